@@ -1,0 +1,11 @@
+"""nodegraph: typed, cached, pull-based node graphs for procedural elastic aggregates."""
+
+from .context import Context
+from .errors import Issue, NodeFailure, NodegraphError, RecipeError
+from .node import In, NodeSpec, Out, node
+from .params import Param
+
+__version__ = "0.1.0"
+
+__all__ = ["Context", "In", "Issue", "NodeFailure", "NodeSpec", "NodegraphError", "Out", "Param",
+           "RecipeError", "__version__", "node"]

@@ -1,0 +1,148 @@
+"""Encode typed values (dataclasses of numpy arrays and plain fields) as deterministic .npz bytes.
+
+The encoding is a standard .npz (readable with ``numpy.load``) holding each array as ``.npy`` plus a
+``__meta__.json`` member with the field tree. It is written by hand with ``zipfile`` because
+``numpy.savez`` stamps the current time into each member, so equal values would give different
+bytes and could not be content-addressed. No pickle is used in either direction.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib
+import io
+import json
+import zipfile
+from typing import Any
+
+import numpy as np
+
+_FIXED_TIME = (1980, 1, 1, 0, 0, 0)
+_META = "__meta__.json"
+
+
+class DecodeError(ValueError):
+    """Bytes that do not decode to a value of the expected type."""
+
+
+def _qualified(cls: type) -> str:
+    return f"{cls.__module__}:{cls.__qualname__}"
+
+
+def _resolve(name: str) -> type:
+    module, _, qualname = name.partition(":")
+    obj: Any = importlib.import_module(module)
+    for part in qualname.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _encode(obj: Any, arrays: dict[str, np.ndarray]) -> Any:
+    if isinstance(obj, np.ndarray):
+        if obj.dtype == object:
+            raise TypeError("object arrays cannot be stored (no pickle)")
+        key = f"a{len(arrays)}"
+        arrays[key] = obj
+        return {"__array__": key}
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        fields = {f.name: _encode(getattr(obj, f.name), arrays) for f in dataclasses.fields(obj)}
+        return {"__value__": _qualified(type(obj)), "fields": fields}
+    if isinstance(obj, tuple):
+        return {"__tuple__": [_encode(v, arrays) for v in obj]}
+    if isinstance(obj, list):
+        return [_encode(v, arrays) for v in obj]
+    if isinstance(obj, dict):
+        if not all(isinstance(k, str) for k in obj):
+            raise TypeError("only str-keyed dicts can be stored")
+        return {"__dict__": {k: _encode(v, arrays) for k, v in obj.items()}}
+    if isinstance(obj, (np.integer, np.floating, np.bool_)):
+        return _encode(obj.item(), arrays)
+    if isinstance(obj, float):
+        return {"__float__": obj.hex()}
+    if isinstance(obj, bytes):
+        return {"__bytes__": _encode(np.frombuffer(obj, dtype=np.uint8), arrays)}
+    if obj is None or isinstance(obj, (bool, int, str)):
+        return obj
+    raise TypeError(f"cannot store a value of type {type(obj).__name__}")
+
+
+def _decode(tree: Any, arrays: dict[str, np.ndarray]) -> Any:
+    if isinstance(tree, list):
+        return [_decode(v, arrays) for v in tree]
+    if not isinstance(tree, dict):
+        return tree
+    if "__array__" in tree:
+        return arrays[tree["__array__"]]
+    if "__value__" in tree:
+        cls = _resolve(tree["__value__"])
+        if not dataclasses.is_dataclass(cls):
+            raise DecodeError(f"{tree['__value__']} is not a value type")
+        kwargs = {k: _decode(v, arrays) for k, v in tree["fields"].items()}
+        return cls(**kwargs)
+    if "__tuple__" in tree:
+        return tuple(_decode(v, arrays) for v in tree["__tuple__"])
+    if "__dict__" in tree:
+        return {k: _decode(v, arrays) for k, v in tree["__dict__"].items()}
+    if "__float__" in tree:
+        return float.fromhex(tree["__float__"])
+    if "__bytes__" in tree:
+        return _decode(tree["__bytes__"], arrays).tobytes()
+    raise DecodeError(f"unknown tag in stored value: {sorted(tree)}")
+
+
+def encode(value: Any) -> bytes:
+    """Deterministic .npz bytes of ``value``: equal values give equal bytes."""
+    arrays: dict[str, np.ndarray] = {}
+    tree = _encode(value, arrays)
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as archive:
+        meta = json.dumps(tree, sort_keys=True, separators=(",", ":")).encode()
+        archive.writestr(zipfile.ZipInfo(_META, date_time=_FIXED_TIME), meta)
+        for key, array in arrays.items():
+            member = io.BytesIO()
+            np.lib.format.write_array(member, np.ascontiguousarray(array), allow_pickle=False)
+            archive.writestr(zipfile.ZipInfo(f"{key}.npy", date_time=_FIXED_TIME), member.getvalue())
+    return buffer.getvalue()
+
+
+def decode(data: bytes, expected: type | None = None) -> Any:
+    """Inverse of ``encode``; arrays come back read-only. Raises DecodeError on bad bytes."""
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            tree = json.loads(archive.read(_META))
+            arrays = {}
+            for name in archive.namelist():
+                if name.endswith(".npy"):
+                    array = np.lib.format.read_array(io.BytesIO(archive.read(name)), allow_pickle=False)
+                    array.flags.writeable = False
+                    arrays[name[:-4]] = array
+        value = _decode(tree, arrays)
+    except DecodeError:
+        raise
+    except Exception as exc:  # zipfile, json, numpy and import errors all mean "cannot trust this"
+        raise DecodeError(f"{type(exc).__name__}: {exc}") from exc
+    if expected is not None and not isinstance(value, expected):
+        raise DecodeError(f"stored value is {type(value).__name__}, expected {expected.__name__}")
+    return value
+
+
+def content_hash(value: Any) -> str:
+    """sha256 of the value's deterministic encoding: equal outputs ⇔ equal hashes."""
+    return hashlib.sha256(encode(value)).hexdigest()
+
+
+def freeze(value: Any) -> Any:
+    """Make every array reachable from ``value`` read-only, so no node can edit another's output."""
+    if isinstance(value, np.ndarray):
+        value.flags.writeable = False
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        for f in dataclasses.fields(value):
+            freeze(getattr(value, f.name))
+    elif isinstance(value, (list, tuple)):
+        for v in value:
+            freeze(v)
+    elif isinstance(value, dict):
+        for v in value.values():
+            freeze(v)
+    return value

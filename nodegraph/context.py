@@ -1,0 +1,100 @@
+"""What a running node receives besides its inputs and parameters: seed, effects, progress, Rerun."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .errors import NodegraphError
+
+
+class ProgressTask:
+    """A unit counter a long node advances (per frame, per element); no-op unless a reporter listens."""
+
+    def __init__(self, callback=None):
+        self._callback = callback
+
+    def advance(self, amount: int = 1) -> None:
+        if self._callback is not None:
+            self._callback(amount)
+
+
+class EntityLogger:
+    """Rerun logging confined to a node's entity subtree ``/<node id>/…``; inert when no recording."""
+
+    def __init__(self, recording: Any | None, prefix: str):
+        self.recording = recording
+        self.prefix = prefix.rstrip("/")
+
+    @property
+    def enabled(self) -> bool:
+        return self.recording is not None
+
+    def path(self, sub: str) -> str:
+        sub = sub.strip("/")
+        return f"{self.prefix}/{sub}" if sub else self.prefix
+
+    def log(self, sub: str, archetype: Any, static: bool = False) -> None:
+        if self.recording is not None:
+            self.recording.log(self.path(sub), archetype, static=static)
+
+    def set_time(self, timeline: str, sequence: int) -> None:
+        if self.recording is not None:
+            self.recording.set_time(timeline, sequence=sequence)
+
+    def reset_time(self) -> None:
+        if self.recording is not None:
+            self.recording.reset_time()
+
+    def send_columns(self, sub: str, indexes: list, columns: Any) -> None:
+        if self.recording is not None:
+            self.recording.send_columns(self.path(sub), indexes=indexes, columns=columns)
+
+
+@dataclass
+class Context:
+    """Per-run facts for one node instance. ``effects`` holds only requested effects the node implements."""
+
+    node_id: str
+    node_type: str
+    seed: int | None = None
+    effects: frozenset[str] = frozenset()
+    variant: int | None = None
+    rerun: EntityLogger = field(default_factory=lambda: EntityLogger(None, "/"))
+    reporter: Any = None
+    _rng: np.random.Generator | None = field(default=None, repr=False)
+
+    @classmethod
+    def standalone(cls, node_type: str = "test", seed: int | None = 0, effects=(), variant=None) -> Context:
+        """A context for calling a node function directly, as tests and benchmarks do."""
+        return cls(node_id=node_type, node_type=node_type, seed=seed, effects=frozenset(effects), variant=variant)
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The node's random generator, seeded from the recipe seed, node id and variant."""
+        if self.seed is None:
+            raise NodegraphError(
+                f"node type '{self.node_type}' draws random numbers but is not declared random=True "
+                "(its cache key would ignore the seed)"
+            )
+        if self._rng is None:
+            self._rng = np.random.default_rng(self.seed)
+        return self._rng
+
+    def wants(self, effect: str) -> bool:
+        """True when the recipe asked for ``effect`` (and this node implements it)."""
+        return effect in self.effects
+
+    @contextlib.contextmanager
+    def progress(self, total: int, description: str = "") -> Iterator[ProgressTask]:
+        """A progress bar of ``total`` steps for this node, shown while the block runs."""
+        if self.reporter is None:
+            yield ProgressTask()
+            return
+        label = self.node_id if self.variant is None else f"{self.node_id}[{self.variant}]"
+        with self.reporter.task(f"{label} {description}".strip(), total) as callback:
+            yield ProgressTask(callback)

@@ -1,0 +1,140 @@
+"""Node type declarations: typed ports, parameters, effects and a version, readable as data.
+
+A node module declares a node with the ``@node`` decorator around a plain function::
+
+    @node("sphere_scatter", version=1,
+          inputs={"mesh": In(Mesh, "base mesh of the grain")},
+          outputs={"spheres": Out(SphereSet, "porosity spheres")},
+          params={"count": Param(int, 64, "number of spheres", range=(0, 50000))},
+          random=True)
+    def sphere_scatter(ctx, mesh, *, count): ...
+
+The decorator returns a ``NodeSpec``; the registry finds specs by scanning module attributes,
+so declaring a node has no side effect and there is no global registry.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+from .errors import NodeDeclarationError
+from .params import Param
+
+
+@dataclass(frozen=True)
+class In:
+    """An input port. ``many=True`` takes a list: several wires, or every variant of a family."""
+
+    type: type
+    doc: str = ""
+    optional: bool = False
+    many: bool = False
+
+    @property
+    def type_name(self) -> str:
+        name = self.type.__name__
+        return f"list[{name}]" if self.many else name
+
+
+@dataclass(frozen=True)
+class Out:
+    """An output port."""
+
+    type: type
+    doc: str = ""
+
+    @property
+    def type_name(self) -> str:
+        return self.type.__name__
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    """Everything the engine knows about a node type; ``run`` is the implementation."""
+
+    type_name: str
+    version: str
+    doc: str
+    run: Callable[..., Any]
+    inputs: Mapping[str, In] = field(default_factory=dict)
+    outputs: Mapping[str, Out] = field(default_factory=dict)
+    params: Mapping[str, Param] = field(default_factory=dict)
+    effects: frozenset[str] = frozenset()
+    random: bool = False
+    check: Callable[[dict[str, Any]], list[tuple[str, str]]] | None = None
+    module: str = ""
+
+    def __call__(self, ctx: Any, **kwargs: Any) -> Any:
+        """Call the implementation directly (tests and benchmarks)."""
+        return self.run(ctx, **kwargs)
+
+    def resolve_params(self, given: Mapping[str, Any]) -> dict[str, Any]:
+        """Validated parameters with defaults filled in (raises ParamValueError / KeyError)."""
+        values = {}
+        for name, param in self.params.items():
+            if name in given:
+                values[name] = param.validate(given[name])
+            elif param.required:
+                raise KeyError(name)
+            else:
+                values[name] = param.default
+        return values
+
+
+def node(
+    type_name: str,
+    *,
+    version: int | str,
+    outputs: Mapping[str, Out],
+    inputs: Mapping[str, In] | None = None,
+    params: Mapping[str, Param] | None = None,
+    effects: tuple[str, ...] | frozenset[str] = (),
+    random: bool = False,
+    check: Callable[[dict[str, Any]], list[tuple[str, str]]] | None = None,
+    doc: str | None = None,
+) -> Callable[[Callable[..., Any]], NodeSpec]:
+    """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
+
+    ``effects`` are the physical effects the node implements; at run time ``ctx.effects`` holds
+    only those the recipe asked for. ``random`` nodes get ``ctx.rng`` and the seed enters their
+    cache key; others cannot draw random numbers. ``check(params)`` returns
+    ``[(param, message), ...]`` for constraints between parameters.
+    """
+    inputs = dict(inputs or {})
+    params = dict(params or {})
+
+    def wrap(fn: Callable[..., Any]) -> NodeSpec:
+        clash = set(inputs) & set(params)
+        if clash:
+            raise NodeDeclarationError(f"{type_name}: names used both as input and parameter: {sorted(clash)}")
+        if not outputs:
+            raise NodeDeclarationError(f"{type_name}: a node needs at least one output port")
+        signature = inspect.signature(fn)
+        accepts_kwargs = any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values())
+        if not accepts_kwargs:
+            missing = (set(inputs) | set(params)) - set(signature.parameters)
+            if missing:
+                raise NodeDeclarationError(f"{type_name}: function {fn.__name__} lacks arguments {sorted(missing)}")
+        for port in list(inputs.values()) + list(outputs.values()):
+            if not isinstance(port.type, type):
+                raise NodeDeclarationError(f"{type_name}: port type {port.type!r} is not a class")
+        text = doc or (inspect.getdoc(fn) or "").strip()
+        return NodeSpec(
+            type_name=type_name,
+            version=str(version),
+            doc=text,
+            run=fn,
+            inputs=MappingProxyType(inputs),
+            outputs=MappingProxyType(dict(outputs)),
+            params=MappingProxyType(params),
+            effects=frozenset(effects),
+            random=random,
+            check=check,
+            module=fn.__module__,
+        )
+
+    return wrap

@@ -1,0 +1,161 @@
+"""Parameter declarations: type, default, range, choices, units and a one-line doc, checked as data.
+
+Type coercion uses pydantic's ``TypeAdapter`` (so ``tuple[float, float]`` or ``list[str]`` work as
+annotations); ranges, choices and the wording of errors are ours, because a user needs the allowed
+range and units in the message, not a pydantic error code.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any, get_args, get_origin
+
+from pydantic import TypeAdapter, ValidationError
+
+REQUIRED: Any = type("Required", (), {"__repr__": lambda self: "REQUIRED"})()
+
+
+class ParamValueError(ValueError):
+    """A parameter value is not allowed; ``allowed`` says what is."""
+
+    def __init__(self, message: str, allowed: str):
+        super().__init__(message)
+        self.allowed = allowed
+
+
+def _type_name(annotation: Any) -> str:
+    origin = get_origin(annotation)
+    if origin is None:
+        return getattr(annotation, "__name__", str(annotation))
+    args = ", ".join("..." if a is Ellipsis else _type_name(a) for a in get_args(annotation))
+    name = getattr(origin, "__name__", str(origin))
+    if name == "UnionType" or name == "Union":
+        return " | ".join(_type_name(a) for a in get_args(annotation))
+    return f"{name}[{args}]"
+
+
+def _numbers_in(value: Any) -> list[float]:
+    if isinstance(value, bool):
+        return []
+    if isinstance(value, (int, float)):
+        return [float(value)]
+    if isinstance(value, (list, tuple)):
+        return [x for v in value for x in _numbers_in(v)]
+    return []
+
+
+def _has_bool_for_number(annotation: Any, value: Any) -> bool:
+    """pydantic's lax mode turns True into 1; a boolean given for a number is a user mistake."""
+    if annotation in (int, float):
+        return isinstance(value, bool)
+    args = get_args(annotation)
+    if isinstance(value, (list, tuple)) and args:
+        inner = [a for a in args if a is not Ellipsis]
+        if len(inner) == 1:
+            return any(_has_bool_for_number(inner[0], v) for v in value)
+        return any(_has_bool_for_number(a, v) for a, v in zip(inner, value))
+    return False
+
+
+@dataclass(frozen=True)
+class Param:
+    """One declared node parameter.
+
+    ``range`` is inclusive ``(low, high)`` (either may be None) and applies to every number in the
+    value, so ``tuple[float, float]`` ranges or RGB colours are checked element-wise.
+    """
+
+    type: Any
+    default: Any = REQUIRED
+    doc: str = ""
+    range: tuple[float | None, float | None] | None = None
+    choices: tuple[Any, ...] | None = None
+    units: str = ""
+    nullable: bool = False
+    extra: dict[str, Any] = field(default_factory=dict, compare=False, hash=False)
+
+    @cached_property
+    def _adapter(self) -> TypeAdapter:
+        return TypeAdapter(self.type)
+
+    @property
+    def required(self) -> bool:
+        return self.default is REQUIRED
+
+    @property
+    def type_name(self) -> str:
+        name = _type_name(self.type)
+        return f"{name} | None" if self.nullable else name
+
+    def allowed(self) -> str:
+        """Human-readable description of the allowed values."""
+        parts = [self.type_name]
+        if self.choices is not None:
+            parts = ["one of " + ", ".join(repr(c) for c in self.choices)]
+        if self.range is not None:
+            lo, hi = self.range
+            if lo is not None and hi is not None:
+                parts.append(f"{lo} ≤ value ≤ {hi}")
+            elif lo is not None:
+                parts.append(f"value ≥ {lo}")
+            elif hi is not None:
+                parts.append(f"value ≤ {hi}")
+        if self.units:
+            parts.append(f"in {self.units}")
+        return ", ".join(parts)
+
+    def validate(self, value: Any) -> Any:
+        """Coerce and check ``value``; raise ParamValueError saying what is allowed."""
+        if value is None:
+            if self.nullable:
+                return None
+            raise ParamValueError("value must not be empty", self.allowed())
+        if _has_bool_for_number(self.type, value):
+            raise ParamValueError(f"expected {self.type_name}, got a boolean", self.allowed())
+        try:
+            coerced = self._adapter.validate_python(value)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            raise ParamValueError(f"expected {self.type_name}: {first['msg'].lower()}", self.allowed()) from None
+        if self.choices is not None and coerced not in self.choices:
+            raise ParamValueError("not one of the allowed values", self.allowed())
+        for number in _numbers_in(coerced):
+            if math.isnan(number):
+                raise ParamValueError("NaN is not a valid value", self.allowed())
+            if self.range is not None:
+                lo, hi = self.range
+                if (lo is not None and number < lo) or (hi is not None and number > hi):
+                    raise ParamValueError("out of range", self.allowed())
+        return coerced
+
+    def describe(self) -> dict[str, str]:
+        """The declaration as strings, for ``nodegraph describe`` and generated docs."""
+        rng = ""
+        if self.range is not None:
+            lo, hi = self.range
+            rng = f"[{'-∞' if lo is None else lo}, {'∞' if hi is None else hi}]"
+        if self.choices is not None:
+            rng = "{" + ", ".join(str(c) for c in self.choices) + "}"
+        return {
+            "type": self.type_name,
+            "default": "(required)" if self.required else repr(self.default),
+            "range": rng,
+            "units": self.units,
+            "doc": self.doc,
+        }
+
+
+def canonical(value: Any) -> Any:
+    """A JSON-able canonical form of a validated parameter value (tuples become lists)."""
+    if isinstance(value, (list, tuple)):
+        return [canonical(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): canonical(v) for k, v in sorted(value.items())}
+    if isinstance(value, float):
+        # repr round-trips exactly; 1 and 1.0 have already been coerced to one type.
+        return {"float": repr(value)}
+    if isinstance(value, (int, str, bool)) or value is None:
+        return value
+    return {"repr": repr(value)}

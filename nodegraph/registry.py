@@ -1,0 +1,103 @@
+"""Find node types: the built-in ``nodes`` package, the ``nodegraph.nodes`` entry points, plugin files.
+
+Every source is a plain module (or package of modules) whose ``NodeSpec`` attributes are node
+types, as pytest finds plugins; the registry is an ordinary object built per command, not global.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import pkgutil
+import sys
+from collections.abc import Iterable
+from importlib.metadata import entry_points
+from pathlib import Path
+from types import ModuleType
+
+from .errors import NodeDeclarationError, NodegraphError
+from .node import NodeSpec
+
+ENTRY_POINT_GROUP = "nodegraph.nodes"
+BUILTIN_PACKAGE = "nodes"
+
+
+class Registry:
+    """Node types by name."""
+
+    def __init__(self, specs: Iterable[NodeSpec] = ()):
+        self._specs: dict[str, NodeSpec] = {}
+        for spec in specs:
+            self.add(spec)
+
+    def add(self, spec: NodeSpec) -> None:
+        existing = self._specs.get(spec.type_name)
+        if existing is not None and existing is not spec:
+            raise NodeDeclarationError(
+                f"node type '{spec.type_name}' is declared twice: in {existing.module} and in {spec.module}"
+            )
+        self._specs[spec.type_name] = spec
+
+    def add_module(self, module: ModuleType) -> None:
+        """Register every NodeSpec defined at module level (imports of other modules' specs are skipped)."""
+        for value in vars(module).values():
+            if isinstance(value, NodeSpec) and value.module == module.__name__:
+                self.add(value)
+
+    def add_package(self, package: ModuleType) -> None:
+        """Register a module, or every module of a package, recursively."""
+        self.add_module(package)
+        if hasattr(package, "__path__"):
+            for info in pkgutil.walk_packages(package.__path__, prefix=package.__name__ + "."):
+                self.add_module(importlib.import_module(info.name))
+
+    def add_plugin_file(self, path: str | Path) -> None:
+        """Load a user's node module from a .py file (``--plugin path.py``)."""
+        path = Path(path).resolve()
+        if not path.is_file():
+            raise NodegraphError(f"plugin file not found: {path}")
+        name = f"nodegraph_plugin_{path.stem}"
+        spec = importlib.util.spec_from_file_location(name, path)
+        if spec is None or spec.loader is None:
+            raise NodegraphError(f"cannot import plugin {path}: not a Python module")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module  # dataclass values defined in a plugin must be importable by name
+        spec.loader.exec_module(module)
+        self.add_module(module)
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._specs
+
+    def __getitem__(self, name: str) -> NodeSpec:
+        return self._specs[name]
+
+    def get(self, name: str) -> NodeSpec | None:
+        return self._specs.get(name)
+
+    def names(self) -> list[str]:
+        return sorted(self._specs)
+
+    def specs(self) -> list[NodeSpec]:
+        return [self._specs[n] for n in self.names()]
+
+    def effects(self) -> set[str]:
+        return {e for spec in self._specs.values() for e in spec.effects}
+
+
+def default_registry(plugins: Iterable[str | Path] = (), entry_point_modules: bool = True) -> Registry:
+    """Built-in nodes, installed plugin packages (entry points), then ``--plugin`` files."""
+    registry = Registry()
+    loaded: set[str] = set()
+    if entry_point_modules:
+        for ep in entry_points(group=ENTRY_POINT_GROUP):
+            if ep.value not in loaded:
+                registry.add_package(ep.load())
+                loaded.add(ep.value)
+    if BUILTIN_PACKAGE not in loaded:  # running from a source checkout that was never pip-installed
+        try:
+            registry.add_package(importlib.import_module(BUILTIN_PACKAGE))
+        except ModuleNotFoundError:
+            pass
+    for plugin in plugins:
+        registry.add_plugin_file(plugin)
+    return registry

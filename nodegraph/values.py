@@ -1,0 +1,298 @@
+"""The typed values that flow along node ports: meshes, sphere sets, volumes, fields, placements...
+
+Each is a frozen dataclass of numpy arrays (struct of arrays) plus plain fields, so the engine can
+store it without pickle (``codec``), hash it, freeze it and log it to Rerun (``rerun_log``). Nothing
+here is specific to rice: these are the geometric and physical vocabulary of the toolkit.
+Lengths are in the recipe's length unit (millimetres in the shipped recipes) unless noted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def _as(array, dtype, shape_tail: tuple[int, ...], name: str) -> np.ndarray:
+    out = np.asarray(array, dtype=dtype)
+    if out.ndim != 1 + len(shape_tail) or out.shape[1:] != shape_tail:
+        raise ValueError(f"{name}: expected shape (n, {', '.join(map(str, shape_tail))}), got {out.shape}")
+    return out
+
+
+def _optional(array, dtype, shape_tail, name, rows: int) -> np.ndarray | None:
+    if array is None:
+        return None
+    out = _as(array, dtype, shape_tail, name)
+    if len(out) != rows:
+        raise ValueError(f"{name}: {len(out)} rows, expected {rows}")
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """A triangle mesh. ``parts`` labels faces (e.g. 0 = ikura white/membrane, 1 = yolk)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray | None = None
+    colors: np.ndarray | None = None
+    parts: np.ndarray | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        object.__setattr__(self, "vertices", _as(self.vertices, np.float64, (3,), "vertices"))
+        object.__setattr__(self, "faces", _as(self.faces, np.int64, (3,), "faces"))
+        n = len(self.vertices)
+        object.__setattr__(self, "normals", _optional(self.normals, np.float64, (3,), "normals", n))
+        if self.colors is not None:
+            colors = np.asarray(self.colors)
+            if colors.ndim != 2 or colors.shape[1] not in (3, 4) or len(colors) != n:
+                raise ValueError(f"colors: expected shape ({n}, 3|4), got {colors.shape}")
+            object.__setattr__(self, "colors", colors)
+        if self.parts is not None:
+            parts = np.asarray(self.parts, dtype=np.int32)
+            if parts.shape != (len(self.faces),):
+                raise ValueError(f"parts: expected shape ({len(self.faces)},), got {parts.shape}")
+            object.__setattr__(self, "parts", parts)
+
+    @classmethod
+    def from_trimesh(cls, mesh, name: str = "", parts=None) -> Mesh:
+        return cls(np.asarray(mesh.vertices), np.asarray(mesh.faces),
+                   normals=np.asarray(mesh.vertex_normals), parts=parts, name=name)
+
+    def to_trimesh(self):
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices.copy(), self.faces.copy(), process=False)
+
+    @property
+    def bounds(self) -> np.ndarray:
+        return np.stack([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+
+
+@dataclass(frozen=True, eq=False)
+class ElementLibrary:
+    """N distinct elements of one kind (e.g. 16 japonica grains), each a high-resolution mesh.
+
+    ``props`` holds per-element arrays of length N (e.g. ``expansion``, ``circumradius``);
+    ``refine_range`` is the kind's own overlap-refine search range factor (S: chestnut 0.1).
+    """
+
+    kind: str
+    meshes: tuple[Mesh, ...]
+    props: dict[str, np.ndarray] = field(default_factory=dict)
+    refine_range: float = 1.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "meshes", tuple(self.meshes))
+        for key, values in self.props.items():
+            if len(values) != len(self.meshes):
+                raise ValueError(f"props[{key!r}]: {len(values)} values for {len(self.meshes)} meshes")
+
+    def __len__(self) -> int:
+        return len(self.meshes)
+
+
+@dataclass(frozen=True, eq=False)
+class SphereSet:
+    """Spheres (centre, radius); ``tags`` marks e.g. 0 = on the surface, 1 = inside."""
+
+    centers: np.ndarray
+    radii: np.ndarray
+    tags: np.ndarray | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "centers", _as(self.centers, np.float64, (3,), "centers"))
+        radii = np.asarray(self.radii, dtype=np.float64)
+        if radii.shape != (len(self.centers),):
+            raise ValueError(f"radii: expected shape ({len(self.centers)},), got {radii.shape}")
+        object.__setattr__(self, "radii", radii)
+        if self.tags is not None:
+            object.__setattr__(self, "tags", np.asarray(self.tags, dtype=np.int8))
+
+    def __len__(self) -> int:
+        return len(self.radii)
+
+
+@dataclass(frozen=True, eq=False)
+class Volume:
+    """A regular grid of cell values; cell (i, j, k) has its centre at ``origin + (i, j, k)·voxel_size``."""
+
+    data: np.ndarray
+    origin: np.ndarray
+    voxel_size: float
+
+    def __post_init__(self):
+        if np.ndim(self.data) != 3:
+            raise ValueError(f"data: expected a 3-D grid, got shape {np.shape(self.data)}")
+        object.__setattr__(self, "origin", np.asarray(self.origin, dtype=np.float64).reshape(3))
+        if not self.voxel_size > 0:
+            raise ValueError(f"voxel_size must be > 0, got {self.voxel_size}")
+
+    def cell_centers(self, mask: np.ndarray | None = None) -> np.ndarray:
+        idx = np.argwhere(self.data if mask is None else mask)
+        return self.origin + idx * self.voxel_size
+
+
+@dataclass(frozen=True, eq=False)
+class DistanceField(Volume):
+    """A distance field on a grid (SPEC §1.4, G eq. 5): positive inside, in length units.
+
+    ``metric`` is ``euclidean`` or ``manhattan``; ``signed`` tells whether outside cells carry
+    negative distances or zero.
+    """
+
+    metric: str = "euclidean"
+    signed: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class Placement:
+    """Element instances: position, rotation (3×3), kind, surface normal, and P_num (SPEC §2.2–2.4).
+
+    ``kinds[i]`` indexes ``kind_names``; ``variants[i]`` picks the mesh within that kind's library;
+    ``offsets`` is the refine displacement t along the normal; ``overlap`` the residual depth.
+    """
+
+    positions: np.ndarray
+    normals: np.ndarray
+    rotations: np.ndarray | None = None
+    kinds: np.ndarray | None = None
+    variants: np.ndarray | None = None
+    p_num: np.ndarray | None = None
+    offsets: np.ndarray | None = None
+    overlap: np.ndarray | None = None
+    kind_names: tuple[str, ...] = ()
+
+    def __post_init__(self):
+        positions = _as(self.positions, np.float64, (3,), "positions")
+        n = len(positions)
+        object.__setattr__(self, "positions", positions)
+        object.__setattr__(self, "normals", _as(self.normals, np.float64, (3,), "normals"))
+        if len(self.normals) != n:
+            raise ValueError(f"normals: {len(self.normals)} rows, expected {n}")
+        rotations = np.tile(np.eye(3), (n, 1, 1)) if self.rotations is None else np.asarray(self.rotations, np.float64)
+        if rotations.shape != (n, 3, 3):
+            raise ValueError(f"rotations: expected shape ({n}, 3, 3), got {rotations.shape}")
+        object.__setattr__(self, "rotations", rotations)
+        defaults = {"kinds": np.zeros(n, np.int32), "variants": np.zeros(n, np.int32),
+                    "p_num": np.arange(n, dtype=np.int64), "offsets": np.zeros(n), "overlap": np.zeros(n)}
+        for name, default in defaults.items():
+            value = getattr(self, name)
+            value = default if value is None else np.asarray(value, dtype=default.dtype)
+            if value.shape != (n,):
+                raise ValueError(f"{name}: expected shape ({n},), got {value.shape}")
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "kind_names", tuple(self.kind_names))
+
+    def __len__(self) -> int:
+        return len(self.positions)
+
+    def subset(self, keep: np.ndarray) -> Placement:
+        """The placement restricted to a boolean mask or index array."""
+        return Placement(self.positions[keep], self.normals[keep], self.rotations[keep], self.kinds[keep],
+                         self.variants[keep], self.p_num[keep], self.offsets[keep], self.overlap[keep],
+                         self.kind_names)
+
+
+@dataclass(frozen=True, eq=False)
+class Aggregate:
+    """Placed elements with their meshes: a placement plus one library per kind (in kind order)."""
+
+    placement: Placement
+    libraries: tuple[ElementLibrary, ...]
+    deformations: np.ndarray | None = None  # (n, 3, 3) per-element linear deformation, identity if None
+
+    def element_mesh(self, i: int) -> Mesh:
+        """The i-th element's mesh in world space (rotation, deformation, position applied)."""
+        p = self.placement
+        base = self.libraries[p.kinds[i]].meshes[p.variants[i] % len(self.libraries[p.kinds[i]])]
+        transform = p.rotations[i] if self.deformations is None else self.deformations[i] @ p.rotations[i]
+        vertices = base.vertices @ transform.T + p.positions[i]
+        normals = None if base.normals is None else base.normals @ p.rotations[i].T
+        return Mesh(vertices, base.faces, normals=normals, parts=base.parts, name=f"{base.name}#{i}")
+
+
+@dataclass(frozen=True, eq=False)
+class ParticleState:
+    """Simulation particles (struct of arrays) at one instant; ``element`` maps particle → element."""
+
+    positions: np.ndarray
+    velocities: np.ndarray
+    radii: np.ndarray
+    inv_mass: np.ndarray
+    element: np.ndarray
+    time: float = 0.0
+
+    def __len__(self) -> int:
+        return len(self.positions)
+
+
+@dataclass(frozen=True, eq=False)
+class Material:
+    """A principled BSDF parameter set (G Table 3 colour columns); colours are linear RGB in [0, 1]."""
+
+    name: str
+    base_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
+    subsurface: float = 0.0
+    subsurface_radius: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    subsurface_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
+    metallic: float = 0.0
+    specular: float = 0.5
+    roughness: float = 0.5
+    anisotropic: float = 0.0
+    anisotropic_rotation: float = 0.0
+    clearcoat: float = 0.0
+    clearcoat_roughness: float = 0.03
+    ior: float = 1.45
+    transmission: float = 0.0
+    emission: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    emission_strength: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class ShadedScene:
+    """Meshes with per-vertex colours and one material each (``material_of[i]`` indexes ``materials``)."""
+
+    meshes: tuple[Mesh, ...]
+    materials: tuple[Material, ...]
+    material_of: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "meshes", tuple(self.meshes))
+        object.__setattr__(self, "materials", tuple(self.materials))
+        object.__setattr__(self, "material_of", np.asarray(self.material_of, dtype=np.int32))
+
+
+@dataclass(frozen=True, eq=False)
+class Image:
+    """An RGB(A) image, uint8, shape (height, width, 3|4)."""
+
+    pixels: np.ndarray
+
+    def __post_init__(self):
+        pixels = np.asarray(self.pixels)
+        if pixels.dtype != np.uint8 or pixels.ndim != 3 or pixels.shape[2] not in (3, 4):
+            raise ValueError(f"pixels: expected uint8 (h, w, 3|4), got {pixels.dtype} {pixels.shape}")
+        object.__setattr__(self, "pixels", pixels)
+
+
+@dataclass(frozen=True, eq=False)
+class FileSet:
+    """Named file contents produced by a node (e.g. .glb, .usda); the engine writes them out atomically."""
+
+    files: dict[str, bytes]
+
+
+@dataclass(frozen=True, eq=False)
+class Table:
+    """Named columns of equal length: measurements, per-step diagnostics, benchmark rows."""
+
+    columns: dict[str, np.ndarray]
+    index: str = ""
+
+    def __post_init__(self):
+        lengths = {len(np.asarray(v)) for v in self.columns.values()}
+        if len(lengths) > 1:
+            raise ValueError(f"columns have different lengths: {sorted(lengths)}")

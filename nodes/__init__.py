@@ -1,0 +1,1 @@
+"""Built-in node types, one subpackage per step family; found by ``nodegraph.registry``."""
