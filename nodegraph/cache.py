@@ -1,0 +1,144 @@
+"""Content-addressed result cache: entries by cache key, output blobs by the sha256 of their bytes.
+
+Layout under the cache directory::
+
+    entries/ab/<key>.json   {"key", "node", "type", "outputs": {port: {"blob": sha, "size": n}}}
+    blobs/cd/<sha>.npz      one encoded value (see ``codec``); identical outputs are stored once
+
+Every file is written to a temporary name in its final directory and renamed into place, blobs
+before the entry that names them, so a crash at any moment leaves either no entry or a whole one.
+A blob whose bytes no longer hash to its name is reported as corruption and recomputed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from . import codec
+from .errors import CacheCorruption
+
+DEFAULT_DIR = ".nodegraph/cache"
+ENV_VAR = "NODEGRAPH_CACHE"
+
+
+def default_cache_dir() -> Path:
+    return Path(os.environ.get(ENV_VAR) or DEFAULT_DIR)
+
+
+def atomic_write(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` so that readers see the old file or the whole new one, never a part."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+@dataclass(frozen=True)
+class CacheInfo:
+    directory: Path
+    entries: int
+    blobs: int
+    bytes: int
+
+
+class Cache:
+    """A directory of cached node results."""
+
+    def __init__(self, directory: str | Path):
+        self.directory = Path(directory)
+
+    def _entry_path(self, key: str) -> Path:
+        return self.directory / "entries" / key[:2] / f"{key}.json"
+
+    def _blob_path(self, digest: str) -> Path:
+        return self.directory / "blobs" / digest[:2] / f"{digest}.npz"
+
+    def has(self, key: str) -> bool:
+        """True when a complete entry for ``key`` exists (blobs present with the recorded sizes)."""
+        try:
+            manifest = self._manifest(key)
+        except (CacheCorruption, FileNotFoundError):
+            return False
+        for item in manifest["outputs"].values():
+            blob = self._blob_path(item["blob"])
+            try:
+                if blob.stat().st_size != item["size"]:
+                    return False
+            except FileNotFoundError:
+                return False
+        return True
+
+    def _manifest(self, key: str) -> dict[str, Any]:
+        path = self._entry_path(key)
+        try:
+            manifest = json.loads(path.read_bytes())
+        except FileNotFoundError:
+            raise
+        except (OSError, ValueError) as exc:
+            raise CacheCorruption(f"entry {path} is unreadable: {exc}") from None
+        if not isinstance(manifest, dict) or manifest.get("key") != key or not isinstance(manifest.get("outputs"), dict):
+            raise CacheCorruption(f"entry {path} is malformed")
+        return manifest
+
+    def load(self, key: str, expected: dict[str, type]) -> dict[str, Any]:
+        """Decode every output of entry ``key``; raise CacheCorruption if anything does not check out."""
+        try:
+            manifest = self._manifest(key)
+        except FileNotFoundError:
+            raise CacheCorruption(f"entry for {key} disappeared") from None
+        outputs = {}
+        for port, cls in expected.items():
+            item = manifest["outputs"].get(port)
+            if item is None:
+                raise CacheCorruption(f"entry {key} lacks output '{port}'")
+            path = self._blob_path(item["blob"])
+            try:
+                data = path.read_bytes()
+            except OSError as exc:
+                raise CacheCorruption(f"blob {path} is unreadable: {exc}") from None
+            if hashlib.sha256(data).hexdigest() != item["blob"]:
+                raise CacheCorruption(f"blob {path} does not match its hash (truncated or edited)")
+            try:
+                outputs[port] = codec.decode(data, cls)
+            except codec.DecodeError as exc:
+                raise CacheCorruption(f"blob {path} cannot be decoded: {exc}") from None
+        return outputs
+
+    def store(self, key: str, outputs: dict[str, Any], node_id: str, node_type: str) -> None:
+        """Store a node's outputs atomically: blobs first, then the entry that makes them visible."""
+        manifest = {"key": key, "node": node_id, "type": node_type, "outputs": {}}
+        for port, value in outputs.items():
+            data = codec.encode(value)
+            digest = hashlib.sha256(data).hexdigest()
+            blob = self._blob_path(digest)
+            if not (blob.exists() and blob.stat().st_size == len(data)):
+                atomic_write(blob, data)
+            manifest["outputs"][port] = {"blob": digest, "size": len(data)}
+        atomic_write(self._entry_path(key), json.dumps(manifest, sort_keys=True, indent=1).encode())
+
+    def discard(self, key: str) -> None:
+        """Forget entry ``key`` (its blobs may be shared, so they stay until ``clear``)."""
+        self._entry_path(key).unlink(missing_ok=True)
+
+    def info(self) -> CacheInfo:
+        entries = list((self.directory / "entries").glob("*/*.json"))
+        blobs = list((self.directory / "blobs").glob("*/*.npz"))
+        size = sum(p.stat().st_size for p in entries + blobs)
+        return CacheInfo(self.directory, len(entries), len(blobs), size)
+
+    def clear(self) -> None:
+        shutil.rmtree(self.directory, ignore_errors=True)

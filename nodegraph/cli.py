@@ -1,0 +1,211 @@
+"""The ``nodegraph`` command: run, check, nodes, describe, graph, cache.
+
+Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from .cache import Cache, default_cache_dir
+from .errors import NodeFailure, NodegraphError, RecipeError
+from .executor import run_recipe
+from .recipe import Recipe, load_recipe
+from .registry import default_registry
+from .report import Reporter
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--plugin", action="append", default=[], metavar="PATH.py",
+                        help="load node types from a Python file (repeatable)")
+    parser.add_argument("--cache-dir", type=Path, default=None,
+                        help="cache directory (default: $NODEGRAPH_CACHE or .nodegraph/cache)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="nodegraph", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="run a recipe and write its outputs")
+    run.add_argument("recipe", type=Path)
+    run.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE",
+                     help="override a parameter (repeatable); also seed=N, NODE.variants=N, NODE.seed=N")
+    run.add_argument("--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]",
+                     help="compute only this output and what it needs (repeatable)")
+    run.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
+    run.add_argument("--rrd", type=Path, default=None, help="Rerun recording path (default outputs/<recipe>/<recipe>.rrd)")
+    run.add_argument("--no-rrd", action="store_true", help="do not record to Rerun")
+    run.add_argument("--spawn", action="store_true", help="also stream to a Rerun viewer")
+    run.add_argument("--out-dir", type=Path, default=None, help="where outputs go (default outputs/<recipe>)")
+    run.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    _common(run)
+
+    check = sub.add_parser("check", help="validate a recipe; nothing runs")
+    check.add_argument("recipe", type=Path)
+    check.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    _common(check)
+
+    nodes = sub.add_parser("nodes", help="list every node type")
+    _common(nodes)
+
+    describe = sub.add_parser("describe", help="ports and parameters of a node type")
+    describe.add_argument("type")
+    _common(describe)
+
+    graph = sub.add_parser("graph", help="print a recipe's graph")
+    graph.add_argument("recipe", type=Path)
+    graph.add_argument("--dot", action="store_true", help="Graphviz DOT instead of text")
+    graph.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    _common(graph)
+
+    cache = sub.add_parser("cache", help="inspect or clear the cache")
+    cache.add_argument("action", choices=["info", "clear"])
+    _common(cache)
+    return parser
+
+
+def _cmd_run(args, registry, console: Console) -> int:
+    recipe = load_recipe(args.recipe, registry, args.overrides)
+    out_dir = args.out_dir or Path("outputs") / recipe.name
+    rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
+    cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
+    reporter = Reporter(console=console, quiet=args.quiet)
+    try:
+        result = run_recipe(recipe, outputs=args.outputs or None, cache=cache, out_dir=out_dir, rrd=rrd,
+                            spawn=args.spawn, reporter=reporter)
+    except NodeFailure:
+        reporter.print_summary()
+        raise
+    reporter.print_summary()
+    if not args.quiet:
+        for path in result.files:
+            console.print(f"wrote {path}")
+        if result.rrd is not None:
+            console.print(f"wrote {result.rrd} (open with: rerun {result.rrd})")
+    return 0
+
+
+def _cmd_check(args, registry, console: Console) -> int:
+    recipe = load_recipe(args.recipe, registry, args.overrides)
+    instances = sum(entry.family or 1 for entry in recipe.nodes.values())
+    console.print(f"{args.recipe}: OK — {len(recipe.nodes)} nodes ({instances} instances), "
+                  f"outputs {', '.join(map(str, recipe.outputs))}, effects {sorted(recipe.effects) or 'none'}")
+    return 0
+
+
+def _cmd_nodes(args, registry, console: Console) -> int:
+    for spec in registry.specs():
+        summary = spec.doc.splitlines()[0] if spec.doc else ""
+        console.print(f"{spec.type_name:<18} v{spec.version:<3} {summary}", highlight=False)
+    if not registry.names():
+        console.print("(no node types found)")
+    return 0
+
+
+def _cmd_describe(args, registry, console: Console) -> int:
+    spec = registry.get(args.type)
+    if spec is None:
+        import difflib
+
+        near = difflib.get_close_matches(args.type, registry.names(), n=1)
+        hint = f"; did you mean '{near[0]}'?" if near else ""
+        raise NodegraphError(f"unknown node type '{args.type}'{hint} (see `nodegraph nodes`)")
+    console.print(f"[bold]{spec.type_name}[/bold]  version {spec.version}  ({spec.module})")
+    if spec.doc:
+        console.print(spec.doc, highlight=False)
+    if spec.effects:
+        console.print(f"effects: {', '.join(sorted(spec.effects))}")
+    console.print(f"random: {'yes (seeded per node and variant)' if spec.random else 'no'}")
+    for title, ports in (("inputs", spec.inputs), ("outputs", spec.outputs)):
+        table = Table(title=title, title_justify="left")
+        for column in ("port", "type", "doc"):
+            table.add_column(column)
+        for name, port in ports.items():
+            flags = " (optional)" if getattr(port, "optional", False) else ""
+            table.add_row(name, port.type_name + flags, port.doc)
+        console.print(table)
+    table = Table(title="parameters", title_justify="left")
+    for column in ("name", "type", "default", "range", "units", "doc"):
+        table.add_column(column)
+    for name, param in spec.params.items():
+        d = param.describe()
+        table.add_row(name, d["type"], d["default"], d["range"], d["units"], d["doc"])
+    console.print(table)
+    return 0
+
+
+def format_graph(recipe: Recipe, dot: bool = False) -> str:
+    """The recipe's DAG as indented text, or as Graphviz DOT."""
+    order = recipe.order()
+    if dot:
+        lines = [f'digraph "{recipe.name}" {{', "  rankdir=LR;", "  node [shape=box, fontname=Helvetica];"]
+        for node_id in order:
+            entry = recipe.nodes[node_id]
+            family = f"\\n×{entry.family}" if entry.family else ""
+            lines.append(f'  "{node_id}" [label="{node_id}\\n({entry.spec.type_name}){family}"];')
+        for node_id in order:
+            for port, wires in recipe.nodes[node_id].inputs.items():
+                for wire in wires:
+                    lines.append(f'  "{wire.node}" -> "{node_id}" [label="{wire.port}→{port}"];')
+        lines.append("}")
+        return "\n".join(lines)
+    lines = [f"{recipe.name} (seed {recipe.seed}, effects: {', '.join(sorted(recipe.effects)) or 'none'})"]
+    outputs = {w.node for w in recipe.outputs}
+    for node_id in order:
+        entry = recipe.nodes[node_id]
+        family = f" ×{entry.family}" if entry.family else ""
+        mark = "  ⇒ output" if node_id in outputs else ""
+        lines.append(f"{node_id} ({entry.spec.type_name}{family}){mark}")
+        for port, wires in entry.inputs.items():
+            for wire in wires:
+                lines.append(f"    {port} ← {wire}")
+    return "\n".join(lines)
+
+
+def _cmd_graph(args, registry, console: Console) -> int:
+    recipe = load_recipe(args.recipe, registry, args.overrides)
+    print(format_graph(recipe, dot=args.dot))
+    return 0
+
+
+def _cmd_cache(args, registry, console: Console) -> int:
+    cache = Cache(args.cache_dir or default_cache_dir())
+    if args.action == "clear":
+        cache.clear()
+        console.print(f"cleared {cache.directory}")
+        return 0
+    info = cache.info()
+    console.print(f"cache {info.directory}: {info.entries} entries, {info.blobs} blobs, "
+                  f"{info.bytes / 2**20:.1f} MiB")
+    return 0
+
+
+COMMANDS = {"run": _cmd_run, "check": _cmd_check, "nodes": _cmd_nodes, "describe": _cmd_describe,
+            "graph": _cmd_graph, "cache": _cmd_cache}
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    console = Console(stderr=False, highlight=False)
+    errors = Console(stderr=True, highlight=False)
+    try:
+        registry = default_registry(plugins=args.plugin) if args.command != "cache" else None
+        return COMMANDS[args.command](args, registry, console)
+    except RecipeError as exc:
+        errors.print(str(exc), markup=False)
+        return 2
+    except NodeFailure as exc:
+        errors.print(f"error: {exc}", markup=False)
+        return 1
+    except NodegraphError as exc:
+        errors.print(f"error: {exc}", markup=False)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

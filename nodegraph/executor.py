@@ -1,0 +1,301 @@
+"""Pull-based execution: compute only what the requested outputs need, reuse what the cache holds.
+
+Each node instance (a node, or one variant of a variant family) has a cache key that covers the
+node type and version, the engine version, the canonical parameters, the keys of the upstream
+values, the derived seed (random nodes only) and the requested effects the node implements. Keys
+depend on upstream *keys*, not values, so the whole run is planned before anything loads.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from . import __version__, codec
+from .cache import Cache
+from .context import Context, EntityLogger
+from .errors import CacheCorruption, NodeFailure, NodegraphError
+from .output_files import write_output
+from .params import canonical
+from .recipe import NodeEntry, Recipe, Wire
+from .report import NodeRecord, PeakMemory, Reporter, now
+from .rerun_log import RunRecording, log_value
+
+CACHE_FORMAT = 1
+
+
+@dataclass(frozen=True, order=True)
+class Instance:
+    """A node, or one variant of a node that is a variant family."""
+
+    node: str
+    variant: int | None = None
+
+    @property
+    def label(self) -> str:
+        return self.node if self.variant is None else f"{self.node}[{self.variant}]"
+
+    @property
+    def entity(self) -> str:
+        return f"/{self.node}" if self.variant is None else f"/{self.node}/{self.variant}"
+
+
+def derive_seed(base: int, node_id: str, variant: int | None) -> int:
+    """A 63-bit seed per node instance, so variants and sibling nodes draw independent streams."""
+    digest = hashlib.sha256(f"{base}/{node_id}/{variant}".encode()).digest()
+    return int.from_bytes(digest[:8], "little") >> 1
+
+
+@dataclass
+class RunResult:
+    """What a run produced: values of materialised instances, per-node records, files written."""
+
+    recipe: Recipe
+    keys: dict[Instance, str]
+    values: dict[Instance, dict[str, Any]]
+    records: list[NodeRecord]
+    files: list[Path] = field(default_factory=list)
+    rrd: Path | None = None
+
+    def output(self, ref: str) -> Any:
+        """The value of ``node.port`` (a list, one per variant, for a variant family)."""
+        node_id, _, port = ref.partition(".")
+        entry = self.recipe.nodes[node_id]
+        port = port or next(iter(entry.spec.outputs))
+        if entry.family is None:
+            return self.values[Instance(node_id)][port]
+        return [self.values[Instance(node_id, v)][port] for v in range(entry.family)]
+
+    def status(self) -> dict[str, str]:
+        return {r.node: r.status for r in self.records}
+
+
+class Executor:
+    """Runs one recipe against one cache, logging to one recording."""
+
+    def __init__(self, recipe: Recipe, cache: Cache | None = None, reporter: Reporter | None = None,
+                 recording: RunRecording | None = None):
+        self.recipe = recipe
+        self.cache = cache
+        self.reporter = reporter or Reporter(quiet=True)
+        self.recording = recording
+        self.keys: dict[Instance, str] = {}
+        self.values: dict[Instance, dict[str, Any]] = {}
+        self.status: dict[Instance, NodeRecord] = {}
+        self.hits: set[str] = set()
+
+    # planning ---------------------------------------------------------------------------------
+    def instances(self, node_id: str) -> list[Instance]:
+        family = self.recipe.nodes[node_id].family
+        return [Instance(node_id)] if family is None else [Instance(node_id, v) for v in range(family)]
+
+    def _sources(self, entry: NodeEntry, variant: int | None) -> dict[str, list[tuple[Instance, str]]]:
+        """Upstream (instance, port) pairs per input port: gathered for many-ports, mapped otherwise."""
+        sources = {}
+        for port_name, wires in entry.inputs.items():
+            pairs = []
+            for wire in wires:
+                if entry.spec.inputs[port_name].many or self.recipe.nodes[wire.node].family is None:
+                    pairs.extend((inst, wire.port) for inst in self.instances(wire.node))
+                else:
+                    pairs.append((Instance(wire.node, variant), wire.port))
+            sources[port_name] = pairs
+        return sources
+
+    def _seed(self, entry: NodeEntry, variant: int | None) -> int | None:
+        if not entry.spec.random:
+            return None
+        base = self.recipe.seed if entry.seed is None else entry.seed
+        return derive_seed(base, entry.id, variant)
+
+    def plan(self, node_ids: list[str]) -> list[Instance]:
+        """Cache keys for every instance of the given nodes (in topological order)."""
+        order = []
+        for node_id in self.recipe.order(node_ids):
+            entry = self.recipe.nodes[node_id]
+            for inst in self.instances(node_id):
+                payload = {
+                    "format": CACHE_FORMAT,
+                    "engine": __version__,
+                    "type": entry.spec.type_name,
+                    "version": entry.spec.version,
+                    "params": canonical(entry.params),
+                    "inputs": {port: [[self.keys[src], out] for src, out in pairs]
+                               for port, pairs in sorted(self._sources(entry, inst.variant).items())},
+                    "seed": self._seed(entry, inst.variant),
+                    "effects": sorted(entry.spec.effects & self.recipe.effects),
+                }
+                blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
+                self.keys[inst] = hashlib.sha256(blob).hexdigest()
+                order.append(inst)
+        return order
+
+    # running ----------------------------------------------------------------------------------
+    def run(self, outputs: list[Wire] | None = None) -> RunResult:
+        """Materialise the requested outputs (default: the recipe's) and everything they need."""
+        outputs = list(outputs or self.recipe.outputs)
+        needed_nodes = self.recipe.upstream({w.node for w in outputs})
+        order = self.plan(sorted(needed_nodes))
+        if self.cache is not None:
+            self.hits = {key for key in set(self.keys.values()) if self.cache.has(key)}
+        output_nodes = {w.node for w in outputs}
+        try:
+            for inst in order:
+                if inst in self.status:
+                    continue
+                if self.keys[inst] in self.hits and self.recording is None and inst.node not in output_nodes:
+                    self.status[inst] = NodeRecord(inst.label, self.recipe.nodes[inst.node].spec.type_name, "cached")
+                    continue
+                self.materialise(inst)
+                if self.recording is not None:
+                    self._log_outputs(inst)
+        finally:
+            for inst in order:
+                if inst in self.status:
+                    self.reporter.record(self.status[inst])
+        return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
+
+    def materialise(self, inst: Instance) -> dict[str, Any]:
+        """The outputs of ``inst``: from memory, from the cache, or by running the node (pulling inputs)."""
+        if inst in self.values:
+            return self.values[inst]
+        entry = self.recipe.nodes[inst.node]
+        spec = entry.spec
+        key = self.keys[inst]
+        status = "ran"
+        if key in self.hits:
+            start = now()
+            try:
+                outputs = self.cache.load(key, {p: o.type for p, o in spec.outputs.items()})
+            except CacheCorruption as exc:
+                self.reporter.warn(f"cache entry of node '{inst.label}' is corrupt ({exc}); recomputing")
+                self.cache.discard(key)
+                self.hits.discard(key)
+                status = "recomputed (corrupt cache)"
+            else:
+                self.values[inst] = outputs
+                self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
+                return outputs
+
+        sources = self._sources(entry, inst.variant)
+        kwargs: dict[str, Any] = {}
+        for port_name, port in spec.inputs.items():
+            pairs = sources.get(port_name, [])
+            values = [self.materialise(src)[out] for src, out in pairs]
+            kwargs[port_name] = values if port.many else (values[0] if values else None)
+        kwargs.update(entry.params)
+        ctx = Context(
+            node_id=inst.node,
+            node_type=spec.type_name,
+            seed=self._seed(entry, inst.variant),
+            effects=frozenset(spec.effects & self.recipe.effects),
+            variant=inst.variant,
+            rerun=self.recording.logger(inst.entity) if self.recording else EntityLogger(None, inst.entity),
+            reporter=self.reporter,
+        )
+        start = now()
+        memory = PeakMemory()
+        try:
+            with memory:
+                result = spec.run(ctx, **kwargs)
+            outputs = self._check_outputs(spec, result)
+        except NodegraphError as exc:
+            self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", now() - start)
+            if isinstance(exc, NodeFailure):
+                raise
+            raise NodeFailure(inst.node, spec.type_name, exc, inst.variant) from exc
+        except Exception as exc:
+            self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", now() - start)
+            raise NodeFailure(inst.node, spec.type_name, exc, inst.variant) from exc
+        finally:
+            if ctx.rerun.enabled:
+                ctx.rerun.reset_time()
+        elapsed = now() - start
+        for value in outputs.values():
+            codec.freeze(value)
+        if self.cache is not None:
+            self.cache.store(key, outputs, inst.node, spec.type_name)
+        self.values[inst] = outputs
+        self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
+        return outputs
+
+    @staticmethod
+    def _check_outputs(spec, result) -> dict[str, Any]:
+        if not isinstance(result, dict) or set(result) != set(spec.outputs):
+            if len(spec.outputs) == 1 and not (isinstance(result, dict) and set(result) == set(spec.outputs)):
+                result = {next(iter(spec.outputs)): result}
+            else:
+                got = sorted(result) if isinstance(result, dict) else type(result).__name__
+                raise TypeError(f"node returned {got}; declared outputs are {sorted(spec.outputs)}")
+        for port, value in result.items():
+            declared = spec.outputs[port].type
+            if not isinstance(value, declared):
+                raise TypeError(f"output '{port}' is a {type(value).__name__}, declared {declared.__name__}")
+        return result
+
+    def _log_outputs(self, inst: Instance) -> None:
+        outputs = self.materialise(inst)
+        for port, value in outputs.items():
+            log_value(value, self.recording.logger(f"{inst.entity}/{port}"))
+
+    # writing ----------------------------------------------------------------------------------
+    def write_outputs(self, result: RunResult, outputs: list[Wire], directory: Path) -> list[Path]:
+        """Write each requested output under ``directory`` (families into a sub-folder per output)."""
+        directory.mkdir(parents=True, exist_ok=True)
+        written = []
+        for wire in outputs:
+            entry = self.recipe.nodes[wire.node]
+            stem = wire.node if len(entry.spec.outputs) == 1 else f"{wire.node}.{wire.port}"
+            for inst in self.instances(wire.node):
+                value = self.materialise(inst)[wire.port]
+                if inst.variant is None:
+                    written += write_output(value, directory, stem)
+                else:
+                    folder = directory / stem
+                    folder.mkdir(exist_ok=True)
+                    written += write_output(value, folder, f"{inst.variant:03d}")
+        result.files = written
+        return written
+
+
+def run_recipe(recipe: Recipe, *, outputs: list[str] | None = None, cache: Cache | None = None,
+               out_dir: Path | None = None, rrd: Path | None = None, spawn: bool = False,
+               reporter: Reporter | None = None) -> RunResult:
+    """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``."""
+    wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
+    recording = RunRecording(rrd, recipe.name, spawn=spawn) if rrd is not None else None
+    executor = Executor(recipe, cache, reporter, recording)
+    ok = False
+    try:
+        result = executor.run(wires)
+        if out_dir is not None:
+            executor.write_outputs(result, wires, out_dir)
+        ok = True
+    finally:
+        if recording is not None:
+            recording.close(keep=True)
+            if ok:
+                result.rrd = recording.path
+    return result
+
+
+def resolve_outputs(recipe: Recipe, refs: list[str]) -> list[Wire]:
+    """``--output`` references: ``node.port`` or ``node`` (all its outputs)."""
+    wires = []
+    for ref in refs:
+        node_id, _, port = ref.partition(".")
+        entry = recipe.nodes.get(node_id)
+        if entry is None:
+            raise NodegraphError(f"--output {ref}: no node '{node_id}' in recipe {recipe.path}; "
+                                 f"nodes: {', '.join(sorted(recipe.nodes))}")
+        if port and port not in entry.spec.outputs:
+            raise NodegraphError(f"--output {ref}: node '{node_id}' has no output '{port}'; "
+                                 f"outputs: {', '.join(entry.spec.outputs)}")
+        wires += [Wire(node_id, p) for p in ([port] if port else entry.spec.outputs)]
+    return wires
+
+
+__all__ = ["Executor", "Instance", "RunResult", "derive_seed", "resolve_outputs", "run_recipe"]

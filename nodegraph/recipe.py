@@ -1,0 +1,418 @@
+"""Recipes: YAML → validated graph of node instances. Every problem is collected before anything runs.
+
+Structure is checked by pydantic models (``extra="forbid"``); their errors are mapped back to the
+file's lines. Node types, parameters, wiring, port types, cycles, variant families, effects and
+outputs are then checked against the registry, each issue with file:line:column and a suggestion.
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import networkx as nx
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from .errors import Issue, Location, RecipeError
+from .node import NodeSpec
+from .params import ParamValueError
+from .registry import Registry
+from .yaml_source import SourceMap, load_yaml, load_yaml_file
+
+NODE_ID = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+MAX_VARIANTS = 100_000
+
+
+class NodeModel(BaseModel):
+    """One node entry of a recipe."""
+
+    model_config = ConfigDict(extra="forbid")
+    type: str
+    params: dict[str, Any] = Field(default_factory=dict)
+    inputs: dict[str, str | list[str]] = Field(default_factory=dict)
+    variants: int | None = Field(default=None, ge=1, le=MAX_VARIANTS)
+    seed: int | None = None
+    doc: str | None = None
+
+
+class RecipeModel(BaseModel):
+    """The top level of a recipe file."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str | None = None
+    description: str | None = None
+    seed: int = 0
+    effects: list[str] = Field(default_factory=list)
+    outputs: list[str] = Field(min_length=1)
+    nodes: dict[str, Any] = Field(min_length=1)
+
+
+@dataclass(frozen=True)
+class Wire:
+    """A connection from ``node.port``."""
+
+    node: str
+    port: str
+
+    def __str__(self) -> str:
+        return f"{self.node}.{self.port}"
+
+
+@dataclass
+class NodeEntry:
+    """A validated node of a recipe: its spec, resolved parameters and incoming wires per port."""
+
+    id: str
+    spec: NodeSpec
+    params: dict[str, Any]
+    inputs: dict[str, list[Wire]]
+    variants: int | None = None
+    seed: int | None = None
+    family: int | None = None  # number of instances when this node is a variant family
+
+
+@dataclass
+class Recipe:
+    """A validated recipe, ready for the executor."""
+
+    name: str
+    path: str
+    seed: int
+    effects: frozenset[str]
+    outputs: list[Wire]
+    nodes: dict[str, NodeEntry]
+    source: SourceMap
+    graph: nx.DiGraph = field(repr=False)
+
+    def upstream(self, node_ids) -> set[str]:
+        """The given nodes and every node they depend on (what a pull-based run must consider)."""
+        needed = set(node_ids)
+        for node_id in node_ids:
+            needed |= nx.ancestors(self.graph, node_id)
+        return needed
+
+    def order(self, node_ids=None) -> list[str]:
+        """Nodes in a deterministic topological order (ties broken by id)."""
+        graph = self.graph if node_ids is None else self.graph.subgraph(node_ids)
+        return list(nx.lexicographical_topological_sort(graph))
+
+
+def _nearest(word: str, options) -> str | None:
+    matches = difflib.get_close_matches(str(word), [str(o) for o in options], n=1, cutoff=0.5)
+    return matches[0] if matches else None
+
+
+def _parse_override(text: str) -> tuple[list[str], Any]:
+    if "=" not in text:
+        raise ValueError("expected node.param=value")
+    target, _, raw = text.partition("=")
+    try:
+        value = yaml.safe_load(raw) if raw.strip() else None
+    except yaml.YAMLError:
+        value = raw
+    return target.strip().split("."), value
+
+
+class _Validator:
+    """Collects issues while building a Recipe."""
+
+    def __init__(self, raw: dict, source: SourceMap, registry: Registry, overrides: list[str], name: str | None):
+        self.raw = raw
+        self.source = source
+        self.registry = registry
+        self.overrides = overrides
+        self.name = name
+        self.issues: list[Issue] = []
+        self.override_at: dict[tuple, Location] = {}
+
+    def issue(self, path: tuple, message: str, key: bool = False, **extra) -> None:
+        location = self.override_at.get(tuple(path[:4])) or self.source.at(path, key=key)
+        self.issues.append(Issue(location, message, **extra))
+
+    def _pydantic_issues(self, exc: ValidationError, base: tuple, node: str | None, model: type[BaseModel]) -> None:
+        for err in exc.errors():
+            loc = base + tuple(err["loc"])
+            field_name = str(err["loc"][-1]) if err["loc"] else None
+            if err["type"] == "extra_forbidden":
+                self.issue(loc, f"unknown key '{field_name}'", key=True, node=node,
+                           allowed=", ".join(model.model_fields), suggestion=_nearest(field_name, model.model_fields))
+            elif err["type"] == "missing":
+                self.issue(loc[:-1], f"missing required key '{field_name}'", node=node)
+            else:
+                given = err.get("input")
+                self.issue(loc, err["msg"], node=node, param=field_name,
+                           given=given if not isinstance(given, (dict, list)) else None)
+
+    def apply_overrides(self) -> None:
+        nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
+        for i, text in enumerate(self.overrides, 1):
+            where = Location("--set", i)
+            try:
+                target, value = _parse_override(text)
+            except ValueError as exc:
+                self.issues.append(Issue(where, f"cannot read '{text}': {exc}"))
+                continue
+            if target == ["seed"]:
+                self.raw["seed"] = value
+                self.override_at[("seed",)] = where
+                continue
+            if len(target) != 2 or not all(target):
+                self.issues.append(Issue(where, f"cannot read '{text}'", allowed="node.param=value or seed=N"))
+                continue
+            node_id, key = target
+            if node_id not in nodes:
+                self.issues.append(Issue(where, f"no node '{node_id}' in the recipe", given=text,
+                                         suggestion=_nearest(node_id, nodes)))
+                continue
+            entry = nodes[node_id]
+            if not isinstance(entry, dict):
+                continue
+            if key in ("variants", "seed"):
+                entry[key] = value
+                self.override_at[("nodes", node_id, key)] = where
+            else:
+                params = entry.setdefault("params", {})
+                if isinstance(params, dict):
+                    params[key] = value
+                    self.override_at[("nodes", node_id, "params", key)] = where
+
+    def build(self) -> Recipe | None:
+        if not isinstance(self.raw, dict):
+            self.issue((), "a recipe must be a mapping with keys name, seed, effects, outputs, nodes")
+            return None
+        self.apply_overrides()
+        top = {k: v for k, v in self.raw.items()}
+        try:
+            model = RecipeModel.model_validate(top)
+        except ValidationError as exc:
+            self._pydantic_issues(exc, (), None, RecipeModel)
+            model = None
+        raw_nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
+
+        entries: dict[str, NodeEntry] = {}
+        wire_sources: dict[tuple[str, str], list[tuple[Wire, tuple]]] = {}
+        for node_id, body in raw_nodes.items():
+            path = ("nodes", node_id)
+            if not isinstance(node_id, str) or not NODE_ID.match(node_id):
+                self.issue(path, f"invalid node id '{node_id}'", key=True,
+                           allowed="letters, digits and _ (not starting with a digit)")
+                continue
+            try:
+                node_model = NodeModel.model_validate(body if body is not None else {})
+            except ValidationError as exc:
+                self._pydantic_issues(exc, path, node_id, NodeModel)
+                continue
+            entry = self._node(node_id, node_model, path, wire_sources)
+            if entry is not None:
+                entries[node_id] = entry
+
+        graph = nx.DiGraph()
+        graph.add_nodes_from(entries)
+        self._check_wires(entries, wire_sources, graph, raw_nodes)
+        cyclic = self._check_cycles(graph)
+        if not cyclic:
+            self._check_families(entries, graph)
+        outputs = self._check_outputs(model.outputs if model else [], entries, raw_nodes)
+        effects = self._check_effects(model.effects if model else [], entries)
+        if self.issues or model is None:
+            return None
+        name = model.name or self.name or Path(self.source.file).stem
+        return Recipe(name=name, path=self.source.file, seed=model.seed, effects=effects, outputs=outputs,
+                      nodes=entries, source=self.source, graph=graph)
+
+    def _node(self, node_id: str, model: NodeModel, path: tuple, wire_sources) -> NodeEntry | None:
+        spec = self.registry.get(model.type)
+        if spec is None:
+            self.issue(path + ("type",), f"unknown node type '{model.type}'", node=node_id,
+                       suggestion=_nearest(model.type, self.registry.names()),
+                       allowed="see `nodegraph nodes`")
+            return None
+        params: dict[str, Any] = {}
+        ok = True
+        for key, value in model.params.items():
+            param = spec.params.get(key)
+            if param is None:
+                self.issue(path + ("params", key), f"unknown parameter '{key}' for {spec.type_name}", key=True,
+                           node=node_id, allowed=", ".join(spec.params) or "(none)",
+                           suggestion=_nearest(key, spec.params))
+                ok = False
+                continue
+            try:
+                params[key] = param.validate(value)
+            except ParamValueError as exc:
+                self.issue(path + ("params", key), str(exc), node=node_id, param=key, given=value,
+                           allowed=exc.allowed)
+                ok = False
+        for key, param in spec.params.items():
+            if key not in params:
+                if param.required:
+                    if key not in model.params:
+                        self.issue(path, f"missing required parameter '{key}'", key=True, node=node_id, param=key,
+                                   allowed=param.allowed())
+                    ok = False
+                else:
+                    params[key] = param.default
+        if ok and spec.check is not None:
+            for param_name, message in spec.check(dict(params)):
+                self.issue(path + ("params", param_name), message, node=node_id, param=param_name,
+                           given=params.get(param_name))
+                ok = False
+
+        inputs: dict[str, list[Wire]] = {}
+        for port_name, refs in model.inputs.items():
+            port = spec.inputs.get(port_name)
+            port_path = path + ("inputs", port_name)
+            if port is None:
+                self.issue(port_path, f"unknown input port '{port_name}' for {spec.type_name}", key=True,
+                           node=node_id, allowed=", ".join(spec.inputs) or "(none)",
+                           suggestion=_nearest(port_name, spec.inputs))
+                continue
+            ref_list = refs if isinstance(refs, list) else [refs]
+            if isinstance(refs, list) and not port.many:
+                self.issue(port_path, f"input '{port_name}' takes one wire, got a list of {len(refs)}",
+                           node=node_id, allowed="node.port")
+                continue
+            wires = []
+            for i, ref in enumerate(ref_list):
+                ref_path = port_path + ((i,) if isinstance(refs, list) else ())
+                node_ref, _, port_ref = ref.partition(".")
+                wire = Wire(node_ref, port_ref)
+                wires.append(wire)
+                wire_sources.setdefault((node_id, port_name), []).append((wire, ref_path))
+            inputs[port_name] = wires
+        for port_name, port in spec.inputs.items():
+            if port_name not in inputs and not port.optional and port_name not in model.inputs:
+                self.issue(path, f"missing required input '{port_name}' ({port.type_name})", key=True, node=node_id,
+                           param=f"inputs.{port_name}")
+        return NodeEntry(node_id, spec, params, inputs, model.variants, model.seed)
+
+    def _resolve_port(self, wire: Wire, entries, raw_nodes) -> str | None:
+        """The output port a wire names; ``node`` alone is allowed when that node has one output."""
+        source = entries[wire.node].spec
+        if wire.port:
+            return wire.port if wire.port in source.outputs else None
+        return next(iter(source.outputs)) if len(source.outputs) == 1 else None
+
+    def _check_wires(self, entries, wire_sources, graph, raw_nodes) -> None:
+        for (node_id, port_name), wires in wire_sources.items():
+            if node_id not in entries:
+                continue
+            entry = entries[node_id]
+            port = entry.spec.inputs[port_name]
+            resolved = []
+            for wire, path in wires:
+                if wire.node not in entries:
+                    if wire.node in raw_nodes:
+                        continue  # that node has its own issue already
+                    self.issue(path, f"input '{port_name}' refers to unknown node '{wire.node}'", node=node_id,
+                               given=str(wire) if wire.port else wire.node, suggestion=_nearest(wire.node, raw_nodes))
+                    continue
+                source_spec = entries[wire.node].spec
+                port_ref = self._resolve_port(wire, entries, raw_nodes)
+                if port_ref is None:
+                    what = f"'{wire.node}' has no output '{wire.port}'" if wire.port else \
+                        f"'{wire.node}' has several outputs; name one as {wire.node}.<port>"
+                    self.issue(path, what, node=node_id, param=f"inputs.{port_name}",
+                               allowed=", ".join(f"{wire.node}.{p}" for p in source_spec.outputs),
+                               suggestion=_nearest(wire.port, source_spec.outputs) if wire.port else None)
+                    continue
+                out = source_spec.outputs[port_ref]
+                if not issubclass(out.type, port.type):
+                    self.issue(path, f"type mismatch: {wire.node}.{port_ref} gives {out.type_name}, "
+                               f"input '{port_name}' of {entry.spec.type_name} takes {port.type_name}",
+                               node=node_id, param=f"inputs.{port_name}")
+                    continue
+                resolved.append(Wire(wire.node, port_ref))
+                graph.add_edge(wire.node, node_id)
+            entry.inputs[port_name] = resolved
+
+    def _check_cycles(self, graph: nx.DiGraph) -> bool:
+        try:
+            cycle = nx.find_cycle(graph)
+        except nx.NetworkXNoCycle:
+            return False
+        ids = [u for u, _ in cycle] + [cycle[0][0]]
+        self.issue(("nodes", cycle[0][0]), "cycle: " + " → ".join(ids), key=True, node=cycle[0][0])
+        return True
+
+    def _check_families(self, entries: dict[str, NodeEntry], graph: nx.DiGraph) -> None:
+        """Variant families: a plain port fed by a family maps the node over it; a many-port gathers it."""
+        for node_id in nx.lexicographical_topological_sort(graph):
+            entry = entries[node_id]
+            sizes: dict[int, str] = {}
+            for port_name, wires in entry.inputs.items():
+                if entry.spec.inputs[port_name].many:
+                    continue
+                for wire in wires:
+                    size = entries[wire.node].family
+                    if size is not None:
+                        sizes.setdefault(size, wire.node)
+            if entry.variants is not None:
+                sizes.setdefault(entry.variants, "its own 'variants'")
+            if len(sizes) > 1:
+                detail = ", ".join(f"{n} from {src}" for n, src in sorted(sizes.items()))
+                self.issue(("nodes", node_id), f"inputs come in variant families of different sizes ({detail})",
+                           key=True, node=node_id)
+            entry.family = min(sizes) if sizes else None
+
+    def _check_outputs(self, outputs: list[str], entries, raw_nodes) -> list[Wire]:
+        wires = []
+        for i, ref in enumerate(outputs):
+            node_ref, _, port_ref = ref.partition(".")
+            path = ("outputs", i)
+            if node_ref not in entries:
+                if node_ref not in raw_nodes:
+                    self.issue(path, f"output refers to unknown node '{node_ref}'", given=ref,
+                               suggestion=_nearest(node_ref, raw_nodes))
+                continue
+            port = self._resolve_port(Wire(node_ref, port_ref), entries, raw_nodes)
+            if port is None:
+                spec = entries[node_ref].spec
+                self.issue(path, f"'{node_ref}' has no output '{port_ref}'" if port_ref else
+                           f"'{node_ref}' has several outputs; name one", given=ref,
+                           allowed=", ".join(f"{node_ref}.{p}" for p in spec.outputs),
+                           suggestion=_nearest(port_ref, spec.outputs) if port_ref else None)
+                continue
+            wires.append(Wire(node_ref, port))
+        return wires
+
+    def _check_effects(self, effects: list[str], entries) -> frozenset[str]:
+        known = self.registry.effects()
+        in_recipe = {e for entry in entries.values() for e in entry.spec.effects}
+        for i, effect in enumerate(effects):
+            path = ("effects", i)
+            if effect not in known:
+                self.issue(path, f"unknown effect '{effect}'", given=effect,
+                           allowed=", ".join(sorted(known)) or "(no node implements any effect)",
+                           suggestion=_nearest(effect, known))
+            elif effect not in in_recipe:
+                implementers = sorted(s.type_name for s in self.registry.specs() if effect in s.effects)
+                self.issue(path, f"effect '{effect}' is asked for but no node in this recipe implements it",
+                           given=effect, allowed="add a node of type " + " or ".join(implementers))
+        return frozenset(effects)
+
+
+def parse_recipe(text: str, registry: Registry, file: str = "<recipe>", overrides: list[str] = ()) -> Recipe:
+    """Validate recipe text; raise RecipeError listing every problem."""
+    raw, source = load_yaml(text, file)
+    return _finish(raw, source, registry, list(overrides), None)
+
+
+def load_recipe(path: str | Path, registry: Registry, overrides: list[str] = ()) -> Recipe:
+    """Load and validate a recipe file; raise RecipeError listing every problem with file:line:column."""
+    raw, source = load_yaml_file(path)
+    return _finish(raw, source, registry, list(overrides), Path(path).stem)
+
+
+def _finish(raw, source, registry, overrides, name) -> Recipe:
+    validator = _Validator(raw, source, registry, overrides, name)
+    recipe = validator.build()
+    if validator.issues or recipe is None:
+        issues = sorted(validator.issues, key=lambda i: (i.location.file != source.file, i.location.file,
+                                                         i.location.line or 0, i.location.column or 0))
+        raise RecipeError(issues or [Issue(source.at(()), "invalid recipe")])
+    return recipe

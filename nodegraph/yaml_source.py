@@ -1,0 +1,100 @@
+"""Load YAML into plain Python values while remembering where every key and value came from.
+
+PyYAML's composer already knows each node's start mark; we walk its node tree ourselves so that a
+duplicate key is an error (PyYAML silently keeps the last) and every path gets a (line, column).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .errors import Issue, Location, RecipeError
+
+PathKey = tuple[Any, ...]
+
+
+@dataclass
+class SourceMap:
+    """(line, column) of each value and each mapping key, by path from the document root."""
+
+    file: str
+    values: dict[PathKey, tuple[int, int]] = field(default_factory=dict)
+    keys: dict[PathKey, tuple[int, int]] = field(default_factory=dict)
+
+    def at(self, path: PathKey, key: bool = False) -> Location:
+        """Location of ``path``; falls back to the nearest enclosing path that has one."""
+        table = self.keys if key else self.values
+        probe = tuple(path)
+        while probe:
+            if probe in table:
+                return Location(self.file, *table[probe])
+            if probe in self.values:
+                return Location(self.file, *self.values[probe])
+            probe = probe[:-1]
+        return Location(self.file, *self.values.get((), (1, 1)))
+
+
+def _mark(node: yaml.Node) -> tuple[int, int]:
+    return node.start_mark.line + 1, node.start_mark.column + 1
+
+
+def _convert(node: yaml.Node, path: PathKey, source: SourceMap, issues: list[Issue]) -> Any:
+    source.values[path] = _mark(node)
+    if isinstance(node, yaml.MappingNode):
+        result: dict[Any, Any] = {}
+        for key_node, value_node in node.value:
+            key = _convert(key_node, path + ("<key>",), source, issues)
+            if not isinstance(key, (str, int, float, bool)) and key is not None:
+                issues.append(Issue(Location(source.file, *_mark(key_node)), "a mapping key must be a scalar"))
+                continue
+            if key in result:
+                first = source.keys[path + (key,)]
+                issues.append(Issue(Location(source.file, *_mark(key_node)),
+                                    f"duplicate key '{key}' (first defined at line {first[0]})"))
+                continue
+            source.keys[path + (key,)] = _mark(key_node)
+            result[key] = _convert(value_node, path + (key,), source, issues)
+        source.values.pop(path + ("<key>",), None)
+        return result
+    if isinstance(node, yaml.SequenceNode):
+        return [_convert(item, path + (i,), source, issues) for i, item in enumerate(node.value)]
+    return yaml.SafeLoader.construct_object(_SCALAR_LOADER, node, deep=True)
+
+
+class _ScalarLoader(yaml.SafeLoader):
+    def __init__(self):
+        super().__init__("")
+
+
+_SCALAR_LOADER = _ScalarLoader()
+
+
+def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
+    """Parse ``text`` (named ``file`` in messages) into plain values and their source map."""
+    source = SourceMap(file)
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        loc = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
+        raise RecipeError([Issue(loc, f"YAML syntax error: {exc.problem or exc}")]) from None
+    if root is None:
+        raise RecipeError([Issue(Location(file, 1, 1), "the recipe is empty")])
+    issues: list[Issue] = []
+    value = _convert(root, (), source, issues)
+    if issues:
+        raise RecipeError(issues)
+    return value, source
+
+
+def load_yaml_file(path: str | Path) -> tuple[Any, SourceMap]:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise RecipeError([Issue(Location(str(path)), f"cannot read recipe: {exc.strerror or exc}")]) from None
+    return load_yaml(text, str(path))

@@ -1,0 +1,169 @@
+"""Every recipe problem is reported before anything runs, with file:line:column, node, parameter."""
+
+import pytest
+
+from nodegraph.errors import RecipeError
+from nodegraph.recipe import load_recipe, parse_recipe
+
+VALID = """\
+name: toy
+seed: 3
+effects: [gravity]
+outputs: [merge.spheres]
+nodes:
+  pts:
+    type: toy_points
+    params: {count: 20, scale: 2.0}
+  shifted:
+    type: toy_shift
+    inputs: {spheres: pts.spheres}
+    params:
+      dx: 1.5
+  phys:
+    type: toy_physics
+    inputs: {spheres: shifted.spheres}
+  merge:
+    type: toy_merge
+    inputs: {parts: [pts.spheres, phys.spheres]}
+"""
+
+
+def issues_of(text, registry, overrides=()):
+    with pytest.raises(RecipeError) as info:
+        parse_recipe(text, registry, file="r.yaml", overrides=list(overrides))
+    return info.value.issues
+
+
+def test_valid_recipe_loads(registry):
+    recipe = parse_recipe(VALID, registry, file="r.yaml")
+    assert set(recipe.nodes) == {"pts", "shifted", "phys", "merge"}
+    assert recipe.nodes["shifted"].params == {"dx": 1.5}
+    assert recipe.nodes["pts"].params == {"count": 20, "scale": 2.0, "mode": "cube"}
+    assert recipe.order() == ["pts", "shifted", "phys", "merge"]
+
+
+def test_unknown_top_level_key_suggests_nearest(registry):
+    (issue,) = issues_of(VALID.replace("effects:", "efects:"), registry)
+    assert (issue.location.line, issue.location.column) == (3, 1)
+    assert issue.suggestion == "effects"
+    assert "r.yaml:3:1" in str(issue)
+
+
+def test_unknown_node_type_suggests(registry):
+    (issue,) = issues_of(VALID.replace("type: toy_shift", "type: toy_shfit"), registry)
+    assert issue.location.line == 10 and issue.node == "shifted"
+    assert issue.suggestion == "toy_shift"
+
+
+def test_unknown_parameter_suggests(registry):
+    (issue,) = issues_of(VALID.replace("dx: 1.5", "dz: 1.5"), registry)
+    assert issue.location.line == 13 and issue.location.column == 7
+    assert issue.suggestion == "dx" and issue.node == "shifted"
+
+
+def test_out_of_range_names_range_and_units(registry):
+    (issue,) = issues_of(VALID.replace("dx: 1.5", "dx: 15"), registry)
+    assert issue.location.line == 13 and issue.param == "dx" and issue.given == 15
+    assert "-10.0 ≤ value ≤ 10.0" in issue.allowed and "mm" in issue.allowed
+
+
+def test_wrong_type_and_bool_for_number(registry):
+    issues = issues_of(VALID.replace("count: 20", "count: many").replace("dx: 1.5", "dx: true"), registry)
+    by_param = {i.param: i for i in issues}
+    assert by_param["count"].location.line == 8 and "int" in by_param["count"].allowed
+    assert by_param["dx"].location.line == 13 and "boolean" in by_param["dx"].message
+
+
+def test_choice_not_allowed(registry):
+    (issue,) = issues_of(VALID.replace("scale: 2.0}", "scale: 2.0, mode: cone}"), registry)
+    assert issue.param == "mode" and "'cube'" in issue.allowed and issue.location.line == 8
+
+
+def test_missing_required_input(registry):
+    text = VALID.replace("    inputs: {spheres: shifted.spheres}\n", "")
+    (issue,) = issues_of(text, registry)
+    assert issue.node == "phys" and "missing required input 'spheres'" in issue.message
+    assert issue.location.line == 14
+
+
+def test_unknown_wire_source_node_and_port(registry):
+    issues = issues_of(VALID.replace("{spheres: pts.spheres}", "{spheres: pst.spheres}")
+                       .replace("phys.spheres]", "phys.sphers]"), registry)
+    messages = sorted((i.location.line, i.suggestion) for i in issues)
+    assert messages == [(11, "pts"), (19, "spheres")]
+
+
+def test_type_mismatch_at_load_time(registry):
+    text = VALID + "  mesh:\n    type: toy_measure\n    inputs: {mesh: pts.spheres}\n"
+    (issue,) = issues_of(text, registry)
+    assert "type mismatch" in issue.message and "SphereSet" in issue.message and "Mesh" in issue.message
+    assert issue.location.line == 22
+
+
+def test_cycle_detected(registry):
+    text = VALID.replace("{spheres: pts.spheres}", "{spheres: phys.spheres}")
+    issues = issues_of(text, registry)
+    assert any("cycle" in i.message and "shifted" in i.message and "phys" in i.message for i in issues)
+
+
+def test_unknown_effect_and_unimplemented_effect(registry):
+    issues = issues_of(VALID.replace("[gravity]", "[gravty, tearing]"), registry)
+    assert issues[0].suggestion == "gravity" and issues[0].location.line == 3
+    # tearing is unknown to the toy registry as well
+    assert "unknown effect 'tearing'" in issues[1].message
+    text = VALID.replace("[gravity]", "[gravity]").replace("type: toy_physics", "type: toy_shift")
+    text = text.replace("  phys:\n    type: toy_shift\n", "  phys:\n    type: toy_shift\n")
+    (issue,) = issues_of(text, registry)
+    assert "no node in this recipe implements it" in issue.message and "toy_physics" in issue.allowed
+
+
+def test_duplicate_key_reported(registry):
+    text = VALID.replace("    params: {count: 20, scale: 2.0}\n", "    params: {count: 20, scale: 2.0}\n    type: toy_points\n")
+    (issue,) = issues_of(text, registry)
+    assert "duplicate key 'type'" in issue.message and issue.location.line == 9
+
+
+def test_yaml_syntax_error_has_line():
+    with pytest.raises(RecipeError) as info:
+        parse_recipe("nodes:\n  a: [1, 2\n", None, file="bad.yaml")
+    (issue,) = info.value.issues
+    assert issue.location.file == "bad.yaml" and issue.location.line >= 2 and "syntax" in issue.message
+
+
+def test_all_problems_reported_at_once(registry):
+    text = (VALID.replace("dx: 1.5", "dx: 99").replace("type: toy_merge", "type: toy_merg")
+            .replace("count: 20", "count: 0"))
+    issues = issues_of(text, registry)
+    assert len(issues) >= 3
+    assert sorted(i.location.line for i in issues)[:3] == [8, 13, 18]
+
+
+def test_outputs_must_exist(registry):
+    issues = issues_of(VALID.replace("outputs: [merge.spheres]", "outputs: [merge.sphere, nope]"), registry)
+    assert issues[0].suggestion == "spheres" and issues[0].location.line == 4
+    assert "unknown node 'nope'" in issues[1].message
+
+
+def test_variant_families_must_agree(registry):
+    text = VALID.replace("    params: {count: 20, scale: 2.0}\n", "    variants: 4\n    params: {count: 20, scale: 2.0}\n")
+    text = text.replace("    inputs: {spheres: pts.spheres}\n    params:\n      dx: 1.5\n",
+                        "    variants: 3\n    inputs: {spheres: pts.spheres}\n    params:\n      dx: 1.5\n")
+    (issue,) = issues_of(text, registry)
+    assert issue.node == "shifted" and "different sizes" in issue.message and "4 from pts" in issue.message
+
+
+def test_set_override_is_validated(registry):
+    recipe = parse_recipe(VALID, registry, file="r.yaml", overrides=["shifted.dx=-2.5", "seed=11"])
+    assert recipe.nodes["shifted"].params["dx"] == -2.5 and recipe.seed == 11
+    issues = issues_of(VALID, registry, overrides=["shifted.dx=50", "shifted.dy=1", "shiftd.dx=1"])
+    assert [str(i.location) for i in issues] == ["--set:1", "--set:2", "--set:3"]
+    assert "out of range" in issues[0].message
+    assert issues[1].suggestion == "dx" and issues[2].suggestion == "shifted"
+
+
+def test_load_recipe_from_file_names_file(registry, recipe_file):
+    path = recipe_file(VALID.replace("dx: 1.5", "dx: 15"))
+    with pytest.raises(RecipeError) as info:
+        load_recipe(path, registry)
+    assert f"{path}:13:11" in str(info.value)
+    assert load_recipe(recipe_file(VALID), registry).name == "toy"
