@@ -360,6 +360,7 @@ class _Validator:
             entry.family = min(sizes) if sizes else None
 
     def _check_outputs(self, outputs: list[str], entries, raw_nodes) -> list[Wire]:
+        """``node.port``, or ``node`` for all of a node's outputs."""
         wires = []
         for i, ref in enumerate(outputs):
             node_ref, _, port_ref = ref.partition(".")
@@ -369,15 +370,15 @@ class _Validator:
                     self.issue(path, f"output refers to unknown node '{node_ref}'", given=ref,
                                suggestion=_nearest(node_ref, raw_nodes))
                 continue
-            port = self._resolve_port(Wire(node_ref, port_ref), entries, raw_nodes)
-            if port is None:
-                spec = entries[node_ref].spec
-                self.issue(path, f"'{node_ref}' has no output '{port_ref}'" if port_ref else
-                           f"'{node_ref}' has several outputs; name one", given=ref,
+            spec = entries[node_ref].spec
+            if not port_ref:
+                wires += [Wire(node_ref, port) for port in spec.outputs]
+            elif port_ref in spec.outputs:
+                wires.append(Wire(node_ref, port_ref))
+            else:
+                self.issue(path, f"'{node_ref}' has no output '{port_ref}'", given=ref,
                            allowed=", ".join(f"{node_ref}.{p}" for p in spec.outputs),
-                           suggestion=_nearest(port_ref, spec.outputs) if port_ref else None)
-                continue
-            wires.append(Wire(node_ref, port))
+                           suggestion=_nearest(port_ref, spec.outputs))
         return wires
 
     def _check_effects(self, effects: list[str], entries) -> frozenset[str]:

@@ -1,0 +1,130 @@
+"""Cache writes are atomic; corrupt entries are detected, reported and recomputed."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nodegraph import cache as cache_module
+from nodegraph import codec
+from nodegraph.cache import Cache
+from nodegraph.executor import run_recipe
+from nodegraph.recipe import parse_recipe
+from nodegraph.report import Reporter
+from nodegraph.values import SphereSet
+
+RECIPE = """\
+outputs: [shifted]
+nodes:
+  pts: {type: toy_points, params: {count: 50}}
+  shifted: {type: toy_shift, inputs: {spheres: pts.spheres}, params: {dx: 1.0}}
+"""
+TOY = Path(__file__).with_name("toy_nodes.py")
+
+
+def run(registry, cache, reporter=None):
+    return run_recipe(parse_recipe(RECIPE, registry, file="c.yaml"), cache=cache, reporter=reporter)
+
+
+def test_store_and_load_round_trip(cache):
+    value = SphereSet(np.arange(12.0).reshape(4, 3), np.ones(4))
+    cache.store("k" * 64, {"spheres": value}, "n", "t")
+    assert cache.has("k" * 64)
+    loaded = cache.load("k" * 64, {"spheres": SphereSet})["spheres"]
+    assert codec.content_hash(loaded) == codec.content_hash(value)
+
+
+def test_identical_outputs_share_one_blob(cache):
+    value = SphereSet(np.zeros((3, 3)), np.ones(3))
+    cache.store("a" * 64, {"s": value}, "n1", "t")
+    cache.store("b" * 64, {"s": value}, "n2", "t")
+    info = cache.info()
+    assert info.entries == 2 and info.blobs == 1
+
+
+def test_crash_between_blob_and_entry_leaves_no_entry(registry, cache, monkeypatch):
+    real = cache_module.atomic_write
+    calls = []
+
+    def crashing(path, data):
+        calls.append(path)
+        if path.suffix == ".json" and len(calls) > 2:  # the second node's entry
+            raise KeyboardInterrupt("simulated crash")
+        real(path, data)
+
+    monkeypatch.setattr(cache_module, "atomic_write", crashing)
+    with pytest.raises(KeyboardInterrupt):
+        run(registry, cache)
+    monkeypatch.setattr(cache_module, "atomic_write", real)
+    assert cache.info().entries == 1  # pts finished; shifted's entry was never made visible
+    assert not list(cache.directory.rglob("*.tmp"))
+    result = run(registry, cache)
+    assert result.status() == {"pts": "cached", "shifted": "ran"}
+
+
+def test_crash_inside_a_write_leaves_no_partial_file(tmp_path, monkeypatch):
+    target = tmp_path / "x" / "entry.json"
+    monkeypatch.setattr(os, "replace", lambda *a: (_ for _ in ()).throw(OSError("disk gone")))
+    with pytest.raises(OSError):
+        cache_module.atomic_write(target, b"{}")
+    assert not target.exists() and not list(target.parent.iterdir())
+
+
+@pytest.mark.parametrize("damage", ["truncate", "flip", "delete", "garbage_entry"])
+def test_corrupt_entry_is_detected_reported_and_recomputed(registry, cache, damage):
+    first = run(registry, cache)
+    blob = next(cache.directory.glob("blobs/*/*.npz"))
+    entries = list(cache.directory.glob("entries/*/*.json"))
+    if damage == "truncate":
+        blob.write_bytes(blob.read_bytes()[:-20])
+    elif damage == "flip":
+        data = bytearray(blob.read_bytes())
+        data[len(data) // 2] ^= 0xFF
+        blob.write_bytes(bytes(data))
+    elif damage == "delete":
+        blob.unlink()
+    else:
+        for entry in entries:
+            entry.write_text("{not json")
+    reporter = Reporter(quiet=True)
+    warnings = []
+    reporter.warn = warnings.append
+    again = run(registry, cache, reporter)
+    assert any(s in ("ran", "recomputed (corrupt cache)") for s in again.status().values())
+    assert codec.content_hash(again.output("shifted")) == codec.content_hash(first.output("shifted"))
+    if damage == "flip":  # size unchanged: only the hash check can find it
+        assert warnings and "corrupt" in warnings[0]
+    assert set(run(registry, cache).status().values()) == {"cached"}
+
+
+SLOW = """\
+outputs: [slow]
+nodes:
+  pts: {type: toy_points, params: {count: 5}}
+  slow: {type: toy_slow, inputs: {spheres: pts.spheres}, params: {seconds: 30}}
+"""
+
+
+def test_killed_run_keeps_finished_nodes_and_no_torn_entries(tmp_path):
+    recipe = tmp_path / "slow.yaml"
+    recipe.write_text(SLOW)
+    cache_dir = tmp_path / "cache"
+    cmd = [sys.executable, "-m", "nodegraph.cli", "run", str(recipe), "--plugin", str(TOY),
+           "--cache-dir", str(cache_dir), "--no-rrd", "--out-dir", str(tmp_path / "out"), "-q"]
+    proc = subprocess.Popen(cmd, cwd=tmp_path)
+    deadline = time.time() + 60
+    while time.time() < deadline and not list(cache_dir.glob("entries/*/*.json")):
+        time.sleep(0.05)
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    cache = Cache(cache_dir)
+    assert cache.info().entries == 1  # pts only; slow was killed mid-run
+    for entry in cache_dir.glob("entries/*/*.json"):
+        key = entry.stem
+        assert cache.load(key, {"spheres": SphereSet})["spheres"].centers.shape == (5, 3)

@@ -1,0 +1,167 @@
+"""Pull-based runs, cache reuse and selective invalidation, variants, effects, failures, determinism."""
+
+import numpy as np
+import pytest
+
+from nodegraph import codec
+from nodegraph.errors import NodeFailure
+from nodegraph.executor import Instance, run_recipe
+from nodegraph.recipe import parse_recipe
+
+RECIPE = """\
+name: toy
+seed: 3
+effects: [gravity]
+outputs: [merge.spheres]
+nodes:
+  pts:
+    type: toy_points
+    params: {count: 20, scale: 2.0}
+  shifted:
+    type: toy_shift
+    inputs: {spheres: pts.spheres}
+    params: {dx: 1.5}
+  phys:
+    type: toy_physics
+    inputs: {spheres: shifted.spheres}
+  merge:
+    type: toy_merge
+    inputs: {parts: [pts.spheres, phys.spheres]}
+  mesh:
+    type: toy_mesh
+  measure:
+    type: toy_measure
+    inputs: {mesh: mesh.mesh}
+"""
+
+
+def run(registry, cache, overrides=(), outputs=None, text=RECIPE, **kw):
+    recipe = parse_recipe(text, registry, file="toy.yaml", overrides=list(overrides))
+    return run_recipe(recipe, cache=cache, outputs=outputs, **kw)
+
+
+def test_first_run_runs_second_is_cached(registry, cache):
+    first = run(registry, cache)
+    assert first.status() == {"pts": "ran", "shifted": "ran", "phys": "ran", "merge": "ran"}
+    second = run(registry, cache)
+    assert set(second.status().values()) == {"cached"}
+    a, b = first.output("merge.spheres"), second.output("merge.spheres")
+    assert codec.content_hash(a) == codec.content_hash(b)
+
+
+def test_changing_a_parameter_recomputes_only_downstream(registry, cache):
+    run(registry, cache)
+    again = run(registry, cache, overrides=["shifted.dx=2.0"])
+    assert again.status() == {"pts": "cached", "shifted": "ran", "phys": "ran", "merge": "ran"}
+
+
+def test_changing_the_seed_recomputes_only_random_nodes_and_dependents(registry, cache):
+    run(registry, cache, outputs=["measure"])
+    run(registry, cache)
+    again = run(registry, cache, overrides=["seed=4"], outputs=["merge", "measure"])
+    status = again.status()
+    assert status["pts"] == "ran" and status["merge"] == "ran"
+    assert status["mesh"] == "cached" and status["measure"] == "cached"
+
+
+def test_pull_based_only_runs_upstream_of_requested_output(registry, cache):
+    result = run(registry, cache, outputs=["shifted.spheres"])
+    assert result.status() == {"pts": "ran", "shifted": "ran"}
+    result = run(registry, cache, outputs=["measure.table"])
+    assert result.status() == {"mesh": "ran", "measure": "ran"}
+
+
+def test_cached_nodes_not_needed_are_not_loaded(registry, cache, monkeypatch):
+    run(registry, cache)
+    loads = []
+    original = cache.load
+    monkeypatch.setattr(cache, "load", lambda key, expected: loads.append(key) or original(key, expected))
+    result = run(registry, cache, overrides=["shifted.dx=3.0"])
+    assert result.status()["pts"] == "cached"
+    assert len(loads) == 1  # pts is loaded once, for shifted; phys and merge run
+
+
+def test_effects_reach_only_implementing_nodes_and_enter_their_key(registry, cache):
+    first = run(registry, cache)
+    table = first.values[Instance("phys")]["effects"]
+    assert bool(table.columns["gravity"][0]) and table.columns["count"][0] == 1
+    no_gravity = RECIPE.replace("effects: [gravity]", "effects: []")
+    second = run(registry, cache, text=no_gravity)
+    assert second.status() == {"pts": "cached", "shifted": "cached", "phys": "ran", "merge": "ran"}
+    assert not second.values[Instance("phys")]["effects"].columns["gravity"][0]
+    moved = second.output("phys.spheres").centers - first.output("shifted.spheres").centers
+    assert np.all(moved == 0)  # no gravity kernel ran
+
+
+def test_same_seed_is_bit_identical_and_other_seed_differs(registry):
+    a = run(registry, None).output("merge.spheres")
+    b = run(registry, None).output("merge.spheres")
+    c = run(registry, None, overrides=["seed=5"]).output("merge.spheres")
+    assert codec.content_hash(a) == codec.content_hash(b)
+    assert codec.content_hash(a) != codec.content_hash(c)
+
+
+def test_outputs_are_read_only(registry, cache):
+    spheres = run(registry, cache).output("pts.spheres") if False else run(registry, cache, outputs=["pts"]).output("pts")
+    with pytest.raises(ValueError):
+        spheres.centers[0, 0] = 1.0
+
+
+FAMILY = """\
+seed: 1
+outputs: [merge]
+nodes:
+  pts:
+    type: toy_points
+    variants: 4
+    params: {count: 5}
+  shifted:
+    type: toy_shift
+    inputs: {spheres: pts.spheres}
+    params: {dx: 1.0}
+  merge:
+    type: toy_merge
+    inputs: {parts: shifted.spheres}
+"""
+
+
+def test_variants_map_and_gather_with_a_cache_entry_each(registry, cache):
+    result = run(registry, cache, text=FAMILY)
+    status = result.status()
+    assert [status[f"pts[{i}]"] for i in range(4)] == ["ran"] * 4
+    assert [status[f"shifted[{i}]"] for i in range(4)] == ["ran"] * 4
+    parts = result.output("pts.spheres")
+    assert len(parts) == 4 and len({codec.content_hash(p) for p in parts}) == 4  # distinct seeds
+    assert list(result.values[Instance("merge")]["stats"].columns["count"]) == [5, 5, 5, 5]
+    assert len({result.keys[Instance("shifted", i)] for i in range(4)}) == 4
+    grown = run(registry, cache, text=FAMILY, overrides=["pts.variants=6"])
+    status = grown.status()
+    assert [status[f"pts[{i}]"] for i in range(6)] == ["cached"] * 4 + ["ran"] * 2
+    assert status["merge"] == "ran"
+
+
+def test_failing_node_names_itself_and_keeps_earlier_results(registry, cache):
+    text = RECIPE.replace("type: toy_physics", "type: toy_fail").replace("effects: [gravity]", "effects: []")
+    with pytest.raises(NodeFailure) as info:
+        run(registry, cache, text=text)
+    message = str(info.value)
+    assert "'phys'" in message and "toy_fail" in message and "radius must be positive" in message
+    fixed = run(registry, cache)
+    assert fixed.status()["pts"] == "cached" and fixed.status()["shifted"] == "cached"
+
+
+def test_node_returning_wrong_type_is_a_clear_failure(registry, cache, monkeypatch):
+    recipe = parse_recipe(RECIPE, registry, file="toy.yaml")
+    spec = recipe.nodes["shifted"].spec
+    monkeypatch.setattr(recipe.nodes["shifted"], "spec", type(spec)(**{**spec.__dict__, "run": lambda ctx, **kw: 42}))
+    with pytest.raises(NodeFailure, match="output 'spheres' is a int, declared SphereSet"):
+        run_recipe(recipe, cache=cache)
+
+
+def test_outputs_written_to_directory(registry, cache, tmp_path):
+    text = RECIPE.replace("outputs: [merge.spheres]", "outputs: [merge.spheres, mesh]")
+    result = run(registry, cache, text=text, out_dir=tmp_path / "out")
+    names = sorted(p.name for p in result.files)
+    assert names == ["merge.spheres.npz", "mesh.ply"]
+    loaded = np.load(tmp_path / "out" / "merge.spheres.npz")
+    assert "a0.npy" in loaded.files or "a0" in loaded.files
