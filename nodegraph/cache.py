@@ -111,6 +111,7 @@ class Cache:
             except OSError as exc:
                 raise CacheCorruption(f"blob {path} is unreadable: {exc}") from None
             if hashlib.sha256(data).hexdigest() != item["blob"]:
+                path.unlink(missing_ok=True)  # content-addressed: bytes that miss their name are garbage
                 raise CacheCorruption(f"blob {path} does not match its hash (truncated or edited)")
             try:
                 outputs[port] = codec.decode(data, cls)
