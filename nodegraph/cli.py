@@ -74,7 +74,7 @@ def _cmd_run(args, registry, console: Console) -> int:
     out_dir = args.out_dir or Path("outputs") / recipe.name
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
-    reporter = Reporter(console=console, quiet=args.quiet)
+    reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
     try:
         result = run_recipe(recipe, outputs=args.outputs or None, cache=cache, out_dir=out_dir, rrd=rrd,
                             spawn=args.spawn, reporter=reporter)
@@ -192,18 +192,17 @@ COMMANDS = {"run": _cmd_run, "check": _cmd_check, "nodes": _cmd_nodes, "describe
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     console = Console(stderr=False, highlight=False)
-    errors = Console(stderr=True, highlight=False)
     try:
         registry = default_registry(plugins=args.plugin) if args.command != "cache" else None
         return COMMANDS[args.command](args, registry, console)
-    except RecipeError as exc:
-        errors.print(str(exc), markup=False)
+    except RecipeError as exc:  # plain text: a terminal-width wrap would split file:line:column
+        print(str(exc), file=sys.stderr)
         return 2
     except NodeFailure as exc:
-        errors.print(f"error: {exc}", markup=False)
+        print(f"error: {exc}", file=sys.stderr)
         return 1
     except NodegraphError as exc:
-        errors.print(f"error: {exc}", markup=False)
+        print(f"error: {exc}", file=sys.stderr)
         return 2
 
 

@@ -36,7 +36,8 @@ class RunRecording:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._tmp = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex[:8]}.tmp")
-        self.stream = rr.RecordingStream(f"nodegraph/{recipe_name}", recording_id=str(uuid.uuid4()))
+        self.stream = rr.RecordingStream("nodegraph", recording_id=str(uuid.uuid4()))
+        self.stream.send_recording_name(recipe_name)
         if spawn:
             self.stream.spawn(connect=False)
             self.stream.set_sinks(rr.FileSink(str(self._tmp)), rr.GrpcSink())

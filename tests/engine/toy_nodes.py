@@ -83,10 +83,14 @@ def toy_fail(ctx, spheres):
       outputs={"spheres": Out(SphereSet, "same")},
       params={"seconds": Param(float, 0.0, "sleep", range=(0.0, 60.0), units="s")})
 def toy_slow(ctx, spheres, *, seconds):
-    """Sleeps, with progress, then passes the spheres on."""
+    """Sleeps, with progress and a per-step scalar on the sim_step timeline, then passes the spheres on."""
+    import rerun as rr
+
     with ctx.progress(10, "sleeping") as bar:
-        for _ in range(10):
+        for step in range(10):
             time.sleep(seconds / 10)
+            ctx.rerun.set_time("sim_step", step)
+            ctx.rerun.log("energy", rr.Scalars(float(10 - step)))
             bar.advance()
     return SphereSet(spheres.centers.copy(), spheres.radii.copy())
 

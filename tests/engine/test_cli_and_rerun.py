@@ -1,0 +1,142 @@
+"""The command line (with a --plugin node module) and the Rerun recording it saves."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import datafusion
+import pytest
+from rerun.chunk import RrdReader
+
+from nodegraph.cli import main
+
+TOY = str(Path(__file__).with_name("toy_nodes.py"))
+RECIPE = """\
+name: toyrun
+seed: 2
+effects: [gravity]
+outputs: [merge.spheres, surf]
+nodes:
+  pts:
+    type: toy_points
+    variants: 2
+    params: {count: 8}
+  phys:
+    type: toy_physics
+    inputs: {spheres: pts.spheres}
+  merge:
+    type: toy_merge
+    inputs: {parts: phys.spheres}
+  surf:
+    type: toy_sphere_mesh
+    inputs: {spheres: merge.spheres}
+"""
+
+
+@pytest.fixture
+def recipe(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("NODEGRAPH_CACHE", str(tmp_path / "cache"))
+    path = tmp_path / "toyrun.yaml"
+    path.write_text(RECIPE)
+    return path
+
+
+def cli(*args):
+    return main([*args, "--plugin", TOY])
+
+
+def test_run_writes_outputs_and_a_readable_rrd(recipe, tmp_path, capsys):
+    assert cli("run", str(recipe)) == 0
+    out = tmp_path / "outputs" / "toyrun"
+    assert (out / "merge.spheres.npz").is_file() and (out / "surf.ply").is_file()
+    rrd = out / "toyrun.rrd"
+    verify = subprocess.run([sys.executable, "-m", "rerun", "rrd", "verify", str(rrd)], capture_output=True, text=True)
+    assert verify.returncode == 0, verify.stderr
+    reader = RrdReader(str(rrd))
+    assert [r.application_id for r in reader.recordings()] == ["nodegraph"]
+    store = reader.stream().collect()
+    entities = set(store.schema().entity_paths())
+    assert {"/pts/0/spheres", "/pts/1/spheres", "/phys/1/spheres", "/merge/spheres", "/surf/mesh"} <= entities
+    ctx = datafusion.SessionContext()  # our own context: the global one hung in threaded workers
+    table = store.reader(None, ctx=ctx).to_arrow_table()
+    assert "/surf/mesh:Mesh3D:vertex_positions" in table.column_names
+    assert "/pts/0/spheres:Points3D:radii" in table.column_names
+
+
+def test_second_run_is_cached_and_summary_shows_it(recipe, capsys):
+    assert cli("run", str(recipe), "--no-rrd") == 0
+    capsys.readouterr()
+    assert cli("run", str(recipe), "--no-rrd") == 0
+    err = capsys.readouterr().err
+    assert "cached" in err and "ran" not in err.replace("nodegraph run", "")
+
+
+def test_set_and_output_from_the_command_line(recipe, tmp_path, capsys):
+    assert cli("run", str(recipe), "--set", "phys.dt=0.5", "--output", "merge.spheres", "--no-rrd") == 0
+    err = capsys.readouterr().err
+    assert "surf" not in err and "merge" in err
+    assert cli("run", str(recipe), "--set", "phys.dt=5") == 2
+    assert "--set:1" in capsys.readouterr().err
+
+
+def test_check_reports_every_problem_with_exit_status_2(recipe, capsys):
+    recipe.write_text(RECIPE.replace("count: 8", "count: -1").replace("type: toy_merge", "type: toy_merj"))
+    assert cli("check", str(recipe)) == 2
+    err = capsys.readouterr().err
+    assert "2 problems" in err and f"{recipe}:9:21" in err and "toy_merge" in err
+
+
+def test_check_ok_and_nothing_runs(recipe, tmp_path, capsys):
+    assert cli("check", str(recipe)) == 0
+    assert "OK" in capsys.readouterr().out
+    assert not (tmp_path / "cache").exists() and not (tmp_path / "outputs").exists()
+
+
+def test_nodes_describe_graph(recipe, capsys):
+    assert cli("nodes") == 0
+    assert "toy_points" in capsys.readouterr().out
+    assert cli("describe", "toy_shift") == 0
+    out = capsys.readouterr().out
+    assert "dx" in out and "mm" in out and "[-10.0, 10.0]" in out
+    assert cli("describe", "toy_shfit") == 2
+    assert "did you mean 'toy_shift'" in capsys.readouterr().err
+    assert cli("graph", str(recipe)) == 0
+    out = capsys.readouterr().out
+    assert "pts (toy_points ×2)" in out and "parts ← phys.spheres" in out
+    assert cli("graph", str(recipe), "--dot") == 0
+    assert '"phys" -> "merge"' in capsys.readouterr().out
+
+
+def test_failing_node_exit_status_1(recipe, capsys):
+    recipe.write_text(RECIPE.replace("type: toy_merge", "type: toy_fail").replace("merge.spheres, ", "")
+                      .replace("{parts: phys.spheres}", "{spheres: phys.spheres}"))
+    assert cli("run", str(recipe), "--no-rrd") == 1
+    err = capsys.readouterr().err
+    assert "node 'merge[0]' (type toy_fail) failed" in err
+
+
+def test_cache_info_and_clear(recipe, tmp_path, capsys):
+    cli("run", str(recipe), "--no-rrd")
+    capsys.readouterr()
+    assert main(["cache", "info"]) == 0
+    assert "entries" in capsys.readouterr().out
+    assert main(["cache", "clear"]) == 0
+    assert not (tmp_path / "cache").exists()
+
+
+def test_console_script_runs(recipe, tmp_path):
+    done = subprocess.run(["nodegraph", "run", str(recipe), "--plugin", TOY, "--no-cache", "-q"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+
+
+def test_time_varying_node_logs_on_its_own_timeline(recipe, tmp_path):
+    recipe.write_text(RECIPE.replace("  surf:\n    type: toy_sphere_mesh", "  surf:\n    type: toy_slow"))
+    recipe.write_text(recipe.read_text().replace("outputs: [merge.spheres, surf]", "outputs: [surf]"))
+    assert cli("run", str(recipe), "--rrd", str(tmp_path / "t.rrd")) == 0
+    store = RrdReader(str(tmp_path / "t.rrd")).stream().collect()
+    ctx = datafusion.SessionContext()  # must outlive the query
+    table = store.reader("sim_step", contents="/surf/energy", ctx=ctx).to_arrow_table()
+    assert table.column("sim_step").to_pylist() == list(range(10))
+    assert [v[0] for v in table.column("/surf/energy:Scalars:scalars").to_pylist()] == [10.0 - s for s in range(10)]
