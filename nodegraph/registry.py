@@ -39,17 +39,23 @@ class Registry:
         self._specs[spec.type_name] = spec
 
     def add_module(self, module: ModuleType) -> None:
-        """Register every NodeSpec defined at module level (imports of other modules' specs are skipped)."""
+        """Register every NodeSpec in the module's namespace that was declared in it or below it.
+
+        A package's ``__init__`` re-exports its node types, so kernel modules are never imported
+        just to list nodes (``nodegraph nodes`` stays fast).
+        """
+        prefix = module.__name__
         for value in vars(module).values():
-            if isinstance(value, NodeSpec) and value.module == module.__name__:
+            if isinstance(value, NodeSpec) and (value.module == prefix or value.module.startswith(prefix + ".")):
                 self.add(value)
 
     def add_package(self, package: ModuleType) -> None:
-        """Register a module, or every module of a package, recursively."""
+        """Register a module, or a package and its sub-packages (each exposing its nodes in ``__init__``)."""
         self.add_module(package)
         if hasattr(package, "__path__"):
-            for info in pkgutil.walk_packages(package.__path__, prefix=package.__name__ + "."):
-                self.add_module(importlib.import_module(info.name))
+            for info in pkgutil.iter_modules(package.__path__, prefix=package.__name__ + "."):
+                if info.ispkg:
+                    self.add_package(importlib.import_module(info.name))
 
     def add_plugin_file(self, path: str | Path) -> None:
         """Load a user's node module from a .py file (``--plugin path.py``)."""
