@@ -1,0 +1,48 @@
+"""Node ``distance_field``: signed distance to the element surface — SPEC §1.4 (G eq. 5)."""
+
+from __future__ import annotations
+
+from nodegraph import In, Out, Param, node
+from nodegraph.values import DistanceField, Mesh, SphereSet, Volume
+
+METHODS = ("exact", "euclidean", "manhattan")
+
+
+@node("distance_field", version=1,
+      inputs={"volume": In(Volume, "occupancy M from voxelise"),
+              "mesh": In(Mesh, "the mesh voxelised (method exact)", optional=True),
+              "spheres": In(SphereSet, "the spheres voxelised (method exact)", optional=True)},
+      outputs={"field": Out(DistanceField, "signed distance, positive inside, mm")},
+      params={
+          "method": Param(str, "exact", "exact: analytic distance of mesh ∪ spheres near the surface; "
+                          "euclidean / manhattan: G eq. 5 on the binary volume (half-voxel stair steps)",
+                          choices=METHODS),
+          "band": Param(int, 3, "exact: cells from the surface computed exactly (farther: binary EDT)",
+                        range=(1, 32)),
+      })
+def distance_field(ctx, volume, mesh=None, spheres=None, *, method, band):
+    """G eq. 5 distance to the nearest outside cell (signed), or the exact distance of mesh ∪ spheres.
+
+    The binary routes follow the paper; ``exact`` removes their stair steps at a few ms per grain.
+    """
+    import numpy as np
+
+    from . import distance_fields, voxel_grid
+
+    inside = np.asarray(volume.data) > 0
+    if method == "exact":
+        if mesh is None and (spheres is None or not len(spheres)):
+            raise ValueError("method 'exact' needs the mesh and/or spheres that were voxelised "
+                             "(wire them to the mesh/spheres inputs) or use method 'euclidean'")
+        grid = voxel_grid.Grid(volume.origin, volume.voxel_size, inside.shape)
+        centers = radii = None
+        if spheres is not None and len(spheres):
+            voxel_grid.check_spheres(spheres.centers, spheres.radii)
+            centers, radii = spheres.centers, spheres.radii
+        data = distance_fields.exact_field(grid, inside, None if mesh is None else mesh.vertices,
+                                           None if mesh is None else mesh.faces, centers, radii, band)
+        return DistanceField(data, volume.origin, volume.voxel_size, metric="euclidean", signed=True)
+    if not inside.any() or inside.all():
+        raise ValueError("the volume is empty or full: no boundary to measure distances to")
+    data = distance_fields.binary_field(inside, volume.voxel_size, method)
+    return DistanceField(data, volume.origin, volume.voxel_size, metric=method, signed=True)

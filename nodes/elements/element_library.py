@@ -1,0 +1,28 @@
+"""Node ``element_library``: N grain meshes of one kind → ElementLibrary — SPEC §1.6, §2 (consumers)."""
+
+from __future__ import annotations
+
+from nodegraph import In, Out, Param, node
+from nodegraph.values import ElementLibrary, Mesh
+
+
+@node("element_library", version=1,
+      inputs={"meshes": In(Mesh, "element meshes (every variant of a family, or a list of wires)", many=True)},
+      outputs={"library": Out(ElementLibrary, "meshes plus per-element props")},
+      params={
+          "kind": Param(str, "grain", "name of the element kind (e.g. japonica)"),
+          "refine_range": Param(float, 1.0, "overlap-refine search range as a fraction of the circumradius "
+                                "(S: rice 1, chestnut 0.1; SPEC §2.6)", range=(0.0, 10.0)),
+      })
+def element_library(ctx, meshes, *, kind, refine_range):
+    """Gather element meshes, checking each is closed and outward, with props per element.
+
+    props: expansion (P), volume (mm³), circumradius and inradius (mm, about the centroid),
+    length / width / thickness (mm, extents along x, y, z).
+    """
+    from .library_props import element_props
+
+    if not meshes:
+        raise ValueError("element_library needs at least one mesh")
+    props = element_props(list(meshes))
+    return ElementLibrary(kind, tuple(meshes), props, refine_range)

@@ -1,0 +1,131 @@
+"""Low-resolution base models of elements — SPEC §1.1 (G §3.1.1, G eq. 10).
+
+Every shape is built watertight and outward-oriented, in millimetres, centred at its volume
+centroid with the long axis along x (the canonical element frame the placement and simulation use).
+Only numpy here; the meshes come from an icosphere built by subdivision, so no library is needed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class RiceVariety:
+    """A variety preset of SPEC §1.1: length factor on the base grain and expansion P."""
+
+    length_factor: float
+    expansion: float
+
+
+#: SPEC §1.1 table (G §3.1.1): indica 1.8 / 1.2, japonica 1.0 / 1.5, aromatic 0.7 / 1.5.
+RICE_VARIETIES = {
+    "indica": RiceVariety(1.8, 1.2),
+    "japonica": RiceVariety(1.0, 1.5),
+    "aromatic": RiceVariety(0.7, 1.5),
+}
+
+#: Base (japonica) grain in mm: a raw short-grain kernel is about 5 × 3 × 2 mm.
+BASE_GRAIN_MM = (5.0, 3.0, 2.0)
+
+#: Typical ikura lipid (yolk) mass fraction, SPEC §1 (Shirai et al.): 14.5 ± 0.7 %.
+IKURA_LIPID_FRACTION = 0.145
+
+
+def icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
+    """Unit icosphere (vertices on the unit sphere, outward CCW faces), by midpoint subdivision."""
+    t = (1.0 + 5.0 ** 0.5) / 2.0
+    vertices = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+                         [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
+    faces = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+                      [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+                      [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]], np.int64)
+    vertices /= np.linalg.norm(vertices, axis=1, keepdims=True)
+    for _ in range(subdivisions):
+        edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+        unique, inverse = np.unique(edges, axis=0, return_inverse=True)
+        mids = vertices[unique].mean(axis=1)
+        mids /= np.linalg.norm(mids, axis=1, keepdims=True)
+        m = len(vertices) + inverse.reshape(3, -1).T  # midpoints of edges 01, 12, 20 of each face
+        vertices = np.concatenate([vertices, mids])
+        a, b, c = faces.T
+        faces = np.concatenate([np.stack([a, m[:, 0], m[:, 2]], 1), np.stack([b, m[:, 1], m[:, 0]], 1),
+                                np.stack([c, m[:, 2], m[:, 1]], 1), m])
+    return vertices, faces
+
+
+def volume_centroid(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, np.ndarray]:
+    """Signed volume and centroid of a closed mesh (divergence theorem over origin tetrahedra)."""
+    a, b, c = (vertices[faces[:, i]] for i in range(3))
+    six_v = np.einsum("ij,ij->i", a, np.cross(b, c))
+    volume = six_v.sum() / 6.0
+    if volume == 0.0:
+        return 0.0, vertices.mean(axis=0)
+    centroid = ((a + b + c) * six_v[:, None]).sum(axis=0) / (24.0 * volume)
+    return volume, centroid
+
+
+def rice_grain(length: float, width: float, thickness: float, bluntness: float = 0.8,
+               bend: float = 0.05, subdivisions: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """A rice grain: a blunted ellipsoid (long axis x) with a slight bend in y, centred.
+
+    ``bluntness`` < 1 squares the ends (each unit-sphere coordinate u ↦ sign(u)|u|^bluntness, a
+    monotone map, so the surface stays embedded and outward); ``bend`` shifts y by
+    ``bend·width·(2x/length)²`` — the dorsal curve of a real kernel.
+    """
+    vertices, faces = icosphere(subdivisions)
+    vertices = np.sign(vertices) * np.abs(vertices) ** bluntness
+    vertices *= np.array([length, width, thickness]) / 2.0
+    vertices[:, 1] += bend * width * (2.0 * vertices[:, 0] / length) ** 2
+    _, centroid = volume_centroid(vertices, faces)
+    return vertices - centroid, faces
+
+
+def ikura_egg(diameter: float, lipid_fraction: float, subdivisions: int = 3):
+    """Ikura egg: membrane sphere r_i and concentric yolk sphere r_o = r_i·∛L — SPEC §1 (G eq. 10, Reading).
+
+    Returns vertices, faces and per-face parts (0 = outer membrane, 1 = yolk). Both shells face
+    outward, each the boundary of its own solid; the white is the space between them.
+    """
+    unit, unit_faces = icosphere(subdivisions)
+    r_i = diameter / 2.0
+    r_o = r_i * lipid_fraction ** (1.0 / 3.0)
+    vertices = np.concatenate([unit * r_i, unit * r_o])
+    faces = np.concatenate([unit_faces, unit_faces + len(unit)])
+    parts = np.repeat(np.array([0, 1], np.int32), len(unit_faces))
+    return vertices, faces, parts
+
+
+def ice_flake(length: float, width: float, thickness: float, irregularity: float = 0.25,
+              shape_seed: int = 0, segments: int = 24) -> tuple[np.ndarray, np.ndarray]:
+    """A shaved-ice flake (kakigori, SPEC §1): a thin plate with an irregular star-shaped outline.
+
+    The outline radius varies by up to ``irregularity`` (a fraction) through a few random low
+    harmonics fixed by ``shape_seed`` (a shape parameter, like a preset number: same seed, same flake).
+    The plate is closed by a fan on top and bottom around the centre, with quads on the rim.
+    """
+    rng = np.random.default_rng(shape_seed)
+    angles = np.linspace(0.0, 2.0 * np.pi, segments, endpoint=False)
+    harmonics = np.arange(2, 6)
+    amplitude = rng.uniform(-1.0, 1.0, len(harmonics)) / harmonics
+    phase = rng.uniform(0.0, 2.0 * np.pi, len(harmonics))
+    wobble = (amplitude[:, None] * np.cos(harmonics[:, None] * angles + phase[:, None])).sum(axis=0)
+    wobble *= irregularity / max(np.abs(wobble).max(), 1e-12)
+    rim = np.stack([np.cos(angles) * length / 2, np.sin(angles) * width / 2], axis=1) * (1.0 + wobble)[:, None]
+    half = thickness / 2.0
+    top = np.column_stack([rim, np.full(segments, half)])
+    bottom = np.column_stack([rim, np.full(segments, -half)])
+    vertices = np.concatenate([top, bottom, [[0.0, 0.0, half], [0.0, 0.0, -half]]])
+    s = np.arange(segments)
+    n = (s + 1) % segments
+    ct, cb = 2 * segments, 2 * segments + 1
+    faces = np.concatenate([
+        np.column_stack([np.full(segments, ct), s, n]),                   # top, normal +z
+        np.column_stack([np.full(segments, cb), n + segments, s + segments]),  # bottom, normal −z
+        np.column_stack([s, s + segments, n + segments]),                  # rim
+        np.column_stack([s, n + segments, n]),
+    ])
+    _, centroid = volume_centroid(vertices, faces)
+    return vertices - centroid, faces

@@ -1,0 +1,43 @@
+"""Node ``voxelise``: mesh ∪ spheres → occupancy volume M — SPEC §1.3 (G §3.1.1, binvox in G)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nodegraph import In, Out, Param, node
+from nodegraph.values import Mesh, SphereSet, Volume
+
+#: Default from benchmarks/bench_elements.py: at 64 cells the exact route's surface is within
+#: ~1 % of a grain length (mean) and a grain costs tens of ms; 96+ buys little below the
+#: simulation's own resolution and costs ~3× the time (see /work/notes/issue-3.md).
+DEFAULT_RESOLUTION = 64
+
+
+@node("voxelise", version=1,
+      inputs={"mesh": In(Mesh, "closed element mesh", optional=True),
+              "spheres": In(SphereSet, "spheres added to the mesh", optional=True)},
+      outputs={"volume": Out(Volume, "occupancy (bool): cell centre inside the mesh or a sphere")},
+      params={
+          "resolution": Param(int, DEFAULT_RESOLUTION, "cells along the longest side, padding included "
+                              "(64: see the resolution sweep in benchmarks/bench_elements.py)", range=(8, 1024)),
+          "voxel_size": Param(float, None, "cell size; overrides resolution when given", range=(1e-4, 100.0),
+                              units="mm", nullable=True),
+          "padding": Param(int, 3, "empty cells around the geometry (room for level offsets)", range=(1, 32)),
+      })
+def voxelise(ctx, mesh=None, spheres=None, *, resolution, voxel_size, padding):
+    """Occupancy of mesh ∪ spheres on a grid around both; refuses an empty or split volume.
+
+    Cell centres are classified exactly (column winding count for the mesh, distance for spheres).
+    """
+    from . import voxel_grid
+
+    vertices = None if mesh is None else mesh.vertices
+    faces = None if mesh is None else mesh.faces
+    centers = radii = None
+    if spheres is not None and len(spheres):
+        voxel_grid.check_spheres(spheres.centers, spheres.radii)
+        centers, radii = spheres.centers, spheres.radii
+    lo, hi = voxel_grid.geometry_bounds(vertices, centers, radii)
+    grid = voxel_grid.grid_for(lo, hi, resolution, voxel_size, padding)
+    inside = voxel_grid.occupancy(grid, vertices, faces, centers, radii)
+    return Volume(inside, np.asarray(grid.origin), grid.voxel_size)
