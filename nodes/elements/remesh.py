@@ -20,14 +20,17 @@ from .element_values import GrainMesh
                                 range=(100, 10_000_000), nullable=True),
       })
 def remesh(ctx, field, *, level, smoothing, target_faces):
-    """Marching cubes at ``level``, optional smoothing and decimation; checked watertight and outward."""
+    """Marching cubes at ``level``, optional smoothing and triangle budget; checked watertight and outward.
+
+    Internal cavity shells are dropped (the outer shell is the element). The budget uses quadric
+    decimation, or a coarser marching-cubes sampling where decimation would pinch the surface.
+    """
     import numpy as np
 
-    from .level_set_mesh import centred, field_surface, finish_mesh
+    from .level_set_mesh import centred, grain_surface
 
     data = np.asarray(field.data)
-    vertices, faces = field_surface(data, field.origin, field.voxel_size, level)
-    vertices, faces = finish_mesh(vertices, faces, smoothing, target_faces)
+    vertices, faces = grain_surface(data, field.origin, field.voxel_size, level, smoothing, target_faces)
     vertices, normals = centred(vertices, faces)
     name = ctx.node_id if ctx.variant is None else f"{ctx.node_id}[{ctx.variant}]"
     return GrainMesh(vertices, faces, normals=normals, name=name,
