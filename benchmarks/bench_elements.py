@@ -1,0 +1,301 @@
+"""Element modelling: accuracy against cost — SPEC §1 (G §3.1.1, eq. 5–6).
+
+1. Resolution sweep (32…256 cells along the grain) for the three distance routes (exact,
+   euclidean, manhattan = G eq. 5): time per grain (warm, whole chain scatter → remesh, P = 1) and
+   the remeshed surface against the exact surface of base mesh ∪ spheres: two-sided Hausdorff and
+   mean distance (in grain lengths and in voxels), volume error, triangle count; and the offset
+   surface at level −0.1 mm (grown by 0.1 mm) against the exact offset: mean |SDF − level| of its
+   vertices in voxels (one-sided), where the metric of eq. 5 matters.
+2. The issue's target: 16 japonica grains at the default resolution, as the recipe builds them.
+3. Peak memory (resident set of a child process) of one element at resolution 256.
+
+Run: ``python benchmarks/bench_elements.py`` (``--quick`` for a smoke run). Writes
+``benchmarks/results/bench_elements.{md,png}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from numba import njit, prange
+
+from nodegraph import Context
+from nodes.elements import base_mesh, distance_field, expand, remesh, sphere_scatter, voxelise
+from nodes.elements.grid_kernels import _point_triangle_distance2
+from nodes.elements.level_set_mesh import grain_surface
+from nodes.elements.sphere_sampling import surface_points, winding_numbers
+from nodes.elements.voxel_grid import Grid, mesh_occupancy, sphere_field
+
+RESULTS = Path(__file__).parent / "results"
+RESOLUTIONS = (32, 48, 64, 96, 128, 192, 256)
+OFFSET_MM = -0.1
+METHODS = ("exact", "euclidean", "manhattan")
+
+
+def params(spec, **given):
+    return spec.resolve_params(given)
+
+
+@njit(parallel=True, cache=True)
+def distance_to_faces(points, vertices, faces, candidates):
+    """Distance from each point to its candidate faces (row of face indices, −1 = none); all if empty."""
+    out = np.empty(points.shape[0])
+    for p in prange(points.shape[0]):
+        t = np.empty((3, 3))
+        best = np.inf
+        count = candidates.shape[1] if candidates.shape[0] else faces.shape[0]
+        for c in range(count):
+            f = candidates[p, c] if candidates.shape[0] else c
+            if f < 0:
+                continue
+            for v in range(3):
+                t[v] = vertices[faces[f, v]]
+            d2 = _point_triangle_distance2(points[p, 0], points[p, 1], points[p, 2], t)
+            if d2 < best:
+                best = d2
+        out[p] = np.sqrt(best)
+    return out
+
+
+class ExactGrain:
+    """The exact solid base mesh ∪ spheres: signed distance at points, surface samples, volume."""
+
+    def __init__(self, mesh, spheres, rng):
+        self.vertices, self.faces = mesh.vertices, mesh.faces
+        self.centers, self.radii = spheres.centers, spheres.radii
+        self.rng = rng
+
+    def signed_distance(self, points):
+        """max(mesh, spheres) signed distance (exact outside the solid, a lower bound just inside)."""
+        none = np.empty((0, 1), np.int64)
+        d_mesh = distance_to_faces(points, self.vertices, self.faces, none)
+        d_mesh = np.where(winding_numbers(points, self.vertices, self.faces) > 0.5, d_mesh, -d_mesh)
+        d_sph = (self.radii - np.linalg.norm(points[:, None] - self.centers[None], axis=2)).max(axis=1)
+        return np.maximum(d_mesh, d_sph)
+
+    def surface_samples(self, count):
+        """Points on the boundary of the union: mesh samples outside every sphere, sphere samples outside the rest."""
+        on_mesh = surface_points(self.vertices, self.faces, count, self.rng)
+        keep = (np.linalg.norm(on_mesh[:, None] - self.centers[None], axis=2) > self.radii).all(axis=1)
+        samples = [on_mesh[keep]]
+        area = self.radii ** 2
+        per = np.maximum((count * area / area.sum()).astype(int), 8)
+        for c, r, n in zip(self.centers, self.radii, per):
+            d = self.rng.normal(size=(n, 3))
+            p = c + r * d / np.linalg.norm(d, axis=1, keepdims=True)
+            others = np.linalg.norm(p[:, None] - self.centers[None], axis=2) < self.radii - 1e-12
+            outside = ~others.any(axis=1) & (winding_numbers(p, self.vertices, self.faces) < 0.5)
+            samples.append(p[outside])
+        return np.concatenate(samples)
+
+    def volume(self, resolution=400):
+        """Volume by counting cell centres of a randomly shifted fine grid (stratified sampling)."""
+        lo = np.minimum(self.vertices.min(0), (self.centers - self.radii[:, None]).min(0))
+        hi = np.maximum(self.vertices.max(0), (self.centers + self.radii[:, None]).max(0))
+        h = float((hi - lo).max()) / resolution
+        shape = tuple(int(n) for n in np.ceil((hi - lo) / h) + 2)
+        grid = Grid(lo - h + self.rng.uniform(0, h, 3), h, shape)
+        inside = mesh_occupancy(grid, self.vertices, self.faces) | (sphere_field(grid, self.centers, self.radii, 1.0) > 0)
+        return inside.sum() * h ** 3
+
+
+def surface_errors(exact: ExactGrain, vertices, faces, samples):
+    """Two-sided Hausdorff and mean distance between the remeshed and the exact surface (mm)."""
+    from scipy.spatial import cKDTree
+    import trimesh
+
+    forward = np.abs(exact.signed_distance(vertices))
+    vertex_faces = trimesh.Trimesh(vertices, faces, process=False).vertex_faces
+    _, near = cKDTree(vertices).query(samples, k=6)
+    candidates = vertex_faces[near].reshape(len(samples), -1)
+    backward = distance_to_faces(samples, vertices, faces, np.ascontiguousarray(candidates, np.int64))
+    hausdorff = max(forward.max(), backward.max())
+    mean = 0.5 * (forward.mean() + backward.mean())
+    return hausdorff, mean
+
+
+def grain_chain(mesh, seed, resolution, method, target_faces=None, expansion=(1.0, 1.0), reach=0.0):
+    """The recipe's chain for one grain; returns every intermediate value and the wall time.
+
+    ``reach`` (mm): make the exact band at least this wide (for offset surfaces).
+    """
+    t0 = time.perf_counter()
+    ctx = Context.standalone(seed=seed)
+    spheres = sphere_scatter(ctx, mesh=mesh, **params(sphere_scatter))
+    volume = voxelise(ctx, mesh=mesh, spheres=spheres, **params(voxelise, resolution=resolution))
+    band = max(3, int(np.ceil(reach / volume.voxel_size)) + 1)
+    field = distance_field(ctx, volume=volume, mesh=mesh, spheres=spheres,
+                           **params(distance_field, method=method, band=band))
+    grown = expand(Context.standalone(seed=seed), field=field, **params(expand, expansion=expansion))
+    grain = remesh(ctx, field=grown, **params(remesh, target_faces=target_faces))
+    return spheres, volume, field, grain, time.perf_counter() - t0
+
+
+def sweep(resolutions, grains, samples):
+    mesh = base_mesh(Context.standalone(), **params(base_mesh))
+    length = float(np.ptp(mesh.vertices[:, 0]))
+    grain_chain(mesh, 0, 32, "exact")  # warm JIT and imports
+    rows = []
+    references = {}
+    for resolution in resolutions:
+        for method in METHODS:
+            times, haus, mean, mean_vox, vol_err, tris, offset = [], [], [], [], [], [], []
+            for seed in range(grains):
+                spheres, volume, field, grain, seconds = grain_chain(mesh, seed, resolution, method,
+                                                                     reach=abs(OFFSET_MM))
+                times.append(seconds)
+                if seed not in references:
+                    exact = ExactGrain(mesh, spheres, np.random.default_rng(seed))
+                    references[seed] = (exact, exact.surface_samples(samples), exact.volume())
+                exact, points, true_volume = references[seed]
+                v, f = grain_surface(np.asarray(field.data), field.origin, field.voxel_size, 0.0, 0, None)
+                h, m = surface_errors(exact, v, f, points)
+                haus.append(h / length)
+                mean.append(m / length)
+                mean_vox.append(m / field.voxel_size)
+                import trimesh
+
+                vol_err.append(trimesh.Trimesh(v, f, process=False).volume / true_volume - 1.0)
+                tris.append(len(grain.faces))
+                v, f = grain_surface(np.asarray(field.data), field.origin, field.voxel_size, OFFSET_MM, 0, None)
+                offset.append(np.abs(exact.signed_distance(v) - OFFSET_MM).mean() / field.voxel_size)
+            rows.append({"resolution": resolution, "method": method, "grid": "×".join(map(str, volume.data.shape)),
+                         "ms_per_grain": 1e3 * float(np.median(times)), "hausdorff": float(np.mean(haus)),
+                         "mean": float(np.mean(mean)), "mean_voxels": float(np.mean(mean_vox)),
+                         "volume_error": float(np.mean(vol_err)), "triangles": int(np.mean(tris)),
+                         "offset_voxels": float(np.mean(offset))})
+            r = rows[-1]
+            print(f"{resolution:4d} {method:9s} {r['grid']:>12s} {r['ms_per_grain']:8.1f} ms  "
+                  f"H {100 * r['hausdorff']:6.3f} %  mean {100 * r['mean']:6.3f} % ({r['mean_voxels']:.3f} vox)  "
+                  f"vol {100 * r['volume_error']:+6.2f} %  {r['triangles']} tris  offset {r['offset_voxels']:.3f} vox",
+                  flush=True)
+    return rows, length
+
+
+def sixteen_grains(resolution, repeats):
+    """16 japonica grains as graphs/rice_grains.yaml builds them (exact route, P = 1.5, 2000 faces)."""
+    mesh = base_mesh(Context.standalone(), **params(base_mesh))
+    out = {}
+    for label, target in (("no budget", None), ("target_faces 2000", 2000)):
+        grain_chain(mesh, 99, resolution, "exact", target, (1.5, 1.5))  # warm
+        best = np.inf
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            for seed in range(16):
+                grain_chain(mesh, seed, resolution, "exact", target, (1.5, 1.5))
+            best = min(best, time.perf_counter() - t0)
+        out[label] = best
+        print(f"16 grains at resolution {resolution} ({label}): {best:.3f} s (best of {repeats})", flush=True)
+    return out
+
+
+def memory_child(resolution: int, shape: str, method: str) -> None:
+    """Run one element at ``resolution`` and print its peak resident set (MiB) as JSON."""
+    mesh = base_mesh(Context.standalone(), **params(base_mesh, shape=shape))
+    t0 = time.perf_counter()
+    spheres, volume, field, grain, _ = grain_chain(mesh, 0, resolution, method)
+    seconds = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(json.dumps({"peak_mib": peak, "grid": list(volume.data.shape), "seconds": seconds,
+                      "triangles": len(grain.faces)}))
+
+
+def baseline_child() -> None:
+    """Peak resident set after imports and a tiny warm run: subtract to get what an element adds."""
+    mesh = base_mesh(Context.standalone(), **params(base_mesh))
+    grain_chain(mesh, 0, 32, "exact")
+    print(json.dumps({"peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}))
+
+
+def measure_memory(resolution):
+    rows = []
+    script = str(Path(__file__).resolve())
+    base = json.loads(subprocess.run([sys.executable, script, "--baseline-child"], capture_output=True, text=True,
+                                     check=True).stdout.strip().splitlines()[-1])["peak_mib"]
+    for shape, method in (("rice", "exact"), ("rice", "euclidean"), ("ikura", "exact")):
+        run = subprocess.run([sys.executable, script, "--memory-child", str(resolution), shape, method],
+                             capture_output=True, text=True, check=True)
+        r = json.loads(run.stdout.strip().splitlines()[-1])
+        r.update(shape=shape, method=method, baseline_mib=base)
+        rows.append(r)
+        print(f"resolution {resolution} {shape} {method}: grid {'×'.join(map(str, r['grid']))}, peak RSS "
+              f"{r['peak_mib']:.0f} MiB (imports + warm run alone: {base:.0f} MiB), {r['seconds']:.2f} s", flush=True)
+    return rows
+
+
+def write_results(rows, length, sixteen, memory, resolution):
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    lines = [f"Grain: japonica base 5 × 3 × 2 mm + 40 spheres r ∈ [0.2, 0.5] mm (length L = {length:.2f} mm), "
+             "P = 1; errors against the exact surface of mesh ∪ spheres, mean of the grains.", "",
+             f"Offset: surface at level {OFFSET_MM} mm, mean |SDF − level| of its vertices (voxels).", "",
+             "| res | method | grid | ms/grain | Hausdorff (L) | mean (L) | mean (voxels) | volume err | triangles "
+             "| offset mean (voxels) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['resolution']} | {r['method']} | {r['grid']} | {r['ms_per_grain']:.1f} | "
+                     f"{100 * r['hausdorff']:.3f} % | {100 * r['mean']:.3f} % | {r['mean_voxels']:.3f} | "
+                     f"{100 * r['volume_error']:+.2f} % | {r['triangles']} | {r['offset_voxels']:.3f} |")
+    lines += ["", f"16 japonica grains, resolution {resolution}, exact route, P = 1.5 (best of repeats, warm):", ""]
+    lines += [f"- {label}: {seconds:.3f} s ({1e3 * seconds / 16:.0f} ms/grain)" for label, seconds in sixteen.items()]
+    lines += ["", "Peak resident memory of one element (child process):", ""]
+    lines += [f"- {m['shape']} {m['method']}, grid {'×'.join(map(str, m['grid']))}: {m['peak_mib']:.0f} MiB "
+              f"(imports + warm-up alone {m['baseline_mib']:.0f} MiB), {m['seconds']:.2f} s" for m in memory]
+    (RESULTS / "bench_elements.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    for method in METHODS:
+        sel = [r for r in rows if r["method"] == method]
+        res = [r["resolution"] for r in sel]
+        axes[0].plot(res, [r["ms_per_grain"] for r in sel], "o-", label=method)
+        axes[1].plot(res, [100 * r["mean"] for r in sel], "o-", label=f"{method} mean")
+        axes[1].plot(res, [100 * r["hausdorff"] for r in sel], "x--", label=f"{method} Hausdorff")
+        axes[2].plot(res, [100 * abs(r["volume_error"]) for r in sel], "o-", label=method)
+    axes[0].set(xlabel="resolution (cells along the grain)", ylabel="ms per grain", yscale="log",
+                title="time per grain (warm)")
+    axes[1].set(xlabel="resolution", ylabel="% of grain length", yscale="log", title="surface error")
+    axes[2].set(xlabel="resolution", ylabel="|volume error| %", yscale="log", title="volume error")
+    for ax in axes:
+        ax.axvline(resolution, color="grey", lw=0.8)
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(RESULTS / "bench_elements.png", dpi=110)
+    print(f"wrote {RESULTS / 'bench_elements.md'} and {RESULTS / 'bench_elements.png'}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="two resolutions, one grain: a smoke run")
+    parser.add_argument("--memory-child", nargs=3, metavar=("RES", "SHAPE", "METHOD"), help=argparse.SUPPRESS)
+    parser.add_argument("--baseline-child", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.memory_child:
+        memory_child(int(args.memory_child[0]), args.memory_child[1], args.memory_child[2])
+        return
+    if args.baseline_child:
+        baseline_child()
+        return
+    from nodes.elements.voxelise import DEFAULT_RESOLUTION
+
+    resolutions = (32, 64) if args.quick else RESOLUTIONS
+    rows, length = sweep(resolutions, grains=1 if args.quick else 3, samples=2000 if args.quick else 20000)
+    sixteen = sixteen_grains(DEFAULT_RESOLUTION, repeats=1 if args.quick else 3)
+    memory = measure_memory(64 if args.quick else 256)
+    write_results(rows, length, sixteen, memory, DEFAULT_RESOLUTION)
+
+
+if __name__ == "__main__":
+    main()
