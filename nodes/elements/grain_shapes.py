@@ -57,14 +57,18 @@ def icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def volume_centroid(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, np.ndarray]:
-    """Signed volume and centroid of a closed mesh (divergence theorem over origin tetrahedra)."""
-    a, b, c = (vertices[faces[:, i]] for i in range(3))
+    """Signed volume and centroid of a closed mesh (divergence theorem over tetrahedra).
+
+    The tetrahedra meet at the vertex mean, not the origin, so a mesh far away loses no precision.
+    """
+    reference = vertices.mean(axis=0)
+    a, b, c = (vertices[faces[:, i]] - reference for i in range(3))
     six_v = np.einsum("ij,ij->i", a, np.cross(b, c))
     volume = six_v.sum() / 6.0
     if volume == 0.0:
-        return 0.0, vertices.mean(axis=0)
+        return 0.0, reference
     centroid = ((a + b + c) * six_v[:, None]).sum(axis=0) / (24.0 * volume)
-    return volume, centroid
+    return volume, reference + centroid
 
 
 def rice_grain(length: float, width: float, thickness: float, bluntness: float = 0.8,

@@ -1,0 +1,131 @@
+"""base_mesh presets and user mesh files — SPEC §1.1."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodes.elements import base_mesh
+from nodes.elements.grain_shapes import RICE_VARIETIES, volume_centroid
+from nodes.elements.mesh_files import MeshFileError, load_element_mesh
+
+from .conftest import as_trimesh, run
+
+
+@pytest.mark.parametrize("variety", sorted(RICE_VARIETIES))
+def test_rice_presets_are_closed_centred_and_scaled(variety):
+    mesh = run(base_mesh, variety=variety)
+    tm = as_trimesh(mesh)
+    assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
+    _, centroid = volume_centroid(mesh.vertices, mesh.faces)
+    assert np.allclose(centroid, 0.0, atol=1e-9)
+    extent = np.ptp(mesh.vertices, axis=0)
+    assert extent[0] == pytest.approx(5.0 * RICE_VARIETIES[variety].length_factor, rel=1e-6)
+    assert extent[0] > extent[1] > extent[2]  # long axis x, thickness z
+    assert extent[2] == pytest.approx(2.0, rel=1e-6)
+
+
+def test_ikura_parts_and_yolk_radius():
+    mesh = run(base_mesh, shape="ikura", diameter=4.0, lipid_fraction=0.145)
+    assert set(np.unique(mesh.parts)) == {0, 1}
+    outer = mesh.vertices[np.unique(mesh.faces[mesh.parts == 0])]
+    yolk = mesh.vertices[np.unique(mesh.faces[mesh.parts == 1])]
+    r_i = np.linalg.norm(outer, axis=1).max()
+    r_o = np.linalg.norm(yolk, axis=1).max()
+    assert r_i == pytest.approx(2.0)
+    assert r_o == pytest.approx(r_i * 0.145 ** (1 / 3))  # SPEC §1 Reading: r_o = r_i·∛L
+    for part in (0, 1):
+        shell = as_trimesh(type(mesh)(mesh.vertices, mesh.faces[mesh.parts == part]))
+        shell.remove_unreferenced_vertices()
+        assert shell.is_watertight and shell.volume > 0
+
+
+def test_ice_flake_is_thin_irregular_and_depends_on_shape_seed():
+    a = run(base_mesh, shape="ice_flake")
+    b = run(base_mesh, shape="ice_flake", shape_seed=3)
+    tm = as_trimesh(a)
+    assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
+    extent = np.ptp(a.vertices, axis=0)
+    assert extent[2] < 0.2 * extent[0]
+    assert not np.allclose(a.vertices, b.vertices)  # the outline depends on shape_seed
+    rim = a.vertices[:-2, :2] / (np.ptp(a.vertices[:, :2], axis=0) / 2)
+    assert np.ptp(np.linalg.norm(rim, axis=1)) > 0.1  # not an ellipse: irregular outline
+
+
+def test_user_mesh_is_recentred_and_aligned(tmp_path):
+    import trimesh
+
+    box = trimesh.creation.box(extents=(2.0, 6.0, 1.0))
+    box.apply_transform(trimesh.transformations.rotation_matrix(0.4, [1, 1, 0]))
+    box.apply_translation([1e5, -3e4, 7.0])  # far from the origin
+    path = tmp_path / "box.obj"  # written by hand: full float64 precision (STL is float32)
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in box.vertices.tolist()] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in box.faces.tolist()]
+    path.write_text("\n".join(lines) + "\n")
+    mesh = run(base_mesh, shape="file", path=str(path))
+    extent = np.ptp(mesh.vertices, axis=0)
+    assert extent == pytest.approx([6.0, 2.0, 1.0], rel=1e-6)
+    assert np.allclose(mesh.vertices.mean(axis=0), 0.0, atol=1e-6)
+    assert as_trimesh(mesh).volume == pytest.approx(12.0, rel=1e-9)
+
+
+def test_inverted_mesh_is_repaired(tmp_path):
+    import trimesh
+
+    box = trimesh.creation.box(extents=(3.0, 2.0, 1.0))
+    box.invert()
+    path = tmp_path / "inverted.ply"
+    box.export(path)
+    vertices, faces = load_element_mesh(path)
+    assert trimesh.Trimesh(vertices, faces, process=False).volume == pytest.approx(6.0)
+
+
+def test_degenerate_faces_are_dropped(tmp_path):
+    import trimesh
+
+    box = trimesh.creation.box(extents=(3.0, 2.0, 1.0))
+    faces = np.vstack([box.faces, [[0, 0, 1], [2, 2, 2]]])  # zero-area faces
+    path = tmp_path / "degenerate.off"
+    trimesh.Trimesh(box.vertices, faces, process=False).export(path)
+    vertices, faces = load_element_mesh(path)
+    assert len(faces) == 12
+
+
+def test_open_mesh_is_refused(tmp_path):
+    import trimesh
+
+    box = trimesh.creation.box()
+    path = tmp_path / "open.stl"
+    trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(path)
+    with pytest.raises(MeshFileError, match="not closed"):
+        run(base_mesh, shape="file", path=str(path))
+
+
+def test_flat_mesh_is_refused(tmp_path):
+    # Two triangles back to back: closed, but encloses no volume.
+    path = tmp_path / "flat.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2\n")
+    with pytest.raises(MeshFileError, match="zero volume|not closed"):
+        load_element_mesh(path)
+
+
+def test_nan_in_file_is_refused(tmp_path):
+    path = tmp_path / "nan.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 nan 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n")
+    with pytest.raises(MeshFileError, match="NaN"):
+        load_element_mesh(path)
+
+
+def test_missing_and_unreadable_files_are_refused(tmp_path):
+    with pytest.raises(MeshFileError, match="not found"):
+        load_element_mesh(tmp_path / "nope.stl")
+    junk = tmp_path / "junk.stl"
+    junk.write_bytes(b"\x00\x01 not a mesh")
+    with pytest.raises(MeshFileError):
+        load_element_mesh(junk)
+
+
+def test_parameter_combinations_are_checked():
+    problems = base_mesh.check(base_mesh.resolve_params({"shape": "file"}))
+    assert [p for p, _ in problems] == ["path"]
+    problems = base_mesh.check(base_mesh.resolve_params({"shape": "ikura", "size": (1.0, 1.0, 1.0)}))
+    assert [p for p, _ in problems] == ["size"]
