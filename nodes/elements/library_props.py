@@ -30,7 +30,8 @@ def element_props(meshes: list) -> dict[str, np.ndarray]:
                      float(np.linalg.norm(tm.vertices - centre, axis=1).max()), inradius, *extent))
     table = np.array(rows)
     names = ("expansion", "volume", "circumradius", "inradius", "length", "width", "thickness")
-    return {name: np.ascontiguousarray(table[:, k]) for k, name in enumerate(names)}
+    # Keys in sorted order: the codec decodes dicts sorted, so equal libraries then encode equally.
+    return {name: np.ascontiguousarray(table[:, names.index(name)]) for name in sorted(names)}
 
 
 def surface_distance(point: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> float:

@@ -59,7 +59,8 @@ def test_user_mesh_is_recentred_and_aligned(tmp_path):
     box.apply_transform(trimesh.transformations.rotation_matrix(0.4, [1, 1, 0]))
     box.apply_translation([1e5, -3e4, 7.0])  # far from the origin
     path = tmp_path / "box.obj"  # written by hand: full float64 precision (STL is float32)
-    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in box.vertices.tolist()] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in box.faces.tolist()]
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in box.vertices.tolist()]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in box.faces.tolist()]
     path.write_text("\n".join(lines) + "\n")
     mesh = run(base_mesh, shape="file", path=str(path))
     extent = np.ptp(mesh.vertices, axis=0)
