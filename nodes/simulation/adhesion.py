@@ -1,0 +1,46 @@
+"""Clumping: breakable adhesion between particles of different elements — SPEC §3, issue 6.
+
+Houdini has no grain "clumping"; we define it as an attractive distance constraint C = gap
+(gap = |x_i − x_j| − r_i − r_j) for 0 < gap ≤ capture radius, with compliance from the adhesion
+strength. A bond breaks (exerts nothing) once the gap exceeds the capture radius, so bonds hold no
+state and λ is not accumulated across iterations. Jacobi with averaging.
+"""
+
+from numba import njit, prange
+
+from .contact_constraints import pair_normal
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def adhesion_project(x, w, r, nbr_start, nbr, capture, alpha_tilde, out):
+    """One Jacobi sweep pulling near-touching pairs together; ``capture`` in length units,
+    ``alpha_tilde`` = compliance / h² (larger is weaker). Writes to ``out`` (no aliasing)."""
+    n = x.shape[0]
+    for i in prange(n):
+        ax = 0.0
+        ay = 0.0
+        az = 0.0
+        count = 0
+        wi = w[i]
+        for a in range(nbr_start[i], nbr_start[i + 1]):
+            j = nbr[a]
+            wsum = wi + w[j]
+            if wsum <= 0.0:
+                continue
+            nx, ny, nz, d = pair_normal(x, i, j)
+            gap = d - r[i] - r[j]
+            if gap <= 0.0 or gap > capture:
+                continue
+            s = -gap * wi / (wsum + alpha_tilde)
+            ax += s * nx
+            ay += s * ny
+            az += s * nz
+            count += 1
+        if count > 0:
+            out[i, 0] = x[i, 0] + ax / count
+            out[i, 1] = x[i, 1] + ay / count
+            out[i, 2] = x[i, 2] + az / count
+        else:
+            out[i, 0] = x[i, 0]
+            out[i, 1] = x[i, 1]
+            out[i, 2] = x[i, 2]

@@ -1,0 +1,58 @@
+"""Buoyant parts inside an element: the ikura yolk rising through the white — SPEC §1 (G ch.5).
+
+The yolk (mesh faces with ``parts == 1``) is a particle of its own inside its egg's cluster. In the
+white of density ρ_w it feels gravity plus buoyancy, a = g·(1 − ρ_w/ρ_y) (upward when ρ_y < ρ_w),
+a viscous drag towards the egg's velocity, and a containment constraint |x_y − c_egg| ≤ R_in − r_y
+that keeps it inside the membrane. Its reaction on the much heavier egg (≈ 15 % of its mass) is
+neglected.
+"""
+
+import numpy as np
+from numba import njit, prange
+
+from .shape_matching import quat_to_matrix
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def yolk_predict(yx, yv, y_prev, x, v, w, start, owner, accel, h, drag_rate):
+    """Drag the yolk velocity towards its egg's mean velocity, add buoyant acceleration, move."""
+    k = yx.shape[0]
+    relax = np.exp(-drag_rate * h)
+    for y in prange(k):
+        c = owner[y]
+        ev = np.zeros(3)
+        total = 0.0
+        for i in range(start[c], start[c + 1]):
+            m = 1.0 / w[i] if w[i] > 0.0 else 1e12
+            total += m
+            for d in range(3):
+                ev[d] += m * v[i, d]
+        for d in range(3):
+            ev[d] /= total
+            y_prev[y, d] = yx[y, d]
+            yv[y, d] = ev[d] + (yv[y, d] - ev[d]) * relax + h * accel[d]
+            yx[y, d] += h * yv[y, d]
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def yolk_contain(yx, yv, y_prev, x, w, start, quats, owner, centre_local, room, h):
+    """Project each yolk back inside its egg (|x_y − c| ≤ room) and set v = Δx/h."""
+    k = yx.shape[0]
+    for y in prange(k):
+        c = owner[y]
+        cm = np.zeros(3)
+        total = 0.0
+        for i in range(start[c], start[c + 1]):
+            m = 1.0 / w[i] if w[i] > 0.0 else 1e12
+            total += m
+            for d in range(3):
+                cm[d] += m * x[i, d]
+        rot = np.empty((3, 3))
+        quat_to_matrix(quats[c], rot)
+        centre = cm / total + rot @ centre_local[y]
+        off = yx[y] - centre
+        dist = np.sqrt(off @ off)
+        if dist > room[y]:
+            yx[y] = centre + off * (room[y] / dist)
+        for d in range(3):
+            yv[y, d] = (yx[y, d] - y_prev[y, d]) / h

@@ -1,0 +1,77 @@
+"""Substep prediction and velocity update — SPEC §3 (XPBD: predict x̃, solve, v = (xⁿ⁺¹ − xⁿ)/Δt).
+
+The speed clamp (|v| ≤ clamp·r/h, one radius per substep by default) is what keeps a particle
+from crossing a wall or another particle between two projections; it is always on (stability,
+not an effect). Damping and sleeping act on velocities only.
+"""
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(cache=True, inline="always")
+def _clamp(v, i, vmax):
+    s = np.sqrt(v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2)
+    if s > vmax:
+        f = vmax / s
+        v[i, 0] *= f
+        v[i, 1] *= f
+        v[i, 2] *= f
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def predict(x, v, w, r, accel, h, clamp, x_prev):
+    """x_prev ← x; v += h·a (a per particle, (n, 3), or one row for all); clamp; x ← x + h·v."""
+    n = x.shape[0]
+    stride = 1 if accel.shape[0] == n else 0
+    for i in prange(n):
+        for k in range(3):
+            x_prev[i, k] = x[i, k]
+        if w[i] <= 0.0:
+            continue
+        row = i * stride
+        for k in range(3):
+            v[i, k] += h * accel[row, k]
+        _clamp(v, i, clamp * r[i] / h)
+        for k in range(3):
+            x[i, k] += h * v[i, k]
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def update_velocity(x, x_prev, v, r, h, clamp, damping_factor):
+    """v = (x − x_prev)/h, clamped, times the damping factor (1 = none); zero restitution."""
+    n = x.shape[0]
+    for i in prange(n):
+        for k in range(3):
+            v[i, k] = (x[i, k] - x_prev[i, k]) / h * damping_factor
+        _clamp(v, i, clamp * r[i] / h)
+
+
+@njit(cache=True, parallel=True)
+def sleep_clusters(v, start, sleep_speed, asleep):
+    """Zero the velocities of every element whose fastest particle is below ``sleep_speed``.
+
+    Sleeping here removes jitter (no kinetic energy creeps into resting piles); the element is
+    re-tested every substep, so anything that pushes it wakes it.
+    """
+    m = start.shape[0] - 1
+    for c in prange(m):
+        fastest = 0.0
+        for i in range(start[c], start[c + 1]):
+            fastest = max(fastest, v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2)
+        asleep[c] = fastest < sleep_speed * sleep_speed
+        if asleep[c]:
+            for i in range(start[c], start[c + 1]):
+                v[i, 0] = 0.0
+                v[i, 1] = 0.0
+                v[i, 2] = 0.0
+
+
+@njit(cache=True)
+def kinetic_energy(v, w):
+    """½ Σ m |v|² over particles with finite mass."""
+    e = 0.0
+    for i in range(v.shape[0]):
+        if w[i] > 0.0:
+            e += 0.5 * (v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2) / w[i]
+    return e

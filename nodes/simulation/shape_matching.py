@@ -1,0 +1,175 @@
+"""Shape-matching cluster constraint per element — SPEC §5 (Müller et al. 2005), as an XPBD
+constraint (Macklin et al. 2016) with linear deformation (U eq. 3.19).
+
+The rotation of A_pq is extracted with Müller et al. 2016 ("A robust method to extract the
+rotational part of deformations"): a quaternion warm-started from the previous step, which always
+returns a proper rotation and leaves the unobservable axis alone when the cluster is collinear or
+planar — where Jacobi-on-AᵀA / SVD polar decompositions flip or blow up. 3×3 algebra is written
+out on scratch arrays: temporaries allocated per cluster per iteration cost more than the maths.
+"""
+
+import numpy as np
+from numba import njit, prange
+
+BLOCK = 64  # clusters per parallel task (one scratch allocation per block)
+
+
+@njit(cache=True, inline="always")
+def quat_to_matrix(q, out):
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    out[0, 0] = 1 - 2 * (y * y + z * z)
+    out[0, 1] = 2 * (x * y - w * z)
+    out[0, 2] = 2 * (x * z + w * y)
+    out[1, 0] = 2 * (x * y + w * z)
+    out[1, 1] = 1 - 2 * (x * x + z * z)
+    out[1, 2] = 2 * (y * z - w * x)
+    out[2, 0] = 2 * (x * z - w * y)
+    out[2, 1] = 2 * (y * z + w * x)
+    out[2, 2] = 1 - 2 * (x * x + y * y)
+
+
+@njit(cache=True)
+def extract_rotation(a, q, max_iter, rot):
+    """Rotate quaternion ``q`` (in place, w-x-y-z) towards the rotation of ``a`` (Müller 2016 eq. 7);
+    ``rot`` is 3×3 scratch and ends holding the rotation matrix."""
+    for _ in range(max_iter):
+        quat_to_matrix(q, rot)
+        ox = 0.0
+        oy = 0.0
+        oz = 0.0
+        dot = 0.0
+        for c in range(3):
+            rx, ry, rz = rot[0, c], rot[1, c], rot[2, c]
+            ax, ay, az = a[0, c], a[1, c], a[2, c]
+            ox += ry * az - rz * ay
+            oy += rz * ax - rx * az
+            oz += rx * ay - ry * ax
+            dot += rx * ax + ry * ay + rz * az
+        inv = 1.0 / (abs(dot) + 1e-9)
+        ox *= inv
+        oy *= inv
+        oz *= inv
+        angle = np.sqrt(ox * ox + oy * oy + oz * oz)
+        if angle < 1e-9:
+            break
+        s = np.sin(0.5 * angle) / angle
+        dw, dx, dy, dz = np.cos(0.5 * angle), ox * s, oy * s, oz * s
+        w0, x0, y0, z0 = q[0], q[1], q[2], q[3]
+        q[0] = dw * w0 - dx * x0 - dy * y0 - dz * z0
+        q[1] = dw * x0 + dx * w0 + dy * z0 - dz * y0
+        q[2] = dw * y0 - dx * z0 + dy * w0 + dz * x0
+        q[3] = dw * z0 + dx * y0 - dy * x0 + dz * w0
+        norm = np.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+        for k in range(4):
+            q[k] /= norm
+    quat_to_matrix(q, rot)
+
+
+@njit(cache=True, inline="always")
+def _mass(w):
+    return 1.0 / w if w > 0.0 else 1e12
+
+
+@njit(cache=True, inline="always")
+def _det3(a):
+    return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+            + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+
+
+@njit(cache=True)
+def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta, rot_iters, apq, rot, goal):
+    """Project one cluster; returns its max |C|."""
+    total = 0.0
+    cx = 0.0
+    cy = 0.0
+    cz = 0.0
+    for i in range(s, e):
+        m = _mass(w[i])
+        total += m
+        cx += m * x[i, 0]
+        cy += m * x[i, 1]
+        cz += m * x[i, 2]
+    cx /= total
+    cy /= total
+    cz /= total
+    apq[:, :] = 0.0
+    for i in range(s, e):
+        m = _mass(w[i])
+        px = m * (x[i, 0] - cx)
+        py = m * (x[i, 1] - cy)
+        pz = m * (x[i, 2] - cz)
+        for c in range(3):
+            apq[0, c] += px * q_rest[i, c]
+            apq[1, c] += py * q_rest[i, c]
+            apq[2, c] += pz * q_rest[i, c]
+    extract_rotation(apq, quat, rot_iters, rot)
+    goal[:, :] = rot
+    if beta > 0.0:
+        # A = A_pq·A_qq⁺ + R·P_null (unobservable axes follow R), volume-normalised (SPEC §5)
+        for r_ in range(3):
+            for c in range(3):
+                v = 0.0
+                for k in range(3):
+                    v += apq[r_, k] * pinv[k, c] + rot[r_, k] * null[k, c]
+                goal[r_, c] = v
+        det = _det3(goal)
+        if det > 1e-6:
+            f = beta / np.cbrt(det)
+            for r_ in range(3):
+                for c in range(3):
+                    goal[r_, c] = f * goal[r_, c] + (1.0 - beta) * rot[r_, c]
+        else:
+            goal[:, :] = rot
+    res = 0.0
+    cm = (cx, cy, cz)
+    for i in range(s, e):
+        for k in range(3):
+            g = cm[k] + goal[k, 0] * q_rest[i, 0] + goal[k, 1] * q_rest[i, 1] + goal[k, 2] * q_rest[i, 2]
+            cval = x[i, k] - g
+            res = max(res, abs(cval))
+            dl = (-cval - alpha_tilde * lam[i, k]) / (w[i] + alpha_tilde)
+            lam[i, k] += dl
+            x[i, k] += w[i] * dl
+    return res
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def shape_match_project(x, w, q_rest, start, quats, aqq_pinv, null_proj, lam, alpha_tilde, beta, rot_iters):
+    """One XPBD sweep of C_i = x_i − g_i per particle, g_i = (β·A + (1−β)·R)·q_i + x_cm (SPEC §5).
+
+    Clusters are disjoint, so the loop over clusters is race-free and updates ``x`` in place.
+    ``lam`` (n, 3) accumulates λ over the iterations of a substep; returns the max |C| seen.
+    """
+    m = start.shape[0] - 1
+    worst = np.zeros(m)
+    blocks = (m + BLOCK - 1) // BLOCK
+    for b in prange(blocks):
+        apq = np.empty((3, 3))
+        rot = np.empty((3, 3))
+        goal = np.empty((3, 3))
+        for c in range(b * BLOCK, min(m, (b + 1) * BLOCK)):
+            if start[c + 1] - start[c] < 2:
+                continue
+            worst[c] = _match_cluster(x, w, q_rest, start[c], start[c + 1], quats[c], aqq_pinv[c], null_proj[c],
+                                      lam, alpha_tilde, beta, rot_iters, apq, rot, goal)
+    return worst.max() if m > 0 else 0.0
+
+
+def rest_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, tolerance: float = 1e-6):
+    """Per cluster A_qq⁺ (pseudo-inverse of Σ m q qᵀ) and the projector on its null space.
+
+    Collinear/planar clusters have a singular A_qq; the pseudo-inverse fits what the particles can
+    observe and the null-space projector lets those axes follow the rotation only (SPEC §5).
+    """
+    m = len(start) - 1
+    pinv = np.zeros((m, 3, 3))
+    null = np.zeros((m, 3, 3))
+    mass = np.where(w > 0, 1.0 / np.maximum(w, 1e-300), 1e12)
+    for c in range(m):
+        q = q_rest[start[c]:start[c + 1]]
+        aqq = (q * mass[start[c]:start[c + 1], None]).T @ q
+        vals, vecs = np.linalg.eigh(aqq)
+        keep = vals > tolerance * max(vals.max(), 1e-300)
+        pinv[c] = (vecs[:, keep] / vals[keep]) @ vecs[:, keep].T
+        null[c] = vecs[:, ~keep] @ vecs[:, ~keep].T
+    return pinv, null

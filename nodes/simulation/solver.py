@@ -1,0 +1,201 @@
+"""The XPBD substep loop — SPEC §3 (G §3.3; Macklin et al. 2016): predict, iterate constraint
+families, update velocities; only the requested effects allocate buffers and run kernels.
+
+Every kernel call goes through ``KernelDispatch``, which counts calls per constraint family: the
+effects-gating test and the effects-cost benchmark read those counters.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import adhesion, buoyancy, collider, contact_constraints, friction, integrate, shape_matching, spatial_hash
+
+EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
+
+
+class KernelDispatch:
+    """Calls kernels by family name and counts the calls (what ran, and how often)."""
+
+    def __init__(self):
+        self.calls: Counter[str] = Counter()
+
+    def __call__(self, family: str, kernel, *args):
+        self.calls[family] += 1
+        return kernel(*args)
+
+
+@dataclass
+class SolverSettings:
+    """Physical and numerical settings in the solver's units (mm, g, s); see the ``xpbd`` node."""
+
+    effects: frozenset[str]
+    substeps: int = 10
+    iterations: int = 2
+    dt: float = 1.0 / 60.0
+    gravity: float = 9810.0
+    compliance: float = 1e-6  # s²/g; 0 = infinitely stiff clusters, inf = no shape matching
+    linear_deformation: float = 0.0  # β of SPEC §5
+    mu_s: float = 0.6
+    mu_k: float = 0.4
+    capture: float = 0.2  # mm
+    adhesion_compliance: float = 1e-3  # s²/g
+    damping: float = 0.0  # fraction of velocity removed per 1/60 s
+    sleep_speed: float = 0.0  # mm/s
+    speed_clamp: float = 1.0  # particle radii per substep
+    yolk_accel: float = 0.0  # mm/s², upward buoyant acceleration of the yolk
+    yolk_drag: float = 40.0  # 1/s
+    rotation_iterations: int = 8
+
+
+@dataclass
+class Diagnostics:
+    """Per-frame scalars (SPEC §3 log): max penetration / radius, residual, kinetic energy, sleeping share."""
+
+    penetration: list[float] = field(default_factory=list)
+    residual: list[float] = field(default_factory=list)
+    kinetic_energy: list[float] = field(default_factory=list)
+    sleeping: list[float] = field(default_factory=list)
+
+
+class XpbdSolver:
+    """Particles in clusters (CSR ``start``), one per element; yolks optional; colliders optional."""
+
+    def __init__(self, x, r, w, start, q_rest, quats, settings: SolverSettings,
+                 sdf=None, yolks=None, dispatch: KernelDispatch | None = None):
+        s = settings
+        unknown = set(s.effects) - set(EFFECTS)
+        if unknown:
+            raise ValueError(f"unknown effects {sorted(unknown)}; allowed: {', '.join(EFFECTS)}")
+        if s.substeps < 1 or s.iterations < 1 or not s.dt > 0:
+            raise ValueError("substeps and iterations must be ≥ 1 and dt > 0")
+        self.s = s
+        self.dispatch = dispatch or KernelDispatch()
+        self.x = np.ascontiguousarray(x, np.float64).copy()
+        self.v = np.zeros_like(self.x)
+        self.x_prev = np.empty_like(self.x)
+        self.r = np.ascontiguousarray(r, np.float64)
+        self.w = np.ascontiguousarray(w, np.float64)
+        self.start = np.ascontiguousarray(start, np.int64)
+        self.elem = np.repeat(np.arange(len(start) - 1, dtype=np.int64), np.diff(self.start))
+        self.q_rest = np.ascontiguousarray(q_rest, np.float64)
+        self.quats = np.ascontiguousarray(quats, np.float64).copy()
+        self.h = s.dt / s.substeps
+        self.time = 0.0
+        self.diagnostics = Diagnostics()
+        self.asleep = np.zeros(len(start) - 1, np.bool_)
+        self.buffers: dict[str, np.ndarray] = {}
+        # shape matching is the element's own elasticity, not an effect: always on for clusters of ≥ 2
+        self.matching = np.isfinite(s.compliance) and bool(np.any(np.diff(self.start) > 1))
+        if self.matching:
+            self.buffers["lambda"] = np.zeros_like(self.x)
+            self.aqq_pinv, self.null_proj = shape_matching.rest_moments(self.q_rest, self.w, self.start)
+        g = np.array([[0.0, 0.0, -s.gravity]]) if "gravity" in s.effects else np.zeros((1, 3))
+        self.accel = g
+        self.pairs = bool({"contact", "friction", "adhesion"} & s.effects)
+        if self.pairs:
+            self.buffers["scratch"] = np.empty_like(self.x)
+            # Verlet skin: lists hold pairs within contact (+ capture) + skin and are rebuilt only
+            # once some particle has moved half the skin since the last build
+            self.skin = 0.5 * float(self.r.max())
+            self.reach = (s.capture if "adhesion" in s.effects else 0.0) + self.skin
+            self.cell = 2.0 * float(self.r.max()) + self.reach
+            self.buffers["x_built"] = np.full_like(self.x, np.inf)
+        self.sdf = sdf if "collider" in s.effects else None
+        self.yolks = yolks if ("buoyancy" in s.effects and yolks is not None and len(yolks["x"])) else None
+        if self.yolks is not None:
+            self.buffers["yolk_v"] = np.zeros_like(self.yolks["x"])
+            self.buffers["yolk_prev"] = np.empty_like(self.yolks["x"])
+            self.yolk_accel = np.array([0.0, 0.0, s.yolk_accel])
+        self.mu_s = s.mu_s if "friction" in s.effects else 0.0
+        self.mu_k = s.mu_k if "friction" in s.effects else 0.0
+        self.damping_factor = (1.0 - s.damping) ** (self.h * 60.0) if "damping" in s.effects else 1.0
+        self.nbr_start = np.zeros(len(self.x) + 1, np.int64)
+        self.nbr = np.zeros(0, np.int64)
+
+    # -- one substep ------------------------------------------------------------------------
+    def substep(self) -> float:
+        """Advance by h = dt/substeps; returns the largest constraint residual of the last iteration."""
+        s, d, h = self.s, self.dispatch, self.h
+        d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp, self.x_prev)
+        if self.yolks is not None:
+            y = self.yolks
+            d("buoyancy", buoyancy.yolk_predict, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"],
+              self.x, self.v, self.w, self.start, y["owner"], self.yolk_accel, h, s.yolk_drag)
+        if self.pairs and spatial_hash.max_displacement(self.x, self.buffers["x_built"]) > 0.5 * self.skin:
+            self.nbr_start, self.nbr = d("neighbours", spatial_hash.neighbour_lists, self.x, self.r, self.elem,
+                                         self.reach, self.cell)
+            self.buffers["x_built"][:] = self.x
+        if self.matching:
+            self.buffers["lambda"][:] = 0.0
+        alpha = s.compliance / (h * h) if self.matching else 0.0
+        adhesion_alpha = s.adhesion_compliance / (h * h)
+        residual = 0.0
+        for _ in range(s.iterations):
+            residual = 0.0
+            if "contact" in s.effects:
+                self._jacobi("contact", contact_constraints.contact_project, self.x, self.w, self.r,
+                             self.nbr_start, self.nbr)
+            if "friction" in s.effects:
+                self._jacobi("friction", friction.friction_project, self.x, self.x_prev, self.w, self.r,
+                             self.nbr_start, self.nbr, self.mu_s, self.mu_k)
+            if "adhesion" in s.effects:
+                self._jacobi("adhesion", adhesion.adhesion_project, self.x, self.w, self.r, self.nbr_start,
+                             self.nbr, s.capture, adhesion_alpha)
+            # the element's shape is restored after the contacts, the walls have the last word
+            if self.matching:
+                residual = d("shape_matching", shape_matching.shape_match_project, self.x, self.w, self.q_rest,
+                             self.start, self.quats, self.aqq_pinv, self.null_proj, self.buffers["lambda"],
+                             alpha, s.linear_deformation, s.rotation_iterations)
+            if self.sdf is not None:
+                phi, origin, pitch = self.sdf
+                d("collider", collider.collider_project, self.x, self.x_prev, self.r, self.w, phi, origin, pitch,
+                  self.mu_s, self.mu_k)
+        d("integrate", integrate.update_velocity, self.x, self.x_prev, self.v, self.r, h, s.speed_clamp,
+          self.damping_factor)
+        if self.yolks is not None:
+            y = self.yolks
+            d("buoyancy", buoyancy.yolk_contain, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"], self.x,
+              self.w, self.start, self.quats, y["owner"], y["centre"], y["room"], h)
+        if s.sleep_speed > 0:
+            d("sleep", integrate.sleep_clusters, self.v, self.start, s.sleep_speed, self.asleep)
+        self.time += h
+        return residual
+
+    def _jacobi(self, family, kernel, *args):
+        out = self.buffers["scratch"]
+        self.dispatch(family, kernel, *args, out)
+        self.x, self.buffers["scratch"] = out, self.x
+
+    # -- one frame --------------------------------------------------------------------------
+    def frame(self) -> None:
+        """``substeps`` substeps, then the per-frame diagnostics."""
+        residual = 0.0
+        for _ in range(self.s.substeps):
+            residual = self.substep()
+        pen = 0.0
+        if "contact" in self.s.effects:
+            pen = contact_constraints.max_penetration_ratio(self.x, self.r, self.nbr_start, self.nbr)
+        if self.sdf is not None:
+            pen = max(pen, collider.collider_penetration(self.x, self.r, *self.sdf))
+        dg = self.diagnostics
+        dg.penetration.append(float(pen))
+        dg.residual.append(float(residual))
+        dg.kinetic_energy.append(float(integrate.kinetic_energy(self.v, self.w)))
+        dg.sleeping.append(float(self.asleep.mean()) if self.s.sleep_speed > 0 else 0.0)
+
+    def rotations(self) -> np.ndarray:
+        """Current cluster rotations (m, 3, 3) from the warm-started quaternions."""
+        out = np.empty((len(self.quats), 3, 3))
+        for c in range(len(self.quats)):
+            shape_matching.quat_to_matrix(self.quats[c], out[c])
+        return out
+
+    def centres(self) -> np.ndarray:
+        """Mass-weighted cluster centres (m, 3)."""
+        m = np.where(self.w > 0, 1.0 / np.maximum(self.w, 1e-300), 1e12)
+        sums = np.add.reduceat(self.x * m[:, None], self.start[:-1], axis=0)
+        return sums / np.add.reduceat(m, self.start[:-1])[:, None]

@@ -1,0 +1,108 @@
+"""The ``xpbd`` node: relax a placed aggregate into a resting, touching, slightly squashed pile —
+SPEC §3 (G §3.3, XPBD) with shape-matching clusters (SPEC §5). Thin: parses parameters, builds the
+particle state (``setup``), runs ``solver.XpbdSolver`` frame by frame, returns typed values.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nodegraph.node import In, Out, node
+from nodegraph.params import Param
+from nodegraph.values import Aggregate, Mesh, ParticleState
+
+
+def _check(params):
+    problems = []
+    if params.get("mode") == "full" and params.get("frames", 0) < 30:
+        problems.append(("frames", "mode 'full' drops a packed block from above: give it ≥ 30 frames"))
+    return problems
+
+
+@node(
+    "xpbd",
+    version=1,
+    inputs={
+        "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
+        "colliders": In(Mesh, "watertight container / ground solids (mm)", optional=True, many=True),
+    },
+    outputs={
+        "aggregate": Out(Aggregate, "elements at rest: new positions, rotations, per-element deformations"),
+        "particles": Out(ParticleState, "the simulation particles at the last frame"),
+    },
+    params={
+        "mode": Param(str, "short", "short: relax the given placement; full: drop identical elements "
+                      "packed on a regular grid in one orientation (G §3.2.1)", choices=("short", "full")),
+        "frames": Param(int, 60, "frames to simulate", range=(1, 100000), units="frames"),
+        "dt": Param(float, 1 / 60, "frame duration", range=(1e-4, 1.0), units="s"),
+        "substeps": Param(int, 10, "XPBD substeps per frame (accuracy: see the accuracy benchmark)", range=(1, 256)),
+        "iterations": Param(int, 2, "constraint iterations per substep", range=(1, 64)),
+        "particles_per_element": Param(int, 8, "particles per element cluster (G Table 3 'number of points')",
+                                       range=(1, 64)),
+        "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
+        "stiffness": Param(float, 2000.0, "shape-matching stiffness, compliance = 1/stiffness; 0 lets a "
+                           "cluster fall apart", range=(0.0, 100000.0), units="N/m"),
+        "linear_deformation": Param(float, 0.3, "β: share of the volume-preserving linear fit in the goal "
+                                    "(SPEC §5, U eq. 3.19); 0 = rigid goal", range=(0.0, 1.0)),
+        "damping": Param(float, 0.1, "velocity fraction removed per 1/60 s (effect 'damping')", range=(0.0, 1.0)),
+        "friction": Param(float, 1.0, "multiplier on both friction coefficients (effect 'friction')",
+                          range=(0.0, 1.0)),
+        "static_threshold": Param(float, 0.6, "μs, static friction coefficient (Houdini's reading)",
+                                  range=(0.0, 1.0)),
+        "dynamic_scale": Param(float, 0.7, "μk / μs", range=(0.0, 1.0)),
+        "capture_radius": Param(float, 0.2, "adhesion reach beyond contact, in particle radii (effect "
+                                "'adhesion')", range=(0.0, 1.0), units="radii"),
+        "clumping": Param(float, 0.3, "adhesion strength (breakable bonds within the capture radius)",
+                          range=(0.0, 1.0)),
+        "water_content": Param(float, 15.0, "water absorbed by the grains (effect 'moisture': scales "
+                               "stiffness, friction, adhesion)", range=(0.0, 40.0), units="%"),
+        "sleep_speed": Param(float, 2.0, "elements slower than this are put to rest each substep (0 = never)",
+                             range=(0.0, 1000.0), units="mm/s"),
+        "speed_clamp": Param(float, 1.0, "max particle travel per substep (anti-tunnelling)", range=(0.1, 2.0),
+                             units="radii"),
+        "gravity": Param(float, 9810.0, "gravitational acceleration (effect 'gravity'), along −z",
+                         range=(0.0, 100000.0), units="mm/s²"),
+        "white_density": Param(float, 1.03, "density of the medium around the buoyant part (ikura white)",
+                               range=(0.1, 10.0), units="g/cm³"),
+        "part_density": Param(float, 0.93, "density of the buoyant part (faces with parts == 1: the yolk)",
+                              range=(0.1, 10.0), units="g/cm³"),
+        "log_every": Param(int, 10, "log particles to Rerun every k frames (0 = never)", range=(0, 100000),
+                           units="frames"),
+    },
+    effects=("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping"),
+    check=_check,
+)
+def xpbd(ctx, aggregate, colliders=None, **params):
+    """XPBD aggregate simulation — SPEC §3: elastic clusters, contact, friction, clumping, containers,
+    buoyant yolks; only the effects in ``ctx.effects`` are computed."""
+    from .setup import build_simulation, finish_simulation
+
+    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, params)
+    with ctx.progress(params["frames"], "frames") as bar:
+        for frame in range(params["frames"]):
+            sim.solver.frame()
+            if params["log_every"] and ctx.rerun.enabled and frame % params["log_every"] == 0:
+                _log_particles(ctx, sim.solver, frame)
+            bar.advance()
+    if ctx.rerun.enabled:
+        _log_scalars(ctx, sim.solver)
+    return finish_simulation(sim)
+
+
+def _log_particles(ctx, solver, frame):
+    import rerun as rr
+
+    keep = slice(None, None, max(1, len(solver.x) // 20000))  # subsample big scenes
+    ctx.rerun.set_time("sim_step", frame * solver.s.substeps)
+    ctx.rerun.log("particles", rr.Points3D(solver.x[keep], radii=solver.r[keep]))
+
+
+def _log_scalars(ctx, solver):
+    import rerun as rr
+
+    dg = solver.diagnostics
+    steps = (np.arange(len(dg.penetration)) + 1) * solver.s.substeps
+    for name, values in (("penetration_over_radius", dg.penetration), ("residual", dg.residual),
+                         ("kinetic_energy", dg.kinetic_energy), ("sleeping_share", dg.sleeping)):
+        ctx.rerun.send_columns(f"scalars/{name}", indexes=[rr.TimeColumn("sim_step", sequence=steps)],
+                               columns=rr.Scalars.columns(scalars=np.asarray(values)))

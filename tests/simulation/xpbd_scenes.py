@@ -1,0 +1,92 @@
+"""Scenes for the xpbd tests and benchmarks, built directly in Python (no placement nodes needed):
+ellipsoid rice grains, ikura eggs with a yolk, a bowl and a ground slab as watertight solids, and
+grains on a jittered grid inside the bowl."""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from nodegraph.values import Aggregate, ElementLibrary, Mesh, Placement
+
+
+def grain_mesh(length=5.0, width=3.0, height=2.5, name="grain") -> Mesh:
+    """A cooked japonica grain as an ellipsoid, mm."""
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    return Mesh.from_trimesh(trimesh.Trimesh(sphere.vertices * [length / 2, width / 2, height / 2], sphere.faces),
+                             name=name)
+
+
+def ikura_mesh(radius=3.5, lipid=0.145) -> Mesh:
+    """Egg sphere (parts 0) with a yolk sphere inside (parts 1), r_yolk = r·∛L (SPEC §1, G eq. 10)."""
+    egg = trimesh.creation.icosphere(subdivisions=2, radius=radius)
+    yolk = trimesh.creation.icosphere(subdivisions=1, radius=radius * lipid ** (1 / 3))
+    both = trimesh.util.concatenate([egg, yolk])
+    parts = np.r_[np.zeros(len(egg.faces)), np.ones(len(yolk.faces))]
+    return Mesh(both.vertices, both.faces, parts=parts, name="ikura")
+
+
+def bowl_mesh(radius=60.0, wall=3.0, rim=0.35, segments=96) -> Mesh:
+    """A hemispherical bowl, a watertight solid: the shell between two spheres below z = rim·radius."""
+    import manifold3d as mf
+
+    shell = mf.Manifold.sphere(radius, segments) - mf.Manifold.sphere(radius - wall, segments)
+    bowl = shell.trim_by_plane((0.0, 0.0, -1.0), -rim * radius).to_mesh()
+    return Mesh(np.asarray(bowl.vert_properties)[:, :3], np.asarray(bowl.tri_verts), name="bowl")
+
+
+def box_mesh(lo, hi, name="box") -> Mesh:
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    box = trimesh.creation.box(extents=hi - lo)
+    return Mesh(box.vertices + 0.5 * (lo + hi), box.faces, name=name)
+
+
+def open_box(inner, wall=1.0, height=None) -> list[Mesh]:
+    """Floor and four walls (each a watertight slab) of an open box whose inside is [0, inner]²×[0, height]."""
+    h = inner if height is None else height
+    return [box_mesh([-wall, -wall, -wall], [inner + wall, inner + wall, 0.0], "floor"),
+            box_mesh([-wall, -wall, 0.0], [0.0, inner + wall, h], "wall_x0"),
+            box_mesh([inner, -wall, 0.0], [inner + wall, inner + wall, h], "wall_x1"),
+            box_mesh([0.0, -wall, 0.0], [inner, 0.0, h], "wall_y0"),
+            box_mesh([0.0, inner, 0.0], [inner, inner + wall, h], "wall_y1")]
+
+
+def bowl_placement(n, spacing=4.0, radius=60.0, wall=3.0, seed=0, jitter=0.3) -> Placement:
+    """n grain positions on a jittered grid inside the bowl cavity, lowest first; random rotations."""
+    rng = np.random.default_rng(seed)
+    inner = radius - wall - spacing
+    axis = np.arange(-inner, inner + spacing, spacing)
+    grid = np.stack(np.meshgrid(axis, axis, np.arange(-inner, 4 * inner, spacing), indexing="ij"), -1).reshape(-1, 3)
+    xy = np.linalg.norm(grid[:, :2], axis=1)
+    inside = (np.linalg.norm(grid, axis=1) < inner) | ((grid[:, 2] >= 0) & (xy < inner))
+    grid = grid[inside]
+    grid = grid[np.lexsort((grid[:, 0], grid[:, 1], grid[:, 2]))][:n]
+    if len(grid) < n:
+        raise ValueError(f"bowl holds only {len(grid)} grid points at spacing {spacing}")
+    positions = grid + rng.uniform(-jitter, jitter, grid.shape)
+    rotations = Rotation.random(n, random_state=seed).as_matrix()
+    return Placement(positions, np.tile([0.0, 0.0, 1.0], (n, 1)), rotations,
+                     variants=rng.integers(0, 4, n).astype(np.int32), kind_names=("japonica",))
+
+
+def rice_library(count=4, seed=0) -> ElementLibrary:
+    rng = np.random.default_rng(seed)
+    meshes = [grain_mesh(*(np.array([5.0, 3.0, 2.5]) * rng.uniform(0.9, 1.1, 3)), name=f"grain{k}") for k in range(count)]
+    return ElementLibrary("japonica", meshes)
+
+
+def rice_bowl(n=200, seed=0, spacing=4.0):
+    """(aggregate, colliders) for n grains in a bowl of radius 60 mm."""
+    placement = bowl_placement(n, spacing=spacing, seed=seed)
+    return Aggregate(placement, (rice_library(seed=seed),)), [bowl_mesh()]
+
+
+def ikura_don(n=310, seed=0, radius=3.5):
+    """(aggregate, colliders): n eggs on a jittered grid in a bowl (ikura on rice, rice left out)."""
+    rng = np.random.default_rng(seed)
+    placement = bowl_placement(n, spacing=2 * radius + 0.2, seed=seed, jitter=0.1)
+    placement = Placement(placement.positions, placement.normals, placement.rotations,
+                          variants=np.zeros(n, np.int32), kind_names=("ikura",))
+    del rng
+    return Aggregate(placement, (ElementLibrary("ikura", [ikura_mesh(radius)]),)), [bowl_mesh()]
