@@ -1,0 +1,14 @@
+"""Aperiodic space filling — SPEC §2 (S §3, G §3.2.2): poisson_place → rotate → mix_ratio → overlap_refine → cull.
+
+Declaration modules (one node each, imported here for the registry) import only numpy and
+nodegraph at top level; the kernels (``candidates``, ``inside_grid``, ``dart_throw``, ``frames``,
+``medial_spheres``, ``element_templates``, ``refine``, ``refine_kernels``) are imported when a node runs.
+"""
+
+from .cull import cull
+from .mix_ratio import mix_ratio
+from .overlap_refine import overlap_refine
+from .poisson_place import poisson_place
+from .rotate import rotate
+
+__all__ = ["cull", "mix_ratio", "overlap_refine", "poisson_place", "rotate"]

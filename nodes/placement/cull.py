@@ -1,0 +1,48 @@
+"""The ``cull`` node: remove elements still overlapping deeper than D — SPEC §2.7 (G eq. 3, reading: depth > D)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nodegraph.node import In, Out, node
+from nodegraph.params import Param
+from nodegraph.values import Aggregate, ElementLibrary, Placement
+
+from .element_templates import template_params
+
+
+@node(
+    "cull",
+    version=1,
+    inputs={"placement": In(Placement, "refined elements"),
+            "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True)},
+    outputs={"placement": Out(Placement, "the elements kept (overlap = depth with the kept neighbours)"),
+             "culled": Out(Placement, "the elements removed, with the depth that removed them"),
+             "aggregate": Out(Aggregate, "kept placement with its libraries")},
+    params={
+        "threshold": Param(float, 0.0, "D: remove an element whose overlap depth exceeds this (0: touching only)", range=(0.0, 1e4), units="mm"),
+        "offset": Param(float, 0.0, "T of G eq. 2 (use the value given to overlap_refine)", range=(0.0, 1e3), units="mm"),
+        **template_params(),
+    },
+)
+def cull(ctx, placement, libraries, *, threshold, offset, sphere_tolerance, max_spheres, cost_points):
+    """Deepest first, an element goes while its depth against the kept neighbours exceeds D; all culled is an error."""
+    from .element_templates import build_templates, matching_libraries
+    from .refine import cull_placement
+
+    libraries = matching_libraries(placement, libraries)
+    templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points)
+    keep, depth = cull_placement(placement, templates, threshold, offset)
+    if len(placement) and not keep.any():
+        raise ValueError(f"threshold: all {len(placement)} elements overlap deeper than D = {threshold:g}; raise D, "
+                         "lower the placement density (larger r) or widen the refine range")
+    names = placement.kind_names or (libraries[0].kind,)
+    with_depth = Placement(placement.positions, placement.normals, placement.rotations, placement.kinds,
+                           placement.variants, placement.p_num, placement.offsets, depth, names)
+    kept, culled = with_depth.subset(keep), with_depth.subset(~keep)
+    if ctx.rerun.enabled:
+        import rerun as rr
+
+        ctx.rerun.log("culled", rr.Points3D(culled.positions, radii=0.3 * float(templates.inscribed.min()),
+                                            colors=np.tile([230, 40, 40], (len(culled), 1))))
+    return {"placement": kept, "culled": culled, "aggregate": Aggregate(kept, libraries)}

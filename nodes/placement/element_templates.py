@@ -1,0 +1,113 @@
+"""Per-element-variant data the refine kernels read: medial spheres and cost points, packed as CSR arrays.
+
+SPEC §2.5–2.6: the implicit function of each variant (its medial spheres, S §3.2.2) and the point set
+X whose overlap the cost sums (S uses all vertices; here up to ``cost_points`` spread by farthest-point
+sampling, since the cost grows linearly with |X|).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from nodegraph.values import ElementLibrary
+
+
+@dataclass(frozen=True, eq=False)
+class ElementTemplates:
+    """Template t = kind_first[kind] + variant; CSR arrays ``*_start`` index ``pts`` and ``centers``/``radii``."""
+
+    pts_start: np.ndarray
+    pts: np.ndarray
+    sph_start: np.ndarray
+    centers: np.ndarray
+    radii: np.ndarray
+    bound: np.ndarray          # radius about the origin outside which the implicit function is ≤ 0
+    circumradius: np.ndarray   # max vertex distance from the origin (S: b)
+    length: np.ndarray         # longest bounding-box extent
+    inscribed: np.ndarray      # largest medial sphere radius
+    kind_first: np.ndarray
+    fit: tuple[dict, ...]
+
+    def index(self, kinds: np.ndarray, variants: np.ndarray) -> np.ndarray:
+        counts = np.diff(np.append(self.kind_first, len(self.bound)))
+        return self.kind_first[kinds] + variants % counts[kinds]
+
+
+def farthest_points(points: np.ndarray, count: int) -> np.ndarray:
+    """``count`` points spread over the set by farthest-point sampling, starting from the farthest from the origin."""
+    if len(points) <= count:
+        return points.copy()
+    chosen = [int(np.argmax((points**2).sum(axis=1)))]
+    distance = np.linalg.norm(points - points[chosen[0]], axis=1)
+    for _ in range(count - 1):
+        nxt = int(np.argmax(distance))
+        chosen.append(nxt)
+        distance = np.minimum(distance, np.linalg.norm(points - points[nxt], axis=1))
+    return points[chosen]
+
+
+def build_templates(libraries: tuple[ElementLibrary, ...], tolerance: float, max_spheres: int,
+                    cost_points: int, measure_fit: bool = False) -> ElementTemplates:
+    """Medial spheres and cost points of every mesh of every library (in kind order)."""
+    from .medial_spheres import element_length, medial_spheres, union_fit
+
+    pts, centers, radii, bound, circum, length, inscribed, fit = [], [], [], [], [], [], [], []
+    kind_first = []
+    for library in libraries:
+        if len(library) == 0:
+            raise ValueError(f"element library {library.kind!r} holds no meshes")
+        kind_first.append(len(bound))
+        for index, mesh in enumerate(library.meshes):
+            try:
+                c, r = medial_spheres(mesh.vertices, mesh.faces, tolerance, max_spheres)
+            except ValueError as exc:
+                raise ValueError(f"element {library.kind!r} mesh {index}: {exc}") from None
+            pts.append(farthest_points(np.asarray(mesh.vertices, np.float64), cost_points))
+            centers.append(c)
+            radii.append(r)
+            bound.append(float((np.linalg.norm(c, axis=1) + r).max()))
+            circum.append(float(np.linalg.norm(mesh.vertices, axis=1).max()))
+            length.append(element_length(mesh.vertices))
+            inscribed.append(float(r.max()))
+            fit.append(union_fit(mesh.vertices, mesh.faces, c, r) if measure_fit else {})
+
+    def csr(parts):
+        start = np.zeros(len(parts) + 1, np.int64)
+        np.cumsum([len(p) for p in parts], out=start[1:])
+        return start
+
+    return ElementTemplates(csr(pts), np.ascontiguousarray(np.vstack(pts)), csr(radii),
+                            np.ascontiguousarray(np.vstack(centers)), np.concatenate(radii), np.array(bound),
+                            np.array(circum), np.array(length), np.array(inscribed), np.array(kind_first, np.int64),
+                            tuple(fit))
+
+
+def template_params():
+    """The parameters shared by nodes that evaluate medial-sphere implicit functions."""
+    from nodegraph.params import Param
+
+    return {
+        "sphere_tolerance": Param(float, 0.02, "medial spheres must touch the surface within this share of the element length", range=(0.001, 0.5)),
+        "max_spheres": Param(int, 64, "most medial spheres per element (cost grows linearly with it)", range=(1, 4096)),
+        "cost_points": Param(int, 64, "element vertices (farthest-point spread) whose overlap the cost sums (S: all)", range=(4, 100000)),
+    }
+
+
+def matching_libraries(placement, libraries) -> tuple[ElementLibrary, ...]:
+    """The libraries in the placement's kind order; a placement without kinds takes the single library."""
+    libraries = tuple(libraries)
+    if not libraries:
+        raise ValueError("libraries: at least one element library is needed")
+    names = tuple(lib.kind for lib in libraries)
+    if not placement.kind_names:
+        if len(libraries) != 1:
+            raise ValueError(f"libraries: the placement has no kinds (no mix_ratio upstream) but {len(libraries)} "
+                             "libraries were given; mix them with mix_ratio first")
+        return libraries
+    by_name = dict(zip(names, libraries))
+    missing = [k for k in placement.kind_names if k not in by_name]
+    if missing:
+        raise ValueError(f"libraries: the placement uses kinds {list(placement.kind_names)} but got {list(names)}")
+    return tuple(by_name[k] for k in placement.kind_names)

@@ -1,0 +1,102 @@
+"""Overlap refine, depth measurement and culling of a placement — SPEC §2.6–2.7 (S eq. 2, G eq. 1 and 3).
+
+Pure functions over ``Placement`` + ``ElementTemplates``; the nodes and the benchmark call these.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from nodegraph.values import Placement
+
+from .element_templates import ElementTemplates
+
+COSTS = ("sakurai", "gan")
+
+
+@dataclass(frozen=True)
+class RefineSettings:
+    """S eq. 2: slope a (0.1), range b = range_scale·refine_range·circumradius; G eq. 1: range r·C_refine."""
+
+    cost: str = "sakurai"
+    slope: float = 0.1
+    range_scale: float = 1.0
+    spacing: float = 0.0      # G's r (Poisson radius); needed by the gan cost
+    c_refine: float = 2.0
+    offset: float = 0.0       # T of G eq. 2
+    tolerance: float = 0.01   # golden-section bracket at the end, as a share of the search range
+
+
+def golden_iterations(tolerance: float) -> int:
+    """Golden-section steps that shrink the bracket to ``tolerance`` of its width."""
+    return max(1, int(np.ceil(np.log(tolerance) / np.log((np.sqrt(5.0) - 1.0) / 2.0))))
+
+
+def _search_ranges(placement: Placement, templates: ElementTemplates, tmpl: np.ndarray,
+                   refine_ranges: np.ndarray, settings: RefineSettings):
+    scale = refine_ranges[placement.kinds]
+    if settings.cost == "sakurai":
+        b = settings.range_scale * scale * templates.circumradius[tmpl]
+        return -b, b
+    return np.zeros(len(placement)), settings.spacing * settings.c_refine * scale
+
+
+def neighbours(positions: np.ndarray, templates: ElementTemplates, tmpl: np.ndarray, travel: np.ndarray):
+    """Pairs that can touch: centre distance < bound_i + travel_i + bound_j + travel_j (grid search)."""
+    from .refine_kernels import neighbour_lists
+
+    if len(positions) == 0:
+        return np.zeros(1, np.int64), np.zeros(0, np.int64)
+    reach = np.maximum(templates.bound[tmpl], templates.circumradius[tmpl]) + travel
+    return neighbour_lists(np.ascontiguousarray(positions), np.ascontiguousarray(reach))
+
+
+def refine_placement(placement: Placement, templates: ElementTemplates, refine_ranges: np.ndarray,
+                     settings: RefineSettings, order: np.ndarray) -> Placement:
+    """Move each element along its normal once, in ``order``, to the golden-section minimum of the cost."""
+    from .refine_kernels import GAN, SAKURAI, colour_in_order, overlap_depths, refine_offsets
+
+    n = len(placement)
+    if n == 0:
+        return placement
+    tmpl = templates.index(placement.kinds, placement.variants)
+    lo, hi = _search_ranges(placement, templates, tmpl, refine_ranges, settings)
+    travel = np.maximum(np.abs(lo), np.abs(hi))
+    nb_start, nb = neighbours(placement.positions, templates, tmpl, travel)
+    order = np.asarray(order, np.int64)
+    colour = colour_in_order(order, nb_start, nb)
+    positions = placement.positions.copy()
+    rotations = np.ascontiguousarray(placement.rotations)
+    cost_kind = SAKURAI if settings.cost == "sakurai" else GAN
+    offsets = refine_offsets(positions, rotations, np.ascontiguousarray(placement.normals), tmpl, lo, hi, nb_start,
+                             nb, colour, order, templates.pts_start, templates.pts, templates.sph_start,
+                             templates.centers, templates.radii, templates.bound, templates.circumradius,
+                             settings.offset, cost_kind,
+                             settings.slope, settings.spacing * settings.c_refine, golden_iterations(settings.tolerance))
+    depth = overlap_depths(positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates.pts_start,
+                           templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
+                           templates.circumradius, settings.offset)
+    return Placement(positions, placement.normals, rotations, placement.kinds, placement.variants, placement.p_num,
+                     placement.offsets + offsets, depth, placement.kind_names)
+
+
+def cull_placement(placement: Placement, templates: ElementTemplates, threshold: float,
+                   offset: float) -> tuple[np.ndarray, np.ndarray]:
+    """(keep mask, depth per element before culling): deepest first, while the depth with live neighbours > D."""
+    from .refine_kernels import cull_deepest, overlap_depths
+
+    n = len(placement)
+    if n == 0:
+        return np.zeros(0, bool), np.zeros(0)
+    tmpl = templates.index(placement.kinds, placement.variants)
+    nb_start, nb = neighbours(placement.positions, templates, tmpl, np.zeros(n))
+    rotations = np.ascontiguousarray(placement.rotations)
+    depth = overlap_depths(placement.positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_),
+                           templates.pts_start, templates.pts, templates.sph_start, templates.centers,
+                           templates.radii, templates.bound, templates.circumradius, offset)
+    keep = cull_deepest(depth, threshold, placement.positions, rotations, tmpl, nb_start, nb, templates.pts_start,
+                        templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
+                        templates.circumradius, offset)
+    return keep, depth

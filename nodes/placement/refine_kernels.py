@@ -1,0 +1,375 @@
+"""Overlap refine and overlap depth with medial-sphere implicit functions — SPEC §2.5–2.7 (S eq. 1–3, G eq. 1–3).
+
+Struct-of-arrays numba kernels. Element templates (one per kind × variant) hold medial spheres and
+cost points in local coordinates (CSR by ``*_start``); elements hold position, rotation, normal,
+template and search range. Neighbours come from a uniform grid. The refine visits elements in a
+random order, once each; elements are greedily coloured in that order so one colour class (no two
+members are neighbours) runs in parallel while the result stays the same for any thread count.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+SAKURAI, GAN = 0, 1
+INV_PHI = (np.sqrt(5.0) - 1.0) / 2.0
+
+
+@njit(cache=True)
+def neighbour_lists(positions, reach):
+    """CSR lists of all j ≠ i with ‖p_i − p_j‖ < reach_i + reach_j, from a grid of cell 2·max(reach)."""
+    n = positions.shape[0]
+    cell = 2.0 * reach.max() + 1e-12
+    lo = np.empty(3)
+    dims = np.empty(3, np.int64)
+    for d in range(3):
+        lo[d] = positions[:, d].min() - 1e-9
+        dims[d] = int((positions[:, d].max() - lo[d]) / cell) + 1
+    coords = np.empty((n, 3), np.int64)
+    keys = np.empty(n, np.int64)
+    for i in range(n):
+        for d in range(3):
+            coords[i, d] = int((positions[i, d] - lo[d]) / cell)
+        keys[i] = (coords[i, 0] * dims[1] + coords[i, 1]) * dims[2] + coords[i, 2]
+    order = np.argsort(keys)
+    sorted_keys = keys[order]
+    counts = np.zeros(n + 1, np.int64)
+    for sweep in range(2):
+        if sweep == 1:
+            for i in range(n):
+                counts[i + 1] += counts[i]
+            out = np.empty(counts[n], np.int64)
+            fill = counts[:n].copy()
+        for i in range(n):
+            for x in range(max(coords[i, 0] - 1, 0), min(coords[i, 0] + 2, dims[0])):
+                for y in range(max(coords[i, 1] - 1, 0), min(coords[i, 1] + 2, dims[1])):
+                    for z in range(max(coords[i, 2] - 1, 0), min(coords[i, 2] + 2, dims[2])):
+                        key = (x * dims[1] + y) * dims[2] + z
+                        k = np.searchsorted(sorted_keys, key)
+                        while k < n and sorted_keys[k] == key:
+                            j = order[k]
+                            k += 1
+                            if j == i:
+                                continue
+                            dist2 = ((positions[i] - positions[j]) ** 2).sum()
+                            limit = reach[i] + reach[j]
+                            if dist2 < limit * limit:
+                                if sweep == 0:
+                                    counts[i + 1] += 1
+                                else:
+                                    out[fill[i]] = j
+                                    fill[i] += 1
+    return counts, out
+
+
+@njit(cache=True)
+def colour_in_order(order, nb_start, nb):
+    """Greedy graph colouring visiting elements in ``order``; returns colour per element."""
+    n = order.shape[0]
+    colour = np.full(n, -1, np.int64)
+    used = np.full(n + 1, -1, np.int64)
+    for step in range(n):
+        i = order[step]
+        for e in range(nb_start[i], nb_start[i + 1]):
+            c = colour[nb[e]]
+            if c >= 0:
+                used[c] = i
+        c = 0
+        while used[c] == i:
+            c += 1
+        colour[i] = c
+    return colour
+
+
+@njit(cache=True, inline="always")
+def _local(rot, x0, x1, x2, out):
+    """out = rotᵀ·x: a world-frame vector in an element's local frame (scalar code: no temporaries)."""
+    out[0] = rot[0, 0] * x0 + rot[1, 0] * x1 + rot[2, 0] * x2
+    out[1] = rot[0, 1] * x0 + rot[1, 1] * x1 + rot[2, 1] * x2
+    out[2] = rot[0, 2] * x0 + rot[1, 2] * x1 + rot[2, 2] * x2
+
+
+@njit(cache=True)
+def _implicit(q0, q1, q2, centers, radii, s0, s1, offset):
+    """f(q) = max_s (r_s − ‖q − c_s‖) − T (G eq. 2 / S eq. 3), in the template's local frame."""
+    best = -np.inf
+    for s in range(s0, s1):
+        dx = q0 - centers[s, 0]
+        dy = q1 - centers[s, 1]
+        dz = q2 - centers[s, 2]
+        v = radii[s] - np.sqrt(dx * dx + dy * dy + dz * dz)
+        if v > best:
+            best = v
+    return best - offset
+
+
+@njit(cache=True)
+def _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, pts,
+                  sph_start, centers, radii, bound, circumradius, offset, world, pair_range, pair_lo, pair_hi,
+                  bump_t0, bump_perp2, bump_r, bump_lo, bump_hi):
+    """Overlap of i with its neighbours as 1-D bumps in t (S eq. 2 made one-dimensional).
+
+    A cost point x moving as x + t·n passes sphere s of neighbour j with depth
+    r_s − sqrt(perp² + (t − t0)²); only spheres that the path enters deeper than T within
+    [t_lo, t_hi] are kept, grouped by (point, neighbour) pair. Returns (pairs, bumps), or (-1, -1)
+    when the buffers are too small.
+    """
+    ti = template[i]
+    lo, hi = t_lo[i], t_hi[i]
+    n0, n1, n2 = normals[i, 0], normals[i, 1], normals[i, 2]
+    ri = rotations[i]
+    k0, k1 = pts_start[ti], pts_start[ti + 1]
+    for k in range(k0, k1):
+        for d in range(3):
+            world[k - k0, d] = ri[d, 0] * pts[k, 0] + ri[d, 1] * pts[k, 1] + ri[d, 2] * pts[k, 2]
+    a = np.empty(3)
+    b = np.empty(3)
+    npairs = 0
+    nbumps = 0
+    cap_pairs, cap_bumps = pair_lo.shape[0], bump_t0.shape[0]
+    for e in range(nb_start[i], nb_start[i + 1]):
+        j = nb[e]
+        tj = template[j]
+        dx = positions[j, 0] - positions[i, 0]
+        dy = positions[j, 1] - positions[i, 1]
+        dz = positions[j, 2] - positions[i, 2]
+        along = min(max(dx * n0 + dy * n1 + dz * n2, lo), hi)
+        ex, ey, ez = dx - along * n0, dy - along * n1, dz - along * n2
+        reach = circumradius[ti] + bound[tj]
+        if ex * ex + ey * ey + ez * ez >= reach * reach:
+            continue  # i's swept bounding sphere misses j's implicit function
+        rj = rotations[j]
+        _local(rj, n0, n1, n2, b)
+        bb = bound[tj] * bound[tj]
+        s0, s1 = sph_start[tj], sph_start[tj + 1]
+        for k in range(k1 - k0):
+            _local(rj, world[k, 0] - dx, world[k, 1] - dy, world[k, 2] - dz, a)
+            ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+            t_near = min(max(-ab, lo), hi)
+            q0, q1, q2 = a[0] + t_near * b[0], a[1] + t_near * b[1], a[2] + t_near * b[2]
+            if q0 * q0 + q1 * q1 + q2 * q2 >= bb:
+                continue
+            first = nbumps
+            plo, phi = np.inf, -np.inf
+            for s in range(s0, s1):
+                depth = radii[s] - offset
+                if depth <= 0.0:
+                    continue
+                u0, u1, u2 = a[0] - centers[s, 0], a[1] - centers[s, 1], a[2] - centers[s, 2]
+                ub = u0 * b[0] + u1 * b[1] + u2 * b[2]
+                perp2 = u0 * u0 + u1 * u1 + u2 * u2 - ub * ub
+                if perp2 >= depth * depth:
+                    continue
+                half = np.sqrt(depth * depth - perp2)
+                t0 = -ub
+                if t0 + half <= lo or t0 - half >= hi:
+                    continue
+                if nbumps == cap_bumps:
+                    return -1, -1
+                bump_t0[nbumps] = t0
+                bump_perp2[nbumps] = perp2
+                bump_r[nbumps] = radii[s]
+                bump_lo[nbumps] = t0 - half
+                bump_hi[nbumps] = t0 + half
+                plo = min(plo, t0 - half)
+                phi = max(phi, t0 + half)
+                nbumps += 1
+            if nbumps > first:
+                if npairs == cap_pairs:
+                    return -1, -1
+                pair_range[npairs] = first
+                pair_range[npairs + 1] = nbumps
+                pair_lo[npairs] = plo
+                pair_hi[npairs] = phi
+                npairs += 1
+    return npairs, nbumps
+
+
+@njit(cache=True)
+def _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset,
+                use_max):
+    """Σ (or max) over (point, neighbour) pairs of the neighbour's implicit function f > 0 at x + t·n."""
+    total = 0.0
+    for p in range(npairs):
+        if t <= pair_lo[p] or t >= pair_hi[p]:
+            continue
+        best = 0.0
+        for q in range(pair_range[p], pair_range[p + 1]):
+            if bump_lo[q] < t < bump_hi[q]:
+                dt = t - bump_t0[q]
+                v = bump_r[q] - np.sqrt(bump_perp2[q] + dt * dt) - offset
+                if v > best:
+                    best = v
+        if use_max:
+            total = max(total, best)
+        else:
+            total += best
+    return total
+
+
+@njit(cache=True)
+def _cost(t, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
+          bump_lo, bump_hi, offset):
+    """S eq. 2: Σ f(x + t·n) + a·|t|;  G eq. 1: a(max f(x + t·n)) + t with a(h) = h + r·C_refine if h > 0."""
+    if cost_kind == SAKURAI:
+        return _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi,
+                           offset, False) + slope * abs(t)
+    h = _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset,
+                    True)
+    return (h + penalty if h > 0.0 else 0.0) + t
+
+
+@njit(cache=True)
+def _golden_section(lo, hi, iterations, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0,
+                    bump_perp2, bump_r, bump_lo, bump_hi, offset):
+    """Golden-section search for the minimum of the cost on [lo, hi] (S §3.2.1, fig. 8)."""
+    if npairs == 0:
+        return min(max(0.0, lo), hi)  # no overlap anywhere in the range: stay as close to the surface as allowed
+    x1 = hi - INV_PHI * (hi - lo)
+    x2 = lo + INV_PHI * (hi - lo)
+    f1 = _cost(x1, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
+               bump_lo, bump_hi, offset)
+    f2 = _cost(x2, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
+               bump_lo, bump_hi, offset)
+    for _ in range(iterations):
+        if f1 <= f2:
+            hi, x2, f2 = x2, x1, f1
+            x1 = hi - INV_PHI * (hi - lo)
+            f1 = _cost(x1, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2,
+                       bump_r, bump_lo, bump_hi, offset)
+        else:
+            lo, x1, f1 = x1, x2, f2
+            x2 = lo + INV_PHI * (hi - lo)
+            f2 = _cost(x2, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2,
+                       bump_r, bump_lo, bump_hi, offset)
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _refine_one(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, pts, sph_start,
+                centers, radii, bound, circumradius, offset, cost_kind, slope, penalty, iterations, max_pts):
+    """The golden-section offset t of element i against its neighbours where they are now."""
+    capacity = 4096
+    while True:
+        world = np.empty((max_pts, 3))
+        pair_range = np.empty(capacity + 1, np.int64)
+        pair_lo = np.empty(capacity)
+        pair_hi = np.empty(capacity)
+        bump_t0 = np.empty(4 * capacity)
+        bump_perp2 = np.empty(4 * capacity)
+        bump_r = np.empty(4 * capacity)
+        bump_lo = np.empty(4 * capacity)
+        bump_hi = np.empty(4 * capacity)
+        npairs, _ = _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start,
+                                  pts, sph_start, centers, radii, bound, circumradius, offset, world, pair_range,
+                                  pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi)
+        if npairs >= 0:
+            break
+        capacity *= 4
+    return _golden_section(t_lo[i], t_hi[i], iterations, cost_kind, slope, penalty, npairs, pair_range, pair_lo,
+                           pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset)
+
+
+@njit(cache=True, parallel=True)
+def refine_offsets(positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, colour, order,
+                   pts_start, pts, sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope, penalty,
+                   iterations):
+    """Offsets t per element (positions updated in place), colour class by colour class in ``order``."""
+    n = positions.shape[0]
+    offsets = np.zeros(n)
+    colours = colour.max() + 1
+    class_start = np.zeros(colours + 1, np.int64)
+    for i in range(n):
+        class_start[colour[i] + 1] += 1
+    for c in range(colours):
+        class_start[c + 1] += class_start[c]
+    members = np.empty(n, np.int64)
+    fill = class_start[:colours].copy()
+    for step in range(n):
+        i = order[step]
+        members[fill[colour[i]]] = i
+        fill[colour[i]] += 1
+    max_pts = 0
+    for t in range(pts_start.shape[0] - 1):
+        max_pts = max(max_pts, pts_start[t + 1] - pts_start[t])
+    for c in range(colours):
+        for m in prange(class_start[c], class_start[c + 1]):
+            i = members[m]
+            t = _refine_one(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, pts,
+                            sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope, penalty,
+                            iterations, max_pts)
+            offsets[i] = t
+            for d in range(3):
+                positions[i, d] += t * normals[i, d]
+    return offsets
+
+
+@njit(cache=True)
+def _depth_into(i, j, positions, rotations, template, pts_start, pts, sph_start, centers, radii, bound, circumradius,
+                offset):
+    """max over i's cost points of j's implicit function (how deep i reaches into j), 0 if nowhere."""
+    ti, tj = template[i], template[j]
+    dx = positions[i, 0] - positions[j, 0]
+    dy = positions[i, 1] - positions[j, 1]
+    dz = positions[i, 2] - positions[j, 2]
+    reach = circumradius[ti] + bound[tj]
+    if dx * dx + dy * dy + dz * dz >= reach * reach:
+        return 0.0
+    ri, rj = rotations[i], rotations[j]
+    bb = bound[tj] * bound[tj]
+    q = np.empty(3)
+    best = 0.0
+    for k in range(pts_start[ti], pts_start[ti + 1]):
+        w0 = ri[0, 0] * pts[k, 0] + ri[0, 1] * pts[k, 1] + ri[0, 2] * pts[k, 2] + dx
+        w1 = ri[1, 0] * pts[k, 0] + ri[1, 1] * pts[k, 1] + ri[1, 2] * pts[k, 2] + dy
+        w2 = ri[2, 0] * pts[k, 0] + ri[2, 1] * pts[k, 1] + ri[2, 2] * pts[k, 2] + dz
+        _local(rj, w0, w1, w2, q)
+        if q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < bb:
+            best = max(best, _implicit(q[0], q[1], q[2], centers, radii, sph_start[tj], sph_start[tj + 1], offset))
+    return best
+
+
+@njit(cache=True)
+def _depth_of(i, alive, positions, rotations, template, nb_start, nb, pts_start, pts, sph_start, centers, radii, bound,
+              circumradius, offset):
+    best = 0.0
+    for e in range(nb_start[i], nb_start[i + 1]):
+        j = nb[e]
+        if alive[j]:
+            best = max(best,
+                       _depth_into(i, j, positions, rotations, template, pts_start, pts, sph_start, centers, radii,
+                                   bound, circumradius, offset),
+                       _depth_into(j, i, positions, rotations, template, pts_start, pts, sph_start, centers, radii,
+                                   bound, circumradius, offset))
+    return best
+
+
+@njit(cache=True, parallel=True)
+def overlap_depths(positions, rotations, template, nb_start, nb, alive, pts_start, pts, sph_start, centers, radii,
+                   bound, circumradius, offset):
+    """Per element the deepest overlap with any live neighbour, both ways (SPEC §2.7 reading of G eq. 3)."""
+    n = positions.shape[0]
+    depth = np.zeros(n)
+    for i in prange(n):
+        if alive[i]:
+            depth[i] = _depth_of(i, alive, positions, rotations, template, nb_start, nb, pts_start, pts, sph_start,
+                                 centers, radii, bound, circumradius, offset)
+    return depth
+
+
+@njit(cache=True)
+def cull_deepest(depth, threshold, positions, rotations, template, nb_start, nb, pts_start, pts, sph_start, centers,
+                 radii, bound, circumradius, offset):
+    """Remove elements deepest first while their overlap with the still-live neighbours exceeds the threshold."""
+    n = depth.shape[0]
+    alive = np.ones(n, np.bool_)
+    order = np.argsort(-depth, kind="mergesort")
+    for step in range(n):
+        i = order[step]
+        if depth[i] <= threshold:
+            break
+        if _depth_of(i, alive, positions, rotations, template, nb_start, nb, pts_start, pts, sph_start, centers,
+                     radii, bound, circumradius, offset) > threshold:
+            alive[i] = False
+    return alive

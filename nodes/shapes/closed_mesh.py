@@ -1,0 +1,53 @@
+"""Checks and repairs that make a target shape a closed, outward-facing solid — SPEC §2 ("shape mesh (closed)")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+
+def load_mesh(path: str) -> trimesh.Trimesh:
+    """Read one triangle mesh (scenes are concatenated); clear error for a missing or empty file."""
+    if not Path(path).is_file():
+        raise ValueError(f"path: no such mesh file {path!r}")
+    try:
+        loaded = trimesh.load(path, force="mesh")
+    except Exception as exc:  # trimesh raises many types for unreadable files
+        raise ValueError(f"path: cannot read {path!r} as a mesh ({exc})") from exc
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise ValueError(f"path: {path!r} holds no triangles")
+    return loaded
+
+
+def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str) -> trimesh.Trimesh:
+    """``mesh`` as a watertight solid with outward normals.
+
+    With ``repair``: consistent winding, inverted orientation flipped, small holes filled
+    (trimesh.repair). A mesh still open afterwards is refused: the aggregate needs an inside.
+    """
+    mesh = mesh.copy()
+    mesh.merge_vertices()
+    mesh.update_faces(mesh.nondegenerate_faces())
+    mesh.remove_unreferenced_vertices()
+    if repair:
+        trimesh.repair.fix_winding(mesh)
+        trimesh.repair.fill_holes(mesh)
+        trimesh.repair.fix_inversion(mesh)
+    if not mesh.is_watertight:
+        raise ValueError(f"{what}: the mesh has holes (not watertight) and could not be closed; "
+                         "close it in a modeller or pass repair: true for small holes")
+    if mesh.volume < 0:
+        if not repair:
+            raise ValueError(f"{what}: normals point inwards (negative volume); pass repair: true to flip them")
+        mesh.invert()
+    if not np.isfinite(mesh.vertices).all() or mesh.volume <= 0:
+        raise ValueError(f"{what}: the mesh encloses no volume")
+    return mesh
+
+
+def as_trimesh(mesh, what: str) -> trimesh.Trimesh:
+    """A nodegraph Mesh (or trimesh) checked as a closed solid without repairing it."""
+    tm = mesh if isinstance(mesh, trimesh.Trimesh) else trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    return closed_mesh(tm, repair=False, what=what)

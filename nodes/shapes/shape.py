@@ -1,0 +1,62 @@
+"""The ``shape`` node: a closed target region for an aggregate — SPEC §2 (S fig. 10, G fig. 4.3.1)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nodegraph.node import Out, node
+from nodegraph.params import Param
+from nodegraph.values import Mesh
+
+KINDS = ("bowl", "onigiri", "sphere", "box", "cylinder")
+
+
+def _check(params: dict) -> list[tuple[str, str]]:
+    issues = []
+    if params.get("kind") == "bowl" and params.get("mound", 0) > 2 * params.get("size", 1):
+        issues.append(("mound", "a mound higher than twice the rim radius is not a bowl of rice"))
+    return issues
+
+
+@node(
+    "shape",
+    version=1,
+    outputs={
+        "mesh": Out(Mesh, "the closed region the elements fill (for a bowl: the cavity to the fill height plus the mound)"),
+        "container": Out(Mesh, "the vessel as a closed solid for a bowl (collider); an empty mesh for other kinds"),
+    },
+    params={
+        "kind": Param(str, "onigiri", "which shape", choices=KINDS),
+        "size": Param(float, 20.0, "sphere/cylinder radius, onigiri circumscribed radius, bowl rim radius", range=(1e-3, 1e4), units="mm"),
+        "extents": Param(tuple[float, float, float], (40.0, 40.0, 40.0), "box edge lengths (x, y, z)", range=(1e-3, 1e4), units="mm"),
+        "length": Param(float, 60.0, "cylinder length along x (lying cylinder)", range=(1e-3, 1e4), units="mm"),
+        "thickness": Param(float, 0.9, "onigiri thickness as a share of its circumscribed radius", range=(0.05, 2.0)),
+        "roundness": Param(float, 0.35, "onigiri corner rounding (0 sharp triangle, 1 disc)", range=(0.01, 1.0)),
+        "bulge": Param(float, 0.8, "onigiri face bulge: 1 ellipsoidal, towards 0 flat faces", range=(0.1, 1.0)),
+        "depth": Param(float, 45.0, "bowl cavity depth below the rim", range=(1e-3, 1e4), units="mm"),
+        "wall": Param(float, 4.0, "bowl wall thickness", range=(1e-3, 1e3), units="mm"),
+        "fill": Param(float, 0.8, "bowl fill height as a share of the depth", range=(0.05, 1.0)),
+        "mound": Param(float, 15.0, "height of the rice mound above the fill plane", range=(0.0, 1e4), units="mm"),
+        "resolution": Param(int, 4, "mesh resolution level (icosphere subdivisions; 12·2^(level−1) segments for solids of revolution)", range=(1, 7)),
+    },
+    check=_check,
+)
+def shape(ctx, *, kind, size, extents, length, thickness, roundness, bulge, depth, wall, fill, mound, resolution):
+    """A closed target shape (outward normals), in millimetres, centred at the origin (bowl: rim at z = 0)."""
+    from . import solids
+
+    container = None
+    if kind == "sphere":
+        mesh = solids.sphere(size, resolution)
+    elif kind == "box":
+        mesh = solids.box(extents)
+    elif kind == "cylinder":
+        mesh = solids.lying_cylinder(size, length, sections=12 * 2**resolution // 4)
+    elif kind == "onigiri":
+        mesh = solids.onigiri(size, thickness * size, roundness, bulge, subdivisions=resolution)
+    else:
+        mesh, container = solids.bowl(size, depth, wall, fill, mound, segments=12 * 2 ** (resolution - 1),
+                                      rings=4 * 2 ** (resolution - 1))
+    out_container = Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), name="none") if container is None \
+        else Mesh.from_trimesh(container, name=f"{kind}_container")
+    return {"mesh": Mesh.from_trimesh(mesh, name=kind), "container": out_container}
