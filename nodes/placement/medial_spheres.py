@@ -67,9 +67,14 @@ def surface_samples(vertices: np.ndarray, faces: np.ndarray, count: int):
 
 def inner_poles(points: np.ndarray, normals: np.ndarray):
     """Per sample, the farthest Voronoi vertex of its cell on the inner side (−normal): centre and radius."""
-    from scipy.spatial import Voronoi
+    from scipy.spatial import QhullError, Voronoi
 
-    vor = Voronoi(points)
+    if len(points) < 5 or np.linalg.matrix_rank(points - points.mean(axis=0), tol=1e-9) < 3:
+        raise ValueError("element mesh has no interior (all vertices on a plane or too few)")
+    try:
+        vor = Voronoi(points)
+    except QhullError as exc:
+        raise ValueError(f"element mesh has no interior (Voronoi of its surface failed: {str(exc).splitlines()[0]})") from None
     centers = np.full((len(points), 3), np.nan)
     for i, region_index in enumerate(vor.point_region):
         region = [v for v in vor.regions[region_index] if v >= 0]
@@ -103,8 +108,6 @@ def medial_spheres(vertices: np.ndarray, faces: np.ndarray, tolerance: float, ma
     faces = np.ascontiguousarray(faces, np.int64)
     length = element_length(vertices)
     points, normals = surface_samples(vertices, faces, samples)
-    if len(points) < 5 or np.linalg.matrix_rank(points - points.mean(axis=0)) < 3:
-        raise ValueError("element mesh has no interior (all vertices on a plane or too few)")
     centers, radii = inner_poles(points, normals)
     keep = inside_points(vertices, faces, centers) & (radii > 1e-6 * length)
     centers, radii = centers[keep], radii[keep]
