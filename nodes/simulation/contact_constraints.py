@@ -4,6 +4,9 @@ Jacobi with averaging: each particle gathers the corrections of all its contacts
 mean (divided by the contact count), which stays stable where summed Jacobi updates explode in
 dense piles. Per-particle gathering (not per-pair scattering) keeps the parallel loop race-free.
 Contacts have zero compliance and produce no restitution: velocities come from positions.
+Overlap left over at the start of a substep is removed by pre-stabilisation only (moves that add
+no velocity, Macklin et al. 2014 §4.2); within the substep each pair may keep that much overlap
+(``allowance``), so deep initial overlaps separate without a burst of kinetic energy.
 """
 
 import numpy as np
@@ -29,11 +32,9 @@ def pair_normal(x, i, j):
 
 
 @njit(cache=True, parallel=True, fastmath=True)
-def contact_project(x, w, r, nbr_start, nbr, out):
-    """One Jacobi sweep of C = r_i + r_j − |x_i − x_j| ≥ 0; writes the averaged result to ``out``.
-
-    Returns nothing; ``out`` must not alias ``x``.
-    """
+def contact_project(x, w, r, nbr_start, nbr, allowance, out):
+    """One Jacobi sweep of C = |x_i − x_j| − r_i − r_j + allowance ≥ 0 (allowance per list entry);
+    writes the averaged result to ``out``, which must not alias ``x``."""
     n = x.shape[0]
     for i in prange(n):
         ax = 0.0
@@ -47,7 +48,7 @@ def contact_project(x, w, r, nbr_start, nbr, out):
             if wsum <= 0.0:
                 continue
             nx, ny, nz, d = pair_normal(x, i, j)
-            pen = r[i] + r[j] - d
+            pen = r[i] + r[j] - d - allowance[a]
             if pen > 0.0:
                 s = pen * wi / wsum
                 ax += s * nx
@@ -62,6 +63,17 @@ def contact_project(x, w, r, nbr_start, nbr, out):
             out[i, 0] = x[i, 0]
             out[i, 1] = x[i, 1]
             out[i, 2] = x[i, 2]
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def overlap_allowance(x, r, nbr_start, nbr, out):
+    """Per list entry, the overlap r_i + r_j − d that remains (≥ 0): tolerated until the next
+    pre-stabilisation."""
+    n = x.shape[0]
+    for i in prange(n):
+        for a in range(nbr_start[i], nbr_start[i + 1]):
+            _, _, _, d = pair_normal(x, i, nbr[a])
+            out[a] = max(0.0, r[i] + r[nbr[a]] - d)
 
 
 @njit(cache=True, parallel=True, fastmath=True)

@@ -48,18 +48,22 @@ def update_velocity(x, x_prev, v, r, h, clamp, damping_factor):
 
 
 @njit(cache=True, parallel=True)
-def sleep_clusters(v, start, sleep_speed, asleep):
-    """Zero the velocities of every element whose fastest particle is below ``sleep_speed``.
+def sleep_clusters(v, x, x_start, h, start, sleep_speed, asleep):
+    """Zero the velocities of every element whose particles all moved less than sleep_speed·h over
+    the substep, measured from before pre-stabilisation: an element pinned in an overlap that
+    pre-stabilisation and the solve undo in turn has a velocity but no motion, and sleeps.
 
-    Sleeping here removes jitter (no kinetic energy creeps into resting piles); the element is
+    Sleeping removes jitter (no kinetic energy creeps into resting piles); the element is
     re-tested every substep, so anything that pushes it wakes it.
     """
     m = start.shape[0] - 1
+    limit = (sleep_speed * h) ** 2
     for c in prange(m):
         fastest = 0.0
         for i in range(start[c], start[c + 1]):
-            fastest = max(fastest, v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2)
-        asleep[c] = fastest < sleep_speed * sleep_speed
+            fastest = max(fastest, (x[i, 0] - x_start[i, 0]) ** 2 + (x[i, 1] - x_start[i, 1]) ** 2
+                          + (x[i, 2] - x_start[i, 2]) ** 2)
+        asleep[c] = fastest < limit
         if asleep[c]:
             for i in range(start[c], start[c + 1]):
                 v[i, 0] = 0.0

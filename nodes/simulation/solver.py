@@ -120,15 +120,17 @@ class XpbdSolver:
     def substep(self) -> float:
         """Advance by h = dt/substeps; returns the largest constraint residual of the last iteration."""
         s, d, h = self.s, self.dispatch, self.h
+        if s.sleep_speed > 0:
+            self.buffers.setdefault("x_start", np.empty_like(self.x))[:] = self.x
+        self._prestabilise()
         d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp, self.x_prev)
         if self.yolks is not None:
             y = self.yolks
             d("buoyancy", buoyancy.yolk_predict, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"],
               self.x, self.v, self.w, self.start, y["owner"], self.yolk_accel, h, s.yolk_drag)
-        if self.pairs and spatial_hash.max_displacement(self.x, self.buffers["x_built"]) > 0.5 * self.skin:
-            self.nbr_start, self.nbr = d("neighbours", spatial_hash.neighbour_lists, self.x, self.r, self.elem,
-                                         self.reach, self.cell)
-            self.buffers["x_built"][:] = self.x
+        if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
+            d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr,
+              self.buffers["allowance"])
         if self.matching:
             self.buffers["lambda"][:] = 0.0
         alpha = s.compliance / (h * h) if self.matching else 0.0
@@ -138,7 +140,7 @@ class XpbdSolver:
             residual = 0.0
             if "contact" in s.effects:
                 self._jacobi("contact", contact_constraints.contact_project, self.x, self.w, self.r,
-                             self.nbr_start, self.nbr)
+                             self.nbr_start, self.nbr, self.buffers["allowance"])
             if "friction" in s.effects:
                 self._jacobi("friction", friction.friction_project, self.x, self.x_prev, self.w, self.r,
                              self.nbr_start, self.nbr, self.mu_s, self.mu_k)
@@ -161,9 +163,36 @@ class XpbdSolver:
             d("buoyancy", buoyancy.yolk_contain, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"], self.x,
               self.w, self.start, self.quats, y["owner"], y["centre"], y["room"], h)
         if s.sleep_speed > 0:
-            d("sleep", integrate.sleep_clusters, self.v, self.start, s.sleep_speed, self.asleep)
+            d("sleep", integrate.sleep_clusters, self.v, self.x, self.buffers["x_start"], h, self.start,
+              s.sleep_speed, self.asleep)
         self.time += h
         return residual
+
+    def _refresh_neighbours(self) -> bool:
+        """Rebuild the Verlet lists once a particle has moved half the skin since the last build."""
+        if self.pairs and spatial_hash.max_displacement(self.x, self.buffers["x_built"]) > 0.5 * self.skin:
+            self.nbr_start, self.nbr = self.dispatch("neighbours", spatial_hash.neighbour_lists, self.x, self.r,
+                                                     self.elem, self.reach, self.cell)
+            self.buffers["x_built"][:] = self.x
+            if "contact" in self.s.effects:
+                self.buffers["allowance"] = np.zeros(len(self.nbr))
+            return True
+        return False
+
+    def _prestabilise(self):
+        """Resolve the overlaps left at the start of the substep before predicting (Macklin et al.
+        2014 §4.2 pre-stabilisation): moved before x_prev is taken, they add no velocity, so deep
+        initial overlaps separate instead of bursting."""
+        self._refresh_neighbours()
+        if "contact" in self.s.effects:
+            none = self.buffers["allowance"]
+            none[:] = 0.0
+            self._jacobi("contact", contact_constraints.contact_project, self.x, self.w, self.r, self.nbr_start,
+                         self.nbr, none)
+            self.dispatch("contact", contact_constraints.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr,
+                          self.buffers["allowance"])
+        if self.sdf is not None:
+            self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf, 0.0, 0.0)
 
     def _jacobi(self, family, kernel, *args):
         out = self.buffers["scratch"]
