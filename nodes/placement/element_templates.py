@@ -16,7 +16,10 @@ from nodegraph.values import ElementLibrary
 
 @dataclass(frozen=True, eq=False)
 class ElementTemplates:
-    """Template t = kind_first[kind] + variant; CSR arrays ``*_start`` index ``pts`` and ``centers``/``radii``."""
+    """Template t = kind_first[kind] + variant; CSR arrays ``*_start`` index ``pts`` and ``centers``/``radii``.
+
+    ``pts`` (the cost's point set X) = up to ``cost_points`` vertices plus the medial-sphere centres.
+    """
 
     pts_start: np.ndarray
     pts: np.ndarray
@@ -64,7 +67,9 @@ def build_templates(libraries: tuple[ElementLibrary, ...], tolerance: float, max
                 c, r = medial_spheres(mesh.vertices, mesh.faces, tolerance, max_spheres)
             except ValueError as exc:
                 raise ValueError(f"element {library.kind!r} mesh {index}: {exc}") from None
-            pts.append(farthest_points(np.asarray(mesh.vertices, np.float64), cost_points))
+            # X = spread vertices plus the medial centres: with vertices alone (S) an element lying
+            # wholly inside another, or coinciding with it, would register no overlap at all.
+            pts.append(np.vstack([farthest_points(np.asarray(mesh.vertices, np.float64), cost_points), c]))
             centers.append(c)
             radii.append(r)
             bound.append(float((np.linalg.norm(c, axis=1) + r).max()))

@@ -1,0 +1,116 @@
+"""overlap_refine and cull: medial-sphere fit, cost ranges, overlap reduction, determinism, hard elements (SPEC §2.5–2.7)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodegraph.values import ElementLibrary, Mesh, Placement
+from nodes.placement import cull, mix_ratio, overlap_refine, poisson_place, rotate
+from nodes.placement.medial_spheres import medial_spheres, union_fit
+
+from .conftest import digest, ellipsoid, run
+
+
+@pytest.fixture(scope="module")
+def pile(small_onigiri, rice):
+    placed = run(poisson_place, seed=1, shape=small_onigiri, r=0.35)["placement"]
+    turned = run(rotate, seed=1, placement=placed)
+    return run(mix_ratio, seed=1, placement=turned, libraries=[rice])["placement"]
+
+
+@pytest.mark.parametrize("tolerance", [0.05, 0.01])
+def test_medial_spheres_fit_the_element_within_the_tolerance(tolerance):
+    grain = ellipsoid((1.1, 0.64, 0.44))
+    centers, radii = medial_spheres(grain.vertices, grain.faces, tolerance, 4096)
+    fit = union_fit(grain.vertices, grain.faces, centers, radii)
+    assert fit["gap_max"] <= 2.0 * tolerance
+    assert fit["volume"] > 0.75
+    inside = np.linalg.norm(centers / np.array([1.1, 0.64, 0.44]), axis=1) < 1.0
+    assert inside.all() and 0.3 < radii.max() <= 0.44 + 1e-3  # inside, none bigger than the inscribed sphere
+
+
+def test_sakurai_refine_reduces_overlap_within_the_range(pile, rice):
+    before = run(cull, placement=pile, libraries=[rice], threshold=1e4)["placement"].overlap
+    out = run(overlap_refine, seed=2, placement=pile, libraries=[rice])
+    refined = out["placement"]
+    assert np.abs(refined.offsets).max() <= 1.1 + 1e-9  # b = circumradius
+    moved = refined.positions - pile.positions
+    assert np.allclose(moved, refined.offsets[:, None] * pile.normals)  # along the normal only
+    assert refined.overlap.mean() < 0.8 * before.mean()
+    assert out["aggregate"].placement is refined and out["stats"].columns["spheres"].min() >= 1
+
+
+def test_gan_refine_stays_in_zero_to_r_c_refine(pile, rice):
+    refined = run(overlap_refine, seed=2, placement=pile, libraries=[rice], cost="gan", r=0.35,
+                  c_refine=2.0)["placement"]
+    assert refined.offsets.min() >= 0.0 and refined.offsets.max() <= 0.7 + 1e-9
+
+
+def test_gan_without_r_is_refused_by_the_check():
+    problems = overlap_refine.check({"cost": "gan", "r": None})
+    assert problems and problems[0][0] == "r"
+
+
+def test_refine_is_deterministic_and_thread_count_independent(pile, rice):
+    import numba
+
+    a = run(overlap_refine, seed=7, placement=pile, libraries=[rice])["placement"]
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        b = run(overlap_refine, seed=7, placement=pile, libraries=[rice])["placement"]
+    finally:
+        numba.set_num_threads(threads)
+    assert digest(a.positions, a.offsets, a.overlap) == digest(b.positions, b.offsets, b.overlap)
+
+
+def test_two_stacked_elements_separate():
+    grain = ElementLibrary("rice", (ellipsoid((1.1, 0.64, 0.44)),))
+    up = np.array([[0.0, 0.0, 1.0]] * 2)
+    stacked = Placement(np.zeros((2, 3)), up)
+    refined = run(overlap_refine, placement=stacked, libraries=[grain], slope=0.01)["placement"]
+    gap = abs(refined.positions[0, 2] - refined.positions[1, 2])
+    assert gap > 0.75  # thickness 0.88: the second moved (nearly) out of the first
+    assert refined.overlap.max() < 0.1
+
+
+def test_cull_leaves_no_overlap_deeper_than_d(pile, rice):
+    refined = run(overlap_refine, seed=2, placement=pile, libraries=[rice])["placement"]
+    for threshold in (0.0, 0.1):
+        out = run(cull, placement=refined, libraries=[rice], threshold=threshold)
+        again = run(cull, placement=out["placement"], libraries=[rice], threshold=1e4)["placement"]
+        assert again.overlap.max() <= threshold + 1e-12
+        assert len(out["placement"]) + len(out["culled"]) == len(refined)
+    loose = run(cull, placement=refined, libraries=[rice], threshold=0.2)
+    assert len(loose["culled"]) < len(out["culled"])
+
+
+def test_a_cluster_of_identical_elements_keeps_exactly_one(rice):
+    cluster = Placement(np.zeros((5, 3)), np.tile([0.0, 0.0, 1.0], (5, 1)))
+    out = run(cull, placement=cluster, libraries=[rice_only := ElementLibrary("rice", rice.meshes[:1])])
+    assert len(out["placement"]) == 1 and len(out["culled"]) == 4
+    assert rice_only.kind == "rice"
+
+
+def test_flat_element_is_refused_and_thin_elements_work(pile):
+    flat = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]), np.array([[0, 1, 2], [1, 3, 2]]))
+    with pytest.raises(ValueError, match="no interior"):
+        run(overlap_refine, placement=pile, libraries=[ElementLibrary("rice", (flat,))])
+    rod = ellipsoid((1.1, 0.05, 0.05))      # S §5: rods
+    plate = ellipsoid((1.1, 1.0, 0.04))     # S §5: plates
+    for thin in (rod, plate):
+        out = run(overlap_refine, placement=pile.subset(np.arange(200)),
+                  libraries=[ElementLibrary("rice", (thin,))])["placement"]
+        assert np.isfinite(out.positions).all() and np.abs(out.offsets).max() <= 1.1 + 1e-9
+
+
+def test_libraries_must_match_the_kinds(pile, rice):
+    with pytest.raises(ValueError, match="kinds"):
+        run(overlap_refine, placement=pile, libraries=[ElementLibrary("other", rice.meshes)])
+
+
+def test_empty_placement_passes_through(rice):
+    empty = Placement(np.zeros((0, 3)), np.zeros((0, 3)))
+    assert len(run(overlap_refine, placement=empty, libraries=[rice])["placement"]) == 0
+    assert len(run(cull, placement=empty, libraries=[rice])["placement"]) == 0
