@@ -22,6 +22,7 @@ class ElementCluster:
     radii: np.ndarray  # (k,)
     yolk_centre: np.ndarray | None = None  # local frame
     yolk_radius: float = 0.0
+    membrane_centre: np.ndarray | None = None  # local frame
     membrane_radius: float = 0.0  # inner room of the body around its centre (for the yolk)
 
 
@@ -69,9 +70,10 @@ def element_cluster(mesh, count: int, depth_fraction: float = 0.5, cells: int = 
     yolk_vertices = vertices[np.unique(yolk_faces)]
     yolk_centre = yolk_vertices.mean(axis=0)
     yolk_radius = float(np.linalg.norm(yolk_vertices - yolk_centre, axis=1).mean())
-    body_centre = centres.mean(axis=0)
-    membrane = float(np.linalg.norm(vertices[np.unique(body_faces)] - body_centre, axis=1).min())
-    return ElementCluster(centres, radii, yolk_centre, yolk_radius, membrane)
+    body = vertices[np.unique(body_faces)]
+    body_centre = body.mean(axis=0)
+    membrane = float(np.linalg.norm(body - body_centre, axis=1).min())
+    return ElementCluster(centres, radii, yolk_centre, yolk_radius, body_centre, membrane)
 
 
 def matrix_to_quat(rotations: np.ndarray) -> np.ndarray:

@@ -110,12 +110,13 @@ def build_simulation(aggregate: Aggregate, colliders, effects, params) -> Simula
     has_yolk = ~np.isnan(yolk_local[:, 0])
     if "buoyancy" in effects and has_yolk.any():
         owner = np.flatnonzero(has_yolk)
-        room = []
+        room, centre = [], []
         for i in owner:
             cl = cache[(int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))]
             room.append(max(0.0, cl.membrane_radius - cl.yolk_radius))
+            centre.append(cl.membrane_centre - local_centre[i])  # membrane centre relative to the cluster's
         yolks = {"x": np.einsum("nij,nj->ni", p.rotations[owner], yolk_local[owner]) + p.positions[owner],
-                 "owner": owner.astype(np.int64), "centre": np.zeros((len(owner), 3)), "room": np.array(room)}
+                 "owner": owner.astype(np.int64), "centre": np.array(centre), "room": np.array(room)}
     solver = XpbdSolver(x, r, w, start, q, matrix_to_quat(p.rotations), settings, sdf=sdf, yolks=yolks)
     return Simulation(solver, aggregate, np.array(local_centre), yolk_local if yolks is not None else None)
 

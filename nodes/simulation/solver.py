@@ -123,11 +123,11 @@ class XpbdSolver:
         if s.sleep_speed > 0:
             self.buffers.setdefault("x_start", np.empty_like(self.x))[:] = self.x
         self._prestabilise()
-        d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp, self.x_prev)
-        if self.yolks is not None:
+        if self.yolks is not None:  # drag towards the egg velocity of the last substep
             y = self.yolks
             d("buoyancy", buoyancy.yolk_predict, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"],
               self.x, self.v, self.w, self.start, y["owner"], self.yolk_accel, h, s.yolk_drag)
+        d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp, self.x_prev)
         if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
             d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr,
               self.buffers["allowance"])

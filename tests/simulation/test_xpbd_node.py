@@ -1,0 +1,135 @@
+"""The xpbd node: effects gating, outputs, buoyant yolk, determinism, bad input, Rerun logging."""
+
+import hashlib
+
+import numpy as np
+import pytest
+from xpbd_scenes import box_mesh, ikura_mesh, rice_bowl
+
+from nodegraph.context import Context, EntityLogger
+from nodegraph.values import Aggregate, ElementLibrary, Placement
+from nodes.simulation.aggregate import DeformedAggregate
+from nodes.simulation.setup import build_simulation
+from nodes.simulation.xpbd import xpbd
+
+ALL = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
+
+
+def params(**given):
+    return xpbd.resolve_params({"frames": 10, "substeps": 5, "log_every": 5, **given})
+
+
+@pytest.fixture(scope="module")
+def bowl():
+    return rice_bowl(40, seed=3)
+
+
+def test_absent_effects_allocate_nothing_and_run_no_kernel(bowl):
+    aggregate, colliders = bowl
+    lean = build_simulation(aggregate, colliders, frozenset({"gravity", "contact"}), params())
+    for _ in range(3):
+        lean.solver.frame()
+    calls = lean.solver.dispatch.calls
+    assert calls["contact"] > 0 and calls["shape_matching"] > 0
+    for family in ("friction", "adhesion", "collider", "buoyancy"):
+        assert calls[family] == 0, family
+    assert lean.solver.sdf is None  # colliders were wired, but 'collider' was not asked: no SDF built
+    assert not {"yolk_v", "yolk_prev"} & set(lean.solver.buffers)
+    full = build_simulation(aggregate, colliders, frozenset(ALL), params())
+    full.solver.frame()
+    for family in ("contact", "friction", "adhesion", "collider"):
+        assert full.solver.dispatch.calls[family] > 0, family
+
+
+def test_no_pair_effect_builds_no_neighbour_lists(bowl):
+    aggregate, colliders = bowl
+    sim = build_simulation(aggregate, colliders, frozenset({"gravity", "collider"}), params())
+    sim.solver.frame()
+    assert sim.solver.dispatch.calls["neighbours"] == 0 and "scratch" not in sim.solver.buffers
+
+
+def test_grains_settle_inside_the_bowl(bowl):
+    aggregate, colliders = bowl
+    ctx = Context.standalone(effects=("gravity", "contact", "friction", "collider", "damping"))
+    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params(frames=40, substeps=8))
+    placement = out["aggregate"].placement
+    assert placement.positions[:, 2].mean() < aggregate.placement.positions[:, 2].mean()  # fell
+    assert np.linalg.norm(out["particles"].positions, axis=1).max() < 60.0 - 3.0 + 0.1  # inside the cavity
+    det = np.linalg.det(out["aggregate"].deformations)
+    assert np.all((det > 0.3) & (det < 3.0))
+    rot = placement.rotations
+    assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3), atol=1e-6)
+    mesh = out["aggregate"].element_mesh(0)  # the high-resolution mesh follows its cluster
+    centre = out["particles"].positions[out["particles"].element == 0].mean(axis=0)
+    assert np.linalg.norm(mesh.vertices.mean(axis=0) - centre) < 1.5
+
+
+def test_same_seed_is_bit_identical(bowl):
+    aggregate, colliders = bowl
+    digests = []
+    for _ in range(2):
+        ctx = Context.standalone(effects=ALL)
+        out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params())
+        h = hashlib.sha256()
+        for array in (out["particles"].positions, out["aggregate"].placement.positions,
+                      out["aggregate"].deformations):
+            h.update(np.ascontiguousarray(array).tobytes())
+        digests.append(h.hexdigest())
+    assert digests[0] == digests[1]
+
+
+def egg_on_ground():
+    placement = Placement(np.array([[0.0, 0.0, 3.6]]), np.array([[0.0, 0.0, 1.0]]), kind_names=("ikura",))
+    return Aggregate(placement, (ElementLibrary("ikura", [ikura_mesh(3.5)]),)), [box_mesh([-20, -20, -3], [20, 20, 0])]
+
+
+def test_buoyant_yolk_rises_inside_its_egg():
+    aggregate, colliders = egg_on_ground()
+    ctx = Context.standalone(effects=("gravity", "collider", "buoyancy", "damping"))
+    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params(frames=30, mass=190.0))
+    assert isinstance(out["aggregate"], DeformedAggregate)
+    offset = out["aggregate"].part_offsets[0]
+    assert offset[2] > 0.5  # rose by more than half a millimetre
+    mesh = out["aggregate"].element_mesh(0)
+    yolk = mesh.vertices[np.unique(mesh.faces[mesh.parts == 1])]
+    white = mesh.vertices[np.unique(mesh.faces[mesh.parts == 0])]
+    assert yolk[:, 2].max() <= white[:, 2].max()  # still inside the membrane
+    ctx = Context.standalone(effects=("gravity", "collider", "damping"))
+    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params(frames=5, mass=190.0))
+    assert not isinstance(out["aggregate"], DeformedAggregate)
+
+
+def test_bad_input_is_reported():
+    aggregate, colliders = egg_on_ground()
+    ctx = Context.standalone(effects=("gravity", "collider"))
+    with pytest.raises(ValueError, match="colliders"):
+        xpbd(ctx, aggregate=aggregate, colliders=[], **params())
+    empty = Aggregate(aggregate.placement.subset(np.zeros(1, bool)), aggregate.libraries)
+    with pytest.raises(ValueError, match="empty"):
+        xpbd(ctx, aggregate=empty, colliders=colliders, **params())
+    assert xpbd.check({"mode": "full", "frames": 10})
+
+
+class Recorder:
+    def __init__(self):
+        self.paths = []
+
+    def log(self, path, archetype, static=False):
+        self.paths.append(path)
+
+    def set_time(self, timeline, sequence):
+        assert timeline == "sim_step"
+
+    def send_columns(self, path, indexes, columns):
+        self.paths.append(path)
+
+
+def test_logs_particles_and_step_scalars_to_rerun():
+    aggregate, colliders = egg_on_ground()
+    ctx = Context.standalone(effects=("gravity", "collider"))
+    ctx.rerun = EntityLogger(Recorder(), "/sim")
+    xpbd(ctx, aggregate=aggregate, colliders=colliders, **params())
+    paths = ctx.rerun.recording.paths
+    assert paths.count("/sim/particles") == 2
+    for name in ("penetration_over_radius", "residual", "kinetic_energy", "sleeping_share"):
+        assert f"/sim/scalars/{name}" in paths
