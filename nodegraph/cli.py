@@ -6,11 +6,11 @@ Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is inv
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from pathlib import Path
 
 from rich.console import Console
-from rich.table import Table
 
 from .cache import Cache, default_cache_dir
 from .errors import NodeFailure, NodegraphError, RecipeError
@@ -101,10 +101,35 @@ def _cmd_check(args, registry, console: Console) -> int:
 def _cmd_nodes(args, registry, console: Console) -> int:
     for spec in registry.specs():
         summary = spec.doc.splitlines()[0] if spec.doc else ""
-        console.print(f"{spec.type_name:<18} v{spec.version:<3} {summary}", highlight=False)
+        effects = f"  [effects: {', '.join(sorted(spec.effects))}]" if spec.effects else ""
+        print(f"{spec.type_name:<18} v{spec.version:<3} {summary}{effects}")
     if not registry.names():
-        console.print("(no node types found)")
+        print("(no node types found)")
     return 0
+
+
+def describe_spec(spec) -> str:
+    """Plain-text description of a node type: header, doc, ports, parameters (readable in a pipe)."""
+    lines = [f"{spec.type_name}  (version {spec.version}, {spec.module})"]
+    if spec.doc:
+        lines += ["", *spec.doc.splitlines()]
+    lines += ["", f"random: {'yes (seeded per node and variant)' if spec.random else 'no'}"]
+    if spec.effects:
+        lines.append(f"effects: {', '.join(sorted(spec.effects))}")
+    for title, ports in (("inputs", spec.inputs), ("outputs", spec.outputs)):
+        lines += ["", f"{title}:"] + ([] if ports else ["  (none)"])
+        for name, port in ports.items():
+            flags = " (optional)" if getattr(port, "optional", False) else ""
+            lines.append(f"  {name:<16} {port.type_name + flags:<24} {port.doc}")
+    lines += ["", "parameters:"] + ([] if spec.params else ["  (none)"])
+    for name, param in spec.params.items():
+        d = param.describe()
+        detail = "  ".join(x for x in (f"default {d['default']}", d["range"] and f"range {d['range']}",
+                                        d["units"] and f"units {d['units']}") if x)
+        lines.append(f"  {name:<16} {d['type']:<24} {detail}")
+        if d["doc"]:
+            lines.append(f"  {'':<16} {d['doc']}")
+    return "\n".join(lines)
 
 
 def _cmd_describe(args, registry, console: Console) -> int:
@@ -115,27 +140,7 @@ def _cmd_describe(args, registry, console: Console) -> int:
         near = difflib.get_close_matches(args.type, registry.names(), n=1)
         hint = f"; did you mean '{near[0]}'?" if near else ""
         raise NodegraphError(f"unknown node type '{args.type}'{hint} (see `nodegraph nodes`)")
-    console.print(f"[bold]{spec.type_name}[/bold]  version {spec.version}  ({spec.module})")
-    if spec.doc:
-        console.print(spec.doc, highlight=False)
-    if spec.effects:
-        console.print(f"effects: {', '.join(sorted(spec.effects))}")
-    console.print(f"random: {'yes (seeded per node and variant)' if spec.random else 'no'}")
-    for title, ports in (("inputs", spec.inputs), ("outputs", spec.outputs)):
-        table = Table(title=title, title_justify="left")
-        for column in ("port", "type", "doc"):
-            table.add_column(column)
-        for name, port in ports.items():
-            flags = " (optional)" if getattr(port, "optional", False) else ""
-            table.add_row(name, port.type_name + flags, port.doc)
-        console.print(table)
-    table = Table(title="parameters", title_justify="left")
-    for column in ("name", "type", "default", "range", "units", "doc"):
-        table.add_column(column)
-    for name, param in spec.params.items():
-        d = param.describe()
-        table.add_row(name, d["type"], d["default"], d["range"], d["units"], d["doc"])
-    console.print(table)
+    print(describe_spec(spec))
     return 0
 
 
@@ -190,6 +195,8 @@ COMMANDS = {"run": _cmd_run, "check": _cmd_check, "nodes": _cmd_nodes, "describe
 
 
 def main(argv: list[str] | None = None) -> int:
+    if argv is None:  # as a command, die quietly when the reader of a pipe goes away (| head)
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     args = build_parser().parse_args(argv)
     console = Console(stderr=False, highlight=False)
     try:
