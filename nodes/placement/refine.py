@@ -84,7 +84,11 @@ def refine_placement(placement: Placement, templates: ElementTemplates, refine_r
 
 def cull_placement(placement: Placement, templates: ElementTemplates, threshold: float,
                    offset: float) -> tuple[np.ndarray, np.ndarray]:
-    """(keep mask, depth per element before culling): deepest first, while the depth with live neighbours > D."""
+    """(keep mask, depth): deepest first, an element goes while its depth with live neighbours > D.
+
+    ``depth`` is, for kept elements, the depth against the kept neighbours; for culled ones the
+    depth they had before culling.
+    """
     from .refine_kernels import cull_deepest, overlap_depths
 
     n = len(placement)
@@ -99,4 +103,7 @@ def cull_placement(placement: Placement, templates: ElementTemplates, threshold:
     keep = cull_deepest(depth, threshold, placement.positions, rotations, tmpl, nb_start, nb, templates.pts_start,
                         templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
                         templates.circumradius, offset)
-    return keep, depth
+    after = overlap_depths(placement.positions, rotations, tmpl, nb_start, nb, keep, templates.pts_start,
+                           templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
+                           templates.circumradius, offset)
+    return keep, np.where(keep, after, depth)
