@@ -84,9 +84,9 @@ def _cmd_run(args, registry, console: Console) -> int:
     reporter.print_summary()
     if not args.quiet:
         for path in result.files:
-            console.print(f"wrote {path}")
+            print(f"wrote {path}")
         if result.rrd is not None:
-            console.print(f"wrote {result.rrd} (open with: rerun {result.rrd})")
+            print(f"wrote {result.rrd} (open with: rerun {result.rrd})")
     return 0
 
 

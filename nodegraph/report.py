@@ -59,6 +59,9 @@ class PeakMemory:
         self.peak_bytes = max(self._peak, end) - self._start
 
 
+_COLOUR = {"ran": "green", "cached": "cyan", "failed": "red"}
+
+
 @dataclass
 class NodeRecord:
     """One row of the closing table."""
@@ -101,15 +104,25 @@ class Reporter:
             task_id = progress.add_task(description, total=total)
             yield lambda amount=1: progress.advance(task_id, amount)
 
-    def summary(self) -> Table:
+    def summary(self, per_instance: bool = False) -> Table:
+        """One row per node (variant families folded into one row, times summed) or per instance."""
         table = Table(title="nodegraph run")
         for column, justify in (("node", "left"), ("type", "left"), ("status", "left"), ("wall time", "right"),
                                 ("peak mem", "right")):
             table.add_column(column, justify=justify)
+        rows: dict[str, list[NodeRecord]] = {}
         for rec in self.records:
-            mem = "" if rec.peak_bytes is None else f"{rec.peak_bytes / 2**20:.1f} MiB"
-            colour = {"ran": "green", "cached": "cyan", "failed": "red"}.get(rec.status, "yellow")
-            table.add_row(rec.node, rec.type, f"[{colour}]{rec.status}[/{colour}]", f"{rec.seconds * 1000:.1f} ms", mem)
+            rows.setdefault(rec.node if per_instance else rec.node.split("[")[0], []).append(rec)
+        for node, records in rows.items():
+            counts: dict[str, int] = {}
+            for rec in records:
+                counts[rec.status] = counts.get(rec.status, 0) + 1
+            status = ", ".join(f"[{_COLOUR.get(s, 'yellow')}]{s}[/]" + (f" ×{n}" if len(records) > 1 else "")
+                               for s, n in counts.items())
+            peaks = [r.peak_bytes for r in records if r.peak_bytes is not None]
+            mem = f"{max(peaks) / 2**20:.1f} MiB" if peaks else ""
+            seconds = sum(r.seconds for r in records)
+            table.add_row(node, records[0].type, status, f"{seconds * 1000:.1f} ms", mem)
         return table
 
     def print_summary(self) -> None:
