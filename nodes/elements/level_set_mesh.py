@@ -40,8 +40,11 @@ def field_surface(data: np.ndarray, origin: np.ndarray, voxel_size: float, level
     if max(float(f.max()) for f in faces_of_box) >= level:
         raise ValueError(f"the surface at level {level:g} mm reaches the edge of the grid and would be cut open; "
                          "use a higher level or more padding when voxelising")
-    # Values exactly at the level make marching cubes emit degenerate, non-manifold pieces.
-    field = np.where(data == level, np.nextafter(np.float32(level), np.float32(np.inf)), data)
+    # Values at the level (common on binary fields: whole multiples of the voxel) put surface vertices on
+    # grid corners, where marching cubes emits zero-area pieces and vertex merging opens holes: lift them
+    # by 1e-4 voxel, far above float32 resolution and far below any error that matters.
+    nudge = 1e-4 * voxel_size
+    field = np.where(np.abs(data - level) < nudge, np.float32(level + nudge), data).astype(np.float32)
     vertices, faces, _, _ = measure.marching_cubes(field, level, spacing=(voxel_size,) * 3, step_size=step,
                                                    allow_degenerate=False)
     vertices = vertices.astype(np.float64)

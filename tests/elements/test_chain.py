@@ -151,3 +151,13 @@ def test_ikura_through_the_chain():
     assert volume.data[tuple(np.array(volume.data.shape) // 2)]  # yolk centre is inside the solid
     grain = run(remesh, field=run(distance_field, volume=volume, mesh=egg))
     assert as_trimesh(grain).volume == pytest.approx(4 / 3 * np.pi * 2.0 ** 3, rel=0.02)
+
+
+@pytest.mark.parametrize("method", ["euclidean", "manhattan"])
+def test_binary_offset_on_whole_voxels_stays_closed(japonica, method):
+    spheres = run(sphere_scatter, mesh=japonica)
+    volume = run(voxelise, mesh=japonica, spheres=spheres, resolution=32)
+    field = run(distance_field, volume=volume, method=method)
+    for cells in (-2, 1):  # the level hits field values exactly
+        grain = run(remesh, field=field, level=float(np.float32(cells * volume.voxel_size)))
+        assert as_trimesh(grain).is_watertight
