@@ -140,3 +140,9 @@ def test_time_varying_node_logs_on_its_own_timeline(recipe, tmp_path):
     table = store.reader("sim_step", contents="/surf/energy", ctx=ctx).to_arrow_table()
     assert table.column("sim_step").to_pylist() == list(range(10))
     assert [v[0] for v in table.column("/surf/energy:Scalars:scalars").to_pylist()] == [10.0 - s for s in range(10)]
+
+
+def test_docs_generated_from_declarations(tmp_path, capsys):
+    assert cli("docs", "--out", str(tmp_path / "nodes.md")) == 0
+    text = (tmp_path / "nodes.md").read_text()
+    assert "## `toy_shift` (v1)" in text and "| `dx` | float | 0.0 | [-10.0, 10.0] | mm |" in text
