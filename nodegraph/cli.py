@@ -82,7 +82,7 @@ def _cmd_run(args, registry, console: Console) -> int:
     try:
         result = run_recipe(recipe, outputs=args.outputs or None, cache=cache, out_dir=out_dir, rrd=rrd,
                             spawn=args.spawn, reporter=reporter)
-    except NodeFailure:
+    except (NodeFailure, KeyboardInterrupt):
         reporter.print_summary()
         raise
     reporter.print_summary()
@@ -251,6 +251,9 @@ def main(argv: list[str] | None = None) -> int:
     except NodegraphError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("interrupted; nodes that finished are cached", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

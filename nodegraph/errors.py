@@ -74,13 +74,16 @@ class NodeDeclarationError(NodegraphError):
 class NodeFailure(NodegraphError):
     """A node raised while running; names the node id, its type and the cause."""
 
-    def __init__(self, node_id: str, node_type: str, cause: BaseException, variant: int | None = None):
+    def __init__(self, node_id: str, node_type: str, cause: BaseException, variant: int | None = None,
+                 location: Location | None = None):
         self.node_id = node_id
         self.node_type = node_type
         self.cause = cause
         self.variant = variant
+        self.location = location
         label = node_id if variant is None else f"{node_id}[{variant}]"
-        super().__init__(f"node '{label}' (type {node_type}) failed: {type(cause).__name__}: {cause}")
+        where = f"{location}: " if location is not None else ""
+        super().__init__(f"{where}node '{label}' (type {node_type}) failed: {type(cause).__name__}: {cause}")
 
 
 class CacheCorruption(NodegraphError):

@@ -206,10 +206,10 @@ class Executor:
             self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", now() - start)
             if isinstance(exc, NodeFailure):
                 raise
-            raise NodeFailure(inst.node, spec.type_name, exc, inst.variant) from exc
+            raise NodeFailure(inst.node, spec.type_name, exc, inst.variant, self._where(inst)) from exc
         except Exception as exc:
             self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", now() - start)
-            raise NodeFailure(inst.node, spec.type_name, exc, inst.variant) from exc
+            raise NodeFailure(inst.node, spec.type_name, exc, inst.variant, self._where(inst)) from exc
         finally:
             if ctx.rerun.enabled:
                 ctx.rerun.reset_time()
@@ -221,6 +221,9 @@ class Executor:
         self.values[inst] = outputs
         self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
         return outputs
+
+    def _where(self, inst: Instance):
+        return self.recipe.source.at(("nodes", inst.node), key=True)
 
     @staticmethod
     def _check_outputs(spec, result) -> dict[str, Any]:

@@ -146,6 +146,7 @@ def test_failing_node_names_itself_and_keeps_earlier_results(registry, cache):
         run(registry, cache, text=text)
     message = str(info.value)
     assert "'phys'" in message and "toy_fail" in message and "radius must be positive" in message
+    assert message.startswith("toy.yaml:13:")  # where the failing node is declared
     fixed = run(registry, cache)
     assert fixed.status()["pts"] == "cached" and fixed.status()["shifted"] == "cached"
 
