@@ -91,19 +91,3 @@ def max_penetration_ratio(x, r, nbr_start, nbr):
                 m = pen
         worst[i] = m
     return worst.max() if n > 0 else 0.0
-
-
-@njit(cache=True, parallel=True)
-def contact_counts(x, r, nbr_start, nbr, tolerance):
-    """Per particle, the number of touching neighbours (gap ≤ tolerance)."""
-    n = x.shape[0]
-    out = np.zeros(n, np.int64)
-    for i in prange(n):
-        c = 0
-        for a in range(nbr_start[i], nbr_start[i + 1]):
-            j = nbr[a]
-            _, _, _, d = pair_normal(x, i, j)
-            if d - r[i] - r[j] <= tolerance:
-                c += 1
-        out[i] = c
-    return out

@@ -1,0 +1,139 @@
+"""Side by side: our XPBD particle contacts vs Newton's SolverXPBD on CPU (issue 6).
+
+N spheres of radius 1 cm in an open box, 10 substeps per 1/60 s frame, 1 iteration, gravity,
+contact + friction, box walls. Both start from the same jittered grid (1 mm gaps), run
+``settle`` frames so the pile forms, then time ``timed`` frames: substeps per second.
+Run: python benchmarks/bench_xpbd_newton.py [--quick] [--sizes 10000 50000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("NUMBA_THREADING_LAYER", "workqueue")  # ENVIRONMENT.md: OpenMP collapses under load
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "simulation"))
+RESULTS = ROOT / "benchmarks" / "results"
+SUBSTEPS, RADIUS = 10, 0.01  # m
+
+
+def initial_grid(n, seed=0):
+    """Jittered grid in a square column of side ``side`` (m), spacing 2.1 r."""
+    side = 0.5
+    spacing = 2.1 * RADIUS
+    per_row = int(side / spacing)
+    k = np.arange(n)
+    grid = np.stack([k % per_row, (k // per_row) % per_row, k // per_row ** 2], 1) * spacing + RADIUS * 1.05
+    rng = np.random.default_rng(seed)
+    return grid + rng.uniform(-0.0004, 0.0004, grid.shape), side
+
+
+def run_ours(n, settle, timed):
+    from xpbd_scenes import open_box
+
+    from nodes.simulation.collider import signed_distance_grid
+    from nodes.simulation.solver import SolverSettings, XpbdSolver
+
+    x, side = initial_grid(n)
+    x_mm, r_mm, side_mm = x * 1000, RADIUS * 1000, side * 1000
+    height = x_mm[:, 2].max() + 2 * r_mm
+    boxes = open_box(side_mm, wall=20.0, height=height)
+    sdf = signed_distance_grid(boxes, np.array([-20.0, -20, -20]), np.array([side_mm + 20, side_mm + 20, height]),
+                               r_mm / 2)
+    settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), substeps=SUBSTEPS,
+                              iterations=1, mu_s=0.5, mu_k=0.5)
+    s = XpbdSolver(x_mm, np.full(n, r_mm), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
+                   np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf)
+    for _ in range(settle):
+        s.frame()
+    t = time.perf_counter()
+    for _ in range(timed):
+        s.frame()
+    wall = time.perf_counter() - t
+    return timed * SUBSTEPS / wall, float(s.x[:, 2].max() / 1000), s.diagnostics.penetration[-1]
+
+
+def run_newton(n, settle, timed):
+    import newton
+    import warp as wp
+
+    wp.config.quiet = True
+    x, side = initial_grid(n)
+    builder = newton.ModelBuilder()
+    builder.add_ground_plane()
+    h = float(x[:, 2].max() + 2 * RADIUS)
+    wall = 0.02
+    for cx, cy, hx, hy in ((-wall, side / 2, wall, side / 2 + wall), (side + wall, side / 2, wall, side / 2 + wall),
+                           (side / 2, -wall, side / 2, wall), (side / 2, side + wall, side / 2, wall)):
+        builder.add_shape_box(body=-1, xform=wp.transform(wp.vec3(cx, cy, h / 2), wp.quat_identity()),
+                              hx=hx, hy=hy, hz=h / 2)
+    for p in x:
+        builder.add_particle(wp.vec3(*p), wp.vec3(0.0, 0.0, 0.0), mass=0.004, radius=RADIUS)
+    model = builder.finalize(device="cpu")
+    model.particle_mu = 0.5
+    model.soft_contact_mu = 0.5
+    solver = newton.solvers.SolverXPBD(model, iterations=1)
+    state_0, state_1 = model.state(), model.state()
+    control = model.control()
+    pipeline = newton.CollisionPipeline(model)
+    contacts = pipeline.contacts()
+    dt = 1.0 / 60 / SUBSTEPS
+
+    def frame():
+        nonlocal state_0, state_1
+        for _ in range(SUBSTEPS):
+            state_0.clear_forces()
+            pipeline.collide(state_0, contacts)
+            solver.step(state_0, state_1, control, contacts, dt)
+            state_0, state_1 = state_1, state_0
+
+    t = time.perf_counter()
+    frame()  # first call compiles the Warp kernels (cached afterwards)
+    compile_s = time.perf_counter() - t
+    for _ in range(settle - 1):
+        frame()
+    wp.synchronize()
+    t = time.perf_counter()
+    for _ in range(timed):
+        frame()
+    wp.synchronize()
+    wall = time.perf_counter() - t
+    q = state_0.particle_q.numpy()
+    return timed * SUBSTEPS / wall, float(q[:, 2].max()), compile_s
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 50000])
+    args = ap.parse_args()
+    settle, timed = (3, 3) if args.quick else (30, 10)
+    sizes = [2000] if args.quick else args.sizes
+    rows = []
+    for n in sizes:
+        ours, ours_top, ours_pen = run_ours(n, settle, timed)
+        try:
+            newton_rate, newton_top, compile_s = run_newton(n, settle, timed)
+            note = f"Newton first-frame compile+run {compile_s:.0f} s"
+        except Exception as exc:  # report why Newton could not run, keep our number
+            newton_rate, newton_top, note = float("nan"), float("nan"), f"Newton failed: {type(exc).__name__}: {exc}"
+        rows.append((n, ours, newton_rate, ours / newton_rate, ours_top, newton_top, ours_pen, note))
+        print(rows[-1], flush=True)
+    lines = ["| N | ours substeps/s | Newton SolverXPBD CPU substeps/s | ratio | pile top ours (m) | pile top Newton (m) "
+             "| our max penetration / r | note |", "|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {n} | {a:.1f} | {b:.1f} | {c:.2f} | {d:.3f} | {e:.3f} | {f:.3f} | {g} |" for n, a, b, c, d, e, f, g in rows]
+    table = "\n".join(lines)
+    print(table)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / "bench_xpbd_newton.md").write_text(table + "\n")
+
+
+if __name__ == "__main__":
+    main()
