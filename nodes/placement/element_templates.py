@@ -18,10 +18,12 @@ from nodegraph.values import ElementLibrary
 class ElementTemplates:
     """Template t = kind_first[kind] + variant; CSR arrays ``*_start`` index ``pts`` and ``centers``/``radii``.
 
-    ``pts`` (the cost's point set X) = up to ``cost_points`` vertices plus the medial-sphere centres.
+    ``pts`` = up to ``cost_points`` spread vertices (the refine cost's X, as S) then the medial-sphere
+    centres, which the overlap depth also probes.
     """
 
     pts_start: np.ndarray
+    cost_end: np.ndarray       # X of the refine cost = pts[pts_start[t]:cost_end[t]] (vertices, as S)
     pts: np.ndarray
     sph_start: np.ndarray
     centers: np.ndarray
@@ -57,7 +59,7 @@ def build_templates(libraries: tuple[ElementLibrary, ...], tolerance: float, max
     from .medial_spheres import element_length, medial_spheres, union_fit
 
     pts, centers, radii, bound, circum, length, inscribed, fit = [], [], [], [], [], [], [], []
-    kind_first = []
+    kind_first, cost_counts = [], []
     for library in libraries:
         if len(library) == 0:
             raise ValueError(f"element library {library.kind!r} holds no meshes")
@@ -67,9 +69,11 @@ def build_templates(libraries: tuple[ElementLibrary, ...], tolerance: float, max
                 c, r = medial_spheres(mesh.vertices, mesh.faces, tolerance, max_spheres)
             except ValueError as exc:
                 raise ValueError(f"element {library.kind!r} mesh {index}: {exc}") from None
-            # X = spread vertices plus the medial centres: with vertices alone (S) an element lying
+            # Depth probes = spread vertices plus the medial centres: with vertices alone an element lying
             # wholly inside another, or coinciding with it, would register no overlap at all.
-            pts.append(np.vstack([farthest_points(np.asarray(mesh.vertices, np.float64), cost_points), c]))
+            spread = farthest_points(np.asarray(mesh.vertices, np.float64), cost_points)
+            cost_counts.append(len(spread))
+            pts.append(np.vstack([spread, c]))
             centers.append(c)
             radii.append(r)
             bound.append(float((np.linalg.norm(c, axis=1) + r).max()))
@@ -83,7 +87,8 @@ def build_templates(libraries: tuple[ElementLibrary, ...], tolerance: float, max
         np.cumsum([len(p) for p in parts], out=start[1:])
         return start
 
-    return ElementTemplates(csr(pts), np.ascontiguousarray(np.vstack(pts)), csr(radii),
+    pts_start = csr(pts)
+    return ElementTemplates(pts_start, pts_start[:-1] + np.array(cost_counts, np.int64), np.ascontiguousarray(np.vstack(pts)), csr(radii),
                             np.ascontiguousarray(np.vstack(centers)), np.concatenate(radii), np.array(bound),
                             np.array(circum), np.array(length), np.array(inscribed), np.array(kind_first, np.int64),
                             tuple(fit))

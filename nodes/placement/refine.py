@@ -56,6 +56,8 @@ def neighbours(positions: np.ndarray, templates: ElementTemplates, tmpl: np.ndar
 def refine_placement(placement: Placement, templates: ElementTemplates, refine_ranges: np.ndarray,
                      settings: RefineSettings, order: np.ndarray) -> Placement:
     """Move each element along its normal once, in ``order``, to the golden-section minimum of the cost."""
+    import numba
+
     from .refine_kernels import GAN, SAKURAI, colour_in_order, overlap_depths, refine_offsets
 
     n = len(placement)
@@ -71,10 +73,11 @@ def refine_placement(placement: Placement, templates: ElementTemplates, refine_r
     rotations = np.ascontiguousarray(placement.rotations)
     cost_kind = SAKURAI if settings.cost == "sakurai" else GAN
     offsets = refine_offsets(positions, rotations, np.ascontiguousarray(placement.normals), tmpl, lo, hi, nb_start,
-                             nb, colour, order, templates.pts_start, templates.pts, templates.sph_start,
+                             nb, colour, order, templates.pts_start, templates.cost_end, templates.pts, templates.sph_start,
                              templates.centers, templates.radii, templates.bound, templates.circumradius,
                              settings.offset, cost_kind,
-                             settings.slope, settings.spacing * settings.c_refine, golden_iterations(settings.tolerance))
+                             settings.slope, settings.spacing * settings.c_refine, golden_iterations(settings.tolerance),
+                             4 * numba.get_num_threads())
     depth = overlap_depths(positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates.pts_start,
                            templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
                            templates.circumradius, settings.offset)

@@ -105,7 +105,7 @@ def _implicit(q0, q1, q2, centers, radii, s0, s1, offset):
 
 
 @njit(cache=True)
-def _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, pts,
+def _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, cost_end, pts,
                   sph_start, centers, radii, bound, circumradius, offset, world, pair_range, pair_lo, pair_hi,
                   bump_t0, bump_perp2, bump_r, bump_lo, bump_hi):
     """Overlap of i with its neighbours as 1-D bumps in t (S eq. 2 made one-dimensional).
@@ -119,7 +119,7 @@ def _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_sta
     lo, hi = t_lo[i], t_hi[i]
     n0, n1, n2 = normals[i, 0], normals[i, 1], normals[i, 2]
     ri = rotations[i]
-    k0, k1 = pts_start[ti], pts_start[ti + 1]
+    k0, k1 = pts_start[ti], cost_end[ti]
     for k in range(k0, k1):
         for d in range(3):
             world[k - k0, d] = ri[d, 0] * pts[k, 0] + ri[d, 1] * pts[k, 1] + ri[d, 2] * pts[k, 2]
@@ -247,35 +247,45 @@ def _golden_section(lo, hi, iterations, cost_kind, slope, penalty, npairs, pair_
 
 
 @njit(cache=True)
-def _refine_one(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, pts, sph_start,
-                centers, radii, bound, circumradius, offset, cost_kind, slope, penalty, iterations, max_pts):
-    """The golden-section offset t of element i against its neighbours where they are now."""
-    capacity = 4096
-    while True:
-        world = np.empty((max_pts, 3))
-        pair_range = np.empty(capacity + 1, np.int64)
-        pair_lo = np.empty(capacity)
-        pair_hi = np.empty(capacity)
-        bump_t0 = np.empty(4 * capacity)
-        bump_perp2 = np.empty(4 * capacity)
-        bump_r = np.empty(4 * capacity)
-        bump_lo = np.empty(4 * capacity)
-        bump_hi = np.empty(4 * capacity)
+def _refine_chunk(members, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, cost_end, pts,
+                  sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope, penalty, iterations,
+                  max_pts, offsets):
+    """Refine a run of mutually independent elements with one set of scratch buffers (grown on demand)."""
+    capacity = 1024
+    world = np.empty((max_pts, 3))
+    pair_range = np.empty(capacity + 1, np.int64)
+    pair_lo, pair_hi = np.empty(capacity), np.empty(capacity)
+    bump_t0, bump_perp2, bump_r = np.empty(4 * capacity), np.empty(4 * capacity), np.empty(4 * capacity)
+    bump_lo, bump_hi = np.empty(4 * capacity), np.empty(4 * capacity)
+    for i in members:
         npairs, _ = _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start,
-                                  pts, sph_start, centers, radii, bound, circumradius, offset, world, pair_range,
+                                  cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, world, pair_range,
                                   pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi)
-        if npairs >= 0:
-            break
-        capacity *= 4
-    return _golden_section(t_lo[i], t_hi[i], iterations, cost_kind, slope, penalty, npairs, pair_range, pair_lo,
-                           pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset)
+        while npairs < 0:
+            capacity *= 4
+            pair_range = np.empty(capacity + 1, np.int64)
+            pair_lo, pair_hi = np.empty(capacity), np.empty(capacity)
+            bump_t0, bump_perp2, bump_r = np.empty(4 * capacity), np.empty(4 * capacity), np.empty(4 * capacity)
+            bump_lo, bump_hi = np.empty(4 * capacity), np.empty(4 * capacity)
+            npairs, _ = _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb,
+                                      pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, world,
+                                      pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi)
+        t = _golden_section(t_lo[i], t_hi[i], iterations, cost_kind, slope, penalty, npairs, pair_range, pair_lo,
+                            pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset)
+        offsets[i] = t
+        for d in range(3):
+            positions[i, d] += t * normals[i, d]
 
 
 @njit(cache=True, parallel=True)
 def refine_offsets(positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, colour, order,
-                   pts_start, pts, sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope, penalty,
-                   iterations):
-    """Offsets t per element (positions updated in place), colour class by colour class in ``order``."""
+                   pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope,
+                   penalty, iterations, chunks):
+    """Offsets t per element (positions updated in place), colour class by colour class in ``order``.
+
+    Each class is split into ``chunks`` contiguous runs processed in parallel; members of a class are
+    not neighbours, so the result does not depend on the thread count.
+    """
     n = positions.shape[0]
     offsets = np.zeros(n)
     colours = colour.max() + 1
@@ -294,14 +304,14 @@ def refine_offsets(positions, rotations, normals, template, t_lo, t_hi, nb_start
     for t in range(pts_start.shape[0] - 1):
         max_pts = max(max_pts, pts_start[t + 1] - pts_start[t])
     for c in range(colours):
-        for m in prange(class_start[c], class_start[c + 1]):
-            i = members[m]
-            t = _refine_one(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, pts,
-                            sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope, penalty,
-                            iterations, max_pts)
-            offsets[i] = t
-            for d in range(3):
-                positions[i, d] += t * normals[i, d]
+        start, size = class_start[c], class_start[c + 1] - class_start[c]
+        parts = min(chunks, size)
+        for part in prange(parts):
+            lo = start + (size * part) // parts
+            hi = start + (size * (part + 1)) // parts
+            _refine_chunk(members[lo:hi], positions, rotations, normals, template, t_lo, t_hi, nb_start, nb,
+                          pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset,
+                          cost_kind, slope, penalty, iterations, max_pts, offsets)
     return offsets
 
 
