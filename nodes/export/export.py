@@ -1,0 +1,52 @@
+"""The ``export`` node: a shaded scene as glTF binary, USD, PLY and OBJ bytes — SPEC §4 output.
+
+Returns a ``FileSet``; the engine writes it atomically into ``outputs/<recipe>/`` (temp + rename),
+so an unwritable destination leaves nothing half-written.
+"""
+
+from __future__ import annotations
+
+import re
+
+from nodegraph.node import In, Out, node
+from nodegraph.params import Param
+from nodegraph.values import FileSet, ShadedScene
+
+FORMATS = ("glb", "usda", "usdc", "ply", "obj")
+
+
+def _check(params):
+    problems = []
+    bad = [f for f in params.get("formats", ()) if f not in FORMATS]
+    if bad:
+        problems.append(("formats", f"unknown format(s) {bad}; allowed: {', '.join(FORMATS)}"))
+    if not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", params.get("basename", "")):
+        problems.append(("basename", "a plain file name: letters, digits, '_', '-', '.' (no folders)"))
+    return problems
+
+
+@node(
+    "export",
+    version=1,
+    inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
+    outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
+    params={
+        "formats": Param(list[str], ["glb", "usdc", "ply", "obj"], f"file formats, any of {', '.join(FORMATS)}"),
+        "basename": Param(str, "scene", "file name without extension (a plain name, no folders)"),
+    },
+    check=_check,
+)
+def export(ctx, scene, *, formats, basename):
+    """glb: core PBR + KHR_materials_* (glTF-Validator clean); USD: UsdPreviewSurface; PLY/OBJ: sRGB colours."""
+    problems = _check({"formats": formats, "basename": basename})
+    if problems:
+        raise ValueError("; ".join(f"{name}: {message}" for name, message in problems))
+    if not formats:
+        raise ValueError("formats: name at least one of " + ", ".join(FORMATS))
+    from .gltf_writer import glb_bytes
+    from .mesh_files import obj_bytes, ply_bytes
+    from .usd_writer import usd_bytes
+
+    writers = {"glb": glb_bytes, "usda": lambda s: usd_bytes(s, binary=False),
+               "usdc": lambda s: usd_bytes(s, binary=True), "ply": ply_bytes, "obj": obj_bytes}
+    return FileSet({f"{basename}.{fmt}": writers[fmt](scene) for fmt in dict.fromkeys(formats)})

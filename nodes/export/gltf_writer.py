@@ -1,0 +1,131 @@
+"""A shaded scene as binary glTF 2.0 (.glb) with KHR_materials_* extensions — SPEC §4 output.
+
+Hand-written JSON + one binary buffer because trimesh's exporter (the library at hand) maps
+materials to core PBR only and drops transmission, volume, IOR, specular, clearcoat and emissive
+strength. One glTF mesh and node per element part; the root node turns our Z-up millimetres into
+glTF's Y-up metres. ``COLOR_0`` holds the CDRF colour divided by the base colour, so a viewer's
+``baseColorFactor × COLOR_0`` shows the CDRF colour while the material keeps its own base colour.
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+
+import numpy as np
+
+from nodegraph.values import Material, ShadedScene
+
+FLOAT, UINT = 5126, 5125
+ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
+Z_UP_TO_Y_UP = [-np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)]  # quaternion (x, y, z, w): −90° about x
+
+
+def material_json(material: Material) -> tuple[dict, set[str]]:
+    """Principled parameters → glTF PBR plus the KHR extensions that carry the rest."""
+    ext: dict[str, dict] = {}
+    if material.transmission > 0:
+        ext["KHR_materials_transmission"] = {"transmissionFactor": material.transmission}
+        ext["KHR_materials_volume"] = {"thicknessFactor": float(np.mean(material.subsurface_radius)),
+                                       "attenuationColor": list(material.subsurface_color),
+                                       "attenuationDistance": max(float(np.mean(material.subsurface_radius)) * 1e-3,
+                                                                  1e-6)}  # mm → m
+    if material.ior != 1.5:
+        ext["KHR_materials_ior"] = {"ior": material.ior}
+    if material.specular != 0.5:
+        # Blender's convention: specular 0.5 is F0 = 0.04, glTF's default; the factor scales F0.
+        ext["KHR_materials_specular"] = {"specularFactor": min(1.0, 2.0 * material.specular)}
+    if material.clearcoat > 0:
+        ext["KHR_materials_clearcoat"] = {"clearcoatFactor": material.clearcoat,
+                                          "clearcoatRoughnessFactor": material.clearcoat_roughness}
+    out = {"name": material.name,
+           "pbrMetallicRoughness": {"baseColorFactor": [*material.base_color, 1.0],
+                                    "metallicFactor": material.metallic, "roughnessFactor": material.roughness}}
+    if material.emission_strength > 0 and max(material.emission) > 0:
+        out["emissiveFactor"] = list(material.emission)
+        if material.emission_strength != 1.0:
+            ext["KHR_materials_emissive_strength"] = {"emissiveStrength": material.emission_strength}
+    if ext:
+        out["extensions"] = ext
+    return out, set(ext)
+
+
+class _Buffer:
+    """The .glb binary chunk: 4-byte aligned views, one accessor each."""
+
+    def __init__(self):
+        self.chunks: list[bytes] = []
+        self.size = 0
+        self.views: list[dict] = []
+        self.accessors: list[dict] = []
+
+    def add(self, array: np.ndarray, component: int, kind: str, target: int, bounds: bool = False) -> int:
+        data = np.ascontiguousarray(array).tobytes()
+        self.views.append({"buffer": 0, "byteOffset": self.size, "byteLength": len(data), "target": target})
+        self.chunks.append(data)
+        self.size += len(data)
+        pad = (-self.size) % 4
+        if pad:
+            self.chunks.append(b"\0" * pad)
+            self.size += pad
+        accessor = {"bufferView": len(self.views) - 1, "componentType": component, "count": len(array), "type": kind}
+        if bounds:
+            accessor["min"] = array.min(axis=0).tolist()
+            accessor["max"] = array.max(axis=0).tolist()
+        self.accessors.append(accessor)
+        return len(self.accessors) - 1
+
+
+def unit_normals(normals: np.ndarray) -> np.ndarray:
+    """float32 unit normals (the validator checks length); a zero normal becomes +z."""
+    n = np.asarray(normals, np.float32)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    n = np.where(length > 1e-6, n / np.maximum(length, 1e-12), np.float32([0, 0, 1]))
+    return (n / np.linalg.norm(n, axis=1, keepdims=True)).astype(np.float32)
+
+
+def color_factor(colors: np.ndarray, base: tuple[float, float, float]) -> np.ndarray:
+    """COLOR_0 such that base × COLOR_0 = the CDRF colour (clipped to [0, 1])."""
+    return np.clip(np.asarray(colors, np.float32)[:, :3] / np.maximum(np.float32(base), 1e-3), 0.0, 1.0)
+
+
+def glb_bytes(scene: ShadedScene) -> bytes:
+    """The scene as a .glb (glTF 2.0 binary): JSON chunk + BIN chunk."""
+    buffer = _Buffer()
+    materials, used = [], set()
+    for material in scene.materials:
+        entry, ext = material_json(material)
+        materials.append(entry)
+        used |= ext
+    meshes, nodes = [], []
+    for k, mesh in enumerate(scene.meshes):
+        if len(mesh.faces) == 0:
+            continue
+        positions = np.asarray(mesh.vertices, np.float32)
+        attributes = {"POSITION": buffer.add(positions, FLOAT, "VEC3", ARRAY_BUFFER, bounds=True)}
+        if mesh.normals is not None:
+            attributes["NORMAL"] = buffer.add(unit_normals(mesh.normals), FLOAT, "VEC3", ARRAY_BUFFER)
+        if mesh.colors is not None:
+            base = scene.materials[scene.material_of[k]].base_color
+            attributes["COLOR_0"] = buffer.add(color_factor(mesh.colors, base), FLOAT, "VEC3", ARRAY_BUFFER)
+        indices = buffer.add(np.asarray(mesh.faces, np.uint32).reshape(-1), UINT, "SCALAR", ELEMENT_ARRAY_BUFFER)
+        name = mesh.name or f"mesh_{k}"
+        meshes.append({"name": name, "primitives": [{"attributes": attributes, "indices": indices,
+                                                     "material": int(scene.material_of[k]), "mode": 4}]})
+        nodes.append({"name": name, "mesh": len(meshes) - 1})
+    if not meshes:
+        raise ValueError("scene: no mesh with faces to export")
+    root = {"name": "aggregate", "rotation": Z_UP_TO_Y_UP, "scale": [1e-3] * 3,  # Z-up mm → Y-up m
+            "children": list(range(1, len(nodes) + 1))}
+    document = {"asset": {"version": "2.0", "generator": "nodegraph export"},
+                "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [root, *nodes], "meshes": meshes,
+                "materials": materials, "accessors": buffer.accessors, "bufferViews": buffer.views,
+                "buffers": [{"byteLength": buffer.size}]}
+    if used:
+        document["extensionsUsed"] = sorted(used)
+    text = json.dumps(document, separators=(",", ":")).encode()
+    text += b" " * ((-len(text)) % 4)
+    binary = b"".join(buffer.chunks)
+    total = 12 + 8 + len(text) + 8 + len(binary)
+    return (struct.pack("<4sII", b"glTF", 2, total) + struct.pack("<I4s", len(text), b"JSON") + text
+            + struct.pack("<I4s", len(binary), b"BIN\0") + binary)

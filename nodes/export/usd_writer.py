@@ -1,0 +1,90 @@
+"""A shaded scene as USD (usd-core): UsdGeom meshes, UsdPreviewSurface materials — SPEC §4 output.
+
+Z-up, millimetres (``metersPerUnit`` 0.001). Per-vertex CDRF colours go to ``primvars:displayColor``;
+each material's principled parameters map onto UsdPreviewSurface (transmission has no input there,
+so it lowers ``opacity``). ``.usda`` comes from the in-memory layer; ``.usdc`` (crate) can only be
+written to a path, so it goes through a private temporary directory and is read back as bytes.
+"""
+
+from __future__ import annotations
+
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from nodegraph.values import Material, ShadedScene
+
+
+def prim_name(text: str, k: int) -> str:
+    """A valid, unique USD prim name from a mesh or material name."""
+    return f"m{k:05d}_" + (re.sub(r"[^A-Za-z0-9_]", "_", text) or "mesh")
+
+
+def _material(stage, path: str, material: Material):
+    from pxr import Gf, Sdf, UsdShade
+
+    look = UsdShade.Material.Define(stage, path)
+    shader = UsdShade.Shader.Define(stage, f"{path}/PreviewSurface")
+    shader.CreateIdAttr("UsdPreviewSurface")
+    inputs = {
+        "diffuseColor": (Sdf.ValueTypeNames.Color3f, Gf.Vec3f(*material.base_color)),
+        "emissiveColor": (Sdf.ValueTypeNames.Color3f,
+                          Gf.Vec3f(*(np.asarray(material.emission) * material.emission_strength).tolist())),
+        "metallic": (Sdf.ValueTypeNames.Float, material.metallic),
+        "roughness": (Sdf.ValueTypeNames.Float, material.roughness),
+        "clearcoat": (Sdf.ValueTypeNames.Float, material.clearcoat),
+        "clearcoatRoughness": (Sdf.ValueTypeNames.Float, material.clearcoat_roughness),
+        "ior": (Sdf.ValueTypeNames.Float, material.ior),
+        "opacity": (Sdf.ValueTypeNames.Float, 1.0 - 0.5 * material.transmission),
+    }
+    for name, (kind, value) in inputs.items():
+        shader.CreateInput(name, kind).Set(value)
+    look.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    return look
+
+
+def build_stage(scene: ShadedScene):
+    """An in-memory stage holding the scene under ``/Scene`` (the default prim)."""
+    from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
+
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1e-3)
+    root = UsdGeom.Xform.Define(stage, "/Scene")
+    stage.SetDefaultPrim(root.GetPrim())
+    UsdGeom.Scope.Define(stage, "/Scene/Looks")
+    looks = [_material(stage, f"/Scene/Looks/{prim_name(m.name, k)}", m) for k, m in enumerate(scene.materials)]
+    UsdGeom.Scope.Define(stage, "/Scene/Elements")
+    for k, mesh in enumerate(scene.meshes):
+        if len(mesh.faces) == 0:
+            continue
+        geom = UsdGeom.Mesh.Define(stage, f"/Scene/Elements/{prim_name(mesh.name, k)}")
+        points = np.asarray(mesh.vertices, np.float32)
+        geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
+        geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(mesh.faces), 3, np.int32)))
+        geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(mesh.faces, np.int32).reshape(-1)))
+        geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+        geom.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(np.stack([points.min(0), points.max(0)])))
+        if mesh.normals is not None:
+            geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.normals, np.float32)))
+            geom.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+        if mesh.colors is not None:
+            color = geom.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
+            color.Set(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.colors, np.float32)[:, :3]))
+        binding = UsdShade.MaterialBindingAPI.Apply(geom.GetPrim())
+        binding.Bind(looks[scene.material_of[k]])
+    return stage
+
+
+def usd_bytes(scene: ShadedScene, binary: bool) -> bytes:
+    """The scene as .usda text or .usdc crate bytes."""
+    stage = build_stage(scene)
+    if not binary:
+        return stage.GetRootLayer().ExportToString().encode()
+    with tempfile.TemporaryDirectory(prefix="nodegraph_usd_") as folder:
+        path = Path(folder) / "scene.usdc"
+        if not stage.GetRootLayer().Export(str(path)):
+            raise ValueError("usd-core could not write the .usdc crate file")
+        return path.read_bytes()
