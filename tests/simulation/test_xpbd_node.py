@@ -133,3 +133,14 @@ def test_logs_particles_and_step_scalars_to_rerun():
     assert paths.count("/sim/particles") == 2
     for name in ("penetration_over_radius", "residual", "kinetic_energy", "sleeping_share"):
         assert f"/sim/scalars/{name}" in paths
+
+
+def test_registry_lists_xpbd_without_loading_kernels():
+    import subprocess
+    import sys
+
+    code = ("import sys; from nodegraph.api import default_registry; r = default_registry(); "
+            "print('xpbd' in r, 'numba' in sys.modules, 'nodes.simulation.solver' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out[0] == "True"  # the package namespace exposes the node to the registry
+    assert out[2] == "False"  # kernels are imported only when the node runs
