@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 
 from nodegraph import Context
 from nodegraph.values import ElementLibrary, Mesh
-from nodes.placement import cull, mix_ratio, overlap_refine, poisson_place, rotate
+from nodes.placement import cull, mix_ratio, poisson_place, rotate
 from nodes.shapes import shape
 
 RESULTS = Path(__file__).resolve().parent / "results"

@@ -26,16 +26,18 @@ from .element_templates import template_params
     },
 )
 def cull(ctx, placement, libraries, *, threshold, offset, sphere_tolerance, max_spheres, cost_points):
-    """Deepest first, an element goes while its depth against the kept neighbours exceeds D; all culled is an error."""
+    """Deepest first, an element goes while its depth against the kept neighbours exceeds D.
+
+    Never culls everything: the last element of an overlapping group has no live neighbour left.
+    """
     from .element_templates import build_templates, matching_libraries
     from .refine import cull_placement
 
     libraries = matching_libraries(placement, libraries)
+    if len(placement) == 0:
+        return {"placement": placement, "culled": placement, "aggregate": Aggregate(placement, libraries)}
     templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points)
     keep, depth = cull_placement(placement, templates, threshold, offset)
-    if len(placement) and not keep.any():
-        raise ValueError(f"threshold: all {len(placement)} elements overlap deeper than D = {threshold:g}; raise D, "
-                         "lower the placement density (larger r) or widen the refine range")
     names = placement.kind_names or (libraries[0].kind,)
     with_depth = Placement(placement.positions, placement.normals, placement.rotations, placement.kinds,
                            placement.variants, placement.p_num, placement.offsets, depth, names)

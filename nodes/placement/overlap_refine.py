@@ -45,6 +45,9 @@ def overlap_refine(ctx, placement, libraries, *, cost, slope, range_scale, r, c_
     from .refine import RefineSettings, refine_placement
 
     libraries = matching_libraries(placement, libraries)
+    if len(placement) == 0:
+        empty = {key: np.zeros(0) for key in ("spheres", "gap_mean", "gap_max", "volume")}
+        return {"placement": placement, "aggregate": Aggregate(placement, libraries), "stats": Table(empty)}
     templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points, measure_fit=True)
     settings = RefineSettings(cost=cost, slope=slope, range_scale=range_scale, spacing=r or 0.0,
                               c_refine=c_refine, offset=offset, tolerance=tolerance)
