@@ -191,14 +191,21 @@ def sixteen_grains(resolution, repeats):
     return out
 
 
+def peak_rss_mib() -> float:
+    """This process's peak resident set (VmHWM). Not ru_maxrss: that survives exec from the parent."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024.0
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def memory_child(resolution: int, shape: str, method: str) -> None:
     """Run one element at ``resolution`` and print its peak resident set (MiB) as JSON."""
     mesh = base_mesh(Context.standalone(), **params(base_mesh, shape=shape))
     t0 = time.perf_counter()
     spheres, volume, field, grain, _ = grain_chain(mesh, 0, resolution, method)
     seconds = time.perf_counter() - t0
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    print(json.dumps({"peak_mib": peak, "grid": list(volume.data.shape), "seconds": seconds,
+    print(json.dumps({"peak_mib": peak_rss_mib(), "grid": list(volume.data.shape), "seconds": seconds,
                       "triangles": len(grain.faces)}))
 
 
@@ -206,7 +213,7 @@ def baseline_child() -> None:
     """Peak resident set after imports and a tiny warm run: subtract to get what an element adds."""
     mesh = base_mesh(Context.standalone(), **params(base_mesh))
     grain_chain(mesh, 0, 32, "exact")
-    print(json.dumps({"peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}))
+    print(json.dumps({"peak_mib": peak_rss_mib()}))
 
 
 def measure_memory(resolution):
@@ -276,12 +283,16 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="two resolutions, one grain: a smoke run")
     parser.add_argument("--memory-child", nargs=3, metavar=("RES", "SHAPE", "METHOD"), help=argparse.SUPPRESS)
     parser.add_argument("--baseline-child", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--memory", type=int, metavar="RES", help="only the peak-memory measurement at RES")
     args = parser.parse_args()
     if args.memory_child:
         memory_child(int(args.memory_child[0]), args.memory_child[1], args.memory_child[2])
         return
     if args.baseline_child:
         baseline_child()
+        return
+    if args.memory:
+        measure_memory(args.memory)
         return
     from nodes.elements.voxelise import DEFAULT_RESOLUTION
 
