@@ -55,7 +55,8 @@ def _encode(obj: Any, arrays: dict[str, np.ndarray]) -> Any:
     if isinstance(obj, dict):
         if not all(isinstance(k, str) for k in obj):
             raise TypeError("only str-keyed dicts can be stored")
-        return {"__dict__": {k: _encode(v, arrays) for k, v in obj.items()}}
+        # sorted: a dict that went through the cache (decoded in key order) must encode to the same bytes
+        return {"__dict__": {k: _encode(obj[k], arrays) for k in sorted(obj)}}
     if isinstance(obj, (np.integer, np.floating, np.bool_)):
         return _encode(obj.item(), arrays)
     if isinstance(obj, float):
