@@ -17,7 +17,7 @@ import numpy as np
 
 from nodegraph.values import Material, ShadedScene
 
-SKY = 0.9            # radiance of the uniform sky (the CDRF colours are multiplied by ≈ this × visibility)
+SKY = 1.0            # radiance of the uniform sky (the CDRF colours are multiplied by ≈ this × visibility)
 SUN_SHARE = 0.1      # the sun's irradiance as a share of the sky's: highlights without re-lighting much
 SUN_ANGLE = 0.06     # rad, angular radius of the sun
 GLOSS = 0.08         # mirror share of glossy materials (≈ Fresnel reflectance of a wet surface)

@@ -48,7 +48,8 @@ def cdrf_exact(theta: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     """
     from scipy.special import erf
 
-    theta, sigma = np.broadcast_arrays(np.asarray(theta, np.float64), np.asarray(sigma, np.float64))
+    theta, sigma = np.broadcast_arrays(np.atleast_1d(np.asarray(theta, np.float64)),
+                                       np.atleast_1d(np.asarray(sigma, np.float64)))
     out = np.maximum(np.cos(theta), 0.0)
     wide = sigma > 1e-6
     t, s = theta[wide], np.minimum(sigma[wide], SIGMA_MAX)

@@ -41,9 +41,9 @@ def _check(params):
                                   "(normalised)", range=(-1.0, 1.0)),
         "light_colors": Param(list[RGB], [(1.0, 0.97, 0.92)], "linear RGB per light (or one for all)",
                               range=(0.0, 1.0)),
-        "light_intensities": Param(list[float], [1.0], "intensity per light (or one for all); must be > 0",
+        "light_intensities": Param(list[float], [1.2], "intensity per light (or one for all); must be > 0",
                                    range=(0.0, 100.0)),
-        "ambient": Param(float, 0.25, "ambient light as a share of the base colour", range=(0.0, 1.0)),
+        "ambient": Param(float, 0.35, "ambient light as a share of the base colour", range=(0.0, 1.0)),
         "presets": Param(list[str], [], "material preset per element kind, 'kind=preset' (rice, ikura, ice); "
                          "kinds named like japonica/ikura/ice are matched automatically"),
         "syrup_color": Param(RGB, (0.75, 0.02, 0.06), "kakigori syrup colour (linear RGB)", range=(0.0, 1.0)),

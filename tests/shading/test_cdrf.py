@@ -1,0 +1,58 @@
+"""CDRF kernels — SPEC §4 eq. 7–9: closed form vs quadrature vs table, σ₀(water), curvature."""
+
+import numpy as np
+import pytest
+
+from nodes.shading.cdrf import CdrfTable, cdrf_exact, cdrf_quadrature, curvature_sigma, sigma0_from_water
+
+
+def test_closed_form_matches_the_convolution_integral():
+    theta = np.linspace(0, np.pi, 37)[:, None]
+    sigma = np.array([0.1, 0.3, 1.0, 2.5])[None, :]
+    assert np.max(np.abs(cdrf_exact(theta, sigma) - cdrf_quadrature(theta, sigma, 128))) < 1e-7
+
+
+def test_zero_width_is_lambert_and_light_bleeds_past_the_terminator_with_width():
+    theta = np.linspace(0, np.pi, 19)
+    assert np.allclose(cdrf_exact(theta, 0.0), np.maximum(np.cos(theta), 0))
+    past = np.array([cdrf_exact(np.pi / 2 + 0.3, s) for s in (0.1, 0.4, 1.0)])
+    assert past[0] < past[1] < past[2] and past[0] > 0
+
+
+def test_table_approximation_error_shrinks_with_size():
+    rng = np.random.default_rng(1)
+    theta, sigma = rng.uniform(0, np.pi, 5000), rng.uniform(0, 3, 5000)
+    exact = cdrf_exact(theta, sigma)
+    errors = [np.max(np.abs(CdrfTable.build(n, n // 2)(theta, sigma) - exact)) for n in (16, 64, 256)]
+    assert errors[0] > errors[1] > errors[2] and errors[2] < 2e-3
+
+
+def test_sigma0_is_a_log_log_line_through_its_end_points():
+    assert sigma0_from_water(0, 0.1, 1.0) == pytest.approx(0.1)
+    assert sigma0_from_water(24, 0.1, 1.0) == pytest.approx(1.0)
+    mid = [np.log(sigma0_from_water(w, 0.1, 1.0)) for w in (4, 9, 14)]
+    logs = np.log(1 + np.array([4, 9, 14]))
+    assert np.allclose(np.diff(mid) / np.diff(logs), np.log(10) / np.log(25))
+
+
+@pytest.mark.parametrize("water", [-0.1, 24.5, 40])
+def test_water_outside_the_fitted_range_is_refused(water):
+    with pytest.raises(ValueError, match="water_content"):
+        sigma0_from_water(water, 0.1, 1.0)
+
+
+def test_sigma_is_clamped_and_symmetric_in_curvature():
+    s = curvature_sigma(np.array([-2.0, 2.0, 1e6]), 0.5)
+    assert s[0] == s[1] == 1.0 and s[2] == 3.0
+
+
+def test_mean_curvature_of_a_sphere():
+    import trimesh
+
+    from nodes.shading.curvature import mean_curvature
+
+    sphere = trimesh.creation.icosphere(4, radius=2.0)
+    h = mean_curvature(sphere.vertices, sphere.faces)
+    assert np.allclose(h, 0.5, rtol=0.01)
+    inside_out = mean_curvature(sphere.vertices, sphere.faces[:, ::-1])
+    assert np.allclose(inside_out, -0.5, rtol=0.01)  # normals flip, so does the sign

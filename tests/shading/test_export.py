@@ -1,0 +1,122 @@
+"""The export node — SPEC §4 outputs checked by the ecosystem's validators (Khronos glTF-Validator,
+USD's validation framework that ``usdchecker`` runs), plus PLY/OBJ round trips and bad input."""
+
+import io
+import json
+import struct
+
+import numpy as np
+import pytest
+
+from nodegraph.context import Context
+from nodes.export import export
+
+
+def _files(scene, formats):
+    return export(Context.standalone(seed=0), scene=scene, **export.resolve_params({"formats": formats,
+                                                                                     "basename": "don"})).files
+
+
+def _gltf_json(data: bytes) -> dict:
+    length = struct.unpack_from("<I", data, 12)[0]
+    return json.loads(data[20:20 + length])
+
+
+def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
+    data = _files(shaded, ["glb"])["don.glb"]
+    report = gltf_validator(data)
+    assert report["numErrors"] == 0, report["messages"][:5]
+    assert report["numWarnings"] == 0, report["messages"][:5]
+    doc = _gltf_json(data)
+    assert {"KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior",
+            "KHR_materials_clearcoat"} <= set(doc["extensionsUsed"])
+    assert len(doc["meshes"]) == len(shaded.meshes)
+    assert all("COLOR_0" in m["primitives"][0]["attributes"] for m in doc["meshes"])
+    membrane = next(m for m in doc["materials"] if m["name"] == "ikura_membrane")
+    assert membrane["extensions"]["KHR_materials_ior"]["ior"] == pytest.approx(1.36)
+
+
+def test_validator_catches_a_broken_glb(shaded, gltf_validator):
+    data = bytearray(_files(shaded, ["glb"])["don.glb"])
+    doc = _gltf_json(bytes(data))
+    doc["accessors"][0]["count"] += 10_000  # past the end of its buffer view
+    text = json.dumps(doc).encode()
+    text += b" " * ((-len(text)) % 4)
+    old = struct.unpack_from("<I", data, 12)[0]
+    broken = bytes(data[:12]) + struct.pack("<I4s", len(text), b"JSON") + text + bytes(data[20 + old:])
+    broken = broken[:8] + struct.pack("<I", len(broken)) + broken[12:]
+    assert gltf_validator(broken)["numErrors"] > 0
+
+
+def _usd_errors(stage):
+    from pxr import UsdValidation
+
+    validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
+    return list(UsdValidation.ValidationContext(validators).Validate(stage))
+
+
+@pytest.mark.parametrize("fmt", ["usda", "usdc"])
+def test_usd_passes_usd_validation(shaded, tmp_path, fmt):
+    from pxr import Usd, UsdGeom, UsdShade
+
+    path = tmp_path / f"don.{fmt}"
+    path.write_bytes(_files(shaded, [fmt])[f"don.{fmt}"])
+    stage = Usd.Stage.Open(str(path))
+    assert _usd_errors(stage) == []
+    assert UsdGeom.GetStageUpAxis(stage) == "Z" and UsdGeom.GetStageMetersPerUnit(stage) == pytest.approx(1e-3)
+    meshes = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    assert len(meshes) == len(shaded.meshes)
+    bound = UsdShade.MaterialBindingAPI(meshes[0]).ComputeBoundMaterial()[0]
+    assert bound.GetPrim().GetName().endswith("rice")
+
+
+def test_usd_validation_is_not_vacuous():
+    from pxr import Usd, UsdGeom, UsdShade
+
+    stage = Usd.Stage.CreateInMemory()  # no up axis / meters per unit / default prim, binding without the API
+    mesh = UsdGeom.Mesh.Define(stage, "/m")
+    look = UsdShade.Material.Define(stage, "/look")
+    mesh.GetPrim().CreateRelationship("material:binding").SetTargets([look.GetPath()])
+    assert _usd_errors(stage)
+
+
+def test_ply_and_obj_round_trip_with_srgb_colours(shaded):
+    import trimesh
+
+    files = _files(shaded, ["ply", "obj"])
+    n = sum(len(m.vertices) for m in shaded.meshes)
+    ply = trimesh.load(io.BytesIO(files["don.ply"]), file_type="ply", process=False)
+    obj = trimesh.load(io.BytesIO(files["don.obj"]), file_type="obj", process=False)
+    assert len(ply.vertices) == n and len(obj.vertices) == n
+    assert np.allclose(ply.vertices[: len(shaded.meshes[0].vertices)], shaded.meshes[0].vertices, atol=1e-5)
+    from nodes.export.mesh_files import linear_to_srgb8
+
+    assert np.array_equal(ply.visual.vertex_colors[: len(shaded.meshes[0].vertices), :3],
+                          linear_to_srgb8(shaded.meshes[0].colors))
+
+
+def test_export_is_deterministic(shaded):
+    a, b = _files(shaded, ["glb", "usda", "ply"]), _files(shaded, ["glb", "usda", "ply"])
+    assert a == b
+
+
+@pytest.mark.parametrize("params, match", [({"basename": "../escape"}, "plain file name"),
+                                           ({"formats": ["fbx"]}, "unknown format"),
+                                           ({"formats": []}, "at least one")])
+def test_bad_export_parameters(shaded, params, match):
+    with pytest.raises(ValueError, match=match):
+        export(Context.standalone(seed=0), scene=shaded, **{**export.resolve_params({}), **params})
+    if params.get("formats") != []:
+        assert export.check({**export.resolve_params({}), **params})
+
+
+def test_unwritable_destination_leaves_nothing_half_written(shaded, tmp_path):
+    from nodegraph.output_files import write_output
+
+    fileset = export(Context.standalone(seed=0), scene=shaded, **export.resolve_params({"formats": ["glb", "ply"]}))
+    blocker = tmp_path / "outputs"
+    blocker.write_text("a file where the output folder should be")  # fails even for root
+    with pytest.raises(OSError):
+        write_output(fileset, blocker / "ikura_don", "export")
+    assert [p.name for p in tmp_path.rglob("*")] == ["outputs"]
+    assert blocker.read_text().startswith("a file")
