@@ -7,23 +7,23 @@ removed entirely when |Δx_t| < μs·d (static: sticking), otherwise scaled by m
 
 from numba import njit, prange
 
-from .contact_constraints import pair_normal
+from .contact_constraints import lifted_share, pair_normal
 
 
 @njit(cache=True, parallel=True, fastmath=True)
-def friction_project(x, x_prev, w, r, nbr_start, nbr, mu_s, mu_k, out):
-    """One Jacobi sweep of contact friction; writes the averaged result to ``out`` (no aliasing)."""
+def friction_project(x, x_prev, w, r, nbr_start, nbr, mu_s, mu_k, lift, out):
+    """One Jacobi sweep of contact friction, with the contacts' mass scaling ``lift``; writes the
+    averaged result to ``out`` (no aliasing)."""
     n = x.shape[0]
     for i in prange(n):
         ax = 0.0
         ay = 0.0
         az = 0.0
         count = 0
-        wi = w[i]
         for a in range(nbr_start[i], nbr_start[i + 1]):
             j = nbr[a]
-            wsum = wi + w[j]
-            if wsum <= 0.0:
+            share = lifted_share(w, x, i, j, lift)
+            if share < 0.0:
                 continue
             nx, ny, nz, d = pair_normal(x, i, j)
             pen = r[i] + r[j] - d
@@ -40,7 +40,7 @@ def friction_project(x, x_prev, w, r, nbr_start, nbr, mu_s, mu_k, out):
             if t <= 1e-12:
                 continue
             scale = 1.0 if t < mu_s * pen else min(mu_k * pen / t, 1.0)
-            s = -scale * wi / wsum
+            s = -scale * share
             ax += s * tx
             ay += s * ty
             az += s * tz

@@ -43,6 +43,7 @@ def settings_from_params(effects, params, radius) -> SolverSettings:
         capture=params["capture_radius"] * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
         damping=params["damping"], sleep_speed=params["sleep_speed"], speed_clamp=params["speed_clamp"],
+        shock_propagation=params["shock_propagation"],
         yolk_accel=params["gravity"] * (params["white_density"] / params["part_density"] - 1.0)
         if "gravity" in effects else 0.0,
     )

@@ -14,6 +14,7 @@ import numpy as np
 
 from . import adhesion, buoyancy, collider, contact_constraints, friction, integrate, shape_matching, spatial_hash
 
+PARALLEL_CONTACTS = 16384
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 
 
@@ -49,6 +50,8 @@ class SolverSettings:
     yolk_accel: float = 0.0  # mm/s², upward buoyant acceleration of the yolk
     yolk_drag: float = 40.0  # 1/s
     rotation_iterations: int = 8
+    overlap_decay: float = 0.05  # share of a radius by which tolerated old overlap shrinks per substep
+    shock_propagation: float = 1.0  # mass ratio of a contact particle to one a diameter above it (1 = off)
 
 
 @dataclass
@@ -110,11 +113,15 @@ class XpbdSolver:
             self.buffers["yolk_v"] = np.zeros_like(self.yolks["x"])
             self.buffers["yolk_prev"] = np.empty_like(self.yolks["x"])
             self.yolk_accel = np.array([0.0, 0.0, s.yolk_accel])
+        # mass scaling by height (contact_constraints): only where gravity says which way is up
+        self.lift = (np.log(s.shock_propagation) / (2.0 * float(np.median(self.r)))
+                     if "gravity" in s.effects and s.shock_propagation > 1.0 else 0.0)
         self.mu_s = s.mu_s if "friction" in s.effects else 0.0
         self.mu_k = s.mu_k if "friction" in s.effects else 0.0
         self.damping_factor = (1.0 - s.damping) ** (self.h * 60.0) if "damping" in s.effects else 1.0
         self.nbr_start = np.zeros(len(self.x) + 1, np.int64)
         self.nbr = np.zeros(0, np.int64)
+        self.grid = ()  # (cell_start, order, dims) of the last neighbour build: the contacts' colouring
 
     # -- one substep ------------------------------------------------------------------------
     def substep(self) -> float:
@@ -130,7 +137,7 @@ class XpbdSolver:
         d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp, self.x_prev)
         if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
             d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr,
-              self.buffers["allowance"])
+              s.overlap_decay, self.buffers["allowance"])
         if self.matching:
             self.buffers["lambda"][:] = 0.0
         alpha = s.compliance / (h * h) if self.matching else 0.0
@@ -139,11 +146,10 @@ class XpbdSolver:
         for _ in range(s.iterations):
             residual = 0.0
             if "contact" in s.effects:
-                self._jacobi("contact", contact_constraints.contact_project, self.x, self.w, self.r,
-                             self.nbr_start, self.nbr, self.buffers["allowance"])
+                self._contacts(self.buffers["allowance"])
             if "friction" in s.effects:
                 self._jacobi("friction", friction.friction_project, self.x, self.x_prev, self.w, self.r,
-                             self.nbr_start, self.nbr, self.mu_s, self.mu_k)
+                             self.nbr_start, self.nbr, self.mu_s, self.mu_k, self.lift)
             if "adhesion" in s.effects:
                 self._jacobi("adhesion", adhesion.adhesion_project, self.x, self.w, self.r, self.nbr_start,
                              self.nbr, s.capture, adhesion_alpha)
@@ -171,8 +177,8 @@ class XpbdSolver:
     def _refresh_neighbours(self) -> bool:
         """Rebuild the Verlet lists once a particle has moved half the skin since the last build."""
         if self.pairs and spatial_hash.max_displacement(self.x, self.buffers["x_built"]) > 0.5 * self.skin:
-            self.nbr_start, self.nbr = self.dispatch("neighbours", spatial_hash.neighbour_lists, self.x, self.r,
-                                                     self.elem, self.reach, self.cell)
+            self.nbr_start, self.nbr, *self.grid = self.dispatch("neighbours", spatial_hash.neighbour_lists, self.x,
+                                                                 self.r, self.elem, self.reach, self.cell)
             self.buffers["x_built"][:] = self.x
             if "contact" in self.s.effects:
                 self.buffers["allowance"] = np.zeros(len(self.nbr))
@@ -187,12 +193,19 @@ class XpbdSolver:
         if "contact" in self.s.effects:
             none = self.buffers["allowance"]
             none[:] = 0.0
-            self._jacobi("contact", contact_constraints.contact_project, self.x, self.w, self.r, self.nbr_start,
-                         self.nbr, none)
+            self._contacts(none)
             self.dispatch("contact", contact_constraints.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr,
-                          self.buffers["allowance"])
+                          self.s.overlap_decay, self.buffers["allowance"])
         if self.sdf is not None:
             self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf, 0.0, 0.0)
+
+    def _contacts(self, allowance):
+        """One Gauss–Seidel contact sweep, threaded from ``PARALLEL_CONTACTS`` particles up (measured:
+        a threaded sweep costs ≈ 0.4 ms in launches; 10k particles take 0.7 ms on one thread)."""
+        kernel = (contact_constraints.contact_gauss_seidel if len(self.x) >= PARALLEL_CONTACTS
+                  else contact_constraints.contact_gauss_seidel_serial)
+        self.dispatch("contact", kernel, self.x, self.w, self.r, self.nbr_start, self.nbr, allowance, self.lift,
+                      *self.grid)
 
     def _jacobi(self, family, kernel, *args):
         out = self.buffers["scratch"]

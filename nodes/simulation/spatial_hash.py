@@ -5,6 +5,10 @@ must skip same-element pairs. Particles are counting-sorted into a dense grid ov
 box with z fastest, so the 27 neighbour cells of a particle are 9 contiguous runs of the sorted
 order. The cell size grows if the box would need more than ``MAX_CELLS_PER_PARTICLE``·n cells
 (a scattered or exploding scene), which only makes the search coarser, never wrong.
+
+The grid is also the contacts' graph colouring (``contact_constraints.contact_gauss_seidel``): a
+particle's neighbours lie in the 27 cells around its own at build time, so slabs of cells whose x
+indices agree modulo 3 share no particle and can be solved in parallel.
 """
 
 import numpy as np
@@ -81,7 +85,8 @@ def _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, out, write_at):
 
 @njit(cache=True, parallel=True)
 def neighbour_lists(x, r, elem, reach, cell_size):
-    """CSR lists of particles j of another element with |x_i − x_j| ≤ r_i + r_j + reach.
+    """CSR lists of particles j of another element with |x_i − x_j| ≤ r_i + r_j + reach, and the
+    grid they were found in: (nbr_start, nbr, cell_start, order, dims).
 
     ``cell_size`` must be ≥ 2·max(r) + reach. Two parallel passes: count, then fill.
     """
@@ -106,7 +111,7 @@ def neighbour_lists(x, r, elem, reach, cell_size):
     nbr = np.empty(counts[n], np.int64)
     for p in prange(n):
         _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, nbr, counts[order[p]])
-    return counts, nbr
+    return counts, nbr, start, order, dims
 
 
 @njit(cache=True, parallel=True)
