@@ -21,7 +21,7 @@ so no exponent overflows however tall the pile. Rest positions do not depend on 
 Overlap left over at the start of a substep is removed mostly by pre-stabilisation (moves that add
 no velocity, Macklin et al. 2014 §4.2); within the substep each pair may keep that overlap less a
 ``decay`` share of the smaller radius (``allowance``). Deep initial overlaps therefore separate
-without a burst of kinetic energy (at most decay·r/h of separation speed), while old overlaps still
+without a burst of kinetic energy (at most decay·r/h of separation speed; the solver passes decay = rate·h, a fixed speed), while old overlaps still
 shrink every substep: an allowance that never decays ratchets, since each impact adds overlap
 that is then tolerated for good, and falling columns ended with coincident particles.
 """

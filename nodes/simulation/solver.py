@@ -50,7 +50,10 @@ class SolverSettings:
     yolk_accel: float = 0.0  # mm/s², upward buoyant acceleration of the yolk
     yolk_drag: float = 40.0  # 1/s
     rotation_iterations: int = 8
-    overlap_decay: float = 0.05  # share of a radius by which tolerated old overlap shrinks per substep
+    # tolerated old overlap shrinks by this many radii per second (0.05 r per substep at 10 × 1/60 s);
+    # a rate, not a share per substep, so the separation speed it allows (≤ rate·r) does not grow
+    # with the substep count (a per-substep share gave 64-substep runs 6× the speed, and energy)
+    overlap_decay_rate: float = 30.0
     shock_propagation: float = 1.0  # mass ratio of a contact particle to one a diameter above it (1 = off)
 
 
@@ -137,12 +140,18 @@ class XpbdSolver:
         d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp, self.x_prev)
         if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
             d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr,
-              s.overlap_decay, self.buffers["allowance"])
+              s.overlap_decay_rate * h, self.buffers["allowance"])
         if self.matching:
             self.buffers["lambda"][:] = 0.0
         alpha = s.compliance / (h * h) if self.matching else 0.0
         adhesion_alpha = s.adhesion_compliance / (h * h)
         residual = 0.0
+        if "adhesion" in s.effects:
+            # once per substep, not per iteration: bonds accumulate no λ, so repeating them per
+            # iteration made them rigid as iterations grew, and at 32 × 8 they fought the contacts
+            # and pumped energy into the pile (accuracy benchmark)
+            self._jacobi("adhesion", adhesion.adhesion_project, self.x, self.w, self.r, self.nbr_start,
+                         self.nbr, s.capture, adhesion_alpha, self.lift)
         for _ in range(s.iterations):
             residual = 0.0
             if "contact" in s.effects:
@@ -150,9 +159,6 @@ class XpbdSolver:
             if "friction" in s.effects:
                 self._jacobi("friction", friction.friction_project, self.x, self.x_prev, self.w, self.r,
                              self.nbr_start, self.nbr, self.mu_s, self.mu_k, self.lift)
-            if "adhesion" in s.effects:
-                self._jacobi("adhesion", adhesion.adhesion_project, self.x, self.w, self.r, self.nbr_start,
-                             self.nbr, s.capture, adhesion_alpha)
             # the element's shape is restored after the contacts, the walls have the last word
             if self.matching:
                 residual = d("shape_matching", shape_matching.shape_match_project, self.x, self.w, self.q_rest,
@@ -195,7 +201,7 @@ class XpbdSolver:
             none[:] = 0.0
             self._contacts(none)
             self.dispatch("contact", contact_constraints.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr,
-                          self.s.overlap_decay, self.buffers["allowance"])
+                          self.s.overlap_decay_rate * self.h, self.buffers["allowance"])
         if self.sdf is not None:
             self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf, 0.0, 0.0)
 

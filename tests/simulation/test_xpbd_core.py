@@ -76,7 +76,7 @@ def test_mass_ratio_1_to_1000_is_stable():
 @pytest.mark.parametrize("damping", [0.0, 0.1])
 def test_deep_initial_overlap_separates_without_explosion(damping):
     """Pre-stabilisation separates the blob without velocity; only the allowance decay (documented
-    speed ≤ decay·r/h per contact) adds some, and damping takes that out again."""
+    speed ≤ decay rate·r per contact) adds some, and damping takes that out again."""
     effects = {"contact", "damping"} if damping else {"contact"}
     settings = SolverSettings(frozenset(effects), substeps=10, iterations=2, damping=damping)
     n = 64
