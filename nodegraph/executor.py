@@ -143,15 +143,18 @@ class Executor:
             self.hits = {key for key in set(self.keys.values()) if self.cache.has(key)}
         output_nodes = {w.node for w in outputs}
         try:
-            for inst in order:
-                if inst in self.status:
-                    continue
-                if self.keys[inst] in self.hits and self.recording is None and inst.node not in output_nodes:
-                    self.status[inst] = NodeRecord(inst.label, self.recipe.nodes[inst.node].spec.type_name, "cached")
-                    continue
-                self.materialise(inst)
-                if self.recording is not None:
-                    self._log_outputs(inst)
+            with self.reporter.task(self.recipe.name, len(order)) as tick:
+                for inst in order:
+                    tick()
+                    if inst in self.status:
+                        continue
+                    if self.keys[inst] in self.hits and self.recording is None and inst.node not in output_nodes:
+                        self.status[inst] = NodeRecord(inst.label, self.recipe.nodes[inst.node].spec.type_name,
+                                                       "cached")
+                        continue
+                    self.materialise(inst)
+                    if self.recording is not None:
+                        self._log_outputs(inst)
         finally:
             for inst in order:
                 if inst in self.status:

@@ -95,14 +95,28 @@ class Reporter:
 
     @contextlib.contextmanager
     def task(self, description: str, total: int) -> Iterator:
-        """A progress bar; only drawn on an interactive terminal so logs in CI stay clean."""
+        """A progress bar; only drawn on an interactive terminal so logs in CI stay clean.
+
+        Bars nest (the run's bar over node instances, a node's bar over frames) inside one rich
+        live display, since rich allows only one at a time.
+        """
         if self.quiet or not self.console.is_terminal:
             yield lambda amount=1: None
             return
-        with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                      console=self.console, transient=True) as progress:
-            task_id = progress.add_task(description, total=total)
+        owner = self._progress is None
+        if owner:
+            self._progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                      TimeElapsedColumn(), console=self.console, transient=True)
+            self._progress.start()
+        progress = self._progress
+        task_id = progress.add_task(description, total=total)
+        try:
             yield lambda amount=1: progress.advance(task_id, amount)
+        finally:
+            progress.remove_task(task_id)
+            if owner:
+                progress.stop()
+                self._progress = None
 
     def summary(self, per_instance: bool = False) -> Table:
         """One row per node (variant families folded into one row, times summed) or per instance."""

@@ -166,3 +166,18 @@ def test_outputs_written_to_directory(registry, cache, tmp_path):
     assert names == ["merge.spheres.npz", "mesh.ply"]
     loaded = np.load(tmp_path / "out" / "merge.spheres.npz")
     assert "a0.npy" in loaded.files or "a0" in loaded.files
+
+
+def test_progress_bars_nest_on_a_terminal(registry, cache):
+    import io
+
+    from rich.console import Console
+
+    from nodegraph.report import Reporter
+
+    buffer = io.StringIO()
+    reporter = Reporter(console=Console(file=buffer, force_terminal=True, width=100))
+    text = RECIPE.replace("type: toy_shift", "type: toy_slow").replace("{dx: 1.5}", "{seconds: 0.05}")
+    result = run(registry, cache, text=text, reporter=reporter)
+    assert result.status()["shifted"] == "ran"
+    assert "shifted sleeping" in buffer.getvalue()  # the node's own bar was drawn inside the run's
