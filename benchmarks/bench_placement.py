@@ -72,7 +72,7 @@ def refine_timed(placement, library, **params):
     settings = RefineSettings(**params)
     order = np.random.default_rng(1).permutation(len(placement))
     refined, t_refine = timed(lambda: refine_placement(placement, templates, np.array([library.refine_range]),
-                                                       settings, order))
+                                                       settings, [order]))
     return refined, templates, t_build, t_refine
 
 

@@ -1,4 +1,4 @@
-"""Aperiodic space filling — SPEC §2 (S §3, G §3.2.2): poisson_place → rotate → mix_ratio → overlap_refine → cull.
+"""Aperiodic space filling — SPEC §2 (S §3, G §3.2.2): poisson_place → rotate → mix_ratio → (medial_spheres) → overlap_refine → cull.
 
 Declaration modules (one node each, imported here for the registry) import only numpy and
 nodegraph at top level; the kernels (``candidates``, ``inside_grid``, ``dart_throw``, ``frames``,
@@ -6,9 +6,10 @@ nodegraph at top level; the kernels (``candidates``, ``inside_grid``, ``dart_thr
 """
 
 from .cull import cull
+from .implicit_function import carry_medial_spheres
 from .mix_ratio import mix_ratio
 from .overlap_refine import overlap_refine
 from .poisson_place import poisson_place
 from .rotate import rotate
 
-__all__ = ["cull", "mix_ratio", "overlap_refine", "poisson_place", "rotate"]
+__all__ = ["carry_medial_spheres", "cull", "mix_ratio", "overlap_refine", "poisson_place", "rotate"]

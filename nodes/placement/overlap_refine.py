@@ -32,15 +32,16 @@ def _check(params: dict) -> list[tuple[str, str]]:
         "r": Param(float, None, "Poisson radius r of G eq. 1 (gan cost only)", range=(1e-6, 1e5), units="mm", nullable=True),
         "c_refine": Param(float, 2.0, "C_refine of G eq. 1: range and penalty r·C_refine", range=(0.0, 100.0)),
         "offset": Param(float, 0.0, "T of G eq. 2: overlap tolerated before the implicit function turns positive", range=(0.0, 1e3), units="mm"),
+        "passes": Param(int, 1, "refine sweeps, each in a fresh random order (S: 1); later sweeps re-balance within the same range about the surface", range=(1, 64)),
         "tolerance": Param(float, 0.01, "golden-section end bracket as a share of the search range", range=(1e-6, 0.5)),
         **template_params(),
     },
     random=True,
     check=_check,
 )
-def overlap_refine(ctx, placement, libraries, *, cost, slope, range_scale, r, c_refine, offset, tolerance,
+def overlap_refine(ctx, placement, libraries, *, cost, slope, range_scale, r, c_refine, offset, passes, tolerance,
                    sphere_tolerance, max_spheres, cost_points):
-    """Medial-sphere implicit functions per variant, then each element once in random order (colour classes in parallel)."""
+    """Medial-sphere implicit functions per variant, then each element once per pass in random order (colour classes in parallel)."""
     from .element_templates import build_templates, matching_libraries
     from .refine import RefineSettings, refine_placement
 
@@ -52,7 +53,8 @@ def overlap_refine(ctx, placement, libraries, *, cost, slope, range_scale, r, c_
     settings = RefineSettings(cost=cost, slope=slope, range_scale=range_scale, spacing=r or 0.0,
                               c_refine=c_refine, offset=offset, tolerance=tolerance)
     ranges = np.array([lib.refine_range for lib in libraries])
-    refined = refine_placement(placement, templates, ranges, settings, ctx.rng.permutation(len(placement)))
+    orders = [ctx.rng.permutation(len(placement)) for _ in range(passes)]
+    refined = refine_placement(placement, templates, ranges, settings, orders)
     if not refined.kind_names:
         refined = Placement(refined.positions, refined.normals, refined.rotations, refined.kinds, refined.variants,
                             refined.p_num, refined.offsets, refined.overlap, (libraries[0].kind,))

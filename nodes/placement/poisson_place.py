@@ -24,13 +24,14 @@ from nodegraph.values import ElementLibrary, Mesh, Placement, Table
     params={
         "mode": Param(str, "surface", "surface: a shell on the shape (S); volume: fill the inside (G)", choices=("surface", "volume")),
         "r": Param(float, None, "exclusion radius; placed points are ≥ 2r apart (empty: from the elements)", range=(1e-6, 1e5), units="mm", nullable=True),
+        "r_scale": Param(float, 1.0, "factor on r derived from the elements (S: 1, neighbours always overlap; 2: r = the inscribed radius, a thinner shell that refines with little overlap)", range=(0.05, 20.0)),
         "candidates": Param(str, "random", "surface candidates: random (area-weighted) or subdivide (S)", choices=("random", "subdivide")),
         "candidate_spacing": Param(float, 1.0, "candidate spacing as a share of r (S: edges ≤ r, i.e. 1)", range=(0.05, 4.0)),
         "max_candidates": Param(int, 5_000_000, "refuse when more candidates than this would be made (memory guard)", range=(1, 500_000_000)),
     },
     random=True,
 )
-def poisson_place(ctx, shape, elements=None, *, mode, r, candidates, candidate_spacing, max_candidates):
+def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, candidate_spacing, max_candidates):
     """Dart throwing over dense candidates (random order, flags) until none is free; maximal over them."""
     from nodes.shapes.closed_mesh import as_trimesh
 
@@ -39,7 +40,7 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, candidates, candidate_s
 
     solid = as_trimesh(shape, "poisson_place shape")
     if r is None:
-        r = _radius_from_elements(elements)
+        r = r_scale * _radius_from_elements(elements)
     extent = float(np.ptp(solid.vertices, axis=0).max())
     if 2.0 * r > extent:
         raise ValueError(f"r: {r:g} is larger than the shape (points must be 2r = {2 * r:g} apart, the shape spans "

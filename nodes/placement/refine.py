@@ -54,8 +54,12 @@ def neighbours(positions: np.ndarray, templates: ElementTemplates, tmpl: np.ndar
 
 
 def refine_placement(placement: Placement, templates: ElementTemplates, refine_ranges: np.ndarray,
-                     settings: RefineSettings, order: np.ndarray) -> Placement:
-    """Move each element along its normal once, in ``order``, to the golden-section minimum of the cost."""
+                     settings: RefineSettings, orders) -> Placement:
+    """Move each element along its normal to the golden-section minimum of the cost, once per pass.
+
+    ``orders``: one permutation per pass (S: a single pass). Later passes search the same range about
+    the surface point and charge the travel from it, so passes only re-balance, never drift outward.
+    """
     import numba
 
     from .refine_kernels import GAN, SAKURAI, colour_in_order, overlap_depths, refine_offsets
@@ -66,23 +70,29 @@ def refine_placement(placement: Placement, templates: ElementTemplates, refine_r
     tmpl = templates.index(placement.kinds, placement.variants)
     lo, hi = _search_ranges(placement, templates, tmpl, refine_ranges, settings)
     travel = np.maximum(np.abs(lo), np.abs(hi))
-    nb_start, nb = neighbours(placement.positions, templates, tmpl, travel)
-    order = np.asarray(order, np.int64)
-    colour = colour_in_order(order, nb_start, nb)
     positions = placement.positions.copy()
     rotations = np.ascontiguousarray(placement.rotations)
+    normals = np.ascontiguousarray(placement.normals)
     cost_kind = SAKURAI if settings.cost == "sakurai" else GAN
-    offsets = refine_offsets(positions, rotations, np.ascontiguousarray(placement.normals), tmpl, lo, hi, nb_start,
-                             nb, colour, order, templates.pts_start, templates.cost_end, templates.pts, templates.sph_start,
-                             templates.centers, templates.radii, templates.bound, templates.circumradius,
-                             settings.offset, cost_kind,
-                             settings.slope, settings.spacing * settings.c_refine, golden_iterations(settings.tolerance),
-                             4 * numba.get_num_threads())
+    travelled = np.zeros(n)
+    for order in orders:
+        # Neighbours within reach of any move left in this pass, from the current positions.
+        nb_start, nb = neighbours(positions, templates, tmpl, travel + np.abs(travelled))
+        order = np.asarray(order, np.int64)
+        colour = colour_in_order(order, nb_start, nb)
+        moved = refine_offsets(positions, rotations, normals, tmpl, lo - travelled, hi - travelled, nb_start, nb,
+                               colour, order, templates.pts_start, templates.cost_end, templates.pts,
+                               templates.sph_start, templates.centers, templates.radii, templates.bound,
+                               templates.circumradius, settings.offset, cost_kind, settings.slope,
+                               settings.spacing * settings.c_refine, golden_iterations(settings.tolerance), travelled,
+                               4 * numba.get_num_threads())
+        travelled += moved
+    nb_start, nb = neighbours(positions, templates, tmpl, np.zeros(n))
     depth = overlap_depths(positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates.pts_start,
                            templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
                            templates.circumradius, settings.offset)
     return Placement(positions, placement.normals, rotations, placement.kinds, placement.variants, placement.p_num,
-                     placement.offsets + offsets, depth, placement.kind_names)
+                     placement.offsets + travelled, depth, placement.kind_names)
 
 
 def cull_placement(placement: Placement, templates: ElementTemplates, threshold: float,

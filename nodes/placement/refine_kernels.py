@@ -210,46 +210,50 @@ def _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bu
 
 @njit(cache=True)
 def _cost(t, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
-          bump_lo, bump_hi, offset):
-    """S eq. 2: Σ f(x + t·n) + a·|t|;  G eq. 1: a(max f(x + t·n)) + t with a(h) = h + r·C_refine if h > 0."""
+          bump_lo, bump_hi, offset, start):
+    """S eq. 2: Σ f(x + t·n) + a·|t|;  G eq. 1: a(max f(x + t·n)) + t with a(h) = h + r·C_refine if h > 0.
+
+    ``start`` is the offset from the surface already travelled in earlier passes: the travel term counts
+    from the surface point, not from the current position.
+    """
     if cost_kind == SAKURAI:
         return _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi,
-                           offset, False) + slope * abs(t)
+                           offset, False) + slope * abs(start + t)
     h = _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset,
                     True)
-    return (h + penalty if h > 0.0 else 0.0) + t
+    return (h + penalty if h > 0.0 else 0.0) + start + t
 
 
 @njit(cache=True)
 def _golden_section(lo, hi, iterations, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0,
-                    bump_perp2, bump_r, bump_lo, bump_hi, offset):
+                    bump_perp2, bump_r, bump_lo, bump_hi, offset, start):
     """Golden-section search for the minimum of the cost on [lo, hi] (S §3.2.1, fig. 8)."""
     if npairs == 0:
-        return min(max(0.0, lo), hi)  # no overlap anywhere in the range: stay as close to the surface as allowed
+        return min(max(-start, lo), hi)  # no overlap anywhere in the range: as close to the surface as allowed
     x1 = hi - INV_PHI * (hi - lo)
     x2 = lo + INV_PHI * (hi - lo)
     f1 = _cost(x1, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
-               bump_lo, bump_hi, offset)
+               bump_lo, bump_hi, offset, start)
     f2 = _cost(x2, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
-               bump_lo, bump_hi, offset)
+               bump_lo, bump_hi, offset, start)
     for _ in range(iterations):
         if f1 <= f2:
             hi, x2, f2 = x2, x1, f1
             x1 = hi - INV_PHI * (hi - lo)
             f1 = _cost(x1, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2,
-                       bump_r, bump_lo, bump_hi, offset)
+                       bump_r, bump_lo, bump_hi, offset, start)
         else:
             lo, x1, f1 = x1, x2, f2
             x2 = lo + INV_PHI * (hi - lo)
             f2 = _cost(x2, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2,
-                       bump_r, bump_lo, bump_hi, offset)
+                       bump_r, bump_lo, bump_hi, offset, start)
     return 0.5 * (lo + hi)
 
 
 @njit(cache=True)
 def _refine_chunk(members, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, cost_end, pts,
                   sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope, penalty, iterations,
-                  max_pts, offsets):
+                  max_pts, travelled, offsets):
     """Refine a run of mutually independent elements with one set of scratch buffers (grown on demand)."""
     capacity = 1024
     world = np.empty((max_pts, 3))
@@ -271,7 +275,7 @@ def _refine_chunk(members, positions, rotations, normals, template, t_lo, t_hi, 
                                       pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, world,
                                       pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi)
         t = _golden_section(t_lo[i], t_hi[i], iterations, cost_kind, slope, penalty, npairs, pair_range, pair_lo,
-                            pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset)
+                            pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset, travelled[i])
         offsets[i] = t
         for d in range(3):
             positions[i, d] += t * normals[i, d]
@@ -280,8 +284,10 @@ def _refine_chunk(members, positions, rotations, normals, template, t_lo, t_hi, 
 @njit(cache=True, parallel=True)
 def refine_offsets(positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, colour, order,
                    pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope,
-                   penalty, iterations, chunks):
+                   penalty, iterations, travelled, chunks):
     """Offsets t per element (positions updated in place), colour class by colour class in ``order``.
+
+    ``travelled``: each element's offset from its surface point before this pass (0 on the first).
 
     Each class is split into ``chunks`` contiguous runs processed in parallel; members of a class are
     not neighbours, so the result does not depend on the thread count.
@@ -311,7 +317,7 @@ def refine_offsets(positions, rotations, normals, template, t_lo, t_hi, nb_start
             hi = start + (size * (part + 1)) // parts
             _refine_chunk(members[lo:hi], positions, rotations, normals, template, t_lo, t_hi, nb_start, nb,
                           pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset,
-                          cost_kind, slope, penalty, iterations, max_pts, offsets)
+                          cost_kind, slope, penalty, iterations, max_pts, travelled, offsets)
     return offsets
 
 

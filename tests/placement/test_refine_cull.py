@@ -113,3 +113,31 @@ def test_empty_placement_passes_through(rice):
     empty = Placement(np.zeros((0, 3)), np.zeros((0, 3)))
     assert len(run(overlap_refine, placement=empty, libraries=[rice])["placement"]) == 0
     assert len(run(cull, placement=empty, libraries=[rice])["placement"]) == 0
+
+
+def test_carried_medial_spheres_give_the_same_refine_and_cull(pile, rice):
+    from nodes.placement import carry_medial_spheres as medial_node
+
+    carried = run(medial_node, library=rice)
+    library = carried["library"]
+    assert library.props["medial_spheres"].shape[0] == len(rice) and library.props["medial_count"].min() >= 1
+    assert np.all(carried["stats"].columns["gap_max"] <= 0.04 + 1e-9)  # the 2 % default tolerance, doubled
+    plain = run(overlap_refine, seed=2, placement=pile, libraries=[rice])["placement"]
+    fast = run(overlap_refine, seed=2, placement=pile, libraries=[library])["placement"]
+    assert digest(plain.positions, plain.overlap) == digest(fast.positions, fast.overlap)
+    assert digest(run(cull, placement=plain, libraries=[rice])["placement"].positions) == \
+        digest(run(cull, placement=fast, libraries=[library])["placement"].positions)
+
+
+def test_more_passes_stay_in_range_and_do_not_deepen_the_overlap(pile, rice):
+    one = run(overlap_refine, seed=2, placement=pile, libraries=[rice])["placement"]
+    three = run(overlap_refine, seed=2, placement=pile, libraries=[rice], passes=3)["placement"]
+    b = max(np.linalg.norm(m.vertices, axis=1).max() for m in rice.meshes)
+    assert np.abs(three.offsets).max() <= b + 1e-9  # later passes re-balance within [−b, b] about the surface
+    assert three.overlap.mean() <= one.overlap.mean() + 1e-9
+
+
+def test_r_scale_multiplies_the_radius_derived_from_the_elements(small_onigiri, rice):
+    s1 = run(poisson_place, seed=1, shape=small_onigiri, elements=[rice])["stats"].columns["r"][0]
+    s2 = run(poisson_place, seed=1, shape=small_onigiri, elements=[rice], r_scale=2.0)["stats"].columns["r"][0]
+    assert s2 == pytest.approx(2.0 * s1)
