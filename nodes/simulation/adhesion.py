@@ -6,6 +6,10 @@ strength. A bond breaks (exerts nothing) once the gap exceeds the capture radius
 state and λ is not accumulated across iterations. Jacobi with averaging. Pairs use the contacts'
 mass scaling by height (``lift``): with plain masses adhesion pulled back what the scaled contacts
 pushed, and the two pumped energy into piles at many substeps × iterations (32 × 8 exploded).
+Static obstacle particles (w = 0) hold no bonds: with an immovable partner nothing recoils, and the
+pull towards near-touching bed particles, undone by the contacts only along their normals, drove
+eggs sideways across a static bed (measured: a lone egg reached the speed clamp, > 500 mm/s, and
+left the bed; with moving partners the recoil cancels it). Contact and friction do act on them.
 """
 
 import numpy as np
@@ -28,9 +32,9 @@ def adhesion_project(x, w, r, nbr_start, nbr, capture, alpha_tilde, lift, out):
         wi = w[i]
         for a in range(nbr_start[i], nbr_start[i + 1]):
             j = nbr[a]
+            if wi <= 0.0 or w[j] <= 0.0:
+                continue  # no bonds with static obstacles (module docstring)
             wsum = wi + (w[j] * np.exp(lift * (x[j, 2] - x[i, 2])) if lift != 0.0 else w[j])
-            if wsum <= 0.0:
-                continue
             nx, ny, nz, d = pair_normal(x, i, j)
             gap = d - r[i] - r[j]
             if gap <= 0.0 or gap > capture:

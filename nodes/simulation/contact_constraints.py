@@ -51,8 +51,9 @@ def pair_normal(x, i, j):
 @njit(cache=True, inline="always")
 def lifted_share(w, x, i, j, lift):
     """Share of a pair correction taken by i: w_i / (w_i + w_j·e^{lift·(z_j − z_i)}) (mass scaling by
-    height; lift = 0 is the plain w_i / (w_i + w_j)). Returns −1 when both are immovable."""
-    wj = w[j] * np.exp(lift * (x[j, 2] - x[i, 2])) if lift != 0.0 else w[j]
+    height; lift = 0 is the plain w_i / (w_i + w_j)). Returns −1 when both are immovable; a static
+    partner (w_j = 0) stays infinitely heavy at any height (no 0·exp overflow)."""
+    wj = w[j] * np.exp(lift * (x[j, 2] - x[i, 2])) if lift != 0.0 and w[j] > 0.0 else w[j]
     wsum = w[i] + wj
     return w[i] / wsum if wsum > 0.0 else -1.0
 

@@ -73,7 +73,20 @@ def full_placement(aggregate: Aggregate, colliders) -> Placement:
                      kind_names=aggregate.placement.kind_names)
 
 
-def build_simulation(aggregate: Aggregate, colliders, effects, params) -> Simulation:
+def static_obstacles(obstacles, effects):
+    """(positions, radii) of the settled particles of other aggregates, or None when none are wired
+    or no pair effect (contact, friction, adhesion) would touch them."""
+    states = [o for o in (obstacles or []) if len(o)]
+    if not states or not {"contact", "friction", "adhesion"} & set(effects):
+        return None
+    x = np.concatenate([o.positions for o in states])
+    r = np.concatenate([o.radii for o in states])
+    if not (np.isfinite(x).all() and np.all(r > 0)):
+        raise ValueError("obstacles: particle positions must be finite and radii > 0")
+    return x, r
+
+
+def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles=None) -> Simulation:
     if len(aggregate.placement) == 0:
         raise ValueError("aggregate: the placement is empty; nothing to simulate")
     if "collider" in effects and not colliders:
@@ -118,7 +131,8 @@ def build_simulation(aggregate: Aggregate, colliders, effects, params) -> Simula
             centre.append(cl.membrane_centre - local_centre[i])  # membrane centre relative to the cluster's
         yolks = {"x": np.einsum("nij,nj->ni", p.rotations[owner], yolk_local[owner]) + p.positions[owner],
                  "owner": owner.astype(np.int64), "centre": np.array(centre), "room": np.array(room)}
-    solver = XpbdSolver(x, r, w, start, q, matrix_to_quat(p.rotations), settings, sdf=sdf, yolks=yolks)
+    solver = XpbdSolver(x, r, w, start, q, matrix_to_quat(p.rotations), settings, sdf=sdf, yolks=yolks,
+                        obstacles=static_obstacles(obstacles, effects))
     return Simulation(solver, aggregate, np.array(local_centre), yolk_local if yolks is not None else None)
 
 
@@ -131,7 +145,8 @@ def finish_simulation(sim: Simulation) -> dict:
     else:
         m = len(s.start) - 1
         pinv, null = np.zeros((m, 3, 3)), np.tile(np.eye(3), (m, 1, 1))
-    positions, rotations, deformations = element_transforms(s.x, s.w, s.start, s.q_rest, rotations, s.centres(),
+    n = s.n_moving  # static obstacle particles (after n) are not part of the output
+    positions, rotations, deformations = element_transforms(s.x[:n], s.w[:n], s.start, s.q_rest, rotations, s.centres(),
                                                             pinv, null, sim.local_centre)
     old = sim.aggregate.placement
     placement = Placement(positions, old.normals, rotations, old.kinds, old.variants, old.p_num, old.offsets,
@@ -144,5 +159,6 @@ def finish_simulation(sim: Simulation) -> dict:
         aggregate = DeformedAggregate(placement, sim.aggregate.libraries, deformations, part_offsets=offsets)
     else:
         aggregate = Aggregate(placement, sim.aggregate.libraries, deformations)
-    particles = ParticleState(s.x.copy(), s.v.copy(), s.r.copy(), s.w.copy(), s.elem.astype(np.int32), s.time)
+    particles = ParticleState(s.x[:n].copy(), s.v[:n].copy(), s.r[:n].copy(), s.w[:n].copy(),
+                              s.elem[:n].astype(np.int32), s.time)
     return {"aggregate": aggregate, "particles": particles}

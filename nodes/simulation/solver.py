@@ -68,10 +68,18 @@ class Diagnostics:
 
 
 class XpbdSolver:
-    """Particles in clusters (CSR ``start``), one per element; yolks optional; colliders optional."""
+    """Particles in clusters (CSR ``start``), one per element; yolks optional; colliders optional.
+
+    ``obstacles`` = (positions, radii) of static particles (other aggregates at rest), or None.
+    They are appended after the moving particles with inverse mass 0 and one shared element id
+    (so no pair of them is ever listed), take part in contact and friction only (adhesion skips
+    them, see ``adhesion``), and lie outside ``start``: shape matching, sleeping and the outputs
+    never see them. The pair kernels treat w = 0 as infinitely heavy (``lifted_share``: the moving partner takes the whole
+    correction, whatever the height scaling). Unwired: nothing is appended or allocated.
+    """
 
     def __init__(self, x, r, w, start, q_rest, quats, settings: SolverSettings,
-                 sdf=None, yolks=None, dispatch: KernelDispatch | None = None):
+                 sdf=None, yolks=None, dispatch: KernelDispatch | None = None, obstacles=None):
         s = settings
         unknown = set(s.effects) - set(EFFECTS)
         if unknown:
@@ -80,13 +88,19 @@ class XpbdSolver:
             raise ValueError("substeps and iterations must be ≥ 1 and dt > 0")
         self.s = s
         self.dispatch = dispatch or KernelDispatch()
+        self.n_moving = len(x)
+        self.start = np.ascontiguousarray(start, np.int64)
+        self.elem = np.repeat(np.arange(len(start) - 1, dtype=np.int64), np.diff(self.start))
+        if obstacles is not None and len(obstacles[0]):
+            x = np.concatenate([x, obstacles[0]])
+            r = np.concatenate([r, obstacles[1]])
+            w = np.concatenate([w, np.zeros(len(obstacles[0]))])
+            self.elem = np.concatenate([self.elem, np.full(len(obstacles[0]), len(start) - 1, np.int64)])
         self.x = np.ascontiguousarray(x, np.float64).copy()
         self.v = np.zeros_like(self.x)
         self.x_prev = np.empty_like(self.x)
         self.r = np.ascontiguousarray(r, np.float64)
         self.w = np.ascontiguousarray(w, np.float64)
-        self.start = np.ascontiguousarray(start, np.int64)
-        self.elem = np.repeat(np.arange(len(start) - 1, dtype=np.int64), np.diff(self.start))
         self.q_rest = np.ascontiguousarray(q_rest, np.float64)
         self.quats = np.ascontiguousarray(quats, np.float64).copy()
         self.h = s.dt / s.substeps
@@ -106,7 +120,7 @@ class XpbdSolver:
             self.buffers["scratch"] = np.empty_like(self.x)
             # Verlet skin: lists hold pairs within contact (+ capture) + skin and are rebuilt only
             # once some particle has moved half the skin since the last build
-            self.skin = 0.5 * float(self.r.max())
+            self.skin = 0.5 * float(self.r[:self.n_moving].max())
             self.reach = (s.capture if "adhesion" in s.effects else 0.0) + self.skin
             self.cell = 2.0 * float(self.r.max()) + self.reach
             self.buffers["x_built"] = np.full_like(self.x, np.inf)
@@ -117,7 +131,7 @@ class XpbdSolver:
             self.buffers["yolk_prev"] = np.empty_like(self.yolks["x"])
             self.yolk_accel = np.array([0.0, 0.0, s.yolk_accel])
         # mass scaling by height (contact_constraints): only where gravity says which way is up
-        self.lift = (np.log(s.shock_propagation) / (2.0 * float(np.median(self.r)))
+        self.lift = (np.log(s.shock_propagation) / (2.0 * float(np.median(self.r[:self.n_moving])))
                      if "gravity" in s.effects and s.shock_propagation > 1.0 else 0.0)
         self.mu_s = s.mu_s if "friction" in s.effects else 0.0
         self.mu_k = s.mu_k if "friction" in s.effects else 0.0
@@ -184,7 +198,8 @@ class XpbdSolver:
         """Rebuild the Verlet lists once a particle has moved half the skin since the last build."""
         if self.pairs and spatial_hash.max_displacement(self.x, self.buffers["x_built"]) > 0.5 * self.skin:
             self.nbr_start, self.nbr, *self.grid = self.dispatch("neighbours", spatial_hash.neighbour_lists, self.x,
-                                                                 self.r, self.elem, self.reach, self.cell)
+                                                                 self.r, self.elem, self.reach, self.cell,
+                                                                 self.n_moving)
             self.buffers["x_built"][:] = self.x
             if "contact" in self.s.effects:
                 self.buffers["allowance"] = np.zeros(len(self.nbr))
@@ -244,6 +259,7 @@ class XpbdSolver:
 
     def centres(self) -> np.ndarray:
         """Mass-weighted cluster centres (m, 3)."""
-        m = np.where(self.w > 0, 1.0 / np.maximum(self.w, 1e-300), 1e12)
-        sums = np.add.reduceat(self.x * m[:, None], self.start[:-1], axis=0)
+        x, w = self.x[:self.n_moving], self.w[:self.n_moving]
+        m = np.where(w > 0, 1.0 / np.maximum(w, 1e-300), 1e12)
+        sums = np.add.reduceat(x * m[:, None], self.start[:-1], axis=0)
         return sums / np.add.reduceat(m, self.start[:-1])[:, None]

@@ -84,11 +84,13 @@ def _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, out, write_at):
 
 
 @njit(cache=True, parallel=True)
-def neighbour_lists(x, r, elem, reach, cell_size):
+def neighbour_lists(x, r, elem, reach, cell_size, n_active):
     """CSR lists of particles j of another element with |x_i − x_j| ≤ r_i + r_j + reach, and the
     grid they were found in: (nbr_start, nbr, cell_start, order, dims).
 
-    ``cell_size`` must be ≥ 2·max(r) + reach. Two parallel passes: count, then fill.
+    ``cell_size`` must be ≥ 2·max(r) + reach. Two parallel passes: count, then fill. Rows of
+    particles i ≥ ``n_active`` (static obstacles, which come last) stay empty: every pair with a
+    static particle is listed from its moving partner, and the pair kernels only need that side.
     """
     start, order, lo, dims, cell = build_grid(x, cell_size)
     n = x.shape[0]
@@ -105,12 +107,14 @@ def neighbour_lists(x, r, elem, reach, cell_size):
     counts = np.zeros(n + 1, np.int64)
     dummy = np.empty(0, np.int64)
     for p in prange(n):
-        counts[order[p] + 1] = _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, dummy, -1)
+        if order[p] < n_active:
+            counts[order[p] + 1] = _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, dummy, -1)
     for i in range(n):
         counts[i + 1] += counts[i]
     nbr = np.empty(counts[n], np.int64)
     for p in prange(n):
-        _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, nbr, counts[order[p]])
+        if order[p] < n_active:
+            _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, nbr, counts[order[p]])
     return counts, nbr, start, order, dims
 
 

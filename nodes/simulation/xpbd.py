@@ -21,10 +21,13 @@ def _check(params):
 
 @node(
     "xpbd",
-    version=1,
+    version=2,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "colliders": In(Mesh, "watertight container / ground solids (mm)", optional=True, many=True),
+        # particles, not the Aggregate: the settled pile's own collision geometry, no re-clustering
+        "obstacles": In(ParticleState, "settled particles of other aggregates (static, w = 0): contact and "
+                        "friction, no adhesion bonds; never moved, not in the outputs", optional=True, many=True),
     },
     outputs={
         "aggregate": Out(Aggregate, "elements at rest: new positions, rotations, per-element deformations"),
@@ -80,12 +83,13 @@ def _check(params):
     effects=("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping"),
     check=_check,
 )
-def xpbd(ctx, aggregate, colliders=None, **params):
+def xpbd(ctx, aggregate, colliders=None, obstacles=None, **params):
     """XPBD aggregate simulation — SPEC §3: elastic clusters, contact, friction, clumping, containers,
-    buoyant yolks; only the effects in ``ctx.effects`` are computed."""
+    buoyant yolks, static obstacle particles (e.g. eggs on settled rice); only the effects in
+    ``ctx.effects`` are computed."""
     from .setup import build_simulation, finish_simulation
 
-    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, params)
+    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, params, obstacles=obstacles)
     with ctx.progress(params["frames"], "frames") as bar:
         for frame in range(params["frames"]):
             sim.solver.frame()
@@ -100,7 +104,8 @@ def xpbd(ctx, aggregate, colliders=None, **params):
 def _log_particles(ctx, solver, frame):
     import rerun as rr
 
-    keep = slice(None, None, max(1, len(solver.x) // 20000))  # subsample big scenes
+    n = solver.n_moving  # static obstacles are another node's output
+    keep = slice(None, n, max(1, n // 20000))  # subsample big scenes
     ctx.rerun.set_time("sim_step", frame * solver.s.substeps)
     ctx.rerun.log("particles", rr.Points3D(solver.x[keep], radii=solver.r[keep]))
 
