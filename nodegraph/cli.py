@@ -73,7 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _cmd_run(args, registry, console: Console) -> int:
+def _cmd_run(args, registry) -> int:
     recipe = load_recipe(args.recipe, registry, args.overrides)
     out_dir = args.out_dir or Path("outputs") / recipe.name
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
@@ -94,15 +94,15 @@ def _cmd_run(args, registry, console: Console) -> int:
     return 0
 
 
-def _cmd_check(args, registry, console: Console) -> int:
+def _cmd_check(args, registry) -> int:
     recipe = load_recipe(args.recipe, registry, args.overrides)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())
-    console.print(f"{args.recipe}: OK — {len(recipe.nodes)} nodes ({instances} instances), "
-                  f"outputs {', '.join(map(str, recipe.outputs))}, effects {sorted(recipe.effects) or 'none'}")
+    print(f"{args.recipe}: OK — {len(recipe.nodes)} nodes ({instances} instances), "
+          f"outputs {', '.join(map(str, recipe.outputs))}, effects: {', '.join(sorted(recipe.effects)) or 'none'}")
     return 0
 
 
-def _cmd_nodes(args, registry, console: Console) -> int:
+def _cmd_nodes(args, registry) -> int:
     for spec in registry.specs():
         summary = spec.doc.splitlines()[0] if spec.doc else ""
         effects = f"  [effects: {', '.join(sorted(spec.effects))}]" if spec.effects else ""
@@ -136,7 +136,7 @@ def describe_spec(spec) -> str:
     return "\n".join(lines)
 
 
-def _cmd_describe(args, registry, console: Console) -> int:
+def _cmd_describe(args, registry) -> int:
     spec = registry.get(args.type)
     if spec is None:
         import difflib
@@ -172,7 +172,7 @@ def markdown_reference(registry) -> str:
     return "\n".join(lines)
 
 
-def _cmd_docs(args, registry, console: Console) -> int:
+def _cmd_docs(args, registry) -> int:
     text = markdown_reference(registry)
     if args.out is None:
         print(text)
@@ -212,21 +212,20 @@ def format_graph(recipe: Recipe, dot: bool = False) -> str:
     return "\n".join(lines)
 
 
-def _cmd_graph(args, registry, console: Console) -> int:
+def _cmd_graph(args, registry) -> int:
     recipe = load_recipe(args.recipe, registry, args.overrides)
     print(format_graph(recipe, dot=args.dot))
     return 0
 
 
-def _cmd_cache(args, registry, console: Console) -> int:
+def _cmd_cache(args, registry) -> int:
     cache = Cache(args.cache_dir or default_cache_dir())
     if args.action == "clear":
         cache.clear()
-        console.print(f"cleared {cache.directory}")
+        print(f"cleared {cache.directory}")
         return 0
     info = cache.info()
-    console.print(f"cache {info.directory}: {info.entries} entries, {info.blobs} blobs, "
-                  f"{info.bytes / 2**20:.1f} MiB")
+    print(f"cache {info.directory}: {info.entries} entries, {info.blobs} blobs, {info.bytes / 2**20:.1f} MiB")
     return 0
 
 
@@ -238,10 +237,9 @@ def main(argv: list[str] | None = None) -> int:
     if argv is None:  # as a command, die quietly when the reader of a pipe goes away (| head)
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     args = build_parser().parse_args(argv)
-    console = Console(stderr=False, highlight=False)
     try:
         registry = default_registry(plugins=args.plugin) if args.command != "cache" else None
-        return COMMANDS[args.command](args, registry, console)
+        return COMMANDS[args.command](args, registry)
     except RecipeError as exc:  # plain text: a terminal-width wrap would split file:line:column
         print(str(exc), file=sys.stderr)
         return 2
