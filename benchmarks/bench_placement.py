@@ -68,11 +68,13 @@ def refine_timed(placement, library, **params):
     from nodes.placement.refine import RefineSettings, refine_placement
 
     tol, spheres, points = params.pop("sphere_tolerance", 0.02), params.pop("max_spheres", 64), params.pop("cost_points", 64)
+    passes = params.pop("passes", 1)
     templates, t_build = timed(lambda: build_templates((library,), tol, spheres, points, measure_fit=True))
     settings = RefineSettings(**params)
-    order = np.random.default_rng(1).permutation(len(placement))
+    rng = np.random.default_rng(1)
+    orders = [rng.permutation(len(placement)) for _ in range(passes)]
     refined, t_refine = timed(lambda: refine_placement(placement, templates, np.array([library.refine_range]),
-                                                       settings, [order]))
+                                                       settings, orders))
     return refined, templates, t_build, t_refine
 
 
@@ -120,6 +122,7 @@ def residual(refined):
 
 
 def culled_share(refined, library):
+    """Share removed by cull at D; ``library`` should carry its medial spheres (with_medial_spheres)."""
     out = run(cull, placement=refined, libraries=[library], threshold=CULL_D)
     return len(out["culled"]) / max(len(refined), 1)
 
@@ -133,7 +136,10 @@ def main():
     size = 8.0 if args.quick else 20.0
     big_size = 10.0 if args.quick else 44.0
     onigiri = run(shape, kind="onigiri", size=size)["mesh"]
+    from nodes.placement.element_templates import with_medial_spheres
+
     library = rice_library()
+    carried = with_medial_spheres(library, 0.02, 64)  # cull reads these instead of recomputing them
     rows, lines = [], []
 
     def record(group, setting, **values):
@@ -154,14 +160,14 @@ def main():
     record("S setup", "subdivide (S)", time_s=t_place + t_build + t_refine, place_s=t_place, implicit_s=t_build,
            refine_s=t_refine, candidates=int(stats.columns["candidates"][0]), placed=len(placement),
            min_dist_ratio=float(stats.columns["min_distance_ratio"][0]), overlap_mean_L=mean, overlap_max_L=worst,
-           culled=culled_share(refined, library), coverage=coverage(onigiri, refined, library, 0.44))
+           culled=culled_share(refined, carried), coverage=coverage(onigiri, refined, library, 0.44))
     placement, stats, t_place = place(onigiri, library)
     refined, templates, t_build, t_refine = refine_timed(placement, library)
     mean, worst = residual(refined)
     record("S setup", "random candidates", time_s=t_place + t_build + t_refine, place_s=t_place, implicit_s=t_build,
            refine_s=t_refine, candidates=int(stats.columns["candidates"][0]), placed=len(placement),
            min_dist_ratio=float(stats.columns["min_distance_ratio"][0]), overlap_mean_L=mean, overlap_max_L=worst,
-           culled=culled_share(refined, library), coverage=coverage(onigiri, refined, library, 0.44))
+           culled=culled_share(refined, carried), coverage=coverage(onigiri, refined, library, 0.44))
     base_placement = placement
 
     # ---- 50,000 elements
@@ -173,6 +179,15 @@ def main():
            implicit_s=t_big_build, refine_s=t_big_refine, candidates=int(big_stats.columns["candidates"][0]),
            placed=len(big_placement), overlap_mean_L=mean, overlap_max_L=worst)
 
+    # ---- shell density: S's r (r_scale 1) against larger r, and extra refine passes
+    for scale, passes in (((1.0, 1), (2.0, 2)) if args.quick else ((1.0, 1), (1.0, 2), (1.5, 2), (2.0, 1), (2.0, 2), (2.5, 2))):
+        p, s, t = place(onigiri, library, candidates="subdivide", r_scale=scale)
+        ref, _, tb, tr = refine_timed(p, library, passes=passes)
+        mean, worst = residual(ref)
+        record("shell density (r_scale, passes)", f"{scale:g}, {passes}", time_s=t + tr, place_s=t, refine_s=tr,
+               candidates=int(s.columns["candidates"][0]), placed=len(p), overlap_mean_L=mean, overlap_max_L=worst,
+               culled=culled_share(ref, carried), coverage=coverage(onigiri, ref, library, 0.44))
+
     # ---- sweeps on the S setup
     for spacing in ((2.0, 1.0) if args.quick else (2.0, 1.0, 0.5, 0.25)):
         p, s, t = place(onigiri, library, candidate_spacing=spacing)
@@ -182,7 +197,7 @@ def main():
         ref, _, tb, tr = refine_timed(base_placement, library, tolerance=tol)
         mean, worst = residual(ref)
         record("golden tolerance", f"{tol:g}", time_s=tr, refine_s=tr, overlap_mean_L=mean, overlap_max_L=worst,
-               culled=culled_share(ref, library))
+               culled=culled_share(ref, carried))
     for sph_tol in ((0.05, 0.01) if args.quick else (0.05, 0.02, 0.01, 0.005)):
         ref, tm, tb, tr = refine_timed(base_placement, library, sphere_tolerance=sph_tol, max_spheres=4096)
         mean, worst = residual(ref)
@@ -190,12 +205,12 @@ def main():
         record("medial spheres (tol)", f"{sph_tol:g}", time_s=tr, implicit_s=tb, refine_s=tr,
                spheres=float(np.mean([f["spheres"] for f in fit])), fit_gap_max_L=float(np.max([f["gap_max"] for f in fit])),
                fit_volume=float(np.mean([f["volume"] for f in fit])), overlap_mean_L=mean, overlap_max_L=worst,
-               culled=culled_share(ref, library))
+               culled=culled_share(ref, carried))
     for cost in ("sakurai", "gan"):
         ref, _, tb, tr = refine_timed(base_placement, library, cost=cost, spacing=r)
         mean, worst = residual(ref)
         record("cost", cost, time_s=tr, refine_s=tr, overlap_mean_L=mean, overlap_max_L=worst,
-               culled=culled_share(ref, library), coverage=coverage(onigiri, ref, library, 0.44))
+               culled=culled_share(ref, carried), coverage=coverage(onigiri, ref, library, 0.44))
 
     centres, g_ours, g_lattice, peak_ours, peak_lattice = aperiodicity(onigiri, library, 2.0 * r if args.quick else 1.0)
     record("aperiodicity (volume fill)", "ours (dart throwing)", rdf_peak=peak_ours)
