@@ -19,32 +19,49 @@ def _clamp(v, i, vmax):
         v[i, 2] *= f
 
 
+@njit(cache=True, inline="always")
+def _moved(x, x_built, i, moved):
+    """Squared distance of particle i from where the neighbour lists were last built."""
+    moved[i] = (x[i, 0] - x_built[i, 0]) ** 2 + (x[i, 1] - x_built[i, 1]) ** 2 + (x[i, 2] - x_built[i, 2]) ** 2
+
+
 @njit(cache=True, parallel=True, fastmath=True)
-def predict(x, v, w, r, accel, h, clamp, x_prev):
-    """x_prev ← x; v += h·a (a per particle, (n, 3), or one row for all); clamp; x ← x + h·v."""
+def predict(x, v, w, r, accel, h, clamp, x_prev, x_built, moved):
+    """x_prev ← x; v += h·a (a per particle, (n, 3), or one row for all); clamp; x ← x + h·v.
+
+    Returns max_i |x_i − x_built_i| (the Verlet-list check, folded in to save a launch; 0 when
+    ``x_built`` is empty, i.e. no neighbour lists). ``moved`` (n,) is scratch."""
     n = x.shape[0]
     stride = 1 if accel.shape[0] == n else 0
+    track = x_built.shape[0] == n
     for i in prange(n):
         for k in range(3):
             x_prev[i, k] = x[i, k]
-        if w[i] <= 0.0:
-            continue
-        row = i * stride
-        for k in range(3):
-            v[i, k] += h * accel[row, k]
-        _clamp(v, i, clamp * r[i] / h)
-        for k in range(3):
-            x[i, k] += h * v[i, k]
+        if w[i] > 0.0:
+            row = i * stride
+            for k in range(3):
+                v[i, k] += h * accel[row, k]
+            _clamp(v, i, clamp * r[i] / h)
+            for k in range(3):
+                x[i, k] += h * v[i, k]
+        if track:
+            _moved(x, x_built, i, moved)
+    return np.sqrt(moved.max()) if track and n > 0 else 0.0
 
 
 @njit(cache=True, parallel=True, fastmath=True)
-def update_velocity(x, x_prev, v, r, h, clamp, damping_factor):
-    """v = (x − x_prev)/h, clamped, times the damping factor (1 = none); zero restitution."""
+def update_velocity(x, x_prev, v, r, h, clamp, damping_factor, x_built, moved):
+    """v = (x − x_prev)/h, clamped, times the damping factor (1 = none); zero restitution.
+    Returns max_i |x_i − x_built_i| like ``predict``: the next substep's Verlet-list check."""
     n = x.shape[0]
+    track = x_built.shape[0] == n
     for i in prange(n):
         for k in range(3):
             v[i, k] = (x[i, k] - x_prev[i, k]) / h * damping_factor
         _clamp(v, i, clamp * r[i] / h)
+        if track:
+            _moved(x, x_built, i, moved)
+    return np.sqrt(moved.max()) if track and n > 0 else 0.0
 
 
 @njit(cache=True, parallel=True)

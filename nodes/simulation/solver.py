@@ -11,8 +11,9 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import get_num_threads as numba_threads
 
-from . import adhesion, buoyancy, collider, contact_constraints, friction, integrate, shape_matching, spatial_hash
+from . import adhesion, buoyancy, collider, contact_constraints, integrate, shape_matching, spatial_hash
 
 PARALLEL_CONTACTS = 16384
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
@@ -24,8 +25,9 @@ class KernelDispatch:
     def __init__(self):
         self.calls: Counter[str] = Counter()
 
-    def __call__(self, family: str, kernel, *args):
-        self.calls[family] += 1
+    def __call__(self, family: str | tuple[str, ...], kernel, *args):
+        for name in (family,) if isinstance(family, str) else family:  # a fused kernel counts for each
+            self.calls[name] += 1
         return kernel(*args)
 
 
@@ -116,14 +118,21 @@ class XpbdSolver:
         g = np.array([[0.0, 0.0, -s.gravity]]) if "gravity" in s.effects else np.zeros((1, 3))
         self.accel = g
         self.pairs = bool({"contact", "friction", "adhesion"} & s.effects)
-        if self.pairs:
+        if "adhesion" in s.effects:
             self.buffers["scratch"] = np.empty_like(self.x)
+        if self.pairs:
             # Verlet skin: lists hold pairs within contact (+ capture) + skin and are rebuilt only
             # once some particle has moved half the skin since the last build
             self.skin = 0.5 * float(self.r[:self.n_moving].max())
             self.reach = (s.capture if "adhesion" in s.effects else 0.0) + self.skin
             self.cell = 2.0 * float(self.r.max()) + self.reach
             self.buffers["x_built"] = np.full_like(self.x, np.inf)
+            self.buffers["moved"] = np.empty(len(self.x))
+        # max displacement since the last neighbour build, from predict / update_velocity
+        self.moved = np.inf
+        self.no_lists = np.empty((0, 3))
+        self.no_allowance = np.empty(0)
+        self.chunks = numba_threads() if len(self.x) >= PARALLEL_CONTACTS else 1
         self.sdf = sdf if "collider" in s.effects else None
         self.yolks = yolks if ("buoyancy" in s.effects and yolks is not None and len(yolks["x"])) else None
         if self.yolks is not None:
@@ -151,7 +160,8 @@ class XpbdSolver:
             y = self.yolks
             d("buoyancy", buoyancy.yolk_predict, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"],
               self.x, self.v, self.w, self.start, y["owner"], self.yolk_accel, h, s.yolk_drag)
-        d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp, self.x_prev)
+        self.moved = d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp,
+                       self.x_prev, *self._tracking())
         if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
             d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr,
               s.overlap_decay_rate * h, self.buffers["allowance"])
@@ -168,11 +178,8 @@ class XpbdSolver:
                          self.nbr, s.capture, adhesion_alpha, self.lift)
         for _ in range(s.iterations):
             residual = 0.0
-            if "contact" in s.effects:
-                self._contacts(self.buffers["allowance"])
-            if "friction" in s.effects:
-                self._jacobi("friction", friction.friction_project, self.x, self.x_prev, self.w, self.r,
-                             self.nbr_start, self.nbr, self.mu_s, self.mu_k, self.lift)
+            if {"contact", "friction"} & s.effects:  # one sweep: friction on each pair after its contact
+                self._contacts(self.buffers.get("allowance", self.no_allowance), friction=True)
             # the element's shape is restored after the contacts, the walls have the last word
             if self.matching:
                 residual = d("shape_matching", shape_matching.shape_match_project, self.x, self.w, self.q_rest,
@@ -182,8 +189,8 @@ class XpbdSolver:
                 phi, origin, pitch = self.sdf
                 d("collider", collider.collider_project, self.x, self.x_prev, self.r, self.w, phi, origin, pitch,
                   self.mu_s, self.mu_k)
-        d("integrate", integrate.update_velocity, self.x, self.x_prev, self.v, self.r, h, s.speed_clamp,
-          self.damping_factor)
+        self.moved = d("integrate", integrate.update_velocity, self.x, self.x_prev, self.v, self.r, h, s.speed_clamp,
+                       self.damping_factor, *self._tracking())
         if self.yolks is not None:
             y = self.yolks
             d("buoyancy", buoyancy.yolk_contain, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"], self.x,
@@ -194,13 +201,19 @@ class XpbdSolver:
         self.time += h
         return residual
 
+    def _tracking(self):
+        """(x_built, moved) for the displacement check folded into predict / update_velocity."""
+        return (self.buffers["x_built"], self.buffers["moved"]) if self.pairs else (self.no_lists, self.no_allowance)
+
     def _refresh_neighbours(self) -> bool:
-        """Rebuild the Verlet lists once a particle has moved half the skin since the last build."""
-        if self.pairs and spatial_hash.max_displacement(self.x, self.buffers["x_built"]) > 0.5 * self.skin:
+        """Rebuild the Verlet lists once a particle has moved half the skin since the last build
+        (``self.moved``: measured by the last predict / update_velocity, or inf before the first)."""
+        if self.pairs and self.moved > 0.5 * self.skin:
             self.nbr_start, self.nbr, *self.grid = self.dispatch("neighbours", spatial_hash.neighbour_lists, self.x,
                                                                  self.r, self.elem, self.reach, self.cell,
                                                                  self.n_moving)
             self.buffers["x_built"][:] = self.x
+            self.moved = 0.0
             if "contact" in self.s.effects:
                 self.buffers["allowance"] = np.zeros(len(self.nbr))
             return True
@@ -220,13 +233,17 @@ class XpbdSolver:
         if self.sdf is not None:
             self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf, 0.0, 0.0)
 
-    def _contacts(self, allowance):
-        """One Gauss–Seidel contact sweep, threaded from ``PARALLEL_CONTACTS`` particles up (measured:
-        a threaded sweep costs ≈ 0.4 ms in launches; 10k particles take 0.7 ms on one thread)."""
-        kernel = (contact_constraints.contact_gauss_seidel if len(self.x) >= PARALLEL_CONTACTS
-                  else contact_constraints.contact_gauss_seidel_serial)
-        self.dispatch("contact", kernel, self.x, self.w, self.r, self.nbr_start, self.nbr, allowance, self.lift,
-                      *self.grid)
+    def _contacts(self, allowance, friction=False):
+        """One Gauss–Seidel sweep of the contacts (if asked) and, with ``friction`` and the effect,
+        friction on each pair just before its normal correction; threaded from ``PARALLEL_CONTACTS``
+        particles up (measured: a threaded sweep costs ≈ 0.4 ms in launches)."""
+        s = self.s
+        normal = "contact" in s.effects
+        rub = friction and "friction" in s.effects
+        family = ("contact",) * normal + ("friction",) * rub
+        kernel = (contact_constraints.contact_sweep if self.chunks > 1 else contact_constraints.contact_sweep_serial)
+        self.dispatch(family, kernel, self.x, self.x_prev, self.w, self.r, self.nbr_start, self.nbr, allowance,
+                      self.lift, self.mu_s if rub else 0.0, self.mu_k, normal, self.chunks, *self.grid)
 
     def _jacobi(self, family, kernel, *args):
         out = self.buffers["scratch"]

@@ -6,7 +6,7 @@ box with z fastest, so the 27 neighbour cells of a particle are 9 contiguous run
 order. The cell size grows if the box would need more than ``MAX_CELLS_PER_PARTICLE``·n cells
 (a scattered or exploding scene), which only makes the search coarser, never wrong.
 
-The grid is also the contacts' graph colouring (``contact_constraints.contact_gauss_seidel``): a
+The grid is also the contacts' graph colouring (``contact_constraints.contact_sweep``): a
 particle's neighbours lie in the 27 cells around its own at build time, so slabs of cells whose x
 indices agree modulo 3 share no particle and can be solved in parallel.
 """
@@ -116,13 +116,3 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active):
         if order[p] < n_active:
             _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, nbr, counts[order[p]])
     return counts, nbr, start, order, dims
-
-
-@njit(cache=True, parallel=True)
-def max_displacement(x, x_ref):
-    """max_i |x_i − x_ref_i|: a Verlet list stays valid while this is below half its skin."""
-    n = x.shape[0]
-    out = np.zeros(n)
-    for i in prange(n):
-        out[i] = (x[i, 0] - x_ref[i, 0]) ** 2 + (x[i, 1] - x_ref[i, 1]) ** 2 + (x[i, 2] - x_ref[i, 2]) ** 2
-    return np.sqrt(out.max()) if n > 0 else 0.0
