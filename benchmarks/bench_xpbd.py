@@ -48,7 +48,7 @@ def pile_measures(out):
 
     p = out["particles"]
     start, nbr, *_ = neighbour_lists(p.positions, p.radii, p.element.astype(np.int64), 0.05,
-                                     2 * p.radii.max() + 0.05, len(p.positions))
+                                     2 * p.radii.max() + 0.05, len(p.positions), False)
     pairs = {(int(p.element[i]), int(p.element[j])) for i in range(len(p.positions)) for j in nbr[start[i]:start[i + 1]]
              if np.linalg.norm(p.positions[i] - p.positions[j]) - p.radii[i] - p.radii[j] <= 0.05}
     contacts = len(pairs) / (p.element.max() + 1)  # each pair counted from both sides = contacts per grain

@@ -184,41 +184,82 @@ def sample_phi(phi, origin, pitch, px, py, pz):
     return val, gx, gy, gz
 
 
+COARSE = 4  # SDF cells per side of a block of ``block_minimum``
+
+
+@njit(cache=True)
+def block_minimum(phi):
+    """min φ over each block of COARSE³ grid cells and the grid points on its far faces: a lower
+    bound of the trilinear φ anywhere in the block. Particles whose block bound exceeds their
+    radius skip the wall projection without touching the fine grid (the interior of a pile: the
+    fine φ of a 50k-sphere box is 38 MB, read at random)."""
+    nx, ny, nz = phi.shape
+    bx, by, bz = (nx + COARSE - 1) // COARSE, (ny + COARSE - 1) // COARSE, (nz + COARSE - 1) // COARSE
+    out = np.full((bx, by, bz), np.inf)
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                v = phi[i, j, k]
+                # grid point (i, j, k) bounds the blocks it is a corner of: its own and those below
+                for a in range(max(0, (i - 1) // COARSE), min(bx, i // COARSE + 1)):
+                    for b in range(max(0, (j - 1) // COARSE), min(by, j // COARSE + 1)):
+                        for c in range(max(0, (k - 1) // COARSE), min(bz, k // COARSE + 1)):
+                            if v < out[a, b, c]:
+                                out[a, b, c] = v
+    return out
+
+
+@njit(cache=True, inline="always")
+def _wall_one(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k, i):
+    """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
+    if w[i] <= 0.0:
+        return 0.0
+    fx = (x[i, 0] - origin[0]) / pitch
+    fy = (x[i, 1] - origin[1]) / pitch
+    fz = (x[i, 2] - origin[2]) / pitch
+    if fx >= 0 and fy >= 0 and fz >= 0:
+        bi = int(fx) // COARSE
+        bj = int(fy) // COARSE
+        bk = int(fz) // COARSE
+        if bi < blocks.shape[0] and bj < blocks.shape[1] and bk < blocks.shape[2] and blocks[bi, bj, bk] > r[i]:
+            return 0.0
+    val, gx, gy, gz = sample_phi(phi, origin, pitch, x[i, 0], x[i, 1], x[i, 2])
+    pen = r[i] - val
+    if pen <= 0.0:
+        return 0.0
+    g = np.sqrt(gx * gx + gy * gy + gz * gz)
+    if g < 1e-12:
+        return pen / r[i]
+    nx, ny, nz = gx / g, gy / g, gz / g
+    x[i, 0] += pen * nx
+    x[i, 1] += pen * ny
+    x[i, 2] += pen * nz
+    if mu_s > 0.0:
+        rx = x[i, 0] - x_prev[i, 0]
+        ry = x[i, 1] - x_prev[i, 1]
+        rz = x[i, 2] - x_prev[i, 2]
+        dn = rx * nx + ry * ny + rz * nz
+        tx = rx - dn * nx
+        ty = ry - dn * ny
+        tz = rz - dn * nz
+        t = np.sqrt(tx * tx + ty * ty + tz * tz)
+        if t > 1e-12:
+            scale = 1.0 if t < mu_s * pen else min(mu_k * pen / t, 1.0)
+            x[i, 0] -= scale * tx
+            x[i, 1] -= scale * ty
+            x[i, 2] -= scale * tz
+    return pen / r[i]
+
+
 @njit(cache=True, parallel=True, fastmath=True)
-def collider_project(x, x_prev, r, w, phi, origin, pitch, mu_s, mu_k):
+def collider_project(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
-    (μs = μk = 0 skips friction). In place; particles are independent. Returns max (r − φ)/r."""
+    (μs = μk = 0 skips friction). In place; particles are independent. ``blocks``: the
+    ``block_minimum`` of φ (particles far from every wall are skipped). Returns max (r − φ)/r."""
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):
-        if w[i] <= 0.0:
-            continue
-        val, gx, gy, gz = sample_phi(phi, origin, pitch, x[i, 0], x[i, 1], x[i, 2])
-        pen = r[i] - val
-        if pen <= 0.0:
-            continue
-        worst[i] = pen / r[i]
-        g = np.sqrt(gx * gx + gy * gy + gz * gz)
-        if g < 1e-12:
-            continue
-        nx, ny, nz = gx / g, gy / g, gz / g
-        x[i, 0] += pen * nx
-        x[i, 1] += pen * ny
-        x[i, 2] += pen * nz
-        if mu_s > 0.0:
-            rx = x[i, 0] - x_prev[i, 0]
-            ry = x[i, 1] - x_prev[i, 1]
-            rz = x[i, 2] - x_prev[i, 2]
-            dn = rx * nx + ry * ny + rz * nz
-            tx = rx - dn * nx
-            ty = ry - dn * ny
-            tz = rz - dn * nz
-            t = np.sqrt(tx * tx + ty * ty + tz * tz)
-            if t > 1e-12:
-                scale = 1.0 if t < mu_s * pen else min(mu_k * pen / t, 1.0)
-                x[i, 0] -= scale * tx
-                x[i, 1] -= scale * ty
-                x[i, 2] -= scale * tz
+        worst[i] = _wall_one(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k, i)
     return worst.max() if n > 0 else 0.0
 
 

@@ -153,18 +153,29 @@ def contact_sweep_serial(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s,
                           cell_start[ix * slab], cell_start[(ix + 1) * slab])
 
 
+@njit(cache=True, inline="always")
+def _allowance_row(x, r, nbr_start, nbr, decay, out, i):
+    for a in range(nbr_start[i], nbr_start[i + 1]):
+        j = nbr[a]
+        if j < i:
+            continue  # the sweep reads each pair's entry from its lower index only
+        _, _, _, d = pair_normal(x, i, j)
+        out[a] = max(0.0, r[i] + r[j] - d - decay * min(r[i], r[j]))
+
+
 @njit(cache=True, parallel=True, fastmath=True)
 def overlap_allowance(x, r, nbr_start, nbr, decay, out):
     """Per list entry (i, j > i), the overlap r_i + r_j − d that remains less decay·min(r_i, r_j)
     (≥ 0): tolerated until the next pre-stabilisation. Entries j < i are not written."""
-    n = x.shape[0]
-    for i in prange(n):
-        for a in range(nbr_start[i], nbr_start[i + 1]):
-            j = nbr[a]
-            if j < i:
-                continue  # the sweep reads each pair's entry from its lower index only
-            _, _, _, d = pair_normal(x, i, j)
-            out[a] = max(0.0, r[i] + r[j] - d - decay * min(r[i], r[j]))
+    for i in prange(x.shape[0]):
+        _allowance_row(x, r, nbr_start, nbr, decay, out, i)
+
+
+@njit(cache=True, fastmath=True)
+def overlap_allowance_serial(x, r, nbr_start, nbr, decay, out):
+    """``overlap_allowance`` on one thread (small scenes)."""
+    for i in range(x.shape[0]):
+        _allowance_row(x, r, nbr_start, nbr, decay, out, i)
 
 
 @njit(cache=True, parallel=True, fastmath=True)

@@ -132,8 +132,13 @@ class XpbdSolver:
         self.moved = np.inf
         self.no_lists = np.empty((0, 3))
         self.no_allowance = np.empty(0)
+        # threads from PARALLEL_CONTACTS particles up; below, the pair kernels run serial (predict,
+        # velocity and walls stay threaded: their serial loops measured slower, 0.4-0.7 ms at 10k)
         self.chunks = numba_threads() if len(self.x) >= PARALLEL_CONTACTS else 1
+        self.overlap_allowance = (contact_constraints.overlap_allowance if self.chunks > 1
+                                  else contact_constraints.overlap_allowance_serial)
         self.sdf = sdf if "collider" in s.effects else None
+        self.sdf_blocks = collider.block_minimum(sdf[0]) if self.sdf is not None else None
         self.yolks = yolks if ("buoyancy" in s.effects and yolks is not None and len(yolks["x"])) else None
         if self.yolks is not None:
             self.buffers["yolk_v"] = np.zeros_like(self.yolks["x"])
@@ -163,7 +168,7 @@ class XpbdSolver:
         self.moved = d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp,
                        self.x_prev, *self._tracking())
         if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
-            d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr,
+            d("contact", self.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr,
               s.overlap_decay_rate * h, self.buffers["allowance"])
         if self.matching:
             self.buffers["lambda"][:] = 0.0
@@ -186,8 +191,7 @@ class XpbdSolver:
                              self.start, self.quats, self.aqq_pinv, self.null_proj, self.buffers["lambda"],
                              alpha, s.linear_deformation, s.rotation_iterations)
             if self.sdf is not None:
-                phi, origin, pitch = self.sdf
-                d("collider", collider.collider_project, self.x, self.x_prev, self.r, self.w, phi, origin, pitch,
+                d("collider", collider.collider_project, self.x, self.x_prev, self.r, self.w, *self.sdf, self.sdf_blocks,
                   self.mu_s, self.mu_k)
         self.moved = d("integrate", integrate.update_velocity, self.x, self.x_prev, self.v, self.r, h, s.speed_clamp,
                        self.damping_factor, *self._tracking())
@@ -211,7 +215,7 @@ class XpbdSolver:
         if self.pairs and self.moved > 0.5 * self.skin:
             self.nbr_start, self.nbr, *self.grid = self.dispatch("neighbours", spatial_hash.neighbour_lists, self.x,
                                                                  self.r, self.elem, self.reach, self.cell,
-                                                                 self.n_moving)
+                                                                 self.n_moving, "adhesion" not in self.s.effects)
             self.buffers["x_built"][:] = self.x
             self.moved = 0.0
             if "contact" in self.s.effects:
@@ -228,10 +232,11 @@ class XpbdSolver:
             none = self.buffers["allowance"]
             none[:] = 0.0
             self._contacts(none)
-            self.dispatch("contact", contact_constraints.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr,
+            self.dispatch("contact", self.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr,
                           self.s.overlap_decay_rate * self.h, self.buffers["allowance"])
         if self.sdf is not None:
-            self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf, 0.0, 0.0)
+            self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf,
+                          self.sdf_blocks, 0.0, 0.0)
 
     def _contacts(self, allowance, friction=False):
         """One Gauss–Seidel sweep of the contacts (if asked) and, with ``friction`` and the effect,

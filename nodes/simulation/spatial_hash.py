@@ -54,29 +54,34 @@ def build_grid(x, cell_size):
 
 
 @njit(cache=True, inline="always")
-def _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, out, write_at):
-    """Count (write_at < 0) or write the neighbours of sorted particle p from other elements.
+def _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, half, out, write_at):
+    """Count (write_at < 0) or write the neighbours of sorted particle p from other elements (with
+    ``half``, only those of higher index).
 
     Works on the cell-sorted copies ``xs, rs, es`` (contiguous memory for a cell's run) and
     writes original particle ids.
     """
-    ix = min(int((xs[p, 0] - lo[0]) / cell), dims[0] - 1)
-    iy = min(int((xs[p, 1] - lo[1]) / cell), dims[1] - 1)
-    iz = min(int((xs[p, 2] - lo[2]) / cell), dims[2] - 1)
+    px, py, pz = xs[p, 0], xs[p, 1], xs[p, 2]
+    ix = min(int((px - lo[0]) / cell), dims[0] - 1)
+    iy = min(int((py - lo[1]) / cell), dims[1] - 1)
+    iz = min(int((pz - lo[2]) / cell), dims[2] - 1)
     z0 = max(iz - 1, 0)
     z1 = min(iz + 1, dims[2] - 1)
+    me = order[p]
+    mine = es[p]
+    rp = rs[p] + reach
     found = 0
     for gx in range(max(ix - 1, 0), min(ix + 2, dims[0])):
         for gy in range(max(iy - 1, 0), min(iy + 2, dims[1])):
             base = (gx * dims[1] + gy) * dims[2]
             for q in range(start[base + z0], start[base + z1 + 1]):
-                if es[q] == es[p]:
+                if half and order[q] < me:
                     continue
-                ex = xs[q, 0] - xs[p, 0]
-                ey = xs[q, 1] - xs[p, 1]
-                ez = xs[q, 2] - xs[p, 2]
-                lim = rs[p] + rs[q] + reach
-                if ex * ex + ey * ey + ez * ez <= lim * lim:
+                ex = xs[q, 0] - px
+                ey = xs[q, 1] - py
+                ez = xs[q, 2] - pz
+                lim = rp + rs[q]
+                if ex * ex + ey * ey + ez * ez <= lim * lim and es[q] != mine:
                     if write_at >= 0:
                         out[write_at + found] = order[q]
                     found += 1
@@ -84,13 +89,16 @@ def _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, out, write_at):
 
 
 @njit(cache=True, parallel=True)
-def neighbour_lists(x, r, elem, reach, cell_size, n_active):
+def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
     """CSR lists of particles j of another element with |x_i − x_j| ≤ r_i + r_j + reach, and the
     grid they were found in: (nbr_start, nbr, cell_start, order, dims).
 
     ``cell_size`` must be ≥ 2·max(r) + reach. Two parallel passes: count, then fill. Rows of
     particles i ≥ ``n_active`` (static obstacles, which come last) stay empty: every pair with a
     static particle is listed from its moving partner, and the pair kernels only need that side.
+    ``half``: each pair is listed once, in the row of its lower index — all the Gauss–Seidel
+    contacts need (a row of both directions made the sweep skip every other entry on a branch it
+    mispredicted half the time); the Jacobi adhesion kernel needs full rows.
     """
     start, order, lo, dims, cell = build_grid(x, cell_size)
     n = x.shape[0]
@@ -108,11 +116,11 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active):
     dummy = np.empty(0, np.int64)
     for p in prange(n):
         if order[p] < n_active:
-            counts[order[p] + 1] = _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, dummy, -1)
+            counts[order[p] + 1] = _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, half, dummy, -1)
     for i in range(n):
         counts[i + 1] += counts[i]
     nbr = np.empty(counts[n], np.int64)
     for p in prange(n):
         if order[p] < n_active:
-            _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, nbr, counts[order[p]])
+            _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, half, nbr, counts[order[p]])
     return counts, nbr, start, order, dims
