@@ -146,3 +146,18 @@ def test_docs_generated_from_declarations(tmp_path, capsys):
     assert cli("docs", "--out", str(tmp_path / "nodes.md")) == 0
     text = (tmp_path / "nodes.md").read_text()
     assert "## `toy_shift` (v1)" in text and "| `dx` | float | 0.0 | [-10.0, 10.0] | mm |" in text
+
+
+def test_two_processes_write_bit_identical_outputs(recipe, tmp_path):
+    """Determinism across processes (hash randomisation, dict order): hash every output file."""
+    import hashlib
+
+    digests = []
+    for run_dir in ("a", "b"):
+        out = tmp_path / run_dir
+        done = subprocess.run([sys.executable, "-m", "nodegraph.cli", "run", str(recipe), "--plugin", TOY,
+                               "--no-cache", "--no-rrd", "--out-dir", str(out), "-q"],
+                              capture_output=True, text=True, cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        digests.append({p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(out.iterdir())})
+    assert digests[0] == digests[1] and set(digests[0]) == {"merge.spheres.npz", "surf.ply"}
