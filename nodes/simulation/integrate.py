@@ -22,7 +22,6 @@ def _clamp(v, i, vmax):
 @njit(cache=True, inline="always")
 def _moved(x, x_built, i, moved):
     """Squared distance of particle i from where the neighbour lists were last built."""
-    # products, not ** 2: in the serial loop ``** 2`` here compiled to a call and made predict 17× slower
     dx = x[i, 0] - x_built[i, 0]
     dy = x[i, 1] - x_built[i, 1]
     dz = x[i, 2] - x_built[i, 2]

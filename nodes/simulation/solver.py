@@ -191,8 +191,8 @@ class XpbdSolver:
                              self.start, self.quats, self.aqq_pinv, self.null_proj, self.buffers["lambda"],
                              alpha, s.linear_deformation, s.rotation_iterations)
             if self.sdf is not None:
-                d("collider", collider.collider_project, self.x, self.x_prev, self.r, self.w, *self.sdf, self.sdf_blocks,
-                  self.mu_s, self.mu_k)
+                d("collider", collider.collider_project, self.x, self.x_prev, self.r, self.w, *self.sdf,
+                  self.sdf_blocks, self.mu_s, self.mu_k)
         self.moved = d("integrate", integrate.update_velocity, self.x, self.x_prev, self.v, self.r, h, s.speed_clamp,
                        self.damping_factor, *self._tracking())
         if self.yolks is not None:
