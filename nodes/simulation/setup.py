@@ -39,7 +39,8 @@ def settings_from_params(effects, params, radius) -> SolverSettings:
         effects=frozenset(effects), substeps=params["substeps"], iterations=params["iterations"], dt=params["dt"],
         gravity=params["gravity"],
         compliance=1.0 / (1000.0 * stiffness) if stiffness > 0 else np.inf,  # N/m → s²/g
-        linear_deformation=params["linear_deformation"], mu_s=mu_s, mu_k=mu_s * params["dynamic_scale"],
+        linear_deformation=params["linear_deformation"], quadratic=params["deformation"] == "quadratic",
+        mu_s=mu_s, mu_k=mu_s * params["dynamic_scale"],
         capture=params["capture_radius"] * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
         damping=params["damping"], sleep_speed=params["sleep_speed"], speed_clamp=params["speed_clamp"],

@@ -1,5 +1,6 @@
 """Shape-matching cluster constraint per element — SPEC §5 (Müller et al. 2005), as an XPBD
-constraint (Macklin et al. 2016) with linear deformation (U eq. 3.19).
+constraint (Macklin et al. 2016) with linear (U eq. 3.19) or quadratic deformation (Müller et al. 2005
+§4.3: q̃ = [q, q², cross terms], goal (β·Ã + (1−β)·[R 0 0])·q̃ + x_cm).
 
 The rotation of A_pq is extracted with Müller et al. 2016 ("A robust method to extract the
 rotational part of deformations"): a quaternion warm-started from the previous step, which always
@@ -153,6 +154,146 @@ def shape_match_project(x, w, q_rest, start, quats, aqq_pinv, null_proj, lam, al
             worst[c] = _match_cluster(x, w, q_rest, start[c], start[c + 1], quats[c], aqq_pinv[c], null_proj[c],
                                       lam, alpha_tilde, beta, rot_iters, apq, rot, goal)
     return worst.max() if m > 0 else 0.0
+
+
+@njit(cache=True)
+def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_tilde, beta, rot_iters, apq, rot,
+                             apq9, goal9):
+    """Project one cluster with the quadratic goal (SPEC §5); returns its max |C|.
+
+    The linear 3×3 block of Ã is volume-normalised as in the linear mode; the quadratic block is
+    scaled by β only. ``qt`` holds centred quadratic columns, so the goal keeps the cluster's x_cm.
+    """
+    total = 0.0
+    cx = 0.0
+    cy = 0.0
+    cz = 0.0
+    for i in range(s, e):
+        m = _mass(w[i])
+        total += m
+        cx += m * x[i, 0]
+        cy += m * x[i, 1]
+        cz += m * x[i, 2]
+    cx /= total
+    cy /= total
+    cz /= total
+    apq[:, :] = 0.0
+    apq9[:, :] = 0.0
+    for i in range(s, e):
+        m = _mass(w[i])
+        px = m * (x[i, 0] - cx)
+        py = m * (x[i, 1] - cy)
+        pz = m * (x[i, 2] - cz)
+        for c in range(3):
+            apq[0, c] += px * q_rest[i, c]
+            apq[1, c] += py * q_rest[i, c]
+            apq[2, c] += pz * q_rest[i, c]
+        for c in range(9):
+            apq9[0, c] += px * qt[i, c]
+            apq9[1, c] += py * qt[i, c]
+            apq9[2, c] += pz * qt[i, c]
+    extract_rotation(apq, quat, rot_iters, rot)
+    goal9[:, :] = 0.0
+    for r_ in range(3):
+        for c in range(3):
+            goal9[r_, c] = rot[r_, c]
+    if beta > 0.0:
+        for r_ in range(3):
+            for c in range(9):
+                v = 0.0
+                for k in range(9):
+                    v += apq9[r_, k] * qpinv[k, c]
+                goal9[r_, c] = v
+        det = _det3(goal9[:, :3])
+        if det > 1e-6:
+            f = beta / np.cbrt(det)
+            for r_ in range(3):
+                for c in range(3):
+                    goal9[r_, c] = f * goal9[r_, c] + (1.0 - beta) * rot[r_, c]
+                for c in range(3, 9):
+                    goal9[r_, c] *= beta
+        else:
+            goal9[:, :] = 0.0
+            for r_ in range(3):
+                for c in range(3):
+                    goal9[r_, c] = rot[r_, c]
+    res = 0.0
+    cm = (cx, cy, cz)
+    for i in range(s, e):
+        for k in range(3):
+            g = cm[k]
+            for c in range(9):
+                g += goal9[k, c] * qt[i, c]
+            cval = x[i, k] - g
+            res = max(res, abs(cval))
+            dl = (-cval - alpha_tilde * lam[i, k]) / (w[i] + alpha_tilde)
+            lam[i, k] += dl
+            x[i, k] += w[i] * dl
+    return res
+
+
+@njit(cache=True, parallel=True, fastmath=True)
+def shape_match_project_quadratic(x, w, q_rest, qt, start, quats, aqq_pinv, null_proj, qpinv, quadratic, lam,
+                                  alpha_tilde, beta, rot_iters):
+    """``shape_match_project`` with quadratic deformation (SPEC §5) for clusters whose flag in
+    ``quadratic`` is set; the others (too few or degenerate particles) take the linear goal."""
+    m = start.shape[0] - 1
+    worst = np.zeros(m)
+    blocks = (m + BLOCK - 1) // BLOCK
+    for b in prange(blocks):
+        apq = np.empty((3, 3))
+        rot = np.empty((3, 3))
+        goal = np.empty((3, 3))
+        apq9 = np.empty((3, 9))
+        goal9 = np.empty((3, 9))
+        for c in range(b * BLOCK, min(m, (b + 1) * BLOCK)):
+            if start[c + 1] - start[c] < 2:
+                continue
+            if quadratic[c]:
+                worst[c] = _match_cluster_quadratic(x, w, q_rest, qt, start[c], start[c + 1], quats[c], qpinv[c],
+                                                    lam, alpha_tilde, beta, rot_iters, apq, rot, apq9, goal9)
+            else:
+                worst[c] = _match_cluster(x, w, q_rest, start[c], start[c + 1], quats[c], aqq_pinv[c],
+                                          null_proj[c], lam, alpha_tilde, beta, rot_iters, apq, rot, goal)
+    return worst.max() if m > 0 else 0.0
+
+
+def quadratic_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, conditioning: float = 1e-4):
+    """Per particle q̃ (n, 9) and per cluster Ã_qq⁻¹ (m, 9, 9) and a flag: quadratic or linear (SPEC §5).
+
+    q̃ = [qx, qy, qz, qx², qy², qz², qx·qy, qy·qz, qz·qx]; the six quadratic columns are divided by
+    the cluster's rms radius (same units as q, better conditioned) and centred on the cluster's
+    mass-weighted mean, so Σ m q̃ = 0 and the goal keeps x_cm (uncentred, a bent goal drags the
+    cluster's centre and the element creeps). A cluster with < 10 particles, or whose 9×9 Ã_qq has
+    eigenvalue ratio below ``conditioning`` (collinear, planar, or too few distinct positions for
+    the nine modes), gets the linear goal: a pseudo-inverse would leave its unobservable quadratic
+    modes to fit noise.
+    """
+    m = len(start) - 1
+    qt = np.zeros((len(q_rest), 9))
+    qpinv = np.zeros((m, 9, 9))
+    quadratic = np.zeros(m, np.bool_)
+    mass = np.where(w > 0, 1.0 / np.maximum(w, 1e-300), 1e12)
+    for c in range(m):
+        s, e = start[c], start[c + 1]
+        q = q_rest[s:e]
+        mc = mass[s:e]
+        scale = np.sqrt((mc * (q * q).sum(axis=1)).sum() / mc.sum())
+        if not scale > 0:
+            qt[s:e, :3] = q
+            continue
+        quad = np.stack([q[:, 0] ** 2, q[:, 1] ** 2, q[:, 2] ** 2, q[:, 0] * q[:, 1], q[:, 1] * q[:, 2],
+                         q[:, 2] * q[:, 0]], axis=1) / scale
+        quad -= (mc[:, None] * quad).sum(axis=0) / mc.sum()
+        qt[s:e] = np.concatenate([q, quad], axis=1)
+        if e - s < 10:
+            continue
+        aqq = (qt[s:e] * mc[:, None]).T @ qt[s:e]
+        vals, vecs = np.linalg.eigh(aqq)
+        if vals[0] > conditioning * vals[-1]:
+            qpinv[c] = (vecs / vals) @ vecs.T
+            quadratic[c] = True
+    return qt, qpinv, quadratic
 
 
 def rest_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, tolerance: float = 1e-6):

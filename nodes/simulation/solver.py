@@ -42,6 +42,7 @@ class SolverSettings:
     gravity: float = 9810.0
     compliance: float = 1e-6  # s²/g; 0 = infinitely stiff clusters, inf = no shape matching
     linear_deformation: float = 0.0  # β of SPEC §5
+    quadratic: bool = False  # quadratic deformation (SPEC §5) for clusters that can support it
     mu_s: float = 0.6
     mu_k: float = 0.4
     capture: float = 0.2  # mm
@@ -115,6 +116,8 @@ class XpbdSolver:
         if self.matching:
             self.buffers["lambda"] = np.zeros_like(self.x)
             self.aqq_pinv, self.null_proj = shape_matching.rest_moments(self.q_rest, self.w, self.start)
+            if s.quadratic:
+                self.qt, self.qpinv, self.quadratic = shape_matching.quadratic_moments(self.q_rest, self.w, self.start)
         g = np.array([[0.0, 0.0, -s.gravity]]) if "gravity" in s.effects else np.zeros((1, 3))
         self.accel = g
         self.pairs = bool({"contact", "friction", "adhesion"} & s.effects)
@@ -186,7 +189,12 @@ class XpbdSolver:
             if {"contact", "friction"} & s.effects:  # one sweep: friction on each pair after its contact
                 self._contacts(self.buffers.get("allowance", self.no_allowance), friction=True)
             # the element's shape is restored after the contacts, the walls have the last word
-            if self.matching:
+            if self.matching and s.quadratic:
+                residual = d("shape_matching", shape_matching.shape_match_project_quadratic, self.x, self.w,
+                             self.q_rest, self.qt, self.start, self.quats, self.aqq_pinv, self.null_proj, self.qpinv,
+                             self.quadratic, self.buffers["lambda"], alpha, s.linear_deformation,
+                             s.rotation_iterations)
+            elif self.matching:
                 residual = d("shape_matching", shape_matching.shape_match_project, self.x, self.w, self.q_rest,
                              self.start, self.quats, self.aqq_pinv, self.null_proj, self.buffers["lambda"],
                              alpha, s.linear_deformation, s.rotation_iterations)

@@ -21,7 +21,7 @@ def _check(params):
 
 @node(
     "xpbd",
-    version=2,
+    version=3,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "colliders": In(Mesh, "watertight container / ground solids (mm)", optional=True, many=True),
@@ -51,6 +51,9 @@ def _check(params):
                            "cluster fall apart", range=(0.0, 100000.0), units="N/m"),
         "linear_deformation": Param(float, 0.3, "β: share of the volume-preserving linear fit in the goal "
                                     "(SPEC §5, U eq. 3.19); 0 = rigid goal", range=(0.0, 1.0)),
+        "deformation": Param(str, "linear", "goal of the β share: linear (A) or quadratic (Ã, 3×9: also bends "
+                             "and twists, SPEC §5); clusters with < 10 particles or collinear/planar ones stay "
+                             "linear", choices=("linear", "quadratic")),
         "damping": Param(float, 0.1, "velocity fraction removed per 1/60 s (effect 'damping')", range=(0.0, 1.0)),
         "friction": Param(float, 1.0, "multiplier on both friction coefficients (effect 'friction')",
                           range=(0.0, 1.0)),
