@@ -40,6 +40,8 @@ def settings_from_params(effects, params, radius) -> SolverSettings:
         gravity=params["gravity"],
         compliance=1.0 / (1000.0 * stiffness) if stiffness > 0 else np.inf,  # N/m → s²/g
         linear_deformation=params["linear_deformation"], quadratic=params["deformation"] == "quadratic",
+        bend_compliance=1.0 / (1000.0 * stiffness * params["bend_stiffness"])
+        if stiffness * params["bend_stiffness"] > 0 else np.inf,
         mu_s=mu_s, mu_k=mu_s * params["dynamic_scale"],
         capture=params["capture_radius"] * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import get_num_threads as numba_threads
 
-from . import adhesion, buoyancy, collider, contact_constraints, integrate, shape_matching, spatial_hash
+from . import adhesion, bending, buoyancy, collider, contact_constraints, integrate, shape_matching, spatial_hash
 
 PARALLEL_CONTACTS = 16384
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
@@ -43,6 +43,7 @@ class SolverSettings:
     compliance: float = 1e-6  # s²/g; 0 = infinitely stiff clusters, inf = no shape matching
     linear_deformation: float = 0.0  # β of SPEC §5
     quadratic: bool = False  # quadratic deformation (SPEC §5) for clusters that can support it
+    bend_compliance: float = np.inf  # s²/g of the long-axis bend constraints (``bending``); inf = none
     mu_s: float = 0.6
     mu_k: float = 0.4
     capture: float = 0.2  # mm
@@ -118,6 +119,12 @@ class XpbdSolver:
             self.aqq_pinv, self.null_proj = shape_matching.rest_moments(self.q_rest, self.w, self.start)
             if s.quadratic:
                 self.qt, self.qpinv, self.quadratic = shape_matching.quadratic_moments(self.q_rest, self.w, self.start)
+        self.bend = None
+        if self.matching and np.isfinite(s.bend_compliance):
+            triples, frac, rest, tstart = bending.bend_triples(self.q_rest, self.start)
+            if len(triples):
+                self.bend = (triples, frac, rest, tstart)
+                self.buffers["bend_lambda"] = np.zeros((len(triples), 3))
         g = np.array([[0.0, 0.0, -s.gravity]]) if "gravity" in s.effects else np.zeros((1, 3))
         self.accel = g
         self.pairs = bool({"contact", "friction", "adhesion"} & s.effects)
@@ -175,6 +182,8 @@ class XpbdSolver:
               s.overlap_decay_rate * h, self.buffers["allowance"])
         if self.matching:
             self.buffers["lambda"][:] = 0.0
+        if self.bend is not None:
+            self.buffers["bend_lambda"][:] = 0.0
         alpha = s.compliance / (h * h) if self.matching else 0.0
         adhesion_alpha = s.adhesion_compliance / (h * h)
         residual = 0.0
@@ -198,6 +207,9 @@ class XpbdSolver:
                 residual = d("shape_matching", shape_matching.shape_match_project, self.x, self.w, self.q_rest,
                              self.start, self.quats, self.aqq_pinv, self.null_proj, self.buffers["lambda"],
                              alpha, s.linear_deformation, s.rotation_iterations)
+            if self.bend is not None:
+                residual = max(residual, d("bending", bending.bend_project, self.x, self.w, *self.bend, self.quats,
+                                           self.buffers["bend_lambda"], s.bend_compliance / (h * h)))
             if self.sdf is not None:
                 d("collider", collider.collider_project, self.x, self.x_prev, self.r, self.w, *self.sdf,
                   self.sdf_blocks, self.mu_s, self.mu_k)

@@ -54,6 +54,9 @@ def _check(params):
         "deformation": Param(str, "linear", "goal of the β share: linear (A) or quadratic (Ã, 3×9: also bends "
                              "and twists, SPEC §5); clusters with < 10 particles or collinear/planar ones stay "
                              "linear", choices=("linear", "quadratic")),
+        "bend_stiffness": Param(float, 0.0, "bend constraints along the long axis of elongated grains (G: 10 for "
+                                "rice): stiffness of each chain triple's midpoint offset, in units of the shape-"
+                                "matching stiffness; 0 = none", range=(0.0, 10.0)),
         "damping": Param(float, 0.1, "velocity fraction removed per 1/60 s (effect 'damping')", range=(0.0, 1.0)),
         "friction": Param(float, 1.0, "multiplier on both friction coefficients (effect 'friction')",
                           range=(0.0, 1.0)),
