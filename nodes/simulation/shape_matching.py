@@ -77,9 +77,9 @@ def _det3(a):
             + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
 
 
-@njit(cache=True)
-def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta, rot_iters, apq, rot, goal):
-    """Project one cluster; returns its max |C|."""
+@njit(cache=True, inline="always")
+def _centre_of_mass(x, w, s, e):
+    """x_cm of the cluster's particles s..e (SPEC §5)."""
     total = 0.0
     cx = 0.0
     cy = 0.0
@@ -90,19 +90,29 @@ def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta,
         cx += m * x[i, 0]
         cy += m * x[i, 1]
         cz += m * x[i, 2]
-    cx /= total
-    cy /= total
-    cz /= total
-    apq[:, :] = 0.0
+    return cx / total, cy / total, cz / total
+
+
+@njit(cache=True, inline="always")
+def _moment_matrix(x, w, q, s, e, cx, cy, cz, out):
+    """A_pq = Σ m_i p_i q_iᵀ with p_i = x_i − x_cm (SPEC §5); q holds 3 (linear) or 9 (quadratic) rest columns."""
+    out[:, :] = 0.0
     for i in range(s, e):
         m = _mass(w[i])
         px = m * (x[i, 0] - cx)
         py = m * (x[i, 1] - cy)
         pz = m * (x[i, 2] - cz)
-        for c in range(3):
-            apq[0, c] += px * q_rest[i, c]
-            apq[1, c] += py * q_rest[i, c]
-            apq[2, c] += pz * q_rest[i, c]
+        for c in range(q.shape[1]):
+            out[0, c] += px * q[i, c]
+            out[1, c] += py * q[i, c]
+            out[2, c] += pz * q[i, c]
+
+
+@njit(cache=True)
+def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta, rot_iters, apq, rot, goal):
+    """Project one cluster; returns its max |C|."""
+    cx, cy, cz = _centre_of_mass(x, w, s, e)
+    _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
     extract_rotation(apq, quat, rot_iters, rot)
     goal[:, :] = rot
     if beta > 0.0:
@@ -164,34 +174,9 @@ def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_til
     The linear 3×3 block of Ã is volume-normalised as in the linear mode; the quadratic block is
     scaled by β only. ``qt`` holds centred quadratic columns, so the goal keeps the cluster's x_cm.
     """
-    total = 0.0
-    cx = 0.0
-    cy = 0.0
-    cz = 0.0
-    for i in range(s, e):
-        m = _mass(w[i])
-        total += m
-        cx += m * x[i, 0]
-        cy += m * x[i, 1]
-        cz += m * x[i, 2]
-    cx /= total
-    cy /= total
-    cz /= total
-    apq[:, :] = 0.0
-    apq9[:, :] = 0.0
-    for i in range(s, e):
-        m = _mass(w[i])
-        px = m * (x[i, 0] - cx)
-        py = m * (x[i, 1] - cy)
-        pz = m * (x[i, 2] - cz)
-        for c in range(3):
-            apq[0, c] += px * q_rest[i, c]
-            apq[1, c] += py * q_rest[i, c]
-            apq[2, c] += pz * q_rest[i, c]
-        for c in range(9):
-            apq9[0, c] += px * qt[i, c]
-            apq9[1, c] += py * qt[i, c]
-            apq9[2, c] += pz * qt[i, c]
+    cx, cy, cz = _centre_of_mass(x, w, s, e)
+    _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
+    _moment_matrix(x, w, qt, s, e, cx, cy, cz, apq9)
     extract_rotation(apq, quat, rot_iters, rot)
     goal9[:, :] = 0.0
     for r_ in range(3):
