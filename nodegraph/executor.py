@@ -230,12 +230,12 @@ class Executor:
 
     @staticmethod
     def _check_outputs(spec, result) -> dict[str, Any]:
-        if not isinstance(result, dict) or set(result) != set(spec.outputs):
-            if len(spec.outputs) == 1 and not (isinstance(result, dict) and set(result) == set(spec.outputs)):
-                result = {next(iter(spec.outputs)): result}
-            else:
+        """The node's result as {port: value}: a dict naming every output, or the bare value of a single one."""
+        if not (isinstance(result, dict) and set(result) == set(spec.outputs)):
+            if len(spec.outputs) != 1:
                 got = sorted(result) if isinstance(result, dict) else type(result).__name__
                 raise TypeError(f"node returned {got}; declared outputs are {sorted(spec.outputs)}")
+            result = {next(iter(spec.outputs)): result}
         for port, value in result.items():
             declared = spec.outputs[port].type
             if not isinstance(value, declared):

@@ -8,7 +8,7 @@ range and units in the message, not a pydantic error code.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, get_args, get_origin
 
@@ -74,7 +74,6 @@ class Param:
     choices: tuple[Any, ...] | None = None
     units: str = ""
     nullable: bool = False
-    extra: dict[str, Any] = field(default_factory=dict, compare=False, hash=False)
 
     @cached_property
     def _adapter(self) -> TypeAdapter:

@@ -185,9 +185,8 @@ class _Validator:
             self.issue((), "a recipe must be a mapping with keys name, seed, effects, outputs, nodes")
             return None
         self.apply_overrides()
-        top = {k: v for k, v in self.raw.items()}
         try:
-            model = RecipeModel.model_validate(top)
+            model = RecipeModel.model_validate(self.raw)
         except ValidationError as exc:
             self._pydantic_issues(exc, (), None, RecipeModel)
             model = None
@@ -290,7 +289,7 @@ class _Validator:
                            param=f"inputs.{port_name}")
         return NodeEntry(node_id, spec, params, inputs, model.variants, model.seed)
 
-    def _resolve_port(self, wire: Wire, entries, raw_nodes) -> str | None:
+    def _resolve_port(self, wire: Wire, entries) -> str | None:
         """The output port a wire names; ``node`` alone is allowed when that node has one output."""
         source = entries[wire.node].spec
         if wire.port:
@@ -312,7 +311,7 @@ class _Validator:
                                given=str(wire) if wire.port else wire.node, suggestion=_nearest(wire.node, raw_nodes))
                     continue
                 source_spec = entries[wire.node].spec
-                port_ref = self._resolve_port(wire, entries, raw_nodes)
+                port_ref = self._resolve_port(wire, entries)
                 if port_ref is None:
                     what = f"'{wire.node}' has no output '{wire.port}'" if wire.port else \
                         f"'{wire.node}' has several outputs; name one as {wire.node}.<port>"

@@ -112,33 +112,21 @@ def _(value: SphereSet, log: EntityLogger) -> None:
 
 @log_value.register
 def _(value: Volume, log: EntityLogger) -> None:
-    """Occupied cells as points (subsampled) and the middle z-slice as an image."""
+    """Inside cells as points (subsampled; a distance field coloured by depth) and the middle z-slice."""
     rr = _rr()
     data = np.asarray(value.data)
     inside = data > 0
-    centers = value.cell_centers(inside)
-    if len(centers) > MAX_VOLUME_POINTS:
-        centers = centers[:: int(np.ceil(len(centers) / MAX_VOLUME_POINTS))]
-    log.log("cells", rr.Points3D(centers.astype(np.float32), radii=np.float32(value.voxel_size * 0.5)), static=True)
+    step = max(1, int(np.ceil(np.count_nonzero(inside) / MAX_VOLUME_POINTS)))
+    centers = value.cell_centers(inside)[::step].astype(np.float32)
+    colors = None
+    if isinstance(value, DistanceField) and len(centers):
+        depth = data[inside][::step]
+        shade = (255 * depth / depth.max()).astype(np.uint8)
+        colors = np.stack([shade, 64 + shade // 2, 255 - shade], axis=1).astype(np.uint8)
+    log.log("cells", rr.Points3D(centers, colors=colors, radii=np.float32(value.voxel_size * 0.5)), static=True)
     middle = data[:, :, data.shape[2] // 2].astype(np.float32)
     span = float(np.abs(middle).max()) or 1.0
     log.log("slice", rr.Tensor(middle / span), static=True)
-
-
-@log_value.register
-def _(value: DistanceField, log: EntityLogger) -> None:
-    rr = _rr()
-    log_value.dispatch(Volume)(value, log)
-    data = np.asarray(value.data)
-    inside = data > 0
-    centers = value.cell_centers(inside)
-    dist = data[inside]
-    step = max(1, int(np.ceil(len(centers) / MAX_VOLUME_POINTS)))
-    if len(dist):
-        shade = (255 * dist[::step] / dist.max()).astype(np.uint8)
-        colors = np.stack([shade, 64 + shade // 2, 255 - shade], axis=1).astype(np.uint8)
-        log.log("distance", rr.Points3D(centers[::step].astype(np.float32), colors=colors,
-                                        radii=np.float32(value.voxel_size * 0.4)), static=True)
 
 
 @log_value.register

@@ -161,3 +161,25 @@ def test_two_processes_write_bit_identical_outputs(recipe, tmp_path):
         assert done.returncode == 0, done.stderr
         digests.append({p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(out.iterdir())})
     assert digests[0] == digests[1] and set(digests[0]) == {"merge.spheres.npz", "surf.ply"}
+
+
+def test_every_value_type_logs_with_its_archetype(tmp_path):
+    """Volumes as points + slice (a distance field coloured by depth), meshes as Mesh3D, tables as scalars."""
+    import numpy as np
+
+    from nodegraph.rerun_log import RunRecording, log_value
+    from nodegraph.values import DistanceField, Mesh, Table, Volume
+
+    grid = np.zeros((6, 6, 6))
+    grid[1:5, 1:5, 1:5] = 1.0
+    recording = RunRecording(tmp_path / "v.rrd", "values")
+    log_value(Volume(grid > 0, np.zeros(3), 0.5), recording.logger("/vol"))
+    log_value(DistanceField(grid * 2.0, np.zeros(3), 0.5), recording.logger("/field"))
+    log_value(Mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]), recording.logger("/mesh"))
+    log_value(Table({"energy": np.arange(4.0)}, index="step"), recording.logger("/table"))
+    recording.close()
+    store = RrdReader(str(tmp_path / "v.rrd")).stream().collect()
+    columns = set(store.schema().column_names())
+    assert {"/vol/cells:Points3D:positions", "/vol/slice:Tensor:data", "/field/cells:Points3D:colors",
+            "/mesh:Mesh3D:vertex_positions", "/table/energy:Scalars:scalars"} <= columns
+    assert "/vol/cells:Points3D:colors" not in columns

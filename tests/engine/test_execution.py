@@ -102,7 +102,7 @@ def test_same_seed_is_bit_identical_and_other_seed_differs(registry):
 
 
 def test_outputs_are_read_only(registry, cache):
-    spheres = run(registry, cache).output("pts.spheres") if False else run(registry, cache, outputs=["pts"]).output("pts")
+    spheres = run(registry, cache, outputs=["pts"]).output("pts")
     with pytest.raises(ValueError):
         spheres.centers[0, 0] = 1.0
 
