@@ -8,6 +8,7 @@ import pytest
 from nodes.elements import distance_field, element_library, expand, remesh, sphere_scatter, voxelise
 from nodes.elements.distance_fields import binary_field
 from nodes.elements.grain_shapes import volume_centroid
+from nodes.elements.library_props import surface_distance
 from nodes.elements.sphere_sampling import INSIDE, SURFACE, winding_numbers
 from nodes.elements.voxel_grid import grid_for, mesh_occupancy
 
@@ -20,7 +21,9 @@ def test_scatter_places_surface_and_inside_spheres(japonica):
     assert ((spheres.radii >= 0.1) & (spheres.radii <= 0.3)).all()
     w = winding_numbers(spheres.centers[spheres.tags == INSIDE], japonica.vertices, japonica.faces)
     assert np.allclose(w, 1.0, atol=1e-6)
-    # surface centres lie on the mesh: the column-winding occupancy flips within one cell of them
+    # surface centres lie on the mesh (area-weighted points of its triangles)
+    on_surface = spheres.centers[spheres.tags == SURFACE]
+    assert max(surface_distance(c, japonica.vertices, japonica.faces) for c in on_surface) < 1e-9
     assert run(sphere_scatter, seed=2, mesh=japonica, count=0).centers.shape == (0, 3)
 
 
@@ -55,11 +58,13 @@ def test_exact_route_is_closer_than_binary(japonica):
     volume = run(voxelise, mesh=japonica, spheres=spheres, resolution=48)
     exact = run(distance_field, volume=volume, mesh=japonica, spheres=spheres, method="exact")
     binary = run(distance_field, volume=volume, method="euclidean")
-    # at cell centres next to the surface, the exact field is the true distance to mesh ∪ spheres
-    centres = volume.cell_centers(np.abs(exact.data) < volume.voxel_size)
+    # at cell centres next to the surface, the exact field is the signed distance to mesh ∪ spheres
+    band = np.abs(exact.data) < volume.voxel_size
+    centres = volume.cell_centers(band)
     d_sph = (spheres.radii - np.linalg.norm(centres[:, None] - spheres.centers[None], axis=2)).max(axis=1)
-    near = np.abs(exact.data[np.abs(exact.data) < volume.voxel_size])
-    assert (near >= np.minimum(np.abs(d_sph), near) - 1e-9).all()
+    sign = np.where(winding_numbers(centres, japonica.vertices, japonica.faces) > 0.5, 1.0, -1.0)
+    d_mesh = sign * np.array([surface_distance(c, japonica.vertices, japonica.faces) for c in centres])
+    assert np.allclose(exact.data[band], np.maximum(d_mesh, d_sph), atol=1e-6)
     assert set(np.unique(np.round(binary.data[volume.data] / volume.voxel_size, 6))) >= {1.0}
     # exact inradius is below the binary one (binary measures to outside cell centres)
     assert exact.data.max() < binary.data.max() + volume.voxel_size
