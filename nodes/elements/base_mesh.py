@@ -35,6 +35,7 @@ def _check(p: dict) -> list[tuple[str, str]]:
                         range=(0.0, 0.5)),
           "diameter": Param(float, 4.0, "ikura: egg diameter 2·r_i (ikura 3–5 mm)", range=(0.1, 100.0),
                             units="mm"),
+          # default: typical ikura lipid mass fraction, SPEC §1 (Shirai et al.): 14.5 ± 0.7 %
           "lipid_fraction": Param(float, 0.145, "ikura: lipid (yolk) fraction L; yolk radius r_o = r_i·∛L "
                                   "(G eq. 10, SPEC Reading)", range=(0.001, 0.95)),
           "irregularity": Param(float, 0.25, "ice flake: outline radius variation (fraction)", range=(0.0, 0.6)),

@@ -27,12 +27,6 @@ RICE_VARIETIES = {
     "aromatic": RiceVariety(0.7, 1.5),
 }
 
-#: Base (japonica) grain in mm: a raw short-grain kernel is about 5 × 3 × 2 mm.
-BASE_GRAIN_MM = (5.0, 3.0, 2.0)
-
-#: Typical ikura lipid (yolk) mass fraction, SPEC §1 (Shirai et al.): 14.5 ± 0.7 %.
-IKURA_LIPID_FRACTION = 0.145
-
 
 def icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
     """Unit icosphere (vertices on the unit sphere, outward CCW faces), by midpoint subdivision."""
