@@ -31,16 +31,12 @@ def distance_field(ctx, volume, mesh=None, spheres=None, *, method, band):
 
     inside = np.asarray(volume.data) > 0
     if method == "exact":
-        if mesh is None and (spheres is None or not len(spheres)):
+        vertices, faces, centers, radii = voxel_grid.element_geometry(mesh, spheres)
+        if vertices is None and centers is None:
             raise ValueError("method 'exact' needs the mesh and/or spheres that were voxelised "
                              "(wire them to the mesh/spheres inputs) or use method 'euclidean'")
         grid = voxel_grid.Grid(volume.origin, volume.voxel_size, inside.shape)
-        centers = radii = None
-        if spheres is not None and len(spheres):
-            voxel_grid.check_spheres(spheres.centers, spheres.radii)
-            centers, radii = spheres.centers, spheres.radii
-        data = distance_fields.exact_field(grid, inside, None if mesh is None else mesh.vertices,
-                                           None if mesh is None else mesh.faces, centers, radii, band)
+        data = distance_fields.exact_field(grid, inside, vertices, faces, centers, radii, band)
         return DistanceField(data, volume.origin, volume.voxel_size, metric="euclidean", signed=True)
     if not inside.any() or inside.all():
         raise ValueError("the volume is empty or full: no boundary to measure distances to")

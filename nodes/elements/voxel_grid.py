@@ -86,6 +86,19 @@ def check_spheres(centers: np.ndarray, radii: np.ndarray) -> None:
                          "every sphere needs a positive radius")
 
 
+def element_geometry(mesh, spheres):
+    """(vertices, faces, centers, radii) of an optional mesh and sphere set, None where absent or empty.
+
+    The spheres are checked (finite, positive radii) before any grid work.
+    """
+    vertices = None if mesh is None else mesh.vertices
+    faces = None if mesh is None else mesh.faces
+    if spheres is None or not len(spheres):
+        return vertices, faces, None, None
+    check_spheres(spheres.centers, spheres.radii)
+    return vertices, faces, spheres.centers, spheres.radii
+
+
 def mesh_occupancy(grid: Grid, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Cells whose centre lies inside the closed mesh."""
     from .grid_kernels import winding_occupancy

@@ -31,12 +31,7 @@ def voxelise(ctx, mesh=None, spheres=None, *, resolution, voxel_size, padding):
     """
     from . import voxel_grid
 
-    vertices = None if mesh is None else mesh.vertices
-    faces = None if mesh is None else mesh.faces
-    centers = radii = None
-    if spheres is not None and len(spheres):
-        voxel_grid.check_spheres(spheres.centers, spheres.radii)
-        centers, radii = spheres.centers, spheres.radii
+    vertices, faces, centers, radii = voxel_grid.element_geometry(mesh, spheres)
     lo, hi = voxel_grid.geometry_bounds(vertices, centers, radii)
     grid = voxel_grid.grid_for(lo, hi, resolution, voxel_size, padding)
     inside = voxel_grid.occupancy(grid, vertices, faces, centers, radii)
