@@ -134,9 +134,13 @@ class _Validator:
         self.issues.append(Issue(location, message, **extra))
 
     def _pydantic_issues(self, exc: ValidationError, base: tuple, node: str | None, model: type[BaseModel]) -> None:
+        """pydantic errors as issues at their line; a value failing every member of a union is one issue."""
+        by_path: dict[tuple, list[dict]] = {}
         for err in exc.errors():
-            loc = base + tuple(err["loc"])
-            field_name = str(err["loc"][-1]) if err["loc"] else None
+            by_path.setdefault(self._data_path(base, err["loc"]), []).append(err)
+        for loc, errors in by_path.items():
+            err = errors[0]
+            field_name = str(loc[-1]) if len(loc) > len(base) else None
             if err["type"] == "extra_forbidden":
                 self.issue(loc, f"unknown key '{field_name}'", key=True, node=node,
                            allowed=", ".join(model.model_fields), suggestion=_nearest(field_name, model.model_fields))
@@ -144,8 +148,28 @@ class _Validator:
                 self.issue(loc[:-1], f"missing required key '{field_name}'", node=node)
             else:
                 given = err.get("input")
-                self.issue(loc, err["msg"], node=node, param=field_name,
-                           given=given if not isinstance(given, (dict, list)) else None)
+                tags = [str(e["loc"][-1]) for e in errors]
+                message = err["msg"] if len(errors) == 1 else "not a valid value"
+                self.issue(loc, message, node=node, param=field_name,
+                           given=given if not isinstance(given, (dict, list)) else None,
+                           allowed=" or ".join(tags) if len(errors) > 1 else None)
+
+    def _data_path(self, base: tuple, loc: tuple) -> tuple:
+        """The part of a pydantic location that addresses the recipe data (drops union-member tags)."""
+        data = self.raw
+        for key in base:
+            data = data.get(key) if isinstance(data, dict) else None
+        path = list(base)
+        for part in loc:
+            if isinstance(data, dict):  # a key: present, unknown or missing, it is where the problem is
+                path.append(part)
+                data = data.get(part)
+            elif isinstance(data, list) and isinstance(part, int):
+                path.append(part)
+                data = data[part] if part < len(data) else None
+            else:  # a scalar was reached: the rest of the location names union members
+                break
+        return tuple(path)
 
     def apply_overrides(self) -> None:
         nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}

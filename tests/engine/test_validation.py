@@ -166,3 +166,10 @@ def test_load_recipe_from_file_names_file(registry, recipe_file):
         load_recipe(path, registry)
     assert f"{path}:13:11" in str(info.value)
     assert load_recipe(recipe_file(VALID), registry).name == "toy"
+
+
+def test_value_failing_every_union_member_is_one_issue(registry):
+    text = "outputs: [a]\nnodes:\n  a: {type: toy_shift, inputs: {spheres: 3}, variants: x}\n"
+    issues = issues_of(text, registry)
+    assert [(i.location.line, i.location.column, i.param) for i in issues] == [(3, 42, "spheres"), (3, 56, "variants")]
+    assert issues[0].allowed == "str or list[str]" and issues[0].given == 3
