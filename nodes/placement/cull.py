@@ -30,17 +30,17 @@ def cull(ctx, placement, libraries, *, threshold, offset, sphere_tolerance, max_
 
     Never culls everything: the last element of an overlapping group has no live neighbour left.
     """
-    from .element_templates import build_templates, matching_libraries
+    from .element_templates import build_templates, matching_libraries, with_kind_names
     from .refine import cull_placement
 
     libraries = matching_libraries(placement, libraries)
     if len(placement) == 0:
         return {"placement": placement, "culled": placement, "aggregate": Aggregate(placement, libraries)}
+    placement = with_kind_names(placement, libraries)
     templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points)
     keep, depth = cull_placement(placement, templates, threshold, offset)
-    names = placement.kind_names or (libraries[0].kind,)
     with_depth = Placement(placement.positions, placement.normals, placement.rotations, placement.kinds,
-                           placement.variants, placement.p_num, placement.offsets, depth, names)
+                           placement.variants, placement.p_num, placement.offsets, depth, placement.kind_names)
     kept, culled = with_depth.subset(keep), with_depth.subset(~keep)
     if ctx.rerun.enabled:
         import rerun as rr

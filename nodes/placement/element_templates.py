@@ -149,6 +149,16 @@ def template_params():
     }
 
 
+def with_kind_names(placement, libraries: tuple[ElementLibrary, ...]):
+    """The placement naming its kinds: one without (no mix_ratio upstream) takes the single library's kind."""
+    from nodegraph.values import Placement
+
+    if placement.kind_names:
+        return placement
+    return Placement(placement.positions, placement.normals, placement.rotations, placement.kinds, placement.variants,
+                     placement.p_num, placement.offsets, placement.overlap, (libraries[0].kind,))
+
+
 def matching_libraries(placement, libraries) -> tuple[ElementLibrary, ...]:
     """The libraries in the placement's kind order; a placement without kinds takes the single library."""
     libraries = tuple(libraries)

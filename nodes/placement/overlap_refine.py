@@ -42,25 +42,23 @@ def _check(params: dict) -> list[tuple[str, str]]:
 def overlap_refine(ctx, placement, libraries, *, cost, slope, range_scale, r, c_refine, offset, passes, tolerance,
                    sphere_tolerance, max_spheres, cost_points):
     """Medial-sphere implicit functions per variant, then each element once per pass in random order (colour classes in parallel)."""
-    from .element_templates import build_templates, matching_libraries
+    from .element_templates import FIT_KEYS, build_templates, matching_libraries, with_kind_names
     from .refine import RefineSettings, refine_placement
 
     libraries = matching_libraries(placement, libraries)
     if len(placement) == 0:
-        empty = {key: np.zeros(0) for key in ("spheres", "gap_mean", "gap_max", "volume")}
+        empty = {key: np.zeros(0) for key in FIT_KEYS}
         return {"placement": placement, "aggregate": Aggregate(placement, libraries), "stats": Table(empty)}
+    placement = with_kind_names(placement, libraries)
     templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points, measure_fit=True)
     settings = RefineSettings(cost=cost, slope=slope, range_scale=range_scale, spacing=r or 0.0,
                               c_refine=c_refine, offset=offset, tolerance=tolerance)
     ranges = np.array([lib.refine_range for lib in libraries])
     orders = [ctx.rng.permutation(len(placement)) for _ in range(passes)]
     refined = refine_placement(placement, templates, ranges, settings, orders)
-    if not refined.kind_names:
-        refined = Placement(refined.positions, refined.normals, refined.rotations, refined.kinds, refined.variants,
-                            refined.p_num, refined.offsets, refined.overlap, (libraries[0].kind,))
     if ctx.rerun.enabled and len(refined):
         import rerun as rr
 
         ctx.rerun.log("refined", rr.Points3D(refined.positions, radii=0.25 * float(templates.inscribed.min())))
-    fit = {key: np.array([f[key] for f in templates.fit]) for key in ("spheres", "gap_mean", "gap_max", "volume")}
+    fit = {key: np.array([f[key] for f in templates.fit]) for key in FIT_KEYS}
     return {"placement": refined, "aggregate": Aggregate(refined, libraries), "stats": Table(fit)}
