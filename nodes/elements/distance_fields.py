@@ -57,13 +57,16 @@ def exact_field(grid: Grid, inside: np.ndarray, vertices: np.ndarray | None, fac
 
     h = grid.voxel_size
     limit = band * h
-    near = np.full(grid.shape, -limit)
+    near = None
     if vertices is not None:
         unsigned = mesh_distance_band(grid.local(vertices), np.ascontiguousarray(faces, np.int64), h, grid.shape,
                                       float(band))
         near = np.where(mesh_occupancy(grid, vertices, faces), unsigned, -unsigned)
     if centers is not None and len(centers):
-        np.maximum(near, sphere_field(grid, centers, radii, float(band)), out=near)
+        spheres = sphere_field(grid, centers, radii, float(band))  # already −band·h where no sphere reaches
+        near = spheres if near is None else np.maximum(near, spheres, out=near)
+    if near is None:
+        raise ValueError("exact distance field needs a mesh and/or spheres")
     far_in = np.maximum(cell_distance(inside, "euclidean") - 0.5, band) * h
     far_out = -np.maximum(cell_distance(~inside, "euclidean") - 0.5, band) * h
     field = np.where(np.abs(near) < limit, near, np.where(inside, far_in, far_out))
