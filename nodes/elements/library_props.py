@@ -30,7 +30,7 @@ def element_props(meshes: list) -> dict[str, np.ndarray]:
                      float(np.linalg.norm(tm.vertices - centre, axis=1).max()), inradius, *extent))
     table = np.array(rows)
     names = ("expansion", "volume", "circumradius", "inradius", "length", "width", "thickness")
-    # Keys in sorted order: the codec decodes dicts sorted, so equal libraries then encode equally.
+    # Keys in sorted order, the order a library read back from the cache has (the codec stores dicts sorted).
     return {name: np.ascontiguousarray(table[:, names.index(name)]) for name in sorted(names)}
 
 
