@@ -134,6 +134,8 @@ def grain_chain(mesh, seed, resolution, method, target_faces=None, expansion=(1.
 
 
 def sweep(resolutions, grains, samples):
+    import trimesh
+
     mesh = base_mesh(Context.standalone(), **params(base_mesh))
     length = float(np.ptp(mesh.vertices[:, 0]))
     grain_chain(mesh, 0, 32, "exact")  # warm JIT and imports
@@ -154,8 +156,6 @@ def sweep(resolutions, grains, samples):
                 haus.append(h / length)
                 mean.append(m / length)
                 mean_vox.append(m / field.voxel_size)
-                import trimesh
-
                 vol_err.append(trimesh.Trimesh(v, f, process=False).volume / true_volume - 1.0)
                 tris.append(len(grain.faces))
                 level = OFFSET_VOXELS * field.voxel_size
