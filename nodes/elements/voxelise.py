@@ -8,8 +8,8 @@ from nodegraph import In, Out, Param, node
 from nodegraph.values import Mesh, SphereSet, Volume
 
 #: Default from benchmarks/bench_elements.py (exact route): at 64 cells the mean surface error is
-#: 0.04 % of the grain length (0.02 voxel), volume −0.2 %, 16 grains ≈ 1.1 s on 2 shared cores;
-#: 96 halves the error at ~3× the time, far below what a simulated grain can show.
+#: 0.04 % of the grain length (0.02 voxel), volume −0.2 %, 16 grains 0.7–1.1 s on 2 shared cores;
+#: 96 halves the error at ~1.8× the time per grain, far below what a simulated grain can show.
 DEFAULT_RESOLUTION = 64
 
 
