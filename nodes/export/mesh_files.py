@@ -13,8 +13,8 @@ from nodegraph.values import ShadedScene
 
 
 def linear_to_srgb8(colors: np.ndarray) -> np.ndarray:
-    """Linear RGB in [0, 1] → 8-bit sRGB (the convention of PLY/OBJ vertex colours)."""
-    c = np.clip(np.asarray(colors, np.float64)[:, :3], 0.0, 1.0)
+    """Linear RGB (clipped to [0, 1]) → 8-bit sRGB: PLY/OBJ vertex colours and preview pixels, shape (..., 3)."""
+    c = np.clip(np.asarray(colors, np.float64)[..., :3], 0.0, 1.0)
     srgb = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
     return np.round(srgb * 255).astype(np.uint8)
 

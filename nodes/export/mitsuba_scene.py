@@ -119,9 +119,10 @@ def render(scene: ShadedScene, camera: Camera, width: int, height: int, spp: int
 
     import mitsuba as mi
 
+    from .mesh_files import linear_to_srgb8
+
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
         loaded = mi.load_dict(scene_dict(scene, Path(folder), camera, width, height, spp, light_direction))
-        image = np.asarray(mi.render(loaded, seed=0), np.float64)[:, :, :3]
-    srgb = np.where(image <= 0.0031308, 12.92 * image, 1.055 * np.power(np.maximum(image, 0), 1 / 2.4) - 0.055)
-    return np.clip(np.round(srgb * 255), 0, 255).astype(np.uint8)
+        image = np.asarray(mi.render(loaded, seed=0), np.float64)
+    return linear_to_srgb8(image)
