@@ -62,16 +62,13 @@ def with_medial_spheres(library: ElementLibrary, tolerance: float, max_spheres: 
     """The library with each mesh's medial spheres (and their fit) in ``props``, so that refine and cull
     read them instead of recomputing them (~0.3 s per mesh). Stored as an (N, K, 4) array of
     (centre, radius) padded with zero rows plus the count per mesh: props are arrays of length N."""
-    from .medial_spheres import medial_spheres, union_fit
+    from .medial_spheres import union_fit
 
     if len(library) == 0:
         raise ValueError(f"element library {library.kind!r} holds no meshes")
     found, fits = [], []
     for index, mesh in enumerate(library.meshes):
-        try:
-            c, r = medial_spheres(mesh.vertices, mesh.faces, tolerance, max_spheres)
-        except ValueError as exc:
-            raise ValueError(f"element {library.kind!r} mesh {index}: {exc}") from None
+        c, r = _mesh_spheres(library, index, tolerance, max_spheres)
         found.append(np.hstack([c, r[:, None]]))
         fits.append(union_fit(mesh.vertices, mesh.faces, c, r))
     packed = np.zeros((len(found), max(len(f) for f in found), 4))
@@ -84,19 +81,27 @@ def with_medial_spheres(library: ElementLibrary, tolerance: float, max_spheres: 
     return ElementLibrary(library.kind, library.meshes, props, library.refine_range)
 
 
+def _mesh_spheres(library: ElementLibrary, index: int, tolerance: float, max_spheres: int):
+    """Medial spheres (centres, radii) of one mesh; an error names the kind and mesh."""
+    from .medial_spheres import medial_spheres
+
+    mesh = library.meshes[index]
+    try:
+        return medial_spheres(mesh.vertices, mesh.faces, tolerance, max_spheres)
+    except ValueError as exc:
+        raise ValueError(f"element {library.kind!r} mesh {index}: {exc}") from None
+
+
 def _spheres_of(library: ElementLibrary, index: int, tolerance: float, max_spheres: int, measure_fit: bool):
     """(centres, radii, fit) of one mesh: carried in props when there, else computed now."""
-    from .medial_spheres import medial_spheres, union_fit
+    from .medial_spheres import union_fit
 
     if SPHERES in library.props:
         rows = library.props[SPHERES][index, :int(library.props[SPHERE_COUNT][index])]
         fit = {key: float(library.props[f"medial_fit_{key}"][index]) for key in FIT_KEYS}
         return np.ascontiguousarray(rows[:, :3]), rows[:, 3].copy(), fit
     mesh = library.meshes[index]
-    try:
-        c, r = medial_spheres(mesh.vertices, mesh.faces, tolerance, max_spheres)
-    except ValueError as exc:
-        raise ValueError(f"element {library.kind!r} mesh {index}: {exc}") from None
+    c, r = _mesh_spheres(library, index, tolerance, max_spheres)
     return c, r, union_fit(mesh.vertices, mesh.faces, c, r) if measure_fit else {}
 
 
