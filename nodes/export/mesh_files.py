@@ -19,14 +19,19 @@ def linear_to_srgb8(colors: np.ndarray) -> np.ndarray:
     return np.round(srgb * 255).astype(np.uint8)
 
 
+def stacked(meshes) -> tuple[np.ndarray, np.ndarray]:
+    """Meshes as one (vertices, faces) array pair, each mesh's face indices shifted past the previous ones."""
+    starts = np.cumsum([0] + [len(m.vertices) for m in meshes])
+    return (np.concatenate([m.vertices for m in meshes]),
+            np.concatenate([m.faces + s for m, s in zip(meshes, starts)]))
+
+
 def combined_arrays(scene: ShadedScene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """All meshes as one (vertices, faces, sRGB colours), vertices kept apart per element."""
     meshes = [m for m in scene.meshes if len(m.faces)]
     if not meshes:
         raise ValueError("scene: no mesh with faces to export")
-    starts = np.cumsum([0] + [len(m.vertices) for m in meshes])
-    vertices = np.concatenate([m.vertices for m in meshes])
-    faces = np.concatenate([m.faces + s for m, s in zip(meshes, starts)])
+    vertices, faces = stacked(meshes)
     colors = np.concatenate([linear_to_srgb8(m.colors) if m.colors is not None
                              else np.full((len(m.vertices), 3), 204, np.uint8) for m in meshes])
     return vertices, faces, colors

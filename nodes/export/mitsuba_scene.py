@@ -70,15 +70,15 @@ def scene_dict(scene: ShadedScene, folder: Path, camera: Camera, width: int, hei
     """The Mitsuba scene description; PLY files are written into ``folder``."""
     import mitsuba as mi
 
+    from .mesh_files import stacked
+
     shapes = {}
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     for index, material in enumerate(scene.materials):
         members = [m for m, k in zip(scene.meshes, scene.material_of) if k == index and len(m.faces)]
         if not members:
             continue
-        starts = np.cumsum([0] + [len(m.vertices) for m in members])
-        vertices = np.concatenate([m.vertices for m in members])
-        faces = np.concatenate([m.faces + s for m, s in zip(members, starts)])
+        vertices, faces = stacked(members)
         normals = np.concatenate([m.normals if m.normals is not None else np.zeros((len(m.vertices), 3))
                                   for m in members])
         colors = np.concatenate([m.colors[:, :3] if m.colors is not None
