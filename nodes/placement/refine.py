@@ -53,6 +53,15 @@ def neighbours(positions: np.ndarray, templates: ElementTemplates, tmpl: np.ndar
     return neighbour_lists(np.ascontiguousarray(positions), np.ascontiguousarray(reach))
 
 
+def _depths(positions, rotations, tmpl, nb_start, nb, alive, templates: ElementTemplates, offset: float):
+    """Per live element the deepest overlap with its live neighbours (refine_kernels.overlap_depths)."""
+    from .refine_kernels import overlap_depths
+
+    return overlap_depths(positions, rotations, tmpl, nb_start, nb, alive, templates.pts_start, templates.pts,
+                          templates.sph_start, templates.centers, templates.radii, templates.bound,
+                          templates.circumradius, offset)
+
+
 def refine_placement(placement: Placement, templates: ElementTemplates, refine_ranges: np.ndarray,
                      settings: RefineSettings, orders) -> Placement:
     """Move each element along its normal to the golden-section minimum of the cost, once per pass.
@@ -62,7 +71,7 @@ def refine_placement(placement: Placement, templates: ElementTemplates, refine_r
     """
     import numba
 
-    from .refine_kernels import GAN, SAKURAI, colour_in_order, overlap_depths, refine_offsets
+    from .refine_kernels import GAN, SAKURAI, colour_in_order, refine_offsets
 
     n = len(placement)
     if n == 0:
@@ -88,9 +97,7 @@ def refine_placement(placement: Placement, templates: ElementTemplates, refine_r
                                4 * numba.get_num_threads())
         travelled += moved
     nb_start, nb = neighbours(positions, templates, tmpl, np.zeros(n))
-    depth = overlap_depths(positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates.pts_start,
-                           templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
-                           templates.circumradius, settings.offset)
+    depth = _depths(positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates, settings.offset)
     return Placement(positions, placement.normals, rotations, placement.kinds, placement.variants, placement.p_num,
                      placement.offsets + travelled, depth, placement.kind_names)
 
@@ -102,7 +109,7 @@ def cull_placement(placement: Placement, templates: ElementTemplates, threshold:
     ``depth`` is, for kept elements, the depth against the kept neighbours; for culled ones the
     depth they had before culling.
     """
-    from .refine_kernels import cull_deepest, overlap_depths
+    from .refine_kernels import cull_deepest
 
     n = len(placement)
     if n == 0:
@@ -110,13 +117,9 @@ def cull_placement(placement: Placement, templates: ElementTemplates, threshold:
     tmpl = templates.index(placement.kinds, placement.variants)
     nb_start, nb = neighbours(placement.positions, templates, tmpl, np.zeros(n))
     rotations = np.ascontiguousarray(placement.rotations)
-    depth = overlap_depths(placement.positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_),
-                           templates.pts_start, templates.pts, templates.sph_start, templates.centers,
-                           templates.radii, templates.bound, templates.circumradius, offset)
+    depth = _depths(placement.positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates, offset)
     keep = cull_deepest(depth, threshold, placement.positions, rotations, tmpl, nb_start, nb, templates.pts_start,
                         templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
                         templates.circumradius, offset)
-    after = overlap_depths(placement.positions, rotations, tmpl, nb_start, nb, keep, templates.pts_start,
-                           templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
-                           templates.circumradius, offset)
+    after = _depths(placement.positions, rotations, tmpl, nb_start, nb, keep, templates, offset)
     return keep, np.where(keep, after, depth)
