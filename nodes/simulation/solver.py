@@ -112,6 +112,8 @@ class XpbdSolver:
         self.diagnostics = Diagnostics()
         self.asleep = np.zeros(len(start) - 1, np.bool_)
         self.buffers: dict[str, np.ndarray] = {}
+        if s.sleep_speed > 0:  # positions at the substep start, for the sleep test
+            self.buffers["x_start"] = np.empty_like(self.x)
         # shape matching is the element's own elasticity, not an effect: always on for clusters of ≥ 2
         self.matching = np.isfinite(s.compliance) and bool(np.any(np.diff(self.start) > 1))
         if self.matching:
@@ -169,7 +171,7 @@ class XpbdSolver:
         """Advance by h = dt/substeps; returns the largest constraint residual of the last iteration."""
         s, d, h = self.s, self.dispatch, self.h
         if s.sleep_speed > 0:
-            self.buffers.setdefault("x_start", np.empty_like(self.x))[:] = self.x
+            self.buffers["x_start"][:] = self.x
         self._prestabilise()
         if self.yolks is not None:  # drag towards the egg velocity of the last substep
             y = self.yolks
