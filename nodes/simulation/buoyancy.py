@@ -10,7 +10,7 @@ neglected.
 import numpy as np
 from numba import njit, prange
 
-from .shape_matching import quat_to_matrix
+from .shape_matching import centre_of_mass, quat_to_matrix
 
 
 @njit(cache=True, parallel=True, fastmath=True)
@@ -20,15 +20,8 @@ def yolk_predict(yx, yv, y_prev, x, v, w, start, owner, accel, h, drag_rate):
     relax = np.exp(-drag_rate * h)
     for y in prange(k):
         c = owner[y]
-        ev = np.zeros(3)
-        total = 0.0
-        for i in range(start[c], start[c + 1]):
-            m = 1.0 / w[i] if w[i] > 0.0 else 1e12
-            total += m
-            for d in range(3):
-                ev[d] += m * v[i, d]
+        ev = centre_of_mass(v, w, start[c], start[c + 1])  # the egg's velocity
         for d in range(3):
-            ev[d] /= total
             y_prev[y, d] = yx[y, d]
             yv[y, d] = ev[d] + (yv[y, d] - ev[d]) * relax + h * accel[d]
             yx[y, d] += h * yv[y, d]
@@ -40,16 +33,9 @@ def yolk_contain(yx, yv, y_prev, x, w, start, quats, owner, centre_local, room, 
     k = yx.shape[0]
     for y in prange(k):
         c = owner[y]
-        cm = np.zeros(3)
-        total = 0.0
-        for i in range(start[c], start[c + 1]):
-            m = 1.0 / w[i] if w[i] > 0.0 else 1e12
-            total += m
-            for d in range(3):
-                cm[d] += m * x[i, d]
         rot = np.empty((3, 3))
         quat_to_matrix(quats[c], rot)
-        centre = cm / total + rot @ centre_local[y]
+        centre = np.array(centre_of_mass(x, w, start[c], start[c + 1])) + rot @ centre_local[y]
         off = yx[y] - centre
         dist = np.sqrt(off @ off)
         if dist > room[y]:

@@ -78,8 +78,8 @@ def _det3(a):
 
 
 @njit(cache=True, inline="always")
-def _centre_of_mass(x, w, s, e):
-    """x_cm of the cluster's particles s..e (SPEC §5)."""
+def centre_of_mass(x, w, s, e):
+    """x_cm of the cluster's particles s..e (SPEC §5); of velocities, the cluster's velocity."""
     total = 0.0
     cx = 0.0
     cy = 0.0
@@ -111,7 +111,7 @@ def _moment_matrix(x, w, q, s, e, cx, cy, cz, out):
 @njit(cache=True)
 def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta, rot_iters, apq, rot, goal):
     """Project one cluster; returns its max |C|."""
-    cx, cy, cz = _centre_of_mass(x, w, s, e)
+    cx, cy, cz = centre_of_mass(x, w, s, e)
     _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
     extract_rotation(apq, quat, rot_iters, rot)
     goal[:, :] = rot
@@ -174,7 +174,7 @@ def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_til
     The linear 3×3 block of Ã is volume-normalised as in the linear mode; the quadratic block is
     scaled by β only. ``qt`` holds centred quadratic columns, so the goal keeps the cluster's x_cm.
     """
-    cx, cy, cz = _centre_of_mass(x, w, s, e)
+    cx, cy, cz = centre_of_mass(x, w, s, e)
     _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
     _moment_matrix(x, w, qt, s, e, cx, cy, cz, apq9)
     extract_rotation(apq, quat, rot_iters, rot)
