@@ -37,20 +37,32 @@ def combined_arrays(scene: ShadedScene) -> tuple[np.ndarray, np.ndarray, np.ndar
     return vertices, faces, colors
 
 
+PLY_TYPES = {"<f4": "float", "|u1": "uchar"}
+
+
+def binary_ply(blocks: list[tuple[tuple[str, ...], np.ndarray]], faces: np.ndarray, comment: str = "") -> bytes:
+    """Binary little-endian PLY: vertex properties from (names, (n, len(names)) float32|uint8 block) pairs,
+    then triangle lists. Written with numpy records (see the module note on trimesh's exporter)."""
+    fields = [(name, block.dtype.str) for names, block in blocks for name in names]
+    vertices = np.zeros(len(blocks[0][1]), dtype=fields)
+    for names, block in blocks:
+        for k, name in enumerate(names):
+            vertices[name] = block[:, k]
+    triangles = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
+    triangles["n"] = 3
+    triangles["i"] = faces
+    header = ("ply\nformat binary_little_endian 1.0\n" + (f"comment {comment}\n" if comment else "")
+              + f"element vertex {len(vertices)}\n"
+              + "".join(f"property {PLY_TYPES[dtype]} {name}\n" for name, dtype in fields)
+              + f"element face {len(triangles)}\nproperty list uchar int vertex_indices\nend_header\n")
+    return header.encode() + vertices.tobytes() + triangles.tobytes()
+
+
 def ply_bytes(scene: ShadedScene) -> bytes:
     """Binary little-endian PLY: float xyz, uchar sRGB colours, triangle lists."""
     points, triangles, colors = combined_arrays(scene)
-    vertices = np.zeros(len(points), dtype=[("p", "<f4", 3), ("c", "u1", 3)])
-    vertices["p"] = points
-    vertices["c"] = colors
-    faces = np.zeros(len(triangles), dtype=[("n", "u1"), ("i", "<i4", 3)])
-    faces["n"] = 3
-    faces["i"] = triangles
-    header = ("ply\nformat binary_little_endian 1.0\ncomment nodegraph export: sRGB vertex colours\n"
-              f"element vertex {len(vertices)}\nproperty float x\nproperty float y\nproperty float z\n"
-              "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-              f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
-    return header.encode() + vertices.tobytes() + faces.tobytes()
+    return binary_ply([(("x", "y", "z"), points.astype("<f4")), (("red", "green", "blue"), colors)], triangles,
+                      comment="nodegraph export: sRGB vertex colours")
 
 
 def obj_bytes(scene: ShadedScene) -> bytes:

@@ -35,15 +35,10 @@ class Camera:
 
 def write_ply(path: Path, vertices, faces, normals, colors) -> None:
     """Binary little-endian PLY with float normals and float linear colours (Mitsuba: ``vertex_color``)."""
-    header = ("ply\nformat binary_little_endian 1.0\n"
-              f"element vertex {len(vertices)}\n"
-              + "".join(f"property float {p}\n" for p in ("x", "y", "z", "nx", "ny", "nz", "r", "g", "b"))
-              + f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    from .mesh_files import binary_ply
+
     rows = np.hstack([vertices, normals, colors[:, :3]]).astype("<f4")
-    tris = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
-    tris["n"] = 3
-    tris["i"] = faces
-    path.write_bytes(header.encode() + rows.tobytes() + tris.tobytes())
+    path.write_bytes(binary_ply([(("x", "y", "z", "nx", "ny", "nz", "r", "g", "b"), rows)], faces))
 
 
 def _bsdf(material: Material) -> dict:
