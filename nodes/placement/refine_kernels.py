@@ -251,26 +251,27 @@ def _golden_section(lo, hi, iterations, cost_kind, slope, penalty, npairs, pair_
 
 
 @njit(cache=True)
+def _bump_buffers(capacity):
+    """Scratch for _gather_bumps: pair_range, pair_lo, pair_hi for ``capacity`` pairs, five bump arrays for 4× as many."""
+    return (np.empty(capacity + 1, np.int64), np.empty(capacity), np.empty(capacity), np.empty(4 * capacity),
+            np.empty(4 * capacity), np.empty(4 * capacity), np.empty(4 * capacity), np.empty(4 * capacity))
+
+
+@njit(cache=True)
 def _refine_chunk(members, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, cost_end, pts,
                   sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope, penalty, iterations,
                   max_pts, travelled, offsets):
     """Refine a run of mutually independent elements with one set of scratch buffers (grown on demand)."""
     capacity = 1024
     world = np.empty((max_pts, 3))
-    pair_range = np.empty(capacity + 1, np.int64)
-    pair_lo, pair_hi = np.empty(capacity), np.empty(capacity)
-    bump_t0, bump_perp2, bump_r = np.empty(4 * capacity), np.empty(4 * capacity), np.empty(4 * capacity)
-    bump_lo, bump_hi = np.empty(4 * capacity), np.empty(4 * capacity)
+    pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi = _bump_buffers(capacity)
     for i in members:
         npairs, _ = _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start,
                                   cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, world, pair_range,
                                   pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi)
         while npairs < 0:
             capacity *= 4
-            pair_range = np.empty(capacity + 1, np.int64)
-            pair_lo, pair_hi = np.empty(capacity), np.empty(capacity)
-            bump_t0, bump_perp2, bump_r = np.empty(4 * capacity), np.empty(4 * capacity), np.empty(4 * capacity)
-            bump_lo, bump_hi = np.empty(4 * capacity), np.empty(4 * capacity)
+            pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi = _bump_buffers(capacity)
             npairs, _ = _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb,
                                       pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, world,
                                       pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi)
