@@ -57,12 +57,12 @@ def cdrf_colors(normals: np.ndarray, curvature: np.ndarray, base: np.ndarray, su
                 weight: np.ndarray, sigma0: float, lights: list[Light], ambient: float,
                 table: CdrfTable) -> np.ndarray:
     """Linear RGB per vertex (n, 3), clipped to [0, 1]; ``base``/``subsurface`` are (n, 3) or (3,)."""
-    sigma = curvature_sigma(curvature, sigma0)[:, None]
+    sigma = curvature_sigma(curvature, sigma0)
     weight = np.asarray(weight, np.float64).reshape(-1, 1) if np.ndim(weight) else float(weight)
     color = ambient * np.broadcast_to(base, normals.shape)
     for light in lights:
         cos = np.clip(normals @ light.direction, -1.0, 1.0)
         lambert = np.maximum(cos, 0.0)[:, None]
-        bleed = table(np.arccos(cos), sigma[:, 0])[:, None]
+        bleed = table(np.arccos(cos), sigma)[:, None]
         color = color + light.intensity * light.color * ((1.0 - weight) * base * lambert + weight * subsurface * bleed)
     return np.clip(color, 0.0, 1.0)
