@@ -44,10 +44,9 @@ def _element_pieces(aggregate: Aggregate, settings: ShadeSettings) -> list[_Piec
     p = aggregate.placement
     kinds = [lib.kind for lib in aggregate.libraries]
     presets = [mat.preset_for_kind(kind, settings.presets) for kind in kinds]
+    is_ice = np.array([presets[k] == "ice" for k in p.kinds], bool)
     syrup = np.zeros(len(p), bool)
-    ice_rows = np.flatnonzero(np.array([presets[k] == "ice" for k in p.kinds], bool)) if len(p) else []
-    if len(ice_rows):
-        syrup[ice_rows] = mat.syrup_mask(p.positions[ice_rows, 2], settings.syrup_coverage)
+    syrup[is_ice] = mat.syrup_mask(p.positions[is_ice, 2], settings.syrup_coverage)
     rice = mat.rice_material(settings.water_content)
     ikura = mat.ikura_materials()
     ice = mat.ice_materials(settings.syrup_color)
