@@ -18,6 +18,8 @@ FORMATS = ("glb", "usda", "usdc", "ply", "obj")
 def _check(params):
     problems = []
     bad = [f for f in params.get("formats", ()) if f not in FORMATS]
+    if not params.get("formats"):
+        problems.append(("formats", "name at least one of " + ", ".join(FORMATS)))
     if bad:
         problems.append(("formats", f"unknown format(s) {bad}; allowed: {', '.join(FORMATS)}"))
     if not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", params.get("basename", "")):
@@ -41,8 +43,6 @@ def export(ctx, scene, *, formats, basename):
     problems = _check({"formats": formats, "basename": basename})
     if problems:
         raise ValueError("; ".join(f"{name}: {message}" for name, message in problems))
-    if not formats:
-        raise ValueError("formats: name at least one of " + ", ".join(FORMATS))
     from .gltf_writer import glb_bytes
     from .mesh_files import obj_bytes, ply_bytes
     from .usd_writer import usd_bytes
