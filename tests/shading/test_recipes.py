@@ -12,17 +12,8 @@ SMALL = ["rice_place.r=3.0", "rice_sim.frames=2", "egg_sim.frames=2", "egg_place
          "grain_mesh.target_faces=200", "preview.width=64", "preview.height=48", "preview.samples=1"]
 
 
-def _registry():
-    registry = default_registry()
-    if "xpbd" not in registry:  # until nodes/simulation/__init__ exports it
-        from nodes.simulation.xpbd import xpbd
-
-        registry.add(xpbd)
-    return registry
-
-
 def _run(recipe_name, overrides, tmp_path):
-    recipe = load_recipe(REPO / "graphs" / f"{recipe_name}.yaml", _registry(), overrides)
+    recipe = load_recipe(REPO / "graphs" / f"{recipe_name}.yaml", default_registry(), overrides)
     return run_recipe(recipe, cache=Cache(tmp_path / "cache"), out_dir=tmp_path / "out")
 
 
