@@ -26,10 +26,9 @@ def material_json(material: Material) -> tuple[dict, set[str]]:
     ext: dict[str, dict] = {}
     if material.transmission > 0:
         ext["KHR_materials_transmission"] = {"transmissionFactor": material.transmission}
-        ext["KHR_materials_volume"] = {"thicknessFactor": float(np.mean(material.subsurface_radius)),
-                                       "attenuationColor": list(material.subsurface_color),
-                                       "attenuationDistance": max(float(np.mean(material.subsurface_radius)) * 1e-3,
-                                                                  1e-6)}  # mm → m
+        radius = float(np.mean(material.subsurface_radius))  # mm
+        ext["KHR_materials_volume"] = {"thicknessFactor": radius, "attenuationColor": list(material.subsurface_color),
+                                       "attenuationDistance": max(radius * 1e-3, 1e-6)}  # mm → m
     if material.ior != 1.5:
         ext["KHR_materials_ior"] = {"ior": material.ior}
     if material.specular != 0.5:
