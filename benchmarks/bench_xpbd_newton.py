@@ -24,12 +24,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "simulation"))
 RESULTS = ROOT / "benchmarks" / "results"
-SUBSTEPS, RADIUS = 10, 0.01  # m
+SUBSTEPS, RADIUS, SIDE = 10, 0.01, 0.5  # m
 
 
 def initial_grid(n, seed=0):
-    """Jittered grid in a square column of side ``side`` (m), spacing 2.1 r."""
-    side = 0.5
+    """Jittered grid in a square column of side ``side`` = SIDE (m), spacing 2.1 r."""
+    side = SIDE
     spacing = 2.1 * RADIUS
     per_row = int(side / spacing)
     k = np.arange(n)
@@ -38,7 +38,8 @@ def initial_grid(n, seed=0):
     return grid + rng.uniform(-0.0004, 0.0004, grid.shape), side
 
 
-def run_ours(n, settle, timed):
+def box_solver(n, dispatch=None):
+    """Our solver on the jittered grid in the open box (mm, g, s), ready to run."""
     from xpbd_scenes import open_box
 
     from nodes.simulation.collider import signed_distance_grid
@@ -47,20 +48,24 @@ def run_ours(n, settle, timed):
     x, side = initial_grid(n)
     x_mm, r_mm, side_mm = x * 1000, RADIUS * 1000, side * 1000
     height = x_mm[:, 2].max() + 2 * r_mm
-    boxes = open_box(side_mm, wall=20.0, height=height)
-    sdf = signed_distance_grid(boxes, np.array([-20.0, -20, -20]), np.array([side_mm + 20, side_mm + 20, height]),
-                               r_mm / 2)
+    sdf = signed_distance_grid(open_box(side_mm, wall=20.0, height=height), np.array([-20.0, -20, -20]),
+                               np.array([side_mm + 20, side_mm + 20, height]), r_mm / 2)
     settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), substeps=SUBSTEPS,
                               iterations=1, mu_s=0.5, mu_k=0.5, shock_propagation=4.0)
-    s = XpbdSolver(x_mm, np.full(n, r_mm), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
-                   np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf)
+    return XpbdSolver(x_mm, np.full(n, r_mm), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
+                      np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf, dispatch=dispatch)
+
+
+def run_ours(n, settle, timed):
+    s = box_solver(n)
     for _ in range(settle):
         s.frame()
     t = time.perf_counter()
     for _ in range(timed):
         s.frame()
     wall = time.perf_counter() - t
-    return timed * SUBSTEPS / wall, float(s.x[:, 2].max() / 1000), s.diagnostics.penetration[-1], packing(s.x / 1000, side)
+    return (timed * SUBSTEPS / wall, float(s.x[:, 2].max() / 1000), s.diagnostics.penetration[-1],
+            packing(s.x / 1000, SIDE))
 
 
 def packing(x, side):

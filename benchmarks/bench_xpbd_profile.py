@@ -18,7 +18,6 @@ from collections import Counter
 from pathlib import Path
 
 os.environ.setdefault("NUMBA_THREADING_LAYER", "workqueue")  # ENVIRONMENT.md: OpenMP collapses under load
-import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -26,7 +25,7 @@ sys.path.insert(0, str(ROOT / "tests" / "simulation"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = ROOT / "benchmarks" / "results"
 
-from bench_xpbd_newton import RADIUS, SUBSTEPS, initial_grid  # noqa: E402
+from bench_xpbd_newton import SUBSTEPS, box_solver  # noqa: E402
 
 from nodes.simulation.solver import KernelDispatch  # noqa: E402
 
@@ -46,23 +45,6 @@ class TimedDispatch(KernelDispatch):
         self.seconds[name] += time.perf_counter() - t
         self.kernel_calls[name] += 1
         return out
-
-
-def box_solver(n, dispatch):
-    from xpbd_scenes import open_box
-
-    from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.solver import SolverSettings, XpbdSolver
-
-    x, side = initial_grid(n)
-    x_mm, r_mm, side_mm = x * 1000, RADIUS * 1000, side * 1000
-    height = x_mm[:, 2].max() + 2 * r_mm
-    sdf = signed_distance_grid(open_box(side_mm, wall=20.0, height=height), np.array([-20.0, -20, -20]),
-                               np.array([side_mm + 20, side_mm + 20, height]), r_mm / 2)
-    settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), substeps=SUBSTEPS,
-                              iterations=1, mu_s=0.5, mu_k=0.5, shock_propagation=4.0)
-    return XpbdSolver(x_mm, np.full(n, r_mm), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
-                      np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf, dispatch=dispatch)
 
 
 def profile(n, settle, timed):
