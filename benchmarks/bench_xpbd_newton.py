@@ -149,7 +149,7 @@ def main():
     table = "\n".join(lines)
     print(table)
     RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "bench_xpbd_newton.md").write_text(table + "\n")
+    (RESULTS / f"bench_xpbd_newton{'_quick' if args.quick else ''}.md").write_text(table + "\n")
 
 
 if __name__ == "__main__":

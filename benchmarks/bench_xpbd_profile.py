@@ -79,7 +79,7 @@ def main():
         out += [f"| {name} | {ms:.3f} | {calls:.2f} |" for name, ms, calls in rows]
         print("\n".join(out[-len(rows) - 4:]), flush=True)
     RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "bench_xpbd_profile.md").write_text("\n".join(out) + "\n")
+    (RESULTS / f"bench_xpbd_profile{'_quick' if args.quick else ''}.md").write_text("\n".join(out) + "\n")
 
 
 if __name__ == "__main__":
