@@ -144,28 +144,6 @@ def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta,
     return res
 
 
-@njit(cache=True, parallel=True, fastmath=True)
-def shape_match_project(x, w, q_rest, start, quats, aqq_pinv, null_proj, lam, alpha_tilde, beta, rot_iters):
-    """One XPBD sweep of C_i = x_i − g_i per particle, g_i = (β·A + (1−β)·R)·q_i + x_cm (SPEC §5).
-
-    Clusters are disjoint, so the loop over clusters is race-free and updates ``x`` in place.
-    ``lam`` (n, 3) accumulates λ over the iterations of a substep; returns the max |C| seen.
-    """
-    m = start.shape[0] - 1
-    worst = np.zeros(m)
-    blocks = (m + BLOCK - 1) // BLOCK
-    for b in prange(blocks):
-        apq = np.empty((3, 3))
-        rot = np.empty((3, 3))
-        goal = np.empty((3, 3))
-        for c in range(b * BLOCK, min(m, (b + 1) * BLOCK)):
-            if start[c + 1] - start[c] < 2:
-                continue
-            worst[c] = _match_cluster(x, w, q_rest, start[c], start[c + 1], quats[c], aqq_pinv[c], null_proj[c],
-                                      lam, alpha_tilde, beta, rot_iters, apq, rot, goal)
-    return worst.max() if m > 0 else 0.0
-
-
 @njit(cache=True)
 def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_tilde, beta, rot_iters, apq, rot,
                              apq9, goal9):
@@ -218,10 +196,15 @@ def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_til
 
 
 @njit(cache=True, parallel=True, fastmath=True)
-def shape_match_project_quadratic(x, w, q_rest, qt, start, quats, aqq_pinv, null_proj, qpinv, quadratic, lam,
-                                  alpha_tilde, beta, rot_iters):
-    """``shape_match_project`` with quadratic deformation (SPEC §5) for clusters whose flag in
-    ``quadratic`` is set; the others (too few or degenerate particles) take the linear goal."""
+def shape_match_project(x, w, q_rest, start, quats, aqq_pinv, null_proj, lam, alpha_tilde, beta, rot_iters,
+                        qt=None, qpinv=None, quadratic=None):
+    """One XPBD sweep of C_i = x_i − g_i per particle, g_i = (β·A + (1−β)·R)·q_i + x_cm (SPEC §5);
+    with ``qt, qpinv, quadratic`` (``quadratic_moments``), the quadratic goal for the clusters whose
+    flag is set (the others, too few or degenerate particles, keep the linear goal).
+
+    Clusters are disjoint, so the loop over clusters is race-free and updates ``x`` in place.
+    ``lam`` (n, 3) accumulates λ over the iterations of a substep; returns the max |C| seen.
+    """
     m = start.shape[0] - 1
     worst = np.zeros(m)
     blocks = (m + BLOCK - 1) // BLOCK
@@ -234,7 +217,7 @@ def shape_match_project_quadratic(x, w, q_rest, qt, start, quats, aqq_pinv, null
         for c in range(b * BLOCK, min(m, (b + 1) * BLOCK)):
             if start[c + 1] - start[c] < 2:
                 continue
-            if quadratic[c]:
+            if quadratic is not None and quadratic[c]:
                 worst[c] = _match_cluster_quadratic(x, w, q_rest, qt, start[c], start[c + 1], quats[c], qpinv[c],
                                                     lam, alpha_tilde, beta, rot_iters, apq, rot, apq9, goal9)
             else:

@@ -119,8 +119,9 @@ class XpbdSolver:
         if self.matching:
             self.buffers["lambda"] = np.zeros_like(self.x)
             self.aqq_pinv, self.null_proj = shape_matching.rest_moments(self.q_rest, self.w, self.start)
-            if s.quadratic:
-                self.qt, self.qpinv, self.quadratic = shape_matching.quadratic_moments(self.q_rest, self.w, self.start)
+            # (qt, qpinv, flags) for the quadratic goal; none: the linear goal for every cluster
+            self.quadratic_fit = (shape_matching.quadratic_moments(self.q_rest, self.w, self.start)
+                                  if s.quadratic else ())
         self.bend = None
         if self.matching and np.isfinite(s.bend_compliance):
             triples, frac, rest, tstart = bending.bend_triples(self.q_rest, self.start)
@@ -200,15 +201,10 @@ class XpbdSolver:
             if {"contact", "friction"} & s.effects:  # one sweep: friction on each pair after its contact
                 self._contacts(self.buffers.get("allowance", self.no_allowance), friction=True)
             # the element's shape is restored after the contacts, the walls have the last word
-            if self.matching and s.quadratic:
-                residual = d("shape_matching", shape_matching.shape_match_project_quadratic, self.x, self.w,
-                             self.q_rest, self.qt, self.start, self.quats, self.aqq_pinv, self.null_proj, self.qpinv,
-                             self.quadratic, self.buffers["lambda"], alpha, s.linear_deformation,
-                             s.rotation_iterations)
-            elif self.matching:
+            if self.matching:
                 residual = d("shape_matching", shape_matching.shape_match_project, self.x, self.w, self.q_rest,
                              self.start, self.quats, self.aqq_pinv, self.null_proj, self.buffers["lambda"],
-                             alpha, s.linear_deformation, s.rotation_iterations)
+                             alpha, s.linear_deformation, s.rotation_iterations, *self.quadratic_fit)
             if self.bend is not None:
                 residual = max(residual, d("bending", bending.bend_project, self.x, self.w, *self.bend, self.quats,
                                            self.buffers["bend_lambda"], s.bend_compliance / (h * h)))

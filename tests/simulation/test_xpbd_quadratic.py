@@ -9,8 +9,7 @@ from scipy.spatial.transform import Rotation
 from xpbd_scenes import rice_bowl
 
 from nodegraph.context import Context
-from nodes.simulation.shape_matching import (quadratic_moments, rest_moments, shape_match_project,
-                                             shape_match_project_quadratic)
+from nodes.simulation.shape_matching import quadratic_moments, rest_moments, shape_match_project
 from nodes.simulation.xpbd import xpbd
 
 ALL = ("gravity", "contact", "friction", "adhesion", "damping")  # no collider: its SDF grid costs seconds
@@ -47,8 +46,7 @@ def project(q, x, mode, beta=1.0, alpha=0.0, quats=None):
         res = shape_match_project(xx, w, q_rest, start, quats, pinv, null, lam, alpha, beta, 8)
     else:
         qt, qpinv, quad = quadratic_moments(q_rest, w, start)
-        res = shape_match_project_quadratic(xx, w, q_rest, qt, start, quats, pinv, null, qpinv, quad, lam, alpha,
-                                            beta, 8)
+        res = shape_match_project(xx, w, q_rest, start, quats, pinv, null, lam, alpha, beta, 8, qt, qpinv, quad)
     return xx, res
 
 
