@@ -34,11 +34,11 @@ def adhesion_project(x, w, r, nbr_start, nbr, capture, alpha_tilde, lift, out):
             j = nbr[a]
             if wi <= 0.0 or w[j] <= 0.0:
                 continue  # no bonds with static obstacles (module docstring)
-            wsum = wi + (w[j] * np.exp(lift * (x[j, 2] - x[i, 2])) if lift != 0.0 else w[j])
             nx, ny, nz, d = pair_normal(x, i, j)
             gap = d - r[i] - r[j]
             if gap <= 0.0 or gap > capture:
                 continue
+            wsum = wi + (w[j] * np.exp(lift * (x[j, 2] - x[i, 2])) if lift != 0.0 else w[j])
             s = -gap * wi / (wsum + alpha_tilde)
             ax += s * nx
             ay += s * ny
