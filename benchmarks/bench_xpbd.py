@@ -11,19 +11,19 @@ Run: python benchmarks/bench_xpbd.py [--quick] [--only speed effects accuracy]
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
 
-os.environ.setdefault("NUMBA_THREADING_LAYER", "workqueue")  # ENVIRONMENT.md: OpenMP collapses under load
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "simulation"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = ROOT / "benchmarks" / "results"
 
+from machine import conditions  # noqa: E402
 from xpbd_scenes import ikura_don, rice_bowl  # noqa: E402
 
 from nodegraph.context import Context  # noqa: E402
@@ -178,7 +178,7 @@ def main():
     RESULTS.mkdir(parents=True, exist_ok=True)
     sections = {"speed": bench_speed, "effects": bench_effects, "accuracy": bench_accuracy}
     for name in args.only:
-        table = sections[name](args.quick)
+        table = sections[name](args.quick) + f"\n\n{conditions()}"
         print(table, flush=True)
         (RESULTS / f"bench_xpbd_{name}{'_quick' if args.quick else ''}.md").write_text(table + "\n")
 

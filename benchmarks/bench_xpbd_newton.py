@@ -12,18 +12,19 @@ Run: python benchmarks/bench_xpbd_newton.py [--quick] [--sizes 10000 50000]
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
 
-os.environ.setdefault("NUMBA_THREADING_LAYER", "workqueue")  # ENVIRONMENT.md: OpenMP collapses under load
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "simulation"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = ROOT / "benchmarks" / "results"
+
+from machine import conditions  # noqa: E402
 SUBSTEPS, RADIUS, SIDE = 10, 0.01, 0.5  # m
 
 
@@ -131,6 +132,7 @@ def main():
     settle, timed = (3, 3) if args.quick else (60, 10)
     sizes = [2000] if args.quick else args.sizes
     rows = []
+    start = conditions()
     for n in sizes:
         ours, ours_top, ours_pen, ours_phi = run_ours(n, settle, timed)
         try:
@@ -146,7 +148,7 @@ def main():
              "| packing ours | packing Newton | our max penetration / r | note |", "|---|---|---|---|---|---|---|---|---|---|"]
     lines += [f"| {n} | {a:.1f} | {b:.1f} | {c:.2f} | {d:.3f} | {e:.3f} | {f:.3f} | {g:.3f} | {h:.3f} | {i} |"
               for n, a, b, c, d, e, f, g, h, i in rows]
-    table = "\n".join(lines)
+    table = "\n".join(lines) + f"\n\nat the start: {start}\nat the end: {conditions()}"
     print(table)
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / f"bench_xpbd_newton{'_quick' if args.quick else ''}.md").write_text(table + "\n")

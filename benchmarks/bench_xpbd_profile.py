@@ -11,13 +11,11 @@ rebuilt. Run: python benchmarks/bench_xpbd_profile.py [--quick] [--sizes 10000 5
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from collections import Counter
 from pathlib import Path
 
-os.environ.setdefault("NUMBA_THREADING_LAYER", "workqueue")  # ENVIRONMENT.md: OpenMP collapses under load
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -27,6 +25,7 @@ RESULTS = ROOT / "benchmarks" / "results"
 
 from bench_xpbd_newton import SUBSTEPS, box_solver  # noqa: E402
 
+from machine import conditions  # noqa: E402
 from nodes.simulation.solver import KernelDispatch  # noqa: E402
 
 
@@ -71,13 +70,15 @@ def main():
     args = ap.parse_args()
     settle, timed = (3, 2) if args.quick else (60, 10)
     sizes = [2000] if args.quick else args.sizes
-    out = [f"load: {os.getloadavg()[0]:.2f}"]
+    out = []
     for n in sizes:
         rate, rows = profile(n, settle, timed)
         out += ["", f"N = {n}: {rate:.1f} substeps/s ({1e3 / rate:.2f} ms per substep)", "",
                 "| kernel | ms / substep | calls / substep |", "|---|---|---|"]
         out += [f"| {name} | {ms:.3f} | {calls:.2f} |" for name, ms, calls in rows]
         print("\n".join(out[-len(rows) - 4:]), flush=True)
+    out += ["", conditions()]
+    print(out[-1])
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / f"bench_xpbd_profile{'_quick' if args.quick else ''}.md").write_text("\n".join(out) + "\n")
 

@@ -35,10 +35,18 @@ def yolk_contain(yx, yv, y_prev, x, w, start, quats, owner, centre_local, room, 
         c = owner[y]
         rot = np.empty((3, 3))
         quat_to_matrix(quats[c], rot)
-        centre = np.array(centre_of_mass(x, w, start[c], start[c + 1])) + rot @ centre_local[y]
-        off = yx[y] - centre
-        dist = np.sqrt(off @ off)
+        cx, cy, cz = centre_of_mass(x, w, start[c], start[c + 1])
+        # scalar arithmetic, not ``rot @ v``: numba sends that to BLAS, whose spinning thread pool
+        # took the cores from the parallel kernels (ikura don 8× slower under OpenMP)
+        cx += rot[0, 0] * centre_local[y, 0] + rot[0, 1] * centre_local[y, 1] + rot[0, 2] * centre_local[y, 2]
+        cy += rot[1, 0] * centre_local[y, 0] + rot[1, 1] * centre_local[y, 1] + rot[1, 2] * centre_local[y, 2]
+        cz += rot[2, 0] * centre_local[y, 0] + rot[2, 1] * centre_local[y, 1] + rot[2, 2] * centre_local[y, 2]
+        ox, oy, oz = yx[y, 0] - cx, yx[y, 1] - cy, yx[y, 2] - cz
+        dist = np.sqrt(ox * ox + oy * oy + oz * oz)
         if dist > room[y]:
-            yx[y] = centre + off * (room[y] / dist)
+            f = room[y] / dist
+            yx[y, 0] = cx + ox * f
+            yx[y, 1] = cy + oy * f
+            yx[y, 2] = cz + oz * f
         for d in range(3):
             yv[y, d] = (yx[y, d] - y_prev[y, d]) / h

@@ -61,8 +61,9 @@ def lifted_share(w, x, i, j, lift):
 
 
 @njit(cache=True, inline="always")
-def _project_slab(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s, mu_k, normal, order, p0, p1):
-    """Project, in order, every pair (i, j > i) whose i lies in the sorted range p0:p1 (a slab):
+def _project_slab(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, order, p0, p1):
+    """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
+    rows, ``half`` false: each pair from its lower index):
     friction when μs > 0 (normal load: the overlap the normal correction will leave), then the
     normal correction (``normal``). Friction after the correction let the tangential moves re-open
     overlaps: the tall-pile test's max penetration rose from 0.14 r to 0.20 r; before it, 0.15 r."""
@@ -70,7 +71,7 @@ def _project_slab(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s, mu_k, 
         i = order[p]
         for a in range(nbr_start[i], nbr_start[i + 1]):
             j = nbr[a]
-            if j < i:
+            if not half and j < i:
                 continue  # each pair once, from its lower index
             nx, ny, nz, d = pair_normal(x, i, j)
             depth = r[i] + r[j] - d
@@ -119,7 +120,7 @@ def _colour_chunks(cell_start, dims, colour, chunks, out):
 
 
 @njit(cache=True, parallel=True, fastmath=True)
-def contact_sweep(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s, mu_k, normal, chunks, cell_start, order,
+def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, chunks, cell_start, order,
                   dims):
     """One Gauss–Seidel sweep over the touching pairs, in place: the non-penetration constraint
     C = |x_i − x_j| − r_i − r_j + allowance ≥ 0 (allowance per list entry; ``normal``) with shock
@@ -136,12 +137,12 @@ def contact_sweep(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s, mu_k, 
         for t in prange(chunks):
             for k in range(bounds[t], bounds[t + 1]):
                 ix = colour + 3 * k
-                _project_slab(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s, mu_k, normal, order,
+                _project_slab(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, order,
                               cell_start[ix * slab], cell_start[(ix + 1) * slab])
 
 
 @njit(cache=True, fastmath=True)
-def contact_sweep_serial(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s, mu_k, normal, chunks, cell_start,
+def contact_sweep_serial(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, chunks, cell_start,
                          order, dims):
     """``contact_sweep`` on one thread, same order, same result: for small scenes, where the
     parallel launches cost more than the sweep itself."""
@@ -149,33 +150,34 @@ def contact_sweep_serial(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s,
     for colour in range(3):
         for k in range((dims[0] - colour + 2) // 3):
             ix = colour + 3 * k
-            _project_slab(x, x_prev, w, r, nbr_start, nbr, allowance, lift, mu_s, mu_k, normal, order,
+            _project_slab(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, order,
                           cell_start[ix * slab], cell_start[(ix + 1) * slab])
 
 
 @njit(cache=True, inline="always")
-def _allowance_row(x, r, nbr_start, nbr, decay, out, i):
+def _allowance_row(x, r, nbr_start, nbr, half, decay, out, i):
     for a in range(nbr_start[i], nbr_start[i + 1]):
         j = nbr[a]
-        if j < i:
+        if not half and j < i:
             continue  # the sweep reads each pair's entry from its lower index only
         _, _, _, d = pair_normal(x, i, j)
         out[a] = max(0.0, r[i] + r[j] - d - decay * min(r[i], r[j]))
 
 
 @njit(cache=True, parallel=True, fastmath=True)
-def overlap_allowance(x, r, nbr_start, nbr, decay, out):
-    """Per list entry (i, j > i), the overlap r_i + r_j − d that remains less decay·min(r_i, r_j)
-    (≥ 0): tolerated until the next pre-stabilisation. Entries j < i are not written."""
+def overlap_allowance(x, r, nbr_start, nbr, half, decay, out):
+    """Per list entry, the overlap r_i + r_j − d that remains less decay·min(r_i, r_j) (≥ 0):
+    tolerated until the next pre-stabilisation. In full rows (``half`` false) entries j < i,
+    which the sweep skips, are not written."""
     for i in prange(x.shape[0]):
-        _allowance_row(x, r, nbr_start, nbr, decay, out, i)
+        _allowance_row(x, r, nbr_start, nbr, half, decay, out, i)
 
 
 @njit(cache=True, fastmath=True)
-def overlap_allowance_serial(x, r, nbr_start, nbr, decay, out):
+def overlap_allowance_serial(x, r, nbr_start, nbr, half, decay, out):
     """``overlap_allowance`` on one thread (small scenes)."""
     for i in range(x.shape[0]):
-        _allowance_row(x, r, nbr_start, nbr, decay, out, i)
+        _allowance_row(x, r, nbr_start, nbr, half, decay, out, i)
 
 
 @njit(cache=True, parallel=True, fastmath=True)

@@ -15,7 +15,7 @@ from numba import get_num_threads as numba_threads
 
 from . import adhesion, bending, buoyancy, collider, contact_constraints, integrate, shape_matching, spatial_hash
 
-PARALLEL_CONTACTS = 16384
+PARALLEL_CONTACTS = 2048
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 
 
@@ -163,6 +163,7 @@ class XpbdSolver:
         self.mu_s = s.mu_s if "friction" in s.effects else 0.0
         self.mu_k = s.mu_k if "friction" in s.effects else 0.0
         self.damping_factor = (1.0 - s.damping) ** (self.h * 60.0) if "damping" in s.effects else 1.0
+        self.half = "adhesion" not in s.effects  # each pair listed once; the Jacobi adhesion needs full rows
         self.nbr_start = np.zeros(len(self.x) + 1, np.int64)
         self.nbr = np.zeros(0, np.int64)
         self.grid = ()  # (cell_start, order, dims) of the last neighbour build: the contacts' colouring
@@ -181,7 +182,7 @@ class XpbdSolver:
         self.moved = d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp,
                        self.x_prev, *self._tracking())
         if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
-            d("contact", self.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr,
+            d("contact", self.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr, self.half,
               s.overlap_decay_rate * h, self.buffers["allowance"])
         if self.matching:
             self.buffers["lambda"][:] = 0.0
@@ -233,7 +234,7 @@ class XpbdSolver:
         if self.pairs and self.moved > 0.5 * self.skin:
             self.nbr_start, self.nbr, *self.grid = self.dispatch("neighbours", spatial_hash.neighbour_lists, self.x,
                                                                  self.r, self.elem, self.reach, self.cell,
-                                                                 self.n_moving, "adhesion" not in self.s.effects)
+                                                                 self.n_moving, self.half)
             self.buffers["x_built"][:] = self.x
             self.moved = 0.0
             if "contact" in self.s.effects:
@@ -250,7 +251,7 @@ class XpbdSolver:
             none = self.buffers["allowance"]
             none[:] = 0.0
             self._contacts(none)
-            self.dispatch("contact", self.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr,
+            self.dispatch("contact", self.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr, self.half,
                           self.s.overlap_decay_rate * self.h, self.buffers["allowance"])
         if self.sdf is not None:
             self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf,
@@ -265,7 +266,7 @@ class XpbdSolver:
         rub = friction and "friction" in s.effects
         family = ("contact",) * normal + ("friction",) * rub
         kernel = (contact_constraints.contact_sweep if self.chunks > 1 else contact_constraints.contact_sweep_serial)
-        self.dispatch(family, kernel, self.x, self.x_prev, self.w, self.r, self.nbr_start, self.nbr, allowance,
+        self.dispatch(family, kernel, self.x, self.x_prev, self.w, self.r, self.nbr_start, self.nbr, self.half, allowance,
                       self.lift, self.mu_s if rub else 0.0, self.mu_k, normal, self.chunks, *self.grid)
 
     def _jacobi(self, family, kernel, *args):
