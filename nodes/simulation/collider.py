@@ -1,4 +1,4 @@
-"""Container and ground colliders: meshes → signed distance grid → particle projection — SPEC §3.
+"""Container and ground colliders and moulds: meshes → signed distance grid → particle projection — SPEC §3.
 
 φ > 0 in free space, φ < 0 inside the collider solid. Near the surface (a band of a few cells) φ is
 the exact point–triangle distance, signed by the closest face's normal; farther away it is the
@@ -144,6 +144,18 @@ def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
     far = np.where(inside, -edt.edt(inside, anisotropy=(pitch,) * 3), edt.edt(~inside, anisotropy=(pitch,) * 3))
     phi = np.where(in_band, dist * np.where(sign < 0, -1.0, 1.0), far)
     return np.ascontiguousarray(phi), origin, float(pitch)
+
+
+def free_space_field(colliders, moulds, lo, hi, pitch: float):
+    """φ of the free space on one grid: outside every collider solid and inside the moulds
+    (onigiri mould, bunny), φ = min(φ_colliders, −φ_moulds); a mould's inside is where elements may
+    be. Returns (phi, origin, pitch) as ``signed_distance_grid``."""
+    phi = None
+    for meshes, sign in ((colliders, 1.0), (moulds, -1.0)):
+        if meshes:
+            part, origin, pitch = signed_distance_grid(meshes, lo, hi, pitch)
+            phi = sign * part if phi is None else np.minimum(phi, sign * part)
+    return phi, origin, pitch
 
 
 @njit(cache=True, inline="always")

@@ -12,7 +12,7 @@ from nodegraph.values import Aggregate, ParticleState, Placement
 
 from .aggregate import DeformedAggregate
 from .clusters import element_cluster, matrix_to_quat
-from .collider import signed_distance_grid
+from .collider import free_space_field
 from .deformation import element_transforms
 from .moisture import moisture_scales
 from .solver import SolverSettings, XpbdSolver
@@ -89,11 +89,15 @@ def static_obstacles(obstacles, effects):
     return x, r
 
 
-def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles=None) -> Simulation:
+def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles=None, moulds=()) -> Simulation:
     if len(aggregate.placement) == 0:
         raise ValueError("aggregate: the placement is empty; nothing to simulate")
-    if "collider" in effects and not colliders:
-        raise ValueError("effect 'collider' is requested but no mesh is wired to input 'colliders'")
+    moulds = list(moulds or [])
+    if "collider" in effects and not (colliders or moulds):
+        raise ValueError("effect 'collider' is requested but no mesh is wired to input 'colliders' or 'moulds'")
+    if params["mode"] == "full" and moulds and "collider" in effects:
+        raise ValueError("mode 'full' drops elements in from above, which a closed mould does not let in: "
+                         "use mode 'short' with moulds, or an open container on 'colliders'")
     if params["mode"] == "full":
         aggregate = Aggregate(full_placement(aggregate, colliders), aggregate.libraries)
     p = aggregate.placement
@@ -118,10 +122,11 @@ def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles
     settings = settings_from_params(effects, params, float(np.median(r)))
     sdf = None
     if "collider" in effects:
-        lo = np.min([c.bounds[0] for c in colliders] + [x.min(axis=0)], axis=0) - 4 * r.max()
-        hi = np.max([c.bounds[1] for c in colliders] + [x.max(axis=0)], axis=0) + 4 * r.max()
+        shapes = colliders + moulds
+        lo = np.min([c.bounds[0] for c in shapes] + [x.min(axis=0)], axis=0) - 4 * r.max()
+        hi = np.max([c.bounds[1] for c in shapes] + [x.max(axis=0)], axis=0) + 4 * r.max()
         pitch = max(0.5 * r.min(), float((hi - lo).max()) / 192)
-        sdf = signed_distance_grid(colliders, lo, hi, pitch)
+        sdf = free_space_field(colliders, moulds, lo, hi, pitch)
     yolk_local = np.array(yolk_local)
     yolks = None
     has_yolk = ~np.isnan(yolk_local[:, 0])

@@ -21,10 +21,12 @@ def _check(params):
 
 @node(
     "xpbd",
-    version=3,
+    version=4,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "colliders": In(Mesh, "watertight container / ground solids (mm)", optional=True, many=True),
+        "moulds": In(Mesh, "watertight shapes the elements must stay inside (onigiri mould, bunny; mm): the "
+                     "free space is their inside (effect 'collider')", optional=True, many=True),
         # particles, not the Aggregate: the settled pile's own collision geometry, no re-clustering
         "obstacles": In(ParticleState, "settled particles of other aggregates (static, w = 0): contact and "
                         "friction, no adhesion bonds; never moved, not in the outputs", optional=True, many=True),
@@ -89,13 +91,14 @@ def _check(params):
     effects=("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping"),
     check=_check,
 )
-def xpbd(ctx, aggregate, colliders=None, obstacles=None, **params):
-    """XPBD aggregate simulation — SPEC §3: elastic clusters, contact, friction, clumping, containers,
-    buoyant yolks, static obstacle particles (e.g. eggs on settled rice); only the effects in
+def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
+    """XPBD aggregate simulation — SPEC §3: elastic clusters, contact, friction, clumping, containers
+    and moulds, buoyant yolks, static obstacle particles (e.g. eggs on settled rice); only the effects in
     ``ctx.effects`` are computed."""
     from .setup import build_simulation, finish_simulation
 
-    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, params, obstacles=obstacles)
+    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, params, obstacles=obstacles,
+                           moulds=moulds)
     with ctx.progress(params["frames"], "frames") as bar:
         for frame in range(params["frames"]):
             sim.solver.frame()
