@@ -18,7 +18,7 @@ from numba import njit, prange
 from .contact_constraints import pair_normal
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def adhesion_project(x, w, r, nbr_start, nbr, capture, alpha_tilde, lift, out):
     """One Jacobi sweep pulling near-touching pairs together; ``capture`` in length units,
     ``alpha_tilde`` = compliance / h² (larger is weaker), ``lift`` the contacts' mass scaling.

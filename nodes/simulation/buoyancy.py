@@ -13,7 +13,7 @@ from numba import njit, prange
 from .shape_matching import centre_of_mass, quat_to_matrix
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def yolk_predict(yx, yv, y_prev, x, v, w, start, owner, accel, h, drag_rate):
     """Drag the yolk velocity towards its egg's mean velocity, add buoyant acceleration, move."""
     k = yx.shape[0]
@@ -27,7 +27,7 @@ def yolk_predict(yx, yv, y_prev, x, v, w, start, owner, accel, h, drag_rate):
             yx[y, d] += h * yv[y, d]
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def yolk_contain(yx, yv, y_prev, x, w, start, quats, owner, centre_local, room, h):
     """Project each yolk back inside its egg (|x_y − c| ≤ room) and set v = Δx/h."""
     k = yx.shape[0]

@@ -263,7 +263,7 @@ def _wall_one(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k, i):
     return pen / r[i]
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def collider_project(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
     (μs = μk = 0 skips friction). In place; particles are independent. ``blocks``: the

@@ -3,8 +3,8 @@
 Gauss–Seidel by graph colouring: the neighbour grid is cut into slabs one cell thick along x and
 coloured by the slab index modulo 3; slabs of one colour share no particle (neighbours lie at most
 one cell away), so they run in parallel while each slab projects its pairs one after another,
-updating both particles at once. Three colours, not 27 cells' worth: a parallel launch costs
-≈ 0.1 ms on this machine, more than a whole sweep of a few thousand particles. Averaged Jacobi (each
+updating both particles at once. Three colours, not 27 cells' worth: each colour is a
+parallel launch and a barrier. Averaged Jacobi (each
 particle moves by the mean of its contacts' corrections) was stable but weak: in a dense pile a
 particle with n contacts moved by 1/n of what it needed per sweep, and 50k-sphere piles sank into
 themselves (penetration ≈ 2 radii). Gauss–Seidel has no such division and stays race-free and
@@ -119,7 +119,7 @@ def _colour_chunks(cell_start, dims, colour, chunks, out):
         t += 1
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, chunks, cell_start, order,
                   dims):
     """One Gauss–Seidel sweep over the touching pairs, in place: the non-penetration constraint
@@ -141,19 +141,6 @@ def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, 
                               cell_start[ix * slab], cell_start[(ix + 1) * slab])
 
 
-@njit(cache=True, fastmath=True)
-def contact_sweep_serial(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, chunks, cell_start,
-                         order, dims):
-    """``contact_sweep`` on one thread, same order, same result: for small scenes, where the
-    parallel launches cost more than the sweep itself."""
-    slab = dims[1] * dims[2]
-    for colour in range(3):
-        for k in range((dims[0] - colour + 2) // 3):
-            ix = colour + 3 * k
-            _project_slab(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, order,
-                          cell_start[ix * slab], cell_start[(ix + 1) * slab])
-
-
 @njit(cache=True, inline="always")
 def _allowance_row(x, r, nbr_start, nbr, half, decay, out, i):
     for a in range(nbr_start[i], nbr_start[i + 1]):
@@ -164,7 +151,7 @@ def _allowance_row(x, r, nbr_start, nbr, half, decay, out, i):
         out[a] = max(0.0, r[i] + r[j] - d - decay * min(r[i], r[j]))
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def overlap_allowance(x, r, nbr_start, nbr, half, decay, out):
     """Per list entry, the overlap r_i + r_j − d that remains less decay·min(r_i, r_j) (≥ 0):
     tolerated until the next pre-stabilisation. In full rows (``half`` false) entries j < i,
@@ -173,14 +160,7 @@ def overlap_allowance(x, r, nbr_start, nbr, half, decay, out):
         _allowance_row(x, r, nbr_start, nbr, half, decay, out, i)
 
 
-@njit(cache=True, fastmath=True)
-def overlap_allowance_serial(x, r, nbr_start, nbr, half, decay, out):
-    """``overlap_allowance`` on one thread (small scenes)."""
-    for i in range(x.shape[0]):
-        _allowance_row(x, r, nbr_start, nbr, half, decay, out, i)
-
-
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def max_penetration_ratio(x, r, nbr_start, nbr):
     """max over contacts of (r_i + r_j − d) / min(r_i, r_j): the residual overlap, in radii."""
     n = x.shape[0]

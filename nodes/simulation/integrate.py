@@ -42,7 +42,7 @@ def _predict_one(x, v, w, r, accel, row, h, clamp, x_prev, x_built, moved, track
         _moved(x, x_built, i, moved)
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def predict(x, v, w, r, accel, h, clamp, x_prev, x_built, moved):
     """x_prev ← x; v += h·a (a per particle, (n, 3), or one row for all); clamp; x ← x + h·v.
 
@@ -65,7 +65,7 @@ def _velocity_one(x, x_prev, v, r, h, clamp, damping_factor, x_built, moved, tra
         _moved(x, x_built, i, moved)
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def update_velocity(x, x_prev, v, r, h, clamp, damping_factor, x_built, moved):
     """v = (x − x_prev)/h, clamped, times the damping factor (1 = none); zero restitution.
     Returns max_i |x_i − x_built_i| like ``predict``: the next substep's Verlet-list check."""

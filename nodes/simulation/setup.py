@@ -89,7 +89,8 @@ def static_obstacles(obstacles, effects):
     return x, r
 
 
-def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles=None, moulds=()) -> Simulation:
+def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles=None, moulds=(),
+                     threads: int | None = None) -> Simulation:
     if len(aggregate.placement) == 0:
         raise ValueError("aggregate: the placement is empty; nothing to simulate")
     moulds = list(moulds or [])
@@ -140,7 +141,7 @@ def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles
         yolks = {"x": np.einsum("nij,nj->ni", p.rotations[owner], yolk_local[owner]) + p.positions[owner],
                  "owner": owner.astype(np.int64), "centre": np.array(centre), "room": np.array(room)}
     solver = XpbdSolver(x, r, w, start, q, matrix_to_quat(p.rotations), settings, sdf=sdf, yolks=yolks,
-                        obstacles=static_obstacles(obstacles, effects))
+                        obstacles=static_obstacles(obstacles, effects), threads=threads)
     return Simulation(solver, aggregate, np.array(local_centre), yolk_local if yolks is not None else None)
 
 

@@ -195,7 +195,7 @@ def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_til
     return res
 
 
-@njit(cache=True, parallel=True, fastmath=True)
+@njit(cache=True, parallel=True)
 def shape_match_project(x, w, q_rest, start, quats, aqq_pinv, null_proj, lam, alpha_tilde, beta, rot_iters,
                         qt=None, qpinv=None, quadratic=None):
     """One XPBD sweep of C_i = x_i − g_i per particle, g_i = (β·A + (1−β)·R)·q_i + x_cm (SPEC §5);

@@ -10,12 +10,15 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
-from numba import get_num_threads as numba_threads
 
 from . import adhesion, bending, buoyancy, collider, contact_constraints, integrate, shape_matching, spatial_hash
+from .threads import FreeCores, thread_count
 
-PARALLEL_CONTACTS = 2048
+# below this many particles the kernels run on one thread: threads gain nothing there (ikura don,
+# 2,480 particles: equal times); above, on the cores other processes leave free (``threads``)
+PARALLEL_PARTICLES = 4096
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 
 
@@ -80,10 +83,13 @@ class XpbdSolver:
     them, see ``adhesion``), and lie outside ``start``: shape matching, sleeping and the outputs
     never see them. The pair kernels treat w = 0 as infinitely heavy (``lifted_share``: the moving partner takes the whole
     correction, whatever the height scaling). Unwired: nothing is appended or allocated.
+    ``threads``: a fixed thread count for the kernels, or None to use the cores other processes
+    leave free (``threads.FreeCores``); the results are the same either way.
     """
 
     def __init__(self, x, r, w, start, q_rest, quats, settings: SolverSettings,
-                 sdf=None, yolks=None, dispatch: KernelDispatch | None = None, obstacles=None):
+                 sdf=None, yolks=None, dispatch: KernelDispatch | None = None, obstacles=None,
+                 threads: int | None = None):
         s = settings
         unknown = set(s.effects) - set(EFFECTS)
         if unknown:
@@ -102,7 +108,7 @@ class XpbdSolver:
             self.elem = np.concatenate([self.elem, np.full(len(obstacles[0]), len(start) - 1, np.int64)])
         self.x = np.ascontiguousarray(x, np.float64).copy()
         self.v = np.zeros_like(self.x)
-        self.x_prev = np.empty_like(self.x)
+        self.x_prev = self.x.copy()
         self.r = np.ascontiguousarray(r, np.float64)
         self.w = np.ascontiguousarray(w, np.float64)
         self.q_rest = np.ascontiguousarray(q_rest, np.float64)
@@ -113,7 +119,7 @@ class XpbdSolver:
         self.asleep = np.zeros(len(start) - 1, np.bool_)
         self.buffers: dict[str, np.ndarray] = {}
         if s.sleep_speed > 0:  # positions at the substep start, for the sleep test
-            self.buffers["x_start"] = np.empty_like(self.x)
+            self.buffers["x_start"] = np.zeros_like(self.x)
         # shape matching is the element's own elasticity, not an effect: always on for clusters of ≥ 2
         self.matching = np.isfinite(s.compliance) and bool(np.any(np.diff(self.start) > 1))
         if self.matching:
@@ -132,7 +138,7 @@ class XpbdSolver:
         self.accel = g
         self.pairs = bool({"contact", "friction", "adhesion"} & s.effects)
         if "adhesion" in s.effects:
-            self.buffers["scratch"] = np.empty_like(self.x)
+            self.buffers["scratch"] = np.zeros_like(self.x)
         if self.pairs:
             # Verlet skin: lists hold pairs within contact (+ capture) + skin and are rebuilt only
             # once some particle has moved half the skin since the last build
@@ -140,22 +146,22 @@ class XpbdSolver:
             self.reach = (s.capture if "adhesion" in s.effects else 0.0) + self.skin
             self.cell = 2.0 * float(self.r.max()) + self.reach
             self.buffers["x_built"] = np.full_like(self.x, np.inf)
-            self.buffers["moved"] = np.empty(len(self.x))
+            self.buffers["moved"] = np.zeros(len(self.x))
         # max displacement since the last neighbour build, from predict / update_velocity
         self.moved = np.inf
         self.no_lists = np.empty((0, 3))
         self.no_allowance = np.empty(0)
-        # threads from PARALLEL_CONTACTS particles up; below, the pair kernels run serial (predict,
-        # velocity and walls stay threaded: their serial loops measured slower, 0.4-0.7 ms at 10k)
-        self.chunks = numba_threads() if len(self.x) >= PARALLEL_CONTACTS else 1
-        self.overlap_allowance = (contact_constraints.overlap_allowance if self.chunks > 1
-                                  else contact_constraints.overlap_allowance_serial)
+        # threads: fixed, or None = one below PARALLEL_PARTICLES, else the free cores, re-measured per frame
+        most = min(threads, numba.config.NUMBA_NUM_THREADS) if threads else \
+            (numba.get_num_threads() if len(self.x) >= PARALLEL_PARTICLES else 1)
+        self.cores = FreeCores(most) if threads is None else None
+        self.threads = most
         self.sdf = sdf if "collider" in s.effects else None
         self.sdf_blocks = collider.block_minimum(sdf[0]) if self.sdf is not None else None
         self.yolks = yolks if ("buoyancy" in s.effects and yolks is not None and len(yolks["x"])) else None
         if self.yolks is not None:
             self.buffers["yolk_v"] = np.zeros_like(self.yolks["x"])
-            self.buffers["yolk_prev"] = np.empty_like(self.yolks["x"])
+            self.buffers["yolk_prev"] = np.zeros_like(self.yolks["x"])
             self.yolk_accel = np.array([0.0, 0.0, s.yolk_accel])
         # mass scaling by height (contact_constraints): only where gravity says which way is up
         self.lift = (np.log(s.shock_propagation) / (2.0 * float(np.median(self.r[:self.n_moving])))
@@ -171,6 +177,10 @@ class XpbdSolver:
     # -- one substep ------------------------------------------------------------------------
     def substep(self) -> float:
         """Advance by h = dt/substeps; returns the largest constraint residual of the last iteration."""
+        with thread_count(self.threads):
+            return self._substep()
+
+    def _substep(self) -> float:
         s, d, h = self.s, self.dispatch, self.h
         if s.sleep_speed > 0:
             self.buffers["x_start"][:] = self.x
@@ -182,7 +192,7 @@ class XpbdSolver:
         self.moved = d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp,
                        self.x_prev, *self._tracking())
         if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
-            d("contact", self.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr, self.half,
+            d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr, self.half,
               s.overlap_decay_rate * h, self.buffers["allowance"])
         if self.matching:
             self.buffers["lambda"][:] = 0.0
@@ -251,7 +261,7 @@ class XpbdSolver:
             none = self.buffers["allowance"]
             none[:] = 0.0
             self._contacts(none)
-            self.dispatch("contact", self.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr, self.half,
+            self.dispatch("contact", contact_constraints.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr, self.half,
                           self.s.overlap_decay_rate * self.h, self.buffers["allowance"])
         if self.sdf is not None:
             self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf,
@@ -259,15 +269,13 @@ class XpbdSolver:
 
     def _contacts(self, allowance, friction=False):
         """One Gauss–Seidel sweep of the contacts (if asked) and, with ``friction`` and the effect,
-        friction on each pair just before its normal correction; threaded from ``PARALLEL_CONTACTS``
-        particles up (measured: a threaded sweep costs ≈ 0.4 ms in launches)."""
+        friction on each pair just before its normal correction; one run of slabs per thread."""
         s = self.s
         normal = "contact" in s.effects
         rub = friction and "friction" in s.effects
         family = ("contact",) * normal + ("friction",) * rub
-        kernel = (contact_constraints.contact_sweep if self.chunks > 1 else contact_constraints.contact_sweep_serial)
-        self.dispatch(family, kernel, self.x, self.x_prev, self.w, self.r, self.nbr_start, self.nbr, self.half, allowance,
-                      self.lift, self.mu_s if rub else 0.0, self.mu_k, normal, self.chunks, *self.grid)
+        self.dispatch(family, contact_constraints.contact_sweep, self.x, self.x_prev, self.w, self.r, self.nbr_start, self.nbr, self.half, allowance,
+                      self.lift, self.mu_s if rub else 0.0, self.mu_k, normal, self.threads, *self.grid)
 
     def _jacobi(self, family, kernel, *args):
         out = self.buffers["scratch"]
@@ -277,9 +285,15 @@ class XpbdSolver:
     # -- one frame --------------------------------------------------------------------------
     def frame(self) -> None:
         """``substeps`` substeps, then the per-frame diagnostics."""
+        if self.cores is not None:
+            self.threads = self.cores.threads()
         residual = 0.0
         for _ in range(self.s.substeps):
             residual = self.substep()
+        with thread_count(self.threads):
+            self._diagnose(residual)
+
+    def _diagnose(self, residual):
         pen = 0.0
         if "contact" in self.s.effects:
             pen = contact_constraints.max_penetration_ratio(self.x, self.r, self.nbr_start, self.nbr)

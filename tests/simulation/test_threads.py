@@ -1,0 +1,42 @@
+"""The solver's thread count: results independent of it; fewer threads when other processes hold the cores."""
+
+import hashlib
+import os
+import subprocess
+import sys
+import time
+
+from xpbd_scenes import rice_bowl
+
+from nodes.simulation.setup import build_simulation
+from nodes.simulation.threads import WINDOW_S, FreeCores
+from nodes.simulation.xpbd import xpbd
+
+RICE = frozenset({"gravity", "contact", "friction", "adhesion", "collider", "moisture", "damping"})
+
+
+def test_results_do_not_depend_on_the_thread_count():
+    aggregate, colliders = rice_bowl(150, seed=2)
+    params = xpbd.resolve_params({"frames": 4, "substeps": 5})
+    digests = []
+    for threads in (1, 2):
+        sim = build_simulation(aggregate, colliders, RICE, params, threads=threads)
+        for _ in range(4):
+            sim.solver.frame()
+        digests.append(hashlib.sha256(sim.solver.x.tobytes() + sim.solver.v.tobytes()).hexdigest())
+    assert digests[0] == digests[1]
+
+
+def test_free_cores_drop_to_one_thread_while_other_processes_fill_the_machine():
+    cores = len(os.sched_getaffinity(0))
+    free = FreeCores(cores)
+    busy = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(cores)]
+    try:
+        time.sleep(0.3)  # the busy loops start
+        free.threads()  # opens a window while they run
+        time.sleep(2 * WINDOW_S)
+        assert free.threads() == 1
+    finally:
+        for proc in busy:
+            proc.kill()
+            proc.wait()
