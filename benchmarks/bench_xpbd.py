@@ -34,11 +34,11 @@ RICE = ("gravity", "contact", "friction", "adhesion", "collider", "moisture", "d
 IKURA = ("gravity", "contact", "friction", "collider", "buoyancy", "damping")
 
 
-def timed_node(aggregate, colliders, effects, **given):
+def timed_node(aggregate, colliders, effects, moulds=None, **given):
     params = xpbd.resolve_params(given)
     ctx = Context.standalone(effects=effects)
     t = time.perf_counter()
-    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params)
+    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, moulds=moulds, **params)
     return time.perf_counter() - t, out
 
 
@@ -71,6 +71,9 @@ def bench_speed(quick):
         rows.append(("rice bowl full", n_rice, len(out["particles"].positions), 240, wall, float("nan"), 3867.0,
                      height, contacts))
         print(rows[-1], flush=True)
+    if not quick:
+        rows.append(bench_bunny())
+        print(rows[-1], flush=True)
     n_egg = 60 if quick else 310
     aggregate, colliders = ikura_don(n_egg)
     timed_node(aggregate, colliders, IKURA, frames=1, mass=190.0)
@@ -82,6 +85,23 @@ def bench_speed(quick):
              "| fill height (mm) | contacts / element |", "|---|---|---|---|---|---|---|---|---|"]
     lines += [f"| {a} | {b} | {c} | {d} | {e:.2f} | {f:g} | {g:g} | {h:.1f} | {i:.2f} |" for a, b, c, d, e, f, g, h, i in rows]
     return "\n".join(lines)
+
+
+def bench_bunny():
+    """G's rice bunny: graphs/rice_bunny.yaml up to the cull (engine-cached under results/), then its
+    ``press`` node (the bunny as a mould) timed alone, warm JIT."""
+    from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
+
+    recipe = load_recipe(ROOT / "graphs" / "rice_bunny.yaml", default_registry())
+    result = run_recipe(recipe, outputs=["pile.aggregate", "bunny.mesh"], cache=Cache(RESULTS / "cache"))
+    aggregate, mould = result.output("pile.aggregate"), result.output("bunny.mesh")
+    press = recipe.nodes["press"]
+    effects, given = recipe.effects, dict(press.params)
+    timed_node(aggregate, None, effects, **{**given, "frames": 1}, moulds=[mould])  # warm
+    wall, out = timed_node(aggregate, None, effects, **given, moulds=[mould])
+    height, contacts = pile_measures(out)
+    return ("rice bunny short (mould)", len(aggregate.placement), len(out["particles"].positions), given["frames"],
+            wall, 90.0, 4376.0, height, contacts)
 
 
 def bench_effects(quick):
