@@ -141,14 +141,10 @@ def _(value: Placement, log: EntityLogger) -> None:
 
 @log_value.register
 def _(value: Aggregate, log: EntityLogger) -> None:
-    rr = _rr()
-    meshes = [value.element_mesh(i) for i in range(len(value.placement))]
-    if not meshes:
-        return
-    offsets = np.cumsum([0] + [len(m.vertices) for m in meshes[:-1]])
-    vertices = np.concatenate([m.vertices for m in meshes]).astype(np.float32)
-    faces = np.concatenate([m.faces + o for m, o in zip(meshes, offsets)]).astype(np.uint32)
-    log.log("elements", rr.Mesh3D(vertex_positions=vertices, triangle_indices=faces), static=True)
+    mesh = value.combined_mesh()
+    if mesh is not None:
+        log.log("elements", _rr().Mesh3D(vertex_positions=mesh.vertices.astype(np.float32),
+                                         triangle_indices=mesh.faces.astype(np.uint32)), static=True)
 
 
 @log_value.register

@@ -213,6 +213,15 @@ class Aggregate:
         normals = None if base.normals is None else base.normals @ p.rotations[i].T
         return Mesh(vertices, base.faces, normals=normals, parts=base.parts, name=f"{base.name}#{i}")
 
+    def combined_mesh(self) -> Mesh | None:
+        """Every element in world space as one mesh (None when empty): one draw call in a viewer."""
+        meshes = [self.element_mesh(i) for i in range(len(self.placement))]
+        if not meshes:
+            return None
+        offsets = np.cumsum([0] + [len(m.vertices) for m in meshes[:-1]])
+        return Mesh(np.concatenate([m.vertices for m in meshes]),
+                    np.concatenate([m.faces + o for m, o in zip(meshes, offsets)]), name="aggregate")
+
 
 @dataclass(frozen=True, eq=False)
 class ParticleState:

@@ -145,8 +145,9 @@ def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles
     return Simulation(solver, aggregate, np.array(local_centre), yolk_local if yolks is not None else None)
 
 
-def finish_simulation(sim: Simulation) -> dict:
-    """The relaxed aggregate (positions, rotations, deformations, yolk offsets) and the particle state."""
+def snapshot_aggregate(sim: Simulation) -> Aggregate:
+    """The aggregate as the particles stand now: per-element positions, rotations, deformations
+    (and yolk offsets) fitted to the clusters (``deformation.element_transforms``)."""
     s = sim.solver
     rotations = s.rotations()
     if s.matching:
@@ -160,14 +161,18 @@ def finish_simulation(sim: Simulation) -> dict:
     old = sim.aggregate.placement
     placement = Placement(positions, old.normals, rotations, old.kinds, old.variants, old.p_num, old.offsets,
                           old.overlap, old.kind_names)
-    if sim.yolk_local is not None:
-        offsets = np.zeros((len(positions), 3))
-        y = s.yolks
-        rest = np.einsum("nij,njk,nk->ni", deformations[y["owner"]], rotations[y["owner"]], sim.yolk_local[y["owner"]])
-        offsets[y["owner"]] = y["x"] - (positions[y["owner"]] + rest)
-        aggregate = DeformedAggregate(placement, sim.aggregate.libraries, deformations, part_offsets=offsets)
-    else:
-        aggregate = Aggregate(placement, sim.aggregate.libraries, deformations)
+    if sim.yolk_local is None:
+        return Aggregate(placement, sim.aggregate.libraries, deformations)
+    offsets = np.zeros((len(positions), 3))
+    y = s.yolks
+    rest = np.einsum("nij,njk,nk->ni", deformations[y["owner"]], rotations[y["owner"]], sim.yolk_local[y["owner"]])
+    offsets[y["owner"]] = y["x"] - (positions[y["owner"]] + rest)
+    return DeformedAggregate(placement, sim.aggregate.libraries, deformations, part_offsets=offsets)
+
+
+def finish_simulation(sim: Simulation) -> dict:
+    """The relaxed aggregate (positions, rotations, deformations, yolk offsets) and the particle state."""
+    s, n = sim.solver, sim.solver.n_moving
     particles = ParticleState(s.x[:n].copy(), s.v[:n].copy(), s.r[:n].copy(), s.w[:n].copy(),
                               s.elem[:n].astype(np.int32), s.time)
-    return {"aggregate": aggregate, "particles": particles}
+    return {"aggregate": snapshot_aggregate(sim), "particles": particles}

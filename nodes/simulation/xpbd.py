@@ -87,6 +87,9 @@ def _check(params):
                               range=(0.1, 10.0), units="g/cm³"),
         "log_every": Param(int, 10, "log particles to Rerun every k frames (0 = never)", range=(0, 100000),
                            units="frames"),
+        "log_meshes_every": Param(int, 30, "log the element meshes to Rerun every k frames and at the last "
+                                  "(0 = never; a 2,000-grain bowl logs ≈ 10 MB per snapshot)", range=(0, 100000),
+                                  units="frames"),
     },
     effects=("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping"),
     check=_check,
@@ -99,11 +102,15 @@ def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
 
     sim = build_simulation(aggregate, list(colliders or []), ctx.effects, params, obstacles=obstacles,
                            moulds=moulds)
-    with ctx.progress(params["frames"], "frames") as bar:
-        for frame in range(params["frames"]):
+    frames, every, meshes_every = params["frames"], params["log_every"], params["log_meshes_every"]
+    with ctx.progress(frames, "frames") as bar:
+        for frame in range(frames):
             sim.solver.frame()
-            if params["log_every"] and ctx.rerun.enabled and frame % params["log_every"] == 0:
-                _log_particles(ctx, sim.solver, frame)
+            if ctx.rerun.enabled:
+                if every and frame % every == 0:
+                    _log_particles(ctx, sim.solver, frame)
+                if meshes_every and (frame % meshes_every == 0 or frame == frames - 1):
+                    _log_meshes(ctx, sim, frame)
             bar.advance()
     if ctx.rerun.enabled:
         _log_scalars(ctx, sim.solver)
@@ -117,6 +124,17 @@ def _log_particles(ctx, solver, frame):
     keep = slice(None, n, max(1, n // 20000))  # subsample big scenes
     ctx.rerun.set_time("sim_step", frame * solver.s.substeps)
     ctx.rerun.log("particles", rr.Points3D(solver.x[keep], radii=solver.r[keep]))
+
+
+def _log_meshes(ctx, sim, frame):
+    import rerun as rr
+
+    from .setup import snapshot_aggregate
+
+    mesh = snapshot_aggregate(sim).combined_mesh()
+    ctx.rerun.set_time("sim_step", frame * sim.solver.s.substeps)
+    ctx.rerun.log("elements", rr.Mesh3D(vertex_positions=mesh.vertices.astype(np.float32),
+                                        triangle_indices=mesh.faces.astype(np.uint32)))
 
 
 def _log_scalars(ctx, solver):

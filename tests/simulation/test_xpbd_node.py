@@ -113,9 +113,11 @@ def test_bad_input_is_reported():
 class Recorder:
     def __init__(self):
         self.paths = []
+        self.archetypes = []
 
     def log(self, path, archetype, static=False):
         self.paths.append(path)
+        self.archetypes.append(archetype)
 
     def set_time(self, timeline, sequence):
         assert timeline == "sim_step"
@@ -131,6 +133,10 @@ def test_logs_particles_and_step_scalars_to_rerun():
     xpbd(ctx, aggregate=aggregate, colliders=colliders, **params())
     paths = ctx.rerun.recording.paths
     assert paths.count("/sim/particles") == 2
+    assert paths.count("/sim/elements") == 2  # meshes at frame 0 and at the last frame (every 30)
+    first, last = [a for p, a in zip(paths, ctx.rerun.recording.archetypes) if p == "/sim/elements"]
+    n_vertices = sum(len(m.vertices) for m in aggregate.libraries[0].meshes[:1]) * len(aggregate.placement)
+    assert len(last.vertex_positions.as_arrow_array()) == n_vertices
     for name in ("penetration_over_radius", "residual", "kinetic_energy", "sleeping_share"):
         assert f"/sim/scalars/{name}" in paths
 
