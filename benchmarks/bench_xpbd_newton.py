@@ -3,7 +3,8 @@
 N spheres of radius 1 cm in an open box, 10 substeps per 1/60 s frame, 1 iteration, gravity,
 contact + friction, box walls. Both start from the same jittered grid (1 mm gaps), run
 ``settle`` frames so the pile forms (60 frames: the 50k column starts 2 m tall and needs ≈ 0.65 s
-to land), then time ``timed`` frames: substeps per second. Also reported per side: the pile top,
+to land), then take turns, three rounds of 10 frames each, ours then Newton's (noise on this shared
+machine falls on both): substeps per second, median and range. Also reported per side: the pile top,
 the packing fraction below 80 % of the 95th-percentile height (random packing ≈ 0.60–0.64) and,
 for ours, the max penetration / r.
 Run: python benchmarks/bench_xpbd_newton.py [--quick] [--sizes 10000 50000]
@@ -57,16 +58,10 @@ def box_solver(n, dispatch=None):
                       np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf, dispatch=dispatch)
 
 
-def run_ours(n, settle, timed):
+def ours_scene(n):
+    """(frame, positions in m, notes) of our solver on the box scene."""
     s = box_solver(n)
-    for _ in range(settle):
-        s.frame()
-    t = time.perf_counter()
-    for _ in range(timed):
-        s.frame()
-    wall = time.perf_counter() - t
-    return (timed * SUBSTEPS / wall, float(s.x[:, 2].max() / 1000), s.diagnostics.penetration[-1],
-            packing(s.x / 1000, SIDE))
+    return s.frame, lambda: s.x / 1000, lambda: {"penetration": s.diagnostics.penetration[-1], "threads": s.threads}
 
 
 def packing(x, side):
@@ -75,7 +70,8 @@ def packing(x, side):
     return float((x[:, 2] < cut).sum() * 4 / 3 * np.pi * RADIUS ** 3 / (side ** 2 * cut))
 
 
-def run_newton(n, settle, timed):
+def newton_scene(n):
+    """(frame, positions in m, notes) of Newton's SolverXPBD on the same scene (CPU)."""
     import newton
     import warp as wp
 
@@ -109,19 +105,27 @@ def run_newton(n, settle, timed):
             solver.step(state_0, state_1, control, contacts, dt)
             state_0, state_1 = state_1, state_0
 
-    t = time.perf_counter()
-    frame()  # first call compiles the Warp kernels (cached afterwards)
-    compile_s = time.perf_counter() - t
-    for _ in range(settle - 1):
-        frame()
-    wp.synchronize()
-    t = time.perf_counter()
-    for _ in range(timed):
-        frame()
-    wp.synchronize()
-    wall = time.perf_counter() - t
-    q = state_0.particle_q.numpy()
-    return timed * SUBSTEPS / wall, float(q[:, 2].max()), compile_s, packing(q, side)
+    return frame, lambda: state_0.particle_q.numpy(), lambda: {}
+
+
+def side_by_side(n, settle, timed, rounds):
+    """Both scenes settle ``settle`` frames, then take turns: ``rounds`` blocks of ``timed`` frames
+    each, ours then Newton's, so machine noise falls on both; substeps/s per block."""
+    import warp as wp
+
+    scenes = {"ours": ours_scene(n), "newton": newton_scene(n)}
+    for frame, _, _ in scenes.values():
+        for _ in range(settle):
+            frame()
+    rates = {name: [] for name in scenes}
+    for _ in range(rounds):
+        for name, (frame, _, _) in scenes.items():
+            t = time.perf_counter()
+            for _ in range(timed):
+                frame()
+            wp.synchronize()
+            rates[name].append(timed * SUBSTEPS / (time.perf_counter() - t))
+    return {name: (rates[name], positions(), notes()) for name, (_, positions, notes) in scenes.items()}
 
 
 def main():
@@ -129,25 +133,23 @@ def main():
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 50000])
     args = ap.parse_args()
-    settle, timed = (3, 3) if args.quick else (60, 10)
+    settle, timed, rounds = (3, 3, 2) if args.quick else (60, 10, 3)
     sizes = [2000] if args.quick else args.sizes
     rows = []
     start = conditions()
     for n in sizes:
-        ours, ours_top, ours_pen, ours_phi = run_ours(n, settle, timed)
-        try:
-            newton_rate, newton_top, compile_s, newton_phi = run_newton(n, settle, timed)
-            note = f"Newton first-frame compile+run {compile_s:.0f} s"
-        except Exception as exc:  # report why Newton could not run, keep our number
-            newton_rate, newton_top, newton_phi = float("nan"), float("nan"), float("nan")
-            note = f"Newton failed: {type(exc).__name__}: {exc}"
-        rows.append((n, ours, newton_rate, ours / newton_rate, ours_top, newton_top, ours_phi, newton_phi, ours_pen,
-                     note))
+        result = side_by_side(n, settle, timed, rounds)
+        (ours, x_ours, notes), (peer, x_peer, _) = result["ours"], result["newton"]
+        a, b = float(np.median(ours)), float(np.median(peer))
+        rows.append((n, a, min(ours), max(ours), b, min(peer), max(peer), a / b, float(x_ours[:, 2].max()),
+                     float(x_peer[:, 2].max()), packing(x_ours, SIDE), packing(x_peer, SIDE), notes["penetration"],
+                     notes["threads"]))
         print(rows[-1], flush=True)
-    lines = ["| N | ours substeps/s | Newton SolverXPBD CPU substeps/s | ratio | pile top ours (m) | pile top Newton (m) "
-             "| packing ours | packing Newton | our max penetration / r | note |", "|---|---|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {n} | {a:.1f} | {b:.1f} | {c:.2f} | {d:.3f} | {e:.3f} | {f:.3f} | {g:.3f} | {h:.3f} | {i} |"
-              for n, a, b, c, d, e, f, g, h, i in rows]
+    lines = [f"| N | ours substeps/s (median of {rounds}; min–max) | Newton SolverXPBD CPU substeps/s | ratio of medians "
+             "| pile top ours / Newton (m) | packing ours / Newton | our max penetration / r | our threads |",
+             "|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {n} | {a:.1f} ({a0:.1f}–{a1:.1f}) | {b:.1f} ({b0:.1f}–{b1:.1f}) | **{c:.2f}** | {d:.3f} / {e:.3f} "
+              f"| {f:.3f} / {g:.3f} | {h:.3f} | {k} |" for n, a, a0, a1, b, b0, b1, c, d, e, f, g, h, k in rows]
     table = "\n".join(lines) + f"\n\nat the start: {start}\nat the end: {conditions()}"
     print(table)
     RESULTS.mkdir(parents=True, exist_ok=True)
