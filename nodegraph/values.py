@@ -203,15 +203,56 @@ class Aggregate:
     placement: Placement
     libraries: tuple[ElementLibrary, ...]
     deformations: np.ndarray | None = None  # (n, 3, 3) per-element linear deformation, identity if None
+    # (n, 3, 6) per-element quadratic deformation (SPEC §5 quadratic shape matching), none if None:
+    # coefficients of the local vertex's monomials [x², y², z², xy, yz, zx] (about the mesh origin,
+    # local frame) giving a local-frame displacement, which the rotation turns into world space
+    bends: np.ndarray | None = None
+
+    @staticmethod
+    def monomials(local: np.ndarray) -> np.ndarray:
+        """(k, 6) quadratic monomials [x², y², z², xy, yz, zx] of local points (k, 3) — SPEC §5's q̃ order."""
+        x, y, z = local[:, 0], local[:, 1], local[:, 2]
+        return np.stack([x * x, y * y, z * z, x * y, y * z, z * x], axis=1)
+
+    def element_points(self, i: int, local: np.ndarray) -> np.ndarray:
+        """Points (k, 3) of element i's local frame in world space: D·R·v + R·B·m(v) + t."""
+        p = self.placement
+        transform = p.rotations[i] if self.deformations is None else self.deformations[i] @ p.rotations[i]
+        world = local @ transform.T + p.positions[i]
+        if self.bends is not None:
+            world += (self.monomials(local) @ self.bends[i].T) @ p.rotations[i].T
+        return world
 
     def element_mesh(self, i: int) -> Mesh:
-        """The i-th element's mesh in world space (rotation, deformation, position applied)."""
+        """The i-th element's mesh in world space (rotation, deformation, bend, position applied).
+
+        Normals are rotated by R; a bent element's normals go through the map's Jacobian instead
+        (cofactor matrix, so they stay normal to the bent surface)."""
         p = self.placement
         base = self.libraries[p.kinds[i]].meshes[p.variants[i] % len(self.libraries[p.kinds[i]])]
-        transform = p.rotations[i] if self.deformations is None else self.deformations[i] @ p.rotations[i]
-        vertices = base.vertices @ transform.T + p.positions[i]
-        normals = None if base.normals is None else base.normals @ p.rotations[i].T
+        vertices = self.element_points(i, base.vertices)
+        if base.normals is None:
+            normals = None
+        elif self.bends is None:
+            normals = base.normals @ p.rotations[i].T
+        else:
+            normals = self._bent_normals(i, base.vertices, base.normals)
         return Mesh(vertices, base.faces, normals=normals, parts=base.parts, name=f"{base.name}#{i}")
+
+    def _bent_normals(self, i: int, local: np.ndarray, normals: np.ndarray) -> np.ndarray:
+        """cof(J)·n, normalised, with J(v) = D·R + R·B·∂m/∂v the Jacobian of ``element_points``."""
+        rotation = self.placement.rotations[i]
+        linear = rotation if self.deformations is None else self.deformations[i] @ rotation
+        x, y, z = local[:, 0], local[:, 1], local[:, 2]
+        zero = np.zeros_like(x)
+        dm = np.stack([np.stack(row, axis=-1) for row in (
+            (2 * x, zero, zero), (zero, 2 * y, zero), (zero, zero, 2 * z), (y, x, zero), (zero, z, y),
+            (z, zero, x))], axis=1)  # (k, 6, 3)
+        jac = linear + np.einsum("ij,jk,vkl->vil", rotation, self.bends[i], dm)
+        a, b, c = jac[:, :, 0], jac[:, :, 1], jac[:, :, 2]
+        cof = np.stack([np.cross(b, c), np.cross(c, a), np.cross(a, b)], axis=2)  # det(J)·J⁻ᵀ
+        out = np.einsum("vij,vj->vi", cof, normals)
+        return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-300)
 
     def combined_mesh(self) -> Mesh | None:
         """Every element in world space as one mesh (None when empty): one draw call in a viewer."""

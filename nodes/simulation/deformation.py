@@ -26,3 +26,40 @@ def element_transforms(x, w, start, q_rest, rotations, centres, aqq_pinv, null_p
         deformations[c] = rotations[c] @ (vecs * vals) @ vecs.T @ rotations[c].T
     positions = centres - np.einsum("cij,cjk,ck->ci", deformations, rotations, local_centre)
     return positions, rotations, deformations
+
+
+def _monomial_jacobian_at(o):
+    """(6, 3) linear part of m(v − o) in v: m(v − o) = m(v) + J·v + m(o), m = [x², y², z², xy, yz, zx]."""
+    ox, oy, oz = o
+    return -np.array([[2 * ox, 0, 0], [0, 2 * oy, 0], [0, 0, 2 * oz], [oy, ox, 0], [0, oz, oy], [oz, 0, ox]])
+
+
+def element_bends(x, w, start, q_rest, rotations, centres, positions, deformations, quadratic, local_centre):
+    """(positions, deformations, bends (m, 3, 6)) with the quadratic term of every flagged cluster — SPEC §5.
+
+    The bend B is the least-squares fit of the particles' local-frame residual after the linear map,
+    Rᵀ(p_i − D·R·q_i) ≈ B·(m(q_i) − m̄), over the six monomials of the rest offset q_i from the
+    cluster's rest centre of mass (``local_centre``; m̄ their mass-weighted mean, so x_cm stays put).
+    It follows the particles, which already carry the β-blended goal: no second β. The map is then
+    re-expressed about the mesh origin (what ``Aggregate.bends`` states): the linear and constant
+    parts of m(v − c₀) move into the deformation and the position. Unflagged clusters (too few or
+    degenerate particles, the solver's linear goal) keep a zero bend and their linear map unchanged.
+    """
+    from nodegraph.values import Aggregate
+
+    m = len(start) - 1
+    positions, deformations = positions.copy(), deformations.copy()
+    bends = np.zeros((m, 3, 6))
+    for c in np.flatnonzero(quadratic[:m]):
+        s, e = start[c], start[c + 1]
+        mass = np.where(w[s:e] > 0, 1.0 / np.maximum(w[s:e], 1e-300), 1e12)
+        rot, q = rotations[c], q_rest[s:e]
+        residual = (x[s:e] - centres[c] - q @ (deformations[c] @ rot).T) @ rot  # rows: Rᵀ·r_i
+        mono = Aggregate.monomials(q)
+        mono_mean = mass @ mono / mass.sum()
+        u = mono - mono_mean
+        bend = np.linalg.solve((u * mass[:, None]).T @ u, (u * mass[:, None]).T @ residual).T
+        bends[c] = bend
+        deformations[c] += rot @ bend @ _monomial_jacobian_at(local_centre[c]) @ rot.T
+        positions[c] += rot @ bend @ (Aggregate.monomials(local_centre[c][None])[0] - mono_mean)
+    return positions, deformations, bends

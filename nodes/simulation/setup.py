@@ -13,7 +13,7 @@ from nodegraph.values import Aggregate, ParticleState, Placement
 from .aggregate import DeformedAggregate
 from .clusters import element_cluster, matrix_to_quat
 from .collider import free_space_field
-from .deformation import element_transforms
+from .deformation import element_bends, element_transforms
 from .moisture import moisture_scales
 from .solver import SolverSettings, XpbdSolver
 
@@ -146,8 +146,9 @@ def build_simulation(aggregate: Aggregate, colliders, effects, params, obstacles
 
 
 def snapshot_aggregate(sim: Simulation) -> Aggregate:
-    """The aggregate as the particles stand now: per-element positions, rotations, deformations
-    (and yolk offsets) fitted to the clusters (``deformation.element_transforms``)."""
+    """The aggregate as the particles stand now: per-element positions, rotations, deformations,
+    bends when the solver ran the quadratic goal (``deformation.element_transforms``,
+    ``deformation.element_bends``) and yolk offsets, fitted to the clusters."""
     s = sim.solver
     rotations = s.rotations()
     if s.matching:
@@ -156,18 +157,26 @@ def snapshot_aggregate(sim: Simulation) -> Aggregate:
         m = len(s.start) - 1
         pinv, null = np.zeros((m, 3, 3)), np.tile(np.eye(3), (m, 1, 1))
     n = s.n_moving  # static obstacle particles (after n) are not part of the output
-    positions, rotations, deformations = element_transforms(s.x[:n], s.w[:n], s.start, s.q_rest, rotations, s.centres(),
+    centres = s.centres()
+    positions, rotations, deformations = element_transforms(s.x[:n], s.w[:n], s.start, s.q_rest, rotations, centres,
                                                             pinv, null, sim.local_centre)
+    bends = None
+    if s.matching and s.s.quadratic and s.quadratic_fit[2].any():  # (qt, qpinv, flags): flagged clusters bend
+        positions, deformations, bends = element_bends(s.x[:n], s.w[:n], s.start, s.q_rest, rotations, centres,
+                                                       positions, deformations, s.quadratic_fit[2], sim.local_centre)
     old = sim.aggregate.placement
     placement = Placement(positions, old.normals, rotations, old.kinds, old.variants, old.p_num, old.offsets,
                           old.overlap, old.kind_names)
     if sim.yolk_local is None:
-        return Aggregate(placement, sim.aggregate.libraries, deformations)
+        return Aggregate(placement, sim.aggregate.libraries, deformations, bends)
     offsets = np.zeros((len(positions), 3))
     y = s.yolks
-    rest = np.einsum("nij,njk,nk->ni", deformations[y["owner"]], rotations[y["owner"]], sim.yolk_local[y["owner"]])
-    offsets[y["owner"]] = y["x"] - (positions[y["owner"]] + rest)
-    return DeformedAggregate(placement, sim.aggregate.libraries, deformations, part_offsets=offsets)
+    owner, local = y["owner"], sim.yolk_local[y["owner"]]  # the yolk's rest centre under its element's map
+    rest = np.einsum("nij,njk,nk->ni", deformations[owner], rotations[owner], local)
+    if bends is not None:
+        rest += np.einsum("nij,njk,nk->ni", rotations[owner], bends[owner], Aggregate.monomials(local))
+    offsets[owner] = y["x"] - (positions[owner] + rest)
+    return DeformedAggregate(placement, sim.aggregate.libraries, deformations, bends, part_offsets=offsets)
 
 
 def finish_simulation(sim: Simulation) -> dict:
