@@ -1,7 +1,8 @@
 """An aggregate whose elements may carry a displaced inner part (the ikura yolk) — SPEC §1, §3.
 
-``Aggregate.element_mesh`` applies one affine map per element; a yolk that rose inside its egg
-needs a second translation for the faces of ``parts == 1``. Subclass, not an edit of values.py.
+``Aggregate.element_mesh`` applies one map per element (affine, plus the quadratic bend when the
+solver ran the quadratic goal); a yolk that rose inside its egg needs a second translation for the
+faces of ``parts == 1``, added on top of that map. Subclass, not an edit of values.py.
 """
 
 from __future__ import annotations
