@@ -19,10 +19,11 @@ from .contact_constraints import pair_normal
 
 
 @njit(cache=True, parallel=True)
-def adhesion_project(x, w, r, nbr_start, nbr, capture, alpha_tilde, lift, out):
+def adhesion_project(x, w, r, nbr_start, nbr, awake, capture, alpha_tilde, lift, out):
     """One Jacobi sweep pulling near-touching pairs together; ``capture`` in length units,
     ``alpha_tilde`` = compliance / h² (larger is weaker), ``lift`` the contacts' mass scaling.
-    Writes to ``out`` (no aliasing)."""
+    Asleep particles (``awake``, ``integrate.wake_flags``) are not moved (an awake partner still
+    takes its own share of their bond). Writes to ``out`` (no aliasing)."""
     n = x.shape[0]
     for i in prange(n):
         ax = 0.0
@@ -30,7 +31,8 @@ def adhesion_project(x, w, r, nbr_start, nbr, capture, alpha_tilde, lift, out):
         az = 0.0
         count = 0
         wi = w[i]
-        for a in range(nbr_start[i], nbr_start[i + 1]):
+        stop = nbr_start[i + 1] if awake[i] else nbr_start[i]  # an asleep particle stays put
+        for a in range(nbr_start[i], stop):
             j = nbr[a]
             if wi <= 0.0 or w[j] <= 0.0:
                 continue  # no bonds with static obstacles (module docstring)

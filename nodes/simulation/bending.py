@@ -44,12 +44,13 @@ def bend_triples(q_rest: np.ndarray, start: np.ndarray, elongation: float = 1.5)
 
 
 @njit(cache=True, parallel=True)
-def bend_project(x, w, triples, frac, rest, tstart, quats, lam, alpha_tilde):
-    """One XPBD sweep of the bend constraints (λ accumulated in ``lam`` (t, 3)); returns max |C|."""
+def bend_project(x, w, triples, frac, rest, tstart, quats, lam, alpha_tilde, awake):
+    """One XPBD sweep of the bend constraints (λ accumulated in ``lam`` (t, 3)) of the clusters whose
+    particles are ``awake`` (``integrate.wake_flags``); returns max |C|."""
     m = tstart.shape[0] - 1
     worst = np.zeros(m)
     for c in prange(m):
-        if tstart[c + 1] == tstart[c]:
+        if tstart[c + 1] == tstart[c] or not awake[triples[tstart[c], 1]]:
             continue
         rot = np.empty((3, 3))
         quat_to_matrix(quats[c], rot)

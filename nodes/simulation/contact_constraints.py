@@ -61,9 +61,28 @@ def lifted_share(w, x, i, j, lift):
 
 
 @njit(cache=True, inline="always")
-def _project_slab(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, order, p0, p1):
+def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
+    """Share of i in a pair with one asleep particle: the asleep one is held like a static obstacle
+    (the awake one takes the whole correction, so a grain resting on sleepers loads nothing onto
+    them) and is marked ``pushed`` when the awake one moved more than ``wake_step`` this substep (it
+    runs or slides into the sleeper faster than the sleep threshold plus one step of gravity)."""
+    a, b = (i, j) if awake[i] else (j, i)
+    dx = x[a, 0] - x_prev[a, 0]
+    dy = x[a, 1] - x_prev[a, 1]
+    dz = x[a, 2] - x_prev[a, 2]
+    if dx * dx + dy * dy + dz * dz > wake_step * wake_step:
+        pushed[b] = True
+    if w[a] <= 0.0:
+        return -1.0
+    return 1.0 if a == i else 0.0
+
+
+@njit(cache=True, inline="always")
+def _project_slab(x, x_prev, w, r, nbr_start, nbr, half, awake, pushed, wake_step, allowance, lift, mu_s, mu_k, normal,
+                  order, p0, p1):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
-    rows, ``half`` false: each pair from its lower index):
+    rows, ``half`` false: each pair from its lower index) but pairs of two asleep particles
+    (``awake``, ``integrate.wake_flags``: at rest, nothing to do; with one asleep, ``sleeper_share``):
     friction when μs > 0 (normal load: the overlap the normal correction will leave), then the
     normal correction (``normal``). Friction after the correction let the tangential moves re-open
     overlaps: the tall-pile test's max penetration rose from 0.14 r to 0.20 r; before it, 0.15 r."""
@@ -73,11 +92,16 @@ def _project_slab(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, 
             j = nbr[a]
             if not half and j < i:
                 continue  # each pair once, from its lower index
+            if not (awake[i] or awake[j]):
+                continue
             nx, ny, nz, d = pair_normal(x, i, j)
             depth = r[i] + r[j] - d
             if depth <= 0.0:
                 continue
-            share = lifted_share(w, x, i, j, lift)
+            if awake[i] and awake[j]:
+                share = lifted_share(w, x, i, j, lift)
+            else:
+                share = sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step)
             if share < 0.0:
                 continue
             pen = depth - allowance[a] if normal else 0.0
@@ -120,8 +144,8 @@ def _colour_chunks(cell_start, dims, colour, chunks, out):
 
 
 @njit(cache=True, parallel=True)
-def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, chunks, cell_start, order,
-                  dims):
+def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, awake, pushed, wake_step, allowance, lift, mu_s, mu_k, normal,
+                  chunks, cell_start, order, dims):
     """One Gauss–Seidel sweep over the touching pairs, in place: the non-penetration constraint
     C = |x_i − x_j| − r_i − r_j + allowance ≥ 0 (allowance per list entry; ``normal``) with shock
     propagation ``lift`` (1/length, 0 = off), and in the same pass friction (μs > 0) on each pair
@@ -129,7 +153,9 @@ def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, 
     sweep (which cost ≈ 0.5× the contacts again, issue-6 profile). ``cell_start, order, dims``: the
     grid the lists were built on (``spatial_hash.neighbour_lists``); slabs of cells with the same x
     index modulo 3 share no particle, so each colour runs as ``chunks`` parallel runs of slabs
-    balanced by particle count. The result does not depend on ``chunks``."""
+    balanced by particle count. The result does not depend on ``chunks``. Sleeping: pairs of two
+    asleep particles are skipped, an asleep one is held still and marked ``pushed`` by a fast awake
+    partner (``sleeper_share``; ``wake_step`` = inf marks none)."""
     slab = dims[1] * dims[2]
     bounds = np.empty(chunks + 1, np.int64)
     for colour in range(3):
@@ -137,27 +163,27 @@ def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, 
         for t in prange(chunks):
             for k in range(bounds[t], bounds[t + 1]):
                 ix = colour + 3 * k
-                _project_slab(x, x_prev, w, r, nbr_start, nbr, half, allowance, lift, mu_s, mu_k, normal, order,
+                _project_slab(x, x_prev, w, r, nbr_start, nbr, half, awake, pushed, wake_step, allowance, lift, mu_s, mu_k, normal, order,
                               cell_start[ix * slab], cell_start[(ix + 1) * slab])
 
 
 @njit(cache=True, inline="always")
-def _allowance_row(x, r, nbr_start, nbr, half, decay, out, i):
+def _allowance_row(x, r, nbr_start, nbr, half, awake, decay, out, i):
     for a in range(nbr_start[i], nbr_start[i + 1]):
         j = nbr[a]
-        if not half and j < i:
-            continue  # the sweep reads each pair's entry from its lower index only
+        if (not half and j < i) or not (awake[i] or awake[j]):
+            continue  # the sweep reads each pair's entry from its lower index only, and skips asleep pairs
         _, _, _, d = pair_normal(x, i, j)
         out[a] = max(0.0, r[i] + r[j] - d - decay * min(r[i], r[j]))
 
 
 @njit(cache=True, parallel=True)
-def overlap_allowance(x, r, nbr_start, nbr, half, decay, out):
+def overlap_allowance(x, r, nbr_start, nbr, half, awake, decay, out):
     """Per list entry, the overlap r_i + r_j − d that remains less decay·min(r_i, r_j) (≥ 0):
-    tolerated until the next pre-stabilisation. In full rows (``half`` false) entries j < i,
-    which the sweep skips, are not written."""
+    tolerated until the next pre-stabilisation. Entries the sweep skips (j < i in full rows, ``half``
+    false; pairs of two asleep particles, ``awake``) are not written."""
     for i in prange(x.shape[0]):
-        _allowance_row(x, r, nbr_start, nbr, half, decay, out, i)
+        _allowance_row(x, r, nbr_start, nbr, half, awake, decay, out, i)
 
 
 @njit(cache=True, parallel=True)

@@ -2,7 +2,10 @@
 
 The speed clamp (|v| ≤ clamp·r/h, one radius per substep by default) is what keeps a particle
 from crossing a wall or another particle between two projections; it is always on (stability,
-not an effect). Damping and sleeping act on velocities only.
+not an effect). Damping acts on velocities only; sleeping (``wake_flags``, ``sleep_clusters``)
+freezes resting elements: an asleep particle is not predicted and the contacts hold it like a
+static obstacle, so it stays where it fell asleep until a fast neighbour runs into it or a probe
+substep finds it unsupported (``solver.XpbdSolver.substep``).
 """
 
 import numpy as np
@@ -29,10 +32,10 @@ def _moved(x, x_built, i, moved):
 
 
 @njit(cache=True, inline="always")
-def _predict_one(x, v, w, r, accel, row, h, clamp, x_prev, x_built, moved, track, i):
+def _predict_one(x, v, w, r, accel, row, h, clamp, x_prev, x_built, moved, track, awake, i):
     for k in range(3):
         x_prev[i, k] = x[i, k]
-    if w[i] > 0.0:
+    if w[i] > 0.0 and awake[i]:
         for k in range(3):
             v[i, k] += h * accel[row, k]
         _clamp(v, i, clamp * r[i] / h)
@@ -43,8 +46,9 @@ def _predict_one(x, v, w, r, accel, row, h, clamp, x_prev, x_built, moved, track
 
 
 @njit(cache=True, parallel=True)
-def predict(x, v, w, r, accel, h, clamp, x_prev, x_built, moved):
-    """x_prev ← x; v += h·a (a per particle, (n, 3), or one row for all); clamp; x ← x + h·v.
+def predict(x, v, w, r, accel, h, clamp, x_prev, x_built, moved, awake):
+    """x_prev ← x; v += h·a (a per particle, (n, 3), or one row for all); clamp; x ← x + h·v —
+    for the ``awake`` particles; asleep ones only get x_prev ← x (no gravity: they stay put).
 
     Returns max_i |x_i − x_built_i| (the Verlet-list check, folded in to save a launch; 0 when
     ``x_built`` is empty, i.e. no neighbour lists). ``moved`` (n,) is scratch."""
@@ -52,7 +56,7 @@ def predict(x, v, w, r, accel, h, clamp, x_prev, x_built, moved):
     stride = 1 if accel.shape[0] == n else 0
     track = x_built.shape[0] == n
     for i in prange(n):
-        _predict_one(x, v, w, r, accel, i * stride, h, clamp, x_prev, x_built, moved, track, i)
+        _predict_one(x, v, w, r, accel, i * stride, h, clamp, x_prev, x_built, moved, track, awake, i)
     return np.sqrt(moved.max()) if track and n > 0 else 0.0
 
 
@@ -77,22 +81,50 @@ def update_velocity(x, x_prev, v, r, h, clamp, damping_factor, x_built, moved):
 
 
 @njit(cache=True, parallel=True)
-def sleep_clusters(v, x, x_start, h, start, sleep_speed, asleep):
-    """Zero the velocities of every element whose particles all moved less than sleep_speed·h over
-    the substep, measured from before pre-stabilisation: an element pinned in an overlap that
-    pre-stabilisation and the solve undo in turn has a velocity but no motion, and sleeps.
+def wake_flags(x, x_start, start, asleep, probe, awake, pushed):
+    """Per particle ``awake`` ← its element is awake (or ``probe``: every element is solved this
+    substep), and for those particles x_start ← x, the sleep test's reference; ``pushed`` cleared;
+    returns how many particles are awake. An asleep particle keeps the x_start of the substep it
+    fell asleep in, so the test measures its drift since then. Particles outside ``start`` (static
+    obstacles) are never touched: they stay asleep."""
+    m = start.shape[0] - 1
+    count = 0
+    for c in prange(m):
+        on = probe or not asleep[c]
+        for i in range(start[c], start[c + 1]):
+            awake[i] = on
+            pushed[i] = False
+            if on:
+                x_start[i, 0] = x[i, 0]
+                x_start[i, 1] = x[i, 1]
+                x_start[i, 2] = x[i, 2]
+        if on:
+            count += start[c + 1] - start[c]
+    return count
 
-    Sleeping removes jitter (no kinetic energy creeps into resting piles); the element is
-    re-tested every substep, so anything that pushes it wakes it.
+
+@njit(cache=True, parallel=True)
+def sleep_clusters(v, x, x_start, h, start, sleep_speed, asleep, pushed):
+    """Put to sleep (and zero the velocities of) every element whose particles all lie within
+    sleep_speed·h of x_start, measured from before pre-stabilisation, and none of which was
+    ``pushed`` (``contact_constraints.sleeper_share``): an element pinned in an overlap that
+    pre-stabilisation and the solve undo in turn has a velocity but no motion, and sleeps. Every
+    other element is awake: an asleep one that a fast neighbour ran into wakes here.
+
+    Sleeping removes jitter (no kinetic energy creeps into resting piles) and work: the solver
+    skips asleep elements in prediction, shape matching, bending and adhesion, and pairs of two
+    asleep particles in the contacts (``solver.XpbdSolver.substep``).
     """
     m = start.shape[0] - 1
     limit = (sleep_speed * h) ** 2
     for c in prange(m):
         fastest = 0.0
+        hit = False
         for i in range(start[c], start[c + 1]):
+            hit = hit or pushed[i]
             fastest = max(fastest, (x[i, 0] - x_start[i, 0]) ** 2 + (x[i, 1] - x_start[i, 1]) ** 2
                           + (x[i, 2] - x_start[i, 2]) ** 2)
-        asleep[c] = fastest < limit
+        asleep[c] = fastest < limit and not hit
         if asleep[c]:
             for i in range(start[c], start[c + 1]):
                 v[i, 0] = 0.0

@@ -53,6 +53,9 @@ class SolverSettings:
     adhesion_compliance: float = 1e-3  # s²/g
     damping: float = 0.0  # fraction of velocity removed per 1/60 s
     sleep_speed: float = 0.0  # mm/s
+    # every this many frames one substep solves the asleep elements too (under gravity), so an
+    # element whose support went away falls and wakes; between probes only a push wakes it
+    sleep_probe: int = 1
     speed_clamp: float = 1.0  # particle radii per substep
     yolk_accel: float = 0.0  # mm/s², upward buoyant acceleration of the yolk
     yolk_drag: float = 40.0  # 1/s
@@ -66,12 +69,15 @@ class SolverSettings:
 
 @dataclass
 class Diagnostics:
-    """Per-frame scalars (SPEC §3 log): max penetration / radius, residual, kinetic energy, sleeping share."""
+    """Per-frame scalars (SPEC §3 log): max penetration / radius, residual, kinetic energy, sleeping
+    share; and ``solved``, the share of the moving particles solved per substep (awake, 1 without
+    sleeping): the work sleeping leaves."""
 
     penetration: list[float] = field(default_factory=list)
     residual: list[float] = field(default_factory=list)
     kinetic_energy: list[float] = field(default_factory=list)
     sleeping: list[float] = field(default_factory=list)
+    solved: list[float] = field(default_factory=list)
 
 
 class XpbdSolver:
@@ -117,17 +123,26 @@ class XpbdSolver:
         self.time = 0.0
         self.diagnostics = Diagnostics()
         self.asleep = np.zeros(len(start) - 1, np.bool_)
+        # per particle: solved this substep (integrate.wake_flags); static obstacles never are
+        self.awake = np.zeros(len(self.x), np.bool_)
+        self.awake[:self.n_moving] = True
+        self.pushed = np.zeros(len(self.x), np.bool_)  # asleep particles a fast awake partner ran into
+        # an awake particle that moves more than this in a substep wakes the sleepers it touches:
+        # the sleep threshold plus the step gravity adds to one resting on them
+        self.wake_step = self.h * s.sleep_speed + (s.gravity if "gravity" in s.effects else 0.0) * self.h ** 2
+        self.substeps_done = 0
+        self.solved = 0  # particles solved over the substeps of the current frame
         self.buffers: dict[str, np.ndarray] = {}
-        if s.sleep_speed > 0:  # positions at the substep start, for the sleep test
+        if s.sleep_speed > 0:  # positions at the substep start (asleep: when it fell asleep), for the sleep test
             self.buffers["x_start"] = np.zeros_like(self.x)
         # shape matching is the element's own elasticity, not an effect: always on for clusters of ≥ 2
         self.matching = np.isfinite(s.compliance) and bool(np.any(np.diff(self.start) > 1))
         if self.matching:
             self.buffers["lambda"] = np.zeros_like(self.x)
             self.aqq_pinv, self.null_proj = shape_matching.rest_moments(self.q_rest, self.w, self.start)
-            # (qt, qpinv, flags) for the quadratic goal; none: the linear goal for every cluster
+            # (qt, qpinv, flags) for the quadratic goal; Nones: the linear goal for every cluster
             self.quadratic_fit = (shape_matching.quadratic_moments(self.q_rest, self.w, self.start)
-                                  if s.quadratic else ())
+                                  if s.quadratic else (None, None, None))
         self.bend = None
         if self.matching and np.isfinite(s.bend_compliance):
             triples, frac, rest, tstart = bending.bend_triples(self.q_rest, self.start)
@@ -176,23 +191,52 @@ class XpbdSolver:
 
     # -- one substep ------------------------------------------------------------------------
     def substep(self) -> float:
-        """Advance by h = dt/substeps; returns the largest constraint residual of the last iteration."""
+        """Advance by h = dt/substeps; returns the largest constraint residual of the last iteration.
+
+        Asleep elements are frozen: not predicted, not shape-matched, pairs of two asleep particles
+        skipped, and an asleep particle holds still against an awake one like a static obstacle, so
+        grains resting on sleepers load nothing onto them (a first design let pushes move sleepers:
+        each awake grain then woke the column under it, and piles hardly slept). An awake partner
+        moving faster than ``wake_step`` wakes the sleeper at the end of the substep (the impact is
+        taken by the awake one alone for that substep). With every element asleep the substep
+        solves nothing; every ``sleep_probe`` frames one substep solves all, under gravity, and
+        re-tests them: a sleeper whose support went away falls and wakes."""
         with thread_count(self.threads):
             return self._substep()
 
     def _substep(self) -> float:
         s, d, h = self.s, self.dispatch, self.h
+        awake = self.n_moving
         if s.sleep_speed > 0:
-            self.buffers["x_start"][:] = self.x
-        self._prestabilise()
+            probe = self.substeps_done % (s.substeps * s.sleep_probe) == 0
+            awake = d("sleep", integrate.wake_flags, self.x, self.buffers["x_start"], self.start, self.asleep, probe,
+                      self.awake, self.pushed)
+        self.substeps_done += 1
+        self.solved += awake
+        if awake:
+            self._prestabilise()
         if self.yolks is not None:  # drag towards the egg velocity of the last substep
             y = self.yolks
             d("buoyancy", buoyancy.yolk_predict, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"],
               self.x, self.v, self.w, self.start, y["owner"], self.yolk_accel, h, s.yolk_drag)
+        residual = self._solve() if awake else 0.0
+        if self.yolks is not None:
+            y = self.yolks
+            d("buoyancy", buoyancy.yolk_contain, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"], self.x,
+              self.w, self.start, self.quats, y["owner"], y["centre"], y["room"], h)
+        if s.sleep_speed > 0:
+            d("sleep", integrate.sleep_clusters, self.v, self.x, self.buffers["x_start"], h, self.start,
+              s.sleep_speed, self.asleep, self.pushed)
+        self.time += h
+        return residual
+
+    def _solve(self) -> float:
+        """Predict, the constraint iterations, velocities from positions; returns the residual."""
+        s, d, h = self.s, self.dispatch, self.h
         self.moved = d("integrate", integrate.predict, self.x, self.v, self.w, self.r, self.accel, h, s.speed_clamp,
-                       self.x_prev, *self._tracking())
+                       self.x_prev, *self._tracking(), self.awake)
         if self._refresh_neighbours() and "contact" in s.effects:  # overlap tolerated: as at the substep start
-            d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr, self.half,
+            d("contact", contact_constraints.overlap_allowance, self.x_prev, self.r, self.nbr_start, self.nbr, self.half, self.awake,
               s.overlap_decay_rate * h, self.buffers["allowance"])
         if self.matching:
             self.buffers["lambda"][:] = 0.0
@@ -206,7 +250,7 @@ class XpbdSolver:
             # iteration made them rigid as iterations grew, and at 32 × 8 they fought the contacts
             # and pumped energy into the pile (accuracy benchmark)
             self._jacobi("adhesion", adhesion.adhesion_project, self.x, self.w, self.r, self.nbr_start,
-                         self.nbr, s.capture, adhesion_alpha, self.lift)
+                         self.nbr, self.awake, s.capture, adhesion_alpha, self.lift)
         for _ in range(s.iterations):
             residual = 0.0
             if {"contact", "friction"} & s.effects:  # one sweep: friction on each pair after its contact
@@ -215,23 +259,15 @@ class XpbdSolver:
             if self.matching:
                 residual = d("shape_matching", shape_matching.shape_match_project, self.x, self.w, self.q_rest,
                              self.start, self.quats, self.aqq_pinv, self.null_proj, self.buffers["lambda"],
-                             alpha, s.linear_deformation, s.rotation_iterations, *self.quadratic_fit)
+                             alpha, s.linear_deformation, s.rotation_iterations, *self.quadratic_fit, self.awake)
             if self.bend is not None:
                 residual = max(residual, d("bending", bending.bend_project, self.x, self.w, *self.bend, self.quats,
-                                           self.buffers["bend_lambda"], s.bend_compliance / (h * h)))
+                                           self.buffers["bend_lambda"], s.bend_compliance / (h * h), self.awake))
             if self.sdf is not None:
                 d("collider", collider.collider_project, self.x, self.x_prev, self.r, self.w, *self.sdf,
                   self.sdf_blocks, self.mu_s, self.mu_k)
         self.moved = d("integrate", integrate.update_velocity, self.x, self.x_prev, self.v, self.r, h, s.speed_clamp,
                        self.damping_factor, *self._tracking())
-        if self.yolks is not None:
-            y = self.yolks
-            d("buoyancy", buoyancy.yolk_contain, y["x"], self.buffers["yolk_v"], self.buffers["yolk_prev"], self.x,
-              self.w, self.start, self.quats, y["owner"], y["centre"], y["room"], h)
-        if s.sleep_speed > 0:
-            d("sleep", integrate.sleep_clusters, self.v, self.x, self.buffers["x_start"], h, self.start,
-              s.sleep_speed, self.asleep)
-        self.time += h
         return residual
 
     def _tracking(self):
@@ -260,22 +296,25 @@ class XpbdSolver:
         if "contact" in self.s.effects:
             none = self.buffers["allowance"]
             none[:] = 0.0
-            self._contacts(none)
+            self._contacts(none, wake_step=np.inf)
             self.dispatch("contact", contact_constraints.overlap_allowance, self.x, self.r, self.nbr_start, self.nbr, self.half,
-                          self.s.overlap_decay_rate * self.h, self.buffers["allowance"])
+                          self.awake, self.s.overlap_decay_rate * self.h, self.buffers["allowance"])
         if self.sdf is not None:
             self.dispatch("collider", collider.collider_project, self.x, self.x, self.r, self.w, *self.sdf,
                           self.sdf_blocks, 0.0, 0.0)
 
-    def _contacts(self, allowance, friction=False):
+    def _contacts(self, allowance, friction=False, wake_step=None):
         """One Gauss–Seidel sweep of the contacts (if asked) and, with ``friction`` and the effect,
-        friction on each pair just before its normal correction; one run of slabs per thread."""
+        friction on each pair just before its normal correction; one run of slabs per thread. ``wake_step``: see
+        ``__init__`` (pre-stabilisation passes inf: the overlaps it undoes are no impact)."""
         s = self.s
         normal = "contact" in s.effects
         rub = friction and "friction" in s.effects
         family = ("contact",) * normal + ("friction",) * rub
-        self.dispatch(family, contact_constraints.contact_sweep, self.x, self.x_prev, self.w, self.r, self.nbr_start, self.nbr, self.half, allowance,
-                      self.lift, self.mu_s if rub else 0.0, self.mu_k, normal, self.threads, *self.grid)
+        wake_step = self.wake_step if wake_step is None else wake_step
+        self.dispatch(family, contact_constraints.contact_sweep, self.x, self.x_prev, self.w, self.r, self.nbr_start, self.nbr, self.half, self.awake,
+                      self.pushed, wake_step, allowance, self.lift, self.mu_s if rub else 0.0, self.mu_k, normal,
+                      self.threads, *self.grid)
 
     def _jacobi(self, family, kernel, *args):
         out = self.buffers["scratch"]
@@ -304,6 +343,8 @@ class XpbdSolver:
         dg.residual.append(float(residual))
         dg.kinetic_energy.append(float(integrate.kinetic_energy(self.v, self.w)))
         dg.sleeping.append(float(self.asleep.mean()) if self.s.sleep_speed > 0 else 0.0)
+        dg.solved.append(self.solved / (self.s.substeps * self.n_moving))
+        self.solved = 0
 
     def rotations(self) -> np.ndarray:
         """Current cluster rotations (m, 3, 3) from the warm-started quaternions."""
