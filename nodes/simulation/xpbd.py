@@ -99,23 +99,27 @@ def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
     """XPBD aggregate simulation — SPEC §3: elastic clusters, contact, friction, clumping, containers
     and moulds, buoyant yolks, static obstacle particles (e.g. eggs on settled rice); only the effects in
     ``ctx.effects`` are computed."""
-    from .setup import build_simulation, finish_simulation
+    from .setup import build_simulation, finish_simulation, snapshot_aggregate
 
     sim = build_simulation(aggregate, list(colliders or []), ctx.effects, params, obstacles=obstacles,
                            moulds=moulds)
     frames, every, meshes_every = params["frames"], params["log_every"], params["log_meshes_every"]
+    substeps = sim.solver.s.substeps
     with ctx.progress(frames, "frames") as bar:
         for frame in range(frames):
             sim.solver.frame()
             if ctx.rerun.enabled:
                 if every and frame % every == 0:
                     _log_particles(ctx, sim.solver, frame)
-                if meshes_every and (frame % meshes_every == 0 or frame == frames - 1):
-                    _log_meshes(ctx, sim, frame)
+                if meshes_every and frame % meshes_every == 0 and frame < frames - 1:
+                    _log_meshes(ctx, snapshot_aggregate(sim), frame * substeps)
             bar.advance()
+    out = finish_simulation(sim)
     if ctx.rerun.enabled:
+        if meshes_every:  # the last frame's meshes are the output's: not fitted twice
+            _log_meshes(ctx, out["aggregate"], (frames - 1) * substeps)
         _log_scalars(ctx, sim.solver)
-    return finish_simulation(sim)
+    return out
 
 
 def _log_particles(ctx, solver, frame):
@@ -127,13 +131,11 @@ def _log_particles(ctx, solver, frame):
     ctx.rerun.log("particles", rr.Points3D(solver.x[keep], radii=solver.r[keep]))
 
 
-def _log_meshes(ctx, sim, frame):
+def _log_meshes(ctx, aggregate, step):
     import rerun as rr
 
-    from .setup import snapshot_aggregate
-
-    mesh = snapshot_aggregate(sim).combined_mesh()
-    ctx.rerun.set_time("sim_step", frame * sim.solver.s.substeps)
+    mesh = aggregate.combined_mesh()
+    ctx.rerun.set_time("sim_step", step)
     ctx.rerun.log("elements", rr.Mesh3D(vertex_positions=mesh.vertices.astype(np.float32),
                                         triangle_indices=mesh.faces.astype(np.uint32)))
 
