@@ -206,10 +206,6 @@ def bench_accuracy(quick):
 
     Both scenes are below ``solver.PARALLEL_PARTICLES``: the solver runs them on one thread (on the
     shared 2-core machine, two OpenMP threads under load spread identical runs over 10× in wall time)."""
-    return accuracy_sweeps(quick)
-
-
-def accuracy_sweeps(quick):
     if quick:
         n, bowl_frames, bowl_ref, stack_frames, stack_ref = 60, 12, (16, 4), 30, (64, 8)
         grid_s, grid_i, stack_s, stack_i = (2,), (1, 2), (1, 4, 16), (1, 2, 4)
