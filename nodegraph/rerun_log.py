@@ -139,12 +139,19 @@ def _(value: Placement, log: EntityLogger) -> None:
                                        vectors=value.normals.astype(np.float32) * 0.5), static=True)
 
 
+def elements_mesh3d(value: Aggregate):
+    """Every element of the aggregate in world space as one ``Mesh3D`` (None when empty)."""
+    mesh = value.combined_mesh()
+    if mesh is None:
+        return None
+    return _rr().Mesh3D(vertex_positions=mesh.vertices.astype(np.float32), triangle_indices=mesh.faces.astype(np.uint32))
+
+
 @log_value.register
 def _(value: Aggregate, log: EntityLogger) -> None:
-    mesh = value.combined_mesh()
-    if mesh is not None:
-        log.log("elements", _rr().Mesh3D(vertex_positions=mesh.vertices.astype(np.float32),
-                                         triangle_indices=mesh.faces.astype(np.uint32)), static=True)
+    archetype = elements_mesh3d(value)
+    if archetype is not None:
+        log.log("elements", archetype, static=True)
 
 
 @log_value.register

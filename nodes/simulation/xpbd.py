@@ -132,12 +132,10 @@ def _log_particles(ctx, solver, frame):
 
 
 def _log_meshes(ctx, aggregate, step):
-    import rerun as rr
+    from nodegraph.rerun_log import elements_mesh3d
 
-    mesh = aggregate.combined_mesh()
     ctx.rerun.set_time("sim_step", step)
-    ctx.rerun.log("elements", rr.Mesh3D(vertex_positions=mesh.vertices.astype(np.float32),
-                                        triangle_indices=mesh.faces.astype(np.uint32)))
+    ctx.rerun.log("elements", elements_mesh3d(aggregate))  # never empty: build_simulation refuses that
 
 
 def _log_scalars(ctx, solver):
