@@ -49,10 +49,11 @@ def bend_project(x, w, triples, frac, rest, tstart, quats, lam, alpha_tilde, awa
     particles are ``awake`` (``integrate.wake_flags``); returns max |C|."""
     m = tstart.shape[0] - 1
     worst = np.zeros(m)
+    rots = np.empty((m, 3, 3))  # one allocation per sweep, not one per cluster inside the parallel loop
     for c in prange(m):
         if tstart[c + 1] == tstart[c] or not awake[triples[tstart[c], 1]]:
             continue
-        rot = np.empty((3, 3))
+        rot = rots[c]
         quat_to_matrix(quats[c], rot)
         for t in range(tstart[c], tstart[c + 1]):
             a, b, e = triples[t, 0], triples[t, 1], triples[t, 2]
