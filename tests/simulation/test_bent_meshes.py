@@ -2,6 +2,9 @@
 (``Aggregate.bends``, SPEC §5 quadratic shape matching); the linear path stays straight and unchanged."""
 
 import hashlib
+import io
+import json
+import zipfile
 
 import numpy as np
 import pytest
@@ -134,10 +137,6 @@ def test_codec_round_trips_bends_and_old_entries_without_the_field():
     assert np.array_equal(back.element_mesh(0).vertices, bent.element_mesh(0).vertices)
     # an entry written before the field existed: no 'bends' in the stored field tree
     old = Aggregate(bent.placement, bent.libraries, bent.deformations)
-    import io
-    import json
-    import zipfile
-
     raw = codec.encode(old)
     with zipfile.ZipFile(io.BytesIO(raw)) as archive:
         members = {name: archive.read(name) for name in archive.namelist()}

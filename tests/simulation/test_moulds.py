@@ -45,7 +45,11 @@ def test_collider_effect_accepts_a_mould_alone_and_full_mode_refuses_one():
     aggregate = crowded_ball(n=10)
     out = xpbd(Context.standalone(effects=("collider",)), aggregate=aggregate, moulds=[ball_mould()],
                **xpbd.resolve_params({"frames": 2, "substeps": 2}))
-    assert np.isfinite(out["particles"].positions).all()
+    p = out["particles"]
+    before = xpbd(Context.standalone(), aggregate=aggregate, **xpbd.resolve_params({"frames": 1, "substeps": 1}))
+    assert (np.linalg.norm(before["particles"].positions, axis=1) + p.radii).max() > 12.5  # some stuck out
+    assert np.isfinite(p.positions).all()
+    assert (np.linalg.norm(p.positions, axis=1) + p.radii).max() < 12.0 + 0.1 * p.radii.max()  # the mould acted
     with pytest.raises(ValueError, match="mould"):
         xpbd(Context.standalone(effects=("gravity", "collider")), aggregate=aggregate, moulds=[ball_mould()],
              **xpbd.resolve_params({"frames": 30, "mode": "full"}))
