@@ -130,13 +130,15 @@ def test_logs_particles_and_step_scalars_to_rerun():
     aggregate, colliders = egg_on_ground()
     ctx = Context.standalone(effects=("gravity", "collider"))
     ctx.rerun = EntityLogger(Recorder(), "/sim")
-    xpbd(ctx, aggregate=aggregate, colliders=colliders, **params())
+    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params())
     paths = ctx.rerun.recording.paths
     assert paths.count("/sim/particles") == 2
     assert paths.count("/sim/elements") == 2  # meshes at frame 0 and at the last frame (every 30)
     first, last = [a for p, a in zip(paths, ctx.rerun.recording.archetypes) if p == "/sim/elements"]
-    n_vertices = sum(len(m.vertices) for m in aggregate.libraries[0].meshes[:1]) * len(aggregate.placement)
-    assert len(last.vertex_positions.as_arrow_array()) == n_vertices
+    logged = [np.asarray(a.vertex_positions.as_arrow_array().flatten()).reshape(-1, 3) for a in (first, last)]
+    final = out["aggregate"].combined_mesh().vertices.astype(np.float32)
+    assert np.array_equal(logged[1], final)  # the last frame's meshes are the output's
+    assert np.abs(logged[0] - final).max() > 0.1  # the egg fell between the first log and the last
     for name in ("penetration_over_radius", "residual", "kinetic_energy", "sleeping_share"):
         assert f"/sim/scalars/{name}" in paths
 
