@@ -43,6 +43,17 @@ class Instance:
         return f"/{self.node}" if self.variant is None else f"/{self.node}/{self.variant}"
 
 
+def file_digests(entry: NodeEntry) -> dict[str, str]:
+    """sha256 of the file each ``Param(file=True)`` of the node names (validation saw it exist)."""
+    out = {}
+    for name, param in entry.spec.params.items():
+        value = entry.params.get(name)
+        if param.file and value:
+            path = Path(value)
+            out[name] = hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else "missing"
+    return out
+
+
 def derive_seed(base: int, node_id: str, variant: int | None) -> int:
     """A 63-bit seed per node instance, so variants and sibling nodes draw independent streams."""
     digest = hashlib.sha256(f"{base}/{node_id}/{variant}".encode()).digest()
@@ -128,6 +139,9 @@ class Executor:
                     "seed": self._seed(entry, inst.variant),
                     "effects": sorted(entry.spec.effects & self.recipe.effects),
                 }
+                files = file_digests(entry)
+                if files:  # only then: keys of nodes without file parameters stay as they were
+                    payload["files"] = files
                 blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
                 self.keys[inst] = hashlib.sha256(blob).hexdigest()
                 order.append(inst)

@@ -8,6 +8,7 @@ range and units in the message, not a pydantic error code.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, get_args, get_origin
@@ -64,7 +65,9 @@ class Param:
     """One declared node parameter.
 
     ``range`` is inclusive ``(low, high)`` (either may be None) and applies to every number in the
-    value, so ``tuple[float, float]`` ranges or RGB colours are checked element-wise.
+    value, so ``tuple[float, float]`` ranges or RGB colours are checked element-wise. ``file``: the
+    value names an input file; it must exist, and its bytes enter the node's cache key (an edited
+    file under the same name is read again).
     """
 
     type: Any
@@ -74,6 +77,7 @@ class Param:
     choices: tuple[Any, ...] | None = None
     units: str = ""
     nullable: bool = False
+    file: bool = False
 
     @cached_property
     def _adapter(self) -> TypeAdapter:
@@ -127,6 +131,9 @@ class Param:
                 lo, hi = self.range
                 if (lo is not None and number < lo) or (hi is not None and number > hi):
                     raise ParamValueError("out of range", self.allowed())
+        if self.file and not Path(coerced).is_file():
+            raise ParamValueError(f"no such file: {coerced}",
+                                  f"an existing file (a relative path is taken from {Path.cwd()})")
         return coerced
 
     def describe(self) -> dict[str, str]:
@@ -137,6 +144,8 @@ class Param:
             rng = f"[{'-∞' if lo is None else lo}, {'∞' if hi is None else hi}]"
         if self.choices is not None:
             rng = "{" + ", ".join(str(c) for c in self.choices) + "}"
+        if self.file:
+            rng = "an existing file (its content is in the cache key)"
         return {
             "type": self.type_name,
             "default": "(required)" if self.required else repr(self.default),

@@ -42,7 +42,7 @@ def _check(p: dict) -> list[tuple[str, str]]:
           "shape_seed": Param(int, 0, "ice flake: which irregular outline (a shape number, not the recipe seed)",
                               range=(0, 2 ** 31 - 1)),
           "path": Param(str, None, "file: mesh file in any trimesh format (.stl, .obj, .ply, .off, .glb)",
-                        nullable=True),
+                        nullable=True, file=True),
           "scale": Param(float, 1.0, "file: factor from the file's units to mm", range=(1e-6, 1e6)),
           "align": Param(bool, True, "file: turn the principal axes onto x ≥ y ≥ z (long axis x)"),
           "subdivisions": Param(int, 2, "icosphere subdivisions of rice/ikura (2 → 320 faces per shell)",

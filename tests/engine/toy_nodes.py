@@ -104,3 +104,12 @@ def toy_sphere_mesh(ctx, spheres):
     verts = (spheres.centers[:, None, :] + base[None]).reshape(-1, 3)
     faces = (np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])[None] + 4 * np.arange(len(spheres))[:, None, None])
     return Mesh(verts, faces.reshape(-1, 3))
+
+
+@node("toy_file_table", version=1,
+      outputs={"table": Out(Table, "one row per line of the file")},
+      params={"path": Param(str, doc="text file", file=True)})
+def toy_file_table(ctx, *, path):
+    """The lengths of a text file's lines."""
+    with open(path, encoding="utf-8") as handle:
+        return Table({"length": np.array([len(line) for line in handle.read().splitlines()])})
