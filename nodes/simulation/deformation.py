@@ -8,6 +8,8 @@ at 1 along axes a collinear/planar cluster cannot observe.
 
 import numpy as np
 
+from .shape_matching import particle_masses
+
 
 def element_transforms(x, w, start, q_rest, rotations, centres, aqq_pinv, null_proj, local_centre):
     """(positions (m, 3), rotations (m, 3, 3), deformations (m, 3, 3)) of every element."""
@@ -17,7 +19,7 @@ def element_transforms(x, w, start, q_rest, rotations, centres, aqq_pinv, null_p
         s, e = start[c], start[c + 1]
         if e - s < 2:
             continue
-        mass = np.where(w[s:e] > 0, 1.0 / np.maximum(w[s:e], 1e-300), 1e12)
+        mass = particle_masses(w[s:e])
         apq = ((x[s:e] - centres[c]) * mass[:, None]).T @ q_rest[s:e]
         stretch = rotations[c].T @ (apq @ aqq_pinv[c]) + null_proj[c]
         stretch = 0.5 * (stretch + stretch.T)
@@ -52,7 +54,7 @@ def element_bends(x, w, start, q_rest, rotations, centres, positions, deformatio
     bends = np.zeros((m, 3, 6))
     for c in np.flatnonzero(quadratic[:m]):
         s, e = start[c], start[c + 1]
-        mass = np.where(w[s:e] > 0, 1.0 / np.maximum(w[s:e], 1e-300), 1e12)
+        mass = particle_masses(w[s:e])
         rot, q = rotations[c], q_rest[s:e]
         residual = (x[s:e] - centres[c] - q @ (deformations[c] @ rot).T) @ rot  # rows: Rᵀ·r_i
         mono = Aggregate.monomials(q)

@@ -71,6 +71,22 @@ def _mass(w):
     return 1.0 / w if w > 0.0 else 1e12
 
 
+def particle_masses(w: np.ndarray) -> np.ndarray:
+    """Masses from inverse masses, 1e12 for static particles (w = 0): ``_mass`` outside the kernels."""
+    return np.where(w > 0, 1.0 / np.maximum(w, 1e-300), 1e12)
+
+
+@njit(cache=True, inline="always")
+def _step_to_goal(x, w, lam, alpha_tilde, i, k, g):
+    """XPBD step of coordinate k of particle i towards its goal g, with λ accumulation (SPEC §5,
+    Macklin et al. 2016); returns |C| before the step."""
+    cval = x[i, k] - g
+    dl = (-cval - alpha_tilde * lam[i, k]) / (w[i] + alpha_tilde)
+    lam[i, k] += dl
+    x[i, k] += w[i] * dl
+    return abs(cval)
+
+
 @njit(cache=True, inline="always")
 def _det3(a):
     return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
@@ -136,11 +152,7 @@ def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta,
     for i in range(s, e):
         for k in range(3):
             g = cm[k] + goal[k, 0] * q_rest[i, 0] + goal[k, 1] * q_rest[i, 1] + goal[k, 2] * q_rest[i, 2]
-            cval = x[i, k] - g
-            res = max(res, abs(cval))
-            dl = (-cval - alpha_tilde * lam[i, k]) / (w[i] + alpha_tilde)
-            lam[i, k] += dl
-            x[i, k] += w[i] * dl
+            res = max(res, _step_to_goal(x, w, lam, alpha_tilde, i, k, g))
     return res
 
 
@@ -187,11 +199,7 @@ def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_til
             g = cm[k]
             for c in range(9):
                 g += goal9[k, c] * qt[i, c]
-            cval = x[i, k] - g
-            res = max(res, abs(cval))
-            dl = (-cval - alpha_tilde * lam[i, k]) / (w[i] + alpha_tilde)
-            lam[i, k] += dl
-            x[i, k] += w[i] * dl
+            res = max(res, _step_to_goal(x, w, lam, alpha_tilde, i, k, g))
     return res
 
 
@@ -238,11 +246,13 @@ def quadratic_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, cond
     the nine modes), gets the linear goal: a pseudo-inverse would leave its unobservable quadratic
     modes to fit noise.
     """
+    from nodegraph.values import Aggregate
+
     m = len(start) - 1
     qt = np.zeros((len(q_rest), 9))
     qpinv = np.zeros((m, 9, 9))
     quadratic = np.zeros(m, np.bool_)
-    mass = np.where(w > 0, 1.0 / np.maximum(w, 1e-300), 1e12)
+    mass = particle_masses(w)
     for c in range(m):
         s, e = start[c], start[c + 1]
         q = q_rest[s:e]
@@ -251,8 +261,7 @@ def quadratic_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, cond
         if not scale > 0:
             qt[s:e, :3] = q
             continue
-        quad = np.stack([q[:, 0] ** 2, q[:, 1] ** 2, q[:, 2] ** 2, q[:, 0] * q[:, 1], q[:, 1] * q[:, 2],
-                         q[:, 2] * q[:, 0]], axis=1) / scale
+        quad = Aggregate.monomials(q) / scale
         quad -= (mc[:, None] * quad).sum(axis=0) / mc.sum()
         qt[s:e] = np.concatenate([q, quad], axis=1)
         if e - s < 10:
@@ -274,7 +283,7 @@ def rest_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, tolerance
     m = len(start) - 1
     pinv = np.zeros((m, 3, 3))
     null = np.zeros((m, 3, 3))
-    mass = np.where(w > 0, 1.0 / np.maximum(w, 1e-300), 1e12)
+    mass = particle_masses(w)
     for c in range(m):
         q = q_rest[start[c]:start[c + 1]]
         aqq = (q * mass[start[c]:start[c + 1], None]).T @ q

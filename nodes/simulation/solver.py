@@ -361,6 +361,6 @@ class XpbdSolver:
     def centres(self) -> np.ndarray:
         """Mass-weighted cluster centres (m, 3)."""
         x, w = self.x[:self.n_moving], self.w[:self.n_moving]
-        m = np.where(w > 0, 1.0 / np.maximum(w, 1e-300), 1e12)
+        m = shape_matching.particle_masses(w)
         sums = np.add.reduceat(x * m[:, None], self.start[:-1], axis=0)
         return sums / np.add.reduceat(m, self.start[:-1])[:, None]
