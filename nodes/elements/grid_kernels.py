@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..triangle_distance import dot3, point_triangle_offset
+
 
 @njit(cache=True)
 def _top_left(ax, ay, bx, by):
@@ -82,59 +84,6 @@ def winding_occupancy(vertices, faces, h, shape):
     return inside
 
 
-@njit(cache=True, inline="always")
-def _dot(ax, ay, az, bx, by, bz):
-    return ax * bx + ay * by + az * bz
-
-
-@njit(cache=True)
-def _point_triangle_distance2(px, py, pz, t):
-    """Squared distance from p to triangle t = [a, b, c] (Ericson, Real-Time Collision Detection §5.1.5).
-
-    Scalar arithmetic only: small temporary arrays would be heap-allocated per call in numba.
-    """
-    ax, ay, az = t[0, 0], t[0, 1], t[0, 2]
-    abx, aby, abz = t[1, 0] - ax, t[1, 1] - ay, t[1, 2] - az
-    acx, acy, acz = t[2, 0] - ax, t[2, 1] - ay, t[2, 2] - az
-    apx, apy, apz = px - ax, py - ay, pz - az
-    d1 = _dot(abx, aby, abz, apx, apy, apz)
-    d2 = _dot(acx, acy, acz, apx, apy, apz)
-    if d1 <= 0.0 and d2 <= 0.0:
-        return _dot(apx, apy, apz, apx, apy, apz)
-    bpx, bpy, bpz = px - t[1, 0], py - t[1, 1], pz - t[1, 2]
-    d3 = _dot(abx, aby, abz, bpx, bpy, bpz)
-    d4 = _dot(acx, acy, acz, bpx, bpy, bpz)
-    if d3 >= 0.0 and d4 <= d3:
-        return _dot(bpx, bpy, bpz, bpx, bpy, bpz)
-    vc = d1 * d4 - d3 * d2
-    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        v = d1 / (d1 - d3)
-        qx, qy, qz = apx - v * abx, apy - v * aby, apz - v * abz
-        return _dot(qx, qy, qz, qx, qy, qz)
-    cpx, cpy, cpz = px - t[2, 0], py - t[2, 1], pz - t[2, 2]
-    d5 = _dot(abx, aby, abz, cpx, cpy, cpz)
-    d6 = _dot(acx, acy, acz, cpx, cpy, cpz)
-    if d6 >= 0.0 and d5 <= d6:
-        return _dot(cpx, cpy, cpz, cpx, cpy, cpz)
-    vb = d5 * d2 - d1 * d6
-    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        w = d2 / (d2 - d6)
-        qx, qy, qz = apx - w * acx, apy - w * acy, apz - w * acz
-        return _dot(qx, qy, qz, qx, qy, qz)
-    va = d3 * d6 - d5 * d4
-    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        qx = bpx - w * (t[2, 0] - t[1, 0])
-        qy = bpy - w * (t[2, 1] - t[1, 1])
-        qz = bpz - w * (t[2, 2] - t[1, 2])
-        return _dot(qx, qy, qz, qx, qy, qz)
-    denom = 1.0 / (va + vb + vc)
-    v = vb * denom
-    w = vc * denom
-    qx, qy, qz = apx - abx * v - acx * w, apy - aby * v - acy * w, apz - abz * v - acz * w
-    return _dot(qx, qy, qz, qx, qy, qz)
-
-
 @njit(cache=True)
 def mesh_distance_band(vertices, faces, h, shape, band):
     """Unsigned distance (in length units) from cell centres to the mesh, exact within ``band`` cells.
@@ -167,10 +116,11 @@ def mesh_distance_band(vertices, faces, h, shape, band):
                 for k in range(k0, k1 + 1):
                     pz = k * h
                     if nn > 0.0:
-                        plane = _dot(nx, ny, nz, px - t[0, 0], py - t[0, 1], pz - t[0, 2])
+                        plane = dot3(nx, ny, nz, px - t[0, 0], py - t[0, 1], pz - t[0, 2])
                         if plane * plane >= dist2[i, j, k]:
                             continue  # the triangle's plane is already farther than the best triangle
-                    d2 = _point_triangle_distance2(px, py, pz, t)
+                    ex, ey, ez = point_triangle_offset(px, py, pz, t[0], t[1], t[2])
+                    d2 = ex * ex + ey * ey + ez * ez
                     if d2 < dist2[i, j, k]:
                         dist2[i, j, k] = d2
     return np.sqrt(dist2)

@@ -13,7 +13,7 @@ from .element_templates import template_params
 
 @node(
     "cull",
-    version=1,
+    version=2,
     inputs={"placement": In(Placement, "refined elements"),
             "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True)},
     outputs={"placement": Out(Placement, "the elements kept (overlap = depth with the kept neighbours)"),

@@ -11,33 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-
-@njit(cache=True)
-def _closest_on_triangle(p, a, b, c):
-    """Closest point to p on triangle abc (Ericson, Real-Time Collision Detection §5.1.5)."""
-    ab, ac, ap = b - a, c - a, p - a
-    d1, d2 = ab @ ap, ac @ ap
-    if d1 <= 0.0 and d2 <= 0.0:
-        return a
-    bp = p - b
-    d3, d4 = ab @ bp, ac @ bp
-    if d3 >= 0.0 and d4 <= d3:
-        return b
-    vc = d1 * d4 - d3 * d2
-    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        return a + ab * (d1 / (d1 - d3))
-    cp = p - c
-    d5, d6 = ab @ cp, ac @ cp
-    if d6 >= 0.0 and d5 <= d6:
-        return c
-    vb = d5 * d2 - d1 * d6
-    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        return a + ac * (d2 / (d2 - d6))
-    va = d3 * d6 - d5 * d4
-    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))
-    denom = 1.0 / (va + vb + vc)
-    return a + ab * (vb * denom) + ac * (vc * denom)
+from ..triangle_distance import point_triangle_offset
 
 
 @njit(cache=True)
@@ -47,10 +21,10 @@ def distance_to_surface(points, vertices, faces):
     for i in range(points.shape[0]):
         best = np.inf
         for f in range(faces.shape[0]):
-            q = _closest_on_triangle(points[i], vertices[faces[f, 0]], vertices[faces[f, 1]], vertices[faces[f, 2]])
-            d = np.sqrt(((points[i] - q) ** 2).sum())
-            best = min(best, d)
-        out[i] = best
+            ex, ey, ez = point_triangle_offset(points[i, 0], points[i, 1], points[i, 2], vertices[faces[f, 0]],
+                                               vertices[faces[f, 1]], vertices[faces[f, 2]])
+            best = min(best, ex * ex + ey * ey + ez * ez)
+        out[i] = np.sqrt(best)
     return out
 
 

@@ -11,54 +11,7 @@ the wall's thickness (test: fast grains against a thin bowl).
 import numpy as np
 from numba import njit, prange
 
-
-@njit(cache=True, inline="always")
-def _sub(a, b):
-    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
-
-
-@njit(cache=True, inline="always")
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit(cache=True)
-def _closest_on_triangle(p, a, b, c):
-    """Closest point to p on triangle abc (Ericson, Real-Time Collision Detection §5.1.5), as a
-    scalar 3-tuple: array temporaries in this inner loop would dominate the SDF build."""
-    ab = _sub(b, a)
-    ac = _sub(c, a)
-    ap = _sub(p, a)
-    d1 = _dot(ab, ap)
-    d2 = _dot(ac, ap)
-    if d1 <= 0.0 and d2 <= 0.0:
-        return a[0], a[1], a[2]
-    bp = _sub(p, b)
-    d3 = _dot(ab, bp)
-    d4 = _dot(ac, bp)
-    if d3 >= 0.0 and d4 <= d3:
-        return b[0], b[1], b[2]
-    vc = d1 * d4 - d3 * d2
-    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        t = d1 / (d1 - d3)
-        return a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]
-    cp = _sub(p, c)
-    d5 = _dot(ab, cp)
-    d6 = _dot(ac, cp)
-    if d6 >= 0.0 and d5 <= d6:
-        return c[0], c[1], c[2]
-    vb = d5 * d2 - d1 * d6
-    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        t = d2 / (d2 - d6)
-        return a[0] + t * ac[0], a[1] + t * ac[1], a[2] + t * ac[2]
-    va = d3 * d6 - d5 * d4
-    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        return b[0] + t * (c[0] - b[0]), b[1] + t * (c[1] - b[1]), b[2] + t * (c[2] - b[2])
-    denom = 1.0 / (va + vb + vc)
-    v = vb * denom
-    w = vc * denom
-    return a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w
+from ..triangle_distance import point_triangle_offset
 
 
 @njit(cache=True)
@@ -89,8 +42,7 @@ def surface_band(vertices, faces, normals, origin, pitch, shape, band):
                 p[1] = origin[1] + j * pitch
                 for k in range(lo[2], hi[2] + 1):
                     p[2] = origin[2] + k * pitch
-                    qx, qy, qz = _closest_on_triangle(p, a, b, c)
-                    ex, ey, ez = p[0] - qx, p[1] - qy, p[2] - qz
+                    ex, ey, ez = point_triangle_offset(p[0], p[1], p[2], a, b, c)
                     d = np.sqrt(ex * ex + ey * ey + ez * ez)
                     if d > band:
                         continue
