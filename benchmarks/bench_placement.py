@@ -21,7 +21,8 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from nodegraph import Context
-from nodegraph.values import ElementLibrary, Mesh
+from nodegraph.values import Mesh
+from nodes.values import ElementLibrary
 from nodes.placement import cull, mix_ratio, poisson_place, rotate
 from nodes.shapes import shape
 

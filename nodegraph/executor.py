@@ -24,7 +24,7 @@ from .recipe import NodeEntry, Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
 from .rerun_log import RunRecording, log_value
 
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2  # 2: the domain value types moved from nodegraph.values to nodes.values (stored type names)
 
 
 @dataclass(frozen=True, order=True)

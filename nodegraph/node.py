@@ -2,12 +2,11 @@
 
 A node module declares a node with the ``@node`` decorator around a plain function::
 
-    @node("sphere_scatter", version=1,
-          inputs={"mesh": In(Mesh, "base mesh of the grain")},
-          outputs={"spheres": Out(SphereSet, "porosity spheres")},
-          params={"count": Param(int, 64, "number of spheres", range=(0, 50000))},
-          random=True)
-    def sphere_scatter(ctx, mesh, *, count): ...
+    @node("decimate", version=1,
+          inputs={"mesh": In(Mesh, "the mesh to simplify")},
+          outputs={"mesh": Out(Mesh, "the simplified mesh")},
+          params={"faces": Param(int, 1000, "target face count", range=(4, 10_000_000))})
+    def decimate(ctx, mesh, *, faces): ...
 
 The decorator returns a ``NodeSpec``; the registry finds specs by scanning module attributes,
 so declaring a node has no side effect and there is no global registry.

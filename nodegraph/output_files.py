@@ -1,6 +1,8 @@
 """Write a recipe's declared outputs into ``outputs/<recipe>/`` in the format each value type suits.
 
-``write_output`` is a singledispatch registry like ``rerun_log.log_value``; every write is atomic.
+``write_output`` is a singledispatch registry like ``rerun_log.log_value``: the engine registers its
+generic values (Mesh → .ply, Image → .png, FileSet → its files, anything else → .npz); a node package
+registers its own types (the built-in ones: ``nodes.output_writers``). Every write is atomic.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import numpy as np
 
 from . import codec
 from .cache import atomic_write
-from .values import Aggregate, ElementLibrary, FileSet, Image, Mesh
+from .values import FileSet, Image, Mesh
 
 
 @singledispatch
@@ -56,31 +58,3 @@ def _(value: FileSet, directory: Path, stem: str) -> list[Path]:
         atomic_write(path, data)
         paths.append(path)
     return paths
-
-
-def _glb(meshes: list[Mesh], names: list[str]) -> bytes:
-    import trimesh
-
-    scene = trimesh.Scene()
-    for mesh, name in zip(meshes, names):
-        colors = None if mesh.colors is None else np.asarray(mesh.colors)
-        scene.add_geometry(trimesh.Trimesh(mesh.vertices, mesh.faces, vertex_colors=colors, process=False),
-                           node_name=name, geom_name=name)
-    return trimesh.exchange.gltf.export_glb(scene)
-
-
-@write_output.register
-def _(value: ElementLibrary, directory: Path, stem: str) -> list[Path]:
-    """All elements of the library in one .glb, laid out as they are (each centred at the origin)."""
-    path = directory / f"{stem}.glb"
-    atomic_write(path, _glb(list(value.meshes), [f"{value.kind}_{i:03d}" for i in range(len(value))]))
-    return [path]
-
-
-@write_output.register
-def _(value: Aggregate, directory: Path, stem: str) -> list[Path]:
-    """The placed elements in world space, one glTF node each."""
-    path = directory / f"{stem}.glb"
-    meshes = [value.element_mesh(i) for i in range(len(value.placement))]
-    atomic_write(path, _glb(meshes, [f"element_{i:05d}" for i in range(len(meshes))]))
-    return [path]

@@ -1,4 +1,5 @@
-"""Find node types: the built-in ``nodes`` package, the ``nodegraph.nodes`` entry points, plugin files.
+"""Find node types: the packages of the ``nodegraph.nodes`` entry points (the built-in ones included,
+registered by the project's own pyproject), then plugin files.
 
 Every source is a plain module (or package of modules) whose ``NodeSpec`` attributes are node
 types, as pytest finds plugins; the registry is an ordinary object built per command, not global.
@@ -19,7 +20,6 @@ from .errors import NodeDeclarationError, NodegraphError
 from .node import NodeSpec
 
 ENTRY_POINT_GROUP = "nodegraph.nodes"
-BUILTIN_PACKAGE = "nodes"
 
 
 class Registry:
@@ -63,6 +63,12 @@ class Registry:
         if not path.is_file():
             raise NodegraphError(f"plugin file not found: {path}")
         name = f"nodegraph_plugin_{path.stem}"
+        loaded = sys.modules.get(name)
+        if loaded is not None and getattr(loaded, "__file__", None) == str(path):
+            # once per process: a second import would make new value classes that stored values
+            # of the first (cache entries, outputs in memory) are no longer instances of
+            self.add_module(loaded)
+            return
         spec = importlib.util.spec_from_file_location(name, path)
         if spec is None or spec.loader is None:
             raise NodegraphError(f"cannot import plugin {path}: not a Python module")
@@ -90,20 +96,20 @@ class Registry:
         return {e for spec in self._specs.values() for e in spec.effects}
 
 
+def node_package_names() -> list[str]:
+    """Top-level module names of the installed node packages (entry points; nothing is imported)."""
+    return sorted({ep.value.split(":")[0].split(".")[0] for ep in entry_points(group=ENTRY_POINT_GROUP)})
+
+
 def default_registry(plugins: Iterable[str | Path] = (), entry_point_modules: bool = True) -> Registry:
-    """Built-in nodes, installed plugin packages (entry points), then ``--plugin`` files."""
+    """Installed node packages (entry points, the built-in ones among them), then ``--plugin`` files."""
     registry = Registry()
-    loaded: set[str] = set()
     if entry_point_modules:
-        for ep in entry_points(group=ENTRY_POINT_GROUP):
+        loaded: set[str] = set()
+        for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda ep: ep.value):
             if ep.value not in loaded:
                 registry.add_package(ep.load())
                 loaded.add(ep.value)
-    if BUILTIN_PACKAGE not in loaded:  # running from a source checkout that was never pip-installed
-        try:
-            registry.add_package(importlib.import_module(BUILTIN_PACKAGE))
-        except ModuleNotFoundError:
-            pass
     for plugin in plugins:
         registry.add_plugin_file(plugin)
     return registry

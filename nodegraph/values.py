@@ -1,29 +1,31 @@
-"""The typed values that flow along node ports: meshes, sphere sets, volumes, fields, placements...
+"""The generic value types the engine itself reads, writes and logs: meshes, images, file sets, tables.
 
 Each is a frozen dataclass of numpy arrays (struct of arrays) plus plain fields, so the engine can
-store it without pickle (``codec``), hash it, freeze it and log it to Rerun (``rerun_log``). Nothing
-here is specific to rice: these are the geometric and physical vocabulary of the toolkit.
-Lengths are in the recipe's length unit (millimetres in the shipped recipes) unless noted.
+store it without pickle (``codec``), hash it, freeze it and log it to Rerun (``rerun_log``). A node
+package defines its own vocabulary the same way (frozen dataclasses of arrays) and registers how its
+types are logged (``rerun_log.log_value.register``) and written (``output_files.write_output.register``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 
-def _as(array, dtype, shape_tail: tuple[int, ...], name: str) -> np.ndarray:
+def as_array(array, dtype, shape_tail: tuple[int, ...], name: str) -> np.ndarray:
+    """``array`` as ``dtype`` with shape (n, *shape_tail), or a ValueError naming the field."""
     out = np.asarray(array, dtype=dtype)
     if out.ndim != 1 + len(shape_tail) or out.shape[1:] != shape_tail:
         raise ValueError(f"{name}: expected shape (n, {', '.join(map(str, shape_tail))}), got {out.shape}")
     return out
 
 
-def _optional(array, dtype, shape_tail, name, rows: int) -> np.ndarray | None:
+def optional_array(array, dtype, shape_tail, name, rows: int) -> np.ndarray | None:
+    """As ``as_array`` with exactly ``rows`` rows; None stays None (an absent optional field)."""
     if array is None:
         return None
-    out = _as(array, dtype, shape_tail, name)
+    out = as_array(array, dtype, shape_tail, name)
     if len(out) != rows:
         raise ValueError(f"{name}: {len(out)} rows, expected {rows}")
     return out
@@ -31,7 +33,7 @@ def _optional(array, dtype, shape_tail, name, rows: int) -> np.ndarray | None:
 
 @dataclass(frozen=True, eq=False)
 class Mesh:
-    """A triangle mesh. ``parts`` labels faces (e.g. 0 = ikura white/membrane, 1 = yolk)."""
+    """A triangle mesh; ``parts`` optionally labels each face with an integer part id."""
 
     vertices: np.ndarray
     faces: np.ndarray
@@ -41,10 +43,10 @@ class Mesh:
     name: str = ""
 
     def __post_init__(self):
-        object.__setattr__(self, "vertices", _as(self.vertices, np.float64, (3,), "vertices"))
-        object.__setattr__(self, "faces", _as(self.faces, np.int64, (3,), "faces"))
+        object.__setattr__(self, "vertices", as_array(self.vertices, np.float64, (3,), "vertices"))
+        object.__setattr__(self, "faces", as_array(self.faces, np.int64, (3,), "faces"))
         n = len(self.vertices)
-        object.__setattr__(self, "normals", _optional(self.normals, np.float64, (3,), "normals", n))
+        object.__setattr__(self, "normals", optional_array(self.normals, np.float64, (3,), "normals", n))
         if self.colors is not None:
             colors = np.asarray(self.colors)
             if colors.ndim != 2 or colors.shape[1] not in (3, 4) or len(colors) != n:
@@ -69,250 +71,6 @@ class Mesh:
     @property
     def bounds(self) -> np.ndarray:
         return np.stack([self.vertices.min(axis=0), self.vertices.max(axis=0)])
-
-
-@dataclass(frozen=True, eq=False)
-class ElementLibrary:
-    """N distinct elements of one kind (e.g. 16 japonica grains), each a high-resolution mesh.
-
-    ``props`` holds per-element arrays of length N (e.g. ``expansion``, ``circumradius``);
-    ``refine_range`` is the kind's own overlap-refine search range factor (S: chestnut 0.1).
-    """
-
-    kind: str
-    meshes: tuple[Mesh, ...]
-    props: dict[str, np.ndarray] = field(default_factory=dict)
-    refine_range: float = 1.0
-
-    def __post_init__(self):
-        object.__setattr__(self, "meshes", tuple(self.meshes))
-        for key, values in self.props.items():
-            if len(values) != len(self.meshes):
-                raise ValueError(f"props[{key!r}]: {len(values)} values for {len(self.meshes)} meshes")
-
-    def __len__(self) -> int:
-        return len(self.meshes)
-
-
-@dataclass(frozen=True, eq=False)
-class SphereSet:
-    """Spheres (centre, radius); ``tags`` marks e.g. 0 = on the surface, 1 = inside."""
-
-    centers: np.ndarray
-    radii: np.ndarray
-    tags: np.ndarray | None = None
-
-    def __post_init__(self):
-        object.__setattr__(self, "centers", _as(self.centers, np.float64, (3,), "centers"))
-        radii = np.asarray(self.radii, dtype=np.float64)
-        if radii.shape != (len(self.centers),):
-            raise ValueError(f"radii: expected shape ({len(self.centers)},), got {radii.shape}")
-        object.__setattr__(self, "radii", radii)
-        if self.tags is not None:
-            object.__setattr__(self, "tags", np.asarray(self.tags, dtype=np.int8))
-
-    def __len__(self) -> int:
-        return len(self.radii)
-
-
-@dataclass(frozen=True, eq=False)
-class Volume:
-    """A regular grid of cell values; cell (i, j, k) has its centre at ``origin + (i, j, k)·voxel_size``."""
-
-    data: np.ndarray
-    origin: np.ndarray
-    voxel_size: float
-
-    def __post_init__(self):
-        if np.ndim(self.data) != 3:
-            raise ValueError(f"data: expected a 3-D grid, got shape {np.shape(self.data)}")
-        object.__setattr__(self, "origin", np.asarray(self.origin, dtype=np.float64).reshape(3))
-        if not self.voxel_size > 0:
-            raise ValueError(f"voxel_size must be > 0, got {self.voxel_size}")
-
-    def cell_centers(self, mask: np.ndarray | None = None) -> np.ndarray:
-        idx = np.argwhere(self.data if mask is None else mask)
-        return self.origin + idx * self.voxel_size
-
-
-@dataclass(frozen=True, eq=False)
-class DistanceField(Volume):
-    """A distance field on a grid (SPEC §1.4, G eq. 5): positive inside, in length units.
-
-    ``metric`` is ``euclidean`` or ``manhattan``; ``signed`` tells whether outside cells carry
-    negative distances or zero.
-    """
-
-    metric: str = "euclidean"
-    signed: bool = True
-
-
-@dataclass(frozen=True, eq=False)
-class Placement:
-    """Element instances: position, rotation (3×3), kind, surface normal, and P_num (SPEC §2.2–2.4).
-
-    ``kinds[i]`` indexes ``kind_names``; ``variants[i]`` picks the mesh within that kind's library;
-    ``offsets`` is the refine displacement t along the normal; ``overlap`` the residual depth.
-    """
-
-    positions: np.ndarray
-    normals: np.ndarray
-    rotations: np.ndarray | None = None
-    kinds: np.ndarray | None = None
-    variants: np.ndarray | None = None
-    p_num: np.ndarray | None = None
-    offsets: np.ndarray | None = None
-    overlap: np.ndarray | None = None
-    kind_names: tuple[str, ...] = ()
-
-    def __post_init__(self):
-        positions = _as(self.positions, np.float64, (3,), "positions")
-        n = len(positions)
-        object.__setattr__(self, "positions", positions)
-        object.__setattr__(self, "normals", _as(self.normals, np.float64, (3,), "normals"))
-        if len(self.normals) != n:
-            raise ValueError(f"normals: {len(self.normals)} rows, expected {n}")
-        rotations = np.tile(np.eye(3), (n, 1, 1)) if self.rotations is None else np.asarray(self.rotations, np.float64)
-        if rotations.shape != (n, 3, 3):
-            raise ValueError(f"rotations: expected shape ({n}, 3, 3), got {rotations.shape}")
-        object.__setattr__(self, "rotations", rotations)
-        defaults = {"kinds": np.zeros(n, np.int32), "variants": np.zeros(n, np.int32),
-                    "p_num": np.arange(n, dtype=np.int64), "offsets": np.zeros(n), "overlap": np.zeros(n)}
-        for name, default in defaults.items():
-            value = getattr(self, name)
-            value = default if value is None else np.asarray(value, dtype=default.dtype)
-            if value.shape != (n,):
-                raise ValueError(f"{name}: expected shape ({n},), got {value.shape}")
-            object.__setattr__(self, name, value)
-        object.__setattr__(self, "kind_names", tuple(self.kind_names))
-
-    def __len__(self) -> int:
-        return len(self.positions)
-
-    def subset(self, keep: np.ndarray) -> Placement:
-        """The placement restricted to a boolean mask or index array."""
-        return Placement(self.positions[keep], self.normals[keep], self.rotations[keep], self.kinds[keep],
-                         self.variants[keep], self.p_num[keep], self.offsets[keep], self.overlap[keep],
-                         self.kind_names)
-
-
-@dataclass(frozen=True, eq=False)
-class Aggregate:
-    """Placed elements with their meshes: a placement plus one library per kind (in kind order)."""
-
-    placement: Placement
-    libraries: tuple[ElementLibrary, ...]
-    deformations: np.ndarray | None = None  # (n, 3, 3) per-element linear deformation, identity if None
-    # (n, 3, 6) per-element quadratic deformation (SPEC §5 quadratic shape matching), none if None:
-    # coefficients of the local vertex's monomials [x², y², z², xy, yz, zx] (about the mesh origin,
-    # local frame) giving a local-frame displacement, which the rotation turns into world space
-    bends: np.ndarray | None = None
-
-    @staticmethod
-    def monomials(local: np.ndarray) -> np.ndarray:
-        """(k, 6) quadratic monomials [x², y², z², xy, yz, zx] of local points (k, 3) — SPEC §5's q̃ order."""
-        x, y, z = local[:, 0], local[:, 1], local[:, 2]
-        return np.stack([x * x, y * y, z * z, x * y, y * z, z * x], axis=1)
-
-    def element_points(self, i: int, local: np.ndarray) -> np.ndarray:
-        """Points (k, 3) of element i's local frame in world space: D·R·v + R·B·m(v) + t."""
-        p = self.placement
-        transform = p.rotations[i] if self.deformations is None else self.deformations[i] @ p.rotations[i]
-        world = local @ transform.T + p.positions[i]
-        if self.bends is not None:
-            world += (self.monomials(local) @ self.bends[i].T) @ p.rotations[i].T
-        return world
-
-    def element_mesh(self, i: int) -> Mesh:
-        """The i-th element's mesh in world space (rotation, deformation, bend, position applied).
-
-        Normals are rotated by R; a bent element's normals go through the map's Jacobian instead
-        (cofactor matrix, so they stay normal to the bent surface)."""
-        p = self.placement
-        base = self.libraries[p.kinds[i]].meshes[p.variants[i] % len(self.libraries[p.kinds[i]])]
-        vertices = self.element_points(i, base.vertices)
-        if base.normals is None:
-            normals = None
-        elif self.bends is None:
-            normals = base.normals @ p.rotations[i].T
-        else:
-            normals = self._bent_normals(i, base.vertices, base.normals)
-        return Mesh(vertices, base.faces, normals=normals, parts=base.parts, name=f"{base.name}#{i}")
-
-    def _bent_normals(self, i: int, local: np.ndarray, normals: np.ndarray) -> np.ndarray:
-        """cof(J)·n, normalised, with J(v) = D·R + R·B·∂m/∂v the Jacobian of ``element_points``."""
-        rotation = self.placement.rotations[i]
-        linear = rotation if self.deformations is None else self.deformations[i] @ rotation
-        x, y, z = local[:, 0], local[:, 1], local[:, 2]
-        zero = np.zeros_like(x)
-        dm = np.stack([np.stack(row, axis=-1) for row in (
-            (2 * x, zero, zero), (zero, 2 * y, zero), (zero, zero, 2 * z), (y, x, zero), (zero, z, y),
-            (z, zero, x))], axis=1)  # (k, 6, 3)
-        jac = linear + np.einsum("ij,jk,vkl->vil", rotation, self.bends[i], dm)
-        a, b, c = jac[:, :, 0], jac[:, :, 1], jac[:, :, 2]
-        cof = np.stack([np.cross(b, c), np.cross(c, a), np.cross(a, b)], axis=2)  # det(J)·J⁻ᵀ
-        out = np.einsum("vij,vj->vi", cof, normals)
-        return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-300)
-
-    def combined_mesh(self) -> Mesh | None:
-        """Every element in world space as one mesh (None when empty): one draw call in a viewer."""
-        meshes = [self.element_mesh(i) for i in range(len(self.placement))]
-        if not meshes:
-            return None
-        offsets = np.cumsum([0] + [len(m.vertices) for m in meshes[:-1]])
-        return Mesh(np.concatenate([m.vertices for m in meshes]),
-                    np.concatenate([m.faces + o for m, o in zip(meshes, offsets)]), name="aggregate")
-
-
-@dataclass(frozen=True, eq=False)
-class ParticleState:
-    """Simulation particles (struct of arrays) at one instant; ``element`` maps particle → element."""
-
-    positions: np.ndarray
-    velocities: np.ndarray
-    radii: np.ndarray
-    inv_mass: np.ndarray
-    element: np.ndarray
-    time: float = 0.0
-
-    def __len__(self) -> int:
-        return len(self.positions)
-
-
-@dataclass(frozen=True, eq=False)
-class Material:
-    """A principled BSDF parameter set (G Table 3 colour columns); colours are linear RGB in [0, 1]."""
-
-    name: str
-    base_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
-    subsurface: float = 0.0
-    subsurface_radius: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    subsurface_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
-    metallic: float = 0.0
-    specular: float = 0.5
-    roughness: float = 0.5
-    anisotropic: float = 0.0
-    anisotropic_rotation: float = 0.0
-    clearcoat: float = 0.0
-    clearcoat_roughness: float = 0.03
-    ior: float = 1.45
-    transmission: float = 0.0
-    emission: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    emission_strength: float = 0.0
-
-
-@dataclass(frozen=True, eq=False)
-class ShadedScene:
-    """Meshes with per-vertex colours and one material each (``material_of[i]`` indexes ``materials``)."""
-
-    meshes: tuple[Mesh, ...]
-    materials: tuple[Material, ...]
-    material_of: np.ndarray
-
-    def __post_init__(self):
-        object.__setattr__(self, "meshes", tuple(self.meshes))
-        object.__setattr__(self, "materials", tuple(self.materials))
-        object.__setattr__(self, "material_of", np.asarray(self.material_of, dtype=np.int32))
 
 
 @dataclass(frozen=True, eq=False)

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
-from nodegraph.values import DistanceField, Mesh, SphereSet, Volume
+from nodegraph.values import Mesh
+from ..values import DistanceField, SphereSet, Volume
 
 METHODS = ("exact", "euclidean", "manhattan")
 

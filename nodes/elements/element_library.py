@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
-from nodegraph.values import ElementLibrary, Mesh
+from nodegraph.values import Mesh
+from ..values import ElementLibrary
 
 
 @node("element_library", version=1,

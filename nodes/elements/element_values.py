@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from nodegraph.values import DistanceField, Mesh
+from nodegraph.values import Mesh
+from ..values import DistanceField
 
 
 @dataclass(frozen=True, eq=False)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
-from nodegraph.values import DistanceField
+from ..values import DistanceField
 
 from .base_mesh import VARIETIES
 from .element_values import ExpandedField

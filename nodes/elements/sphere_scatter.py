@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
-from nodegraph.values import Mesh, SphereSet
+from nodegraph.values import Mesh
+from ..values import SphereSet
 
 
 def _check(p: dict) -> list[tuple[str, str]]:

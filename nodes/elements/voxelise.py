@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from nodegraph import In, Out, Param, node
-from nodegraph.values import Mesh, SphereSet, Volume
+from nodegraph.values import Mesh
+from ..values import SphereSet, Volume
 
 #: Default from benchmarks/bench_elements.py (exact route): at 64 cells the mean surface error is
 #: 0.04 % of the grain length (0.02 voxel), volume −0.2 %, 16 grains 0.7–1.1 s on 2 shared cores;

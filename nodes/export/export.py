@@ -10,7 +10,8 @@ import re
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import FileSet, ShadedScene
+from nodegraph.values import FileSet
+from ..values import ShadedScene
 
 FORMATS = ("glb", "usda", "usdc", "ply", "obj")
 

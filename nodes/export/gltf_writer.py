@@ -14,7 +14,7 @@ import struct
 
 import numpy as np
 
-from nodegraph.values import Material, ShadedScene
+from ..values import Material, ShadedScene
 
 FLOAT, UINT = 5126, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963

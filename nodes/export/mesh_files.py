@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodegraph.values import ShadedScene
+from ..values import ShadedScene
 
 
 def linear_to_srgb8(colors: np.ndarray) -> np.ndarray:

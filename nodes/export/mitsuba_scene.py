@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nodegraph.values import Material, ShadedScene
+from ..values import Material, ShadedScene
 
 SKY = 1.0            # radiance of the uniform sky (the CDRF colours are multiplied by ≈ this × visibility)
 SUN_SHARE = 0.1      # the sun's irradiance as a share of the sky's: highlights without re-lighting much

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import Image, ShadedScene
+from nodegraph.values import Image
+from ..values import ShadedScene
 
 
 @node(

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nodegraph.values import Material, ShadedScene
+from ..values import Material, ShadedScene
 
 
 def prim_name(text: str, k: int) -> str:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodegraph.values import ElementLibrary
+from ..values import ElementLibrary
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,7 +156,7 @@ def template_params():
 
 def with_kind_names(placement, libraries: tuple[ElementLibrary, ...]):
     """The placement naming its kinds: one without (no mix_ratio upstream) takes the single library's kind."""
-    from nodegraph.values import Placement
+    from ..values import Placement
 
     if placement.kind_names:
         return placement

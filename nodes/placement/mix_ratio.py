@@ -6,7 +6,7 @@ import numpy as np
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import Aggregate, ElementLibrary, Placement
+from ..values import Aggregate, ElementLibrary, Placement
 
 
 @node(

@@ -6,7 +6,8 @@ import numpy as np
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import Aggregate, ElementLibrary, Placement, Table
+from nodegraph.values import Table
+from ..values import Aggregate, ElementLibrary, Placement
 
 from .element_templates import template_params
 

@@ -6,7 +6,8 @@ import numpy as np
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import ElementLibrary, Mesh, Placement, Table
+from nodegraph.values import Mesh, Table
+from ..values import ElementLibrary, Placement
 
 
 @node(

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodegraph.values import Placement
+from ..values import Placement
 
 from .element_templates import ElementTemplates
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodegraph.values import Material
+from ..values import Material
 
 from .cdrf import WATER_MAX
 

@@ -11,7 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodegraph.values import Aggregate, Material, Mesh, ShadedScene
+from nodegraph.values import Mesh
+from ..values import Aggregate, Material, ShadedScene
 
 from . import materials as mat
 from .cdrf import CdrfTable

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import Aggregate, Mesh, ShadedScene
+from nodegraph.values import Mesh
+from ..values import Aggregate, ShadedScene
 
 RGB = tuple[float, float, float]
 

@@ -11,7 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodegraph.values import Aggregate, Mesh
+from nodegraph.values import Mesh
+from ..values import Aggregate
 
 
 @dataclass(frozen=True, eq=False)

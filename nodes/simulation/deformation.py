@@ -47,7 +47,7 @@ def element_bends(x, w, start, q_rest, rotations, centres, positions, deformatio
     parts of m(v − c₀) move into the deformation and the position. Unflagged clusters (too few or
     degenerate particles, the solver's linear goal) keep a zero bend and their linear map unchanged.
     """
-    from nodegraph.values import Aggregate
+    from ..values import Aggregate
 
     m = len(start) - 1
     positions, deformations = positions.copy(), deformations.copy()

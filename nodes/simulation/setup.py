@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodegraph.values import Aggregate, ParticleState, Placement
+from ..values import Aggregate, ParticleState, Placement
 
 from .aggregate import DeformedAggregate
 from .clusters import element_cluster, matrix_to_quat

@@ -246,7 +246,7 @@ def quadratic_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, cond
     the nine modes), gets the linear goal: a pseudo-inverse would leave its unobservable quadratic
     modes to fit noise.
     """
-    from nodegraph.values import Aggregate
+    from ..values import Aggregate
 
     m = len(start) - 1
     qt = np.zeros((len(q_rest), 9))

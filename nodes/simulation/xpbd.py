@@ -9,7 +9,8 @@ import numpy as np
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import Aggregate, Mesh, ParticleState
+from nodegraph.values import Mesh
+from ..values import Aggregate, ParticleState
 
 
 def _check(params):
@@ -132,7 +133,7 @@ def _log_particles(ctx, solver, frame):
 
 
 def _log_meshes(ctx, aggregate, step):
-    from nodegraph.rerun_log import elements_mesh3d
+    from ..rerun_loggers import elements_mesh3d
 
     ctx.rerun.set_time("sim_step", step)
     ctx.rerun.log("elements", elements_mesh3d(aggregate))  # never empty: build_simulation refuses that

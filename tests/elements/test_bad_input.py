@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from nodegraph.params import ParamValueError
-from nodegraph.values import SphereSet
+from nodes.values import SphereSet
 from nodes.elements import distance_field, expand, remesh, sphere_scatter, voxelise
 
 from .conftest import run

@@ -131,7 +131,8 @@ def test_variety_expansion(japonica):
 
 
 def test_element_far_from_origin(japonica):
-    from nodegraph.values import Mesh, SphereSet
+    from nodegraph.values import Mesh
+    from nodes.values import SphereSet
 
     spheres = run(sphere_scatter, seed=8, mesh=japonica)
     shift = np.array([1e5, -2e5, 3e4])

@@ -1,5 +1,6 @@
 """Cache writes are atomic; corrupt entries are detected, reported and recomputed."""
 
+import json
 import os
 import signal
 import subprocess
@@ -16,7 +17,7 @@ from nodegraph.cache import Cache
 from nodegraph.executor import run_recipe
 from nodegraph.recipe import parse_recipe
 from nodegraph.report import Reporter
-from nodegraph.values import SphereSet
+from nodegraph.values import Table
 
 RECIPE = """\
 outputs: [shifted]
@@ -32,15 +33,15 @@ def run(registry, cache, reporter=None):
 
 
 def test_store_and_load_round_trip(cache):
-    value = SphereSet(np.arange(12.0).reshape(4, 3), np.ones(4))
-    cache.store("k" * 64, {"spheres": value}, "n", "t")
+    value = Table({"x": np.arange(12.0), "n": np.ones(12, np.int64)})
+    cache.store("k" * 64, {"table": value}, "n", "t")
     assert cache.has("k" * 64)
-    loaded = cache.load("k" * 64, {"spheres": SphereSet})["spheres"]
+    loaded = cache.load("k" * 64, {"table": Table})["table"]
     assert codec.content_hash(loaded) == codec.content_hash(value)
 
 
 def test_identical_outputs_share_one_blob(cache):
-    value = SphereSet(np.zeros((3, 3)), np.ones(3))
+    value = Table({"x": np.zeros(3)})
     cache.store("a" * 64, {"s": value}, "n1", "t")
     cache.store("b" * 64, {"s": value}, "n2", "t")
     info = cache.info()
@@ -78,8 +79,11 @@ def test_crash_inside_a_write_leaves_no_partial_file(tmp_path, monkeypatch):
 @pytest.mark.parametrize("damage", ["truncate", "flip", "delete", "garbage_entry"])
 def test_corrupt_entry_is_detected_reported_and_recomputed(registry, cache, damage):
     first = run(registry, cache)
-    blob = next(cache.directory.glob("blobs/*/*.npz"))
     entries = list(cache.directory.glob("entries/*/*.json"))
+    # the requested output's blob (pull-based: a damaged upstream blob is never read while it is cached)
+    manifest = next(json.loads(e.read_text()) for e in entries if json.loads(e.read_text())["node"] == "shifted")
+    digest = manifest["outputs"]["spheres"]["blob"]
+    blob = cache.directory / "blobs" / digest[:2] / f"{digest}.npz"
     if damage == "truncate":
         blob.write_bytes(blob.read_bytes()[:-20])
     elif damage == "flip":
@@ -110,7 +114,7 @@ nodes:
 """
 
 
-def test_killed_run_keeps_finished_nodes_and_no_torn_entries(tmp_path):
+def test_killed_run_keeps_finished_nodes_and_no_torn_entries(tmp_path, registry):
     recipe = tmp_path / "slow.yaml"
     recipe.write_text(SLOW)
     cache_dir = tmp_path / "cache"
@@ -127,4 +131,5 @@ def test_killed_run_keeps_finished_nodes_and_no_torn_entries(tmp_path):
     assert cache.info().entries == 1  # pts only; slow was killed mid-run
     for entry in cache_dir.glob("entries/*/*.json"):
         key = entry.stem
-        assert cache.load(key, {"spheres": SphereSet})["spheres"].centers.shape == (5, 3)
+        spheres_type = registry["toy_points"].outputs["spheres"].type
+        assert cache.load(key, {"spheres": spheres_type})["spheres"].centers.shape == (5, 3)

@@ -168,7 +168,8 @@ def test_every_value_type_logs_with_its_archetype(tmp_path):
     import numpy as np
 
     from nodegraph.rerun_log import RunRecording, log_value
-    from nodegraph.values import DistanceField, Mesh, Table, Volume
+    from nodegraph.values import Mesh, Table
+    from nodes.values import DistanceField, Volume
 
     grid = np.zeros((6, 6, 6))
     grid[1:5, 1:5, 1:5] = 1.0

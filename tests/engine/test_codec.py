@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from nodegraph import codec
-from nodegraph.values import ElementLibrary, Mesh, Placement, Table
+from nodegraph.values import Mesh, Table
+from nodes.values import ElementLibrary, Placement
 
 
 def tetra(name=""):

@@ -10,7 +10,7 @@ from nodegraph import registry as registry_module
 from nodegraph.errors import NodeDeclarationError
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import Mesh, SphereSet
+from nodegraph.values import Mesh, Table
 
 PLUGIN = textwrap.dedent('''
     from nodegraph import Out, Param, node
@@ -60,4 +60,4 @@ def test_declaration_errors_are_caught_when_declared():
         node("bad", version=1, inputs={"x": In(Mesh)}, outputs={"y": Out(Mesh)}, params={"x": Param(int, 1)})(
             lambda ctx, x: x)
     with pytest.raises(NodeDeclarationError, match="lacks arguments"):
-        node("bad", version=1, inputs={"mesh": In(Mesh)}, outputs={"y": Out(SphereSet)})(lambda ctx: None)
+        node("bad", version=1, inputs={"mesh": In(Mesh)}, outputs={"y": Out(Table)})(lambda ctx: None)

@@ -1,11 +1,33 @@
-"""Small node types for engine tests (the engine must not depend on the real nodes)."""
+"""Small node types for engine tests (the engine must not depend on the real nodes): a plugin file
+with its own value type, as a user's would be."""
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
 from nodegraph import In, Out, Param, node
-from nodegraph.values import Mesh, SphereSet, Table
+from nodegraph.rerun_log import log_value
+from nodegraph.values import Mesh, Table
+
+
+@dataclass(frozen=True, eq=False)
+class SphereSet:
+    """Spheres (centre, radius): the toy nodes' own value type."""
+
+    centers: np.ndarray
+    radii: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.radii)
+
+
+@log_value.register
+def _(value: SphereSet, log) -> None:
+    """A plugin's value type registers its own Rerun view."""
+    import rerun as rr
+
+    log.log("", rr.Points3D(value.centers.astype(np.float32), radii=value.radii.astype(np.float32)), static=True)
 
 
 @node("toy_points", version=1, random=True,

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from nodegraph import Context
-from nodegraph.values import ElementLibrary, Mesh
+from nodegraph.values import Mesh
+from nodes.values import ElementLibrary
 
 
 def run(spec, seed=0, **given):

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from nodegraph.values import ElementLibrary, Mesh
+from nodegraph.values import Mesh
+from nodes.values import ElementLibrary
 from nodes.placement import poisson_place
 from nodes.shapes import shape
 

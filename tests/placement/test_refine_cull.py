@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodegraph.values import ElementLibrary, Mesh, Placement
+from nodegraph.values import Mesh
+from nodes.values import ElementLibrary, Placement
 from nodes.placement import cull, mix_ratio, overlap_refine, poisson_place, rotate
 from nodes.placement.medial_spheres import medial_spheres, union_fit
 

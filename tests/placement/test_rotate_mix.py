@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodegraph.values import Placement
+from nodes.values import Placement
 from nodes.placement import mix_ratio, rotate
 
 from .conftest import digest, rice_library, run

@@ -18,7 +18,8 @@ def scene_inputs():
     import trimesh
 
     from nodegraph.context import Context
-    from nodegraph.values import Aggregate, ElementLibrary, Mesh, Placement
+    from nodegraph.values import Mesh
+    from nodes.values import Aggregate, ElementLibrary, Placement
     from nodes.elements import base_mesh
     from nodes.shapes import shape
 

@@ -12,7 +12,8 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from nodegraph import codec
-from nodegraph.values import Aggregate, ElementLibrary, Mesh, Placement
+from nodegraph.values import Mesh
+from nodes.values import Aggregate, ElementLibrary, Placement
 from nodes.simulation.aggregate import DeformedAggregate
 from nodes.simulation.setup import build_simulation, snapshot_aggregate
 from nodes.simulation.xpbd import xpbd

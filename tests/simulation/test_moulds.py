@@ -7,7 +7,8 @@ from scipy.spatial.transform import Rotation
 from xpbd_scenes import rice_library
 
 from nodegraph.context import Context
-from nodegraph.values import Aggregate, Mesh, Placement
+from nodegraph.values import Mesh
+from nodes.values import Aggregate, Placement
 from nodes.simulation.xpbd import xpbd
 
 PRESS = ("contact", "friction", "adhesion", "collider", "moisture", "damping")

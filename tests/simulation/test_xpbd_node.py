@@ -7,7 +7,7 @@ import pytest
 from xpbd_scenes import box_mesh, ikura_mesh, rice_bowl
 
 from nodegraph.context import Context, EntityLogger
-from nodegraph.values import Aggregate, ElementLibrary, Placement
+from nodes.values import Aggregate, ElementLibrary, Placement
 from nodes.simulation.aggregate import DeformedAggregate
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.xpbd import xpbd

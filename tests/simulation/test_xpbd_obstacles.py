@@ -7,7 +7,7 @@ from scipy.spatial import cKDTree
 from xpbd_scenes import ikura_mesh, rice_bowl
 
 from nodegraph.context import Context
-from nodegraph.values import Aggregate, ElementLibrary, ParticleState, Placement
+from nodes.values import Aggregate, ElementLibrary, ParticleState, Placement
 from nodes.simulation.setup import build_simulation, finish_simulation
 from nodes.simulation.xpbd import xpbd
 

@@ -8,7 +8,8 @@ import numpy as np
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from nodegraph.values import Aggregate, ElementLibrary, Mesh, Placement
+from nodegraph.values import Mesh
+from nodes.values import Aggregate, ElementLibrary, Placement
 
 
 def grain_mesh(length=5.0, width=3.0, height=2.5, name="grain") -> Mesh:
