@@ -18,6 +18,7 @@ from .executor import run_recipe
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
+from .rerun_log import has_display
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -74,14 +75,23 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _cmd_run(args, registry) -> int:
+    if args.no_rrd and (args.spawn or args.rrd):
+        given = " and ".join(f for f, on in (("--spawn", args.spawn), ("--rrd", args.rrd)) if on)
+        raise NodegraphError(f"--no-rrd contradicts {given}: a viewer and a recording file both need the "
+                             "recording; drop one of them")
     recipe = load_recipe(args.recipe, registry, args.overrides)
     out_dir = args.out_dir or Path("outputs") / recipe.name
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
+    spawn = args.spawn
+    if spawn and not has_display():  # said before anything is computed
+        reporter.warn(f"--spawn: no display (DISPLAY and WAYLAND_DISPLAY are unset), so no viewer opens; the "
+                      f"recording is written to {rrd} (open it later with: rerun {rrd})")
+        spawn = False
     try:
         result = run_recipe(recipe, outputs=args.outputs or None, cache=cache, out_dir=out_dir, rrd=rrd,
-                            spawn=args.spawn, reporter=reporter)
+                            spawn=spawn, reporter=reporter)
     except (NodeFailure, KeyboardInterrupt):
         reporter.print_summary()
         raise
@@ -229,6 +239,10 @@ def _cmd_cache(args, registry) -> int:
     return 0
 
 
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
 COMMANDS = {"run": _cmd_run, "check": _cmd_check, "nodes": _cmd_nodes, "describe": _cmd_describe,
             "graph": _cmd_graph, "cache": _cmd_cache, "docs": _cmd_docs}
 
@@ -236,6 +250,9 @@ COMMANDS = {"run": _cmd_run, "check": _cmd_check, "nodes": _cmd_nodes, "describe
 def main(argv: list[str] | None = None) -> int:
     if argv is None:  # as a command, die quietly when the reader of a pipe goes away (| head)
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+        # SIGTERM (kill, a job scheduler) ends a run as Ctrl-C does: finished nodes stay cached and
+        # the recording is closed as partial beside the last complete one
+        signal.signal(signal.SIGTERM, _interrupt)
     args = build_parser().parse_args(argv)
     try:
         registry = default_registry(plugins=args.plugin) if args.command != "cache" else None

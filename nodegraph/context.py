@@ -23,12 +23,28 @@ class ProgressTask:
             self._callback(amount)
 
 
-class EntityLogger:
-    """Rerun logging confined to a node's entity subtree ``/<node id>/…``; inert when no recording."""
+class LogIndex:
+    """What a run logged: entity path → the archetype names logged there, and whether any of it was
+    temporal (on a timeline) — what the recording's blueprint is built from."""
 
-    def __init__(self, recording: Any | None, prefix: str):
+    def __init__(self):
+        self.archetypes: dict[str, set[str]] = {}
+        self.temporal: set[str] = set()
+
+    def add(self, path: str, archetype: str, static: bool) -> None:
+        self.archetypes.setdefault(path, set()).add(archetype)
+        if not static:
+            self.temporal.add(path)
+
+
+class EntityLogger:
+    """Rerun logging confined to an entity subtree; inert when no recording. ``index`` (optional)
+    notes every path logged, for the blueprint."""
+
+    def __init__(self, recording: Any | None, prefix: str, index: LogIndex | None = None):
         self.recording = recording
         self.prefix = prefix.rstrip("/")
+        self.index = index
 
     @property
     def enabled(self) -> bool:
@@ -38,9 +54,16 @@ class EntityLogger:
         sub = sub.strip("/")
         return f"{self.prefix}/{sub}" if sub else self.prefix
 
+    def child(self, sub: str) -> EntityLogger:
+        """A logger for the subtree ``sub`` below this one (same recording and index)."""
+        return EntityLogger(self.recording, self.path(sub), self.index)
+
     def log(self, sub: str, archetype: Any, static: bool = False) -> None:
         if self.recording is not None:
-            self.recording.log(self.path(sub), archetype, static=static)
+            path = self.path(sub)
+            self.recording.log(path, archetype, static=static)
+            if self.index is not None:
+                self.index.add(path, type(archetype).__name__, static)
 
     def set_time(self, timeline: str, sequence: int) -> None:
         if self.recording is not None:
@@ -50,9 +73,13 @@ class EntityLogger:
         if self.recording is not None:
             self.recording.reset_time()
 
-    def send_columns(self, sub: str, indexes: list, columns: Any) -> None:
+    def send_columns(self, sub: str, indexes: list, columns: Any, archetype: str = "Scalars") -> None:
+        """A whole series at once (``archetype`` names what the columns hold, for the blueprint)."""
         if self.recording is not None:
-            self.recording.send_columns(self.path(sub), indexes=indexes, columns=columns)
+            path = self.path(sub)
+            self.recording.send_columns(path, indexes=indexes, columns=columns)
+            if self.index is not None:
+                self.index.add(path, archetype, static=False)
 
 
 @dataclass

@@ -22,6 +22,7 @@ from .output_files import write_output
 from .params import canonical
 from .recipe import NodeEntry, Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
+from .blueprint import LOG, build_blueprint
 from .rerun_log import RunRecording, log_value
 
 CACHE_FORMAT = 2  # 2: the domain value types moved from nodegraph.values to nodes.values (stored type names)
@@ -210,7 +211,9 @@ class Executor:
             seed=self._seed(entry, inst.variant),
             effects=frozenset(spec.effects & self.recipe.effects),
             variant=inst.variant,
-            rerun=self.recording.logger(inst.entity) if self.recording else EntityLogger(None, inst.entity),
+            # the node's own logging under /<node>/log: never at an output's path, where the static output
+            # (the final state) would shadow what the node logged on a timeline (a simulation per step)
+            rerun=self.recording.logger(f"{inst.entity}/{LOG}") if self.recording else EntityLogger(None, inst.entity),
             reporter=self.reporter,
         )
         start = now()
@@ -284,9 +287,19 @@ class Executor:
 def run_recipe(recipe: Recipe, *, outputs: list[str] | None = None, cache: Cache | None = None,
                out_dir: Path | None = None, rrd: Path | None = None, spawn: bool = False,
                reporter: Reporter | None = None) -> RunResult:
-    """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``."""
+    """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``.
+
+    The recording is written beside ``rrd`` as ``*.partial.rrd`` and moved over ``rrd`` only when the run
+    completes; its id is derived from what the recipe computes (``Recipe.digest``), so two settings of a
+    recipe are two recordings a viewer shows side by side, and it carries a blueprint built from the
+    recipe and what was logged (``blueprint``)."""
     wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
-    recording = RunRecording(rrd, recipe.name, spawn=spawn) if rrd is not None else None
+    warn = reporter.warn if reporter is not None else None
+    recording = None
+    if rrd is not None:
+        digest = recipe.digest()
+        recording = RunRecording(rrd, recording_name(recipe), spawn=spawn, warn=warn,
+                                 recording_id=f"{recipe.name}-{digest[:16]}")
     executor = Executor(recipe, cache, reporter, recording)
     ok = False
     try:
@@ -296,10 +309,18 @@ def run_recipe(recipe: Recipe, *, outputs: list[str] | None = None, cache: Cache
         ok = True
     finally:
         if recording is not None:
-            recording.close(keep=True)
+            blueprint = build_blueprint(recipe, recording.index) if ok else None
+            written = recording.close(complete=ok, blueprint=blueprint)
             if ok:
-                result.rrd = recording.path
+                result.rrd = written
+            elif warn is not None:
+                warn(f"the run did not complete: its recording is {written}; {recording.path} was left as it was")
     return result
+
+
+def recording_name(recipe: Recipe) -> str:
+    """The recording's name in a viewer: the recipe and the overrides that make this setting."""
+    return " ".join([recipe.name, *recipe.overrides])
 
 
 def resolve_outputs(recipe: Recipe, refs: list[str]) -> list[Wire]:

@@ -8,6 +8,8 @@ outputs are then checked against the registry, each issue with file:line:column 
 from __future__ import annotations
 
 import difflib
+import hashlib
+import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,7 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from .errors import Issue, Location, RecipeError
 from .node import NodeSpec
-from .params import ParamValueError
+from .params import ParamValueError, canonical
 from .registry import Registry
 from .yaml_source import SourceMap, load_yaml, load_yaml_file
 
@@ -87,6 +89,17 @@ class Recipe:
     nodes: dict[str, NodeEntry]
     source: SourceMap
     graph: nx.DiGraph = field(repr=False)
+    overrides: tuple[str, ...] = ()  # the --set texts applied on top of the file
+
+    def digest(self) -> str:
+        """sha256 of what the recipe computes (name, seed, effects, outputs, every node's type, parameters,
+        variants and wires): two settings of one recipe differ, one setting run twice does not."""
+        nodes = {node_id: {"type": e.spec.type_name, "params": canonical(e.params), "family": e.family,
+                           "inputs": {port: [str(w) for w in wires] for port, wires in sorted(e.inputs.items())}}
+                 for node_id, e in sorted(self.nodes.items())}
+        text = json.dumps({"name": self.name, "seed": self.seed, "effects": sorted(self.effects),
+                           "outputs": [str(w) for w in self.outputs], "nodes": nodes}, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()
 
     def upstream(self, node_ids) -> set[str]:
         """The given nodes and every node they depend on (what a pull-based run must consider)."""
@@ -245,7 +258,7 @@ class _Validator:
             return None
         name = model.name or self.name or Path(self.source.file).stem
         return Recipe(name=name, path=self.source.file, seed=model.seed, effects=effects, outputs=outputs,
-                      nodes=entries, source=self.source, graph=graph)
+                      nodes=entries, source=self.source, graph=graph, overrides=tuple(self.overrides))
 
     def _node(self, node_id: str, model: NodeModel, path: tuple, wire_sources) -> NodeEntry | None:
         spec = self.registry.get(model.type)

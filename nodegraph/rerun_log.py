@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import sys
 import uuid
 from functools import singledispatch
 from pathlib import Path
@@ -16,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from .context import EntityLogger
+from .context import EntityLogger, LogIndex
 from .values import FileSet, Image, Mesh, Table
 
 
@@ -26,33 +27,58 @@ def rerun_module():
     return rr
 
 
-class RunRecording:
-    """One ``rr.RecordingStream`` per run, saved to a temporary file and renamed when closed."""
+def partial_path(path: Path) -> Path:
+    """Where a run's recording is written until the run completes: ``name.partial.rrd`` beside it."""
+    return path.with_name(f"{path.stem}.partial{path.suffix}")
 
-    def __init__(self, path: str | Path, recipe_name: str, spawn: bool = False):
+
+def has_display() -> bool:
+    """True when a viewer window can open here (an X or Wayland display, or not Linux)."""
+    return not sys.platform.startswith("linux") or bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+class RunRecording:
+    """One ``rr.RecordingStream`` per run, written to ``name.partial.rrd`` and renamed over ``name.rrd``
+    only when the run completes, so an interrupted or failed run never replaces a complete recording
+    (its partial file stays beside it, named as partial; the next complete run removes it).
+
+    ``recording_id`` names the run (e.g. a digest of recipe and overrides), so runs of two settings
+    are two recordings that a viewer shows side by side. ``spawn`` also streams to a viewer; a viewer
+    that cannot start is reported through ``warn`` and the file is still written."""
+
+    def __init__(self, path: str | Path, recipe_name: str, spawn: bool = False, recording_id: str | None = None,
+                 warn=None):
         rr = rerun_module()
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._tmp = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex[:8]}.tmp")
-        self.stream = rr.RecordingStream("nodegraph", recording_id=str(uuid.uuid4()))
+        self.partial = partial_path(self.path)
+        self.index = LogIndex()
+        self.stream = rr.RecordingStream("nodegraph", recording_id=recording_id or str(uuid.uuid4()))
         self.stream.send_recording_name(recipe_name)
+        sinks = [rr.FileSink(str(self.partial))]
         if spawn:
-            self.stream.spawn(connect=False)
-            self.stream.set_sinks(rr.FileSink(str(self._tmp)), rr.GrpcSink())
-        else:
-            self.stream.save(str(self._tmp))
+            try:
+                self.stream.spawn(connect=False)
+                sinks.append(rr.GrpcSink())
+            except Exception as exc:  # no viewer binary, no port: the file is what matters
+                if warn is not None:
+                    warn(f"--spawn: the Rerun viewer did not start ({exc}); recording to {self.path} only")
+        self.stream.set_sinks(*sinks)
 
     def logger(self, prefix: str) -> EntityLogger:
-        return EntityLogger(self.stream, prefix)
+        return EntityLogger(self.stream, prefix, self.index)
 
-    def close(self, keep: bool = True) -> None:
-        """Flush, write the footer (by disconnecting the sink) and move the file into place."""
+    def close(self, complete: bool = True, blueprint=None) -> Path:
+        """Send the blueprint, flush, write the footer (by disconnecting the sinks); a complete run's
+        file replaces ``path``, an incomplete one stays at ``partial``. Returns where the file is."""
+        if blueprint is not None:
+            self.stream.send_blueprint(blueprint)
         self.stream.flush()
         self.stream.disconnect()
-        if keep:
-            os.replace(self._tmp, self.path)
-        else:
-            self._tmp.unlink(missing_ok=True)
+        if not complete:
+            return self.partial
+        os.replace(self.partial, self.path)
+        return self.path
 
 
 @singledispatch

@@ -7,6 +7,7 @@ normals, aggregates as one mesh, particles as points, shaded scenes mesh by mesh
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import numpy as np
 
@@ -25,7 +26,7 @@ def _(value: ElementLibrary, log: EntityLogger) -> None:
     for i, mesh in enumerate(value.meshes):
         lo, hi = mesh.bounds
         shift = np.array([offset - lo[0], 0.0, 0.0])
-        log_value(dataclasses.replace(mesh, vertices=mesh.vertices + shift), EntityLogger(log.recording, log.path(f"{i}")))
+        log_value(dataclasses.replace(mesh, vertices=mesh.vertices + shift), log.child(f"{i}"))
         offset += (hi[0] - lo[0]) * 1.2
 
 
@@ -86,7 +87,21 @@ def _(value: ParticleState, log: EntityLogger) -> None:
                             class_ids=(value.element % 65535).astype(np.uint16)), static=True)
 
 
+def _entity_parts(name: str) -> list[str]:
+    """Entity path parts from a mesh name like ``japonica/0012`` or ``ikura/0003/yolk`` (unsafe characters
+    replaced)."""
+    parts = [re.sub(r"[^A-Za-z0-9_.-]", "_", part) for part in name.split("/") if part]
+    return parts
+
+
 @log_value.register
 def _(value: ShadedScene, log: EntityLogger) -> None:
+    """Each mesh under its name (``/shade/scene/japonica/0012``, ``…/ikura/0003/yolk``, ``…/bowl_container``),
+    with its element kind and material as properties."""
+    rr = rerun_module()
     for i, mesh in enumerate(value.meshes):
-        log_value(mesh, EntityLogger(log.recording, log.path(f"{i}")))
+        parts = _entity_parts(mesh.name) or [f"mesh_{i:04d}"]
+        child = log.child("/".join(parts))
+        log_value(mesh, child)
+        material = value.materials[value.material_of[i]]
+        child.log("", rr.AnyValues(kind=parts[0], material=material.name), static=True)

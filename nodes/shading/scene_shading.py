@@ -7,6 +7,7 @@ then split back into one mesh per element part (ikura: membrane, yolk).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,7 +42,9 @@ class _Piece:
     material: Material
 
 
-def _element_pieces(aggregate: Aggregate, settings: ShadeSettings) -> list[_Piece]:
+def _element_pieces(aggregate: Aggregate, settings: ShadeSettings, numbers: dict[str, int]) -> list[_Piece]:
+    """The aggregate's element parts with their materials, named ``<kind>/<number>[/<part>]``, numbered per
+    kind across the scene's aggregates (``numbers``: the next number of each kind)."""
     p = aggregate.placement
     kinds = [lib.kind for lib in aggregate.libraries]
     presets = [mat.preset_for_kind(kind, settings.presets) for kind in kinds]
@@ -54,7 +57,9 @@ def _element_pieces(aggregate: Aggregate, settings: ShadeSettings) -> list[_Piec
     pieces = []
     for i in range(len(p)):
         preset = presets[p.kinds[i]]
-        mesh = aggregate.element_mesh(i)
+        kind = kinds[p.kinds[i]]
+        numbers[kind] = numbers.get(kind, -1) + 1
+        mesh = dataclasses.replace(aggregate.element_mesh(i), name=f"{kind}/{numbers[kind]:04d}")
         if preset == "rice":
             pieces.append(_Piece(mesh, rice))
         elif preset == "ice":
@@ -77,7 +82,8 @@ def _submesh(mesh: Mesh, face_mask: np.ndarray, name: str) -> Mesh:
 
 def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: ShadeSettings) -> ShadedScene:
     """CDRF-shaded meshes, one per element part and scenery mesh, with their materials."""
-    pieces = [piece for aggregate in aggregates for piece in _element_pieces(aggregate, settings)]
+    numbers: dict[str, int] = {}
+    pieces = [piece for aggregate in aggregates for piece in _element_pieces(aggregate, settings, numbers)]
     if not pieces:
         raise ValueError("aggregates: no elements to shade (every aggregate is empty)")
     ceramic = mat.ceramic_material(settings.scenery_color)

@@ -24,7 +24,7 @@ def _check(params):
 
 @node(
     "shade",
-    version=1,
+    version=2,  # 2: meshes named <kind>/<number>[/<part>] (Rerun entity paths, glTF node names)
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "scenery": In(Mesh, "other meshes to show, e.g. the bowl (glazed ceramic)", optional=True, many=True),

@@ -137,9 +137,9 @@ def test_time_varying_node_logs_on_its_own_timeline(recipe, tmp_path):
     assert cli("run", str(recipe), "--rrd", str(tmp_path / "t.rrd")) == 0
     store = RrdReader(str(tmp_path / "t.rrd")).stream().collect()
     ctx = datafusion.SessionContext()  # must outlive the query
-    table = store.reader("sim_step", contents="/surf/energy", ctx=ctx).to_arrow_table()
+    table = store.reader("sim_step", contents="/surf/log/energy", ctx=ctx).to_arrow_table()
     assert table.column("sim_step").to_pylist() == list(range(10))
-    assert [v[0] for v in table.column("/surf/energy:Scalars:scalars").to_pylist()] == [10.0 - s for s in range(10)]
+    assert [v[0] for v in table.column("/surf/log/energy:Scalars:scalars").to_pylist()] == [10.0 - s for s in range(10)]
 
 
 def test_docs_generated_from_declarations(tmp_path, capsys):

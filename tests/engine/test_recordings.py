@@ -1,0 +1,127 @@
+"""Recordings are safe and readable: a partial run never replaces a complete recording, no temp files
+after any signal, a blueprint names the views, a node's own logs never sit under a static output."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import datafusion
+import pytest
+from rerun.chunk import RrdReader
+
+from nodegraph.cli import main
+
+TOY = str(Path(__file__).with_name("toy_nodes.py"))
+RECIPE = """\
+name: slowrun
+seed: 2
+effects: []
+outputs: [slow, surf]
+nodes:
+  pts: {type: toy_points, params: {count: 6}}
+  slow: {type: toy_slow, inputs: {spheres: pts.spheres}, params: {seconds: SECONDS}}
+  surf: {type: toy_sphere_mesh, inputs: {spheres: slow.spheres}}
+"""
+
+
+def write(tmp_path, seconds=0.0) -> Path:
+    path = tmp_path / "slowrun.yaml"
+    path.write_text(RECIPE.replace("SECONDS", str(seconds)))
+    return path
+
+
+def command(tmp_path, *extra, quiet=True):
+    return [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slowrun.yaml"), "--plugin", TOY,
+            "--cache-dir", str(tmp_path / "cache"), *(["-q"] if quiet else []), *extra]
+
+
+def blueprint_view_names(path: Path) -> set[str]:
+    reader = RrdReader(str(path))
+    names = set()
+    for chunk in reader.stream(store=reader.blueprints()[0]).to_chunks():
+        batch = chunk.to_record_batch()
+        if "ViewBlueprint:display_name" in batch.schema.names:
+            names.update(v for row in batch.column("ViewBlueprint:display_name").to_pylist() for v in row)
+    return names
+
+
+def hidden_or_temp(directory: Path) -> list[str]:
+    return [p.name for p in directory.rglob("*") if p.name.startswith(".") or p.suffix == ".tmp"]
+
+
+def test_complete_run_has_a_blueprint_naming_its_views_and_logs_apart_from_outputs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path)
+    assert main(["run", "slowrun.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), "-q"]) == 0
+    rrd = tmp_path / "outputs" / "slowrun" / "slowrun.rrd"
+    reader = RrdReader(str(rrd))
+    assert len(reader.recordings()) == 1 and len(reader.blueprints()) == 1
+    names = blueprint_view_names(rrd)
+    assert {"final scene (surf)", "surf", "pts", "slow: energy"} <= names, names
+    ctx = datafusion.SessionContext()
+    store = reader.stream().collect()
+    steps = store.reader("sim_step", contents="/slow/log/energy", ctx=ctx).to_arrow_table()
+    assert steps.column("sim_step").to_pylist() == list(range(10))
+    assert not list(tmp_path.glob("outputs/slowrun/*.partial.rrd")) and not hidden_or_temp(tmp_path / "outputs")
+
+
+def test_recording_ids_differ_between_settings_and_repeat_for_one(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path)
+    ids = []
+    for name, extra in (("a", []), ("b", []), ("c", ["--set", "pts.count=7"])):
+        assert main(["run", "slowrun.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), "-q",
+                     "--rrd", f"{name}.rrd", *extra]) == 0
+        ids.append(RrdReader(f"{name}.rrd").recordings()[0].recording_id)
+    assert ids[0] == ids[1] != ids[2]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL], ids=["INT", "TERM", "KILL"])
+def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_temp_files(tmp_path, sig):
+    write(tmp_path)
+    rrd = tmp_path / "outputs" / "slowrun" / "slowrun.rrd"
+    subprocess.run(command(tmp_path), check=True, cwd=tmp_path)
+    complete = rrd.read_bytes()
+    write(tmp_path, seconds=20.0)
+    proc = subprocess.Popen(command(tmp_path, quiet=False), cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    partial = rrd.with_name("slowrun.partial.rrd")
+    deadline = time.time() + 60
+    while time.time() < deadline and not (partial.exists() and list((tmp_path / "cache").glob("entries/*/*"))):
+        time.sleep(0.05)
+    time.sleep(0.5)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0
+    assert rrd.read_bytes() == complete  # the last complete recording is untouched
+    assert partial.exists()  # the interrupted run's recording is kept beside it, named as partial
+    assert not hidden_or_temp(tmp_path / "outputs"), hidden_or_temp(tmp_path / "outputs")
+    if sig != signal.SIGKILL:
+        assert "did not complete" in err and "slowrun.partial.rrd" in err
+        RrdReader(str(partial)).recordings()  # closed properly: readable
+    write(tmp_path)  # the next complete run replaces the recording
+    subprocess.run(command(tmp_path), check=True, cwd=tmp_path)
+    assert rrd.read_bytes() != complete or rrd.stat().st_size > 0
+
+
+def test_spawn_without_a_display_says_so_first_and_still_writes_the_file(tmp_path):
+    write(tmp_path)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    done = subprocess.run(command(tmp_path, "--spawn", quiet=False), cwd=tmp_path, env=env, capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "no display" in done.stderr
+    assert done.stderr.index("no display") < done.stderr.index("pts")  # before the run's table of nodes
+    assert (tmp_path / "outputs" / "slowrun" / "slowrun.rrd").is_file()
+    assert not hidden_or_temp(tmp_path / "outputs")
+
+
+@pytest.mark.parametrize("flags", [["--spawn", "--no-rrd"], ["--rrd", "x.rrd", "--no-rrd"]])
+def test_contradictory_recording_flags_are_refused_before_anything_runs(tmp_path, monkeypatch, capsys, flags):
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path)
+    assert main(["run", "slowrun.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), *flags]) == 2
+    assert "--no-rrd contradicts" in capsys.readouterr().err
+    assert not (tmp_path / "cache").exists() and not (tmp_path / "outputs").exists()
