@@ -261,8 +261,10 @@ class Executor:
 
     def _log_outputs(self, inst: Instance) -> None:
         outputs = self.materialise(inst)
+        start = now()
         for port, value in outputs.items():
             log_value(value, self.recording.logger(f"{inst.entity}/{port}"))
+        self.status[inst].log_seconds = now() - start
 
     # writing ----------------------------------------------------------------------------------
     def write_outputs(self, result: RunResult, outputs: list[Wire], directory: Path) -> list[Path]:

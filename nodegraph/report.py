@@ -71,6 +71,7 @@ class NodeRecord:
     status: str  # ran | cached | failed | recomputed (corrupt cache)
     seconds: float = 0.0
     peak_bytes: int | None = None
+    log_seconds: float | None = None  # logging its outputs to Rerun (None: no recording)
 
 
 class Reporter:
@@ -121,8 +122,9 @@ class Reporter:
     def summary(self, per_instance: bool = False) -> Table:
         """One row per node (variant families folded into one row, times summed) or per instance."""
         table = Table(title="nodegraph run")
+        logged = any(r.log_seconds is not None for r in self.records)
         for column, justify in (("node", "left"), ("type", "left"), ("status", "left"), ("wall time", "right"),
-                                ("peak mem", "right")):
+                                ("peak mem", "right")) + ((("rerun log", "right"),) if logged else ()):
             table.add_column(column, justify=justify)
         rows: dict[str, list[NodeRecord]] = {}
         for rec in self.records:
@@ -136,7 +138,10 @@ class Reporter:
             peaks = [r.peak_bytes for r in records if r.peak_bytes is not None]
             mem = f"{max(peaks) / 2**20:.1f} MiB" if peaks else ""
             seconds = sum(r.seconds for r in records)
-            table.add_row(node, records[0].type, status, f"{seconds * 1000:.1f} ms", mem)
+            row = [node, records[0].type, status, f"{seconds * 1000:.1f} ms", mem]
+            if logged:
+                row.append(f"{sum(r.log_seconds or 0.0 for r in records) * 1000:.1f} ms")
+            table.add_row(*row)
         return table
 
     def print_summary(self) -> None:
