@@ -2,12 +2,14 @@
 
 Layout under the cache directory::
 
+    CACHEDIR.TAG            marks the directory as a nodegraph cache (https://bford.info/cachedir/)
     entries/ab/<key>.json   {"key", "node", "type", "outputs": {port: {"blob": sha, "size": n}}}
     blobs/cd/<sha>.npz      one encoded value (see ``codec``); identical outputs are stored once
 
 Every file is written to a temporary name in its final directory and renamed into place, blobs
 before the entry that names them, so a crash at any moment leaves either no entry or a whole one.
-A blob whose bytes no longer hash to its name is reported as corruption and recomputed.
+A blob whose bytes no longer hash to its name is reported as corruption and recomputed. ``clear``
+removes only what a cache holds, and only from a directory carrying the marker.
 """
 
 from __future__ import annotations
@@ -22,14 +24,35 @@ from pathlib import Path
 from typing import Any
 
 from . import codec
-from .errors import CacheCorruption
+from .errors import CacheCorruption, NodegraphError
 
 DEFAULT_DIR = ".nodegraph/cache"
 ENV_VAR = "NODEGRAPH_CACHE"
 
 
+MARKER = "CACHEDIR.TAG"
+MARKER_TEXT = (b"Signature: 8a477f597d28d172789f06886806bc55\n"
+               b"# This directory is a nodegraph cache: `nodegraph cache clear` empties it.\n")
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
+
 def default_cache_dir() -> Path:
     return Path(os.environ.get(ENV_VAR) or DEFAULT_DIR)
+
+
+def check_writable(directory: Path, what: str, fix: str) -> None:
+    """Fail before any compute when ``directory`` cannot be created or written (read-only disk, a file
+    in the way), naming the path and ``fix``."""
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".nodegraph-probe.", dir=directory)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        reason = "a file is in the way" if isinstance(exc, (FileExistsError, NotADirectoryError)) else \
+            (exc.strerror or str(exc)).lower()
+        raise NodegraphError(f"cannot write the {what} at {directory}: {reason}; {fix}") from None
 
 
 def atomic_write(path: Path, data: bytes) -> None:
@@ -37,6 +60,7 @@ def atomic_write(path: Path, data: bytes) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        os.fchmod(fd, 0o666 & ~_UMASK)  # as open() would make it (mkstemp's 0600 would hide outputs from others)
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
             handle.flush()
@@ -121,6 +145,9 @@ class Cache:
 
     def store(self, key: str, outputs: dict[str, Any], node_id: str, node_type: str) -> None:
         """Store a node's outputs atomically: blobs first, then the entry that makes them visible."""
+        marker = self.directory / MARKER
+        if not marker.exists():
+            atomic_write(marker, MARKER_TEXT)
         manifest = {"key": key, "node": node_id, "type": node_type, "outputs": {}}
         for port, value in outputs.items():
             data = codec.encode(value)
@@ -141,5 +168,41 @@ class Cache:
         size = sum(p.stat().st_size for p in entries + blobs)
         return CacheInfo(self.directory, len(entries), len(blobs), size)
 
+    def is_cache(self) -> bool:
+        """True when the directory carries the marker a nodegraph cache writes."""
+        try:
+            if (self.directory / MARKER).read_bytes().startswith(MARKER_TEXT):
+                return True
+            names = {p.name for p in self.directory.iterdir()}
+        except OSError:
+            return False
+        return bool(names) and names <= {"entries", "blobs"}  # a cache written before the marker existed
+
     def clear(self) -> None:
-        shutil.rmtree(self.directory, ignore_errors=True)
+        """Remove the entries, the blobs and the marker, then the directory if nothing else is left in it.
+        Refuses (NodegraphError, nothing removed) a directory that is not a nodegraph cache."""
+        if not self.directory.exists():
+            return
+        if not self.directory.is_dir():
+            raise NodegraphError(f"{self.directory} is a file, not a cache directory; nothing removed")
+        if not self.is_cache():
+            raise NodegraphError(f"{self.directory} is not a nodegraph cache (it has no {MARKER} written by nodegraph); "
+                                 "nothing removed. Give --cache-dir the cache directory itself")
+        failed = []
+        for part in ("entries", "blobs", MARKER):
+            target = self.directory / part
+            try:
+                if target.is_dir():
+                    shutil.rmtree(target, onerror=lambda _f, path, exc: failed.append((path, exc[1])))
+                elif target.exists():
+                    target.unlink()
+            except OSError as exc:
+                failed.append((target, exc))
+        if failed:
+            path, exc = failed[0]
+            raise NodegraphError(f"cannot remove {path}: {getattr(exc, 'strerror', None) or exc} "
+                                 f"({len(failed)} path(s) left; is the directory read-only?)")
+        try:
+            self.directory.rmdir()  # only if empty: a user's files put beside the cache stay
+        except OSError:
+            pass

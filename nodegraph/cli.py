@@ -12,7 +12,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from .cache import Cache, default_cache_dir
+from .cache import Cache, check_writable, default_cache_dir
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import run_recipe
 from .recipe import Recipe, load_recipe
@@ -70,6 +70,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     cache = sub.add_parser("cache", help="inspect or clear the cache")
     cache.add_argument("action", choices=["info", "clear"])
+    cache.add_argument("--yes", action="store_true", help="clear without asking (asked only on a terminal)")
     _common(cache)
     return parser
 
@@ -83,6 +84,12 @@ def _cmd_run(args, registry) -> int:
     out_dir = args.out_dir or Path("outputs") / recipe.name
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
+    # every place the run writes, checked before anything is computed
+    check_writable(out_dir, "outputs", "choose another folder with --out-dir")
+    if rrd is not None:
+        check_writable(rrd.parent, "Rerun recording", "choose another path with --rrd, or --no-rrd")
+    if cache is not None:
+        check_writable(cache.directory, "cache", "choose another with --cache-dir (or $NODEGRAPH_CACHE), or --no-cache")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
     spawn = args.spawn
     if spawn and not has_display():  # said before anything is computed
@@ -189,7 +196,12 @@ def _cmd_docs(args, registry) -> int:
     else:
         from .cache import atomic_write
 
-        atomic_write(args.out, text.encode())
+        if args.out.is_dir():
+            raise NodegraphError(f"--out {args.out} is a directory; give a file name, e.g. {args.out / 'nodes.md'}")
+        try:
+            atomic_write(args.out, text.encode())
+        except OSError as exc:
+            raise NodegraphError(f"cannot write {args.out}: {exc.strerror or exc}") from None
         print(f"wrote {args.out}")
     return 0
 
@@ -231,6 +243,16 @@ def _cmd_graph(args, registry) -> int:
 def _cmd_cache(args, registry) -> int:
     cache = Cache(args.cache_dir or default_cache_dir())
     if args.action == "clear":
+        if not cache.directory.exists():
+            print(f"nothing to clear: {cache.directory} does not exist")
+            return 0
+        if cache.directory.is_dir() and cache.is_cache() and not args.yes and sys.stdin.isatty():
+            info = cache.info()
+            answer = input(f"remove {info.entries} entries and {info.blobs} blobs ({info.bytes / 2**20:.1f} MiB) "
+                           f"from {cache.directory}? [y/N] ")
+            if answer.strip().lower() not in ("y", "yes"):
+                print("nothing removed")
+                return 1
         cache.clear()
         print(f"cleared {cache.directory}")
         return 0

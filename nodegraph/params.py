@@ -109,8 +109,9 @@ class Param:
             parts.append(f"in {self.units}")
         return ", ".join(parts)
 
-    def validate(self, value: Any) -> Any:
-        """Coerce and check ``value``; raise ParamValueError saying what is allowed."""
+    def validate(self, value: Any, base: Path | None = None) -> Any:
+        """Coerce and check ``value``; raise ParamValueError saying what is allowed. A relative path of a
+        ``file`` parameter is taken from ``base`` (the recipe's folder) when given, else the working folder."""
         if value is None:
             if self.nullable:
                 return None
@@ -131,9 +132,14 @@ class Param:
                 lo, hi = self.range
                 if (lo is not None and number < lo) or (hi is not None and number > hi):
                     raise ParamValueError("out of range", self.allowed())
-        if self.file and not Path(coerced).is_file():
-            raise ParamValueError(f"no such file: {coerced}",
-                                  f"an existing file (a relative path is taken from {Path.cwd()})")
+        if self.file:
+            path = Path(coerced).expanduser()
+            if base is not None and not path.is_absolute():
+                path = base / path
+                coerced = str(path)
+            if not path.is_file():
+                raise ParamValueError(f"no such file: {path}",
+                                      f"an existing file (a relative path is taken from {base or Path.cwd()})")
         return coerced
 
     def describe(self) -> dict[str, str]:

@@ -26,6 +26,7 @@ from .registry import Registry
 from .yaml_source import SourceMap, load_yaml, load_yaml_file
 
 NODE_ID = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+RECIPE_NAME = re.compile(r"^(?!.*\.\.)[A-Za-z0-9_-][A-Za-z0-9_.-]*$")
 MAX_VARIANTS = 100_000
 
 
@@ -139,6 +140,8 @@ class _Validator:
         self.registry = registry
         self.overrides = overrides
         self.name = name
+        recipe_file = Path(source.file)
+        self.base_dir = recipe_file.resolve().parent if recipe_file.is_file() else None
         self.issues: list[Issue] = []
         self.override_at: dict[tuple, Location] = {}
 
@@ -161,7 +164,7 @@ class _Validator:
                 self.issue(loc[:-1], f"missing required key '{field_name}'", node=node)
             else:
                 given = err.get("input")
-                tags = [str(e["loc"][-1]) for e in errors]
+                tags = [str(e["loc"][-1]) for e in errors if e["loc"]]
                 message = err["msg"] if len(errors) == 1 else "not a valid value"
                 self.issue(loc, message, node=node, param=field_name,
                            given=given if not isinstance(given, (dict, list)) else None,
@@ -237,6 +240,12 @@ class _Validator:
                 self.issue(path, f"invalid node id '{node_id}'", key=True,
                            allowed="letters, digits and _ (not starting with a digit)")
                 continue
+            if body is not None and not isinstance(body, dict):
+                hint = f" (for a node type, write '{node_id}: {{type: {body}}}')" if isinstance(body, str) else ""
+                self.issue(path, f"a node must be a mapping (type, params, inputs, variants), not a "
+                           f"{type(body).__name__}{hint}", node=node_id,
+                           given=body if not isinstance(body, list) else None, allowed="a mapping with at least 'type'")
+                continue
             try:
                 node_model = NodeModel.model_validate(body if body is not None else {})
             except ValidationError as exc:
@@ -254,6 +263,10 @@ class _Validator:
             self._check_families(entries, graph)
         outputs = self._check_outputs(model.outputs if model else [], entries, raw_nodes)
         effects = self._check_effects(model.effects if model else [], entries)
+        if model is not None and model.name is not None and not RECIPE_NAME.match(model.name):
+            self.issue(("name",), "the recipe name names its output folder and recording, so it must be a plain name",
+                       param="name", given=model.name,
+                       allowed="letters, digits, _, - and . (not starting with '.'; no '/', '\\' or '..')")
         if self.issues or model is None:
             return None
         name = model.name or self.name or Path(self.source.file).stem
@@ -277,8 +290,11 @@ class _Validator:
                            suggestion=_nearest(key, spec.params))
                 ok = False
                 continue
+            from_file = ("nodes", node_id, "params", key) not in self.override_at
             try:
-                params[key] = param.validate(value)
+                # a relative file path written in the recipe is taken from the recipe's folder (the recipe
+                # runs from anywhere); one given with --set from the working directory, as a shell would
+                params[key] = param.validate(value, base=self.base_dir if from_file else None)
             except ParamValueError as exc:
                 self.issue(path + ("params", key), str(exc), node=node_id, param=key, given=value,
                            allowed=exc.allowed)

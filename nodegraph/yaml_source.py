@@ -42,12 +42,30 @@ def _mark(node: yaml.Node) -> tuple[int, int]:
     return node.start_mark.line + 1, node.start_mark.column + 1
 
 
-def _convert(node: yaml.Node, path: PathKey, source: SourceMap, issues: list[Issue]) -> Any:
+MAX_VALUES = 100_000  # a recipe is a few hundred values; YAML aliases can expand a short file without bound
+
+
+class _TooLarge(Exception):
+    """The document expands (through aliases) to more values than any recipe needs."""
+
+    def __init__(self, node: yaml.Node):
+        self.node = node
+
+
+def _convert(node: yaml.Node, path: PathKey, source: SourceMap, issues: list[Issue], budget: list[int],
+             open_nodes: frozenset[int] = frozenset()) -> Any:
+    """Plain values from YAML nodes, at most ``budget[0]`` of them (aliases are expanded here, so a
+    "billion laughs" document stops at the budget), a node inside itself refused."""
+    budget[0] -= 1
+    if budget[0] < 0 or id(node) in open_nodes:
+        raise _TooLarge(node)
     source.values[path] = _mark(node)
+    if isinstance(node, (yaml.MappingNode, yaml.SequenceNode)):
+        open_nodes = open_nodes | {id(node)}
     if isinstance(node, yaml.MappingNode):
         result: dict[Any, Any] = {}
         for key_node, value_node in node.value:
-            key = _convert(key_node, path + ("<key>",), source, issues)
+            key = _convert(key_node, path + ("<key>",), source, issues, budget, open_nodes)
             if not isinstance(key, (str, int, float, bool)) and key is not None:
                 issues.append(Issue(Location(source.file, *_mark(key_node)), "a mapping key must be a scalar"))
                 continue
@@ -57,11 +75,11 @@ def _convert(node: yaml.Node, path: PathKey, source: SourceMap, issues: list[Iss
                                     f"duplicate key '{key}' (first defined at line {first[0]})"))
                 continue
             source.keys[path + (key,)] = _mark(key_node)
-            result[key] = _convert(value_node, path + (key,), source, issues)
+            result[key] = _convert(value_node, path + (key,), source, issues, budget, open_nodes)
         source.values.pop(path + ("<key>",), None)
         return result
     if isinstance(node, yaml.SequenceNode):
-        return [_convert(item, path + (i,), source, issues) for i, item in enumerate(node.value)]
+        return [_convert(item, path + (i,), source, issues, budget, open_nodes) for i, item in enumerate(node.value)]
     return yaml.SafeLoader.construct_object(_SCALAR_LOADER, node, deep=True)
 
 
@@ -85,7 +103,15 @@ def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     if root is None:
         raise RecipeError([Issue(Location(file, 1, 1), "the recipe is empty")])
     issues: list[Issue] = []
-    value = _convert(root, (), source, issues)
+    try:
+        value = _convert(root, (), source, issues, [MAX_VALUES])
+    except _TooLarge as exc:
+        raise RecipeError([Issue(Location(file, *_mark(exc.node)),
+                                 f"the document expands to more than {MAX_VALUES:,} values or contains itself "
+                                 "(YAML aliases?)", allowed="a recipe without recursive or exploding aliases")]
+                          ) from None
+    except (yaml.YAMLError, ValueError, TypeError, OverflowError) as exc:  # e.g. a malformed timestamp scalar
+        raise RecipeError([Issue(Location(file, *_mark(root)), f"YAML value error: {exc}")]) from None
     if issues:
         raise RecipeError(issues)
     return value, source
@@ -94,7 +120,15 @@ def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
 def load_yaml_file(path: str | Path) -> tuple[Any, SourceMap]:
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        data = path.read_bytes()
     except OSError as exc:
         raise RecipeError([Issue(Location(str(path)), f"cannot read recipe: {exc.strerror or exc}")]) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise RecipeError([Issue(Location(str(path), line, column),
+                                 f"the recipe is not UTF-8 text (byte 0x{data[exc.start]:02x})",
+                                 allowed="a YAML text file in UTF-8")]) from None
     return load_yaml(text, str(path))
