@@ -27,10 +27,10 @@ import numpy as np
 from numba import njit, prange
 
 from nodes.elements import base_mesh, distance_field, expand, remesh, sphere_scatter, voxelise
-from nodes.elements.grid_kernels import _point_triangle_distance2
 from nodes.elements.level_set_mesh import grain_surface
 from nodes.elements.sphere_sampling import surface_points, winding_numbers
 from nodes.elements.voxel_grid import Grid, mesh_occupancy, sphere_field
+from nodes.triangle_distance import point_triangle_offset
 
 RESULTS = Path(__file__).parent / "results"
 RESOLUTIONS = (32, 48, 64, 96, 128, 192, 256)
@@ -52,7 +52,8 @@ def distance_to_faces(points, vertices, faces, candidates):
                 continue
             for v in range(3):
                 t[v] = vertices[faces[f, v]]
-            d2 = _point_triangle_distance2(points[p, 0], points[p, 1], points[p, 2], t)
+            ox, oy, oz = point_triangle_offset(points[p, 0], points[p, 1], points[p, 2], t[0], t[1], t[2])
+            d2 = ox * ox + oy * oy + oz * oz
             if d2 < best:
                 best = d2
         out[p] = np.sqrt(best)
