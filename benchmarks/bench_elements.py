@@ -26,7 +26,6 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
-from nodegraph import Context
 from nodes.elements import base_mesh, distance_field, expand, remesh, sphere_scatter, voxelise
 from nodes.elements.level_set_mesh import grain_surface
 from nodes.elements.sphere_sampling import surface_points, winding_numbers
@@ -37,10 +36,6 @@ RESULTS = Path(__file__).parent / "results"
 RESOLUTIONS = (32, 48, 64, 96, 128, 192, 256)
 OFFSET_VOXELS = -2.0
 METHODS = ("exact", "euclidean", "manhattan")
-
-
-def params(spec, **given):
-    return spec.resolve_params(given)
 
 
 @njit(parallel=True, cache=True)
@@ -123,19 +118,18 @@ def surface_errors(exact: ExactGrain, vertices, faces, samples):
 def grain_chain(mesh, seed, resolution, method, target_faces=None, expansion=(1.0, 1.0)):
     """The recipe's chain for one grain; returns every intermediate value and the wall time."""
     t0 = time.perf_counter()
-    ctx = Context.standalone(seed=seed)
-    spheres = sphere_scatter(ctx, mesh=mesh, **params(sphere_scatter))
-    volume = voxelise(ctx, mesh=mesh, spheres=spheres, **params(voxelise, resolution=resolution))
-    field = distance_field(ctx, volume=volume, mesh=mesh, spheres=spheres, **params(distance_field, method=method))
-    grown = expand(Context.standalone(seed=seed), field=field, **params(expand, expansion=expansion))
-    grain = remesh(ctx, field=grown, **params(remesh, target_faces=target_faces))
+    spheres = sphere_scatter.call(seed=seed, mesh=mesh)
+    volume = voxelise.call(mesh=mesh, spheres=spheres, resolution=resolution)
+    field = distance_field.call(volume=volume, mesh=mesh, spheres=spheres, method=method)
+    grown = expand.call(seed=seed, field=field, expansion=expansion)
+    grain = remesh.call(field=grown, target_faces=target_faces)
     return spheres, volume, field, grain, time.perf_counter() - t0
 
 
 def sweep(resolutions, grains, samples):
     import trimesh
 
-    mesh = base_mesh(Context.standalone(), **params(base_mesh))
+    mesh = base_mesh.call()
     length = float(np.ptp(mesh.vertices[:, 0]))
     grain_chain(mesh, 0, 32, "exact")  # warm JIT and imports
     rows = []
@@ -175,7 +169,7 @@ def sweep(resolutions, grains, samples):
 
 def sixteen_grains(resolution, repeats):
     """16 japonica grains as graphs/rice_grains.yaml builds them (exact route, P = 1.5, 2000 faces)."""
-    mesh = base_mesh(Context.standalone(), **params(base_mesh))
+    mesh = base_mesh.call()
     out = {}
     for label, target in (("no budget", None), ("target_faces 2000", 2000)):
         grain_chain(mesh, 99, resolution, "exact", target, (1.5, 1.5))  # warm
@@ -200,7 +194,7 @@ def peak_rss_mib() -> float:
 
 def memory_child(resolution: int, shape: str, method: str) -> None:
     """Run one element at ``resolution`` and print its peak resident set (MiB) as JSON."""
-    mesh = base_mesh(Context.standalone(), **params(base_mesh, shape=shape))
+    mesh = base_mesh.call(shape=shape)
     t0 = time.perf_counter()
     spheres, volume, field, grain, _ = grain_chain(mesh, 0, resolution, method)
     seconds = time.perf_counter() - t0
@@ -210,7 +204,7 @@ def memory_child(resolution: int, shape: str, method: str) -> None:
 
 def baseline_child() -> None:
     """Peak resident set after imports and a tiny warm run: subtract to get what an element adds."""
-    mesh = base_mesh(Context.standalone(), **params(base_mesh))
+    mesh = base_mesh.call()
     grain_chain(mesh, 0, 32, "exact")
     print(json.dumps({"peak_mib": peak_rss_mib()}))
 

@@ -20,7 +20,6 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
-from nodegraph import Context
 from nodegraph.values import Mesh
 from nodes.values import ElementLibrary
 from nodes.placement import cull, mix_ratio, poisson_place, rotate
@@ -29,12 +28,6 @@ from nodes.shapes import shape
 RESULTS = Path(__file__).resolve().parent / "results"
 GRAIN_LENGTH = 2.2  # circumscribed radius 1.1 (S table 2)
 CULL_D = 0.1        # mm ≈ 0.045 element lengths
-
-
-def run(spec, seed=0, **given):
-    inputs = {k: v for k, v in given.items() if k in spec.inputs}
-    params = spec.resolve_params({k: v for k, v in given.items() if k not in spec.inputs})
-    return spec(Context.standalone(node_type=spec.type_name, seed=seed), **inputs, **params)
 
 
 def rice_library(variants: int = 4) -> ElementLibrary:
@@ -56,9 +49,9 @@ def timed(fn):
 def place(onigiri, library, seed=0, **params):
     """poisson_place → rotate → mix_ratio; returns (placement, stats, seconds)."""
     def go():
-        out = run(poisson_place, seed, shape=onigiri, elements=[library], **params)
-        turned = run(rotate, seed, placement=out["placement"])
-        return run(mix_ratio, seed, placement=turned, libraries=[library])["placement"], out["stats"]
+        out = poisson_place.call(seed=seed, shape=onigiri, elements=[library], **params)
+        turned = rotate.call(seed=seed, placement=out["placement"])
+        return mix_ratio.call(seed=seed, placement=turned, libraries=[library])["placement"], out["stats"]
     (placement, stats), seconds = timed(go)
     return placement, stats, seconds
 
@@ -105,7 +98,7 @@ def aperiodicity(onigiri, library, r):
     from nodes.placement.candidates import volume_candidates
     from nodes.placement.inside_grid import inside_points
 
-    ours = run(poisson_place, 0, shape=onigiri, r=r, mode="volume")["placement"].positions
+    ours = poisson_place.call(seed=0, shape=onigiri, r=r, mode="volume")["placement"].positions
     spacing = np.median(cKDTree(ours).query(ours, k=2)[0][:, 1])
     lo, hi = onigiri.vertices.min(axis=0), onigiri.vertices.max(axis=0)
     grid = np.stack(np.meshgrid(*[np.arange(lo[d], hi[d], spacing) for d in range(3)], indexing="ij"), -1).reshape(-1, 3)
@@ -124,7 +117,7 @@ def residual(refined):
 
 def culled_share(refined, library):
     """Share removed by cull at D; ``library`` should carry its medial spheres (with_medial_spheres)."""
-    out = run(cull, placement=refined, libraries=[library], threshold=CULL_D)
+    out = cull.call(placement=refined, libraries=[library], threshold=CULL_D)
     return len(out["culled"]) / max(len(refined), 1)
 
 
@@ -133,9 +126,9 @@ def s_setup_timing(repeats: int) -> None:
     import os
     import statistics
 
-    onigiri = run(shape, kind="onigiri", size=20.0)["mesh"]
+    onigiri = shape.call(kind="onigiri", size=20.0)["mesh"]
     library = rice_library()
-    warm, _, _ = place(run(shape, kind="onigiri", size=5.0)["mesh"], library)
+    warm, _, _ = place(shape.call(kind="onigiri", size=5.0)["mesh"], library)
     refine_timed(warm, library, spacing=0.22)
     times = {"placement": [], "implicit functions": [], "refine": []}
     for _ in range(repeats):
@@ -162,7 +155,7 @@ def main():
 
     size = 8.0 if args.quick else 20.0
     big_size = 10.0 if args.quick else 44.0
-    onigiri = run(shape, kind="onigiri", size=size)["mesh"]
+    onigiri = shape.call(kind="onigiri", size=size)["mesh"]
     from nodes.placement.element_templates import with_medial_spheres
 
     library = rice_library()
@@ -173,11 +166,11 @@ def main():
         rows.append({"group": group, "setting": setting, **values})
 
     # Warm-up: compile every kernel once on a small scene.
-    small = run(shape, kind="onigiri", size=5.0)["mesh"]
+    small = shape.call(kind="onigiri", size=5.0)["mesh"]
     warm, _, _ = place(small, library)
     for cost in ("sakurai", "gan"):
         refine_timed(warm, library, cost=cost, spacing=0.22)
-    run(cull, placement=warm, libraries=[library])
+    cull.call(placement=warm, libraries=[library])
 
     # ---- the S setup (S table 2 row 1)
     placement, stats, t_place = place(onigiri, library, candidates="subdivide")
@@ -198,7 +191,7 @@ def main():
     base_placement = placement
 
     # ---- 50,000 elements
-    big = run(shape, kind="onigiri", size=big_size)["mesh"]
+    big = shape.call(kind="onigiri", size=big_size)["mesh"]
     big_placement, big_stats, t_big_place = place(big, library)
     big_refined, _, t_big_build, t_big_refine = refine_timed(big_placement, library)
     mean, worst = residual(big_refined)

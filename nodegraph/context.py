@@ -97,7 +97,7 @@ class Context:
 
     @classmethod
     def standalone(cls, node_type: str = "test", seed: int | None = 0, effects=(), variant=None) -> Context:
-        """A context for calling a node function directly, as tests and benchmarks do."""
+        """A context outside any recipe: what ``NodeSpec.call`` gives a node, or a test that builds its own."""
         return cls(node_id=node_type, node_type=node_type, seed=seed, effects=frozenset(effects), variant=variant)
 
     @property

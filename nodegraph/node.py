@@ -15,13 +15,17 @@ so declaring a node has no side effect and there is no global registry.
 from __future__ import annotations
 
 import inspect
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
+from .context import Context
 from .errors import NodeDeclarationError
-from .params import Param
+from .params import Param, ParamValueError
+
+# Keyword arguments of ``NodeSpec.call``; no port or parameter may take these names.
+CALL_ARGUMENTS = frozenset({"seed", "effects"})
 
 
 @dataclass(frozen=True)
@@ -68,8 +72,39 @@ class NodeSpec:
     module: str = ""
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
-        """Call the implementation directly (tests and benchmarks)."""
+        """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
         return self.run(ctx, **kwargs)
+
+    def call(self, *, seed: int = 0, effects: Iterable[str] = (), **given: Any) -> Any:
+        """Run the node outside a recipe, as the executor would: ``given`` names inputs and parameters.
+
+        Parameters are validated, defaults filled in and ``check`` applied (ParamValueError); an input
+        not given is passed as an unwired port is (None, or [] for a many-input). ``seed`` becomes
+        ``ctx.seed`` of a random node (others get None, as in a recipe); ``effects`` are the effects the
+        node receives in ``ctx.effects``. Returns what the implementation returns. For tests, scripts
+        and benchmarks: ``shape.call(kind="bowl", size=60.0)``, ``sphere_scatter.call(seed=3, mesh=m)``.
+        """
+        where = f"node type '{self.type_name}'"
+        unknown = sorted(set(given) - set(self.inputs) - set(self.params))
+        if unknown:
+            raise TypeError(f"{where} has no input or parameter {unknown}; inputs: {sorted(self.inputs)}, "
+                            f"parameters: {sorted(self.params)}")
+        missing = [name for name, port in self.inputs.items() if not port.optional and name not in given]
+        missing += [name for name, param in self.params.items() if param.required and name not in given]
+        if missing:
+            raise TypeError(f"{where} needs {missing}")
+        effects = frozenset(effects)
+        if not effects <= self.effects:
+            raise ValueError(f"{where} does not implement the effects {sorted(effects - self.effects)}; "
+                             f"it implements {sorted(self.effects)}")
+        params = self.resolve_params({name: value for name, value in given.items() if name in self.params})
+        problems = self.check(dict(params)) if self.check is not None else []
+        if problems:
+            raise ParamValueError(f"{where}: " + "; ".join(f"{name}: {message}" for name, message in problems),
+                                  f"see `nodegraph describe {self.type_name}`")
+        inputs = {name: given.get(name, [] if port.many else None) for name, port in self.inputs.items()}
+        ctx = Context.standalone(node_type=self.type_name, seed=seed if self.random else None, effects=effects)
+        return self.run(ctx, **inputs, **params)
 
     def resolve_params(self, given: Mapping[str, Any]) -> dict[str, Any]:
         """Validated parameters with defaults filled in (raises ParamValueError / KeyError)."""
@@ -110,6 +145,10 @@ def node(
         clash = set(inputs) & set(params)
         if clash:
             raise NodeDeclarationError(f"{type_name}: names used both as input and parameter: {sorted(clash)}")
+        reserved = (set(inputs) | set(params)) & CALL_ARGUMENTS
+        if reserved:
+            raise NodeDeclarationError(f"{type_name}: {sorted(reserved)} cannot name an input or parameter "
+                                       "(the seed and the effects come from the recipe, in ctx)")
         if not outputs:
             raise NodeDeclarationError(f"{type_name}: a node needs at least one output port")
         signature = inspect.signature(fn)

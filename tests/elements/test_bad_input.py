@@ -9,8 +9,6 @@ from nodegraph.params import ParamValueError
 from nodes.values import SphereSet
 from nodes.elements import distance_field, expand, remesh, sphere_scatter, voxelise
 
-from .conftest import run
-
 
 @pytest.mark.parametrize("resolution", [1, 100_000])
 def test_resolution_out_of_range_is_refused_by_the_declaration(resolution):
@@ -27,7 +25,7 @@ def test_resolution_limits_in_the_kernel(japonica):
     with pytest.raises(ValueError, match="exceeds the limit"):
         grid_for(lo, hi, 100_000, None, 3)
     with pytest.raises(ValueError, match="exceeds the limit"):
-        run(voxelise, mesh=japonica, voxel_size=1e-4)
+        voxelise.call(mesh=japonica, voxel_size=1e-4)
 
 
 def test_zero_radius_is_refused(japonica):
@@ -35,42 +33,42 @@ def test_zero_radius_is_refused(japonica):
         sphere_scatter.resolve_params({"radius_range": (0.0, 0.3)})
     spheres = SphereSet([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [0.3, 0.0])
     with pytest.raises(ValueError, match="radii are ≤ 0"):
-        run(voxelise, mesh=japonica, spheres=spheres)
+        voxelise.call(mesh=japonica, spheres=spheres)
 
 
 def test_nan_sphere_is_refused(japonica):
     spheres = SphereSet([[0.0, np.nan, 0.0]], [0.3])
     with pytest.raises(ValueError, match="NaN"):
-        run(voxelise, mesh=japonica, spheres=spheres)
+        voxelise.call(mesh=japonica, spheres=spheres)
 
 
 def test_spheres_that_cover_nothing(japonica):
     tiny = SphereSet([[0.0, 0.0, 0.0]], [1e-4])  # far smaller than a cell: no cell centre inside
     with pytest.raises(ValueError, match="volume is empty"):
-        run(voxelise, spheres=tiny, voxel_size=0.5)
+        voxelise.call(spheres=tiny, voxel_size=0.5)
     with pytest.raises(ValueError, match="nothing to voxelise"):
-        run(voxelise)
+        voxelise.call()
 
 
 def test_spheres_away_from_the_mesh_make_a_clear_error(japonica):
     loose = SphereSet([[20.0, 0.0, 0.0]], [0.5])
     with pytest.raises(ValueError, match="separate pieces"):
-        run(voxelise, mesh=japonica, spheres=loose, resolution=64)
+        voxelise.call(mesh=japonica, spheres=loose, resolution=64)
 
 
 def test_exact_route_without_geometry(japonica):
-    volume = run(voxelise, mesh=japonica, resolution=16)
+    volume = voxelise.call(mesh=japonica, resolution=16)
     with pytest.raises(ValueError, match="needs the mesh"):
-        run(distance_field, volume=volume, method="exact")
+        distance_field.call(volume=volume, method="exact")
 
 
 def test_level_without_surface_or_cut_by_the_grid(japonica):
-    volume = run(voxelise, mesh=japonica, resolution=24, padding=1)
-    field = run(distance_field, volume=volume, mesh=japonica)
+    volume = voxelise.call(mesh=japonica, resolution=24, padding=1)
+    field = distance_field.call(volume=volume, mesh=japonica)
     with pytest.raises(ValueError, match="outside the field's range"):
-        run(remesh, field=field, level=50.0)
+        remesh.call(field=field, level=50.0)
     with pytest.raises(ValueError, match="edge of the grid"):
-        run(remesh, field=field, level=-0.5)
+        remesh.call(field=field, level=-0.5)
 
 
 def test_expansion_range_order_is_checked():

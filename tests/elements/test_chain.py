@@ -12,11 +12,11 @@ from nodes.elements.library_props import surface_distance
 from nodes.elements.sphere_sampling import INSIDE, SURFACE, winding_numbers
 from nodes.elements.voxel_grid import grid_for, mesh_occupancy
 
-from .conftest import as_trimesh, chain, digest, run
+from .conftest import as_trimesh, chain, digest
 
 
 def test_scatter_places_surface_and_inside_spheres(japonica):
-    spheres = run(sphere_scatter, seed=1, mesh=japonica, count=50, surface_share=0.6, radius_range=(0.1, 0.3))
+    spheres = sphere_scatter.call(seed=1, mesh=japonica, count=50, surface_share=0.6, radius_range=(0.1, 0.3))
     assert len(spheres) == 50 and (spheres.tags == SURFACE).sum() == 30
     assert ((spheres.radii >= 0.1) & (spheres.radii <= 0.3)).all()
     w = winding_numbers(spheres.centers[spheres.tags == INSIDE], japonica.vertices, japonica.faces)
@@ -24,7 +24,7 @@ def test_scatter_places_surface_and_inside_spheres(japonica):
     # surface centres lie on the mesh (area-weighted points of its triangles)
     on_surface = spheres.centers[spheres.tags == SURFACE]
     assert max(surface_distance(c, japonica.vertices, japonica.faces) for c in on_surface) < 1e-9
-    assert run(sphere_scatter, seed=2, mesh=japonica, count=0).centers.shape == (0, 3)
+    assert sphere_scatter.call(seed=2, mesh=japonica, count=0).centers.shape == (0, 3)
 
 
 def test_winding_occupancy_matches_exact_volume():
@@ -54,10 +54,10 @@ def test_grain_is_watertight_centred_and_expanded(japonica):
 
 
 def test_exact_route_is_closer_than_binary(japonica):
-    spheres = run(sphere_scatter, seed=4, mesh=japonica)
-    volume = run(voxelise, mesh=japonica, spheres=spheres, resolution=48)
-    exact = run(distance_field, volume=volume, mesh=japonica, spheres=spheres, method="exact")
-    binary = run(distance_field, volume=volume, method="euclidean")
+    spheres = sphere_scatter.call(seed=4, mesh=japonica)
+    volume = voxelise.call(mesh=japonica, spheres=spheres, resolution=48)
+    exact = distance_field.call(volume=volume, mesh=japonica, spheres=spheres, method="exact")
+    binary = distance_field.call(volume=volume, method="euclidean")
     # at cell centres next to the surface, the exact field is the signed distance to mesh ∪ spheres
     band = np.abs(exact.data) < volume.voxel_size
     centres = volume.cell_centers(band)
@@ -101,7 +101,7 @@ def test_smoothing_keeps_the_grain_closed(japonica):
 
 def test_library_props(japonica):
     grains = [chain(japonica, seed=s, resolution=32, expansion=(1.0, 1.5))[3] for s in range(3)]
-    library = run(element_library, meshes=grains, kind="japonica")
+    library = element_library.call(meshes=grains, kind="japonica")
     assert len(library) == 3 and library.kind == "japonica"
     for key in ("expansion", "volume", "circumradius", "inradius", "length", "width", "thickness"):
         assert library.props[key].shape == (3,)
@@ -115,18 +115,18 @@ def test_library_refuses_open_meshes(japonica):
 
     broken = Mesh(japonica.vertices, japonica.faces[:-1])
     with pytest.raises(ValueError, match="not a closed"):
-        run(element_library, meshes=[japonica, broken])
+        element_library.call(meshes=[japonica, broken])
     with pytest.raises(ValueError, match="at least one"):
-        run(element_library, meshes=[])
+        element_library.call(meshes=[])
 
 
 def test_variety_expansion(japonica):
-    spheres = run(sphere_scatter, mesh=japonica, count=0)
-    volume = run(voxelise, mesh=japonica, spheres=spheres, resolution=24)
-    field = run(distance_field, volume=volume, method="euclidean")
-    assert run(expand, field=field, variety="indica").expansion == 1.2
-    assert run(expand, field=field, variety="japonica").expansion == 1.5
-    drawn = {run(expand, seed=s, field=field).expansion for s in range(5)}
+    spheres = sphere_scatter.call(mesh=japonica, count=0)
+    volume = voxelise.call(mesh=japonica, spheres=spheres, resolution=24)
+    field = distance_field.call(volume=volume, method="euclidean")
+    assert expand.call(field=field, variety="indica").expansion == 1.2
+    assert expand.call(field=field, variety="japonica").expansion == 1.5
+    drawn = {expand.call(seed=s, field=field).expansion for s in range(5)}
     assert len(drawn) == 5 and all(1.0 <= p <= 1.5 for p in drawn)
 
 
@@ -134,36 +134,36 @@ def test_element_far_from_origin(japonica):
     from nodegraph.values import Mesh
     from nodes.values import SphereSet
 
-    spheres = run(sphere_scatter, seed=8, mesh=japonica)
+    spheres = sphere_scatter.call(seed=8, mesh=japonica)
     shift = np.array([1e5, -2e5, 3e4])
     far_mesh = Mesh(japonica.vertices + shift, japonica.faces)
     far_spheres = SphereSet(spheres.centers + shift, spheres.radii)
-    near = run(voxelise, mesh=japonica, spheres=spheres, resolution=32)
-    far = run(voxelise, mesh=far_mesh, spheres=far_spheres, resolution=32)
+    near = voxelise.call(mesh=japonica, spheres=spheres, resolution=32)
+    far = voxelise.call(mesh=far_mesh, spheres=far_spheres, resolution=32)
     assert (near.data == far.data).all()
-    fn = run(distance_field, volume=near, mesh=japonica, spheres=spheres)
-    ff = run(distance_field, volume=far, mesh=far_mesh, spheres=far_spheres)
+    fn = distance_field.call(volume=near, mesh=japonica, spheres=spheres)
+    ff = distance_field.call(volume=far, mesh=far_mesh, spheres=far_spheres)
     assert np.abs(fn.data - ff.data).max() < 1e-6
-    grain_near = run(remesh, field=fn)
-    grain_far = run(remesh, field=ff)
+    grain_near = remesh.call(field=fn)
+    grain_far = remesh.call(field=ff)
     assert np.abs(grain_near.vertices - grain_far.vertices).max() < 1e-6  # both centred
 
 
 def test_ikura_through_the_chain():
     from nodes.elements import base_mesh
 
-    egg = run(base_mesh, shape="ikura", diameter=4.0)
-    volume = run(voxelise, mesh=egg, resolution=40)
+    egg = base_mesh.call(shape="ikura", diameter=4.0)
+    volume = voxelise.call(mesh=egg, resolution=40)
     assert volume.data[tuple(np.array(volume.data.shape) // 2)]  # yolk centre is inside the solid
-    grain = run(remesh, field=run(distance_field, volume=volume, mesh=egg))
+    grain = remesh.call(field=distance_field.call(volume=volume, mesh=egg))
     assert as_trimesh(grain).volume == pytest.approx(4 / 3 * np.pi * 2.0 ** 3, rel=0.02)
 
 
 @pytest.mark.parametrize("method", ["euclidean", "manhattan"])
 def test_binary_offset_on_whole_voxels_stays_closed(japonica, method):
-    spheres = run(sphere_scatter, mesh=japonica)
-    volume = run(voxelise, mesh=japonica, spheres=spheres, resolution=32)
-    field = run(distance_field, volume=volume, method=method)
+    spheres = sphere_scatter.call(mesh=japonica)
+    volume = voxelise.call(mesh=japonica, spheres=spheres, resolution=32)
+    field = distance_field.call(volume=volume, method=method)
     for cells in (-2, 1):  # the level hits field values exactly
-        grain = run(remesh, field=field, level=float(np.float32(cells * volume.voxel_size)))
+        grain = remesh.call(field=field, level=float(np.float32(cells * volume.voxel_size)))
         assert as_trimesh(grain).is_watertight

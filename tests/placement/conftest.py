@@ -7,16 +7,8 @@ import hashlib
 import numpy as np
 import pytest
 
-from nodegraph import Context
 from nodegraph.values import Mesh
 from nodes.values import ElementLibrary
-
-
-def run(spec, seed=0, **given):
-    """Call a node with validated parameters (defaults filled) and the given inputs."""
-    inputs = {k: v for k, v in given.items() if k in spec.inputs}
-    values = spec.resolve_params({k: v for k, v in given.items() if k not in spec.inputs})
-    return spec(Context.standalone(node_type=spec.type_name, seed=seed), **inputs, **values)
 
 
 def ellipsoid(semi_axes, subdivisions=3) -> Mesh:
@@ -40,10 +32,6 @@ def digest(*arrays) -> str:
     return h.hexdigest()
 
 
-def ctx(seed=0):
-    return Context.standalone(seed=seed)
-
-
 @pytest.fixture(scope="session")
 def rice():
     return rice_library()
@@ -53,4 +41,4 @@ def rice():
 def small_onigiri():
     from nodes.shapes import shape
 
-    return run(shape, kind="onigiri", size=8.0, resolution=4)["mesh"]
+    return shape.call(kind="onigiri", size=8.0, resolution=4)["mesh"]

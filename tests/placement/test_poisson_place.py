@@ -13,13 +13,13 @@ from nodes.values import ElementLibrary
 from nodes.placement import poisson_place
 from nodes.shapes import shape
 
-from .conftest import digest, ellipsoid, run
+from .conftest import digest, ellipsoid
 
 
 @pytest.mark.parametrize("method", ["random", "subdivide"])
 def test_surface_points_keep_2r_and_cover_the_shape(small_onigiri, method):
     r = 0.3
-    out = run(poisson_place, shape=small_onigiri, r=r, candidates=method)
+    out = poisson_place.call(shape=small_onigiri, r=r, candidates=method)
     points = out["placement"].positions
     assert out["stats"].columns["min_distance_ratio"][0] >= 1.0 - 1e-9
     # Maximal: every surface point lies within 2r (+ candidate gap) of a placed point.
@@ -34,8 +34,8 @@ def test_surface_points_keep_2r_and_cover_the_shape(small_onigiri, method):
 
 
 def test_volume_points_lie_inside_with_up_normals():
-    ball = run(shape, kind="sphere", size=5.0)["mesh"]
-    out = run(poisson_place, shape=ball, r=0.5, mode="volume")
+    ball = shape.call(kind="sphere", size=5.0)["mesh"]
+    out = poisson_place.call(shape=ball, r=0.5, mode="volume")
     points = out["placement"].positions
     assert len(points) > 50
     assert np.linalg.norm(points, axis=1).max() < 5.0 + 0.25 * 0.5
@@ -45,39 +45,39 @@ def test_volume_points_lie_inside_with_up_normals():
 
 def test_r_from_the_element_is_half_its_inscribed_radius(small_onigiri):
     library = ElementLibrary("rice", (ellipsoid((1.1, 0.64, 0.44)),))
-    out = run(poisson_place, shape=small_onigiri, elements=[library])
+    out = poisson_place.call(shape=small_onigiri, elements=[library])
     assert out["stats"].columns["r"][0] == pytest.approx(0.22, rel=0.03)
 
 
 def test_same_seed_same_placement(small_onigiri):
-    a = run(poisson_place, seed=3, shape=small_onigiri, r=0.3)["placement"]
-    b = run(poisson_place, seed=3, shape=small_onigiri, r=0.3)["placement"]
-    c = run(poisson_place, seed=4, shape=small_onigiri, r=0.3)["placement"]
+    a = poisson_place.call(seed=3, shape=small_onigiri, r=0.3)["placement"]
+    b = poisson_place.call(seed=3, shape=small_onigiri, r=0.3)["placement"]
+    c = poisson_place.call(seed=4, shape=small_onigiri, r=0.3)["placement"]
     assert digest(a.positions, a.normals, a.p_num) == digest(b.positions, b.normals, b.p_num)
     assert digest(a.positions) != digest(c.positions)
 
 
 def test_r_larger_than_the_shape_is_refused(small_onigiri):
     with pytest.raises(ValueError, match="larger than the shape"):
-        run(poisson_place, shape=small_onigiri, r=50.0)
+        poisson_place.call(shape=small_onigiri, r=50.0)
 
 
 def test_tiny_r_is_refused_quickly_with_a_memory_estimate(small_onigiri):
     start = time.perf_counter()
     with pytest.raises(ValueError, match="MiB"):
-        run(poisson_place, shape=small_onigiri, r=1e-4)
+        poisson_place.call(shape=small_onigiri, r=1e-4)
     assert time.perf_counter() - start < 2.0
 
 
 def test_no_r_and_no_elements_is_refused(small_onigiri):
     with pytest.raises(ValueError, match="give r"):
-        run(poisson_place, shape=small_onigiri)
+        poisson_place.call(shape=small_onigiri)
 
 
 def test_zero_candidates_is_a_clear_error():
-    plate = run(shape, kind="box", extents=(10.0, 10.0, 0.2))["mesh"]
+    plate = shape.call(kind="box", extents=(10.0, 10.0, 0.2))["mesh"]
     with pytest.raises(ValueError, match="no candidate"):
-        run(poisson_place, shape=plate, r=1.0, mode="volume")
+        poisson_place.call(shape=plate, r=1.0, mode="volume")
 
 
 def test_open_or_inverted_shapes_are_refused():
@@ -86,13 +86,13 @@ def test_open_or_inverted_shapes_are_refused():
     ball = trimesh.creation.icosphere(2)
     inverted = Mesh(ball.vertices, ball.faces[:, ::-1])
     with pytest.raises(ValueError, match="inwards"):
-        run(poisson_place, shape=inverted, r=0.1)
+        poisson_place.call(shape=inverted, r=0.1)
     holed = Mesh(ball.vertices, ball.faces[10:])
     with pytest.raises(ValueError, match="holes"):
-        run(poisson_place, shape=holed, r=0.1)
+        poisson_place.call(shape=holed, r=0.1)
 
 
 def test_flat_element_cannot_set_r(small_onigiri):
     flat = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]), np.array([[0, 1, 2], [1, 3, 2]]))
     with pytest.raises(ValueError, match="no interior"):
-        run(poisson_place, shape=small_onigiri, elements=[ElementLibrary("flat", (flat,))])
+        poisson_place.call(shape=small_onigiri, elements=[ElementLibrary("flat", (flat,))])

@@ -10,14 +10,14 @@ from nodes.values import ElementLibrary, Placement
 from nodes.placement import cull, mix_ratio, overlap_refine, poisson_place, rotate
 from nodes.placement.medial_spheres import medial_spheres, union_fit
 
-from .conftest import digest, ellipsoid, run
+from .conftest import digest, ellipsoid
 
 
 @pytest.fixture(scope="module")
 def pile(small_onigiri, rice):
-    placed = run(poisson_place, seed=1, shape=small_onigiri, r=0.35)["placement"]
-    turned = run(rotate, seed=1, placement=placed)
-    return run(mix_ratio, seed=1, placement=turned, libraries=[rice])["placement"]
+    placed = poisson_place.call(seed=1, shape=small_onigiri, r=0.35)["placement"]
+    turned = rotate.call(seed=1, placement=placed)
+    return mix_ratio.call(seed=1, placement=turned, libraries=[rice])["placement"]
 
 
 @pytest.mark.parametrize("tolerance", [0.05, 0.01])
@@ -32,8 +32,8 @@ def test_medial_spheres_fit_the_element_within_the_tolerance(tolerance):
 
 
 def test_sakurai_refine_reduces_overlap_within_the_range(pile, rice):
-    before = run(cull, placement=pile, libraries=[rice], threshold=1e4)["placement"].overlap
-    out = run(overlap_refine, seed=2, placement=pile, libraries=[rice])
+    before = cull.call(placement=pile, libraries=[rice], threshold=1e4)["placement"].overlap
+    out = overlap_refine.call(seed=2, placement=pile, libraries=[rice])
     refined = out["placement"]
     assert np.abs(refined.offsets).max() <= 1.1 + 1e-9  # b = circumradius
     moved = refined.positions - pile.positions
@@ -43,7 +43,7 @@ def test_sakurai_refine_reduces_overlap_within_the_range(pile, rice):
 
 
 def test_gan_refine_stays_in_zero_to_r_c_refine(pile, rice):
-    refined = run(overlap_refine, seed=2, placement=pile, libraries=[rice], cost="gan", r=0.35,
+    refined = overlap_refine.call(seed=2, placement=pile, libraries=[rice], cost="gan", r=0.35,
                   c_refine=2.0)["placement"]
     assert refined.offsets.min() >= 0.0 and refined.offsets.max() <= 0.7 + 1e-9
 
@@ -56,11 +56,11 @@ def test_gan_without_r_is_refused_by_the_check():
 def test_refine_is_deterministic_and_thread_count_independent(pile, rice):
     import numba
 
-    a = run(overlap_refine, seed=7, placement=pile, libraries=[rice])["placement"]
+    a = overlap_refine.call(seed=7, placement=pile, libraries=[rice])["placement"]
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
-        b = run(overlap_refine, seed=7, placement=pile, libraries=[rice])["placement"]
+        b = overlap_refine.call(seed=7, placement=pile, libraries=[rice])["placement"]
     finally:
         numba.set_num_threads(threads)
     assert digest(a.positions, a.offsets, a.overlap) == digest(b.positions, b.offsets, b.overlap)
@@ -70,75 +70,75 @@ def test_two_stacked_elements_separate():
     grain = ElementLibrary("rice", (ellipsoid((1.1, 0.64, 0.44)),))
     up = np.array([[0.0, 0.0, 1.0]] * 2)
     stacked = Placement(np.zeros((2, 3)), up)
-    refined = run(overlap_refine, placement=stacked, libraries=[grain], slope=0.01)["placement"]
+    refined = overlap_refine.call(placement=stacked, libraries=[grain], slope=0.01)["placement"]
     gap = abs(refined.positions[0, 2] - refined.positions[1, 2])
     assert gap > 0.75  # thickness 0.88: the second moved (nearly) out of the first
     assert refined.overlap.max() < 0.1
 
 
 def test_cull_leaves_no_overlap_deeper_than_d(pile, rice):
-    refined = run(overlap_refine, seed=2, placement=pile, libraries=[rice])["placement"]
+    refined = overlap_refine.call(seed=2, placement=pile, libraries=[rice])["placement"]
     for threshold in (0.1,):
-        out = run(cull, placement=refined, libraries=[rice], threshold=threshold)
-        again = run(cull, placement=out["placement"], libraries=[rice], threshold=1e4)["placement"]
+        out = cull.call(placement=refined, libraries=[rice], threshold=threshold)
+        again = cull.call(placement=out["placement"], libraries=[rice], threshold=1e4)["placement"]
         assert again.overlap.max() <= threshold + 1e-12
         assert len(out["placement"]) + len(out["culled"]) == len(refined)
-    loose = run(cull, placement=refined, libraries=[rice], threshold=0.2)
+    loose = cull.call(placement=refined, libraries=[rice], threshold=0.2)
     assert len(loose["culled"]) < len(out["culled"])
 
 
 def test_a_cluster_of_identical_elements_keeps_exactly_one(rice):
     cluster = Placement(np.zeros((5, 3)), np.tile([0.0, 0.0, 1.0], (5, 1)))
-    out = run(cull, placement=cluster, libraries=[ElementLibrary("rice", rice.meshes[:1])])
+    out = cull.call(placement=cluster, libraries=[ElementLibrary("rice", rice.meshes[:1])])
     assert len(out["placement"]) == 1 and len(out["culled"]) == 4  # never all: the last one has no live neighbour
 
 
 def test_flat_element_is_refused_and_thin_elements_work(pile):
     flat = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]), np.array([[0, 1, 2], [1, 3, 2]]))
     with pytest.raises(ValueError, match="no interior"):
-        run(overlap_refine, placement=pile, libraries=[ElementLibrary("rice", (flat,))])
+        overlap_refine.call(placement=pile, libraries=[ElementLibrary("rice", (flat,))])
     rod = ellipsoid((1.1, 0.05, 0.05))      # S §5: rods
     plate = ellipsoid((1.1, 1.0, 0.04))     # S §5: plates
     for thin in (rod, plate):
-        out = run(overlap_refine, placement=pile.subset(np.arange(200)),
+        out = overlap_refine.call(placement=pile.subset(np.arange(200)),
                   libraries=[ElementLibrary("rice", (thin,))])["placement"]
         assert np.isfinite(out.positions).all() and np.abs(out.offsets).max() <= 1.1 + 1e-9
 
 
 def test_libraries_must_match_the_kinds(pile, rice):
     with pytest.raises(ValueError, match="kinds"):
-        run(overlap_refine, placement=pile, libraries=[ElementLibrary("other", rice.meshes)])
+        overlap_refine.call(placement=pile, libraries=[ElementLibrary("other", rice.meshes)])
 
 
 def test_empty_placement_passes_through(rice):
     empty = Placement(np.zeros((0, 3)), np.zeros((0, 3)))
-    assert len(run(overlap_refine, placement=empty, libraries=[rice])["placement"]) == 0
-    assert len(run(cull, placement=empty, libraries=[rice])["placement"]) == 0
+    assert len(overlap_refine.call(placement=empty, libraries=[rice])["placement"]) == 0
+    assert len(cull.call(placement=empty, libraries=[rice])["placement"]) == 0
 
 
 def test_carried_medial_spheres_give_the_same_refine_and_cull(pile, rice):
     from nodes.placement import carry_medial_spheres as medial_node
 
-    carried = run(medial_node, library=rice)
+    carried = medial_node.call(library=rice)
     library = carried["library"]
     assert library.props["medial_spheres"].shape[0] == len(rice) and library.props["medial_count"].min() >= 1
     assert np.all(carried["stats"].columns["gap_max"] <= 0.04 + 1e-9)  # the 2 % default tolerance, doubled
-    plain = run(overlap_refine, seed=2, placement=pile, libraries=[rice])["placement"]
-    fast = run(overlap_refine, seed=2, placement=pile, libraries=[library])["placement"]
+    plain = overlap_refine.call(seed=2, placement=pile, libraries=[rice])["placement"]
+    fast = overlap_refine.call(seed=2, placement=pile, libraries=[library])["placement"]
     assert digest(plain.positions, plain.overlap) == digest(fast.positions, fast.overlap)
-    assert digest(run(cull, placement=plain, libraries=[rice])["placement"].positions) == \
-        digest(run(cull, placement=fast, libraries=[library])["placement"].positions)
+    assert digest(cull.call(placement=plain, libraries=[rice])["placement"].positions) == \
+        digest(cull.call(placement=fast, libraries=[library])["placement"].positions)
 
 
 def test_more_passes_stay_in_range_and_do_not_deepen_the_overlap(pile, rice):
-    one = run(overlap_refine, seed=2, placement=pile, libraries=[rice])["placement"]
-    three = run(overlap_refine, seed=2, placement=pile, libraries=[rice], passes=3)["placement"]
+    one = overlap_refine.call(seed=2, placement=pile, libraries=[rice])["placement"]
+    three = overlap_refine.call(seed=2, placement=pile, libraries=[rice], passes=3)["placement"]
     b = max(np.linalg.norm(m.vertices, axis=1).max() for m in rice.meshes)
     assert np.abs(three.offsets).max() <= b + 1e-9  # later passes re-balance within [−b, b] about the surface
     assert three.overlap.mean() <= one.overlap.mean() + 1e-9
 
 
 def test_r_scale_multiplies_the_radius_derived_from_the_elements(small_onigiri, rice):
-    s1 = run(poisson_place, seed=1, shape=small_onigiri, elements=[rice])["stats"].columns["r"][0]
-    s2 = run(poisson_place, seed=1, shape=small_onigiri, elements=[rice], r_scale=2.0)["stats"].columns["r"][0]
+    s1 = poisson_place.call(seed=1, shape=small_onigiri, elements=[rice])["stats"].columns["r"][0]
+    s2 = poisson_place.call(seed=1, shape=small_onigiri, elements=[rice], r_scale=2.0)["stats"].columns["r"][0]
     assert s2 == pytest.approx(2.0 * s1)

@@ -10,10 +10,6 @@ from nodegraph.params import ParamValueError
 from nodes.shading import shade
 
 
-def _params(**over):
-    return shade.resolve_params(over)
-
-
 def test_materials_per_kind_and_ikura_parts(shaded):
     names = [m.name for m in shaded.materials]
     assert names == ["rice", "ikura_membrane", "ikura_yolk", "ceramic"]
@@ -28,10 +24,9 @@ def test_materials_per_kind_and_ikura_parts(shaded):
 
 
 def test_wetter_rice_is_whiter_and_glows_past_the_terminator(scene_inputs):
-    ctx = Context.standalone(seed=0)
     light = {"light_directions": [(1.0, 0.0, 0.0)], "ambient": 0.0}
-    dry = shade(ctx, **scene_inputs, **_params(water_content=0.0, **light))
-    wet = shade(ctx, **scene_inputs, **_params(water_content=24.0, **light))
+    dry = shade.call(**scene_inputs, water_content=0.0, **light)
+    wet = shade.call(**scene_inputs, water_content=24.0, **light)
     grain_dry, grain_wet = dry.meshes[0], wet.meshes[0]
     shadow = grain_dry.normals[:, 0] < -0.1  # facing away from the light: Lambert gives 0
     assert shadow.any()
@@ -41,7 +36,7 @@ def test_wetter_rice_is_whiter_and_glows_past_the_terminator(scene_inputs):
 
 def test_same_input_gives_bit_identical_colours(scene_inputs):
     def digest():
-        scene = shade(Context.standalone(seed=0), **scene_inputs, **_params())
+        scene = shade.call(**scene_inputs)
         h = hashlib.sha256()
         for mesh in scene.meshes:
             h.update(np.ascontiguousarray(mesh.colors).tobytes())
@@ -58,7 +53,7 @@ def test_ice_with_syrup_on_top(scene_inputs):
     heights = rice.placement.positions + np.c_[np.zeros((len(rice.placement), 2)), np.arange(len(rice.placement))]
     ice = replace(rice, placement=replace(rice.placement, positions=heights),
                   libraries=(replace(rice.libraries[0], kind="ice"),))
-    scene = shade(Context.standalone(seed=0), aggregates=[ice], **_params(syrup_coverage=0.5))
+    scene = shade.call(aggregates=[ice], syrup_coverage=0.5)
     assert {m.name for m in scene.materials} == {"ice", "ice_syrup"}
     assert all(m.ior == pytest.approx(1.31) and m.transmission > 0 for m in scene.materials)
     syrup = [mesh.vertices[:, 2].mean() for mesh, k in zip(scene.meshes, scene.material_of)
@@ -76,17 +71,18 @@ def test_out_of_range_parameters_are_refused_before_running(name, value):
 
 
 def test_bad_input_at_run_time_gives_clear_errors(scene_inputs):
-    ctx = Context.standalone(seed=0)
     with pytest.raises(ValueError, match="intensity > 0"):
-        shade(ctx, **scene_inputs, **_params(light_intensities=[0.0]))
+        shade.call(**scene_inputs, light_intensities=[0.0])
     with pytest.raises(ValueError, match="zero vector"):
-        shade(ctx, **scene_inputs, **_params(light_directions=[(0.0, 0.0, 0.0)]))
+        shade.call(**scene_inputs, light_directions=[(0.0, 0.0, 0.0)])
+    # Past the declaration (as a caller skipping validation would): the node's own checks still refuse.
+    unchecked = {**shade.resolve_params({}), **scene_inputs}
     with pytest.raises(ValueError, match="linear RGB"):
-        shade(ctx, **scene_inputs, **{**_params(), "syrup_color": (1.5, 0.0, 0.0)})
+        shade(Context.standalone(), **{**unchecked, "syrup_color": (1.5, 0.0, 0.0)})
     with pytest.raises(ValueError, match="water_content"):
-        shade(ctx, **scene_inputs, **{**_params(), "water_content": 25.0})
+        shade(Context.standalone(), **{**unchecked, "water_content": 25.0})
     with pytest.raises(ValueError, match="presets"):
-        shade(ctx, **scene_inputs, **_params(presets=["japonica=marble"]))
+        shade.call(**scene_inputs, presets=["japonica=marble"])
     assert shade.check({"light_directions": [(0, 0, 1)] * 2, "light_colors": [(1, 1, 1)] * 3,
                         "light_intensities": [1.0]})
 
@@ -96,10 +92,9 @@ def test_unknown_kind_and_empty_aggregates_are_refused(scene_inputs):
 
     rice, _ = scene_inputs["aggregates"]
     pebbles = replace(rice, libraries=(replace(rice.libraries[0], kind="pebble"),))
-    ctx = Context.standalone(seed=0)
     with pytest.raises(ValueError, match="pebble"):
-        shade(ctx, aggregates=[pebbles], **_params())
-    assert shade(ctx, aggregates=[pebbles], **_params(presets=["pebble=rice"])).materials[0].name == "rice"
+        shade.call(aggregates=[pebbles])
+    assert shade.call(aggregates=[pebbles], presets=["pebble=rice"]).materials[0].name == "rice"
     empty = replace(rice, placement=rice.placement.subset(np.zeros(len(rice.placement), bool)))
     with pytest.raises(ValueError, match="no elements"):
-        shade(ctx, aggregates=[empty], **_params())
+        shade.call(aggregates=[empty])

@@ -7,7 +7,6 @@ import json
 import zipfile
 
 import numpy as np
-import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 

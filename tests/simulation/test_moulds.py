@@ -6,7 +6,6 @@ import trimesh
 from scipy.spatial.transform import Rotation
 from xpbd_scenes import rice_library
 
-from nodegraph.context import Context
 from nodegraph.values import Mesh
 from nodes.values import Aggregate, Placement
 from nodes.simulation.xpbd import xpbd
@@ -31,11 +30,9 @@ def crowded_ball(n=60, radius=12.0, seed=1) -> Aggregate:
 
 def test_grains_sticking_out_of_a_mould_are_pressed_inside_and_stay():
     aggregate = crowded_ball()
-    out = xpbd(Context.standalone(effects=PRESS), aggregate=aggregate, moulds=[ball_mould()],
-               **xpbd.resolve_params({"frames": 20, "substeps": 5}))
+    out = xpbd.call(effects=PRESS, aggregate=aggregate, moulds=[ball_mould()], frames=20, substeps=5)
     p = out["particles"]
-    before = xpbd(Context.standalone(effects=("contact",)), aggregate=aggregate,
-                  **xpbd.resolve_params({"frames": 1, "substeps": 1}))["particles"]
+    before = xpbd.call(effects=("contact",), aggregate=aggregate, frames=1, substeps=1)["particles"]
     reach = np.linalg.norm(p.positions, axis=1) + p.radii
     assert (np.linalg.norm(before.positions, axis=1) + before.radii).max() > 12.5  # some stuck out
     assert np.isfinite(p.positions).all()
@@ -44,15 +41,13 @@ def test_grains_sticking_out_of_a_mould_are_pressed_inside_and_stay():
 
 def test_collider_effect_accepts_a_mould_alone_and_full_mode_refuses_one():
     aggregate = crowded_ball(n=10)
-    out = xpbd(Context.standalone(effects=("collider",)), aggregate=aggregate, moulds=[ball_mould()],
-               **xpbd.resolve_params({"frames": 2, "substeps": 2}))
+    out = xpbd.call(effects=("collider",), aggregate=aggregate, moulds=[ball_mould()], frames=2, substeps=2)
     p = out["particles"]
-    before = xpbd(Context.standalone(), aggregate=aggregate, **xpbd.resolve_params({"frames": 1, "substeps": 1}))
+    before = xpbd.call(aggregate=aggregate, frames=1, substeps=1)
     assert (np.linalg.norm(before["particles"].positions, axis=1) + p.radii).max() > 12.5  # some stuck out
     assert np.isfinite(p.positions).all()
     assert (np.linalg.norm(p.positions, axis=1) + p.radii).max() < 12.0 + 0.1 * p.radii.max()  # the mould acted
     with pytest.raises(ValueError, match="mould"):
-        xpbd(Context.standalone(effects=("gravity", "collider")), aggregate=aggregate, moulds=[ball_mould()],
-             **xpbd.resolve_params({"frames": 30, "mode": "full"}))
+        xpbd.call(effects=("gravity", "collider"), aggregate=aggregate, moulds=[ball_mould()], frames=30, mode="full")
     with pytest.raises(ValueError, match="'colliders' or 'moulds'"):
-        xpbd(Context.standalone(effects=("collider",)), aggregate=aggregate, **xpbd.resolve_params({"frames": 2}))
+        xpbd.call(effects=("collider",), aggregate=aggregate, frames=2)

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from xpbd_scenes import rice_bowl
 
-from nodegraph.context import Context
 from nodes.simulation.bending import bend_triples
 from nodes.simulation.solver import SolverSettings, XpbdSolver
 from nodes.simulation.xpbd import xpbd
@@ -61,9 +60,8 @@ def test_bend_off_allocates_nothing_and_node_stays_deterministic():
     aggregate, colliders = rice_bowl(10, seed=4)
     digests = []
     for bend in (0.0, 10.0, 10.0):
-        ctx = Context.standalone(effects=("gravity", "contact"))
-        out = xpbd(ctx, aggregate=aggregate, colliders=colliders,
-                   **xpbd.resolve_params({"frames": 5, "substeps": 4, "log_every": 0, "bend_stiffness": bend}))
+        out = xpbd.call(effects=("gravity", "contact"), aggregate=aggregate, colliders=colliders, frames=5, substeps=4,
+                        log_every=0, bend_stiffness=bend)
         assert np.isfinite(out["particles"].positions).all()
         digests.append(hashlib.sha256(out["particles"].positions.tobytes()).hexdigest())
     assert digests[1] == digests[2] != digests[0]

@@ -50,8 +50,8 @@ def test_no_pair_effect_builds_no_neighbour_lists(bowl):
 
 def test_grains_settle_inside_the_bowl(bowl):
     aggregate, colliders = bowl
-    ctx = Context.standalone(effects=("gravity", "contact", "friction", "collider", "damping"))
-    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params(frames=40, substeps=8))
+    out = xpbd.call(effects=("gravity", "contact", "friction", "collider", "damping"), aggregate=aggregate,
+                    colliders=colliders, **params(frames=40, substeps=8))
     placement = out["aggregate"].placement
     assert placement.positions[:, 2].mean() < aggregate.placement.positions[:, 2].mean()  # fell
     assert np.linalg.norm(out["particles"].positions, axis=1).max() < 60.0 - 3.0 + 0.1  # inside the cavity
@@ -68,8 +68,7 @@ def test_same_seed_is_bit_identical(bowl):
     aggregate, colliders = bowl
     digests = []
     for _ in range(2):
-        ctx = Context.standalone(effects=ALL)
-        out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params())
+        out = xpbd.call(effects=ALL, aggregate=aggregate, colliders=colliders, **params())
         h = hashlib.sha256()
         for array in (out["particles"].positions, out["aggregate"].placement.positions,
                       out["aggregate"].deformations):
@@ -85,8 +84,8 @@ def egg_on_ground():
 
 def test_buoyant_yolk_rises_inside_its_egg():
     aggregate, colliders = egg_on_ground()
-    ctx = Context.standalone(effects=("gravity", "collider", "buoyancy", "damping"))
-    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params(frames=30, mass=190.0))
+    out = xpbd.call(effects=("gravity", "collider", "buoyancy", "damping"), aggregate=aggregate, colliders=colliders,
+                    **params(frames=30, mass=190.0))
     assert isinstance(out["aggregate"], DeformedAggregate)
     offset = out["aggregate"].part_offsets[0]
     assert offset[2] > 0.5  # rose by more than half a millimetre
@@ -94,19 +93,19 @@ def test_buoyant_yolk_rises_inside_its_egg():
     yolk = mesh.vertices[np.unique(mesh.faces[mesh.parts == 1])]
     white = mesh.vertices[np.unique(mesh.faces[mesh.parts == 0])]
     assert yolk[:, 2].max() <= white[:, 2].max()  # still inside the membrane
-    ctx = Context.standalone(effects=("gravity", "collider", "damping"))
-    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params(frames=5, mass=190.0))
+    out = xpbd.call(effects=("gravity", "collider", "damping"), aggregate=aggregate, colliders=colliders,
+                    **params(frames=5, mass=190.0))
     assert not isinstance(out["aggregate"], DeformedAggregate)
 
 
 def test_bad_input_is_reported():
     aggregate, colliders = egg_on_ground()
-    ctx = Context.standalone(effects=("gravity", "collider"))
+    effects = ("gravity", "collider")
     with pytest.raises(ValueError, match="colliders"):
-        xpbd(ctx, aggregate=aggregate, colliders=[], **params())
+        xpbd.call(effects=effects, aggregate=aggregate, colliders=[], **params())
     empty = Aggregate(aggregate.placement.subset(np.zeros(1, bool)), aggregate.libraries)
     with pytest.raises(ValueError, match="empty"):
-        xpbd(ctx, aggregate=empty, colliders=colliders, **params())
+        xpbd.call(effects=effects, aggregate=empty, colliders=colliders, **params())
     assert xpbd.check({"mode": "full", "frames": 10})
 
 

@@ -6,7 +6,6 @@ import pytest
 from scipy.spatial import cKDTree
 from xpbd_scenes import ikura_mesh, rice_bowl
 
-from nodegraph.context import Context
 from nodes.values import Aggregate, ElementLibrary, ParticleState, Placement
 from nodes.simulation.setup import build_simulation, finish_simulation
 from nodes.simulation.xpbd import xpbd
@@ -71,8 +70,8 @@ def test_eggs_dropped_on_a_particle_bed_rest_on_it(effects):
 
 def test_obstacles_through_the_node_match_the_builder():
     bed = particle_bed(half=10.0)
-    ctx = Context.standalone(effects=("gravity", "contact"))
-    out = xpbd(ctx, aggregate=eggs_above(n_side=1), obstacles=[bed], **params(frames=20))
+    out = xpbd.call(effects=("gravity", "contact"), aggregate=eggs_above(n_side=1), obstacles=[bed],
+                    **params(frames=20))
     assert out["particles"].positions[:, 2].min() > -0.5  # landed on the bed instead of falling through
     assert len(out["particles"]) == 4
 
@@ -100,6 +99,6 @@ def test_unwired_obstacles_allocate_nothing():
 def test_bad_obstacles_are_reported():
     bed = particle_bed(half=3.0)
     broken = ParticleState(bed.positions, bed.velocities, np.zeros(len(bed)), bed.inv_mass, bed.element)
-    ctx = Context.standalone(effects=("gravity", "contact"))
     with pytest.raises(ValueError, match="obstacles"):
-        xpbd(ctx, aggregate=eggs_above(n_side=1), obstacles=[broken], **params(frames=1))
+        xpbd.call(effects=("gravity", "contact"), aggregate=eggs_above(n_side=1), obstacles=[broken],
+                  **params(frames=1))

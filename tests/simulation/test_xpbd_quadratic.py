@@ -8,7 +8,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 from xpbd_scenes import rice_bowl
 
-from nodegraph.context import Context
 from nodes.simulation.shape_matching import quadratic_moments, rest_moments, shape_match_project
 from nodes.simulation.xpbd import xpbd
 
@@ -109,10 +108,8 @@ def bowl():
 
 def run(bowl, **given):
     aggregate, colliders = bowl
-    ctx = Context.standalone(effects=ALL)
-    params = xpbd.resolve_params({"frames": 6, "substeps": 4, "log_every": 0, "particles_per_element": 12,
-                                  **given})
-    out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params)
+    settings = {"frames": 6, "substeps": 4, "log_every": 0, "particles_per_element": 12, **given}
+    out = xpbd.call(effects=ALL, aggregate=aggregate, colliders=colliders, **settings)
     h = hashlib.sha256()
     for array in (out["particles"].positions, out["aggregate"].placement.positions, out["aggregate"].deformations):
         assert np.isfinite(array).all()

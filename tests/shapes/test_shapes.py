@@ -8,26 +8,24 @@ import trimesh
 
 from nodes.shapes import boolean, mesh_file, shape
 
-from .conftest import run
-
 
 @pytest.mark.parametrize("kind", ["bowl", "onigiri", "sphere", "box", "cylinder"])
 def test_every_kind_is_a_closed_outward_solid(kind):
-    out = run(shape, kind=kind, resolution=3)
+    out = shape.call(kind=kind, resolution=3)
     mesh = trimesh.Trimesh(out["mesh"].vertices, out["mesh"].faces, process=False)
     assert mesh.is_watertight and mesh.volume > 0
     assert (len(out["container"].vertices) > 0) == (kind == "bowl")
 
 
 def test_onigiri_has_the_circumscribed_radius_asked_for():
-    mesh = run(shape, kind="onigiri", size=20.0)["mesh"]
+    mesh = shape.call(kind="onigiri", size=20.0)["mesh"]
     radius = np.linalg.norm(mesh.vertices - mesh.vertices.mean(axis=0), axis=1).max()
     assert radius == pytest.approx(20.0, rel=0.02)
     assert np.ptp(mesh.vertices[:, 1]) == pytest.approx(0.9 * 20.0, rel=0.05)  # thickness share
 
 
 def test_bowl_region_sits_in_the_cavity_with_a_mound():
-    out = run(shape, kind="bowl", size=60.0, depth=45.0, fill=0.8, mound=15.0)
+    out = shape.call(kind="bowl", size=60.0, depth=45.0, fill=0.8, mound=15.0)
     region, container = out["mesh"], out["container"]
     assert region.vertices[:, 2].max() == pytest.approx(-45.0 + 0.8 * 45.0 + 15.0, abs=0.5)
     assert region.vertices[:, 2].min() == pytest.approx(-45.0, abs=0.5)
@@ -39,14 +37,14 @@ def test_bowl_region_sits_in_the_cavity_with_a_mound():
 
 
 def test_boolean_difference_removes_the_intersection():
-    a = run(shape, kind="sphere", size=10.0)["mesh"]
-    b = run(shape, kind="box", extents=(10.0, 10.0, 10.0))["mesh"]
-    diff = run(boolean, a=a, b=b, operation="difference")
-    inter = run(boolean, a=a, b=b, operation="intersection")
+    a = shape.call(kind="sphere", size=10.0)["mesh"]
+    b = shape.call(kind="box", extents=(10.0, 10.0, 10.0))["mesh"]
+    diff = boolean.call(a=a, b=b, operation="difference")
+    inter = boolean.call(a=a, b=b, operation="intersection")
     vol = lambda m: trimesh.Trimesh(m.vertices, m.faces).volume  # noqa: E731
     assert vol(diff) + vol(inter) == pytest.approx(vol(a), rel=1e-3)
     with pytest.raises(ValueError, match="empty"):
-        run(boolean, a=inter, b=a, operation="difference")
+        boolean.call(a=inter, b=a, operation="difference")
 
 
 def test_mesh_file_repairs_inverted_normals_and_refuses_holes(tmp_path):
@@ -54,13 +52,13 @@ def test_mesh_file_repairs_inverted_normals_and_refuses_holes(tmp_path):
     inverted = ball.copy()
     inverted.invert()
     inverted.export(tmp_path / "inverted.stl")
-    fixed = run(mesh_file, path=str(tmp_path / "inverted.stl"), size=5.0)
+    fixed = mesh_file.call(path=str(tmp_path / "inverted.stl"), size=5.0)
     assert trimesh.Trimesh(fixed.vertices, fixed.faces).volume > 0
     with pytest.raises(ValueError, match="inwards"):
-        run(mesh_file, path=str(tmp_path / "inverted.stl"), repair=False)
+        mesh_file.call(path=str(tmp_path / "inverted.stl"), repair=False)
     open_mesh = trimesh.Trimesh(ball.vertices, ball.faces[ball.vertices[ball.faces].mean(axis=1)[:, 2] < 0.5])
     open_mesh.export(tmp_path / "open.stl")
     with pytest.raises(ValueError, match="holes"):
-        run(mesh_file, path=str(tmp_path / "open.stl"))
+        mesh_file.call(path=str(tmp_path / "open.stl"))
     with pytest.raises(ValueError, match="no such"):
-        run(mesh_file, path=str(tmp_path / "missing.stl"))
+        mesh_file.call(path=str(tmp_path / "missing.stl"))

@@ -13,8 +13,7 @@ from nodes.export import export
 
 
 def _files(scene, formats):
-    return export(Context.standalone(seed=0), scene=scene, **export.resolve_params({"formats": formats,
-                                                                                     "basename": "don"})).files
+    return export.call(scene=scene, formats=formats, basename="don").files
 
 
 def _gltf_json(data: bytes) -> dict:
@@ -112,7 +111,7 @@ def test_bad_export_parameters(shaded, params, match):
 def test_unwritable_destination_leaves_nothing_half_written(shaded, tmp_path):
     from nodegraph.output_files import write_output
 
-    fileset = export(Context.standalone(seed=0), scene=shaded, **export.resolve_params({"formats": ["glb", "ply"]}))
+    fileset = export.call(scene=shaded, formats=["glb", "ply"])
     blocker = tmp_path / "outputs"
     blocker.write_text("a file where the output folder should be")  # fails even for root
     with pytest.raises(OSError):

@@ -9,12 +9,12 @@ from nodes.elements import base_mesh
 from nodes.elements.grain_shapes import RICE_VARIETIES, volume_centroid
 from nodes.elements.mesh_files import MeshFileError, load_element_mesh
 
-from .conftest import as_trimesh, run
+from .conftest import as_trimesh
 
 
 @pytest.mark.parametrize("variety", sorted(RICE_VARIETIES))
 def test_rice_presets_are_closed_centred_and_scaled(variety):
-    mesh = run(base_mesh, variety=variety)
+    mesh = base_mesh.call(variety=variety)
     tm = as_trimesh(mesh)
     assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
     _, centroid = volume_centroid(mesh.vertices, mesh.faces)
@@ -26,7 +26,7 @@ def test_rice_presets_are_closed_centred_and_scaled(variety):
 
 
 def test_ikura_parts_and_yolk_radius():
-    mesh = run(base_mesh, shape="ikura", diameter=4.0, lipid_fraction=0.145)
+    mesh = base_mesh.call(shape="ikura", diameter=4.0, lipid_fraction=0.145)
     assert set(np.unique(mesh.parts)) == {0, 1}
     outer = mesh.vertices[np.unique(mesh.faces[mesh.parts == 0])]
     yolk = mesh.vertices[np.unique(mesh.faces[mesh.parts == 1])]
@@ -41,8 +41,8 @@ def test_ikura_parts_and_yolk_radius():
 
 
 def test_ice_flake_is_thin_irregular_and_depends_on_shape_seed():
-    a = run(base_mesh, shape="ice_flake")
-    b = run(base_mesh, shape="ice_flake", shape_seed=3)
+    a = base_mesh.call(shape="ice_flake")
+    b = base_mesh.call(shape="ice_flake", shape_seed=3)
     tm = as_trimesh(a)
     assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
     extent = np.ptp(a.vertices, axis=0)
@@ -62,7 +62,7 @@ def test_user_mesh_is_recentred_and_aligned(tmp_path):
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in box.vertices.tolist()]
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in box.faces.tolist()]
     path.write_text("\n".join(lines) + "\n")
-    mesh = run(base_mesh, shape="file", path=str(path))
+    mesh = base_mesh.call(shape="file", path=str(path))
     extent = np.ptp(mesh.vertices, axis=0)
     assert extent == pytest.approx([6.0, 2.0, 1.0], rel=1e-6)
     assert np.allclose(mesh.vertices.mean(axis=0), 0.0, atol=1e-6)
@@ -98,7 +98,7 @@ def test_open_mesh_is_refused(tmp_path):
     path = tmp_path / "open.stl"
     trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(path)
     with pytest.raises(MeshFileError, match="not closed"):
-        run(base_mesh, shape="file", path=str(path))
+        base_mesh.call(shape="file", path=str(path))
 
 
 def test_flat_mesh_is_refused(tmp_path):

@@ -3,13 +3,11 @@
 import numpy as np
 import pytest
 
-from nodegraph.context import Context
 from nodes.export import preview
 
 
 def _render(scene, **over):
-    params = preview.resolve_params({"width": 64, "height": 48, "samples": 2, **over})
-    return preview(Context.standalone(seed=0), scene=scene, **params).pixels
+    return preview.call(scene=scene, **{"width": 64, "height": 48, "samples": 2, **over}).pixels
 
 
 def test_preview_shows_the_shaded_scene(shaded):
