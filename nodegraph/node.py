@@ -82,7 +82,7 @@ class NodeSpec:
         not given is passed as an unwired port is (None, or [] for a many-input). ``seed`` becomes
         ``ctx.seed`` of a random node (others get None, as in a recipe); ``effects`` are the effects the
         node receives in ``ctx.effects``. Returns what the implementation returns. For tests, scripts
-        and benchmarks: ``shape.call(kind="bowl", size=60.0)``, ``sphere_scatter.call(seed=3, mesh=m)``.
+        and benchmarks: ``decimate.call(mesh=m, faces=500)``, ``scatter.call(seed=3, mesh=m)``.
         """
         where = f"node type '{self.type_name}'"
         unknown = sorted(set(given) - set(self.inputs) - set(self.params))
