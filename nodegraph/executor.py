@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from datetime import datetime, timezone
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,7 @@ from . import __version__, codec
 from .cache import Cache
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
-from .output_files import write_output
+from .output_files import MANIFEST, write_manifest, write_output
 from .params import canonical
 from .recipe import NodeEntry, Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
@@ -308,6 +309,15 @@ def run_recipe(recipe: Recipe, *, outputs: list[str] | None = None, cache: Cache
         result = executor.run(wires)
         if out_dir is not None:
             executor.write_outputs(result, wires, out_dir)
+            others = sorted(p.name for p in out_dir.iterdir() if p.is_file() and p not in result.files
+                            and p.name != MANIFEST and not p.name.endswith(".rrd"))
+            write_manifest(out_dir, result.files, {
+                "recipe": recipe.name, "recipe_file": recipe.path, "digest": recipe.digest(), "seed": recipe.seed,
+                "overrides": list(recipe.overrides), "outputs": [str(w) for w in wires], "engine": __version__,
+                "written": datetime.now(timezone.utc).isoformat(timespec="seconds")})
+            if others and warn is not None:
+                warn(f"{len(others)} other file(s) in {out_dir} are not from this run (see {MANIFEST}): "
+                     + ", ".join(others[:5]) + (" …" if len(others) > 5 else ""))
         ok = True
     finally:
         if recording is not None:

@@ -1,30 +1,90 @@
 """Write a recipe's declared outputs into ``outputs/<recipe>/`` in the format each value type suits.
 
 ``write_output`` is a singledispatch registry like ``rerun_log.log_value``: the engine registers its
-generic values (Mesh → .ply, Image → .png, FileSet → its files, anything else → .npz); a node package
+generic values (Mesh → .ply, Image → .png, FileSet → its files, Table → .csv, anything else → a .npz
+with members named by field path); a node package
 registers its own types (the built-in ones: ``nodes.output_writers``). Every write is atomic.
 """
 
 from __future__ import annotations
 
+import csv
+import hashlib
+import json
+import dataclasses
 import io
+import zipfile
 from functools import singledispatch
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from . import codec
 from .cache import atomic_write
-from .values import FileSet, Image, Mesh
+from .values import FileSet, Image, Mesh, Table
+
+
+def flat_arrays(value: Any, prefix: str = "") -> dict[str, np.ndarray]:
+    """The arrays of a value by field path (``positions``, ``libraries.0.kind``): what ``numpy.load``
+    shows of it. Plain fields become 0-d arrays, strings unicode arrays (no pickle)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        items = [(f.name, getattr(value, f.name)) for f in dataclasses.fields(value)]
+    elif isinstance(value, dict):
+        items = sorted((str(k), v) for k, v in value.items())
+    elif isinstance(value, (list, tuple)):
+        items = [(str(i), v) for i, v in enumerate(value)]
+    else:
+        if value is None:
+            return {}
+        if isinstance(value, bytes):
+            value = np.frombuffer(value, np.uint8)
+        array = np.asarray(value)
+        return {} if array.dtype == object else {prefix or "value": array}
+    out: dict[str, np.ndarray] = {}
+    for name, item in items:
+        out.update(flat_arrays(item, f"{prefix}.{name}" if prefix else name))
+    return out
+
+
+def named_npz(arrays: dict[str, np.ndarray]) -> bytes:
+    """A deterministic .npz (fixed member times, no pickle) with one member per named array."""
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as archive:
+        for name, array in arrays.items():
+            member = io.BytesIO()
+            np.lib.format.write_array(member, np.ascontiguousarray(array), allow_pickle=False)
+            archive.writestr(zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0)), member.getvalue())
+    return buffer.getvalue()
 
 
 @singledispatch
 def write_output(value: Any, directory: Path, stem: str) -> list[Path]:
-    """Fallback: the value's .npz encoding (numpy.load reads it; ``__meta__.json`` holds the field tree)."""
+    """Fallback: a .npz whose members are named by field path (``numpy.load(f).files`` lists them)."""
     path = directory / f"{stem}.npz"
-    atomic_write(path, codec.encode(value))
+    atomic_write(path, named_npz(flat_arrays(value)))
     return [path]
+
+
+@write_output.register
+def _(value: Table, directory: Path, stem: str) -> list[Path]:
+    """A table of 1-D columns as CSV (a header row of column names); other tables as a named .npz."""
+    columns = {name: np.asarray(column) for name, column in value.columns.items()}
+    if not all(c.ndim == 1 for c in columns.values()):
+        return write_output.dispatch(object)(value, directory, stem)
+    path = directory / f"{stem}.csv"
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(columns)
+    writer.writerows(zip(*(_csv_cells(c) for c in columns.values())))
+    atomic_write(path, buffer.getvalue().encode())
+    return [path]
+
+
+def _csv_cells(column: np.ndarray) -> list:
+    """Cells of a column: floats written exactly (repr round-trips), the rest as they print."""
+    if column.dtype.kind == "f":
+        return [repr(float(x)) for x in column]
+    return [x.item() if hasattr(x, "item") else x for x in column]
 
 
 @write_output.register
@@ -58,3 +118,19 @@ def _(value: FileSet, directory: Path, stem: str) -> list[Path]:
         atomic_write(path, data)
         paths.append(path)
     return paths
+
+
+MANIFEST = "manifest.json"
+
+
+def write_manifest(directory: Path, files: list[Path], run: dict[str, Any]) -> Path:
+    """``manifest.json`` beside the outputs: which run wrote them (``run``: recipe, digest, seed, overrides,
+    time, ...) and the sha256 and size of each file it wrote; files in the folder it does not list are
+    not from this run."""
+    listing = {}
+    for path in files:
+        data = path.read_bytes()
+        listing[str(path.relative_to(directory))] = {"sha256": hashlib.sha256(data).hexdigest(), "bytes": len(data)}
+    path = directory / MANIFEST
+    atomic_write(path, json.dumps({**run, "files": listing}, indent=1, sort_keys=True).encode())
+    return path

@@ -1,5 +1,8 @@
 """Pull-based runs, cache reuse and selective invalidation, variants, effects, failures, determinism."""
 
+import json
+import os
+
 import numpy as np
 import pytest
 
@@ -165,7 +168,25 @@ def test_outputs_written_to_directory(registry, cache, tmp_path):
     names = sorted(p.name for p in result.files)
     assert names == ["merge.spheres.npz", "mesh.ply"]
     loaded = np.load(tmp_path / "out" / "merge.spheres.npz")
-    assert "a0.npy" in loaded.files or "a0" in loaded.files
+    assert sorted(loaded.files) == ["centers", "radii"]  # named by field, readable without nodegraph
+    assert np.array_equal(loaded["centers"], result.output("merge.spheres").centers)
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert set(manifest["files"]) == set(names) and manifest["seed"] == result.recipe.seed
+    assert manifest["files"]["mesh.ply"]["bytes"] == (tmp_path / "out" / "mesh.ply").stat().st_size
+    umask = os.umask(0)
+    os.umask(umask)
+    assert all(p.stat().st_mode & 0o777 == 0o666 & ~umask for p in result.files)  # as open() makes them, not 0600
+
+
+def test_tables_are_written_as_csv(tmp_path):
+    from nodegraph.output_files import write_output
+    from nodegraph.values import Table
+
+    table = Table({"placed": np.array([12, 7]), "ratio": np.array([1.0 / 3.0, 2.5])})
+    (path,) = write_output(table, tmp_path, "stats")
+    assert path.name == "stats.csv"
+    rows = path.read_text().splitlines()
+    assert rows[0] == "placed,ratio" and float(rows[1].split(",")[1]) == 1.0 / 3.0
 
 
 def test_progress_bars_nest_on_a_terminal(registry, cache):
