@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..mesh_io import read_mesh
+
 
 class MeshFileError(ValueError):
     """A mesh file that cannot be used as an element, with the reason and what would be accepted."""
@@ -20,15 +22,10 @@ class MeshFileError(ValueError):
 
 def load_element_mesh(path: str | Path, scale: float = 1.0, align: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (mm) and faces of a closed, outward, centred element mesh read from ``path``."""
-    import trimesh
-
-    path = Path(path)
-    if not path.is_file():
-        raise MeshFileError(f"mesh file not found: {path}")
     try:
-        loaded = trimesh.load(path, force="mesh", process=False)
-    except Exception as exc:  # trimesh raises many types for unreadable files
-        raise MeshFileError(f"cannot read mesh file {path}: {type(exc).__name__}: {exc}") from exc
+        loaded = read_mesh(path, process=False)
+    except ValueError as exc:
+        raise MeshFileError(str(exc)) from exc
     vertices = np.asarray(getattr(loaded, "vertices", np.empty((0, 3))), dtype=np.float64)
     faces = np.asarray(getattr(loaded, "faces", np.empty((0, 3))), dtype=np.int64)
     return repair_element_mesh(vertices * scale, faces, source=str(path), align=align)

@@ -2,23 +2,18 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import trimesh
 
+from ..mesh_io import read_mesh
+
 
 def load_mesh(path: str) -> trimesh.Trimesh:
-    """Read one triangle mesh (scenes are concatenated); clear error for a missing or empty file."""
-    if not Path(path).is_file():
-        raise ValueError(f"path: no such mesh file {path!r}")
+    """Read one triangle mesh (scenes are concatenated); a clear error naming the cause otherwise."""
     try:
-        loaded = trimesh.load(path, force="mesh")
-    except Exception as exc:  # trimesh raises many types for unreadable files
-        raise ValueError(f"path: cannot read {path!r} as a mesh ({exc})") from exc
-    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        raise ValueError(f"path: {path!r} holds no triangles")
-    return loaded
+        return read_mesh(path)
+    except ValueError as exc:
+        raise ValueError(f"path: {exc}") from exc
 
 
 def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str) -> trimesh.Trimesh:
@@ -36,8 +31,9 @@ def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str) -> trimesh.Tr
         trimesh.repair.fill_holes(mesh)
         trimesh.repair.fix_inversion(mesh)
     if not mesh.is_watertight:
-        raise ValueError(f"{what}: the mesh has holes (not watertight) and could not be closed; "
-                         "close it in a modeller or pass repair: true for small holes")
+        fix = "repair (on) could not close them: close the mesh in a modeller" if repair else \
+            "close it in a modeller, or pass repair: true for small holes"
+        raise ValueError(f"{what}: the mesh has holes (not watertight); {fix}")
     if mesh.volume < 0:
         if not repair:
             raise ValueError(f"{what}: normals point inwards (negative volume); pass repair: true to flip them")
