@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import pickle
+import traceback
 from dataclasses import dataclass
 
 
@@ -83,7 +86,23 @@ class NodeFailure(NodegraphError):
         self.location = location
         label = node_id if variant is None else f"{node_id}[{variant}]"
         where = f"{location}: " if location is not None else ""
-        super().__init__(f"{where}node '{label}' (type {node_type}) failed: {type(cause).__name__}: {cause}")
+        super().__init__(f"{where}node '{label}' (type {node_type}) failed: {type(cause).__name__}: {cause}"
+                         + compiled_cache_hint(cause))
+
+
+def compiled_cache_hint(cause: BaseException) -> str:
+    """A hint when the failure came from loading numba's on-disk cache (a truncated or damaged entry
+    fails every run the same way until it is removed)."""
+    seen = set()
+    while cause is not None and id(cause) not in seen:
+        seen.add(id(cause))
+        frames = traceback.extract_tb(cause.__traceback__)
+        if isinstance(cause, (EOFError, pickle.UnpicklingError)) and any("numba" in f.filename for f in frames):
+            directory = os.environ.get("NUMBA_CACHE_DIR", "numba's cache directory")
+            return (f" — numba's compiled-kernel cache looks damaged: remove {directory} (it is rebuilt on the "
+                    "next run)")
+        cause = cause.__cause__ or cause.__context__
+    return ""
 
 
 class CacheCorruption(NodegraphError):

@@ -100,6 +100,13 @@ def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
         mark = exc.problem_mark or exc.context_mark
         loc = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
         raise RecipeError([Issue(loc, f"YAML syntax error: {exc.problem or exc}")]) from None
+    except yaml.reader.ReaderError as exc:  # a character YAML does not allow (e.g. a NUL byte)
+        line = text.count("\n", 0, exc.position) + 1
+        column = exc.position - (text.rfind("\n", 0, exc.position) + 1) + 1
+        raise RecipeError([Issue(Location(file, line, column), f"character {exc.character!r} is not allowed in "
+                                 "YAML", allowed="printable text")]) from None
+    except yaml.YAMLError as exc:
+        raise RecipeError([Issue(Location(file, 1, 1), f"YAML error: {exc}")]) from None
     if root is None:
         raise RecipeError([Issue(Location(file, 1, 1), "the recipe is empty")])
     issues: list[Issue] = []

@@ -20,7 +20,8 @@ DEFAULT_RESOLUTION = 64
       outputs={"volume": Out(Volume, "occupancy (bool): cell centre inside the mesh or a sphere")},
       params={
           "resolution": Param(int, DEFAULT_RESOLUTION, "cells along the longest side, padding included "
-                              "(64: see the resolution sweep in benchmarks/bench_elements.py)", range=(8, 1024)),
+                              "(64: see the resolution sweep in benchmarks/bench_elements.py); at most 406, so any shape's grid "
+                              "fits the 2^26-cell limit (finer: voxel_size)", range=(8, 406)),
           "voxel_size": Param(float, None, "cell size; overrides resolution when given", range=(1e-4, 100.0),
                               units="mm", nullable=True),
           "padding": Param(int, 3, "empty cells around the geometry (room for level offsets)", range=(1, 32)),
