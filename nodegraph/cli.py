@@ -44,6 +44,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--spawn", action="store_true", help="also stream to a Rerun viewer")
     run.add_argument("--out-dir", type=Path, default=None, help="where outputs go (default outputs/<recipe>)")
     run.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    run.add_argument("--max-minutes", type=float, default=10.0, metavar="M",
+                     help="a node whose own estimate is longer than this refuses to start (default 10)")
+    run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
     _common(run)
 
     check = sub.add_parser("check", help="validate a recipe; nothing runs")
@@ -98,7 +101,7 @@ def _cmd_run(args, registry) -> int:
         spawn = False
     try:
         result = run_recipe(recipe, outputs=args.outputs or None, cache=cache, out_dir=out_dir, rrd=rrd,
-                            spawn=spawn, reporter=reporter)
+                            spawn=spawn, reporter=reporter, max_seconds=None if args.yes else 60 * args.max_minutes)
     except (NodeFailure, KeyboardInterrupt):
         reporter.print_summary()
         raise

@@ -82,6 +82,18 @@ class EntityLogger:
                 self.index.add(path, archetype, static=False)
 
 
+class CostLimitExceeded(NodegraphError):
+    """A node's own estimate of its run time is over the run's limit: refused before the work starts."""
+
+
+def format_seconds(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
 @dataclass
 class Context:
     """Per-run facts for one node instance. ``effects`` holds only requested effects the node implements."""
@@ -93,6 +105,7 @@ class Context:
     variant: int | None = None
     rerun: EntityLogger = field(default_factory=lambda: EntityLogger(None, "/"))
     reporter: Any = None
+    max_seconds: float | None = None  # a node expecting to run longer refuses to start (``expect_cost``)
     _rng: np.random.Generator | None = field(default=None, repr=False)
 
     @classmethod
@@ -111,6 +124,19 @@ class Context:
         if self._rng is None:
             self._rng = np.random.default_rng(self.seed)
         return self._rng
+
+    def expect_cost(self, seconds: float, what: str) -> None:
+        """Called by a long node before its work, with its estimate: said when it is long (≥ 10 s), and
+        refused (CostLimitExceeded) when over ``max_seconds``, so a parameter that makes a run take hours
+        is caught before the hours, not after; nodes upstream stay cached."""
+        label = self.node_id if self.variant is None else f"{self.node_id}[{self.variant}]"
+        if self.max_seconds is not None and seconds > self.max_seconds:
+            raise CostLimitExceeded(
+                f"{what} would take ≈ {format_seconds(seconds)}, over this run's limit of "
+                f"{format_seconds(self.max_seconds)}: run again with --yes to go ahead (or --max-minutes N); "
+                "the nodes before it are cached")
+        if seconds >= 10.0 and self.reporter is not None:
+            self.reporter.info(f"{label}: {what}, ≈ {format_seconds(seconds)} expected")
 
     def wants(self, effect: str) -> bool:
         """True when the recipe asked for ``effect`` (and this node implements it)."""

@@ -90,8 +90,9 @@ class Executor:
     """Runs one recipe against one cache, logging to one recording."""
 
     def __init__(self, recipe: Recipe, cache: Cache | None = None, reporter: Reporter | None = None,
-                 recording: RunRecording | None = None):
+                 recording: RunRecording | None = None, max_seconds: float | None = None):
         self.recipe = recipe
+        self.max_seconds = max_seconds
         self.cache = cache
         self.reporter = reporter or Reporter(quiet=True)
         self.recording = recording
@@ -216,6 +217,7 @@ class Executor:
             # (the final state) would shadow what the node logged on a timeline (a simulation per step)
             rerun=self.recording.logger(f"{inst.entity}/{LOG}") if self.recording else EntityLogger(None, inst.entity),
             reporter=self.reporter,
+            max_seconds=self.max_seconds,
         )
         start = now()
         memory = PeakMemory()
@@ -289,8 +291,9 @@ class Executor:
 
 def run_recipe(recipe: Recipe, *, outputs: list[str] | None = None, cache: Cache | None = None,
                out_dir: Path | None = None, rrd: Path | None = None, spawn: bool = False,
-               reporter: Reporter | None = None) -> RunResult:
-    """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``.
+               reporter: Reporter | None = None, max_seconds: float | None = None) -> RunResult:
+    """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``; a node
+    that expects to run longer than ``max_seconds`` refuses to start (``Context.expect_cost``).
 
     The recording is written beside ``rrd`` as ``*.partial.rrd`` and moved over ``rrd`` only when the run
     completes; its id is derived from what the recipe computes (``Recipe.digest``), so two settings of a
@@ -303,7 +306,7 @@ def run_recipe(recipe: Recipe, *, outputs: list[str] | None = None, cache: Cache
         digest = recipe.digest()
         recording = RunRecording(rrd, recording_name(recipe), spawn=spawn, warn=warn,
                                  recording_id=f"{recipe.name}-{digest[:16]}")
-    executor = Executor(recipe, cache, reporter, recording)
+    executor = Executor(recipe, cache, reporter, recording, max_seconds)
     ok = False
     try:
         result = executor.run(wires)
