@@ -6,9 +6,9 @@ thread that shares it arrives late at every barrier. Measured on this 2-core mac
 the same 10k-sphere profile ran 366 and then 12 substeps/s on two threads, as the other
 processes came and went, and one thread launched in 2.8 µs where two took 370 µs. So the solver
 measures, between frames, how much CPU the other processes used (``/proc/stat`` minus this
-process's own time) and runs on the cores they leave. The kernels' results do not depend on the thread count (tested), only their speed.
-Hand-written: no library reports "cores used by other processes" (psutil gives the same numbers
-from the same files, as one more dependency).
+process's own time) and runs on the cores they leave. The kernels' results do not depend on the
+thread count (tested), only their speed. Hand-written: no library reports "cores used by other
+processes" (psutil gives the same numbers from the same files, as one more dependency).
 """
 
 from __future__ import annotations
