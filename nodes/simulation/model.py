@@ -27,6 +27,9 @@ class RestMoments:
     aqq_pinv: np.ndarray  # (m, 3, 3)
     null_proj: np.ndarray  # (m, 3, 3)
 
+    def args(self):
+        return self.aqq_pinv, self.null_proj
+
 
 @dataclass(frozen=True, eq=False)
 class QuadraticFit:

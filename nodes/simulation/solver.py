@@ -109,7 +109,7 @@ class XpbdSolver:
         self.model = model
         self.settings = settings
         self.dispatch = dispatch or KernelDispatch()
-        self.k = Coefficients.of(model, settings)
+        self.coefficients = Coefficients.of(model, settings)
         self.clusters = ClusterBuffers.allocate(model)
         self.pairs = PairBuffers.allocate(model, settings)
         self.diagnostics = Diagnostics()
@@ -137,7 +137,7 @@ class XpbdSolver:
             return self._substep(state)
 
     def _substep(self, st: State) -> float:
-        s, d, k, m = self.settings, self.dispatch, self.k, self.model
+        s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
         awake = m.n_moving
         if s.sleep_speed > 0:
             probe = st.substeps_done % (s.substeps * s.sleep_probe) == 0
@@ -162,7 +162,8 @@ class XpbdSolver:
 
     def _solve(self, st: State) -> float:
         """Predict, the constraint iterations, velocities from positions; returns the residual."""
-        s, d, k, m, pairs, clusters = self.settings, self.dispatch, self.k, self.model, self.pairs, self.clusters
+        s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
+        pairs, clusters = self.pairs, self.clusters
         moved = d("integrate", integrate.predict, st.x, st.v, st.x_prev, st.awake, m.w, m.r, *self._tracking(),
                   k.accel, k.h, s.speed_clamp)
         self._track(moved)
@@ -181,12 +182,12 @@ class XpbdSolver:
         for _ in range(s.iterations):
             residual = 0.0
             if {"contact", "friction"} & s.effects:  # one sweep: friction on each pair after its contact
-                self._contacts(st, pairs.allowance, friction=True)
+                self._contacts(st, friction=True)
             # the element's shape is restored after the contacts, the walls have the last word
             if m.moments is not None:
                 residual = d("shape_matching", shape_matching.shape_match_project, st.x, st.quats, st.awake, m.w,
-                             m.q_rest, m.start, m.moments.aqq_pinv, m.moments.null_proj, clusters.lam, k.alpha,
-                             s.linear_deformation, s.rotation_iterations, *quadratic)
+                             m.q_rest, m.start, *m.moments.args(), clusters.lam, k.alpha, s.linear_deformation,
+                             s.rotation_iterations, *quadratic)
             if m.bend is not None:
                 residual = max(residual, d("bending", bending.bend_project, st.x, st.quats, st.awake, m.w,
                                            *m.bend.args(), clusters.bend_lam, k.bend_alpha))
@@ -224,33 +225,34 @@ class XpbdSolver:
         """Resolve the overlaps left at the start of the substep before predicting (Macklin et al.
         2014 §4.2 pre-stabilisation): moved before x_prev is taken, they add no velocity, so deep
         initial overlaps separate instead of bursting."""
-        d, k, m, pairs = self.dispatch, self.k, self.model, self.pairs
+        d, k, m, pairs = self.dispatch, self.coefficients, self.model, self.pairs
         self._refresh_neighbours(st)
         if "contact" in self.settings.effects:
             pairs.allowance[:] = 0.0  # none tolerated here
-            self._contacts(st, pairs.allowance, wake_step=np.inf)
+            self._contacts(st, wake_step=np.inf)
             d("contact", contact_constraints.overlap_allowance, st.x, st.awake, m.r, *pairs.lists.rows(), k.decay,
               pairs.allowance)
         if m.collider is not None:
             d("collider", collider.collider_project, st.x, st.x, m.w, m.r, *m.collider.args(), 0.0, 0.0)
 
-    def _contacts(self, st: State, allowance, friction=False, wake_step=None) -> None:
+    def _contacts(self, st: State, friction=False, wake_step=None) -> None:
         """One Gauss–Seidel sweep of the contacts (if asked) and, with ``friction`` and the effect,
         friction on each pair just before its normal correction; one run of slabs per thread.
         ``wake_step``: ``Coefficients.wake_step`` unless given (pre-stabilisation passes inf: the
         overlaps it undoes are no impact)."""
-        s, k, m, lists = self.settings, self.k, self.model, self.pairs.lists
+        s, k, m, pairs = self.settings, self.coefficients, self.model, self.pairs
+        lists = pairs.lists
         normal = "contact" in s.effects
         rub = friction and "friction" in s.effects
         family = ("contact",) * normal + ("friction",) * rub
         wake_step = k.wake_step if wake_step is None else wake_step
         self.dispatch(family, contact_constraints.contact_sweep, st.x, st.x_prev, st.awake, st.pushed, m.w, m.r,
-                      *lists.rows(), *lists.grid(), allowance, wake_step, k.lift, k.mu_s if rub else 0.0, k.mu_k,
-                      normal, self.threads)
+                      *lists.rows(), *lists.grid(), pairs.allowance, wake_step, k.lift, k.mu_s if rub else 0.0,
+                      k.mu_k, normal, self.threads)
 
     def _adhesion(self, st: State) -> None:
         """One Jacobi sweep of the adhesion bonds into the scratch copy, which becomes the positions."""
-        k, m, pairs = self.k, self.model, self.pairs
+        k, m, pairs = self.coefficients, self.model, self.pairs
         out = pairs.scratch
         self.dispatch("adhesion", adhesion.adhesion_project, st.x, st.awake, m.w, m.r, *pairs.lists.csr(),
                       self.settings.capture, k.adhesion_alpha, k.lift, out)
@@ -262,8 +264,8 @@ class XpbdSolver:
         if self.cores is not None:
             self.threads = self.cores.threads()
         residual = 0.0
-        for k in range(self.settings.substeps):
-            if k == self.settings.substeps - 1:
+        for i in range(self.settings.substeps):
+            if i == self.settings.substeps - 1:
                 self.x_mark[:] = state.x
             residual = self.substep(state)
         with thread_count(self.threads):
@@ -281,7 +283,7 @@ class XpbdSolver:
         dg.residual.append(float(residual))
         # from the motion over the last substep, not from v: a resting particle that pre-stabilisation
         # lifts out of its tolerated overlap and the solve lets sink back has v = −Δ/h but stands still
-        dg.kinetic_energy.append(float(integrate.kinetic_energy((st.x - self.x_mark) / self.k.h, m.w)))
+        dg.kinetic_energy.append(float(integrate.kinetic_energy((st.x - self.x_mark) / self.coefficients.h, m.w)))
         dg.sleeping.append(float(st.asleep.mean()) if s.sleep_speed > 0 else 0.0)
         dg.solved.append(self.solved / (s.substeps * m.n_moving))
         self.solved = 0
