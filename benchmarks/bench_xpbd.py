@@ -27,6 +27,7 @@ RESULTS = ROOT / "benchmarks" / "results"
 from machine import conditions  # noqa: E402
 from xpbd_scenes import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column  # noqa: E402
 
+from nodes.simulation.settings import XpbdParams  # noqa: E402
 from nodes.simulation.setup import build_simulation  # noqa: E402
 from nodes.simulation.xpbd import xpbd  # noqa: E402
 
@@ -107,14 +108,14 @@ def bench_effects(quick):
     aggregate, colliders = rice_bowl(n)
     ladder = [("gravity", "collider"), ("contact",), ("friction",), ("adhesion",), ("damping",), ("moisture",)]
     effects, rows, base = (), [], None
-    params = xpbd.resolve_params({"frames": frames})
+    params = XpbdParams(**xpbd.resolve_params({"frames": frames}))
     for step in ladder:
         effects = effects + step
         sim = build_simulation(aggregate, colliders, frozenset(effects), params)
-        sim.solver.frame()  # warm
+        sim.frame()  # warm
         t = time.perf_counter()
         for _ in range(frames):
-            sim.solver.frame()
+            sim.frame()
         per_frame = (time.perf_counter() - t) / frames
         base = per_frame if base is None else base
         calls = sim.solver.dispatch.calls
@@ -127,13 +128,14 @@ def bench_effects(quick):
     return "\n".join(lines)
 
 
-def run_to_rest(solver, frames, repeats=1, make=None):
-    """Run ``frames`` frames; returns (wall of the frames alone, element centres, max penetration / r
-    over the run, last residual, energy drift and rise of ``energy_drift``). With ``repeats`` > 1 the
-    (deterministic) run is repeated on fresh solvers from ``make`` and the fastest wall kept."""
+def run_to_rest(run, frames, repeats=1, make=None):
+    """Run ``frames`` frames of a ``setup.Simulation`` or ``xpbd_scenes.SolverRun``; returns (wall of the
+    frames alone, element centres, max penetration / r over the run, last residual, energy drift and
+    rise of ``energy_drift``). With ``repeats`` > 1 the (deterministic) run is repeated on fresh runs
+    from ``make`` and the fastest wall kept."""
     walls = []
     for k in range(repeats):
-        s = solver if k == 0 else make()
+        s = run if k == 0 else make()
         energies, wall = [], 0.0
         for _ in range(frames):
             t = time.perf_counter()
@@ -141,17 +143,18 @@ def run_to_rest(solver, frames, repeats=1, make=None):
             wall += time.perf_counter() - t
             energies.append(mechanical_energy(s))
         walls.append(wall)
-    mass = float(np.sum(1.0 / s.w[:s.n_moving]))
-    drift, rise = energy_drift(energies, mass, s.s.gravity, float(np.median(s.r[:s.n_moving])))
-    dg = s.diagnostics
-    return min(walls), s.centres(), max(dg.penetration), dg.residual[-1], drift, rise
+    m = s.model
+    mass = float(np.sum(1.0 / m.w[:m.n_moving]))
+    drift, rise = energy_drift(energies, mass, s.solver.settings.gravity, float(np.median(m.r[:m.n_moving])))
+    dg = s.solver.diagnostics
+    return min(walls), m.centres(s.state.x), max(dg.penetration), dg.residual[-1], drift, rise
 
 
 def bowl_maker(aggregate, colliders, frames):
     def make(substeps, iterations):
         params = xpbd.resolve_params({"frames": frames, "substeps": substeps, "iterations": iterations,
                                       "sleep_speed": 0.0})
-        return build_simulation(aggregate, colliders, frozenset(RICE), params).solver
+        return build_simulation(aggregate, colliders, frozenset(RICE), XpbdParams(**params))
     return make
 
 

@@ -41,11 +41,11 @@ def initial_grid(n, seed=0):
 
 
 def box_solver(n, dispatch=None):
-    """Our solver on the jittered grid in the open box (mm, g, s), ready to run."""
-    from xpbd_scenes import open_box
+    """Our solver on the jittered grid in the open box (mm, g, s), ready to run: an ``xpbd_scenes.SolverRun``."""
+    from xpbd_scenes import open_box, solver_run
 
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.solver import SolverSettings, XpbdSolver
+    from nodes.simulation.settings import SolverSettings
 
     x, side = initial_grid(n)
     x_mm, r_mm, side_mm = x * 1000, RADIUS * 1000, side * 1000
@@ -54,14 +54,15 @@ def box_solver(n, dispatch=None):
                                np.array([side_mm + 20, side_mm + 20, height]), r_mm / 2)
     settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), substeps=SUBSTEPS,
                               iterations=1, mu_s=0.5, mu_k=0.5, shock_propagation=4.0)
-    return XpbdSolver(x_mm, np.full(n, r_mm), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
-                      np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf, dispatch=dispatch)
+    return solver_run(x_mm, np.full(n, r_mm), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
+                      np.tile([1.0, 0, 0, 0], (n, 1)), settings, dispatch=dispatch, sdf=sdf)
 
 
 def ours_scene(n):
     """(frame, positions in m, notes) of our solver on the box scene."""
     s = box_solver(n)
-    return s.frame, lambda: s.x / 1000, lambda: {"penetration": s.diagnostics.penetration[-1], "threads": s.threads}
+    return s.frame, lambda: s.state.x / 1000, lambda: {"penetration": s.solver.diagnostics.penetration[-1],
+                                                        "threads": s.solver.threads}
 
 
 def packing(x, side):

@@ -25,6 +25,7 @@ from bench_xpbd import RICE, pile_measures  # noqa: E402
 from machine import conditions  # noqa: E402
 from xpbd_scenes import rice_bowl  # noqa: E402
 
+from nodes.simulation.settings import XpbdParams  # noqa: E402
 from nodes.simulation.setup import build_simulation, finish_simulation  # noqa: E402
 from nodes.simulation.xpbd import xpbd  # noqa: E402
 
@@ -33,12 +34,12 @@ TAIL = 10  # frames at the end whose cost is reported apart
 
 def run(aggregate, colliders, sleep_speed, frames):
     """(wall s, per-frame seconds, diagnostics, node-like outputs) of one run."""
-    params = xpbd.resolve_params({"frames": frames, "sleep_speed": sleep_speed})
+    params = XpbdParams(**xpbd.resolve_params({"frames": frames, "sleep_speed": sleep_speed}))
     sim = build_simulation(aggregate, colliders, frozenset(RICE), params)
     per_frame = []
     for _ in range(frames):
         t = time.perf_counter()
-        sim.solver.frame()
+        sim.frame()
         per_frame.append(time.perf_counter() - t)
     return sum(per_frame), np.array(per_frame), sim.solver.diagnostics, finish_simulation(sim)
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from nodegraph.values import Mesh, as_array, optional_array
+from nodegraph.values import Mesh, as_array
 
 
 @dataclass(frozen=True, eq=False)

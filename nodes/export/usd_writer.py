@@ -47,7 +47,7 @@ def _material(stage, path: str, material: Material):
 
 def build_stage(scene: ShadedScene):
     """An in-memory stage holding the scene under ``/Scene`` (the default prim)."""
-    from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
+    from pxr import Usd, UsdGeom, UsdShade, Vt
 
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)

@@ -19,7 +19,7 @@ from .contact_constraints import pair_normal
 
 
 @njit(cache=True, parallel=True)
-def adhesion_project(x, w, r, nbr_start, nbr, awake, capture, alpha_tilde, lift, out):
+def adhesion_project(x, awake, w, r, nbr_start, nbr, capture, alpha_tilde, lift, out):
     """One Jacobi sweep pulling near-touching pairs together; ``capture`` in length units,
     ``alpha_tilde`` = compliance / h² (larger is weaker), ``lift`` the contacts' mass scaling.
     Asleep particles (``awake``, ``integrate.wake_flags``) are not moved (an awake partner still

@@ -44,7 +44,7 @@ def bend_triples(q_rest: np.ndarray, start: np.ndarray, elongation: float = 1.5)
 
 
 @njit(cache=True, parallel=True)
-def bend_project(x, w, triples, frac, rest, tstart, quats, lam, alpha_tilde, awake):
+def bend_project(x, quats, awake, w, triples, frac, rest, tstart, lam, alpha_tilde):
     """One XPBD sweep of the bend constraints (λ accumulated in ``lam`` (t, 3)) of the clusters whose
     particles are ``awake`` (``integrate.wake_flags``); returns max |C|."""
     m = tstart.shape[0] - 1

@@ -28,7 +28,7 @@ def yolk_predict(yx, yv, y_prev, x, v, w, start, owner, accel, h, drag_rate):
 
 
 @njit(cache=True, parallel=True)
-def yolk_contain(yx, yv, y_prev, x, w, start, quats, owner, centre_local, room, h):
+def yolk_contain(yx, yv, y_prev, x, quats, w, start, owner, centre_local, room, h):
     """Project each yolk back inside its egg (|x_y − c| ≤ room) and set v = Δx/h."""
     k = yx.shape[0]
     for y in prange(k):

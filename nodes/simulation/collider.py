@@ -12,6 +12,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..triangle_distance import point_triangle_offset
+from .friction import friction_wall
 
 
 @njit(cache=True)
@@ -174,7 +175,7 @@ def block_minimum(phi):
 
 
 @njit(cache=True, inline="always")
-def _wall_one(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k, i):
+def _wall_one(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k, i):
     """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
     if w[i] <= 0.0:
         return 0.0
@@ -199,31 +200,20 @@ def _wall_one(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k, i):
     x[i, 1] += pen * ny
     x[i, 2] += pen * nz
     if mu_s > 0.0:
-        rx = x[i, 0] - x_prev[i, 0]
-        ry = x[i, 1] - x_prev[i, 1]
-        rz = x[i, 2] - x_prev[i, 2]
-        dn = rx * nx + ry * ny + rz * nz
-        tx = rx - dn * nx
-        ty = ry - dn * ny
-        tz = rz - dn * nz
-        t = np.sqrt(tx * tx + ty * ty + tz * tz)
-        if t > 1e-12:
-            scale = 1.0 if t < mu_s * pen else min(mu_k * pen / t, 1.0)
-            x[i, 0] -= scale * tx
-            x[i, 1] -= scale * ty
-            x[i, 2] -= scale * tz
+        friction_wall(x, x_prev, i, nx, ny, nz, pen, mu_s, mu_k)
     return pen / r[i]
 
 
 @njit(cache=True, parallel=True)
-def collider_project(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k):
+def collider_project(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
-    (μs = μk = 0 skips friction). In place; particles are independent. ``blocks``: the
-    ``block_minimum`` of φ (particles far from every wall are skipped). Returns max (r − φ)/r."""
+    (``friction.friction_wall``, normal load = the penetration; μs = μk = 0 skips friction). In
+    place; particles are independent. ``blocks``: the ``block_minimum`` of φ (particles far from
+    every wall are skipped). Returns max (r − φ)/r."""
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):
-        worst[i] = _wall_one(x, x_prev, r, w, phi, origin, pitch, blocks, mu_s, mu_k, i)
+        worst[i] = _wall_one(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k, i)
     return worst.max() if n > 0 else 0.0
 
 

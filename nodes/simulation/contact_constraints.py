@@ -21,9 +21,10 @@ so no exponent overflows however tall the pile. Rest positions do not depend on 
 Overlap left over at the start of a substep is removed mostly by pre-stabilisation (moves that add
 no velocity, Macklin et al. 2014 §4.2); within the substep each pair may keep that overlap less a
 ``decay`` share of the smaller radius (``allowance``). Deep initial overlaps therefore separate
-without a burst of kinetic energy (at most decay·r/h of separation speed; the solver passes decay = rate·h, a fixed speed), while old overlaps still
-shrink every substep: an allowance that never decays ratchets, since each impact adds overlap
-that is then tolerated for good, and falling columns ended with coincident particles.
+without a burst of kinetic energy (at most decay·r/h of separation speed; the solver passes
+decay = rate·h, a fixed speed), while old overlaps still shrink every substep: an allowance that
+never decays ratchets, since each impact adds overlap that is then tolerated for good, and falling
+columns ended with coincident particles.
 """
 
 import numpy as np
@@ -78,8 +79,8 @@ def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
 
 
 @njit(cache=True, inline="always")
-def _project_slab(x, x_prev, w, r, nbr_start, nbr, half, awake, pushed, wake_step, allowance, lift, mu_s, mu_k, normal,
-                  order, p0, p1):
+def _project_slab(x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, allowance, wake_step, lift, mu_s, mu_k,
+                  normal, order, p0, p1):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
     rows, ``half`` false: each pair from its lower index) but pairs of two asleep particles
     (``awake``, ``integrate.wake_flags``: at rest, nothing to do; with one asleep, ``sleeper_share``):
@@ -144,8 +145,8 @@ def _colour_chunks(cell_start, dims, colour, chunks, out):
 
 
 @njit(cache=True, parallel=True)
-def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, awake, pushed, wake_step, allowance, lift, mu_s, mu_k, normal,
-                  chunks, cell_start, order, dims):
+def contact_sweep(x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, cell_start, order, dims, allowance, wake_step,
+                  lift, mu_s, mu_k, normal, chunks):
     """One Gauss–Seidel sweep over the touching pairs, in place: the non-penetration constraint
     C = |x_i − x_j| − r_i − r_j + allowance ≥ 0 (allowance per list entry; ``normal``) with shock
     propagation ``lift`` (1/length, 0 = off), and in the same pass friction (μs > 0) on each pair
@@ -163,12 +164,12 @@ def contact_sweep(x, x_prev, w, r, nbr_start, nbr, half, awake, pushed, wake_ste
         for t in prange(chunks):
             for k in range(bounds[t], bounds[t + 1]):
                 ix = colour + 3 * k
-                _project_slab(x, x_prev, w, r, nbr_start, nbr, half, awake, pushed, wake_step, allowance, lift, mu_s, mu_k, normal, order,
-                              cell_start[ix * slab], cell_start[(ix + 1) * slab])
+                _project_slab(x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, allowance, wake_step, lift, mu_s,
+                              mu_k, normal, order, cell_start[ix * slab], cell_start[(ix + 1) * slab])
 
 
 @njit(cache=True, inline="always")
-def _allowance_row(x, r, nbr_start, nbr, half, awake, decay, out, i):
+def _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, i):
     for a in range(nbr_start[i], nbr_start[i + 1]):
         j = nbr[a]
         if (not half and j < i) or not (awake[i] or awake[j]):
@@ -178,12 +179,12 @@ def _allowance_row(x, r, nbr_start, nbr, half, awake, decay, out, i):
 
 
 @njit(cache=True, parallel=True)
-def overlap_allowance(x, r, nbr_start, nbr, half, awake, decay, out):
+def overlap_allowance(x, awake, r, nbr_start, nbr, half, decay, out):
     """Per list entry, the overlap r_i + r_j − d that remains less decay·min(r_i, r_j) (≥ 0):
     tolerated until the next pre-stabilisation. Entries the sweep skips (j < i in full rows, ``half``
     false; pairs of two asleep particles, ``awake``) are not written."""
     for i in prange(x.shape[0]):
-        _allowance_row(x, r, nbr_start, nbr, half, awake, decay, out, i)
+        _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, i)
 
 
 @njit(cache=True, parallel=True)

@@ -46,7 +46,7 @@ def _predict_one(x, v, w, r, accel, row, h, clamp, x_prev, x_built, moved, track
 
 
 @njit(cache=True, parallel=True)
-def predict(x, v, w, r, accel, h, clamp, x_prev, x_built, moved, awake):
+def predict(x, v, x_prev, awake, w, r, x_built, moved, accel, h, clamp):
     """x_prev ← x; v += h·a (a per particle, (n, 3), or one row for all); clamp; x ← x + h·v —
     for the ``awake`` particles; asleep ones only get x_prev ← x (no gravity: they stay put).
 
@@ -70,7 +70,7 @@ def _velocity_one(x, x_prev, v, r, h, clamp, damping_factor, x_built, moved, tra
 
 
 @njit(cache=True, parallel=True)
-def update_velocity(x, x_prev, v, r, h, clamp, damping_factor, x_built, moved):
+def update_velocity(x, v, x_prev, r, x_built, moved, h, clamp, damping_factor):
     """v = (x − x_prev)/h, clamped, times the damping factor (1 = none); zero restitution.
     Returns max_i |x_i − x_built_i| like ``predict``: the next substep's Verlet-list check."""
     n = x.shape[0]
@@ -81,7 +81,7 @@ def update_velocity(x, x_prev, v, r, h, clamp, damping_factor, x_built, moved):
 
 
 @njit(cache=True, parallel=True)
-def wake_flags(x, x_start, start, asleep, probe, awake, pushed):
+def wake_flags(x, x_start, asleep, awake, pushed, start, probe):
     """Per particle ``awake`` ← its element is awake (or ``probe``: every element is solved this
     substep), and for those particles x_start ← x, the sleep test's reference; ``pushed`` cleared;
     returns how many particles are awake. An asleep particle keeps the x_start of the substep it
@@ -104,7 +104,7 @@ def wake_flags(x, x_start, start, asleep, probe, awake, pushed):
 
 
 @njit(cache=True, parallel=True)
-def sleep_clusters(v, x, x_start, h, start, sleep_speed, asleep, pushed):
+def sleep_clusters(x, v, x_start, asleep, pushed, start, h, sleep_speed):
     """Put to sleep (and zero the velocities of) every element whose particles all lie within
     sleep_speed·h of x_start, measured from before pre-stabilisation, and none of which was
     ``pushed`` (``contact_constraints.sleeper_share``): an element pinned in an overlap that

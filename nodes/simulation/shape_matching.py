@@ -204,12 +204,13 @@ def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_til
 
 
 @njit(cache=True, parallel=True)
-def shape_match_project(x, w, q_rest, start, quats, aqq_pinv, null_proj, lam, alpha_tilde, beta, rot_iters,
-                        qt=None, qpinv=None, quadratic=None, awake=None):
+def shape_match_project(x, quats, awake, w, q_rest, start, aqq_pinv, null_proj, lam, alpha_tilde, beta, rot_iters,
+                        qt=None, qpinv=None, quadratic=None):
     """One XPBD sweep of C_i = x_i − g_i per particle, g_i = (β·A + (1−β)·R)·q_i + x_cm (SPEC §5);
     with ``qt, qpinv, quadratic`` (``quadratic_moments``), the quadratic goal for the clusters whose
-    flag is set (the others, too few or degenerate particles, keep the linear goal). With ``awake``
-    (per particle, ``integrate.wake_flags``), asleep clusters are skipped: they keep their shape.
+    flag is set (the others, too few or degenerate particles, keep the linear goal). Clusters whose
+    particles are asleep (``awake`` per particle, ``integrate.wake_flags``) are skipped: they keep
+    their shape.
 
     Clusters are disjoint, so the loop over clusters is race-free and updates ``x`` in place.
     ``lam`` (n, 3) accumulates λ over the iterations of a substep; returns the max |C| seen.
@@ -224,7 +225,7 @@ def shape_match_project(x, w, q_rest, start, quats, aqq_pinv, null_proj, lam, al
         apq9 = np.empty((3, 9))
         goal9 = np.empty((3, 9))
         for c in range(b * BLOCK, min(m, (b + 1) * BLOCK)):
-            if start[c + 1] - start[c] < 2 or (awake is not None and not awake[start[c]]):
+            if start[c + 1] - start[c] < 2 or not awake[start[c]]:
                 continue
             if quadratic is not None and quadratic[c]:
                 worst[c] = _match_cluster_quadratic(x, w, q_rest, qt, start[c], start[c + 1], quats[c], qpinv[c],

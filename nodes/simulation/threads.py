@@ -4,11 +4,11 @@ numba's OpenMP layer (its default, ≈ 2 µs per parallel launch) splits a loop 
 threads and waits for the slowest at the end of the loop; when another process holds a core, the
 thread that shares it arrives late at every barrier. Measured on this 2-core machine at load 4:
 the same 10k-sphere profile ran 366 and then 12 substeps/s on two threads, as the other
-processes came and went, and one thread launched in 2.8 µs where two took 370 µs. So the solver measures, between frames, how much CPU
-the other processes used (``/proc/stat`` minus this process's own time) and runs on the cores
-they leave. The kernels' results do not depend on the thread count (tested), only their speed.
-Hand-written: no library reports "cores used by other processes" (psutil gives the same numbers
-from the same files, as one more dependency).
+processes came and went, and one thread launched in 2.8 µs where two took 370 µs. So the solver
+measures, between frames, how much CPU the other processes used (``/proc/stat`` minus this
+process's own time) and runs on the cores they leave. The kernels' results do not depend on the
+thread count (tested), only their speed. Hand-written: no library reports "cores used by other
+processes" (psutil gives the same numbers from the same files, as one more dependency).
 """
 
 from __future__ import annotations

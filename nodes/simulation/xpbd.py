@@ -1,6 +1,7 @@
 """The ``xpbd`` node: relax a placed aggregate into a resting, touching, slightly squashed pile —
-SPEC §3 (G §3.3, XPBD) with shape-matching clusters (SPEC §5). Thin: parses parameters, builds the
-particle state (``setup``), runs ``solver.XpbdSolver`` frame by frame, returns typed values.
+SPEC §3 (G §3.3, XPBD) with shape-matching clusters (SPEC §5). Thin: its parameters become one typed
+``settings.XpbdParams``, ``setup`` builds the model, state and solver from it, ``solver.XpbdSolver``
+runs frame by frame, and the outputs are typed values.
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
 from ..values import Aggregate, ParticleState
+
+from .settings import EFFECTS, XpbdParams
 
 
 def _check(params):
@@ -93,7 +96,7 @@ def _check(params):
                                   "(0 = never; a 2,000-grain bowl logs ≈ 10 MB per snapshot)", range=(0, 100000),
                                   units="frames"),
     },
-    effects=("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping"),
+    effects=EFFECTS,
     check=_check,
 )
 def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
@@ -102,16 +105,15 @@ def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
     ``ctx.effects`` are computed."""
     from .setup import build_simulation, finish_simulation, snapshot_aggregate
 
-    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, params, obstacles=obstacles,
-                           moulds=moulds)
-    frames, every, meshes_every = params["frames"], params["log_every"], params["log_meshes_every"]
-    substeps = sim.solver.s.substeps
+    p = XpbdParams(**params)
+    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds)
+    frames, every, meshes_every, substeps = p.frames, p.log_every, p.log_meshes_every, p.substeps
     with ctx.progress(frames, "frames") as bar:
         for frame in range(frames):
-            sim.solver.frame()
+            sim.frame()
             if ctx.rerun.enabled:
                 if every and frame % every == 0:
-                    _log_particles(ctx, sim.solver, frame)
+                    _log_particles(ctx, sim, frame * substeps)
                 if meshes_every and frame % meshes_every == 0 and frame < frames - 1:
                     _log_meshes(ctx, snapshot_aggregate(sim), frame * substeps)
             bar.advance()
@@ -119,17 +121,17 @@ def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
     if ctx.rerun.enabled:
         if meshes_every:  # the last frame's meshes are the output's: not fitted twice
             _log_meshes(ctx, out["aggregate"], (frames - 1) * substeps)
-        _log_scalars(ctx, sim.solver)
+        _log_scalars(ctx, sim.solver.diagnostics, substeps)
     return out
 
 
-def _log_particles(ctx, solver, frame):
+def _log_particles(ctx, sim, step):
     import rerun as rr
 
-    n = solver.n_moving  # static obstacles are another node's output
+    n = sim.model.n_moving  # static obstacles are another node's output
     keep = slice(None, n, max(1, n // 20000))  # subsample big scenes
-    ctx.rerun.set_time("sim_step", frame * solver.s.substeps)
-    ctx.rerun.log("particles", rr.Points3D(solver.x[keep], radii=solver.r[keep]))
+    ctx.rerun.set_time("sim_step", step)
+    ctx.rerun.log("particles", rr.Points3D(sim.state.x[keep], radii=sim.model.r[keep]))
 
 
 def _log_meshes(ctx, aggregate, step):
@@ -139,11 +141,10 @@ def _log_meshes(ctx, aggregate, step):
     ctx.rerun.log("elements", elements_mesh3d(aggregate))  # never empty: build_simulation refuses that
 
 
-def _log_scalars(ctx, solver):
+def _log_scalars(ctx, dg, substeps):
     import rerun as rr
 
-    dg = solver.diagnostics
-    steps = (np.arange(len(dg.penetration)) + 1) * solver.s.substeps
+    steps = (np.arange(len(dg.penetration)) + 1) * substeps
     for name, values in (("penetration_over_radius", dg.penetration), ("residual", dg.residual),
                          ("kinetic_energy", dg.kinetic_energy), ("sleeping_share", dg.sleeping)):
         ctx.rerun.send_columns(f"scalars/{name}", indexes=[rr.TimeColumn("sim_step", sequence=steps)],

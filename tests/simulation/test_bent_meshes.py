@@ -14,6 +14,7 @@ from nodegraph import codec
 from nodegraph.values import Mesh
 from nodes.values import Aggregate, ElementLibrary, Placement
 from nodes.simulation.aggregate import DeformedAggregate
+from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation, snapshot_aggregate
 from nodes.simulation.xpbd import xpbd
 
@@ -33,8 +34,9 @@ def aggregate(mesh=None) -> Aggregate:
     return Aggregate(placement, (ElementLibrary("long", [mesh or long_grain()]),))
 
 
-def params(**given):
-    return xpbd.resolve_params({"frames": 1, "particles_per_element": 16, "linear_deformation": 1.0, **given})
+def params(**given) -> XpbdParams:
+    return XpbdParams(**xpbd.resolve_params({"frames": 1, "particles_per_element": 16, "linear_deformation": 1.0,
+                                             **given}))
 
 
 def arc(local):
@@ -48,9 +50,8 @@ def arc(local):
 def bent_snapshot(deformation):
     """Lay the element's particles on the arc (in its own frame) and read the aggregate back."""
     sim = build_simulation(aggregate(), [], frozenset(), params(deformation=deformation))
-    s = sim.solver
-    rest_local = s.q_rest + sim.local_centre[0]
-    s.x[:] = arc(rest_local) @ ROTATION.T + ORIGIN
+    rest_local = sim.model.q_rest + sim.local_centre[0]
+    sim.state.x[:] = arc(rest_local) @ ROTATION.T + ORIGIN
     return sim, snapshot_aggregate(sim)
 
 
@@ -67,7 +68,7 @@ def sag(local_rest, local_now):
 
 def test_long_grain_cluster_gets_the_quadratic_goal():
     sim = build_simulation(aggregate(), [], frozenset(), params(deformation="quadratic"))
-    assert sim.solver.quadratic_fit[2].all()
+    assert sim.model.quadratic.flags.all()
 
 
 def test_quadratic_mesh_follows_the_arc_linear_mesh_stays_straight():
@@ -93,8 +94,8 @@ def test_bent_map_passes_closer_through_the_particles():
     misfit = {}
     for mode in ("quadratic", "linear"):
         sim, snapshot = bent_snapshot(mode)
-        mapped = snapshot.element_points(0, sim.solver.q_rest + sim.local_centre[0])
-        misfit[mode] = np.abs(mapped - sim.solver.x).max()
+        mapped = snapshot.element_points(0, sim.model.q_rest + sim.local_centre[0])
+        misfit[mode] = np.abs(mapped - sim.state.x).max()
     assert misfit["quadratic"] < 0.2 * misfit["linear"]
 
 

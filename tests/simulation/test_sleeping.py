@@ -5,10 +5,10 @@ changes nothing."""
 import hashlib
 
 import numpy as np
-from xpbd_scenes import box_mesh
+from xpbd_scenes import box_mesh, solver_run
 
 from nodes.simulation.collider import signed_distance_grid
-from nodes.simulation.solver import SolverSettings, XpbdSolver
+from nodes.simulation.settings import SolverSettings
 
 RADIUS = 0.6
 TETRA = np.array([[0.0, 0, 0], [1, 0, 0], [0.5, 0.87, 0], [0.5, 0.29, 0.82]])
@@ -25,7 +25,7 @@ def solver(elements, sleep_speed):
     start = np.r_[0, np.cumsum([len(qe) for qe in q])]
     w = np.concatenate([np.full(len(qe), len(qe) / 0.025) for qe in q])
     settings = SolverSettings(EFFECTS, damping=0.1, sleep_speed=sleep_speed)
-    return XpbdSolver(x, np.full(len(x), RADIUS), w, start, np.concatenate(q), np.tile([1.0, 0, 0, 0], (len(q), 1)),
+    return solver_run(x, np.full(len(x), RADIUS), w, start, np.concatenate(q), np.tile([1.0, 0, 0, 0], (len(q), 1)),
                       settings, sdf=GROUND)
 
 
@@ -43,25 +43,25 @@ def settle(s, frames):
 
 
 def digest(s):
-    return hashlib.sha256(s.x.tobytes() + s.v.tobytes() + s.quats.tobytes()).hexdigest()
+    return hashlib.sha256(s.state.x.tobytes() + s.state.v.tobytes() + s.state.quats.tobytes()).hexdigest()
 
 
 def test_resting_pile_sleeps_and_skips_the_work():
     s = settle(pile(2.0), 90)
     awake_run = settle(pile(0.0), 90)
-    assert s.diagnostics.sleeping[-1] == 1.0
+    assert s.solver.diagnostics.sleeping[-1] == 1.0
     # the probe substep solves all (1/10), a few elements stay awake a substep or two after it
-    assert s.diagnostics.solved[-1] <= 0.2
-    assert awake_run.diagnostics.solved[-1] == 1.0
-    before = s.dispatch.calls.copy()
+    assert s.solver.diagnostics.solved[-1] <= 0.2
+    assert awake_run.solver.diagnostics.solved[-1] == 1.0
+    before = s.solver.dispatch.calls.copy()
     s.frame()
-    calls = s.dispatch.calls - before
+    calls = s.solver.dispatch.calls - before
     # the probe substep and the few substeps after it that still have someone awake (20 without sleeping)
-    assert calls["shape_matching"] <= s.s.substeps * s.s.iterations / 2
+    assert calls["shape_matching"] <= s.solver.settings.substeps * s.solver.settings.iterations / 2
     # and the same pile at rest as the never-sleeping run (which keeps creeping: KE ≈ 0.1 g·mm²/s²,
     # so element by element they differ by up to a radius on top): same mean height, no overlap
     assert abs(s.centres()[:, 2].mean() - awake_run.centres()[:, 2].mean()) < 0.05 * RADIUS
-    assert s.diagnostics.penetration[-1] < 0.05
+    assert s.solver.diagnostics.penetration[-1] < 0.05
 
 
 def drop_on_floor(sleep_speed):
@@ -71,18 +71,18 @@ def drop_on_floor(sleep_speed):
     g = (np.arange(5) - 2) * 2.4
     elements = [(PLATE, np.array([a, b, 0.6])) for a in g for b in g] + [(TETRA, np.array([0.0, 0, 12.0]))]
     s = solver(elements, sleep_speed)
-    drop = slice(s.start[-2], s.start[-1])
-    s.w[drop] = 0.0
+    drop = slice(s.model.start[-2], s.model.start[-1])
+    s.model.w[drop] = 0.0
     settle(s, 60)
-    assert s.asleep.all() or sleep_speed == 0
-    x0 = s.x.copy()
-    s.w[drop] = 4 / 0.025
-    s.asleep[-1] = False
-    woke = np.zeros(len(s.asleep), bool)
+    assert s.state.asleep.all() or sleep_speed == 0
+    x0 = s.state.x.copy()
+    s.model.w[drop] = 4 / 0.025
+    s.state.asleep[-1] = False
+    woke = np.zeros(len(s.state.asleep), bool)
     for _ in range(30):
         s.frame()
-        woke |= ~s.asleep
-    return s, woke, np.linalg.norm((s.x - x0)[:s.start[-2]], axis=1).reshape(-1, 4).max(axis=1)
+        woke |= ~s.state.asleep
+    return s, woke, np.linalg.norm((s.state.x - x0)[:s.model.start[-2]], axis=1).reshape(-1, 4).max(axis=1)
 
 
 def test_a_dropped_element_wakes_the_sleepers_it_hits():
@@ -94,23 +94,24 @@ def test_a_dropped_element_wakes_the_sleepers_it_hits():
     # of the impact, and the dropped element alone takes it
     assert moved[hit] > 0.5 * moved_awake[hit]
     assert not woke[corners].any() and moved[corners].max() < 0.05  # untouched: asleep all along
-    assert s.asleep.mean() > 0.7  # and mostly at rest again
-    assert abs(s.x[s.start[-2]:, 2].mean() - awake_run.x[s.start[-2]:, 2].mean()) < 0.3  # lands alike
-    assert np.isfinite(s.x).all()
+    assert s.state.asleep.mean() > 0.7  # and mostly at rest again
+    dropped = slice(s.model.start[-2], None)
+    assert abs(s.state.x[dropped, 2].mean() - awake_run.state.x[dropped, 2].mean()) < 0.3  # lands alike
+    assert np.isfinite(s.state.x).all()
 
 
 def test_an_element_whose_support_goes_falls_within_a_frame():
     base = np.array([[a, b, 0.0] for a in (0.0, 1.2, 2.4) for b in (0.0, 1.2, 2.4)])  # 3 × 3, its top in 4 hollows
     s = settle(solver([(base, np.array([0.0, 0, 0.6])), (PLATE, np.array([0.0, 0, 1.5]))], 2.0), 90)
-    assert s.asleep.all()
-    top_z = s.x[9:, 2].mean()
+    assert s.state.asleep.all()
+    top_z = s.state.x[9:, 2].mean()
     assert top_z > 1.2  # resting on the base (on the ground: 0.6)
-    s.x[:9, 0] += 8.0  # the base is taken away: moved between frames, nothing pushed the top
-    s.substep()
-    s.substep()
-    assert not s.asleep[1]  # the probe substep let it fall under gravity, and it woke
+    s.state.x[:9, 0] += 8.0  # the base is taken away: moved between frames, nothing pushed the top
+    s.solver.substep(s.state)
+    s.solver.substep(s.state)
+    assert not s.state.asleep[1]  # the probe substep let it fall under gravity, and it woke
     settle(s, 40)
-    assert s.x[9:, 2].mean() < top_z - 0.5  # down on the ground
+    assert s.state.x[9:, 2].mean() < top_z - 0.5  # down on the ground
 
 
 def test_sleeping_that_never_triggers_changes_nothing():
@@ -118,10 +119,10 @@ def test_sleeping_that_never_triggers_changes_nothing():
     # to sleeping off (the flags and the skips change no arithmetic); and off runs no sleep kernel
     # (dropped from 10 mm: a resting element held by static friction moves by exactly 0 and sleeps)
     off, never = settle(pile(0.0, lift=10.0), 5), settle(pile(1e-12, lift=10.0), 5)
-    assert not never.asleep.any()
+    assert not never.state.asleep.any()
     assert digest(off) == digest(never)
-    assert "sleep" not in off.dispatch.calls and never.dispatch.calls["sleep"] > 0
-    assert off.diagnostics.solved == [1.0] * 5
+    assert "sleep" not in off.solver.dispatch.calls and never.solver.dispatch.calls["sleep"] > 0
+    assert off.solver.diagnostics.solved == [1.0] * 5
 
 
 def test_sleeping_is_deterministic():

@@ -11,7 +11,7 @@ FRAMES = 30  # 0.5 s: the stack is at rest after ≈ 10 frames (same errors as a
 
 
 def settle(substeps, iterations, frames=FRAMES):
-    """(solver, rest centres, element mass, energies per frame) after ``frames`` frames."""
+    """(``SolverRun``, rest centres, element mass, energies per frame) after ``frames`` frames."""
     solver, rest, mass = stack_column(8, substeps=substeps, iterations=iterations)
     energies = []
     for _ in range(frames):
@@ -29,11 +29,11 @@ def test_defaults_rest_near_the_analytic_stack():
     """10 substeps × 2 iterations (the node's defaults): a straight column, every element within
     0.25 r of its rest height on average (measured 0.19 r), the top one within 0.5 r (measured 0.34 r)."""
     s, rest, _, _ = settle(10, 2)
-    assert np.isfinite(s.x).all()
+    assert np.isfinite(s.state.x).all()
     assert np.abs(s.centres()[:, :2]).max() < 1e-9  # nothing pushes the column sideways
     assert error(s, rest) < 0.25
     assert abs(s.centres()[-1, 2] - rest[-1, 2]) < 0.5
-    assert s.diagnostics.penetration[-1] < 0.1
+    assert s.solver.diagnostics.penetration[-1] < 0.1
 
 
 def test_more_substeps_land_nearer_and_the_reference_is_the_analytic_rest():
@@ -49,7 +49,7 @@ def test_resting_stack_gains_no_energy():
     (beyond round-off) nor drift by more than 1e-3 M·g·r, at the defaults and at 4 × 4."""
     for substeps, iterations in ((10, 2), (4, 4)):
         s, _, mass, energies = settle(substeps, iterations, frames=45)
-        drift, rise = energy_drift(energies, mass * 8, s.s.gravity, 1.0)
+        drift, rise = energy_drift(energies, mass * 8, s.solver.settings.gravity, 1.0)
         assert rise < 1e-6 and abs(drift) < 1e-3, (substeps, iterations, drift, rise)
 
 
@@ -63,5 +63,5 @@ def test_energy_drift_reads_gains_and_losses():
 
 
 def test_stack_is_deterministic():
-    digests = [hashlib.sha256(settle(10, 2, frames=20)[0].x.tobytes()).hexdigest() for _ in range(2)]
+    digests = [hashlib.sha256(settle(10, 2, frames=20)[0].state.x.tobytes()).hexdigest() for _ in range(2)]
     assert digests[0] == digests[1]

@@ -10,6 +10,7 @@ import numba
 import pytest
 from xpbd_scenes import rice_bowl
 
+from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.threads import WINDOW_S, FreeCores
 from nodes.simulation.xpbd import xpbd
@@ -20,14 +21,14 @@ RICE = frozenset({"gravity", "contact", "friction", "adhesion", "collider", "moi
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread: nothing to compare")
 def test_results_do_not_depend_on_the_thread_count():
     aggregate, colliders = rice_bowl(150, seed=2)
-    params = xpbd.resolve_params({"frames": 4, "substeps": 5})
+    params = XpbdParams(**xpbd.resolve_params({"frames": 4, "substeps": 5}))
     digests = []
     for threads in (1, 2):
         sim = build_simulation(aggregate, colliders, RICE, params, threads=threads)
         assert sim.solver.threads == threads  # the contact sweep splits into this many runs of slabs
         for _ in range(4):
-            sim.solver.frame()
-        digests.append(hashlib.sha256(sim.solver.x.tobytes() + sim.solver.v.tobytes()).hexdigest())
+            sim.frame()
+        digests.append(hashlib.sha256(sim.state.x.tobytes() + sim.state.v.tobytes()).hexdigest())
     assert digests[0] == digests[1]
 
 

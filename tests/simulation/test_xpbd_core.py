@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-from xpbd_scenes import bowl_mesh, box_mesh
+from xpbd_scenes import bowl_mesh, box_mesh, solver_run
 
 from nodes.simulation.collider import signed_distance_grid
+from nodes.simulation.settings import SolverSettings
 from nodes.simulation.shape_matching import extract_rotation
-from nodes.simulation.solver import SolverSettings, XpbdSolver
 
 GROUND = [box_mesh([-40, -40, -4], [40, 40, 0], "ground")]
 
@@ -22,7 +22,7 @@ def cluster_bar(n=4, spacing=1.0):
 
 
 def make(elements, radius, masses, settings, sdf=None):
-    """Solver from a list of (local particle offsets, world centre, rotation) per element."""
+    """``SolverRun`` from a list of (local particle offsets, world centre, rotation) per element."""
     xs, qs, ws, sizes, quats = [], [], [], [], []
     for (local, centre, rot), mass in zip(elements, masses):
         q = local - local.mean(axis=0)
@@ -32,12 +32,12 @@ def make(elements, radius, masses, settings, sdf=None):
         sizes.append(len(q))
         quats.append(Rotation.from_matrix(rot).as_quat()[[3, 0, 1, 2]])
     x = np.concatenate(xs)
-    return XpbdSolver(x, np.full(len(x), radius), np.concatenate(ws), np.r_[0, np.cumsum(sizes)], np.concatenate(qs),
+    return solver_run(x, np.full(len(x), radius), np.concatenate(ws), np.r_[0, np.cumsum(sizes)], np.concatenate(qs),
                       np.array(quats), settings, sdf=sdf)
 
 
-def finite(solver):
-    return np.isfinite(solver.x).all() and np.isfinite(solver.v).all()
+def finite(run):
+    return np.isfinite(run.state.x).all() and np.isfinite(run.state.v).all()
 
 
 def pairwise(p):
@@ -55,9 +55,9 @@ def test_zero_compliance_keeps_shape():
         s.frame()
     assert finite(s)
     for c in range(3):
-        p = s.x[s.start[c]:s.start[c + 1]]
+        p = s.state.x[s.model.start[c]:s.model.start[c + 1]]
         assert np.abs(pairwise(p) - pairwise(bar)).max() < 0.05
-    assert s.x[:, 2].min() > 0.6 * 0.9  # resting on the ground, not through it
+    assert s.state.x[:, 2].min() > 0.6 * 0.9  # resting on the ground, not through it
 
 
 def test_mass_ratio_1_to_1000_is_stable():
@@ -68,9 +68,10 @@ def test_mass_ratio_1_to_1000_is_stable():
     for _ in range(90):
         s.frame()
     assert finite(s)
-    assert s.diagnostics.penetration[-1] < 0.5
-    assert s.x[:, 2].max() < 6.0  # nothing launched
-    assert s.diagnostics.kinetic_energy[-1] < 1e-2 * max(s.diagnostics.kinetic_energy)
+    dg = s.solver.diagnostics
+    assert dg.penetration[-1] < 0.5
+    assert s.state.x[:, 2].max() < 6.0  # nothing launched
+    assert dg.kinetic_energy[-1] < 1e-2 * max(dg.kinetic_energy)
 
 
 @pytest.mark.parametrize("damping", [0.0, 0.1])
@@ -81,16 +82,16 @@ def test_deep_initial_overlap_separates_without_explosion(damping):
     settings = SolverSettings(frozenset(effects), substeps=10, iterations=2, damping=damping)
     n = 64
     x = np.zeros((n, 3))  # every particle at the same point
-    s = XpbdSolver(x, np.full(n, 0.5), np.full(n, 40.0), np.arange(n + 1), np.zeros((n, 3)),
+    s = solver_run(x, np.full(n, 0.5), np.full(n, 40.0), np.arange(n + 1), np.zeros((n, 3)),
                    np.tile([1.0, 0, 0, 0], (n, 1)), settings)
-    clamp = 0.5 / s.h
+    clamp = 0.5 / settings.h
     for _ in range(120):
         s.frame()
-        assert np.linalg.norm(s.v, axis=1).max() < 0.4 * clamp  # no burst towards the speed clamp
+        assert np.linalg.norm(s.state.v, axis=1).max() < 0.4 * clamp  # no burst towards the speed clamp
     assert finite(s)
-    assert s.diagnostics.penetration[-1] < 0.25
+    assert s.solver.diagnostics.penetration[-1] < 0.25
     if damping:
-        assert np.linalg.norm(s.x, axis=1).max() < 20.0  # a compact cluster
+        assert np.linalg.norm(s.state.x, axis=1).max() < 20.0  # a compact cluster
 
 
 def test_large_time_step_stays_bounded():
@@ -102,7 +103,7 @@ def test_large_time_step_stays_bounded():
     for _ in range(20):
         s.frame()
     assert finite(s)
-    assert s.x[:, 2].min() > 0.0 and s.x[:, 2].max() < 30.0
+    assert s.state.x[:, 2].min() > 0.0 and s.state.x[:, 2].max() < 30.0
 
 
 def test_fast_grains_do_not_tunnel_through_thin_bowl_wall():
@@ -112,15 +113,15 @@ def test_fast_grains_do_not_tunnel_through_thin_bowl_wall():
     rng = np.random.default_rng(1)
     n = 200
     x = rng.uniform(-4, 4, (n, 3))
-    s = XpbdSolver(x, np.full(n, 0.5), np.full(n, 40.0), np.arange(n + 1), np.zeros((n, 3)),
+    s = solver_run(x, np.full(n, 0.5), np.full(n, 40.0), np.arange(n + 1), np.zeros((n, 3)),
                    np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf)
     direction = x / np.linalg.norm(x, axis=1, keepdims=True)
     direction[:, 2] = -np.abs(direction[:, 2])
-    s.v[:] = 20000.0 * direction  # 20 m/s towards the wall: 160× a radius per substep before the clamp
+    s.state.v[:] = 20000.0 * direction  # 20 m/s towards the wall: 160× a radius per substep before the clamp
     inner = 20.0 - 0.8
     for _ in range(30):
         s.frame()
-        assert np.linalg.norm(s.x, axis=1).max() < inner  # no particle ever reached the wall's far side
+        assert np.linalg.norm(s.state.x, axis=1).max() < inner  # no particle ever reached the wall's far side
     assert finite(s)
 
 
@@ -134,11 +135,11 @@ def test_long_rest_decays_without_jitter_growth():
     s = make(elements, 0.6, [0.025] * 12, settings, ground_sdf())
     for _ in range(240):
         s.frame()
-    ke = np.array(s.diagnostics.kinetic_energy)
+    ke = np.array(s.solver.diagnostics.kinetic_energy)
     assert finite(s)
     assert ke[-60:].max() <= 1e-3 * ke.max()
     assert ke[-30:].max() <= ke[-60:-30].max() + 1e-12  # no jitter growth at rest
-    assert s.diagnostics.sleeping[-1] > 0.5
+    assert s.solver.diagnostics.sleeping[-1] > 0.5
 
 
 @pytest.mark.parametrize("shape", ["collinear", "planar", "single"])
@@ -152,11 +153,11 @@ def test_degenerate_clusters_keep_proper_rotations(shape):
     for _ in range(60):
         s.frame()
     assert finite(s)
-    rot = s.rotations()
+    rot = s.state.rotations()
     assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3), atol=1e-6)
     assert np.allclose(np.linalg.det(rot), 1.0, atol=1e-6)
     for c in range(4):
-        p = s.x[s.start[c]:s.start[c + 1]]
+        p = s.state.x[s.model.start[c]:s.model.start[c + 1]]
         assert np.abs(pairwise(p) - pairwise(local)).max() < 0.25
 
 
@@ -171,8 +172,9 @@ def test_rotation_extraction_from_rank_one_matrix():
 
 def test_bad_settings_are_rejected():
     with pytest.raises(ValueError, match="unknown effects"):
-        XpbdSolver(np.zeros((1, 3)), np.ones(1), np.ones(1), np.array([0, 1]), np.zeros((1, 3)),
-                   np.array([[1.0, 0, 0, 0]]), SolverSettings(frozenset({"magnetism"})))
+        SolverSettings(frozenset({"magnetism"}))
+    with pytest.raises(ValueError, match="substeps"):
+        SolverSettings(frozenset({"gravity"}), substeps=0)
     with pytest.raises(ValueError, match="watertight"):
         open_mesh = box_mesh([0, 0, 0], [1, 1, 1])
         from nodegraph.values import Mesh
@@ -192,7 +194,7 @@ def tall_pile(n, side, shock, frames, iterations=1):
                                np.array([side + 2, side + 2, top]), 0.5)
     settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), substeps=10,
                               iterations=iterations, mu_s=0.5, mu_k=0.35, shock_propagation=shock)
-    s = XpbdSolver(x, np.full(n, 1.0), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
+    s = solver_run(x, np.full(n, 1.0), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
                    np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf)
     for _ in range(frames):
         s.frame()
@@ -206,14 +208,14 @@ def test_tall_column_rests_on_its_base():
     sdf = signed_distance_grid(GROUND, np.array([-5.0, -5, -3]), np.array([5.0, 5, 70]), 0.5)
     settings = SolverSettings(frozenset({"gravity", "contact", "collider"}), substeps=10, iterations=1,
                               shock_propagation=4.0)
-    s = XpbdSolver(x, np.ones(n), np.ones(n), np.arange(n + 1), np.zeros((n, 3)), np.tile([1.0, 0, 0, 0], (n, 1)),
+    s = solver_run(x, np.ones(n), np.ones(n), np.arange(n + 1), np.zeros((n, 3)), np.tile([1.0, 0, 0, 0], (n, 1)),
                    settings, sdf=sdf)
     for _ in range(120):
         s.frame()
     assert finite(s)
-    assert np.abs(s.x[:, :2]).max() < 1e-6  # still a column
-    assert max(s.diagnostics.penetration[-30:]) < 0.1
-    assert s.x[:, 2].max() > 0.97 * (2 * n - 1)  # the top sphere is where a rigid stack puts it
+    assert np.abs(s.state.x[:, :2]).max() < 1e-6  # still a column
+    assert max(s.solver.diagnostics.penetration[-30:]) < 0.1
+    assert s.state.x[:, 2].max() > 0.97 * (2 * n - 1)  # the top sphere is where a rigid stack puts it
 
 
 def test_tall_pile_keeps_spheres_apart():
@@ -222,8 +224,8 @@ def test_tall_pile_keeps_spheres_apart():
     shock propagation (or with the old averaged Jacobi) the same pile sinks to penetration ≈ 2 r."""
     s = tall_pile(2000, 24.0, shock=4.0, frames=60, iterations=2)
     assert finite(s)
-    assert max(s.diagnostics.penetration[-10:]) < 0.2
-    z = s.x[:, 2]
+    assert max(s.solver.diagnostics.penetration[-10:]) < 0.2
+    z = s.state.x[:, 2]
     cut = 0.8 * np.percentile(z, 95)
     packing = (z < cut).sum() * (4 / 3) * np.pi / (24.0 ** 2 * cut)
     assert 0.5 < packing < 0.68

@@ -1,5 +1,6 @@
 """The xpbd node: effects gating, outputs, buoyant yolk, determinism, bad input, Rerun logging."""
 
+import dataclasses
 import hashlib
 
 import numpy as np
@@ -9,14 +10,23 @@ from xpbd_scenes import box_mesh, ikura_mesh, rice_bowl
 from nodegraph.context import Context, EntityLogger
 from nodes.values import Aggregate, ElementLibrary, Placement
 from nodes.simulation.aggregate import DeformedAggregate
+from nodes.simulation.settings import EFFECTS as ALL
+from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.xpbd import xpbd
-
-ALL = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 
 
 def params(**given):
     return xpbd.resolve_params({"frames": 10, "substeps": 5, "log_every": 5, **given})
+
+
+def typed(**given) -> XpbdParams:
+    return XpbdParams(**params(**given))
+
+
+def test_typed_parameters_are_the_declared_ones():
+    assert {f.name for f in dataclasses.fields(XpbdParams)} == set(xpbd.params)
+    assert xpbd.effects == frozenset(ALL)
 
 
 @pytest.fixture(scope="module")
@@ -26,26 +36,26 @@ def bowl():
 
 def test_absent_effects_allocate_nothing_and_run_no_kernel(bowl):
     aggregate, colliders = bowl
-    lean = build_simulation(aggregate, colliders, frozenset({"gravity", "contact"}), params())
+    lean = build_simulation(aggregate, colliders, frozenset({"gravity", "contact"}), typed())
     for _ in range(3):
-        lean.solver.frame()
+        lean.frame()
     calls = lean.solver.dispatch.calls
     assert calls["contact"] > 0 and calls["shape_matching"] > 0
     for family in ("friction", "adhesion", "collider", "buoyancy"):
         assert calls[family] == 0, family
-    assert lean.solver.sdf is None  # colliders were wired, but 'collider' was not asked: no SDF built
-    assert not {"yolk_v", "yolk_prev"} & set(lean.solver.buffers)
-    full = build_simulation(aggregate, colliders, frozenset(ALL), params())
-    full.solver.frame()
+    assert lean.model.collider is None  # colliders were wired, but 'collider' was not asked: no SDF built
+    assert lean.state.yolks is None and lean.solver.pairs.scratch is None  # no yolk state, no Jacobi copy
+    full = build_simulation(aggregate, colliders, frozenset(ALL), typed())
+    full.frame()
     for family in ("contact", "friction", "adhesion", "collider"):
         assert full.solver.dispatch.calls[family] > 0, family
 
 
 def test_no_pair_effect_builds_no_neighbour_lists(bowl):
     aggregate, colliders = bowl
-    sim = build_simulation(aggregate, colliders, frozenset({"gravity", "collider"}), params())
-    sim.solver.frame()
-    assert sim.solver.dispatch.calls["neighbours"] == 0 and "scratch" not in sim.solver.buffers
+    sim = build_simulation(aggregate, colliders, frozenset({"gravity", "collider"}), typed())
+    sim.frame()
+    assert sim.solver.dispatch.calls["neighbours"] == 0 and sim.solver.pairs is None
 
 
 def test_grains_settle_inside_the_bowl(bowl):

@@ -7,6 +7,7 @@ from scipy.spatial import cKDTree
 from xpbd_scenes import ikura_mesh, rice_bowl
 
 from nodes.values import Aggregate, ElementLibrary, ParticleState, Placement
+from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation, finish_simulation
 from nodes.simulation.xpbd import xpbd
 
@@ -15,6 +16,10 @@ PAIRS = ("gravity", "contact", "friction", "adhesion", "damping")
 
 def params(**given):
     return xpbd.resolve_params({"frames": 30, "substeps": 8, "particles_per_element": 4, "log_every": 0, **given})
+
+
+def typed(**given) -> XpbdParams:
+    return XpbdParams(**params(**given))
 
 
 def particle_bed(half=20.0, spacing=1.5, radius=1.0, layers=2) -> ParticleState:
@@ -51,15 +56,15 @@ def worst_overlap(x, r, bed):
 def test_eggs_dropped_on_a_particle_bed_rest_on_it(effects):
     bed = particle_bed()
     aggregate = eggs_above()
-    sim = build_simulation(aggregate, [], frozenset(effects), params(), obstacles=[bed])
-    n = sim.solver.n_moving
-    assert len(sim.solver.x) == n + len(bed) and np.all(sim.solver.w[n:] == 0.0)
+    sim = build_simulation(aggregate, [], frozenset(effects), typed(), obstacles=[bed])
+    n = sim.model.n_moving
+    assert len(sim.state.x) == n + len(bed) and np.all(sim.model.w[n:] == 0.0)
     for _ in range(30):
-        sim.solver.frame()
+        sim.frame()
     out = finish_simulation(sim)
     x, r = out["particles"].positions, out["particles"].radii
-    assert np.isfinite(sim.solver.x).all() and np.isfinite(sim.solver.v).all()
-    assert np.array_equal(sim.solver.x[n:], bed.positions)  # the bed did not move, not by one bit
+    assert np.isfinite(sim.state.x).all() and np.isfinite(sim.state.v).all()
+    assert np.array_equal(sim.state.x[n:], bed.positions)  # the bed did not move, not by one bit
     assert len(x) == n and out["particles"].element.max() == len(aggregate.placement) - 1  # bed not in the output
     z0 = aggregate.placement.positions[:, 2]
     assert np.all(out["aggregate"].placement.positions[:, 2] < z0 - 2.0)  # every egg fell …
@@ -79,21 +84,22 @@ def test_obstacles_through_the_node_match_the_builder():
 def test_unwired_obstacles_allocate_nothing():
     aggregate, colliders = rice_bowl(20, seed=1)
     effects = frozenset({"gravity", "contact", "friction", "collider"})
-    plain = build_simulation(aggregate, colliders, effects, params())
-    empty = build_simulation(aggregate, colliders, effects, params(), obstacles=[])
+    plain = build_simulation(aggregate, colliders, effects, typed())
+    empty = build_simulation(aggregate, colliders, effects, typed(), obstacles=[])
     for sim in (plain, empty):
-        s = sim.solver
-        assert s.n_moving == len(s.x) == len(s.w) == len(s.elem) == s.start[-1]
-        for name, buffer in s.buffers.items():
-            assert len(buffer) in (0, s.n_moving), name
+        m, st, pairs = sim.model, sim.state, sim.solver.pairs
+        assert m.n_moving == len(m.x0) == len(m.w) == len(m.elem) == m.start[-1]
+        per_particle = (st.x, st.v, st.x_prev, st.x_start, st.awake, st.pushed, pairs.x_built, pairs.moved,
+                        sim.solver.clusters.lam)
+        assert all(len(a) == m.n_moving for a in per_particle)
     # wired, but no pair effect would touch them: nothing appended either
-    lone = build_simulation(aggregate, colliders, frozenset({"gravity", "collider"}), params(),
+    lone = build_simulation(aggregate, colliders, frozenset({"gravity", "collider"}), typed(),
                             obstacles=[particle_bed(half=5.0)])
-    assert len(lone.solver.x) == lone.solver.n_moving
+    assert len(lone.state.x) == lone.model.n_moving
     for _ in range(2):
-        plain.solver.frame()
-        empty.solver.frame()
-    assert np.array_equal(plain.solver.x, empty.solver.x)
+        plain.frame()
+        empty.frame()
+    assert np.array_equal(plain.state.x, empty.state.x)
 
 
 def test_bad_obstacles_are_reported():

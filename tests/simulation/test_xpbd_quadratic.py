@@ -41,11 +41,9 @@ def project(q, x, mode, beta=1.0, alpha=0.0, quats=None):
     quats = np.tile([1.0, 0, 0, 0], (len(q), 1)) if quats is None else quats.copy()
     lam = np.zeros_like(xx)
     pinv, null = rest_moments(q_rest, w, start)
-    if mode == "linear":
-        res = shape_match_project(xx, w, q_rest, start, quats, pinv, null, lam, alpha, beta, 8)
-    else:
-        qt, qpinv, quad = quadratic_moments(q_rest, w, start)
-        res = shape_match_project(xx, w, q_rest, start, quats, pinv, null, lam, alpha, beta, 8, qt, qpinv, quad)
+    awake = np.ones(len(xx), np.bool_)
+    quadratic = quadratic_moments(q_rest, w, start) if mode == "quadratic" else ()
+    res = shape_match_project(xx, quats, awake, w, q_rest, start, pinv, null, lam, alpha, beta, 8, *quadratic)
     return xx, res
 
 

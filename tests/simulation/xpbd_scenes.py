@@ -4,6 +4,8 @@ grains on a jittered grid inside the bowl."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import trimesh
 from scipy.spatial.transform import Rotation
@@ -73,7 +75,8 @@ def bowl_placement(n, spacing=4.0, radius=60.0, wall=3.0, seed=0, jitter=0.3) ->
 
 def rice_library(count=4, seed=0) -> ElementLibrary:
     rng = np.random.default_rng(seed)
-    meshes = [grain_mesh(*(np.array([5.0, 3.0, 2.5]) * rng.uniform(0.9, 1.1, 3)), name=f"grain{k}") for k in range(count)]
+    meshes = [grain_mesh(*(np.array([5.0, 3.0, 2.5]) * rng.uniform(0.9, 1.1, 3)), name=f"grain{k}")
+              for k in range(count)]
     return ElementLibrary("japonica", meshes)
 
 
@@ -93,6 +96,30 @@ def ikura_don(n=310, seed=0, radius=3.5):
     return Aggregate(placement, (ElementLibrary("ikura", [ikura_mesh(radius)]),)), [bowl_mesh()]
 
 
+@dataclass
+class SolverRun:
+    """A model, the state a solver steps, and the solver: ``setup.Simulation`` without an aggregate."""
+
+    model: object
+    state: object
+    solver: object
+
+    def frame(self) -> None:
+        self.solver.frame(self.state)
+
+    def centres(self) -> np.ndarray:
+        return self.model.centres(self.state.x)
+
+
+def solver_run(x, r, w, start, q_rest, quats, settings, dispatch=None, threads=None, **model_options) -> SolverRun:
+    """A solver on particles in clusters (``model.build_model``; ``model_options``: sdf, yolks, obstacles)."""
+    from nodes.simulation.model import build_model
+    from nodes.simulation.solver import XpbdSolver
+
+    model = build_model(x, r, w, start, q_rest, quats, settings, **model_options)
+    return SolverRun(model, model.state(), XpbdSolver(model, settings, dispatch=dispatch, threads=threads))
+
+
 def stack_column(layers=8, radius=1.0, per_side=2, mass=25.0, gap=0.1, **settings):
     """The stack test of the accuracy benchmark (issue 6): ``layers`` cube elements, each per_side³
     particles of radius r touching on a grid of pitch 2r, in one vertical column over a ground slab
@@ -102,10 +129,10 @@ def stack_column(layers=8, radius=1.0, per_side=2, mass=25.0, gap=0.1, **setting
     z = per_side·(2k+1)·r over x = y = 0. ``settings`` override the solver settings, whose defaults
     are the xpbd node's (stiffness 2,000 N/m, friction μs 0.6, μk 0.42, shock propagation 4) with
     β = 0 and no damping: rigid elements (sag under the stack's weight < 1 µm) and nothing that
-    hides an energy gain. Returns (solver, rest element centres (layers, 3), element mass in g).
+    hides an energy gain. Returns (``SolverRun``, rest element centres (layers, 3), element mass in g).
     """
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.solver import SolverSettings, XpbdSolver
+    from nodes.simulation.settings import SolverSettings
 
     side = 2.0 * radius * per_side
     grid = (np.stack(np.meshgrid(*[np.arange(per_side)] * 3, indexing="ij"), -1).reshape(-1, 3) + 0.5) * 2 * radius
@@ -124,19 +151,20 @@ def stack_column(layers=8, radius=1.0, per_side=2, mass=25.0, gap=0.1, **setting
                    compliance=1.0 / (1000.0 * 2000.0), linear_deformation=0.0, mu_s=0.6, mu_k=0.42,
                    shock_propagation=4.0)
     options.update(settings)
-    solver = XpbdSolver(x, np.full(len(x), radius), np.full(len(x), n_el / (mass * 1e-3)),
-                        np.arange(layers + 1) * n_el, np.tile(q, (layers, 1)), np.tile([1.0, 0, 0, 0], (layers, 1)),
-                        SolverSettings(**options), sdf=sdf)
-    return solver, rest, mass * 1e-3
+    run = solver_run(x, np.full(len(x), radius), np.full(len(x), n_el / (mass * 1e-3)), np.arange(layers + 1) * n_el,
+                     np.tile(q, (layers, 1)), np.tile([1.0, 0, 0, 0], (layers, 1)), SolverSettings(**options), sdf=sdf)
+    return run, rest, mass * 1e-3
 
 
-def mechanical_energy(solver) -> float:
-    """E = ½ Σ m|v|² + Σ m g z over the moving particles (g·mm²/s², z from the solver's origin)."""
+def mechanical_energy(run) -> float:
+    """E = ½ Σ m|v|² + Σ m g z over the moving particles (g·mm²/s², z from the solver's origin) of a
+    ``SolverRun`` or ``setup.Simulation``."""
     from nodes.simulation.integrate import kinetic_energy
 
-    x, v, w = (a[:solver.n_moving] for a in (solver.x, solver.v, solver.w))
+    n, settings = run.model.n_moving, run.solver.settings
+    x, v, w = run.state.x[:n], run.state.v[:n], run.model.w[:n]
     moving = w > 0
-    gravity = solver.s.gravity if "gravity" in solver.s.effects else 0.0
+    gravity = settings.gravity if "gravity" in settings.effects else 0.0
     return float(kinetic_energy(v, w) + gravity * np.sum(x[moving, 2] / w[moving]))
 
 

@@ -1,0 +1,107 @@
+"""The solver's scratch between kernels — SPEC §3: typed, and allocated only for what runs (no
+shape matching: no λ; no pair effect: no neighbour lists; no 'adhesion': no Jacobi copy).
+
+A solver's buffers follow the one ``State`` it steps: the Verlet lists remember where that state's
+particles were when they were built.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import Model
+from .settings import PAIR_EFFECTS, SolverSettings
+
+
+@dataclass(frozen=True, eq=False)
+class ClusterBuffers:
+    """XPBD λ of the cluster constraints, accumulated over a substep's iterations (SPEC §5)."""
+
+    lam: np.ndarray  # (n, 3) shape matching
+    bend_lam: np.ndarray | None  # (t, 3) bend constraints, None without them
+
+    @classmethod
+    def allocate(cls, model: Model) -> ClusterBuffers | None:
+        """None without shape matching (then there are no bend constraints either)."""
+        if model.moments is None:
+            return None
+        bend = np.zeros((len(model.bend.triples), 3)) if model.bend is not None else None
+        return cls(np.zeros_like(model.x0), bend)
+
+    def clear(self) -> None:
+        self.lam[:] = 0.0
+        if self.bend_lam is not None:
+            self.bend_lam[:] = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class NeighbourLists:
+    """CSR lists of the particles of other elements within reach, and the grid they were found in
+    (``spatial_hash.neighbour_lists``), which is also the contacts' colouring. ``half``: each pair
+    listed once (the Gauss–Seidel contacts); full rows for the Jacobi adhesion."""
+
+    nbr_start: np.ndarray  # (n + 1,)
+    nbr: np.ndarray
+    half: bool
+    cell_start: np.ndarray
+    order: np.ndarray
+    dims: np.ndarray
+
+    @classmethod
+    def empty(cls, n: int, half: bool) -> NeighbourLists:
+        none = np.zeros(0, np.int64)
+        return cls(np.zeros(n + 1, np.int64), none, half, none, none, none)
+
+    def csr(self):
+        return self.nbr_start, self.nbr
+
+    def rows(self):
+        """(nbr_start, nbr, half): what the pair kernels read of the lists."""
+        return self.nbr_start, self.nbr, self.half
+
+    def grid(self):
+        """(cell_start, order, dims): the colouring of ``contact_constraints.contact_sweep``."""
+        return self.cell_start, self.order, self.dims
+
+
+@dataclass(eq=False)
+class PairBuffers:
+    """Verlet neighbour lists and the pair families' scratch; allocated with a pair effect.
+
+    The lists hold pairs within contact (+ capture with 'adhesion') + ``skin`` and are rebuilt only
+    once some particle has moved half the skin since the last build: ``displacement`` is that
+    largest move, measured by predict / update_velocity from ``x_built`` (``moved``: their per-particle
+    scratch), inf before the first build."""
+
+    lists: NeighbourLists
+    skin: float
+    reach: float  # list reach beyond r_i + r_j
+    cell: float  # grid cell size, ≥ 2·max r + reach
+    x_built: np.ndarray  # (n, 3) positions at the last build
+    moved: np.ndarray  # (n,)
+    allowance: np.ndarray  # per list entry, the tolerated overlap (``contact_constraints``); empty without 'contact'
+    scratch: np.ndarray | None  # (n, 3) the Jacobi adhesion's output ('adhesion'), swapped with the positions
+    displacement: float = np.inf
+
+    @classmethod
+    def allocate(cls, model: Model, settings: SolverSettings) -> PairBuffers | None:
+        """None without a pair effect (contact, friction, adhesion)."""
+        effects = settings.effects
+        if not PAIR_EFFECTS & effects:
+            return None
+        skin = 0.5 * float(model.r[:model.n_moving].max())
+        reach = (settings.capture if "adhesion" in effects else 0.0) + skin
+        x = model.x0
+        return cls(NeighbourLists.empty(len(x), half="adhesion" not in effects), skin, reach,
+                   2.0 * float(model.r.max()) + reach, np.full_like(x, np.inf), np.zeros(len(x)), np.empty(0),
+                   np.zeros_like(x) if "adhesion" in effects else None)
+
+    def stale(self) -> bool:
+        """Some particle moved more than half the skin since the last build (or none was built)."""
+        return self.displacement > 0.5 * self.skin
+
+    def tracking(self):
+        """(x_built, moved): the displacement check folded into predict / update_velocity."""
+        return self.x_built, self.moved
