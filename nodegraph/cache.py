@@ -5,6 +5,7 @@ Layout under the cache directory::
     CACHEDIR.TAG            marks the directory as a nodegraph cache (https://bford.info/cachedir/)
     entries/ab/<key>.json   {"key", "node", "type", "outputs": {port: {"blob": sha, "size": n}}}
     blobs/cd/<sha>.npz      one encoded value (see ``codec``); identical outputs are stored once
+    checkpoints/<key>.npz   a long node's progress while it runs (``checkpoint``), removed when it completes
 
 Every file is written to a temporary name in its final directory and renamed into place, blobs
 before the entry that names them, so a crash at any moment leaves either no entry or a whole one.
@@ -176,7 +177,7 @@ class Cache:
             names = {p.name for p in self.directory.iterdir()}
         except OSError:
             return False
-        return bool(names) and names <= {"entries", "blobs"}  # a cache written before the marker existed
+        return bool(names) and names <= {"entries", "blobs", "checkpoints"}  # written before the marker existed
 
     def clear(self) -> None:
         """Remove the entries, the blobs and the marker, then the directory if nothing else is left in it.
@@ -189,7 +190,7 @@ class Cache:
             raise NodegraphError(f"{self.directory} is not a nodegraph cache (it has no {MARKER} written by nodegraph); "
                                  "nothing removed. Give --cache-dir the cache directory itself")
         failed = []
-        for part in ("entries", "blobs", MARKER):
+        for part in ("entries", "blobs", "checkpoints", MARKER):
             target = self.directory / part
             try:
                 if target.is_dir():

@@ -147,3 +147,20 @@ def freeze(value: Any) -> Any:
         for v in value.values():
             freeze(v)
     return value
+
+
+def thaw(value: Any) -> Any:
+    """A copy of ``value`` whose arrays are writable (decoded values are frozen): to resume work from a
+    stored state."""
+    if isinstance(value, np.ndarray):
+        return value.copy()
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return dataclasses.replace(value, **{f.name: thaw(getattr(value, f.name)) for f in dataclasses.fields(value)
+                                             if f.init})
+    if isinstance(value, tuple):
+        return tuple(thaw(v) for v in value)
+    if isinstance(value, list):
+        return [thaw(v) for v in value]
+    if isinstance(value, dict):
+        return {k: thaw(v) for k, v in value.items()}
+    return value

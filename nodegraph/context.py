@@ -106,6 +106,7 @@ class Context:
     rerun: EntityLogger = field(default_factory=lambda: EntityLogger(None, "/"))
     reporter: Any = None
     max_seconds: float | None = None  # a node expecting to run longer refuses to start (``expect_cost``)
+    checkpoint: Any = None  # ``checkpoint.Checkpoint`` for resumable long nodes, None without a cache
     _rng: np.random.Generator | None = field(default=None, repr=False)
 
     @classmethod

@@ -17,6 +17,7 @@ from typing import Any
 
 from . import __version__, codec
 from .cache import Cache
+from .checkpoint import Checkpoint
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
 from .output_files import MANIFEST, write_manifest, write_output
@@ -218,6 +219,7 @@ class Executor:
             rerun=self.recording.logger(f"{inst.entity}/{LOG}") if self.recording else EntityLogger(None, inst.entity),
             reporter=self.reporter,
             max_seconds=self.max_seconds,
+            checkpoint=None if self.cache is None else Checkpoint(self.cache.directory / "checkpoints" / f"{key}.npz"),
         )
         start = now()
         memory = PeakMemory()
@@ -241,6 +243,7 @@ class Executor:
             codec.freeze(value)
         if self.cache is not None:
             self.cache.store(key, outputs, inst.node, spec.type_name)
+            ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
         self.values[inst] = outputs
         self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
         return outputs

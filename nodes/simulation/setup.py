@@ -17,7 +17,8 @@ from .collider import free_space_field
 from .deformation import element_bends, element_transforms
 from .model import Model, Yolks, build_model
 from .settings import PAIR_EFFECTS, XpbdParams, solver_settings
-from .solver import XpbdSolver
+from .buffers import PairBuffers
+from .solver import Diagnostics, XpbdSolver
 from .state import State
 
 
@@ -36,6 +37,28 @@ class Simulation:
     def frame(self) -> None:
         """One frame of the solver on the state (``XpbdSolver.frame``)."""
         self.solver.frame(self.state)
+
+    def progress(self, frames_done: int) -> SimulationProgress:
+        """What a resumed run needs to go on bit for bit: the state, the Verlet lists with their build
+        positions (a fresh build would change the contacts' order), the diagnostics so far."""
+        return SimulationProgress(frames_done, self.state, self.solver.pairs, self.solver.diagnostics)
+
+    def resume(self, progress: SimulationProgress) -> int:
+        """Continue from ``progress`` (writable arrays); returns the frames already done."""
+        self.state = progress.state
+        self.solver.pairs = progress.pairs
+        self.solver.diagnostics = progress.diagnostics
+        return progress.frames_done
+
+
+@dataclass(eq=False)
+class SimulationProgress:
+    """A checkpoint of the ``xpbd`` node at a frame boundary (``Simulation.progress``)."""
+
+    frames_done: int
+    state: State
+    pairs: PairBuffers | None
+    diagnostics: Diagnostics
 
 
 def full_placement(aggregate: Aggregate, colliders) -> Placement:

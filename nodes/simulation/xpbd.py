@@ -15,6 +15,11 @@ from ..values import Aggregate, ParticleState
 
 from .settings import EFFECTS, XpbdParams
 
+# particle-iterations per second of a substep's work (10 substeps × 2 iterations of a 2,000-grain bowl,
+# 16,000 particles, 60 frames in 7.3 s on 2 cores: 2.6e6; ``frames: 100000`` of ikura don's rice took
+# 42 min, 2.4e6): what ``expect_cost`` tells before a long run starts, a rough figure by design
+PARTICLE_ITERATIONS_PER_SECOND = 2.0e6
+
 
 def _check(params):
     problems = []
@@ -108,21 +113,43 @@ def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
     p = XpbdParams(**params)
     sim = build_simulation(aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds)
     frames, every, meshes_every, substeps = p.frames, p.log_every, p.log_meshes_every, p.substeps
+    moving = sim.model.n_moving
+    ctx.expect_cost(moving * frames * substeps * p.iterations / PARTICLE_ITERATIONS_PER_SECOND,
+                    f"{frames:,} frames × {substeps} substeps × {p.iterations} iterations of {moving:,} particles")
+    done = 0
+    resumed = ctx.checkpoint.load() if ctx.checkpoint is not None else None
+    if resumed is not None:
+        done = sim.resume(resumed)
+        if ctx.reporter is not None:
+            ctx.reporter.info(f"{ctx.node_id}: resuming at frame {done:,} of {frames:,} (checkpoint)")
+    elif ctx.rerun.enabled:  # the start, at sim_step 0; the state after frame f is logged at (f + 1)·substeps
+        _log_step(ctx, sim, 0, every, meshes_every, snapshot_aggregate)
     with ctx.progress(frames, "frames") as bar:
-        for frame in range(frames):
+        bar.advance(done)
+        for frame in range(done + 1, frames + 1):
             sim.frame()
-            if ctx.rerun.enabled:
-                if every and frame % every == 0:
-                    _log_particles(ctx, sim, frame * substeps)
-                if meshes_every and frame % meshes_every == 0 and frame < frames - 1:
-                    _log_meshes(ctx, snapshot_aggregate(sim), frame * substeps)
+            if ctx.rerun.enabled and frame < frames:  # the last frame's meshes are the output's: logged below
+                _log_step(ctx, sim, frame, every, meshes_every, snapshot_aggregate)
+            if ctx.checkpoint is not None and ctx.checkpoint.due() and frame < frames:
+                ctx.checkpoint.save(sim.progress(frame))
             bar.advance()
     out = finish_simulation(sim)
     if ctx.rerun.enabled:
-        if meshes_every:  # the last frame's meshes are the output's: not fitted twice
-            _log_meshes(ctx, out["aggregate"], (frames - 1) * substeps)
+        if every:
+            _log_particles(ctx, sim, frames * substeps)
+        if meshes_every:
+            _log_meshes(ctx, out["aggregate"], frames * substeps)
         _log_scalars(ctx, sim.solver.diagnostics, substeps)
     return out
+
+
+def _log_step(ctx, sim, frame, every, meshes_every, snapshot_aggregate):
+    """Particles every ``every`` frames, element meshes every ``meshes_every``, at sim_step frame·substeps."""
+    step = frame * sim.solver.settings.substeps
+    if every and frame % every == 0:
+        _log_particles(ctx, sim, step)
+    if meshes_every and frame % meshes_every == 0:
+        _log_meshes(ctx, snapshot_aggregate(sim), step)
 
 
 def _log_particles(ctx, sim, step):

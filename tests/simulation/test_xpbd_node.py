@@ -141,13 +141,15 @@ def test_logs_particles_and_step_scalars_to_rerun():
     ctx.rerun = EntityLogger(Recorder(), "/sim")
     out = xpbd(ctx, aggregate=aggregate, colliders=colliders, **params())
     paths = ctx.rerun.recording.paths
-    assert paths.count("/sim/particles") == 2
-    assert paths.count("/sim/elements") == 2  # meshes at frame 0 and at the last frame (every 30)
+    assert paths.count("/sim/particles") == 3  # the start, after frame 5 and after frame 10 (log_every 5)
+    assert paths.count("/sim/elements") == 2  # meshes at the start and after the last frame (every 30)
     first, last = [a for p, a in zip(paths, ctx.rerun.recording.archetypes) if p == "/sim/elements"]
     logged = [np.asarray(a.vertex_positions.as_arrow_array().flatten()).reshape(-1, 3) for a in (first, last)]
     final = out["aggregate"].combined_mesh().vertices.astype(np.float32)
     assert np.array_equal(logged[1], final)  # the last frame's meshes are the output's
     assert np.abs(logged[0] - final).max() > 0.1  # the egg fell between the first log and the last
+    start = aggregate.combined_mesh().vertices.astype(np.float32)
+    assert np.abs(logged[0] - start).max() < 1e-3  # the first is the start, before any frame
     for name in ("penetration_over_radius", "residual", "kinetic_energy", "sleeping_share"):
         assert f"/sim/scalars/{name}" in paths
 

@@ -1,0 +1,48 @@
+"""Resumable work for long nodes: a node saves its progress now and then; a re-run of the same
+node instance (same cache key: same inputs, parameters, seed, effects, versions) starts from there.
+
+The checkpoint sits in the cache directory (``checkpoints/<key>.npz``), written atomically with the
+value codec, so an interrupted run (Ctrl-C, SIGTERM, a lost machine) loses at most ``interval``
+seconds of work; the engine deletes it when the node completes.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+from . import codec
+from .cache import atomic_write
+
+
+class Checkpoint:
+    """One node instance's saved progress (any value the codec stores)."""
+
+    def __init__(self, path: Path, interval: float = 30.0):
+        self.path = Path(path)
+        self.interval = interval
+        self._last = time.monotonic()
+
+    def due(self) -> bool:
+        """True when ``interval`` seconds have passed since the last save (or since the node started)."""
+        return time.monotonic() - self._last >= self.interval
+
+    def save(self, value: Any) -> None:
+        atomic_write(self.path, codec.encode(value))
+        self._last = time.monotonic()
+
+    def load(self) -> Any | None:
+        """The saved progress with writable arrays, or None (none saved, or unreadable: then removed)."""
+        try:
+            data = self.path.read_bytes()
+        except OSError:
+            return None
+        try:
+            return codec.thaw(codec.decode(data))
+        except codec.DecodeError:
+            self.clear()
+            return None
+
+    def clear(self) -> None:
+        self.path.unlink(missing_ok=True)
