@@ -64,7 +64,8 @@ def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
     """
     import edt
     import trimesh
-    from scipy import ndimage
+
+    from ..mesh_inside import inside_columns
 
     tms = []
     for k, mesh in enumerate(meshes):
@@ -76,25 +77,17 @@ def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
             tm.invert()
         tms.append(tm)
     merged = trimesh.util.concatenate(tms)
+    vertices, faces = np.asarray(merged.vertices, float), np.asarray(merged.faces, np.int64)
     origin = np.asarray(lo, float)
     shape = tuple(int(s) for s in np.ceil((np.asarray(hi) - origin) / pitch).astype(int) + 1)
-    band = band_cells * pitch
-    dist, sign = surface_band(np.asarray(merged.vertices, float), np.asarray(merged.faces, np.int64),
-                              np.asarray(merged.face_normals, float), origin, pitch, shape, band)
-    in_band = np.isfinite(dist)
-    # sign of the cells off the band: each connected region takes the sign of the band cells it touches
-    labels, count = ndimage.label(~in_band)
-    inside = sign < 0
-    if count:
-        grown = ndimage.grey_dilation(labels, size=(3, 3, 3)) * in_band
-        votes = np.bincount(grown[in_band].ravel(), weights=(sign[in_band] < 0).ravel().astype(float),
-                            minlength=count + 1)
-        totals = np.bincount(grown[in_band].ravel(), minlength=count + 1)
-        region_inside = votes > 0.5 * np.maximum(totals, 1)
-        region_inside[0] = False
-        inside |= region_inside[labels] & ~in_band
+    dist, _ = surface_band(vertices, faces, np.asarray(merged.face_normals, float), origin, pitch, shape,
+                           band_cells * pitch)
+    # the one inside test (column winding number > 0: the union of overlapping solids, nested shells inside);
+    # grid points on the surface itself (φ = 0) belong to the free side of the far field's split
+    axes = [origin[d] + np.arange(shape[d]) * pitch for d in range(3)]
+    inside = inside_columns(vertices, faces, *axes) & (dist > 0.0)
     far = np.where(inside, -edt.edt(inside, anisotropy=(pitch,) * 3), edt.edt(~inside, anisotropy=(pitch,) * 3))
-    phi = np.where(in_band, dist * np.where(sign < 0, -1.0, 1.0), far)
+    phi = np.where(np.isfinite(dist), np.where(inside, -dist, dist), far)
     return np.ascontiguousarray(phi), origin, float(pitch)
 
 
