@@ -15,7 +15,7 @@ from .element_templates import template_params
 
 @node(
     "cull",
-    version=2,
+    version=3,
     inputs={"placement": In(Placement, "refined elements"),
             "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True)},
     outputs={"placement": Out(Placement, "the elements kept (overlap = depth with the kept neighbours)"),

@@ -11,7 +11,7 @@ from nodegraph.values import ElementLibrary, Mesh, Placement, Table
 
 @node(
     "poisson_place",
-    version=2,
+    version=3,
     inputs={
         "shape": In(Mesh, "closed target shape (outward normals)"),
         "elements": In(ElementLibrary, "elements that set r when r is not given (S: half the largest inscribed sphere radius)",
