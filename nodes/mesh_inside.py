@@ -116,9 +116,12 @@ def point_winding(vertices, faces, points):
     for p in range(points.shape[0]):
         px, py, pz = points[p, 0], points[p, 1], points[p, 2]
         for f in range(faces.shape[0]):
-            a, b, c = vertices[faces[f, 0]], vertices[faces[f, 1]], vertices[faces[f, 2]]
-            if min(a[0], b[0], c[0]) > px or max(a[0], b[0], c[0]) < px or min(a[1], b[1], c[1]) > py \
-                    or max(a[1], b[1], c[1]) < py:
+            i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+            x0, x1, x2 = vertices[i0, 0], vertices[i1, 0], vertices[i2, 0]
+            if min(x0, x1, x2) > px or max(x0, x1, x2) < px:
+                continue
+            y0, y1, y2 = vertices[i0, 1], vertices[i1, 1], vertices[i2, 1]
+            if min(y0, y1, y2) > py or max(y0, y1, y2) < py:
                 continue
             a, b, c, area2, step = _oriented_face(vertices, faces, f)
             if step != 0 and _crossing_height(a, b, c, area2, px, py) < pz:  # NaN (a miss) compares False
