@@ -28,8 +28,9 @@ from numba import njit, prange
 
 from nodes.elements import base_mesh, distance_field, expand, remesh, sphere_scatter, voxelise
 from nodes.elements.level_set_mesh import grain_surface
-from nodes.elements.sphere_sampling import surface_points, winding_numbers
+from nodes.elements.sphere_sampling import surface_points
 from nodes.elements.voxel_grid import Grid, mesh_occupancy, sphere_field
+from nodes.mesh_inside import inside_points
 from nodes.triangle_distance import point_triangle_offset
 
 RESULTS = Path(__file__).parent / "results"
@@ -49,9 +50,9 @@ def distance_to_faces(points, vertices, faces, candidates):
             f = candidates[p, c] if candidates.shape[0] else c
             if f < 0:
                 continue
-            ox, oy, oz = point_triangle_offset(points[p, 0], points[p, 1], points[p, 2], vertices[faces[f, 0]],
+            ex, ey, ez = point_triangle_offset(points[p, 0], points[p, 1], points[p, 2], vertices[faces[f, 0]],
                                                vertices[faces[f, 1]], vertices[faces[f, 2]])
-            d2 = ox * ox + oy * oy + oz * oz
+            d2 = ex * ex + ey * ey + ez * ez
             if d2 < best:
                 best = d2
         out[p] = np.sqrt(best)
@@ -70,7 +71,7 @@ class ExactGrain:
         """max(mesh, spheres) signed distance (exact outside the solid, a lower bound just inside)."""
         none = np.empty((0, 1), np.int64)
         d_mesh = distance_to_faces(points, self.vertices, self.faces, none)
-        d_mesh = np.where(winding_numbers(points, self.vertices, self.faces) > 0.5, d_mesh, -d_mesh)
+        d_mesh = np.where(inside_points(self.vertices, self.faces, points), d_mesh, -d_mesh)
         d_sph = (self.radii - np.linalg.norm(points[:, None] - self.centers[None], axis=2)).max(axis=1)
         return np.maximum(d_mesh, d_sph)
 
@@ -85,7 +86,7 @@ class ExactGrain:
             d = self.rng.normal(size=(n, 3))
             p = c + r * d / np.linalg.norm(d, axis=1, keepdims=True)
             others = np.linalg.norm(p[:, None] - self.centers[None], axis=2) < self.radii - 1e-12
-            outside = ~others.any(axis=1) & (winding_numbers(p, self.vertices, self.faces) < 0.5)
+            outside = ~others.any(axis=1) & ~inside_points(self.vertices, self.faces, p)
             samples.append(p[outside])
         return np.concatenate(samples)
 

@@ -96,7 +96,7 @@ def rdf(points, reference, bins):
 def aperiodicity(onigiri, library, r):
     """RDF peak beyond the first shell: our volume fill vs a cubic lattice (G §3.2.1 regular packing)."""
     from nodes.placement.candidates import volume_candidates
-    from nodes.placement.inside_grid import inside_points
+    from nodes.mesh_inside import inside_points
 
     ours = poisson_place.call(seed=0, shape=onigiri, r=r, mode="volume")["placement"].positions
     spacing = np.median(cKDTree(ours).query(ours, k=2)[0][:, 1])

@@ -1,6 +1,7 @@
 """Random porosity spheres on the surface and inside a base mesh — SPEC §1.2 (G §3.1.1).
 
-Pure numpy with a caller-supplied generator, so the same seed gives bit-identical spheres.
+Numpy with a caller-supplied generator, so the same seed gives bit-identical spheres; the inside test
+of the interior candidates is the one the voxeliser uses (``nodes.mesh_inside``).
 """
 
 from __future__ import annotations
@@ -8,27 +9,6 @@ from __future__ import annotations
 import numpy as np
 
 SURFACE, INSIDE = 0, 1  # SphereSet.tags
-
-
-def winding_numbers(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Generalised winding number of each point (≈1 inside a closed outward mesh, 0 outside).
-
-    Solid angle of every triangle seen from the point (Van Oosterom & Strackee 1983), summed / 4π;
-    chunked so memory stays near 8 MB whatever the mesh size.
-    """
-    out = np.empty(len(points))
-    chunk = max(1, 250_000 // max(len(faces), 1))
-    for s in range(0, len(points), chunk):
-        p = points[s:s + chunk, None, None, :]
-        abc = vertices[faces][None] - p                       # (n, F, 3, 3)
-        lengths = np.linalg.norm(abc, axis=-1)
-        a, b, c = abc[..., 0, :], abc[..., 1, :], abc[..., 2, :]
-        la, lb, lc = lengths[..., 0], lengths[..., 1], lengths[..., 2]
-        det = np.einsum("...i,...i", a, np.cross(b, c))
-        div = (la * lb * lc + np.einsum("...i,...i", a, b) * lc + np.einsum("...i,...i", b, c) * la
-               + np.einsum("...i,...i", c, a) * lb)
-        out[s:s + chunk] = np.arctan2(det, div).sum(axis=1) / (2.0 * np.pi)
-    return out
 
 
 def surface_points(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
@@ -44,12 +24,16 @@ def surface_points(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.
 
 def interior_points(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
     """``count`` points uniformly distributed inside the closed mesh (rejection in its bounding box)."""
+    from ..mesh_inside import inside_points
+
+    vertices = np.ascontiguousarray(vertices, np.float64)
+    faces = np.ascontiguousarray(faces, np.int64)
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
     found: list[np.ndarray] = []
     have = 0
     for _ in range(64):
         trial = lo + (hi - lo) * rng.random((max(4 * (count - have), 16), 3))
-        keep = trial[winding_numbers(trial, vertices, faces) > 0.5]
+        keep = trial[inside_points(vertices, faces, trial)]
         found.append(keep)
         have += len(keep)
         if have >= count:

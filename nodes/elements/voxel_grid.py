@@ -1,8 +1,8 @@
 """Grid sizing and occupancy of mesh ∪ spheres — SPEC §1.3 (G §3.1.1: the volume M).
 
-Replaces G's external binvox: the mesh is voxelised by an exact column winding count and the
-spheres by their exact signed distance (``grid_kernels``), so a cell is occupied exactly when its
-centre lies inside the mesh or a sphere.
+Replaces G's external binvox: the mesh is voxelised by the exact column winding count shared with
+placement and the colliders (``nodes.mesh_inside``) and the spheres by their exact signed distance
+(``grid_kernels``), so a cell is occupied exactly when its centre lies inside the mesh or a sphere.
 """
 
 from __future__ import annotations
@@ -100,10 +100,10 @@ def element_geometry(mesh, spheres):
 
 
 def mesh_occupancy(grid: Grid, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Cells whose centre lies inside the closed mesh."""
-    from .grid_kernels import winding_occupancy
+    """Cells whose centre lies inside the closed mesh (column winding number > 0, ``nodes.mesh_inside``)."""
+    from ..mesh_inside import inside_cells
 
-    return winding_occupancy(grid.local(vertices), np.ascontiguousarray(faces, np.int64), grid.voxel_size, grid.shape)
+    return inside_cells(grid.local(vertices), np.ascontiguousarray(faces, np.int64), grid.voxel_size, grid.shape)
 
 
 def sphere_field(grid: Grid, centers: np.ndarray, radii: np.ndarray, band: float) -> np.ndarray:

@@ -1,7 +1,7 @@
 """Aperiodic space filling — SPEC §2 (S §3, G §3.2.2): poisson_place → rotate → mix_ratio → (medial_spheres) → overlap_refine → cull.
 
 Declaration modules (one node each, imported here for the registry) import only numpy and
-nodegraph at top level; the kernels (``candidates``, ``inside_grid``, ``dart_throw``, ``frames``,
+nodegraph at top level; the kernels (``candidates``, ``dart_throw``, ``frames``,
 ``medial_spheres``, ``element_templates``, ``refine``, ``refine_kernels``) are imported when a node runs.
 """
 

@@ -3,7 +3,8 @@
 Surface: the shape is subdivided without smoothing until every edge ≤ the candidate spacing (S
 adds face centroids and edge midpoints; trimesh's midpoint subdivision gives the same density on
 triangles); its vertices, with vertex normals, are the candidates. Volume: a jittered cubic grid
-of the same spacing, kept where the point lies inside the shape (ray parity along z columns).
+of the same spacing, kept where the point lies inside the shape (the column winding number of
+``nodes.mesh_inside``, shared with the voxeliser and the colliders).
 """
 
 from __future__ import annotations
@@ -53,10 +54,11 @@ def surface_candidates(vertices: np.ndarray, faces: np.ndarray, spacing: float, 
 
 def volume_candidates(vertices: np.ndarray, faces: np.ndarray, spacing: float, rng: np.random.Generator):
     """Points of a jittered cubic grid (jitter ±spacing/4) inside the closed shape, each with local up +z."""
-    from .inside_grid import inside_columns
+    from ..mesh_inside import inside_columns
 
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
-    # Small irrational shifts, different per axis, keep grid columns off mesh edges and diagonals.
+    # Small irrational shifts, different per axis, keep grid columns off the edges and diagonals of box-like
+    # shapes (the inside test is exact there; the shifts keep candidates off the surface itself).
     shift = 1e-4 * np.array([np.pi, np.e, np.sqrt(2.0)])
     axes = [np.arange(lo[d] + (0.5 + shift[d]) * spacing, hi[d], spacing) for d in range(3)]
     if any(len(a) == 0 for a in axes):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from nodegraph.node import In, Out, node
@@ -13,7 +15,7 @@ from .element_templates import template_params
 
 @node(
     "cull",
-    version=2,
+    version=3,
     inputs={"placement": In(Placement, "refined elements"),
             "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True)},
     outputs={"placement": Out(Placement, "the elements kept (overlap = depth with the kept neighbours)"),
@@ -39,8 +41,7 @@ def cull(ctx, placement, libraries, *, threshold, offset, sphere_tolerance, max_
     placement = with_kind_names(placement, libraries)
     templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points)
     keep, depth = cull_placement(placement, templates, threshold, offset)
-    with_depth = Placement(placement.positions, placement.normals, placement.rotations, placement.kinds,
-                           placement.variants, placement.p_num, placement.offsets, depth, placement.kind_names)
+    with_depth = dataclasses.replace(placement, overlap=depth)
     kept, culled = with_depth.subset(keep), with_depth.subset(~keep)
     if ctx.rerun.enabled:
         import rerun as rr

@@ -7,6 +7,7 @@ sampling, since the cost grows linearly with |X|).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -156,12 +157,9 @@ def template_params():
 
 def with_kind_names(placement, libraries: tuple[ElementLibrary, ...]):
     """The placement naming its kinds: one without (no mix_ratio upstream) takes the single library's kind."""
-    from ..values import Placement
-
     if placement.kind_names:
         return placement
-    return Placement(placement.positions, placement.normals, placement.rotations, placement.kinds, placement.variants,
-                     placement.p_num, placement.offsets, placement.overlap, (libraries[0].kind,))
+    return dataclasses.replace(placement, kind_names=(libraries[0].kind,))
 
 
 def matching_libraries(placement, libraries) -> tuple[ElementLibrary, ...]:

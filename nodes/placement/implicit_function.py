@@ -12,7 +12,7 @@ from ..values import ElementLibrary
 
 @node(
     "medial_spheres",
-    version=2,
+    version=3,
     inputs={"library": In(ElementLibrary, "elements whose implicit functions overlap_refine and cull evaluate")},
     outputs={"library": Out(ElementLibrary, "the same elements carrying their medial spheres in props "
                                             "(medial_spheres (N, K, 4), medial_count; read by overlap_refine and cull)"),

@@ -76,7 +76,7 @@ def medial_spheres(vertices: np.ndarray, faces: np.ndarray, tolerance: float, ma
 
     Raises ValueError for an element without interior (flat or open): no inner pole survives.
     """
-    from .inside_grid import inside_points
+    from ..mesh_inside import inside_points
 
     vertices = np.ascontiguousarray(vertices, np.float64)
     faces = np.ascontiguousarray(faces, np.int64)
@@ -111,7 +111,7 @@ def _greedy_cover(points, centers, radii, epsilon, max_spheres):
 
 def largest_inscribed_radius(vertices: np.ndarray, faces: np.ndarray, samples: int = 2000) -> float:
     """Radius of the largest sphere inside the element (S: r is half of it) — best of the inner poles."""
-    from .inside_grid import inside_points
+    from ..mesh_inside import inside_points
 
     vertices = np.ascontiguousarray(vertices, np.float64)
     faces = np.ascontiguousarray(faces, np.int64)
@@ -131,7 +131,7 @@ def union_fit(vertices: np.ndarray, faces: np.ndarray, centers: np.ndarray, radi
     ``gap_mean``/``gap_max``: distance from surface samples to the union's surface; ``volume``:
     share of the element's interior grid points inside some sphere.
     """
-    from .inside_grid import inside_columns
+    from ..mesh_inside import inside_columns
 
     length = element_length(vertices)
     points, _ = surface_samples(vertices, faces, 4000)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from nodegraph.node import In, Out, node
@@ -42,6 +44,5 @@ def mix_ratio(ctx, placement, libraries, *, ratios):
     kinds = np.minimum(np.searchsorted(cumulative, draw[placement.p_num], side="right"), len(libraries) - 1)
     sizes = np.array([len(lib) for lib in libraries])
     variants = pick[placement.p_num] % sizes[kinds]
-    out = Placement(placement.positions, placement.normals, placement.rotations, kinds, variants, placement.p_num,
-                    placement.offsets, placement.overlap, tuple(names))
+    out = dataclasses.replace(placement, kinds=kinds, variants=variants, kind_names=tuple(names))
     return {"placement": out, "aggregate": Aggregate(out, libraries)}

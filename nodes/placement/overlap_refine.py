@@ -20,7 +20,7 @@ def _check(params: dict) -> list[tuple[str, str]]:
 
 @node(
     "overlap_refine",
-    version=2,
+    version=3,
     inputs={"placement": In(Placement, "placed, rotated, mixed elements"),
             "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True)},
     outputs={"placement": Out(Placement, "moved elements: offsets t and residual overlap depth filled"),

@@ -12,7 +12,7 @@ from ..values import ElementLibrary, Placement
 
 @node(
     "poisson_place",
-    version=2,
+    version=3,
     inputs={
         "shape": In(Mesh, "closed target shape (outward normals)"),
         "elements": In(ElementLibrary, "elements that set r when r is not given (S: half the largest inscribed sphere radius)",

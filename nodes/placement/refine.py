@@ -5,6 +5,7 @@ Pure functions over ``Placement`` + ``ElementTemplates``; the nodes and the benc
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,8 +99,8 @@ def refine_placement(placement: Placement, templates: ElementTemplates, refine_r
         travelled += moved
     nb_start, nb = neighbours(positions, templates, tmpl, np.zeros(n))
     depth = _depths(positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates, settings.offset)
-    return Placement(positions, placement.normals, rotations, placement.kinds, placement.variants, placement.p_num,
-                     placement.offsets + travelled, depth, placement.kind_names)
+    return dataclasses.replace(placement, positions=positions, rotations=rotations,
+                               offsets=placement.offsets + travelled, overlap=depth)
 
 
 def cull_placement(placement: Placement, templates: ElementTemplates, threshold: float,

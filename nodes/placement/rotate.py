@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from nodegraph.node import In, Out, node
@@ -34,8 +36,7 @@ def rotate(ctx, placement, *, angles, field, flow):
     frames = local_frames(placement.normals, directions)
     local = random_rotations(ctx.rng, placement.p_num, np.radians(angles))
     rotations = np.einsum("nij,njk->nik", frames, local)
-    out = Placement(placement.positions, placement.normals, rotations, placement.kinds, placement.variants,
-                    placement.p_num, placement.offsets, placement.overlap, placement.kind_names)
+    out = dataclasses.replace(placement, rotations=rotations)
     if ctx.rerun.enabled and len(out):
         import rerun as rr
 

@@ -5,6 +5,7 @@ transforms after the run (SPEC §5).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -177,9 +178,7 @@ def snapshot_aggregate(sim: Simulation) -> Aggregate:
     if m.quadratic is not None and m.quadratic.flags.any():  # flagged clusters bend
         positions, deformations, bends = element_bends(x, w, m.start, m.q_rest, rotations, centres, positions,
                                                        deformations, m.quadratic.flags, sim.local_centre)
-    old = sim.aggregate.placement
-    placement = Placement(positions, old.normals, rotations, old.kinds, old.variants, old.p_num, old.offsets,
-                          old.overlap, old.kind_names)
+    placement = dataclasses.replace(sim.aggregate.placement, positions=positions, rotations=rotations)
     if sim.yolk_local is None:
         return Aggregate(placement, sim.aggregate.libraries, deformations, bends)
     offsets = np.zeros((len(positions), 3))

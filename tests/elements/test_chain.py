@@ -9,8 +9,9 @@ from nodes.elements import distance_field, element_library, expand, remesh, sphe
 from nodes.elements.distance_fields import binary_field
 from nodes.elements.grain_shapes import volume_centroid
 from nodes.elements.library_props import surface_distance
-from nodes.elements.sphere_sampling import INSIDE, SURFACE, winding_numbers
+from nodes.elements.sphere_sampling import INSIDE, SURFACE
 from nodes.elements.voxel_grid import grid_for, mesh_occupancy
+from nodes.mesh_inside import inside_points, point_winding
 
 from .conftest import as_trimesh, chain, digest
 
@@ -19,8 +20,7 @@ def test_scatter_places_surface_and_inside_spheres(japonica):
     spheres = sphere_scatter.call(seed=1, mesh=japonica, count=50, surface_share=0.6, radius_range=(0.1, 0.3))
     assert len(spheres) == 50 and (spheres.tags == SURFACE).sum() == 30
     assert ((spheres.radii >= 0.1) & (spheres.radii <= 0.3)).all()
-    w = winding_numbers(spheres.centers[spheres.tags == INSIDE], japonica.vertices, japonica.faces)
-    assert np.allclose(w, 1.0, atol=1e-6)
+    assert (point_winding(japonica.vertices, japonica.faces, spheres.centers[spheres.tags == INSIDE]) == 1).all()
     # surface centres lie on the mesh (area-weighted points of its triangles)
     on_surface = spheres.centers[spheres.tags == SURFACE]
     assert max(surface_distance(c, japonica.vertices, japonica.faces) for c in on_surface) < 1e-9
@@ -62,7 +62,7 @@ def test_exact_route_is_closer_than_binary(japonica):
     band = np.abs(exact.data) < volume.voxel_size
     centres = volume.cell_centers(band)
     d_sph = (spheres.radii - np.linalg.norm(centres[:, None] - spheres.centers[None], axis=2)).max(axis=1)
-    sign = np.where(winding_numbers(centres, japonica.vertices, japonica.faces) > 0.5, 1.0, -1.0)
+    sign = np.where(inside_points(japonica.vertices, japonica.faces, centres), 1.0, -1.0)
     d_mesh = sign * np.array([surface_distance(c, japonica.vertices, japonica.faces) for c in centres])
     assert np.allclose(exact.data[band], np.maximum(d_mesh, d_sph), atol=1e-6)
     assert set(np.unique(np.round(binary.data[volume.data] / volume.voxel_size, 6))) >= {1.0}

@@ -29,7 +29,7 @@ def test_bowl_region_sits_in_the_cavity_with_a_mound():
     region, container = out["mesh"], out["container"]
     assert region.vertices[:, 2].max() == pytest.approx(-45.0 + 0.8 * 45.0 + 15.0, abs=0.5)
     assert region.vertices[:, 2].min() == pytest.approx(-45.0, abs=0.5)
-    from nodes.placement.inside_grid import inside_points
+    from nodes.mesh_inside import inside_points
 
     inner = region.vertices[region.vertices[:, 2] < -10.0] * 0.98
     assert not inside_points(container.vertices, container.faces, inner).any()  # the region does not cut the wall
