@@ -50,8 +50,14 @@ def distance_to_faces(points, vertices, faces, candidates):
             f = candidates[p, c] if candidates.shape[0] else c
             if f < 0:
                 continue
-            ex, ey, ez = point_triangle_offset(points[p, 0], points[p, 1], points[p, 2], vertices[faces[f, 0]],
-                                               vertices[faces[f, 1]], vertices[faces[f, 2]])
+            ex, ey, ez = point_triangle_offset(
+                points[p, 0],
+                points[p, 1],
+                points[p, 2],
+                vertices[faces[f, 0]],
+                vertices[faces[f, 1]],
+                vertices[faces[f, 2]],
+            )
             d2 = ex * ex + ey * ey + ez * ez
             if d2 < best:
                 best = d2
@@ -80,7 +86,7 @@ class ExactGrain:
         on_mesh = surface_points(self.vertices, self.faces, count, self.rng)
         keep = (np.linalg.norm(on_mesh[:, None] - self.centers[None], axis=2) > self.radii).all(axis=1)
         samples = [on_mesh[keep]]
-        area = self.radii ** 2
+        area = self.radii**2
         per = np.maximum((count * area / area.sum()).astype(int), 8)
         for c, r, n in zip(self.centers, self.radii, per):
             d = self.rng.normal(size=(n, 3))
@@ -97,14 +103,16 @@ class ExactGrain:
         h = float((hi - lo).max()) / resolution
         shape = tuple(int(n) for n in np.ceil((hi - lo) / h) + 2)
         grid = Grid(lo - h + self.rng.uniform(0, h, 3), h, shape)
-        inside = mesh_occupancy(grid, self.vertices, self.faces) | (sphere_field(grid, self.centers, self.radii, 1.0) > 0)
-        return inside.sum() * h ** 3
+        inside = mesh_occupancy(grid, self.vertices, self.faces) | (
+            sphere_field(grid, self.centers, self.radii, 1.0) > 0
+        )
+        return inside.sum() * h**3
 
 
 def surface_errors(exact: ExactGrain, vertices, faces, samples):
     """Two-sided Hausdorff and mean distance between the remeshed and the exact surface (mm)."""
-    from scipy.spatial import cKDTree
     import trimesh
+    from scipy.spatial import cKDTree
 
     forward = np.abs(exact.signed_distance(vertices))
     vertex_faces = trimesh.Trimesh(vertices, faces, process=False).vertex_faces
@@ -155,16 +163,27 @@ def sweep(resolutions, grains, samples):
                 level = OFFSET_VOXELS * field.voxel_size
                 v, f = grain_surface(np.asarray(field.data), field.origin, field.voxel_size, level, 0, None)
                 offset.append(np.abs(exact.signed_distance(v) - level).mean() / field.voxel_size)
-            rows.append({"resolution": resolution, "method": method, "grid": "×".join(map(str, volume.data.shape)),
-                         "ms_per_grain": 1e3 * float(np.median(times)), "hausdorff": float(np.mean(haus)),
-                         "mean": float(np.mean(mean)), "mean_voxels": float(np.mean(mean_vox)),
-                         "volume_error": float(np.mean(vol_err)), "triangles": int(np.mean(tris)),
-                         "offset_voxels": float(np.mean(offset))})
+            rows.append(
+                {
+                    "resolution": resolution,
+                    "method": method,
+                    "grid": "×".join(map(str, volume.data.shape)),
+                    "ms_per_grain": 1e3 * float(np.median(times)),
+                    "hausdorff": float(np.mean(haus)),
+                    "mean": float(np.mean(mean)),
+                    "mean_voxels": float(np.mean(mean_vox)),
+                    "volume_error": float(np.mean(vol_err)),
+                    "triangles": int(np.mean(tris)),
+                    "offset_voxels": float(np.mean(offset)),
+                }
+            )
             r = rows[-1]
-            print(f"{resolution:4d} {method:9s} {r['grid']:>12s} {r['ms_per_grain']:8.1f} ms  "
-                  f"H {100 * r['hausdorff']:6.3f} %  mean {100 * r['mean']:6.3f} % ({r['mean_voxels']:.3f} vox)  "
-                  f"vol {100 * r['volume_error']:+6.2f} %  {r['triangles']} tris  offset {r['offset_voxels']:.3f} vox",
-                  flush=True)
+            print(
+                f"{resolution:4d} {method:9s} {r['grid']:>12s} {r['ms_per_grain']:8.1f} ms  "
+                f"H {100 * r['hausdorff']:6.3f} %  mean {100 * r['mean']:6.3f} % ({r['mean_voxels']:.3f} vox)  "
+                f"vol {100 * r['volume_error']:+6.2f} %  {r['triangles']} tris  offset {r['offset_voxels']:.3f} vox",
+                flush=True,
+            )
     return rows, length
 
 
@@ -199,8 +218,16 @@ def memory_child(resolution: int, shape: str, method: str) -> None:
     t0 = time.perf_counter()
     spheres, volume, field, grain, _ = grain_chain(mesh, 0, resolution, method)
     seconds = time.perf_counter() - t0
-    print(json.dumps({"peak_mib": peak_rss_mib(), "grid": list(volume.data.shape), "seconds": seconds,
-                      "triangles": len(grain.faces)}))
+    print(
+        json.dumps(
+            {
+                "peak_mib": peak_rss_mib(),
+                "grid": list(volume.data.shape),
+                "seconds": seconds,
+                "triangles": len(grain.faces),
+            }
+        )
+    )
 
 
 def baseline_child() -> None:
@@ -213,36 +240,55 @@ def baseline_child() -> None:
 def measure_memory(resolution):
     rows = []
     script = str(Path(__file__).resolve())
-    base = json.loads(subprocess.run([sys.executable, script, "--baseline-child"], capture_output=True, text=True,
-                                     check=True).stdout.strip().splitlines()[-1])["peak_mib"]
+    base = json.loads(
+        subprocess.run([sys.executable, script, "--baseline-child"], capture_output=True, text=True, check=True)
+        .stdout.strip()
+        .splitlines()[-1]
+    )["peak_mib"]
     for shape, method in (("rice", "exact"), ("rice", "euclidean"), ("ikura", "exact")):
-        run = subprocess.run([sys.executable, script, "--memory-child", str(resolution), shape, method],
-                             capture_output=True, text=True, check=True)
+        run = subprocess.run(
+            [sys.executable, script, "--memory-child", str(resolution), shape, method],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         r = json.loads(run.stdout.strip().splitlines()[-1])
         r.update(shape=shape, method=method, baseline_mib=base)
         rows.append(r)
-        print(f"resolution {resolution} {shape} {method}: grid {'×'.join(map(str, r['grid']))}, peak RSS "
-              f"{r['peak_mib']:.0f} MiB (imports + warm run alone: {base:.0f} MiB), {r['seconds']:.2f} s", flush=True)
+        print(
+            f"resolution {resolution} {shape} {method}: grid {'×'.join(map(str, r['grid']))}, peak RSS "
+            f"{r['peak_mib']:.0f} MiB (imports + warm run alone: {base:.0f} MiB), {r['seconds']:.2f} s",
+            flush=True,
+        )
     return rows
 
 
 def write_results(rows, length, sixteen, memory, resolution):
     RESULTS.mkdir(parents=True, exist_ok=True)
-    lines = [f"Grain: japonica base 5 × 3 × 2 mm + 40 spheres r ∈ [0.2, 0.5] mm (length L = {length:.2f} mm), "
-             "P = 1; errors against the exact surface of mesh ∪ spheres, mean of the grains.", "",
-             f"Offset: surface at level {OFFSET_VOXELS} voxels, mean |SDF − level| of its vertices (voxels).", "",
-             "| res | method | grid | ms/grain | Hausdorff (L) | mean (L) | mean (voxels) | volume err | triangles "
-             "| offset mean (voxels) |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"Grain: japonica base 5 × 3 × 2 mm + 40 spheres r ∈ [0.2, 0.5] mm (length L = {length:.2f} mm), "
+        "P = 1; errors against the exact surface of mesh ∪ spheres, mean of the grains.",
+        "",
+        f"Offset: surface at level {OFFSET_VOXELS} voxels, mean |SDF − level| of its vertices (voxels).",
+        "",
+        "| res | method | grid | ms/grain | Hausdorff (L) | mean (L) | mean (voxels) | volume err | triangles "
+        "| offset mean (voxels) |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
-        lines.append(f"| {r['resolution']} | {r['method']} | {r['grid']} | {r['ms_per_grain']:.1f} | "
-                     f"{100 * r['hausdorff']:.3f} % | {100 * r['mean']:.3f} % | {r['mean_voxels']:.3f} | "
-                     f"{100 * r['volume_error']:+.2f} % | {r['triangles']} | {r['offset_voxels']:.3f} |")
+        lines.append(
+            f"| {r['resolution']} | {r['method']} | {r['grid']} | {r['ms_per_grain']:.1f} | "
+            f"{100 * r['hausdorff']:.3f} % | {100 * r['mean']:.3f} % | {r['mean_voxels']:.3f} | "
+            f"{100 * r['volume_error']:+.2f} % | {r['triangles']} | {r['offset_voxels']:.3f} |"
+        )
     lines += ["", f"16 japonica grains, resolution {resolution}, exact route, P = 1.5 (best of repeats, warm):", ""]
     lines += [f"- {label}: {seconds:.3f} s ({1e3 * seconds / 16:.0f} ms/grain)" for label, seconds in sixteen.items()]
     lines += ["", "Peak resident memory of one element (child process):", ""]
-    lines += [f"- {m['shape']} {m['method']}, grid {'×'.join(map(str, m['grid']))}: {m['peak_mib']:.0f} MiB "
-              f"(imports + warm-up alone {m['baseline_mib']:.0f} MiB), {m['seconds']:.2f} s" for m in memory]
+    lines += [
+        f"- {m['shape']} {m['method']}, grid {'×'.join(map(str, m['grid']))}: {m['peak_mib']:.0f} MiB "
+        f"(imports + warm-up alone {m['baseline_mib']:.0f} MiB), {m['seconds']:.2f} s"
+        for m in memory
+    ]
     (RESULTS / "bench_elements.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
@@ -259,8 +305,9 @@ def write_results(rows, length, sixteen, memory, resolution):
         axes[1].plot(res, [100 * r["mean"] for r in sel], "o-", label=f"{method} mean")
         axes[1].plot(res, [100 * r["hausdorff"] for r in sel], "x--", label=f"{method} Hausdorff")
         axes[2].plot(res, [100 * abs(r["volume_error"]) for r in sel], "o-", label=method)
-    axes[0].set(xlabel="resolution (cells along the grain)", ylabel="ms per grain", yscale="log",
-                title="time per grain (warm)")
+    axes[0].set(
+        xlabel="resolution (cells along the grain)", ylabel="ms per grain", yscale="log", title="time per grain (warm)"
+    )
     axes[1].set(xlabel="resolution", ylabel="% of grain length", yscale="log", title="surface error")
     axes[2].set(xlabel="resolution", ylabel="|volume error| %", yscale="log", title="volume error")
     for ax in axes:

@@ -22,13 +22,20 @@ TOY = Path(__file__).resolve().parent.parent / "tests" / "engine" / "toy_nodes.p
 
 def chain_recipe(nodes: int) -> str:
     """A source node, then shifts in a chain with a merge every 10 nodes: nodes in all."""
-    lines = ["name: bench", "seed: 1", f"outputs: [n{nodes - 1}]", "nodes:",
-             "  n0: {type: toy_points, params: {count: 100, scale: 1.0}}"]
+    lines = [
+        "name: bench",
+        "seed: 1",
+        f"outputs: [n{nodes - 1}]",
+        "nodes:",
+        "  n0: {type: toy_points, params: {count: 100, scale: 1.0}}",
+    ]
     for i in range(1, nodes):
         if i % 10 == 0:
             lines.append(f"  n{i}: {{type: toy_merge, inputs: {{parts: [n{i - 1}.spheres, n{i - 5}.spheres]}}}}")
         else:
-            lines.append(f"  n{i}: {{type: toy_shift, inputs: {{spheres: n{i - 1}.spheres}}, params: {{dx: {i % 7 * 0.1:.1f}}}}}")
+            lines.append(
+                f"  n{i}: {{type: toy_shift, inputs: {{spheres: n{i - 1}.spheres}}, params: {{dx: {i % 7 * 0.1:.1f}}}}}"
+            )
     return "\n".join(lines) + "\n"
 
 

@@ -46,10 +46,15 @@ def pile_measures(out):
     from nodes.simulation.spatial_hash import neighbour_lists
 
     p = out["particles"]
-    start, nbr, *_ = neighbour_lists(p.positions, p.radii, p.element.astype(np.int64), 0.05,
-                                     2 * p.radii.max() + 0.05, len(p.positions), False)
-    pairs = {(int(p.element[i]), int(p.element[j])) for i in range(len(p.positions)) for j in nbr[start[i]:start[i + 1]]
-             if np.linalg.norm(p.positions[i] - p.positions[j]) - p.radii[i] - p.radii[j] <= 0.05}
+    start, nbr, *_ = neighbour_lists(
+        p.positions, p.radii, p.element.astype(np.int64), 0.05, 2 * p.radii.max() + 0.05, len(p.positions), False
+    )
+    pairs = {
+        (int(p.element[i]), int(p.element[j]))
+        for i in range(len(p.positions))
+        for j in nbr[start[i] : start[i + 1]]
+        if np.linalg.norm(p.positions[i] - p.positions[j]) - p.radii[i] - p.radii[j] <= 0.05
+    }
     contacts = len(pairs) / (p.element.max() + 1)  # each pair counted from both sides = contacts per grain
     z = out["aggregate"].placement.positions[:, 2]
     return float(np.percentile(z, 95) - p.positions[:, 2].min()), contacts
@@ -62,13 +67,26 @@ def bench_speed(quick):
     timed_node(aggregate, colliders, RICE, frames=1)  # warm JIT and caches
     wall, out = timed_node(aggregate, colliders, RICE, frames=frames)
     height, contacts = pile_measures(out)
-    rows.append(("rice bowl short", n_rice, len(out["particles"].positions), frames, wall, 30.0, 2041.0, height, contacts))
+    rows.append(
+        ("rice bowl short", n_rice, len(out["particles"].positions), frames, wall, 30.0, 2041.0, height, contacts)
+    )
     print(rows[-1], flush=True)
     if not quick:
         wall, out = timed_node(aggregate, colliders, RICE, mode="full", frames=240)
         height, contacts = pile_measures(out)
-        rows.append(("rice bowl full", n_rice, len(out["particles"].positions), 240, wall, float("nan"), 3867.0,
-                     height, contacts))
+        rows.append(
+            (
+                "rice bowl full",
+                n_rice,
+                len(out["particles"].positions),
+                240,
+                wall,
+                float("nan"),
+                3867.0,
+                height,
+                contacts,
+            )
+        )
         print(rows[-1], flush=True)
     if not quick:
         rows.append(bench_bunny())
@@ -80,9 +98,14 @@ def bench_speed(quick):
     height, contacts = pile_measures(out)
     rows.append(("ikura don short", n_egg, len(out["particles"].positions), frames, wall, 3.0, 65.0, height, contacts))
     print(rows[-1], flush=True)
-    lines = ["| scene | elements | particles | frames (1/60 s, 10 substeps × 2 it.) | wall (s) | target (s) | G table 2 (s) "
-             "| fill height (mm) | contacts / element |", "|---|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {a} | {b} | {c} | {d} | {e:.2f} | {f:g} | {g:g} | {h:.1f} | {i:.2f} |" for a, b, c, d, e, f, g, h, i in rows]
+    lines = [
+        "| scene | elements | particles | frames (1/60 s, 10 substeps × 2 it.) | wall (s) | target (s) | G table 2 (s) "
+        "| fill height (mm) | contacts / element |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {a} | {b} | {c} | {d} | {e:.2f} | {f:g} | {g:g} | {h:.1f} | {i:.2f} |" for a, b, c, d, e, f, g, h, i in rows
+    ]
     return "\n".join(lines)
 
 
@@ -99,8 +122,17 @@ def bench_bunny():
     timed_node(aggregate, None, effects, **{**given, "frames": 1}, moulds=[mould])  # warm
     wall, out = timed_node(aggregate, None, effects, **given, moulds=[mould])
     height, contacts = pile_measures(out)
-    return ("rice bunny short (mould)", len(aggregate.placement), len(out["particles"].positions), given["frames"],
-            wall, 90.0, 4376.0, height, contacts)
+    return (
+        "rice bunny short (mould)",
+        len(aggregate.placement),
+        len(out["particles"].positions),
+        given["frames"],
+        wall,
+        90.0,
+        4376.0,
+        height,
+        contacts,
+    )
 
 
 def bench_effects(quick):
@@ -119,11 +151,19 @@ def bench_effects(quick):
         per_frame = (time.perf_counter() - t) / frames
         base = per_frame if base is None else base
         calls = sim.solver.dispatch.calls
-        rows.append(("+ " + " + ".join(step), per_frame * 1e3, per_frame / base,
-                     ", ".join(f"{k} {v}" for k, v in sorted(calls.items()))))
+        rows.append(
+            (
+                "+ " + " + ".join(step),
+                per_frame * 1e3,
+                per_frame / base,
+                ", ".join(f"{k} {v}" for k, v in sorted(calls.items())),
+            )
+        )
         print(rows[-1], flush=True)
-    lines = [f"| effects ({n} grains, {frames} frames) | ms / frame | × gravity+collider | kernel calls |",
-             "|---|---|---|---|"]
+    lines = [
+        f"| effects ({n} grains, {frames} frames) | ms / frame | × gravity+collider | kernel calls |",
+        "|---|---|---|---|",
+    ]
     lines += [f"| {a} | {b:.1f} | {c:.2f} | {d} |" for a, b, c, d in rows]
     return "\n".join(lines)
 
@@ -144,17 +184,19 @@ def run_to_rest(run, frames, repeats=1, make=None):
             energies.append(mechanical_energy(s))
         walls.append(wall)
     m = s.model
-    mass = float(np.sum(1.0 / m.w[:m.n_moving]))
-    drift, rise = energy_drift(energies, mass, s.solver.settings.gravity, float(np.median(m.r[:m.n_moving])))
+    mass = float(np.sum(1.0 / m.w[: m.n_moving]))
+    drift, rise = energy_drift(energies, mass, s.solver.settings.gravity, float(np.median(m.r[: m.n_moving])))
     dg = s.solver.diagnostics
     return min(walls), m.centres(s.state.x), max(dg.penetration), dg.residual[-1], drift, rise
 
 
 def bowl_maker(aggregate, colliders, frames):
     def make(substeps, iterations):
-        params = xpbd.resolve_params({"frames": frames, "substeps": substeps, "iterations": iterations,
-                                      "sleep_speed": 0.0})
+        params = xpbd.resolve_params(
+            {"frames": frames, "substeps": substeps, "iterations": iterations, "sleep_speed": 0.0}
+        )
         return build_simulation(aggregate, colliders, frozenset(RICE), XpbdParams(**params))
+
     return make
 
 
@@ -167,9 +209,10 @@ def sweep(make, frames, grid, reference, second, repeats=1):
     print(f"reference {reference[0]}×{reference[1]}: {second[0]} {second[1](ref, ref):.3g}", flush=True)
     rows = []
     for s, it in grid:
-        wall, centres, pen, res, drift, rise = run_to_rest(make(s, it), frames, repeats, lambda: make(s, it))
-        rows.append([s, it, wall, pen, res, drift, rise, np.linalg.norm(centres - ref, axis=1).mean(),
-                     second[1](centres, ref)])
+        wall, centres, pen, res, drift, rise = run_to_rest(make(s, it), frames, repeats, lambda s=s, it=it: make(s, it))
+        rows.append(
+            [s, it, wall, pen, res, drift, rise, np.linalg.norm(centres - ref, axis=1).mean(), second[1](centres, ref)]
+        )
         print(" ".join(f"{v:.4g}" for v in rows[-1]), flush=True)
     return np.array(rows)
 
@@ -190,12 +233,32 @@ def accuracy_table(rows, reference, second):
     """Markdown rows of ``sweep``; ★ marks the Pareto front on the position error vs the reference,
     ☆ the front on the ``second`` error."""
     ref = f"{reference[0]}×{reference[1]}"
-    head = ["substeps", "iterations", "wall (s)", "max penetration / r", "residual (mm)", "energy drift (M·g·r)",
-            "max energy rise (M·g·r)", f"mean position error vs {ref} (mm)", second, "Pareto ★ position, ☆ 2nd"]
+    head = [
+        "substeps",
+        "iterations",
+        "wall (s)",
+        "max penetration / r",
+        "residual (mm)",
+        "energy drift (M·g·r)",
+        "max energy rise (M·g·r)",
+        f"mean position error vs {ref} (mm)",
+        second,
+        "Pareto ★ position, ☆ 2nd",
+    ]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r, p, q in zip(rows, pareto_front(rows), pareto_front(rows, 8)):
-        cells = [f"{int(r[0])}", f"{int(r[1])}", f"{r[2]:.3g}", f"{r[3]:.3g}", f"{r[4]:.3g}", f"{r[5]:+.2g}",
-                 f"{r[6]:.2g}", f"{r[7]:.3g}", f"{r[8]:.3g}", ("★" if p else "") + ("☆" if q else "")]
+        cells = [
+            f"{int(r[0])}",
+            f"{int(r[1])}",
+            f"{r[2]:.3g}",
+            f"{r[3]:.3g}",
+            f"{r[4]:.3g}",
+            f"{r[5]:+.2g}",
+            f"{r[6]:.2g}",
+            f"{r[7]:.3g}",
+            f"{r[8]:.3g}",
+            ("★" if p else "") + ("☆" if q else ""),
+        ]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -217,34 +280,60 @@ def bench_accuracy(quick):
     aggregate, colliders = rice_bowl(n)
     scenes = []
     heights = ("height-profile error vs reference (mm)", height_profile_error)
-    bowl = sweep(bowl_maker(aggregate, colliders, bowl_frames), bowl_frames,
-                 sorted({*((s, i) for s in grid_s for i in grid_i), (10, 2)}), bowl_ref, heights,
-                 repeats=1 if quick else 2)
+    bowl = sweep(
+        bowl_maker(aggregate, colliders, bowl_frames),
+        bowl_frames,
+        sorted({*((s, i) for s in grid_s for i in grid_i), (10, 2)}),
+        bowl_ref,
+        heights,
+        repeats=1 if quick else 2,
+    )
     scenes.append((f"{n} grains in a bowl, {bowl_frames} frames", bowl, bowl_ref, heights[0], True))
     rest = stack_column(layers)[1]
-    analytic = ("mean position error vs analytic rest (mm)",
-                lambda centres, _: float(np.linalg.norm(centres - rest, axis=1).mean()))
-    stack = sweep(lambda s, it: stack_column(layers, substeps=s, iterations=it)[0], stack_frames,
-                  sorted({*((s, i) for s in stack_s for i in stack_i), (10, 2)}), stack_ref, analytic, repeats=5)
-    scenes.append((f"stack of {layers} cubes (2×2×2 particles, r = 1 mm), {stack_frames} frames", stack, stack_ref,
-                   analytic[0], False))
+    analytic = (
+        "mean position error vs analytic rest (mm)",
+        lambda centres, _: float(np.linalg.norm(centres - rest, axis=1).mean()),
+    )
+    stack = sweep(
+        lambda s, it: stack_column(layers, substeps=s, iterations=it)[0],
+        stack_frames,
+        sorted({*((s, i) for s in stack_s for i in stack_i), (10, 2)}),
+        stack_ref,
+        analytic,
+        repeats=5,
+    )
+    scenes.append(
+        (
+            f"stack of {layers} cubes (2×2×2 particles, r = 1 mm), {stack_frames} frames",
+            stack,
+            stack_ref,
+            analytic[0],
+            False,
+        )
+    )
     plot_accuracy(scenes, quick)
     out = [ENERGY_NOTE]
     for title, rows, ref, second, _ in scenes:
-        out += [f"**{title}** (reference {ref[0]} substeps × {ref[1]} iterations)", "",
-                accuracy_table(rows, ref, second), ""]
+        out += [
+            f"**{title}** (reference {ref[0]} substeps × {ref[1]} iterations)",
+            "",
+            accuracy_table(rows, ref, second),
+            "",
+        ]
     return "\n".join(out).rstrip()
 
 
-ENERGY_NOTE = ("Energy drift: E = KE + Σ m·g·z after each frame; drift = E_T − E_k0 and max rise = max over "
-               "k ≥ k0 of E_k − E_k0, over the last third of the frames (k0 = T − ⌊T/3⌋), "
-               "in units of M·g·r "
-               "(the whole mass lifted by one particle radius). At rest both should be ≈ 0; drift < 0 is settling "
-               "or sinking, a rise > 0 is energy gained. Max penetration / r is over the whole run; the position "
-               "error is the mean element-centre distance at the last frame; the bowl's height-profile error "
-               "(``height_profile_error``) compares sorted element heights, so it sees the pile's shape, not "
-               "which grain went where. Wall: the frames alone on one numba "
-               "thread, the fastest of 5 identical runs for the stack and of 2 for the full-size bowl.\n")
+ENERGY_NOTE = (
+    "Energy drift: E = KE + Σ m·g·z after each frame; drift = E_T − E_k0 and max rise = max over "
+    "k ≥ k0 of E_k − E_k0, over the last third of the frames (k0 = T − ⌊T/3⌋), "
+    "in units of M·g·r "
+    "(the whole mass lifted by one particle radius). At rest both should be ≈ 0; drift < 0 is settling "
+    "or sinking, a rise > 0 is energy gained. Max penetration / r is over the whole run; the position "
+    "error is the mean element-centre distance at the last frame; the bowl's height-profile error "
+    "(``height_profile_error``) compares sorted element heights, so it sees the pile's shape, not "
+    "which grain went where. Wall: the frames alone on one numba "
+    "thread, the fastest of 5 identical runs for the stack and of 2 for the full-size bowl.\n"
+)
 
 
 def plot_accuracy(scenes, quick):
@@ -262,17 +351,29 @@ def plot_accuracy(scenes, quick):
         if plot_second:
             columns.append((8, "^", "orange", second.replace(" (mm)", "")))
         for col, marker, colour, label in columns:
-            sc = ax.scatter(rows[:, 2], rows[:, col], c=np.log2(rows[:, 0]), marker=marker,
-                            s=20 + 15 * np.log2(rows[:, 1]) ** 2, cmap="viridis")
+            sc = ax.scatter(
+                rows[:, 2],
+                rows[:, col],
+                c=np.log2(rows[:, 0]),
+                marker=marker,
+                s=20 + 15 * np.log2(rows[:, 1]) ** 2,
+                cmap="viridis",
+            )
             front = rows[pareto_front(rows, col)]
             front = front[np.argsort(front[:, 2])]
-            ax.plot(front[:, 2], front[:, col], "-", color=colour, marker=marker, mfc="none",
-                    label=f"Pareto front: {label}")
+            ax.plot(
+                front[:, 2], front[:, col], "-", color=colour, marker=marker, mfc="none", label=f"Pareto front: {label}"
+            )
             for r in rows:
                 default = r[0] == 10 and r[1] == 2
-                ax.annotate(f"{int(r[0])}×{int(r[1])}" + (" (default)" if default else ""), (r[2], r[col]),
-                            fontsize=8 if default else 6, color="red" if default else "black",
-                            xytext=(3, 3), textcoords="offset points")
+                ax.annotate(
+                    f"{int(r[0])}×{int(r[1])}" + (" (default)" if default else ""),
+                    (r[2], r[col]),
+                    fontsize=8 if default else 6,
+                    color="red" if default else "black",
+                    xytext=(3, 3),
+                    textcoords="offset points",
+                )
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("wall time (s)")

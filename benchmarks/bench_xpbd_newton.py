@@ -26,6 +26,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = ROOT / "benchmarks" / "results"
 
 from machine import conditions  # noqa: E402
+
 SUBSTEPS, RADIUS, SIDE = 10, 0.01, 0.5  # m
 
 
@@ -35,7 +36,7 @@ def initial_grid(n, seed=0):
     spacing = 2.1 * RADIUS
     per_row = int(side / spacing)
     k = np.arange(n)
-    grid = np.stack([k % per_row, (k // per_row) % per_row, k // per_row ** 2], 1) * spacing + RADIUS * 1.05
+    grid = np.stack([k % per_row, (k // per_row) % per_row, k // per_row**2], 1) * spacing + RADIUS * 1.05
     rng = np.random.default_rng(seed)
     return grid + rng.uniform(-0.0004, 0.0004, grid.shape), side
 
@@ -50,25 +51,47 @@ def box_solver(n, dispatch=None):
     x, side = initial_grid(n)
     x_mm, r_mm, side_mm = x * 1000, RADIUS * 1000, side * 1000
     height = x_mm[:, 2].max() + 2 * r_mm
-    sdf = signed_distance_grid(open_box(side_mm, wall=20.0, height=height), np.array([-20.0, -20, -20]),
-                               np.array([side_mm + 20, side_mm + 20, height]), r_mm / 2)
-    settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), substeps=SUBSTEPS,
-                              iterations=1, mu_s=0.5, mu_k=0.5, shock_propagation=4.0)
-    return solver_run(x_mm, np.full(n, r_mm), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
-                      np.tile([1.0, 0, 0, 0], (n, 1)), settings, dispatch=dispatch, sdf=sdf)
+    sdf = signed_distance_grid(
+        open_box(side_mm, wall=20.0, height=height),
+        np.array([-20.0, -20, -20]),
+        np.array([side_mm + 20, side_mm + 20, height]),
+        r_mm / 2,
+    )
+    settings = SolverSettings(
+        frozenset({"gravity", "contact", "friction", "collider"}),
+        substeps=SUBSTEPS,
+        iterations=1,
+        mu_s=0.5,
+        mu_k=0.5,
+        shock_propagation=4.0,
+    )
+    return solver_run(
+        x_mm,
+        np.full(n, r_mm),
+        np.full(n, 1.0),
+        np.arange(n + 1),
+        np.zeros((n, 3)),
+        np.tile([1.0, 0, 0, 0], (n, 1)),
+        settings,
+        dispatch=dispatch,
+        sdf=sdf,
+    )
 
 
 def ours_scene(n):
     """(frame, positions in m, notes) of our solver on the box scene."""
     s = box_solver(n)
-    return s.frame, lambda: s.state.x / 1000, lambda: {"penetration": s.solver.diagnostics.penetration[-1],
-                                                        "threads": s.solver.threads}
+    return (
+        s.frame,
+        lambda: s.state.x / 1000,
+        lambda: {"penetration": s.solver.diagnostics.penetration[-1], "threads": s.solver.threads},
+    )
 
 
 def packing(x, side):
     """Volume fraction of spheres below 80 % of the 95th-percentile height, in a box of side ``side``."""
     cut = 0.8 * np.percentile(x[:, 2], 95)
-    return float((x[:, 2] < cut).sum() * 4 / 3 * np.pi * RADIUS ** 3 / (side ** 2 * cut))
+    return float((x[:, 2] < cut).sum() * 4 / 3 * np.pi * RADIUS**3 / (side**2 * cut))
 
 
 def newton_scene(n):
@@ -82,10 +105,15 @@ def newton_scene(n):
     builder.add_ground_plane()
     h = float(x[:, 2].max() + 2 * RADIUS)
     wall = 0.02
-    for cx, cy, hx, hy in ((-wall, side / 2, wall, side / 2 + wall), (side + wall, side / 2, wall, side / 2 + wall),
-                           (side / 2, -wall, side / 2, wall), (side / 2, side + wall, side / 2, wall)):
-        builder.add_shape_box(body=-1, xform=wp.transform(wp.vec3(cx, cy, h / 2), wp.quat_identity()),
-                              hx=hx, hy=hy, hz=h / 2)
+    for cx, cy, hx, hy in (
+        (-wall, side / 2, wall, side / 2 + wall),
+        (side + wall, side / 2, wall, side / 2 + wall),
+        (side / 2, -wall, side / 2, wall),
+        (side / 2, side + wall, side / 2, wall),
+    ):
+        builder.add_shape_box(
+            body=-1, xform=wp.transform(wp.vec3(cx, cy, h / 2), wp.quat_identity()), hx=hx, hy=hy, hz=h / 2
+        )
     for p in x:
         builder.add_particle(wp.vec3(*p), wp.vec3(0.0, 0.0, 0.0), mass=0.004, radius=RADIUS)
     model = builder.finalize(device="cpu")
@@ -142,15 +170,35 @@ def main():
         result = side_by_side(n, settle, timed, rounds)
         (ours, x_ours, notes), (peer, x_peer, _) = result["ours"], result["newton"]
         a, b = float(np.median(ours)), float(np.median(peer))
-        rows.append((n, a, min(ours), max(ours), b, min(peer), max(peer), a / b, float(x_ours[:, 2].max()),
-                     float(x_peer[:, 2].max()), packing(x_ours, SIDE), packing(x_peer, SIDE), notes["penetration"],
-                     notes["threads"]))
+        rows.append(
+            (
+                n,
+                a,
+                min(ours),
+                max(ours),
+                b,
+                min(peer),
+                max(peer),
+                a / b,
+                float(x_ours[:, 2].max()),
+                float(x_peer[:, 2].max()),
+                packing(x_ours, SIDE),
+                packing(x_peer, SIDE),
+                notes["penetration"],
+                notes["threads"],
+            )
+        )
         print(rows[-1], flush=True)
-    lines = [f"| N | ours substeps/s (median of {rounds}; min–max) | Newton SolverXPBD CPU substeps/s | ratio of medians "
-             "| pile top ours / Newton (m) | packing ours / Newton | our max penetration / r | our threads |",
-             "|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {n} | {a:.1f} ({a0:.1f}–{a1:.1f}) | {b:.1f} ({b0:.1f}–{b1:.1f}) | **{c:.2f}** | {d:.3f} / {e:.3f} "
-              f"| {f:.3f} / {g:.3f} | {h:.3f} | {k} |" for n, a, a0, a1, b, b0, b1, c, d, e, f, g, h, k in rows]
+    lines = [
+        f"| N | ours substeps/s (median of {rounds}; min–max) | Newton SolverXPBD CPU substeps/s | ratio of medians "
+        "| pile top ours / Newton (m) | packing ours / Newton | our max penetration / r | our threads |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {n} | {a:.1f} ({a0:.1f}–{a1:.1f}) | {b:.1f} ({b0:.1f}–{b1:.1f}) | **{c:.2f}** | {d:.3f} / {e:.3f} "
+        f"| {f:.3f} / {g:.3f} | {h:.3f} | {k} |"
+        for n, a, a0, a1, b, b0, b1, c, d, e, f, g, h, k in rows
+    ]
     table = "\n".join(lines) + f"\n\nat the start: {start}\nat the end: {conditions()}"
     print(table)
     RESULTS.mkdir(parents=True, exist_ok=True)

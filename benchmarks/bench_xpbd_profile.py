@@ -16,7 +16,6 @@ import time
 from collections import Counter
 from pathlib import Path
 
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "simulation"))
@@ -24,8 +23,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = ROOT / "benchmarks" / "results"
 
 from bench_xpbd_newton import SUBSTEPS, box_solver  # noqa: E402
-
 from machine import conditions  # noqa: E402
+
 from nodes.simulation.solver import KernelDispatch  # noqa: E402
 
 
@@ -73,10 +72,15 @@ def main():
     out = []
     for n in sizes:
         rate, rows = profile(n, settle, timed)
-        out += ["", f"N = {n}: {rate:.1f} substeps/s ({1e3 / rate:.2f} ms per substep)", "",
-                "| kernel | ms / substep | calls / substep |", "|---|---|---|"]
+        out += [
+            "",
+            f"N = {n}: {rate:.1f} substeps/s ({1e3 / rate:.2f} ms per substep)",
+            "",
+            "| kernel | ms / substep | calls / substep |",
+            "|---|---|---|",
+        ]
         out += [f"| {name} | {ms:.3f} | {calls:.2f} |" for name, ms, calls in rows]
-        print("\n".join(out[-len(rows) - 4:]), flush=True)
+        print("\n".join(out[-len(rows) - 4 :]), flush=True)
     out += ["", conditions()]
     print(out[-1])
     RESULTS.mkdir(parents=True, exist_ok=True)

@@ -53,17 +53,32 @@ def compare(n, frames):
     for speed in (2.0, 0.0):
         wall, per_frame, dg, out = run(aggregate, colliders, speed, frames)
         height, contacts = pile_measures(out)
-        rows.append((speed, wall, per_frame[-TAIL:].mean() * 1e3, float(np.mean(dg.solved)), dg.solved[-1],
-                     dg.sleeping[-1], height, contacts))
+        rows.append(
+            (
+                speed,
+                wall,
+                per_frame[-TAIL:].mean() * 1e3,
+                float(np.mean(dg.solved)),
+                dg.solved[-1],
+                dg.sleeping[-1],
+                height,
+                contacts,
+            )
+        )
         print(rows[-1], flush=True)
     base = rows[1][1]
-    lines = [f"rice bowl, {n} grains, {frames} frames (1/60 s, 10 substeps × 2 iterations), effects "
-             f"{', '.join(RICE)}; warm JIT", "",
-             f"| sleep_speed (mm/s) | wall, {frames} frames (s) | speedup | ms / frame, last {TAIL} "
-             "| solved share, mean | solved share, last frame | sleeping share, end | fill height (mm) | contacts / grain |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {s:g} | {w:.2f} | {base / w:.2f} | {t:.1f} | {m:.2f} | {ls:.2f} | {sl:.2f} | {h:.2f} | {c:.2f} |"
-              for s, w, t, m, ls, sl, h, c in rows]
+    lines = [
+        f"rice bowl, {n} grains, {frames} frames (1/60 s, 10 substeps × 2 iterations), effects "
+        f"{', '.join(RICE)}; warm JIT",
+        "",
+        f"| sleep_speed (mm/s) | wall, {frames} frames (s) | speedup | ms / frame, last {TAIL} "
+        "| solved share, mean | solved share, last frame | sleeping share, end | fill height (mm) | contacts / grain |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {s:g} | {w:.2f} | {base / w:.2f} | {t:.1f} | {m:.2f} | {ls:.2f} | {sl:.2f} | {h:.2f} | {c:.2f} |"
+        for s, w, t, m, ls, sl, h, c in rows
+    ]
     return "\n".join(lines)
 
 

@@ -15,5 +15,7 @@ def conditions() -> str:
         layer = numba.threading_layer()
     except ValueError:  # no parallel kernel ran yet
         layer = "not chosen yet"
-    return (f"numba threading layer {layer}, {numba.get_num_threads()} threads; "
-            f"load average {os.getloadavg()[0]:.2f} (1 min) on {os.cpu_count()} cores")
+    return (
+        f"numba threading layer {layer}, {numba.get_num_threads()} threads; "
+        f"load average {os.getloadavg()[0]:.2f} (1 min) on {os.cpu_count()} cores"
+    )

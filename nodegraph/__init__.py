@@ -11,5 +11,16 @@ from .params import Param
 
 __version__ = "0.1.0"
 
-__all__ = ["Context", "In", "Issue", "NodeFailure", "NodeSpec", "NodegraphError", "Out", "Param",
-           "RecipeError", "__version__", "node"]
+__all__ = [
+    "Context",
+    "In",
+    "Issue",
+    "NodeFailure",
+    "NodeSpec",
+    "NodegraphError",
+    "Out",
+    "Param",
+    "RecipeError",
+    "__version__",
+    "node",
+]

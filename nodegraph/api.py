@@ -7,5 +7,16 @@ from .executor import Executor, Instance, RunResult, run_recipe
 from .recipe import Recipe, load_recipe, parse_recipe
 from .registry import Registry, default_registry
 
-__all__ = ["Cache", "Executor", "Instance", "Recipe", "Registry", "RunResult", "default_cache_dir",
-           "default_registry", "load_recipe", "parse_recipe", "run_recipe"]
+__all__ = [
+    "Cache",
+    "Executor",
+    "Instance",
+    "Recipe",
+    "Registry",
+    "RunResult",
+    "default_cache_dir",
+    "default_registry",
+    "load_recipe",
+    "parse_recipe",
+    "run_recipe",
+]

@@ -46,10 +46,10 @@ def _node_logs(node_id: str, index: LogIndex) -> NodeLogs:
     for path in sorted(index.archetypes):
         if path != root and not path.startswith(root + "/"):
             continue
-        parts = path[len(root) + 1:].split("/")
+        parts = path[len(root) + 1 :].split("/")
         in_log = LOG in parts[:2]  # /<node>/log/… or /<node>/<variant>/log/…
         if in_log:
-            log_root = "/".join([root] + parts[:parts.index(LOG) + 1])
+            log_root = "/".join([root] + parts[: parts.index(LOG) + 1])
             if log_root not in logs.log_roots:
                 logs.log_roots.append(log_root)
         kinds = index.archetypes[path]
@@ -80,8 +80,11 @@ def build_blueprint(recipe: Recipe, index: LogIndex):
     """A ``rerun.blueprint.Blueprint`` for the recording of ``recipe``'s run (None when nothing was logged)."""
     import rerun.blueprint as rrb
 
-    order = [node_id for node_id in recipe.order() if any(p == f"/{node_id}" or p.startswith(f"/{node_id}/")
-                                                          for p in index.archetypes)]
+    order = [
+        node_id
+        for node_id in recipe.order()
+        if any(p == f"/{node_id}" or p.startswith(f"/{node_id}/") for p in index.archetypes)
+    ]
     if not order:
         return None
     logs = {node_id: _node_logs(node_id, index) for node_id in order}
@@ -90,31 +93,53 @@ def build_blueprint(recipe: Recipe, index: LogIndex):
         node = logs[node_id]
         views = []
         if node.outputs_3d:
-            views.append(rrb.Spatial3DView(name=node_id, origin="/", contents=[f"+ /{node_id}/**"] + [
-                f"- {root}/**" for root in node.log_roots]))
+            views.append(
+                rrb.Spatial3DView(
+                    name=node_id,
+                    origin="/",
+                    contents=[f"+ /{node_id}/**"] + [f"- {root}/**" for root in node.log_roots],
+                )
+            )
         if node.log_3d:
-            views.append(rrb.Spatial3DView(name=f"{node_id}: as it ran", origin="/",
-                                           contents=[f"+ {root}/**" for root in node.log_roots]))
+            views.append(
+                rrb.Spatial3DView(
+                    name=f"{node_id}: as it ran", origin="/", contents=[f"+ {root}/**" for root in node.log_roots]
+                )
+            )
         # a series the node logged: a view each (a simulation's residual, energy, ...); an output
         # table's columns: one view per table
         logged = [path for path in node.series if any(path.startswith(root + "/") for root in node.log_roots)]
-        views += [rrb.TimeSeriesView(name=f"{node_id}: {path.rsplit('/', 1)[-1]}", origin="/", contents=[f"+ {path}"])
-                  for path in logged]
-        views += [rrb.TimeSeriesView(name=f"{node_id}: {top.strip('/')}", origin="/", contents=[f"+ {top}/**"])
-                  for top in _output_subtrees([p for p in node.series if p not in logged], node_id)]
+        views += [
+            rrb.TimeSeriesView(name=f"{node_id}: {path.rsplit('/', 1)[-1]}", origin="/", contents=[f"+ {path}"])
+            for path in logged
+        ]
+        views += [
+            rrb.TimeSeriesView(name=f"{node_id}: {top.strip('/')}", origin="/", contents=[f"+ {top}/**"])
+            for top in _output_subtrees([p for p in node.series if p not in logged], node_id)
+        ]
         views += [rrb.Spatial2DView(name=f"{node_id}: {path.rsplit('/', 1)[-1]}", origin=path) for path in node.images]
-        views += [rrb.TextDocumentView(name=f"{node_id}: {path.rsplit('/', 1)[-1]}", origin=path)
-                  for path in node.texts]
+        views += [
+            rrb.TextDocumentView(name=f"{node_id}: {path.rsplit('/', 1)[-1]}", origin=path) for path in node.texts
+        ]
         if views:
             families.setdefault(node_family(recipe.nodes[node_id].spec.module), []).extend(views)
     tabs = []
     last_3d = next((node_id for node_id in reversed(order) if logs[node_id].outputs_3d), None)
     result = []
     if last_3d is not None:
-        result.append(rrb.Spatial3DView(name=f"final scene ({last_3d})", origin="/", contents=[
-            f"+ {top}/**" for top in _output_subtrees(logs[last_3d].outputs_3d, last_3d)]))
-    result += [rrb.Spatial2DView(name=path.strip("/"), origin=path) for node_id in order
-               for path in logs[node_id].images if LOG not in path.split("/")]
+        result.append(
+            rrb.Spatial3DView(
+                name=f"final scene ({last_3d})",
+                origin="/",
+                contents=[f"+ {top}/**" for top in _output_subtrees(logs[last_3d].outputs_3d, last_3d)],
+            )
+        )
+    result += [
+        rrb.Spatial2DView(name=path.strip("/"), origin=path)
+        for node_id in order
+        for path in logs[node_id].images
+        if LOG not in path.split("/")
+    ]
     if result:
         tabs.append(rrb.Horizontal(*result, name="result"))
     tabs += [rrb.Grid(*views, name=family) for family, views in families.items()]

@@ -32,8 +32,10 @@ ENV_VAR = "NODEGRAPH_CACHE"
 
 
 MARKER = "CACHEDIR.TAG"
-MARKER_TEXT = (b"Signature: 8a477f597d28d172789f06886806bc55\n"
-               b"# This directory is a nodegraph cache: `nodegraph cache clear` empties it.\n")
+MARKER_TEXT = (
+    b"Signature: 8a477f597d28d172789f06886806bc55\n"
+    b"# This directory is a nodegraph cache: `nodegraph cache clear` empties it.\n"
+)
 _UMASK = os.umask(0)
 os.umask(_UMASK)
 
@@ -51,8 +53,11 @@ def check_writable(directory: Path, what: str, fix: str) -> None:
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        reason = "a file is in the way" if isinstance(exc, (FileExistsError, NotADirectoryError)) else \
-            (exc.strerror or str(exc)).lower()
+        reason = (
+            "a file is in the way"
+            if isinstance(exc, (FileExistsError, NotADirectoryError))
+            else (exc.strerror or str(exc)).lower()
+        )
         raise NodegraphError(f"cannot write the {what} at {directory}: {reason}; {fix}") from None
 
 
@@ -115,7 +120,11 @@ class Cache:
             raise
         except (OSError, ValueError) as exc:
             raise CacheCorruption(f"entry {path} is unreadable: {exc}") from None
-        if not isinstance(manifest, dict) or manifest.get("key") != key or not isinstance(manifest.get("outputs"), dict):
+        if (
+            not isinstance(manifest, dict)
+            or manifest.get("key") != key
+            or not isinstance(manifest.get("outputs"), dict)
+        ):
             raise CacheCorruption(f"entry {path} is malformed")
         return manifest
 
@@ -187,8 +196,10 @@ class Cache:
         if not self.directory.is_dir():
             raise NodegraphError(f"{self.directory} is a file, not a cache directory; nothing removed")
         if not self.is_cache():
-            raise NodegraphError(f"{self.directory} is not a nodegraph cache (it has no {MARKER} written by nodegraph); "
-                                 "nothing removed. Give --cache-dir the cache directory itself")
+            raise NodegraphError(
+                f"{self.directory} is not a nodegraph cache (it has no {MARKER} written by nodegraph); "
+                "nothing removed. Give --cache-dir the cache directory itself"
+            )
         failed = []
         for part in ("entries", "blobs", "checkpoints", MARKER):
             target = self.directory / part
@@ -201,8 +212,10 @@ class Cache:
                 failed.append((target, exc))
         if failed:
             path, exc = failed[0]
-            raise NodegraphError(f"cannot remove {path}: {getattr(exc, 'strerror', None) or exc} "
-                                 f"({len(failed)} path(s) left; is the directory read-only?)")
+            raise NodegraphError(
+                f"cannot remove {path}: {getattr(exc, 'strerror', None) or exc} "
+                f"({len(failed)} path(s) left; is the directory read-only?)"
+            )
         try:
             self.directory.rmdir()  # only if empty: a user's files put beside the cache stay
         except OSError:

@@ -22,10 +22,16 @@ from .rerun_log import has_display
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--plugin", action="append", default=[], metavar="PATH.py",
-                        help="load node types from a Python file (repeatable)")
-    parser.add_argument("--cache-dir", type=Path, default=None,
-                        help="cache directory (default: $NODEGRAPH_CACHE or .nodegraph/cache)")
+    parser.add_argument(
+        "--plugin",
+        action="append",
+        default=[],
+        metavar="PATH.py",
+        help="load node types from a Python file (repeatable)",
+    )
+    parser.add_argument(
+        "--cache-dir", type=Path, default=None, help="cache directory (default: $NODEGRAPH_CACHE or .nodegraph/cache)"
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,18 +40,37 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = sub.add_parser("run", help="run a recipe and write its outputs")
     run.add_argument("recipe", type=Path)
-    run.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE",
-                     help="override a parameter (repeatable); also seed=N, NODE.variants=N, NODE.seed=N")
-    run.add_argument("--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]",
-                     help="compute only this output and what it needs (repeatable)")
+    run.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="NODE.PARAM=VALUE",
+        help="override a parameter (repeatable); also seed=N, NODE.variants=N, NODE.seed=N",
+    )
+    run.add_argument(
+        "--output",
+        dest="outputs",
+        action="append",
+        default=[],
+        metavar="NODE[.PORT]",
+        help="compute only this output and what it needs (repeatable)",
+    )
     run.add_argument("--no-cache", action="store_true", help="neither read nor write the cache")
-    run.add_argument("--rrd", type=Path, default=None, help="Rerun recording path (default outputs/<recipe>/<recipe>.rrd)")
+    run.add_argument(
+        "--rrd", type=Path, default=None, help="Rerun recording path (default outputs/<recipe>/<recipe>.rrd)"
+    )
     run.add_argument("--no-rrd", action="store_true", help="do not record to Rerun")
     run.add_argument("--spawn", action="store_true", help="also stream to a Rerun viewer")
     run.add_argument("--out-dir", type=Path, default=None, help="where outputs go (default outputs/<recipe>)")
     run.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
-    run.add_argument("--max-minutes", type=float, default=10.0, metavar="M",
-                     help="a node whose own estimate is longer than this refuses to start (default 10)")
+    run.add_argument(
+        "--max-minutes",
+        type=float,
+        default=10.0,
+        metavar="M",
+        help="a node whose own estimate is longer than this refuses to start (default 10)",
+    )
     run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
     _common(run)
 
@@ -81,8 +106,9 @@ def build_parser() -> argparse.ArgumentParser:
 def _cmd_run(args, registry) -> int:
     if args.no_rrd and (args.spawn or args.rrd):
         given = " and ".join(f for f, on in (("--spawn", args.spawn), ("--rrd", args.rrd)) if on)
-        raise NodegraphError(f"--no-rrd contradicts {given}: a viewer and a recording file both need the "
-                             "recording; drop one of them")
+        raise NodegraphError(
+            f"--no-rrd contradicts {given}: a viewer and a recording file both need the recording; drop one of them"
+        )
     recipe = load_recipe(args.recipe, registry, args.overrides)
     out_dir = args.out_dir or Path("outputs") / recipe.name
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
@@ -96,12 +122,22 @@ def _cmd_run(args, registry) -> int:
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
     spawn = args.spawn
     if spawn and not has_display():  # said before anything is computed
-        reporter.warn(f"--spawn: no display (DISPLAY and WAYLAND_DISPLAY are unset), so no viewer opens; the "
-                      f"recording is written to {rrd} (open it later with: rerun {rrd})")
+        reporter.warn(
+            f"--spawn: no display (DISPLAY and WAYLAND_DISPLAY are unset), so no viewer opens; the "
+            f"recording is written to {rrd} (open it later with: rerun {rrd})"
+        )
         spawn = False
     try:
-        result = run_recipe(recipe, outputs=args.outputs or None, cache=cache, out_dir=out_dir, rrd=rrd,
-                            spawn=spawn, reporter=reporter, max_seconds=None if args.yes else 60 * args.max_minutes)
+        result = run_recipe(
+            recipe,
+            outputs=args.outputs or None,
+            cache=cache,
+            out_dir=out_dir,
+            rrd=rrd,
+            spawn=spawn,
+            reporter=reporter,
+            max_seconds=None if args.yes else 60 * args.max_minutes,
+        )
     except (NodeFailure, KeyboardInterrupt):
         reporter.print_summary()
         raise
@@ -117,8 +153,10 @@ def _cmd_run(args, registry) -> int:
 def _cmd_check(args, registry) -> int:
     recipe = load_recipe(args.recipe, registry, args.overrides)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())
-    print(f"{args.recipe}: OK — {len(recipe.nodes)} nodes ({instances} instances), "
-          f"outputs {', '.join(map(str, recipe.outputs))}, effects: {', '.join(sorted(recipe.effects)) or 'none'}")
+    print(
+        f"{args.recipe}: OK — {len(recipe.nodes)} nodes ({instances} instances), "
+        f"outputs {', '.join(map(str, recipe.outputs))}, effects: {', '.join(sorted(recipe.effects)) or 'none'}"
+    )
     return 0
 
 
@@ -148,8 +186,15 @@ def describe_spec(spec) -> str:
     lines += ["", "parameters:"] + ([] if spec.params else ["  (none)"])
     for name, param in spec.params.items():
         d = param.describe()
-        detail = "  ".join(x for x in (f"default {d['default']}", d["range"] and f"range {d['range']}",
-                                        d["units"] and f"units {d['units']}") if x)
+        detail = "  ".join(
+            x
+            for x in (
+                f"default {d['default']}",
+                d["range"] and f"range {d['range']}",
+                d["units"] and f"units {d['units']}",
+            )
+            if x
+        )
         lines.append(f"  {name:<16} {d['type']:<24} {detail}")
         if d["doc"]:
             lines.append(f"  {'':<16} {d['doc']}")
@@ -180,8 +225,10 @@ def markdown_reference(registry) -> str:
         for title, ports in (("Inputs", spec.inputs), ("Outputs", spec.outputs)):
             if ports:
                 lines += [f"**{title}**", ""]
-                lines += [f"- `{n}`: {p.type_name}{' (optional)' if getattr(p, 'optional', False) else ''}"
-                          f" — {p.doc}" for n, p in ports.items()]
+                lines += [
+                    f"- `{n}`: {p.type_name}{' (optional)' if getattr(p, 'optional', False) else ''} — {p.doc}"
+                    for n, p in ports.items()
+                ]
                 lines.append("")
         if spec.params:
             lines += ["| parameter | type | default | range | units | doc |", "|---|---|---|---|---|---|"]
@@ -251,8 +298,10 @@ def _cmd_cache(args, registry) -> int:
             return 0
         if cache.directory.is_dir() and cache.is_cache() and not args.yes and sys.stdin.isatty():
             info = cache.info()
-            answer = input(f"remove {info.entries} entries and {info.blobs} blobs ({info.bytes / 2**20:.1f} MiB) "
-                           f"from {cache.directory}? [y/N] ")
+            answer = input(
+                f"remove {info.entries} entries and {info.blobs} blobs ({info.bytes / 2**20:.1f} MiB) "
+                f"from {cache.directory}? [y/N] "
+            )
             if answer.strip().lower() not in ("y", "yes"):
                 print("nothing removed")
                 return 1
@@ -268,8 +317,15 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
-COMMANDS = {"run": _cmd_run, "check": _cmd_check, "nodes": _cmd_nodes, "describe": _cmd_describe,
-            "graph": _cmd_graph, "cache": _cmd_cache, "docs": _cmd_docs}
+COMMANDS = {
+    "run": _cmd_run,
+    "check": _cmd_check,
+    "nodes": _cmd_nodes,
+    "describe": _cmd_describe,
+    "graph": _cmd_graph,
+    "cache": _cmd_cache,
+    "docs": _cmd_docs,
+}
 
 
 def main(argv: list[str] | None = None) -> int:

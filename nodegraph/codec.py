@@ -155,8 +155,9 @@ def thaw(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return value.copy()
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return dataclasses.replace(value, **{f.name: thaw(getattr(value, f.name)) for f in dataclasses.fields(value)
-                                             if f.init})
+        return dataclasses.replace(
+            value, **{f.name: thaw(getattr(value, f.name)) for f in dataclasses.fields(value) if f.init}
+        )
     if isinstance(value, tuple):
         return tuple(thaw(v) for v in value)
     if isinstance(value, list):

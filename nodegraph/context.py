@@ -135,7 +135,8 @@ class Context:
             raise CostLimitExceeded(
                 f"{what} would take ≈ {format_seconds(seconds)}, over this run's limit of "
                 f"{format_seconds(self.max_seconds)}: run again with --yes to go ahead (or --max-minutes N); "
-                "the nodes before it are cached")
+                "the nodes before it are cached"
+            )
         if seconds >= 10.0 and self.reporter is not None:
             self.reporter.info(f"{label}: {what}, ≈ {format_seconds(seconds)} expected")
 

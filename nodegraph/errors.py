@@ -77,8 +77,14 @@ class NodeDeclarationError(NodegraphError):
 class NodeFailure(NodegraphError):
     """A node raised while running; names the node id, its type and the cause."""
 
-    def __init__(self, node_id: str, node_type: str, cause: BaseException, variant: int | None = None,
-                 location: Location | None = None):
+    def __init__(
+        self,
+        node_id: str,
+        node_type: str,
+        cause: BaseException,
+        variant: int | None = None,
+        location: Location | None = None,
+    ):
         self.node_id = node_id
         self.node_type = node_type
         self.cause = cause
@@ -86,8 +92,10 @@ class NodeFailure(NodegraphError):
         self.location = location
         label = node_id if variant is None else f"{node_id}[{variant}]"
         where = f"{location}: " if location is not None else ""
-        super().__init__(f"{where}node '{label}' (type {node_type}) failed: {type(cause).__name__}: {cause}"
-                         + compiled_cache_hint(cause))
+        super().__init__(
+            f"{where}node '{label}' (type {node_type}) failed: {type(cause).__name__}: {cause}"
+            + compiled_cache_hint(cause)
+        )
 
 
 def compiled_cache_hint(cause: BaseException) -> str:
@@ -99,8 +107,7 @@ def compiled_cache_hint(cause: BaseException) -> str:
         frames = traceback.extract_tb(cause.__traceback__)
         if isinstance(cause, (EOFError, pickle.UnpicklingError)) and any("numba" in f.filename for f in frames):
             directory = os.environ.get("NUMBA_CACHE_DIR", "numba's cache directory")
-            return (f" — numba's compiled-kernel cache looks damaged: remove {directory} (it is rebuilt on the "
-                    "next run)")
+            return f" — numba's compiled-kernel cache looks damaged: remove {directory} (it is rebuilt on the next run)"
         cause = cause.__cause__ or cause.__context__
     return ""
 

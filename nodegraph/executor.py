@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import hashlib
 import json
-from datetime import datetime, timezone
 from dataclasses import dataclass, field
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 from . import __version__, codec
+from .blueprint import LOG, build_blueprint
 from .cache import Cache
 from .checkpoint import Checkpoint
 from .context import Context, EntityLogger
@@ -24,7 +25,6 @@ from .output_files import MANIFEST, write_manifest, write_output
 from .params import canonical
 from .recipe import NodeEntry, Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
-from .blueprint import LOG, build_blueprint
 from .rerun_log import RunRecording, log_value
 
 CACHE_FORMAT = 2  # 2: the domain value types moved from nodegraph.values to nodes.values (stored type names)
@@ -90,8 +90,14 @@ class RunResult:
 class Executor:
     """Runs one recipe against one cache, logging to one recording."""
 
-    def __init__(self, recipe: Recipe, cache: Cache | None = None, reporter: Reporter | None = None,
-                 recording: RunRecording | None = None, max_seconds: float | None = None):
+    def __init__(
+        self,
+        recipe: Recipe,
+        cache: Cache | None = None,
+        reporter: Reporter | None = None,
+        recording: RunRecording | None = None,
+        max_seconds: float | None = None,
+    ):
         self.recipe = recipe
         self.max_seconds = max_seconds
         self.cache = cache
@@ -138,8 +144,10 @@ class Executor:
                     "type": entry.spec.type_name,
                     "version": entry.spec.version,
                     "params": canonical(entry.params),
-                    "inputs": {port: [[self.keys[src], out] for src, out in pairs]
-                               for port, pairs in sorted(self._sources(entry, inst.variant).items())},
+                    "inputs": {
+                        port: [[self.keys[src], out] for src, out in pairs]
+                        for port, pairs in sorted(self._sources(entry, inst.variant).items())
+                    },
                     "seed": self._seed(entry, inst.variant),
                     "effects": sorted(entry.spec.effects & self.recipe.effects),
                 }
@@ -167,8 +175,9 @@ class Executor:
                     if inst in self.status:
                         continue
                     if self.keys[inst] in self.hits and self.recording is None and inst.node not in output_nodes:
-                        self.status[inst] = NodeRecord(inst.label, self.recipe.nodes[inst.node].spec.type_name,
-                                                       "cached")
+                        self.status[inst] = NodeRecord(
+                            inst.label, self.recipe.nodes[inst.node].spec.type_name, "cached"
+                        )
                         continue
                     self.materialise(inst)
                     if self.recording is not None:
@@ -292,9 +301,17 @@ class Executor:
         return written
 
 
-def run_recipe(recipe: Recipe, *, outputs: list[str] | None = None, cache: Cache | None = None,
-               out_dir: Path | None = None, rrd: Path | None = None, spawn: bool = False,
-               reporter: Reporter | None = None, max_seconds: float | None = None) -> RunResult:
+def run_recipe(
+    recipe: Recipe,
+    *,
+    outputs: list[str] | None = None,
+    cache: Cache | None = None,
+    out_dir: Path | None = None,
+    rrd: Path | None = None,
+    spawn: bool = False,
+    reporter: Reporter | None = None,
+    max_seconds: float | None = None,
+) -> RunResult:
     """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``; a node
     that expects to run longer than ``max_seconds`` refuses to start (``Context.expect_cost``).
 
@@ -307,23 +324,40 @@ def run_recipe(recipe: Recipe, *, outputs: list[str] | None = None, cache: Cache
     recording = None
     if rrd is not None:
         digest = recipe.digest()
-        recording = RunRecording(rrd, recording_name(recipe), spawn=spawn, warn=warn,
-                                 recording_id=f"{recipe.name}-{digest[:16]}")
+        recording = RunRecording(
+            rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=f"{recipe.name}-{digest[:16]}"
+        )
     executor = Executor(recipe, cache, reporter, recording, max_seconds)
     ok = False
     try:
         result = executor.run(wires)
         if out_dir is not None:
             executor.write_outputs(result, wires, out_dir)
-            others = sorted(p.name for p in out_dir.iterdir() if p.is_file() and p not in result.files
-                            and p.name != MANIFEST and not p.name.endswith(".rrd"))
-            write_manifest(out_dir, result.files, {
-                "recipe": recipe.name, "recipe_file": recipe.path, "digest": recipe.digest(), "seed": recipe.seed,
-                "overrides": list(recipe.overrides), "outputs": [str(w) for w in wires], "engine": __version__,
-                "written": datetime.now(timezone.utc).isoformat(timespec="seconds")})
+            others = sorted(
+                p.name
+                for p in out_dir.iterdir()
+                if p.is_file() and p not in result.files and p.name != MANIFEST and not p.name.endswith(".rrd")
+            )
+            write_manifest(
+                out_dir,
+                result.files,
+                {
+                    "recipe": recipe.name,
+                    "recipe_file": recipe.path,
+                    "digest": recipe.digest(),
+                    "seed": recipe.seed,
+                    "overrides": list(recipe.overrides),
+                    "outputs": [str(w) for w in wires],
+                    "engine": __version__,
+                    "written": datetime.now(UTC).isoformat(timespec="seconds"),
+                },
+            )
             if others and warn is not None:
-                warn(f"{len(others)} other file(s) in {out_dir} are not from this run (see {MANIFEST}): "
-                     + ", ".join(others[:5]) + (" …" if len(others) > 5 else ""))
+                warn(
+                    f"{len(others)} other file(s) in {out_dir} are not from this run (see {MANIFEST}): "
+                    + ", ".join(others[:5])
+                    + (" …" if len(others) > 5 else "")
+                )
         ok = True
     finally:
         if recording is not None:
@@ -348,11 +382,13 @@ def resolve_outputs(recipe: Recipe, refs: list[str]) -> list[Wire]:
         node_id, _, port = ref.partition(".")
         entry = recipe.nodes.get(node_id)
         if entry is None:
-            raise NodegraphError(f"--output {ref}: no node '{node_id}' in recipe {recipe.path}; "
-                                 f"nodes: {', '.join(sorted(recipe.nodes))}")
+            raise NodegraphError(
+                f"--output {ref}: no node '{node_id}' in recipe {recipe.path}; nodes: {', '.join(sorted(recipe.nodes))}"
+            )
         if port and port not in entry.spec.outputs:
-            raise NodegraphError(f"--output {ref}: node '{node_id}' has no output '{port}'; "
-                                 f"outputs: {', '.join(entry.spec.outputs)}")
+            raise NodegraphError(
+                f"--output {ref}: node '{node_id}' has no output '{port}'; outputs: {', '.join(entry.spec.outputs)}"
+            )
         wires += [Wire(node_id, p) for p in ([port] if port else entry.spec.outputs)]
     return wires
 

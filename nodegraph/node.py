@@ -87,21 +87,27 @@ class NodeSpec:
         where = f"node type '{self.type_name}'"
         unknown = sorted(set(given) - set(self.inputs) - set(self.params))
         if unknown:
-            raise TypeError(f"{where} has no input or parameter {unknown}; inputs: {sorted(self.inputs)}, "
-                            f"parameters: {sorted(self.params)}")
+            raise TypeError(
+                f"{where} has no input or parameter {unknown}; inputs: {sorted(self.inputs)}, "
+                f"parameters: {sorted(self.params)}"
+            )
         missing = [name for name, port in self.inputs.items() if not port.optional and name not in given]
         missing += [name for name, param in self.params.items() if param.required and name not in given]
         if missing:
             raise TypeError(f"{where} needs {missing}")
         effects = frozenset(effects)
         if not effects <= self.effects:
-            raise ValueError(f"{where} does not implement the effects {sorted(effects - self.effects)}; "
-                             f"it implements {sorted(self.effects)}")
+            raise ValueError(
+                f"{where} does not implement the effects {sorted(effects - self.effects)}; "
+                f"it implements {sorted(self.effects)}"
+            )
         params = self.resolve_params({name: value for name, value in given.items() if name in self.params})
         problems = self.check(dict(params)) if self.check is not None else []
         if problems:
-            raise ParamValueError(f"{where}: " + "; ".join(f"{name}: {message}" for name, message in problems),
-                                  f"see `nodegraph describe {self.type_name}`")
+            raise ParamValueError(
+                f"{where}: " + "; ".join(f"{name}: {message}" for name, message in problems),
+                f"see `nodegraph describe {self.type_name}`",
+            )
         inputs = {name: given.get(name, [] if port.many else None) for name, port in self.inputs.items()}
         ctx = Context.standalone(node_type=self.type_name, seed=seed if self.random else None, effects=effects)
         return self.run(ctx, **inputs, **params)
@@ -147,8 +153,10 @@ def node(
             raise NodeDeclarationError(f"{type_name}: names used both as input and parameter: {sorted(clash)}")
         reserved = (set(inputs) | set(params)) & CALL_ARGUMENTS
         if reserved:
-            raise NodeDeclarationError(f"{type_name}: {sorted(reserved)} cannot name an input or parameter "
-                                       "(the seed and the effects come from the recipe, in ctx)")
+            raise NodeDeclarationError(
+                f"{type_name}: {sorted(reserved)} cannot name an input or parameter "
+                "(the seed and the effects come from the recipe, in ctx)"
+            )
         if not outputs:
             raise NodeDeclarationError(f"{type_name}: a node needs at least one output port")
         signature = inspect.signature(fn)

@@ -9,10 +9,10 @@ registers its own types (the built-in ones: ``nodes.output_writers``). Every wri
 from __future__ import annotations
 
 import csv
-import hashlib
-import json
 import dataclasses
+import hashlib
 import io
+import json
 import zipfile
 from functools import singledispatch
 from pathlib import Path

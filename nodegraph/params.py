@@ -8,9 +8,9 @@ range and units in the message, not a pydantic error code.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from dataclasses import dataclass
 from functools import cached_property
+from pathlib import Path
 from typing import Any, get_args, get_origin
 
 from pydantic import TypeAdapter, ValidationError
@@ -138,8 +138,9 @@ class Param:
                 path = base / path
                 coerced = str(path)
             if not path.is_file():
-                raise ParamValueError(f"no such file: {path}",
-                                      f"an existing file (a relative path is taken from {base or Path.cwd()})")
+                raise ParamValueError(
+                    f"no such file: {path}", f"an existing file (a relative path is taken from {base or Path.cwd()})"
+                )
         return coerced
 
     def describe(self) -> dict[str, str]:

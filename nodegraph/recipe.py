@@ -95,11 +95,25 @@ class Recipe:
     def digest(self) -> str:
         """sha256 of what the recipe computes (name, seed, effects, outputs, every node's type, parameters,
         variants and wires): two settings of one recipe differ, one setting run twice does not."""
-        nodes = {node_id: {"type": e.spec.type_name, "params": canonical(e.params), "family": e.family,
-                           "inputs": {port: [str(w) for w in wires] for port, wires in sorted(e.inputs.items())}}
-                 for node_id, e in sorted(self.nodes.items())}
-        text = json.dumps({"name": self.name, "seed": self.seed, "effects": sorted(self.effects),
-                           "outputs": [str(w) for w in self.outputs], "nodes": nodes}, sort_keys=True)
+        nodes = {
+            node_id: {
+                "type": e.spec.type_name,
+                "params": canonical(e.params),
+                "family": e.family,
+                "inputs": {port: [str(w) for w in wires] for port, wires in sorted(e.inputs.items())},
+            }
+            for node_id, e in sorted(self.nodes.items())
+        }
+        text = json.dumps(
+            {
+                "name": self.name,
+                "seed": self.seed,
+                "effects": sorted(self.effects),
+                "outputs": [str(w) for w in self.outputs],
+                "nodes": nodes,
+            },
+            sort_keys=True,
+        )
         return hashlib.sha256(text.encode()).hexdigest()
 
     def upstream(self, node_ids) -> set[str]:
@@ -158,17 +172,28 @@ class _Validator:
             err = errors[0]
             field_name = str(loc[-1]) if len(loc) > len(base) else None
             if err["type"] == "extra_forbidden":
-                self.issue(loc, f"unknown key '{field_name}'", key=True, node=node,
-                           allowed=", ".join(model.model_fields), suggestion=_nearest(field_name, model.model_fields))
+                self.issue(
+                    loc,
+                    f"unknown key '{field_name}'",
+                    key=True,
+                    node=node,
+                    allowed=", ".join(model.model_fields),
+                    suggestion=_nearest(field_name, model.model_fields),
+                )
             elif err["type"] == "missing":
                 self.issue(loc[:-1], f"missing required key '{field_name}'", node=node)
             else:
                 given = err.get("input")
                 tags = [str(e["loc"][-1]) for e in errors if e["loc"]]
                 message = err["msg"] if len(errors) == 1 else "not a valid value"
-                self.issue(loc, message, node=node, param=field_name,
-                           given=given if not isinstance(given, (dict, list)) else None,
-                           allowed=" or ".join(tags) if len(errors) > 1 else None)
+                self.issue(
+                    loc,
+                    message,
+                    node=node,
+                    param=field_name,
+                    given=given if not isinstance(given, (dict, list)) else None,
+                    allowed=" or ".join(tags) if len(errors) > 1 else None,
+                )
 
     def _data_path(self, base: tuple, loc: tuple) -> tuple:
         """The part of a pydantic location that addresses the recipe data (drops union-member tags)."""
@@ -205,8 +230,9 @@ class _Validator:
                 continue
             node_id, key = target
             if node_id not in nodes:
-                self.issues.append(Issue(where, f"no node '{node_id}' in the recipe", given=text,
-                                         suggestion=_nearest(node_id, nodes)))
+                self.issues.append(
+                    Issue(where, f"no node '{node_id}' in the recipe", given=text, suggestion=_nearest(node_id, nodes))
+                )
                 continue
             entry = nodes[node_id]
             if not isinstance(entry, dict):
@@ -237,14 +263,22 @@ class _Validator:
         for node_id, body in raw_nodes.items():
             path = ("nodes", node_id)
             if not isinstance(node_id, str) or not NODE_ID.match(node_id):
-                self.issue(path, f"invalid node id '{node_id}'", key=True,
-                           allowed="letters, digits and _ (not starting with a digit)")
+                self.issue(
+                    path,
+                    f"invalid node id '{node_id}'",
+                    key=True,
+                    allowed="letters, digits and _ (not starting with a digit)",
+                )
                 continue
             if body is not None and not isinstance(body, dict):
                 hint = f" (for a node type, write '{node_id}: {{type: {body}}}')" if isinstance(body, str) else ""
-                self.issue(path, f"a node must be a mapping (type, params, inputs, variants), not a "
-                           f"{type(body).__name__}{hint}", node=node_id,
-                           given=body if not isinstance(body, list) else None, allowed="a mapping with at least 'type'")
+                self.issue(
+                    path,
+                    f"a node must be a mapping (type, params, inputs, variants), not a {type(body).__name__}{hint}",
+                    node=node_id,
+                    given=body if not isinstance(body, list) else None,
+                    allowed="a mapping with at least 'type'",
+                )
                 continue
             try:
                 node_model = NodeModel.model_validate(body if body is not None else {})
@@ -264,30 +298,52 @@ class _Validator:
         outputs = self._check_outputs(model.outputs if model else [], entries, raw_nodes)
         effects = self._check_effects(model.effects if model else [], entries)
         if model is not None and model.name is not None and not RECIPE_NAME.match(model.name):
-            self.issue(("name",), "the recipe name names its output folder and recording, so it must be a plain name",
-                       param="name", given=model.name,
-                       allowed="letters, digits, _, - and . (not starting with '.'; no '/', '\\' or '..')")
+            self.issue(
+                ("name",),
+                "the recipe name names its output folder and recording, so it must be a plain name",
+                param="name",
+                given=model.name,
+                allowed="letters, digits, _, - and . (not starting with '.'; no '/', '\\' or '..')",
+            )
         if self.issues or model is None:
             return None
         name = model.name or self.name or Path(self.source.file).stem
-        return Recipe(name=name, path=self.source.file, seed=model.seed, effects=effects, outputs=outputs,
-                      nodes=entries, source=self.source, graph=graph, overrides=tuple(self.overrides))
+        return Recipe(
+            name=name,
+            path=self.source.file,
+            seed=model.seed,
+            effects=effects,
+            outputs=outputs,
+            nodes=entries,
+            source=self.source,
+            graph=graph,
+            overrides=tuple(self.overrides),
+        )
 
     def _node(self, node_id: str, model: NodeModel, path: tuple, wire_sources) -> NodeEntry | None:
         spec = self.registry.get(model.type)
         if spec is None:
-            self.issue(path + ("type",), f"unknown node type '{model.type}'", node=node_id,
-                       suggestion=_nearest(model.type, self.registry.names()),
-                       allowed="see `nodegraph nodes`")
+            self.issue(
+                path + ("type",),
+                f"unknown node type '{model.type}'",
+                node=node_id,
+                suggestion=_nearest(model.type, self.registry.names()),
+                allowed="see `nodegraph nodes`",
+            )
             return None
         params: dict[str, Any] = {}
         ok = True
         for key, value in model.params.items():
             param = spec.params.get(key)
             if param is None:
-                self.issue(path + ("params", key), f"unknown parameter '{key}' for {spec.type_name}", key=True,
-                           node=node_id, allowed=", ".join(spec.params) or "(none)",
-                           suggestion=_nearest(key, spec.params))
+                self.issue(
+                    path + ("params", key),
+                    f"unknown parameter '{key}' for {spec.type_name}",
+                    key=True,
+                    node=node_id,
+                    allowed=", ".join(spec.params) or "(none)",
+                    suggestion=_nearest(key, spec.params),
+                )
                 ok = False
                 continue
             from_file = ("nodes", node_id, "params", key) not in self.override_at
@@ -296,22 +352,28 @@ class _Validator:
                 # runs from anywhere); one given with --set from the working directory, as a shell would
                 params[key] = param.validate(value, base=self.base_dir if from_file else None)
             except ParamValueError as exc:
-                self.issue(path + ("params", key), str(exc), node=node_id, param=key, given=value,
-                           allowed=exc.allowed)
+                self.issue(path + ("params", key), str(exc), node=node_id, param=key, given=value, allowed=exc.allowed)
                 ok = False
         for key, param in spec.params.items():
             if key not in params:
                 if param.required:
                     if key not in model.params:
-                        self.issue(path, f"missing required parameter '{key}'", key=True, node=node_id, param=key,
-                                   allowed=param.allowed())
+                        self.issue(
+                            path,
+                            f"missing required parameter '{key}'",
+                            key=True,
+                            node=node_id,
+                            param=key,
+                            allowed=param.allowed(),
+                        )
                     ok = False
                 else:
                     params[key] = param.default
         if ok and spec.check is not None:
             for param_name, message in spec.check(dict(params)):
-                self.issue(path + ("params", param_name), message, node=node_id, param=param_name,
-                           given=params.get(param_name))
+                self.issue(
+                    path + ("params", param_name), message, node=node_id, param=param_name, given=params.get(param_name)
+                )
                 ok = False
 
         inputs: dict[str, list[Wire]] = {}
@@ -319,14 +381,23 @@ class _Validator:
             port = spec.inputs.get(port_name)
             port_path = path + ("inputs", port_name)
             if port is None:
-                self.issue(port_path, f"unknown input port '{port_name}' for {spec.type_name}", key=True,
-                           node=node_id, allowed=", ".join(spec.inputs) or "(none)",
-                           suggestion=_nearest(port_name, spec.inputs))
+                self.issue(
+                    port_path,
+                    f"unknown input port '{port_name}' for {spec.type_name}",
+                    key=True,
+                    node=node_id,
+                    allowed=", ".join(spec.inputs) or "(none)",
+                    suggestion=_nearest(port_name, spec.inputs),
+                )
                 continue
             ref_list = refs if isinstance(refs, list) else [refs]
             if isinstance(refs, list) and not port.many:
-                self.issue(port_path, f"input '{port_name}' takes one wire, got a list of {len(refs)}",
-                           node=node_id, allowed="node.port")
+                self.issue(
+                    port_path,
+                    f"input '{port_name}' takes one wire, got a list of {len(refs)}",
+                    node=node_id,
+                    allowed="node.port",
+                )
                 continue
             wires = []
             for i, ref in enumerate(ref_list):
@@ -338,8 +409,13 @@ class _Validator:
             inputs[port_name] = wires
         for port_name, port in spec.inputs.items():
             if port_name not in inputs and not port.optional and port_name not in model.inputs:
-                self.issue(path, f"missing required input '{port_name}' ({port.type_name})", key=True, node=node_id,
-                           param=f"inputs.{port_name}")
+                self.issue(
+                    path,
+                    f"missing required input '{port_name}' ({port.type_name})",
+                    key=True,
+                    node=node_id,
+                    param=f"inputs.{port_name}",
+                )
         return NodeEntry(node_id, spec, params, inputs, model.variants, model.seed)
 
     def _resolve_port(self, wire: Wire, entries) -> str | None:
@@ -360,23 +436,40 @@ class _Validator:
                 if wire.node not in entries:
                     if wire.node in raw_nodes:
                         continue  # that node has its own issue already
-                    self.issue(path, f"input '{port_name}' refers to unknown node '{wire.node}'", node=node_id,
-                               given=str(wire) if wire.port else wire.node, suggestion=_nearest(wire.node, raw_nodes))
+                    self.issue(
+                        path,
+                        f"input '{port_name}' refers to unknown node '{wire.node}'",
+                        node=node_id,
+                        given=str(wire) if wire.port else wire.node,
+                        suggestion=_nearest(wire.node, raw_nodes),
+                    )
                     continue
                 source_spec = entries[wire.node].spec
                 port_ref = self._resolve_port(wire, entries)
                 if port_ref is None:
-                    what = f"'{wire.node}' has no output '{wire.port}'" if wire.port else \
-                        f"'{wire.node}' has several outputs; name one as {wire.node}.<port>"
-                    self.issue(path, what, node=node_id, param=f"inputs.{port_name}",
-                               allowed=", ".join(f"{wire.node}.{p}" for p in source_spec.outputs),
-                               suggestion=_nearest(wire.port, source_spec.outputs) if wire.port else None)
+                    what = (
+                        f"'{wire.node}' has no output '{wire.port}'"
+                        if wire.port
+                        else f"'{wire.node}' has several outputs; name one as {wire.node}.<port>"
+                    )
+                    self.issue(
+                        path,
+                        what,
+                        node=node_id,
+                        param=f"inputs.{port_name}",
+                        allowed=", ".join(f"{wire.node}.{p}" for p in source_spec.outputs),
+                        suggestion=_nearest(wire.port, source_spec.outputs) if wire.port else None,
+                    )
                     continue
                 out = source_spec.outputs[port_ref]
                 if not issubclass(out.type, port.type):
-                    self.issue(path, f"type mismatch: {wire.node}.{port_ref} gives {out.type_name}, "
-                               f"input '{port_name}' of {entry.spec.type_name} takes {port.type_name}",
-                               node=node_id, param=f"inputs.{port_name}")
+                    self.issue(
+                        path,
+                        f"type mismatch: {wire.node}.{port_ref} gives {out.type_name}, "
+                        f"input '{port_name}' of {entry.spec.type_name} takes {port.type_name}",
+                        node=node_id,
+                        param=f"inputs.{port_name}",
+                    )
                     continue
                 resolved.append(Wire(wire.node, port_ref))
                 graph.add_edge(wire.node, node_id)
@@ -407,8 +500,12 @@ class _Validator:
                 sizes.setdefault(entry.variants, "its own 'variants'")
             if len(sizes) > 1:
                 detail = ", ".join(f"{n} from {src}" for n, src in sorted(sizes.items()))
-                self.issue(("nodes", node_id), f"inputs come in variant families of different sizes ({detail})",
-                           key=True, node=node_id)
+                self.issue(
+                    ("nodes", node_id),
+                    f"inputs come in variant families of different sizes ({detail})",
+                    key=True,
+                    node=node_id,
+                )
             entry.family = min(sizes) if sizes else None
 
     def _check_outputs(self, outputs: list[str], entries, raw_nodes) -> list[Wire]:
@@ -419,8 +516,12 @@ class _Validator:
             path = ("outputs", i)
             if node_ref not in entries:
                 if node_ref not in raw_nodes:
-                    self.issue(path, f"output refers to unknown node '{node_ref}'", given=ref,
-                               suggestion=_nearest(node_ref, raw_nodes))
+                    self.issue(
+                        path,
+                        f"output refers to unknown node '{node_ref}'",
+                        given=ref,
+                        suggestion=_nearest(node_ref, raw_nodes),
+                    )
                 continue
             spec = entries[node_ref].spec
             if not port_ref:
@@ -428,9 +529,13 @@ class _Validator:
             elif port_ref in spec.outputs:
                 wires.append(Wire(node_ref, port_ref))
             else:
-                self.issue(path, f"'{node_ref}' has no output '{port_ref}'", given=ref,
-                           allowed=", ".join(f"{node_ref}.{p}" for p in spec.outputs),
-                           suggestion=_nearest(port_ref, spec.outputs))
+                self.issue(
+                    path,
+                    f"'{node_ref}' has no output '{port_ref}'",
+                    given=ref,
+                    allowed=", ".join(f"{node_ref}.{p}" for p in spec.outputs),
+                    suggestion=_nearest(port_ref, spec.outputs),
+                )
         return wires
 
     def _check_effects(self, effects: list[str], entries) -> frozenset[str]:
@@ -439,13 +544,21 @@ class _Validator:
         for i, effect in enumerate(effects):
             path = ("effects", i)
             if effect not in known:
-                self.issue(path, f"unknown effect '{effect}'", given=effect,
-                           allowed=", ".join(sorted(known)) or "(no node implements any effect)",
-                           suggestion=_nearest(effect, known))
+                self.issue(
+                    path,
+                    f"unknown effect '{effect}'",
+                    given=effect,
+                    allowed=", ".join(sorted(known)) or "(no node implements any effect)",
+                    suggestion=_nearest(effect, known),
+                )
             elif effect not in in_recipe:
                 implementers = sorted(s.type_name for s in self.registry.specs() if effect in s.effects)
-                self.issue(path, f"effect '{effect}' is asked for but no node in this recipe implements it",
-                           given=effect, allowed="add a node of type " + " or ".join(implementers))
+                self.issue(
+                    path,
+                    f"effect '{effect}' is asked for but no node in this recipe implements it",
+                    given=effect,
+                    allowed="add a node of type " + " or ".join(implementers),
+                )
         return frozenset(effects)
 
 
@@ -465,7 +578,14 @@ def _finish(raw, source, registry, overrides, name) -> Recipe:
     validator = _Validator(raw, source, registry, overrides, name)
     recipe = validator.build()
     if validator.issues or recipe is None:
-        issues = sorted(validator.issues, key=lambda i: (i.location.file != source.file, i.location.file,
-                                                         i.location.line or 0, i.location.column or 0))
+        issues = sorted(
+            validator.issues,
+            key=lambda i: (
+                i.location.file != source.file,
+                i.location.file,
+                i.location.line or 0,
+                i.location.column or 0,
+            ),
+        )
         raise RecipeError(issues or [Issue(source.at(()), "invalid recipe")])
     return recipe

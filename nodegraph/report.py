@@ -6,12 +6,11 @@ import contextlib
 import os
 import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Iterator
 
 from rich.console import Console
-from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn,
-                           TimeRemainingColumn)
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
 _PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
@@ -107,9 +106,16 @@ class Reporter:
             return
         owner = self._progress is None
         if owner:
-            self._progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                                      TimeElapsedColumn(), TextColumn("eta"), TimeRemainingColumn(),
-                                      console=self.console, transient=True)
+            self._progress = Progress(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TimeElapsedColumn(),
+                TextColumn("eta"),
+                TimeRemainingColumn(),
+                console=self.console,
+                transient=True,
+            )
             self._progress.start()
         progress = self._progress
         task_id = progress.add_task(description, total=total)
@@ -125,8 +131,13 @@ class Reporter:
         """One row per node (variant families folded into one row, times summed) or per instance."""
         table = Table(title="nodegraph run")
         logged = any(r.log_seconds is not None for r in self.records)
-        for column, justify in (("node", "left"), ("type", "left"), ("status", "left"), ("wall time", "right"),
-                                ("peak mem", "right")) + ((("rerun log", "right"),) if logged else ()):
+        for column, justify in (
+            ("node", "left"),
+            ("type", "left"),
+            ("status", "left"),
+            ("wall time", "right"),
+            ("peak mem", "right"),
+        ) + ((("rerun log", "right"),) if logged else ()):
             table.add_column(column, justify=justify)
         rows: dict[str, list[NodeRecord]] = {}
         for rec in self.records:
@@ -135,8 +146,10 @@ class Reporter:
             counts: dict[str, int] = {}
             for rec in records:
                 counts[rec.status] = counts.get(rec.status, 0) + 1
-            status = ", ".join(f"[{_COLOUR.get(s, 'yellow')}]{s}[/]" + (f" ×{n}" if len(records) > 1 else "")
-                               for s, n in counts.items())
+            status = ", ".join(
+                f"[{_COLOUR.get(s, 'yellow')}]{s}[/]" + (f" ×{n}" if len(records) > 1 else "")
+                for s, n in counts.items()
+            )
             peaks = [r.peak_bytes for r in records if r.peak_bytes is not None]
             mem = f"{max(peaks) / 2**20:.1f} MiB" if peaks else ""
             seconds = sum(r.seconds for r in records)

@@ -46,8 +46,9 @@ class RunRecording:
     are two recordings that a viewer shows side by side. ``spawn`` also streams to a viewer; a viewer
     that cannot start is reported through ``warn`` and the file is still written."""
 
-    def __init__(self, path: str | Path, recipe_name: str, spawn: bool = False, recording_id: str | None = None,
-                 warn=None):
+    def __init__(
+        self, path: str | Path, recipe_name: str, spawn: bool = False, recording_id: str | None = None, warn=None
+    ):
         rr = rerun_module()
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -112,9 +113,16 @@ def mesh_colors(mesh: Mesh):
 @log_value.register
 def _(value: Mesh, log: EntityLogger) -> None:
     rr = rerun_module()
-    log.log("", rr.Mesh3D(vertex_positions=value.vertices.astype(np.float32), triangle_indices=value.faces.astype(np.uint32),
-                          vertex_normals=None if value.normals is None else value.normals.astype(np.float32),
-                          vertex_colors=mesh_colors(value)), static=True)
+    log.log(
+        "",
+        rr.Mesh3D(
+            vertex_positions=value.vertices.astype(np.float32),
+            triangle_indices=value.faces.astype(np.uint32),
+            vertex_normals=None if value.normals is None else value.normals.astype(np.float32),
+            vertex_colors=mesh_colors(value),
+        ),
+        static=True,
+    )
 
 
 @log_value.register
@@ -135,5 +143,8 @@ def _(value: Table, log: EntityLogger) -> None:
     for name, column in value.columns.items():
         column = np.asarray(column)
         if column.dtype.kind in "fiu" and column.ndim == 1 and len(column):
-            log.send_columns(name, indexes=[rr.TimeColumn(value.index or "row", sequence=np.arange(len(column)))],
-                             columns=rr.Scalars.columns(scalars=column.astype(np.float64)))
+            log.send_columns(
+                name,
+                indexes=[rr.TimeColumn(value.index or "row", sequence=np.arange(len(column)))],
+                columns=rr.Scalars.columns(scalars=column.astype(np.float64)),
+            )

@@ -60,8 +60,13 @@ class Mesh:
 
     @classmethod
     def from_trimesh(cls, mesh, name: str = "", parts=None) -> Mesh:
-        return cls(np.asarray(mesh.vertices), np.asarray(mesh.faces),
-                   normals=np.asarray(mesh.vertex_normals), parts=parts, name=name)
+        return cls(
+            np.asarray(mesh.vertices),
+            np.asarray(mesh.faces),
+            normals=np.asarray(mesh.vertex_normals),
+            parts=parts,
+            name=name,
+        )
 
     def to_trimesh(self):
         import trimesh

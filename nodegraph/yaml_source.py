@@ -52,8 +52,14 @@ class _TooLarge(Exception):
         self.node = node
 
 
-def _convert(node: yaml.Node, path: PathKey, source: SourceMap, issues: list[Issue], budget: list[int],
-             open_nodes: frozenset[int] = frozenset()) -> Any:
+def _convert(
+    node: yaml.Node,
+    path: PathKey,
+    source: SourceMap,
+    issues: list[Issue],
+    budget: list[int],
+    open_nodes: frozenset[int] = frozenset(),
+) -> Any:
     """Plain values from YAML nodes, at most ``budget[0]`` of them (aliases are expanded here, so a
     "billion laughs" document stops at the budget), a node inside itself refused."""
     budget[0] -= 1
@@ -71,8 +77,12 @@ def _convert(node: yaml.Node, path: PathKey, source: SourceMap, issues: list[Iss
                 continue
             if key in result:
                 first = source.keys[path + (key,)]
-                issues.append(Issue(Location(source.file, *_mark(key_node)),
-                                    f"duplicate key '{key}' (first defined at line {first[0]})"))
+                issues.append(
+                    Issue(
+                        Location(source.file, *_mark(key_node)),
+                        f"duplicate key '{key}' (first defined at line {first[0]})",
+                    )
+                )
                 continue
             source.keys[path + (key,)] = _mark(key_node)
             result[key] = _convert(value_node, path + (key,), source, issues, budget, open_nodes)
@@ -103,8 +113,15 @@ def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     except yaml.reader.ReaderError as exc:  # a character YAML does not allow (e.g. a NUL byte)
         line = text.count("\n", 0, exc.position) + 1
         column = exc.position - (text.rfind("\n", 0, exc.position) + 1) + 1
-        raise RecipeError([Issue(Location(file, line, column), f"character {exc.character!r} is not allowed in "
-                                 "YAML", allowed="printable text")]) from None
+        raise RecipeError(
+            [
+                Issue(
+                    Location(file, line, column),
+                    f"character {exc.character!r} is not allowed in YAML",
+                    allowed="printable text",
+                )
+            ]
+        ) from None
     except yaml.YAMLError as exc:
         raise RecipeError([Issue(Location(file, 1, 1), f"YAML error: {exc}")]) from None
     if root is None:
@@ -113,10 +130,15 @@ def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     try:
         value = _convert(root, (), source, issues, [MAX_VALUES])
     except _TooLarge as exc:
-        raise RecipeError([Issue(Location(file, *_mark(exc.node)),
-                                 f"the document expands to more than {MAX_VALUES:,} values or contains itself "
-                                 "(YAML aliases?)", allowed="a recipe without recursive or exploding aliases")]
-                          ) from None
+        raise RecipeError(
+            [
+                Issue(
+                    Location(file, *_mark(exc.node)),
+                    f"the document expands to more than {MAX_VALUES:,} values or contains itself (YAML aliases?)",
+                    allowed="a recipe without recursive or exploding aliases",
+                )
+            ]
+        ) from None
     except (yaml.YAMLError, ValueError, TypeError, OverflowError) as exc:  # e.g. a malformed timestamp scalar
         raise RecipeError([Issue(Location(file, *_mark(root)), f"YAML value error: {exc}")]) from None
     if issues:
@@ -135,7 +157,13 @@ def load_yaml_file(path: str | Path) -> tuple[Any, SourceMap]:
     except UnicodeDecodeError as exc:
         line = data.count(b"\n", 0, exc.start) + 1
         column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
-        raise RecipeError([Issue(Location(str(path), line, column),
-                                 f"the recipe is not UTF-8 text (byte 0x{data[exc.start]:02x})",
-                                 allowed="a YAML text file in UTF-8")]) from None
+        raise RecipeError(
+            [
+                Issue(
+                    Location(str(path), line, column),
+                    f"the recipe is not UTF-8 text (byte 0x{data[exc.start]:02x})",
+                    allowed="a YAML text file in UTF-8",
+                )
+            ]
+        ) from None
     return load_yaml(text, str(path))

@@ -62,8 +62,11 @@ def _crossing_height(a, b, c, area2, px, py):
     w2 = _edge(a[0], a[1], b[0], b[1], px, py)
     if w0 < 0.0 or w1 < 0.0 or w2 < 0.0:
         return np.nan
-    if ((w0 == 0.0 and not _top_left(b[0], b[1], c[0], c[1])) or (w1 == 0.0 and not _top_left(c[0], c[1], a[0], a[1]))
-            or (w2 == 0.0 and not _top_left(a[0], a[1], b[0], b[1]))):
+    if (
+        (w0 == 0.0 and not _top_left(b[0], b[1], c[0], c[1]))
+        or (w1 == 0.0 and not _top_left(c[0], c[1], a[0], a[1]))
+        or (w2 == 0.0 and not _top_left(a[0], a[1], b[0], b[1]))
+    ):
         return np.nan
     return (w0 * a[2] + w1 * b[2] + w2 * c[2]) / area2
 
@@ -104,8 +107,9 @@ def inside_columns(vertices, faces, xs, ys, zs):
 def inside_cells(vertices, faces, h, shape):
     """Cells of a regular grid of spacing h whose centre (i, j, k)·h is inside; ``vertices`` relative to the
     grid origin (far-away elements lose no precision). Columns and crossings are taken in cell units."""
-    return inside_columns(vertices / h, faces, np.arange(shape[0]) * 1.0, np.arange(shape[1]) * 1.0,
-                          np.arange(shape[2]) * 1.0)
+    return inside_columns(
+        vertices / h, faces, np.arange(shape[0]) * 1.0, np.arange(shape[1]) * 1.0, np.arange(shape[2]) * 1.0
+    )
 
 
 @njit(cache=True)

@@ -27,8 +27,10 @@ def stl_problem(data: bytes) -> str | None:
         count = int.from_bytes(data[80:84], "little")
         if len(data) == STL_HEADER + STL_TRIANGLE * count:
             return None
-        return (f"not an STL file: not ASCII ('solid …') and not binary either (its header counts {count:,} "
-                f"triangles, which take {STL_HEADER + STL_TRIANGLE * count:,} bytes; the file has {len(data):,})")
+        return (
+            f"not an STL file: not ASCII ('solid …') and not binary either (its header counts {count:,} "
+            f"triangles, which take {STL_HEADER + STL_TRIANGLE * count:,} bytes; the file has {len(data):,})"
+        )
     return f"not an STL file: {len(data)} bytes is shorter than a binary STL header ({STL_HEADER} bytes)"
 
 
@@ -49,12 +51,16 @@ def read_mesh(path: str | Path, process: bool = True):
         loaded = trimesh.load(path, force="mesh", process=False)  # processing would drop non-finite vertices
     except Exception as exc:  # trimesh raises many types (and import errors of optional readers)
         fmt = path.suffix.lstrip(".").upper() or "a mesh"
-        raise ValueError(f"{path}: cannot be read as {fmt} ({type(exc).__name__}: {exc}); check that the file is "
-                         f"a complete {fmt} file, e.g. by opening it in a modeller") from exc
+        raise ValueError(
+            f"{path}: cannot be read as {fmt} ({type(exc).__name__}: {exc}); check that the file is "
+            f"a complete {fmt} file, e.g. by opening it in a modeller"
+        ) from exc
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"{path}: holds no triangles")
     bad = int((~np.isfinite(loaded.vertices)).any(axis=1).sum())
     if bad:
-        raise ValueError(f"{path}: {bad} vertices have NaN or infinite coordinates; no repair can place them: "
-                         "fix or re-export the mesh")
+        raise ValueError(
+            f"{path}: {bad} vertices have NaN or infinite coordinates; no repair can place them: "
+            "fix or re-export the mesh"
+        )
     return loaded.process() if process else loaded

@@ -21,8 +21,11 @@ def _glb(meshes: list[Mesh], names: list[str]) -> bytes:
     scene = trimesh.Scene()
     for mesh, name in zip(meshes, names):
         colors = None if mesh.colors is None else np.asarray(mesh.colors)
-        scene.add_geometry(trimesh.Trimesh(mesh.vertices, mesh.faces, vertex_colors=colors, process=False),
-                           node_name=name, geom_name=name)
+        scene.add_geometry(
+            trimesh.Trimesh(mesh.vertices, mesh.faces, vertex_colors=colors, process=False),
+            node_name=name,
+            geom_name=name,
+        )
     return trimesh.exchange.gltf.export_glb(scene)
 
 

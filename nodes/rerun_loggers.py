@@ -58,11 +58,17 @@ def _(value: Volume, log: EntityLogger) -> None:
 @log_value.register
 def _(value: Placement, log: EntityLogger) -> None:
     rr = rerun_module()
-    log.log("positions", rr.Points3D(value.positions.astype(np.float32), class_ids=value.kinds.astype(np.uint16)),
-            static=True)
+    log.log(
+        "positions",
+        rr.Points3D(value.positions.astype(np.float32), class_ids=value.kinds.astype(np.uint16)),
+        static=True,
+    )
     if len(value):
-        log.log("normals", rr.Arrows3D(origins=value.positions.astype(np.float32),
-                                       vectors=value.normals.astype(np.float32) * 0.5), static=True)
+        log.log(
+            "normals",
+            rr.Arrows3D(origins=value.positions.astype(np.float32), vectors=value.normals.astype(np.float32) * 0.5),
+            static=True,
+        )
 
 
 def elements_mesh3d(value: Aggregate):
@@ -70,7 +76,9 @@ def elements_mesh3d(value: Aggregate):
     mesh = value.combined_mesh()
     if mesh is None:
         return None
-    return rerun_module().Mesh3D(vertex_positions=mesh.vertices.astype(np.float32), triangle_indices=mesh.faces.astype(np.uint32))
+    return rerun_module().Mesh3D(
+        vertex_positions=mesh.vertices.astype(np.float32), triangle_indices=mesh.faces.astype(np.uint32)
+    )
 
 
 @log_value.register
@@ -83,8 +91,15 @@ def _(value: Aggregate, log: EntityLogger) -> None:
 @log_value.register
 def _(value: ParticleState, log: EntityLogger) -> None:
     rr = rerun_module()
-    log.log("", rr.Points3D(value.positions.astype(np.float32), radii=value.radii.astype(np.float32),
-                            class_ids=(value.element % 65535).astype(np.uint16)), static=True)
+    log.log(
+        "",
+        rr.Points3D(
+            value.positions.astype(np.float32),
+            radii=value.radii.astype(np.float32),
+            class_ids=(value.element % 65535).astype(np.uint16),
+        ),
+        static=True,
+    )
 
 
 def _entity_parts(name: str) -> list[str]:

@@ -58,4 +58,3 @@ def point_triangle_offset(px, py, pz, a, b, c):
     w = vc * denom
     qx, qy, qz = apx - abx * v - acx * w, apy - aby * v - acy * w, apz - abz * v - acz * w
     return qx, qy, qz
-

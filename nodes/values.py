@@ -126,8 +126,13 @@ class Placement:
         if rotations.shape != (n, 3, 3):
             raise ValueError(f"rotations: expected shape ({n}, 3, 3), got {rotations.shape}")
         object.__setattr__(self, "rotations", rotations)
-        defaults = {"kinds": np.zeros(n, np.int32), "variants": np.zeros(n, np.int32),
-                    "p_num": np.arange(n, dtype=np.int64), "offsets": np.zeros(n), "overlap": np.zeros(n)}
+        defaults = {
+            "kinds": np.zeros(n, np.int32),
+            "variants": np.zeros(n, np.int32),
+            "p_num": np.arange(n, dtype=np.int64),
+            "offsets": np.zeros(n),
+            "overlap": np.zeros(n),
+        }
         for name, default in defaults.items():
             value = getattr(self, name)
             value = default if value is None else np.asarray(value, dtype=default.dtype)
@@ -193,9 +198,20 @@ class Aggregate:
         linear = rotation if self.deformations is None else self.deformations[i] @ rotation
         x, y, z = local[:, 0], local[:, 1], local[:, 2]
         zero = np.zeros_like(x)
-        dm = np.stack([np.stack(row, axis=-1) for row in (
-            (2 * x, zero, zero), (zero, 2 * y, zero), (zero, zero, 2 * z), (y, x, zero), (zero, z, y),
-            (z, zero, x))], axis=1)  # (k, 6, 3)
+        dm = np.stack(
+            [
+                np.stack(row, axis=-1)
+                for row in (
+                    (2 * x, zero, zero),
+                    (zero, 2 * y, zero),
+                    (zero, zero, 2 * z),
+                    (y, x, zero),
+                    (zero, z, y),
+                    (z, zero, x),
+                )
+            ],
+            axis=1,
+        )  # (k, 6, 3)
         jac = linear + np.einsum("ij,jk,vkl->vil", rotation, self.bends[i], dm)
         a, b, c = jac[:, :, 0], jac[:, :, 1], jac[:, :, 2]
         cof = np.stack([np.cross(b, c), np.cross(c, a), np.cross(a, b)], axis=2)  # det(J)·J⁻ᵀ
@@ -208,8 +224,11 @@ class Aggregate:
         if not meshes:
             return None
         offsets = np.cumsum([0] + [len(m.vertices) for m in meshes[:-1]])
-        return Mesh(np.concatenate([m.vertices for m in meshes]),
-                    np.concatenate([m.faces + o for m, o in zip(meshes, offsets)]), name="aggregate")
+        return Mesh(
+            np.concatenate([m.vertices for m in meshes]),
+            np.concatenate([m.faces + o for m, o in zip(meshes, offsets)]),
+            name="aggregate",
+        )
 
 
 @dataclass(frozen=True, eq=False)

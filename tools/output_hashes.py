@@ -23,18 +23,51 @@ REPO = Path(__file__).resolve().parents[1]
 
 # The reduced sizes the tests run the recipes at (tests/*/test_recipe*.py), plus rice_bowl and onigiri.
 SMALL = {
-    "rice_grains": ["japonica_spheres.variants=3", "japonica_volume.resolution=24",
-                    "japonica_grain.target_faces=400", "indica_spheres.variants=2", "aromatic_spheres.variants=2",
-                    "indica_volume.resolution=24", "aromatic_volume.resolution=24"],
-    "ikura_don": ["rice_place.r=3.0", "rice_sim.frames=2", "egg_sim.frames=2", "egg_place.r=4.0",
-                  "grain_mesh.target_faces=200", "preview.width=64", "preview.height=48", "preview.samples=1"],
-    "rice_bowl": ["rice_place.r=3.0", "rice_sim.frames=2", "grain_mesh.target_faces=200", "preview.width=64",
-                  "preview.height=48", "preview.samples=1"],
-    "onigiri": ["onigiri.size=10.0", "press.frames=2", "grain_spheres.variants=2", "preview.width=64",
-                "preview.height=48", "preview.samples=1"],
+    "rice_grains": [
+        "japonica_spheres.variants=3",
+        "japonica_volume.resolution=24",
+        "japonica_grain.target_faces=400",
+        "indica_spheres.variants=2",
+        "aromatic_spheres.variants=2",
+        "indica_volume.resolution=24",
+        "aromatic_volume.resolution=24",
+    ],
+    "ikura_don": [
+        "rice_place.r=3.0",
+        "rice_sim.frames=2",
+        "egg_sim.frames=2",
+        "egg_place.r=4.0",
+        "grain_mesh.target_faces=200",
+        "preview.width=64",
+        "preview.height=48",
+        "preview.samples=1",
+    ],
+    "rice_bowl": [
+        "rice_place.r=3.0",
+        "rice_sim.frames=2",
+        "grain_mesh.target_faces=200",
+        "preview.width=64",
+        "preview.height=48",
+        "preview.samples=1",
+    ],
+    "onigiri": [
+        "onigiri.size=10.0",
+        "press.frames=2",
+        "grain_spheres.variants=2",
+        "preview.width=64",
+        "preview.height=48",
+        "preview.samples=1",
+    ],
     "pile_onigiri": ["grain_spheres.variants=2", "grain_volume.resolution=24", "onigiri.size=6.0"],
-    "rice_bunny": ["bunny.size=20.0", "grain_spheres.variants=2", "grain_volume.resolution=24", "press.frames=3",
-                   "preview.width=48", "preview.height=36", "preview.samples=1"],
+    "rice_bunny": [
+        "bunny.size=20.0",
+        "grain_spheres.variants=2",
+        "grain_volume.resolution=24",
+        "press.frames=3",
+        "preview.width=48",
+        "preview.height=36",
+        "preview.samples=1",
+    ],
 }
 
 
@@ -92,8 +125,9 @@ def main(argv=None) -> int:
     ap.add_argument("--compare", type=Path, help="a previous --json file: print the before/after table")
     ap.add_argument("--only", nargs="*", help="recipes to run (default: all)")
     args = ap.parse_args(argv)
-    hashes = {name: recipe_hashes(name, overrides) for name, overrides in SMALL.items()
-              if not args.only or name in args.only}
+    hashes = {
+        name: recipe_hashes(name, overrides) for name, overrides in SMALL.items() if not args.only or name in args.only
+    }
     if args.json:
         args.json.write_text(json.dumps(hashes, indent=1, sort_keys=True))
     before = json.loads(args.compare.read_text()) if args.compare else None

@@ -21,36 +21,70 @@ def _check(p: dict) -> list[tuple[str, str]]:
     return issues
 
 
-@node("base_mesh", version=1, outputs={"mesh": Out(Mesh, "closed outward element mesh, centred, long axis x, mm")},
-      params={
-          "shape": Param(str, "rice", "which base model", choices=SHAPES),
-          "variety": Param(str, "japonica", "rice variety preset: length factor (indica 1.8, japonica 1.0, "
-                           "aromatic 0.7) applied to size[0] (SPEC §1.1)", choices=VARIETIES),
-          "size": Param(tuple[float, float, float], None, "length, width, thickness before the variety factor; "
-                        "default rice 5×3×2 (a raw short grain), ice flake 4×3×0.4", range=(0.01, 1000.0),
-                        units="mm", nullable=True),
-          "bluntness": Param(float, 0.8, "rice: end shape exponent (1 = ellipsoid, smaller = blunter)",
-                             range=(0.3, 1.0)),
-          "bend": Param(float, 0.05, "rice: dorsal bend, y offset at the tips as a fraction of the width",
-                        range=(0.0, 0.5)),
-          "diameter": Param(float, 4.0, "ikura: egg diameter 2·r_i (ikura 3–5 mm)", range=(0.1, 100.0),
-                            units="mm"),
-          # default: typical ikura lipid mass fraction, SPEC §1 (Shirai et al.): 14.5 ± 0.7 %
-          "lipid_fraction": Param(float, 0.145, "ikura: lipid (yolk) fraction L; yolk radius r_o = r_i·∛L "
-                                  "(G eq. 10, SPEC Reading)", range=(0.001, 0.95)),
-          "irregularity": Param(float, 0.25, "ice flake: outline radius variation (fraction)", range=(0.0, 0.6)),
-          "shape_seed": Param(int, 0, "ice flake: which irregular outline (a shape number, not the recipe seed)",
-                              range=(0, 2 ** 31 - 1)),
-          "path": Param(str, None, "file: mesh file in any trimesh format (.stl, .obj, .ply, .off, .glb)",
-                        nullable=True, file=True),
-          "scale": Param(float, 1.0, "file: factor from the file's units to mm", range=(1e-6, 1e6)),
-          "align": Param(bool, True, "file: turn the principal axes onto x ≥ y ≥ z (long axis x)"),
-          "subdivisions": Param(int, 2, "icosphere subdivisions of rice/ikura (2 → 320 faces per shell)",
-                                range=(0, 5)),
-      },
-      check=_check)
-def base_mesh(ctx, *, shape, variety, size, bluntness, bend, diameter, lipid_fraction, irregularity, shape_seed,
-              path, scale, align, subdivisions):
+@node(
+    "base_mesh",
+    version=1,
+    outputs={"mesh": Out(Mesh, "closed outward element mesh, centred, long axis x, mm")},
+    params={
+        "shape": Param(str, "rice", "which base model", choices=SHAPES),
+        "variety": Param(
+            str,
+            "japonica",
+            "rice variety preset: length factor (indica 1.8, japonica 1.0, "
+            "aromatic 0.7) applied to size[0] (SPEC §1.1)",
+            choices=VARIETIES,
+        ),
+        "size": Param(
+            tuple[float, float, float],
+            None,
+            "length, width, thickness before the variety factor; "
+            "default rice 5×3×2 (a raw short grain), ice flake 4×3×0.4",
+            range=(0.01, 1000.0),
+            units="mm",
+            nullable=True,
+        ),
+        "bluntness": Param(float, 0.8, "rice: end shape exponent (1 = ellipsoid, smaller = blunter)", range=(0.3, 1.0)),
+        "bend": Param(
+            float, 0.05, "rice: dorsal bend, y offset at the tips as a fraction of the width", range=(0.0, 0.5)
+        ),
+        "diameter": Param(float, 4.0, "ikura: egg diameter 2·r_i (ikura 3–5 mm)", range=(0.1, 100.0), units="mm"),
+        # default: typical ikura lipid mass fraction, SPEC §1 (Shirai et al.): 14.5 ± 0.7 %
+        "lipid_fraction": Param(
+            float,
+            0.145,
+            "ikura: lipid (yolk) fraction L; yolk radius r_o = r_i·∛L (G eq. 10, SPEC Reading)",
+            range=(0.001, 0.95),
+        ),
+        "irregularity": Param(float, 0.25, "ice flake: outline radius variation (fraction)", range=(0.0, 0.6)),
+        "shape_seed": Param(
+            int, 0, "ice flake: which irregular outline (a shape number, not the recipe seed)", range=(0, 2**31 - 1)
+        ),
+        "path": Param(
+            str, None, "file: mesh file in any trimesh format (.stl, .obj, .ply, .off, .glb)", nullable=True, file=True
+        ),
+        "scale": Param(float, 1.0, "file: factor from the file's units to mm", range=(1e-6, 1e6)),
+        "align": Param(bool, True, "file: turn the principal axes onto x ≥ y ≥ z (long axis x)"),
+        "subdivisions": Param(int, 2, "icosphere subdivisions of rice/ikura (2 → 320 faces per shell)", range=(0, 5)),
+    },
+    check=_check,
+)
+def base_mesh(
+    ctx,
+    *,
+    shape,
+    variety,
+    size,
+    bluntness,
+    bend,
+    diameter,
+    lipid_fraction,
+    irregularity,
+    shape_seed,
+    path,
+    scale,
+    align,
+    subdivisions,
+):
     """Low-resolution element model: rice grain preset, ikura egg (membrane + yolk parts), ice flake, or a file.
 
     Rice: a blunted, slightly bent ellipsoid; the variety multiplies the length (SPEC §1.1), its

@@ -4,23 +4,32 @@ from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
 from nodegraph.values import Mesh
+
 from ..values import DistanceField, SphereSet, Volume
 
 METHODS = ("exact", "euclidean", "manhattan")
 
 
-@node("distance_field", version=1,
-      inputs={"volume": In(Volume, "occupancy M from voxelise"),
-              "mesh": In(Mesh, "the mesh voxelised (method exact)", optional=True),
-              "spheres": In(SphereSet, "the spheres voxelised (method exact)", optional=True)},
-      outputs={"field": Out(DistanceField, "signed distance, positive inside, mm")},
-      params={
-          "method": Param(str, "exact", "exact: analytic distance of mesh ∪ spheres near the surface; "
-                          "euclidean / manhattan: G eq. 5 on the binary volume (half-voxel stair steps)",
-                          choices=METHODS),
-          "band": Param(int, 3, "exact: cells from the surface computed exactly (farther: binary EDT)",
-                        range=(1, 32)),
-      })
+@node(
+    "distance_field",
+    version=1,
+    inputs={
+        "volume": In(Volume, "occupancy M from voxelise"),
+        "mesh": In(Mesh, "the mesh voxelised (method exact)", optional=True),
+        "spheres": In(SphereSet, "the spheres voxelised (method exact)", optional=True),
+    },
+    outputs={"field": Out(DistanceField, "signed distance, positive inside, mm")},
+    params={
+        "method": Param(
+            str,
+            "exact",
+            "exact: analytic distance of mesh ∪ spheres near the surface; "
+            "euclidean / manhattan: G eq. 5 on the binary volume (half-voxel stair steps)",
+            choices=METHODS,
+        ),
+        "band": Param(int, 3, "exact: cells from the surface computed exactly (farther: binary EDT)", range=(1, 32)),
+    },
+)
 def distance_field(ctx, volume, mesh=None, spheres=None, *, method, band):
     """G eq. 5 distance to the nearest outside cell (signed), or the exact distance of mesh ∪ spheres.
 
@@ -34,8 +43,10 @@ def distance_field(ctx, volume, mesh=None, spheres=None, *, method, band):
     if method == "exact":
         vertices, faces, centers, radii = voxel_grid.element_geometry(mesh, spheres)
         if vertices is None and centers is None:
-            raise ValueError("method 'exact' needs the mesh and/or spheres that were voxelised "
-                             "(wire them to the mesh/spheres inputs) or use method 'euclidean'")
+            raise ValueError(
+                "method 'exact' needs the mesh and/or spheres that were voxelised "
+                "(wire them to the mesh/spheres inputs) or use method 'euclidean'"
+            )
         grid = voxel_grid.Grid(volume.origin, volume.voxel_size, inside.shape)
         data = distance_fields.exact_field(grid, inside, vertices, faces, centers, radii, band)
         return DistanceField(data, volume.origin, volume.voxel_size, metric="euclidean", signed=True)

@@ -46,8 +46,15 @@ def binary_field(inside: np.ndarray, voxel_size: float, metric: str) -> np.ndarr
     return field
 
 
-def exact_field(grid: Grid, inside: np.ndarray, vertices: np.ndarray | None, faces: np.ndarray | None,
-                centers: np.ndarray | None, radii: np.ndarray | None, band: int) -> np.ndarray:
+def exact_field(
+    grid: Grid,
+    inside: np.ndarray,
+    vertices: np.ndarray | None,
+    faces: np.ndarray | None,
+    centers: np.ndarray | None,
+    radii: np.ndarray | None,
+    band: int,
+) -> np.ndarray:
     """Signed distance of mesh ∪ spheres (max of the signed distances), exact within ``band`` cells.
 
     Beyond the band, the binary Euclidean field shifted by half a cell (the surface lies about half
@@ -59,8 +66,9 @@ def exact_field(grid: Grid, inside: np.ndarray, vertices: np.ndarray | None, fac
     limit = band * h
     near = None
     if vertices is not None:
-        unsigned = mesh_distance_band(grid.local(vertices), np.ascontiguousarray(faces, np.int64), h, grid.shape,
-                                      float(band))
+        unsigned = mesh_distance_band(
+            grid.local(vertices), np.ascontiguousarray(faces, np.int64), h, grid.shape, float(band)
+        )
         near = np.where(mesh_occupancy(grid, vertices, faces), unsigned, -unsigned)
     if centers is not None and len(centers):
         spheres = sphere_field(grid, centers, radii, float(band))  # already −band·h where no sphere reaches

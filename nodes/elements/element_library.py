@@ -4,17 +4,25 @@ from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
 from nodegraph.values import Mesh
+
 from ..values import ElementLibrary
 
 
-@node("element_library", version=1,
-      inputs={"meshes": In(Mesh, "element meshes (every variant of a family, or a list of wires)", many=True)},
-      outputs={"library": Out(ElementLibrary, "meshes plus per-element props")},
-      params={
-          "kind": Param(str, "grain", "name of the element kind (e.g. japonica)"),
-          "refine_range": Param(float, 1.0, "overlap-refine search range as a fraction of the circumradius "
-                                "(S: rice 1, chestnut 0.1; SPEC §2.6)", range=(0.0, 10.0)),
-      })
+@node(
+    "element_library",
+    version=1,
+    inputs={"meshes": In(Mesh, "element meshes (every variant of a family, or a list of wires)", many=True)},
+    outputs={"library": Out(ElementLibrary, "meshes plus per-element props")},
+    params={
+        "kind": Param(str, "grain", "name of the element kind (e.g. japonica)"),
+        "refine_range": Param(
+            float,
+            1.0,
+            "overlap-refine search range as a fraction of the circumradius (S: rice 1, chestnut 0.1; SPEC §2.6)",
+            range=(0.0, 10.0),
+        ),
+    },
+)
 def element_library(ctx, meshes, *, kind, refine_range):
     """Gather element meshes, checking each is closed and outward, with props per element.
 

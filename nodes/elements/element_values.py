@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from nodegraph.values import Mesh
+
 from ..values import DistanceField
 
 

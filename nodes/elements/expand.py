@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
-from ..values import DistanceField
 
+from ..values import DistanceField
 from .base_mesh import VARIETIES
 from .element_values import ExpandedField
 
@@ -14,16 +14,29 @@ def _check(p: dict) -> list[tuple[str, str]]:
     return [("expansion", f"low {lo} must not exceed high {hi}")] if lo > hi else []
 
 
-@node("expand", version=1,
-      inputs={"field": In(DistanceField, "signed distance field of the grain")},
-      outputs={"field": Out(DistanceField, "the field scaled by P about the grain centroid (ExpandedField)")},
-      params={
-          "expansion": Param(tuple[float, float], (1.0, 1.5), "P drawn uniformly per element in [low, high] "
-                             "(G: 1–1.5); low = high fixes P", range=(0.1, 10.0)),
-          "variety": Param(str, None, "use the variety's P instead (indica 1.2, japonica 1.5, aromatic 1.5; "
-                           "SPEC §1.1)", choices=VARIETIES, nullable=True),
-      },
-      random=True, check=_check)
+@node(
+    "expand",
+    version=1,
+    inputs={"field": In(DistanceField, "signed distance field of the grain")},
+    outputs={"field": Out(DistanceField, "the field scaled by P about the grain centroid (ExpandedField)")},
+    params={
+        "expansion": Param(
+            tuple[float, float],
+            (1.0, 1.5),
+            "P drawn uniformly per element in [low, high] (G: 1–1.5); low = high fixes P",
+            range=(0.1, 10.0),
+        ),
+        "variety": Param(
+            str,
+            None,
+            "use the variety's P instead (indica 1.2, japonica 1.5, aromatic 1.5; SPEC §1.1)",
+            choices=VARIETIES,
+            nullable=True,
+        ),
+    },
+    random=True,
+    check=_check,
+)
 def expand(ctx, field, *, expansion, variety):
     """Scale the grain by P about its centroid (G eq. 6); P per element from ``expansion`` or the variety.
 

@@ -30,12 +30,49 @@ RICE_VARIETIES = {
 
 def icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
     """Unit icosphere (vertices on the unit sphere, outward CCW faces), by midpoint subdivision."""
-    t = (1.0 + 5.0 ** 0.5) / 2.0
-    vertices = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
-                         [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
-    faces = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
-                      [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
-                      [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]], np.int64)
+    t = (1.0 + 5.0**0.5) / 2.0
+    vertices = np.array(
+        [
+            [-1, t, 0],
+            [1, t, 0],
+            [-1, -t, 0],
+            [1, -t, 0],
+            [0, -1, t],
+            [0, 1, t],
+            [0, -1, -t],
+            [0, 1, -t],
+            [t, 0, -1],
+            [t, 0, 1],
+            [-t, 0, -1],
+            [-t, 0, 1],
+        ],
+        float,
+    )
+    faces = np.array(
+        [
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ],
+        np.int64,
+    )
     vertices /= np.linalg.norm(vertices, axis=1, keepdims=True)
     for _ in range(subdivisions):
         edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
@@ -45,8 +82,14 @@ def icosphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
         m = len(vertices) + inverse.reshape(3, -1).T  # midpoints of edges 01, 12, 20 of each face
         vertices = np.concatenate([vertices, mids])
         a, b, c = faces.T
-        faces = np.concatenate([np.stack([a, m[:, 0], m[:, 2]], 1), np.stack([b, m[:, 1], m[:, 0]], 1),
-                                np.stack([c, m[:, 2], m[:, 1]], 1), m])
+        faces = np.concatenate(
+            [
+                np.stack([a, m[:, 0], m[:, 2]], 1),
+                np.stack([b, m[:, 1], m[:, 0]], 1),
+                np.stack([c, m[:, 2], m[:, 1]], 1),
+                m,
+            ]
+        )
     return vertices, faces
 
 
@@ -65,8 +108,9 @@ def volume_centroid(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, np.
     return volume, reference + centroid
 
 
-def rice_grain(length: float, width: float, thickness: float, bluntness: float = 0.8,
-               bend: float = 0.05, subdivisions: int = 2) -> tuple[np.ndarray, np.ndarray]:
+def rice_grain(
+    length: float, width: float, thickness: float, bluntness: float = 0.8, bend: float = 0.05, subdivisions: int = 2
+) -> tuple[np.ndarray, np.ndarray]:
     """A rice grain: a blunted ellipsoid (long axis x) with a slight bend in y, centred.
 
     ``bluntness`` < 1 squares the ends (each unit-sphere coordinate u ↦ sign(u)|u|^bluntness, a
@@ -96,8 +140,9 @@ def ikura_egg(diameter: float, lipid_fraction: float, subdivisions: int = 3):
     return vertices, faces, parts
 
 
-def ice_flake(length: float, width: float, thickness: float, irregularity: float = 0.25,
-              shape_seed: int = 0, segments: int = 24) -> tuple[np.ndarray, np.ndarray]:
+def ice_flake(
+    length: float, width: float, thickness: float, irregularity: float = 0.25, shape_seed: int = 0, segments: int = 24
+) -> tuple[np.ndarray, np.ndarray]:
     """A shaved-ice flake (kakigori, SPEC §1): a thin plate with an irregular star-shaped outline.
 
     The outline radius varies by up to ``irregularity`` (a fraction) through a few random low
@@ -119,11 +164,13 @@ def ice_flake(length: float, width: float, thickness: float, irregularity: float
     s = np.arange(segments)
     n = (s + 1) % segments
     ct, cb = 2 * segments, 2 * segments + 1
-    faces = np.concatenate([
-        np.column_stack([np.full(segments, ct), s, n]),                   # top, normal +z
-        np.column_stack([np.full(segments, cb), n + segments, s + segments]),  # bottom, normal −z
-        np.column_stack([s, s + segments, n + segments]),                  # rim
-        np.column_stack([s, n + segments, n]),
-    ])
+    faces = np.concatenate(
+        [
+            np.column_stack([np.full(segments, ct), s, n]),  # top, normal +z
+            np.column_stack([np.full(segments, cb), n + segments, s + segments]),  # bottom, normal −z
+            np.column_stack([s, s + segments, n + segments]),  # rim
+            np.column_stack([s, n + segments, n]),
+        ]
+    )
     _, centroid = volume_centroid(vertices, faces)
     return vertices - centroid, faces

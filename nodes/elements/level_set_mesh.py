@@ -34,19 +34,24 @@ def field_surface(data: np.ndarray, origin: np.ndarray, voxel_size: float, level
     from skimage import measure
 
     if not data.min() < level < data.max():
-        raise ValueError(f"level {level:g} mm is outside the field's range [{data.min():g}, {data.max():g}] mm: "
-                         "there is no surface to extract")
+        raise ValueError(
+            f"level {level:g} mm is outside the field's range [{data.min():g}, {data.max():g}] mm: "
+            "there is no surface to extract"
+        )
     faces_of_box = [data[0], data[-1], data[:, 0], data[:, -1], data[:, :, 0], data[:, :, -1]]
     if max(float(f.max()) for f in faces_of_box) >= level:
-        raise ValueError(f"the surface at level {level:g} mm reaches the edge of the grid and would be cut open; "
-                         "use a higher level or more padding when voxelising")
+        raise ValueError(
+            f"the surface at level {level:g} mm reaches the edge of the grid and would be cut open; "
+            "use a higher level or more padding when voxelising"
+        )
     # Values at the level (common on binary fields: whole multiples of the voxel) put surface vertices on
     # grid corners, where marching cubes emits zero-area pieces and vertex merging opens holes: lift them
     # by 1e-4 voxel, far above float32 resolution and far below any error that matters.
     nudge = 1e-4 * voxel_size
     field = np.where(np.abs(data - level) < nudge, np.float32(level + nudge), data).astype(np.float32)
-    vertices, faces, _, _ = measure.marching_cubes(field, level, spacing=(voxel_size,) * 3, step_size=step,
-                                                   allow_degenerate=False)
+    vertices, faces, _, _ = measure.marching_cubes(
+        field, level, spacing=(voxel_size,) * 3, step_size=step, allow_degenerate=False
+    )
     vertices = vertices.astype(np.float64)
     faces = faces.astype(np.int64)
     a, b, c = (vertices[faces[:, i]] for i in range(3))
@@ -55,8 +60,9 @@ def field_surface(data: np.ndarray, origin: np.ndarray, voxel_size: float, level
     return vertices + origin, faces
 
 
-def grain_surface(data: np.ndarray, origin: np.ndarray, voxel_size: float, level: float, smoothing: int,
-                  target_faces: int | None):
+def grain_surface(
+    data: np.ndarray, origin: np.ndarray, voxel_size: float, level: float, smoothing: int, target_faces: int | None
+):
     """The remeshed grain: outer shell of the level set, smoothed, within a triangle budget, checked.
 
     Budget: quadric decimation first; if it pinches the surface (non-manifold) three times, marching

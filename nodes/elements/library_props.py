@@ -26,8 +26,15 @@ def element_props(meshes: list) -> dict[str, np.ndarray]:
         inradius = float(getattr(mesh, "inradius", 0.0))
         if inradius <= 0.0:
             inradius = surface_distance(centre, np.asarray(tm.vertices), np.asarray(tm.faces, np.int64))
-        rows.append((float(getattr(mesh, "expansion", 1.0)), float(tm.volume),
-                     float(np.linalg.norm(tm.vertices - centre, axis=1).max()), inradius, *extent))
+        rows.append(
+            (
+                float(getattr(mesh, "expansion", 1.0)),
+                float(tm.volume),
+                float(np.linalg.norm(tm.vertices - centre, axis=1).max()),
+                inradius,
+                *extent,
+            )
+        )
     table = np.array(rows)
     names = ("expansion", "volume", "circumradius", "inradius", "length", "width", "thickness")
     # Keys in sorted order, the order a library read back from the cache has (the codec stores dicts sorted).

@@ -31,8 +31,9 @@ def load_element_mesh(path: str | Path, scale: float = 1.0, align: bool = True) 
     return repair_element_mesh(vertices * scale, faces, source=str(path), align=align)
 
 
-def repair_element_mesh(vertices: np.ndarray, faces: np.ndarray, source: str = "mesh",
-                        align: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def repair_element_mesh(
+    vertices: np.ndarray, faces: np.ndarray, source: str = "mesh", align: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
     """Apply the documented repairs to a mesh, or raise MeshFileError saying why it cannot be used."""
     import trimesh
 
@@ -51,13 +52,17 @@ def repair_element_mesh(vertices: np.ndarray, faces: np.ndarray, source: str = "
         raise MeshFileError(f"{source}: every face is degenerate (zero area); nothing is left of the mesh")
     if not mesh.is_watertight:
         open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
-        raise MeshFileError(f"{source}: mesh is not closed ({open_edges} boundary edges, or edges shared by "
-                            "more than two faces); an element must be a closed (watertight) surface")
+        raise MeshFileError(
+            f"{source}: mesh is not closed ({open_edges} boundary edges, or edges shared by "
+            "more than two faces); an element must be a closed (watertight) surface"
+        )
     if not mesh.is_winding_consistent:
-        raise MeshFileError(f"{source}: faces are not consistently oriented (some neighbours disagree); "
-                            "fix the winding or export with consistent normals")
+        raise MeshFileError(
+            f"{source}: faces are not consistently oriented (some neighbours disagree); "
+            "fix the winding or export with consistent normals"
+        )
     scale = float(np.ptp(mesh.vertices, axis=0).max())
-    if abs(mesh.volume) <= 1e-9 * scale ** 3:
+    if abs(mesh.volume) <= 1e-9 * scale**3:
         raise MeshFileError(f"{source}: mesh encloses zero volume (flat or collapsed); an element needs a solid")
     if mesh.volume < 0:
         mesh.invert()  # documented repair: inside-out mesh

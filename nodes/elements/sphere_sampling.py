@@ -38,12 +38,20 @@ def interior_points(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np
         have += len(keep)
         if have >= count:
             return np.concatenate(found)[:count]
-    raise ValueError(f"could not place {count} spheres inside the mesh: it fills under 1/256 of its "
-                     "bounding box (is it closed and outward-oriented?)")
+    raise ValueError(
+        f"could not place {count} spheres inside the mesh: it fills under 1/256 of its "
+        "bounding box (is it closed and outward-oriented?)"
+    )
 
 
-def scatter_spheres(vertices: np.ndarray, faces: np.ndarray, count: int, radius_range: tuple[float, float],
-                    surface_share: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def scatter_spheres(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    count: int,
+    radius_range: tuple[float, float],
+    surface_share: float,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Centres, radii and tags of ``count`` spheres: a ``surface_share`` of them on the surface.
 
     Radii are uniform in ``radius_range``; the rest of the spheres have centres uniform inside.
@@ -53,8 +61,12 @@ def scatter_spheres(vertices: np.ndarray, faces: np.ndarray, count: int, radius_
         raise ValueError(f"radius_range must satisfy 0 < low ≤ high, got {radius_range}")
     n_surface = int(round(count * surface_share))
     n_inside = count - n_surface
-    centers = np.concatenate([surface_points(vertices, faces, n_surface, rng),
-                              interior_points(vertices, faces, n_inside, rng) if n_inside else np.empty((0, 3))])
+    centers = np.concatenate(
+        [
+            surface_points(vertices, faces, n_surface, rng),
+            interior_points(vertices, faces, n_inside, rng) if n_inside else np.empty((0, 3)),
+        ]
+    )
     radii = rng.uniform(lo, hi, count)
     tags = np.repeat(np.array([SURFACE, INSIDE], np.int8), [n_surface, n_inside])
     return centers, radii, tags

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
 from nodegraph.values import Mesh
+
 from ..values import SphereSet
 
 
@@ -12,17 +13,27 @@ def _check(p: dict) -> list[tuple[str, str]]:
     return [("radius_range", f"low {lo} must not exceed high {hi}")] if lo > hi else []
 
 
-@node("sphere_scatter", version=1,
-      inputs={"mesh": In(Mesh, "closed base mesh (mm)")},
-      outputs={"spheres": Out(SphereSet, "sphere centres and radii; tags 0 = surface, 1 = inside")},
-      params={
-          "count": Param(int, 40, "number of spheres (0 keeps the base mesh as it is)", range=(0, 5000)),
-          "radius_range": Param(tuple[float, float], (0.2, 0.5), "radii drawn uniformly in [low, high]; "
-                                "the default suits a 3 mm wide grain", range=(0.001, 100.0), units="mm"),
-          "surface_share": Param(float, 0.7, "fraction of spheres centred on the surface; the rest inside",
-                                 range=(0.0, 1.0)),
-      },
-      random=True, check=_check)
+@node(
+    "sphere_scatter",
+    version=1,
+    inputs={"mesh": In(Mesh, "closed base mesh (mm)")},
+    outputs={"spheres": Out(SphereSet, "sphere centres and radii; tags 0 = surface, 1 = inside")},
+    params={
+        "count": Param(int, 40, "number of spheres (0 keeps the base mesh as it is)", range=(0, 5000)),
+        "radius_range": Param(
+            tuple[float, float],
+            (0.2, 0.5),
+            "radii drawn uniformly in [low, high]; the default suits a 3 mm wide grain",
+            range=(0.001, 100.0),
+            units="mm",
+        ),
+        "surface_share": Param(
+            float, 0.7, "fraction of spheres centred on the surface; the rest inside", range=(0.0, 1.0)
+        ),
+    },
+    random=True,
+    check=_check,
+)
 def sphere_scatter(ctx, mesh, *, count, radius_range, surface_share):
     """Scatter ``count`` spheres: a ``surface_share`` centred on the surface (by area), the rest inside.
 
@@ -30,6 +41,7 @@ def sphere_scatter(ctx, mesh, *, count, radius_range, surface_share):
     """
     from .sphere_sampling import scatter_spheres
 
-    centers, radii, tags = scatter_spheres(mesh.vertices, mesh.faces, count, tuple(radius_range), surface_share,
-                                           ctx.rng)
+    centers, radii, tags = scatter_spheres(
+        mesh.vertices, mesh.faces, count, tuple(radius_range), surface_share, ctx.rng
+    )
     return SphereSet(centers, radii, tags)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 #: Largest grid accepted: 2²⁶ cells (e.g. 406³) keeps the distance-field chain under ~2 GiB.
-MAX_CELLS = 2 ** 26
+MAX_CELLS = 2**26
 MIN_RESOLUTION = 8
 
 
@@ -30,8 +30,9 @@ class Grid:
         return np.ascontiguousarray(np.asarray(points, np.float64) - self.origin)
 
 
-def geometry_bounds(vertices: np.ndarray | None, centers: np.ndarray | None,
-                    radii: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+def geometry_bounds(
+    vertices: np.ndarray | None, centers: np.ndarray | None, radii: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
     """Axis-aligned bounds of the mesh vertices and the spheres (centre ± radius)."""
     lows, highs = [], []
     if vertices is not None and len(vertices):
@@ -45,8 +46,7 @@ def geometry_bounds(vertices: np.ndarray | None, centers: np.ndarray | None,
     return np.min(lows, axis=0), np.max(highs, axis=0)
 
 
-def grid_for(lo: np.ndarray, hi: np.ndarray, resolution: int | None, voxel_size: float | None,
-             padding: int) -> Grid:
+def grid_for(lo: np.ndarray, hi: np.ndarray, resolution: int | None, voxel_size: float | None, padding: int) -> Grid:
     """A grid around [lo, hi] with ``padding`` empty cells each side.
 
     ``resolution`` = cells along the longest side, padding included; ``voxel_size`` (mm), when
@@ -58,19 +58,25 @@ def grid_for(lo: np.ndarray, hi: np.ndarray, resolution: int | None, voxel_size:
         raise ValueError(f"the geometry has no extent (bounds {lo} … {hi}); nothing to voxelise")
     if voxel_size is None:
         if resolution is None or resolution < MIN_RESOLUTION or resolution < 2 * padding + 4:
-            raise ValueError(f"resolution {resolution} is too small: need at least "
-                             f"{max(MIN_RESOLUTION, 2 * padding + 4)} cells along the longest side")
+            raise ValueError(
+                f"resolution {resolution} is too small: need at least "
+                f"{max(MIN_RESOLUTION, 2 * padding + 4)} cells along the longest side"
+            )
         voxel_size = longest / (resolution - 1 - 2 * padding)
     elif not voxel_size > 0.0:
         raise ValueError(f"voxel_size must be > 0 mm, got {voxel_size}")
     counts = [int(math.ceil(e / voxel_size - 1e-9)) + 1 + 2 * padding for e in extent]
     cells = counts[0] * counts[1] * counts[2]
     if max(counts) < MIN_RESOLUTION:
-        raise ValueError(f"voxel_size {voxel_size:g} mm gives only {max(counts)} cells along the longest "
-                         f"side; need at least {MIN_RESOLUTION}")
+        raise ValueError(
+            f"voxel_size {voxel_size:g} mm gives only {max(counts)} cells along the longest "
+            f"side; need at least {MIN_RESOLUTION}"
+        )
     if cells > MAX_CELLS:
-        raise ValueError(f"grid of {counts[0]}×{counts[1]}×{counts[2]} = {cells:,} cells exceeds the limit of "
-                         f"{MAX_CELLS:,} (about 2 GiB of working memory); lower resolution or raise voxel_size")
+        raise ValueError(
+            f"grid of {counts[0]}×{counts[1]}×{counts[2]} = {cells:,} cells exceeds the limit of "
+            f"{MAX_CELLS:,} (about 2 GiB of working memory); lower resolution or raise voxel_size"
+        )
     centre = (lo + hi) / 2.0
     origin = centre - (np.array(counts) - 1) / 2.0 * voxel_size
     return Grid(origin, float(voxel_size), (counts[0], counts[1], counts[2]))
@@ -82,8 +88,10 @@ def check_spheres(centers: np.ndarray, radii: np.ndarray) -> None:
         raise ValueError("spheres: NaN or infinite centre or radius")
     bad = np.flatnonzero(radii <= 0.0)
     if len(bad):
-        raise ValueError(f"spheres: {len(bad)} radii are ≤ 0 (first: sphere {bad[0]}, r = {radii[bad[0]]}); "
-                         "every sphere needs a positive radius")
+        raise ValueError(
+            f"spheres: {len(bad)} radii are ≤ 0 (first: sphere {bad[0]}, r = {radii[bad[0]]}); "
+            "every sphere needs a positive radius"
+        )
 
 
 def element_geometry(mesh, spheres):
@@ -110,12 +118,18 @@ def sphere_field(grid: Grid, centers: np.ndarray, radii: np.ndarray, band: float
     """Signed distance of the sphere union (positive inside), exact above −band cells."""
     from .grid_kernels import sphere_union_band
 
-    return sphere_union_band(grid.local(centers), np.ascontiguousarray(radii, np.float64), grid.voxel_size,
-                             grid.shape, float(band))
+    return sphere_union_band(
+        grid.local(centers), np.ascontiguousarray(radii, np.float64), grid.voxel_size, grid.shape, float(band)
+    )
 
 
-def occupancy(grid: Grid, vertices: np.ndarray | None, faces: np.ndarray | None,
-              centers: np.ndarray | None, radii: np.ndarray | None) -> np.ndarray:
+def occupancy(
+    grid: Grid,
+    vertices: np.ndarray | None,
+    faces: np.ndarray | None,
+    centers: np.ndarray | None,
+    radii: np.ndarray | None,
+) -> np.ndarray:
     """The volume M of eq. 5: cells inside the mesh or any sphere; refuses empty or split results."""
     inside = np.zeros(grid.shape, dtype=bool)
     if vertices is not None:
@@ -131,11 +145,15 @@ def check_single_piece(inside: np.ndarray, voxel_size: float) -> None:
     from scipy import ndimage
 
     if not inside.any():
-        raise ValueError(f"the volume is empty: no cell centre lies inside the mesh or a sphere at voxel size "
-                         f"{voxel_size:g} mm; the geometry is smaller than a cell, raise the resolution")
+        raise ValueError(
+            f"the volume is empty: no cell centre lies inside the mesh or a sphere at voxel size "
+            f"{voxel_size:g} mm; the geometry is smaller than a cell, raise the resolution"
+        )
     labels, count = ndimage.label(inside)
     if count > 1:
         sizes = np.sort(np.bincount(labels.ravel())[1:])[::-1]
-        raise ValueError(f"the volume falls into {count} separate pieces (cells per piece: {sizes[:5].tolist()}); "
-                         "spheres that do not touch the mesh or each other make loose fragments — keep sphere "
-                         "centres on or inside the base mesh")
+        raise ValueError(
+            f"the volume falls into {count} separate pieces (cells per piece: {sizes[:5].tolist()}); "
+            "spheres that do not touch the mesh or each other make loose fragments — keep sphere "
+            "centres on or inside the base mesh"
+        )

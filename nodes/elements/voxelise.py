@@ -6,6 +6,7 @@ import numpy as np
 
 from nodegraph import In, Out, Param, node
 from nodegraph.values import Mesh
+
 from ..values import SphereSet, Volume
 
 #: Default from benchmarks/bench_elements.py (exact route): at 64 cells the mean surface error is
@@ -14,18 +15,29 @@ from ..values import SphereSet, Volume
 DEFAULT_RESOLUTION = 64
 
 
-@node("voxelise", version=1,
-      inputs={"mesh": In(Mesh, "closed element mesh", optional=True),
-              "spheres": In(SphereSet, "spheres added to the mesh", optional=True)},
-      outputs={"volume": Out(Volume, "occupancy (bool): cell centre inside the mesh or a sphere")},
-      params={
-          "resolution": Param(int, DEFAULT_RESOLUTION, "cells along the longest side, padding included "
-                              "(64: see the resolution sweep in benchmarks/bench_elements.py); at most 406, so any shape's grid "
-                              "fits the 2^26-cell limit (finer: voxel_size)", range=(8, 406)),
-          "voxel_size": Param(float, None, "cell size; overrides resolution when given", range=(1e-4, 100.0),
-                              units="mm", nullable=True),
-          "padding": Param(int, 3, "empty cells around the geometry (room for level offsets)", range=(1, 32)),
-      })
+@node(
+    "voxelise",
+    version=1,
+    inputs={
+        "mesh": In(Mesh, "closed element mesh", optional=True),
+        "spheres": In(SphereSet, "spheres added to the mesh", optional=True),
+    },
+    outputs={"volume": Out(Volume, "occupancy (bool): cell centre inside the mesh or a sphere")},
+    params={
+        "resolution": Param(
+            int,
+            DEFAULT_RESOLUTION,
+            "cells along the longest side, padding included "
+            "(64: see the resolution sweep in benchmarks/bench_elements.py); at most 406, so any shape's grid "
+            "fits the 2^26-cell limit (finer: voxel_size)",
+            range=(8, 406),
+        ),
+        "voxel_size": Param(
+            float, None, "cell size; overrides resolution when given", range=(1e-4, 100.0), units="mm", nullable=True
+        ),
+        "padding": Param(int, 3, "empty cells around the geometry (room for level offsets)", range=(1, 32)),
+    },
+)
 def voxelise(ctx, mesh=None, spheres=None, *, resolution, voxel_size, padding):
     """Occupancy of mesh ∪ spheres on a grid around both; refuses an empty or split volume.
 

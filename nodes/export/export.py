@@ -11,6 +11,7 @@ import re
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import FileSet
+
 from ..values import ShadedScene
 
 FORMATS = ("glb", "usda", "usdc", "ply", "obj")
@@ -48,6 +49,11 @@ def export(ctx, scene, *, formats, basename):
     from .mesh_files import obj_bytes, ply_bytes
     from .usd_writer import usd_bytes
 
-    writers = {"glb": glb_bytes, "usda": lambda s: usd_bytes(s, binary=False),
-               "usdc": lambda s: usd_bytes(s, binary=True), "ply": ply_bytes, "obj": obj_bytes}
+    writers = {
+        "glb": glb_bytes,
+        "usda": lambda s: usd_bytes(s, binary=False),
+        "usdc": lambda s: usd_bytes(s, binary=True),
+        "ply": ply_bytes,
+        "obj": obj_bytes,
+    }
     return FileSet({f"{basename}.{fmt}": writers[fmt](scene) for fmt in dict.fromkeys(formats)})

@@ -27,19 +27,29 @@ def material_json(material: Material) -> tuple[dict, set[str]]:
     if material.transmission > 0:
         ext["KHR_materials_transmission"] = {"transmissionFactor": material.transmission}
         radius = float(np.mean(material.subsurface_radius))  # mm
-        ext["KHR_materials_volume"] = {"thicknessFactor": radius, "attenuationColor": list(material.subsurface_color),
-                                       "attenuationDistance": max(radius * 1e-3, 1e-6)}  # mm → m
+        ext["KHR_materials_volume"] = {
+            "thicknessFactor": radius,
+            "attenuationColor": list(material.subsurface_color),
+            "attenuationDistance": max(radius * 1e-3, 1e-6),
+        }  # mm → m
     if material.ior != 1.5:
         ext["KHR_materials_ior"] = {"ior": material.ior}
     if material.specular != 0.5:
         # Blender's convention: specular 0.5 is F0 = 0.04, glTF's default; the factor scales F0.
         ext["KHR_materials_specular"] = {"specularFactor": min(1.0, 2.0 * material.specular)}
     if material.clearcoat > 0:
-        ext["KHR_materials_clearcoat"] = {"clearcoatFactor": material.clearcoat,
-                                          "clearcoatRoughnessFactor": material.clearcoat_roughness}
-    out = {"name": material.name,
-           "pbrMetallicRoughness": {"baseColorFactor": [*material.base_color, 1.0],
-                                    "metallicFactor": material.metallic, "roughnessFactor": material.roughness}}
+        ext["KHR_materials_clearcoat"] = {
+            "clearcoatFactor": material.clearcoat,
+            "clearcoatRoughnessFactor": material.clearcoat_roughness,
+        }
+    out = {
+        "name": material.name,
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [*material.base_color, 1.0],
+            "metallicFactor": material.metallic,
+            "roughnessFactor": material.roughness,
+        },
+    }
     if material.emission_strength > 0 and max(material.emission) > 0:
         out["emissiveFactor"] = list(material.emission)
         if material.emission_strength != 1.0:
@@ -109,22 +119,44 @@ def glb_bytes(scene: ShadedScene) -> bytes:
             attributes["COLOR_0"] = buffer.add(color_factor(mesh.colors, base), FLOAT, "VEC3", ARRAY_BUFFER)
         indices = buffer.add(np.asarray(mesh.faces, np.uint32).reshape(-1), UINT, "SCALAR", ELEMENT_ARRAY_BUFFER)
         name = mesh.name or f"mesh_{k}"
-        meshes.append({"name": name, "primitives": [{"attributes": attributes, "indices": indices,
-                                                     "material": int(scene.material_of[k]), "mode": 4}]})
+        meshes.append(
+            {
+                "name": name,
+                "primitives": [
+                    {"attributes": attributes, "indices": indices, "material": int(scene.material_of[k]), "mode": 4}
+                ],
+            }
+        )
         nodes.append({"name": name, "mesh": len(meshes) - 1})
     if not meshes:
         raise ValueError("scene: no mesh with faces to export")
-    root = {"name": "aggregate", "rotation": Z_UP_TO_Y_UP, "scale": [1e-3] * 3,  # Z-up mm → Y-up m
-            "children": list(range(1, len(nodes) + 1))}
-    document = {"asset": {"version": "2.0", "generator": "nodegraph export"},
-                "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [root, *nodes], "meshes": meshes,
-                "materials": materials, "accessors": buffer.accessors, "bufferViews": buffer.views,
-                "buffers": [{"byteLength": buffer.size}]}
+    root = {
+        "name": "aggregate",
+        "rotation": Z_UP_TO_Y_UP,
+        "scale": [1e-3] * 3,  # Z-up mm → Y-up m
+        "children": list(range(1, len(nodes) + 1)),
+    }
+    document = {
+        "asset": {"version": "2.0", "generator": "nodegraph export"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [root, *nodes],
+        "meshes": meshes,
+        "materials": materials,
+        "accessors": buffer.accessors,
+        "bufferViews": buffer.views,
+        "buffers": [{"byteLength": buffer.size}],
+    }
     if used:
         document["extensionsUsed"] = sorted(used)
     text = json.dumps(document, separators=(",", ":")).encode()
     text += b" " * ((-len(text)) % 4)
     binary = b"".join(buffer.chunks)
     total = 12 + 8 + len(text) + 8 + len(binary)
-    return (struct.pack("<4sII", b"glTF", 2, total) + struct.pack("<I4s", len(text), b"JSON") + text
-            + struct.pack("<I4s", len(binary), b"BIN\0") + binary)
+    return (
+        struct.pack("<4sII", b"glTF", 2, total)
+        + struct.pack("<I4s", len(text), b"JSON")
+        + text
+        + struct.pack("<I4s", len(binary), b"BIN\0")
+        + binary
+    )

@@ -22,8 +22,7 @@ def linear_to_srgb8(colors: np.ndarray) -> np.ndarray:
 def stacked(meshes) -> tuple[np.ndarray, np.ndarray]:
     """Meshes as one (vertices, faces) array pair, each mesh's face indices shifted past the previous ones."""
     starts = np.cumsum([0] + [len(m.vertices) for m in meshes])
-    return (np.concatenate([m.vertices for m in meshes]),
-            np.concatenate([m.faces + s for m, s in zip(meshes, starts)]))
+    return (np.concatenate([m.vertices for m in meshes]), np.concatenate([m.faces + s for m, s in zip(meshes, starts)]))
 
 
 def combined_arrays(scene: ShadedScene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -32,8 +31,12 @@ def combined_arrays(scene: ShadedScene) -> tuple[np.ndarray, np.ndarray, np.ndar
     if not meshes:
         raise ValueError("scene: no mesh with faces to export")
     vertices, faces = stacked(meshes)
-    colors = np.concatenate([linear_to_srgb8(m.colors) if m.colors is not None
-                             else np.full((len(m.vertices), 3), 204, np.uint8) for m in meshes])
+    colors = np.concatenate(
+        [
+            linear_to_srgb8(m.colors) if m.colors is not None else np.full((len(m.vertices), 3), 204, np.uint8)
+            for m in meshes
+        ]
+    )
     return vertices, faces, colors
 
 
@@ -51,18 +54,24 @@ def binary_ply(blocks: list[tuple[tuple[str, ...], np.ndarray]], faces: np.ndarr
     triangles = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
     triangles["n"] = 3
     triangles["i"] = faces
-    header = ("ply\nformat binary_little_endian 1.0\n" + (f"comment {comment}\n" if comment else "")
-              + f"element vertex {len(vertices)}\n"
-              + "".join(f"property {PLY_TYPES[dtype]} {name}\n" for name, dtype in fields)
-              + f"element face {len(triangles)}\nproperty list uchar int vertex_indices\nend_header\n")
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        + (f"comment {comment}\n" if comment else "")
+        + f"element vertex {len(vertices)}\n"
+        + "".join(f"property {PLY_TYPES[dtype]} {name}\n" for name, dtype in fields)
+        + f"element face {len(triangles)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
     return header.encode() + vertices.tobytes() + triangles.tobytes()
 
 
 def ply_bytes(scene: ShadedScene) -> bytes:
     """Binary little-endian PLY: float xyz, uchar sRGB colours, triangle lists."""
     points, triangles, colors = combined_arrays(scene)
-    return binary_ply([(("x", "y", "z"), points.astype("<f4")), (("red", "green", "blue"), colors)], triangles,
-                      comment="nodegraph export: sRGB vertex colours")
+    return binary_ply(
+        [(("x", "y", "z"), points.astype("<f4")), (("red", "green", "blue"), colors)],
+        triangles,
+        comment="nodegraph export: sRGB vertex colours",
+    )
 
 
 def obj_bytes(scene: ShadedScene) -> bytes:
@@ -70,6 +79,5 @@ def obj_bytes(scene: ShadedScene) -> bytes:
 
     vertices, faces, colors = combined_arrays(scene)
     mesh = trimesh.Trimesh(vertices, faces, vertex_colors=colors, process=False)
-    text = trimesh.exchange.obj.export_obj(mesh, include_normals=False, include_color=True,
-                                           include_texture=False)
+    text = trimesh.exchange.obj.export_obj(mesh, include_normals=False, include_color=True, include_texture=False)
     return text.encode()

@@ -17,10 +17,10 @@ import numpy as np
 
 from ..values import Material, ShadedScene
 
-SKY = 1.0            # radiance of the uniform sky (the CDRF colours are multiplied by ≈ this × visibility)
-SUN_SHARE = 0.1      # the sun's irradiance as a share of the sky's: highlights without re-lighting much
-SUN_ANGLE = 0.06     # rad, angular radius of the sun
-GLOSS = 0.08         # mirror share of glossy materials (≈ Fresnel reflectance of a wet surface)
+SKY = 1.0  # radiance of the uniform sky (the CDRF colours are multiplied by ≈ this × visibility)
+SUN_SHARE = 0.1  # the sun's irradiance as a share of the sky's: highlights without re-lighting much
+SUN_ANGLE = 0.06  # rad, angular radius of the sun
+GLOSS = 0.08  # mirror share of glossy materials (≈ Fresnel reflectance of a wet surface)
 
 
 @dataclass(frozen=True)
@@ -28,9 +28,9 @@ class Camera:
     """An orbit camera aimed at the scene's bounding-sphere centre, distance chosen to fit it."""
 
     elevation: float  # degrees above the horizon
-    azimuth: float    # degrees, 0 = looking along +y, 90 = along −x
-    fov: float        # degrees, horizontal
-    margin: float     # 1 = the bounding sphere touches the frame
+    azimuth: float  # degrees, 0 = looking along +y, 90 = along −x
+    fov: float  # degrees, horizontal
+    margin: float  # 1 = the bounding sphere touches the frame
 
 
 def write_ply(path: Path, vertices, faces, normals, colors) -> None:
@@ -45,8 +45,12 @@ def _bsdf(material: Material) -> dict:
     colour = {"type": "mesh_attribute", "name": "vertex_color"}
     if material.clearcoat >= 0.5 or material.roughness <= 0.15:
         # a thin mirror layer (Mitsuba's plastic needs a texture mean that vertex colours lack)
-        return {"type": "blendbsdf", "weight": GLOSS, "bsdf_0": {"type": "diffuse", "reflectance": colour},
-                "bsdf_1": {"type": "conductor", "material": "none"}}
+        return {
+            "type": "blendbsdf",
+            "weight": GLOSS,
+            "bsdf_0": {"type": "diffuse", "reflectance": colour},
+            "bsdf_1": {"type": "conductor", "material": "none"},
+        }
     return {"type": "diffuse", "reflectance": colour}
 
 
@@ -60,8 +64,9 @@ def look_at(bounds: np.ndarray, camera: Camera) -> tuple[np.ndarray, np.ndarray]
     return centre + distance * view, centre
 
 
-def scene_dict(scene: ShadedScene, folder: Path, camera: Camera, width: int, height: int, spp: int,
-               light_direction: np.ndarray) -> dict:
+def scene_dict(
+    scene: ShadedScene, folder: Path, camera: Camera, width: int, height: int, spp: int, light_direction: np.ndarray
+) -> dict:
     """The Mitsuba scene description; PLY files are written into ``folder``."""
     import mitsuba as mi
 
@@ -74,14 +79,23 @@ def scene_dict(scene: ShadedScene, folder: Path, camera: Camera, width: int, hei
         if not members:
             continue
         vertices, faces = stacked(members)
-        normals = np.concatenate([m.normals if m.normals is not None else np.zeros((len(m.vertices), 3))
-                                  for m in members])
-        colors = np.concatenate([m.colors[:, :3] if m.colors is not None
-                                 else np.tile(material.base_color, (len(m.vertices), 1)) for m in members])
+        normals = np.concatenate(
+            [m.normals if m.normals is not None else np.zeros((len(m.vertices), 3)) for m in members]
+        )
+        colors = np.concatenate(
+            [
+                m.colors[:, :3] if m.colors is not None else np.tile(material.base_color, (len(m.vertices), 1))
+                for m in members
+            ]
+        )
         path = folder / f"material_{index}.ply"
         write_ply(path, vertices, faces, normals, colors)
-        shapes[f"shape_{index}"] = {"type": "ply", "filename": str(path), "bsdf": _bsdf(material),
-                                    "face_normals": False}
+        shapes[f"shape_{index}"] = {
+            "type": "ply",
+            "filename": str(path),
+            "bsdf": _bsdf(material),
+            "face_normals": False,
+        }
         lo, hi = np.minimum(lo, vertices.min(0)), np.maximum(hi, vertices.max(0))
     if not shapes:
         raise ValueError("scene: no mesh with faces to render")
@@ -96,14 +110,21 @@ def scene_dict(scene: ShadedScene, folder: Path, camera: Camera, width: int, hei
     return {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": 3},
-        "sensor": {"type": "perspective", "fov": camera.fov, "fov_axis": "x",
-                   "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=target.tolist(),
-                                                              up=[0, 0, 1]),
-                   "film": {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "rgb"},
-                   "sampler": {"type": "independent", "sample_count": spp}},
+        "sensor": {
+            "type": "perspective",
+            "fov": camera.fov,
+            "fov_axis": "x",
+            "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=target.tolist(), up=[0, 0, 1]),
+            "film": {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "rgb"},
+            "sampler": {"type": "independent", "sample_count": spp},
+        },
         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": SKY}},
-        "sun": {"type": "sphere", "center": (target + sun_distance * d).tolist(), "radius": float(sun_radius),
-                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": float(sun_radiance)}}},
+        "sun": {
+            "type": "sphere",
+            "center": (target + sun_distance * d).tolist(),
+            "radius": float(sun_radius),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": float(sun_radiance)}},
+        },
         **shapes,
     }
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Image
+
 from ..values import ShadedScene
 
 
@@ -23,10 +24,13 @@ from ..values import ShadedScene
         "elevation": Param(float, 40.0, "camera elevation above the horizon", range=(-89.0, 89.0), units="degrees"),
         "azimuth": Param(float, 20.0, "camera azimuth (0 looks along +y)", range=(-360.0, 360.0), units="degrees"),
         "fov": Param(float, 35.0, "horizontal field of view", range=(1.0, 150.0), units="degrees"),
-        "margin": Param(float, 1.0, "framing: 1 fits the scene's bounding sphere, smaller zooms in",
-                        range=(0.2, 5.0)),
-        "sun_direction": Param(tuple[float, float, float], (-0.45, -0.6, 0.75),
-                               "direction towards the highlight light (match shade's key light)", range=(-1.0, 1.0)),
+        "margin": Param(float, 1.0, "framing: 1 fits the scene's bounding sphere, smaller zooms in", range=(0.2, 5.0)),
+        "sun_direction": Param(
+            tuple[float, float, float],
+            (-0.45, -0.6, 0.75),
+            "direction towards the highlight light (match shade's key light)",
+            range=(-1.0, 1.0),
+        ),
     },
 )
 def preview(ctx, scene, *, width, height, samples, elevation, azimuth, fov, margin, sun_direction):

@@ -30,8 +30,10 @@ def _material(stage, path: str, material: Material):
     shader.CreateIdAttr("UsdPreviewSurface")
     inputs = {
         "diffuseColor": (Sdf.ValueTypeNames.Color3f, Gf.Vec3f(*material.base_color)),
-        "emissiveColor": (Sdf.ValueTypeNames.Color3f,
-                          Gf.Vec3f(*(np.asarray(material.emission) * material.emission_strength).tolist())),
+        "emissiveColor": (
+            Sdf.ValueTypeNames.Color3f,
+            Gf.Vec3f(*(np.asarray(material.emission) * material.emission_strength).tolist()),
+        ),
         "metallic": (Sdf.ValueTypeNames.Float, material.metallic),
         "roughness": (Sdf.ValueTypeNames.Float, material.roughness),
         "clearcoat": (Sdf.ValueTypeNames.Float, material.clearcoat),

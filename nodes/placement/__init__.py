@@ -1,4 +1,5 @@
-"""Aperiodic space filling — SPEC §2 (S §3, G §3.2.2): poisson_place → rotate → mix_ratio → (medial_spheres) → overlap_refine → cull.
+"""Aperiodic space filling — SPEC §2 (S §3, G §3.2.2):
+poisson_place → rotate → mix_ratio → (medial_spheres) → overlap_refine → cull.
 
 Declaration modules (one node each, imported here for the registry) import only numpy and
 nodegraph at top level; the kernels (``candidates``, ``dart_throw``, ``frames``,

@@ -23,8 +23,7 @@ def estimate_candidates(mode: str, area: float, volume: float, spacing: float) -
     return int(volume / spacing**3) + 1
 
 
-def surface_candidates(vertices: np.ndarray, faces: np.ndarray, spacing: float, method: str,
-                       rng: np.random.Generator):
+def surface_candidates(vertices: np.ndarray, faces: np.ndarray, spacing: float, method: str, rng: np.random.Generator):
     """Candidate points on the shape with outward normals, about one per (spacing/2)² of area.
 
     ``subdivide`` (S): vertices of the shape subdivided until every edge ≤ ``spacing``.
@@ -63,8 +62,9 @@ def volume_candidates(vertices: np.ndarray, faces: np.ndarray, spacing: float, r
     axes = [np.arange(lo[d] + (0.5 + shift[d]) * spacing, hi[d], spacing) for d in range(3)]
     if any(len(a) == 0 for a in axes):
         return np.zeros((0, 3)), np.zeros((0, 3))
-    inside = inside_columns(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64),
-                            axes[0], axes[1], axes[2])
+    inside = inside_columns(
+        np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64), axes[0], axes[1], axes[2]
+    )
     ix, iy, iz = np.nonzero(inside)
     points = np.stack([axes[0][ix], axes[1][iy], axes[2][iz]], axis=1)
     points += rng.uniform(-0.25 * spacing, 0.25 * spacing, points.shape)

@@ -8,22 +8,34 @@ import numpy as np
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from ..values import Aggregate, ElementLibrary, Placement
 
+from ..values import Aggregate, ElementLibrary, Placement
 from .element_templates import template_params
 
 
 @node(
     "cull",
     version=3,
-    inputs={"placement": In(Placement, "refined elements"),
-            "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True)},
-    outputs={"placement": Out(Placement, "the elements kept (overlap = depth with the kept neighbours)"),
-             "culled": Out(Placement, "the elements removed, with the depth that removed them"),
-             "aggregate": Out(Aggregate, "kept placement with its libraries")},
+    inputs={
+        "placement": In(Placement, "refined elements"),
+        "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),
+    },
+    outputs={
+        "placement": Out(Placement, "the elements kept (overlap = depth with the kept neighbours)"),
+        "culled": Out(Placement, "the elements removed, with the depth that removed them"),
+        "aggregate": Out(Aggregate, "kept placement with its libraries"),
+    },
     params={
-        "threshold": Param(float, 0.0, "D: remove an element whose overlap depth exceeds this (0: touching only)", range=(0.0, 1e4), units="mm"),
-        "offset": Param(float, 0.0, "T of G eq. 2 (use the value given to overlap_refine)", range=(0.0, 1e3), units="mm"),
+        "threshold": Param(
+            float,
+            0.0,
+            "D: remove an element whose overlap depth exceeds this (0: touching only)",
+            range=(0.0, 1e4),
+            units="mm",
+        ),
+        "offset": Param(
+            float, 0.0, "T of G eq. 2 (use the value given to overlap_refine)", range=(0.0, 1e3), units="mm"
+        ),
         **template_params(),
     },
 )
@@ -46,6 +58,12 @@ def cull(ctx, placement, libraries, *, threshold, offset, sphere_tolerance, max_
     if ctx.rerun.enabled:
         import rerun as rr
 
-        ctx.rerun.log("culled", rr.Points3D(culled.positions, radii=0.3 * float(templates.inscribed.min()),
-                                            colors=np.tile([230, 40, 40], (len(culled), 1))))
+        ctx.rerun.log(
+            "culled",
+            rr.Points3D(
+                culled.positions,
+                radii=0.3 * float(templates.inscribed.min()),
+                colors=np.tile([230, 40, 40], (len(culled), 1)),
+            ),
+        )
     return {"placement": kept, "culled": culled, "aggregate": Aggregate(kept, libraries)}

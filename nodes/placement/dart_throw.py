@@ -65,11 +65,12 @@ def dart_throw(points: np.ndarray, order: np.ndarray, min_distance: float) -> np
         return np.zeros(0, np.int64)
     points = np.ascontiguousarray(points, np.float64)
     origin = points.min(axis=0) - 1e-9
-    dims = (np.floor((points.max(axis=0) - origin) / min_distance).astype(np.int64) + 1)
+    dims = np.floor((points.max(axis=0) - origin) / min_distance).astype(np.int64) + 1
     keys = _cell_keys(points, origin, float(min_distance), dims)
     sorted_index = np.argsort(keys, kind="stable")
-    return _throw(points, np.asarray(order, np.int64), float(min_distance), origin, dims,
-                  keys[sorted_index], sorted_index)
+    return _throw(
+        points, np.asarray(order, np.int64), float(min_distance), origin, dims, keys[sorted_index], sorted_index
+    )
 
 
 def min_distance_ratio(points: np.ndarray, min_distance: float) -> float:

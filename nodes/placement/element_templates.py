@@ -24,15 +24,15 @@ class ElementTemplates:
     """
 
     pts_start: np.ndarray
-    cost_end: np.ndarray       # X of the refine cost = pts[pts_start[t]:cost_end[t]] (vertices, as S)
+    cost_end: np.ndarray  # X of the refine cost = pts[pts_start[t]:cost_end[t]] (vertices, as S)
     pts: np.ndarray
     sph_start: np.ndarray
     centers: np.ndarray
     radii: np.ndarray
-    bound: np.ndarray          # radius about the origin outside which the implicit function is ≤ 0
-    circumradius: np.ndarray   # max vertex distance from the origin (S: b)
-    length: np.ndarray         # longest bounding-box extent
-    inscribed: np.ndarray      # largest medial sphere radius
+    bound: np.ndarray  # radius about the origin outside which the implicit function is ≤ 0
+    circumradius: np.ndarray  # max vertex distance from the origin (S: b)
+    length: np.ndarray  # longest bounding-box extent
+    inscribed: np.ndarray  # largest medial sphere radius
     kind_first: np.ndarray
     fit: tuple[dict, ...]
 
@@ -74,7 +74,7 @@ def with_medial_spheres(library: ElementLibrary, tolerance: float, max_spheres: 
         fits.append(union_fit(mesh.vertices, mesh.faces, c, r))
     packed = np.zeros((len(found), max(len(f) for f in found), 4))
     for index, spheres in enumerate(found):
-        packed[index, :len(spheres)] = spheres
+        packed[index, : len(spheres)] = spheres
     props = dict(library.props)
     props[SPHERES] = packed
     props[SPHERE_COUNT] = np.array([len(f) for f in found], np.int64)
@@ -98,7 +98,7 @@ def _spheres_of(library: ElementLibrary, index: int, tolerance: float, max_spher
     from .medial_spheres import union_fit
 
     if SPHERES in library.props:
-        rows = library.props[SPHERES][index, :int(library.props[SPHERE_COUNT][index])]
+        rows = library.props[SPHERES][index, : int(library.props[SPHERE_COUNT][index])]
         fit = {key: float(library.props[f"medial_fit_{key}"][index]) for key in FIT_KEYS}
         return np.ascontiguousarray(rows[:, :3]), rows[:, 3].copy(), fit
     mesh = library.meshes[index]
@@ -106,8 +106,13 @@ def _spheres_of(library: ElementLibrary, index: int, tolerance: float, max_spher
     return c, r, union_fit(mesh.vertices, mesh.faces, c, r) if measure_fit else {}
 
 
-def build_templates(libraries: tuple[ElementLibrary, ...], tolerance: float, max_spheres: int,
-                    cost_points: int, measure_fit: bool = False) -> ElementTemplates:
+def build_templates(
+    libraries: tuple[ElementLibrary, ...],
+    tolerance: float,
+    max_spheres: int,
+    cost_points: int,
+    measure_fit: bool = False,
+) -> ElementTemplates:
     """Medial spheres (carried in props, else computed) and cost points of every mesh of every library."""
     from .medial_spheres import element_length
 
@@ -138,10 +143,20 @@ def build_templates(libraries: tuple[ElementLibrary, ...], tolerance: float, max
         return start
 
     pts_start = csr(pts)
-    return ElementTemplates(pts_start, pts_start[:-1] + np.array(cost_counts, np.int64), np.ascontiguousarray(np.vstack(pts)), csr(radii),
-                            np.ascontiguousarray(np.vstack(centers)), np.concatenate(radii), np.array(bound),
-                            np.array(circum), np.array(length), np.array(inscribed), np.array(kind_first, np.int64),
-                            tuple(fit))
+    return ElementTemplates(
+        pts_start,
+        pts_start[:-1] + np.array(cost_counts, np.int64),
+        np.ascontiguousarray(np.vstack(pts)),
+        csr(radii),
+        np.ascontiguousarray(np.vstack(centers)),
+        np.concatenate(radii),
+        np.array(bound),
+        np.array(circum),
+        np.array(length),
+        np.array(inscribed),
+        np.array(kind_first, np.int64),
+        tuple(fit),
+    )
 
 
 def template_params():
@@ -149,9 +164,22 @@ def template_params():
     from nodegraph.params import Param
 
     return {
-        "sphere_tolerance": Param(float, 0.02, "medial spheres must touch the surface within this share of the element length (only for libraries not carrying spheres from medial_spheres)", range=(0.001, 0.5)),
-        "max_spheres": Param(int, 64, "most medial spheres per element, cost grows linearly with it (only for libraries not carrying spheres)", range=(1, 4096)),
-        "cost_points": Param(int, 64, "element vertices (farthest-point spread) whose overlap the cost sums (S: all)", range=(4, 100000)),
+        "sphere_tolerance": Param(
+            float,
+            0.02,
+            "medial spheres must touch the surface within this share of the element length (only for libraries "
+            "not carrying spheres from medial_spheres)",
+            range=(0.001, 0.5),
+        ),
+        "max_spheres": Param(
+            int,
+            64,
+            "most medial spheres per element, cost grows linearly with it (only for libraries not carrying spheres)",
+            range=(1, 4096),
+        ),
+        "cost_points": Param(
+            int, 64, "element vertices (farthest-point spread) whose overlap the cost sums (S: all)", range=(4, 100000)
+        ),
     }
 
 
@@ -170,8 +198,10 @@ def matching_libraries(placement, libraries) -> tuple[ElementLibrary, ...]:
     names = tuple(lib.kind for lib in libraries)
     if not placement.kind_names:
         if len(libraries) != 1:
-            raise ValueError(f"libraries: the placement has no kinds (no mix_ratio upstream) but {len(libraries)} "
-                             "libraries were given; mix them with mix_ratio first")
+            raise ValueError(
+                f"libraries: the placement has no kinds (no mix_ratio upstream) but {len(libraries)} "
+                "libraries were given; mix them with mix_ratio first"
+            )
         return libraries
     by_name = dict(zip(names, libraries))
     missing = [k for k in placement.kind_names if k not in by_name]

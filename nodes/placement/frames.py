@@ -6,14 +6,17 @@ import numpy as np
 
 
 def local_frames(normals: np.ndarray, directions: np.ndarray | None) -> np.ndarray:
-    """Columns (u, v, w): w = unit normal, u = ``directions`` projected on the tangent plane (any tangent if none/parallel)."""
+    """Columns (u, v, w): w = unit normal, u = ``directions`` projected on the tangent plane (any tangent if
+    none/parallel)."""
     w = normals / np.linalg.norm(normals, axis=1, keepdims=True)
     fallback = np.eye(3)[np.argmin(np.abs(w), axis=1)]  # the axis least aligned with w
     guide = fallback if directions is None else np.asarray(directions, float)
     u = guide - (guide * w).sum(axis=1, keepdims=True) * w
     length = np.linalg.norm(u, axis=1)
     degenerate = length < 1e-9
-    u[degenerate] = fallback[degenerate] - (fallback[degenerate] * w[degenerate]).sum(axis=1, keepdims=True) * w[degenerate]
+    u[degenerate] = (
+        fallback[degenerate] - (fallback[degenerate] * w[degenerate]).sum(axis=1, keepdims=True) * w[degenerate]
+    )
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     v = np.cross(w, u)
     return np.stack([u, v, w], axis=2)

@@ -21,8 +21,14 @@ def distance_to_surface(points, vertices, faces):
     for i in range(points.shape[0]):
         best = np.inf
         for f in range(faces.shape[0]):
-            ex, ey, ez = point_triangle_offset(points[i, 0], points[i, 1], points[i, 2], vertices[faces[f, 0]],
-                                               vertices[faces[f, 1]], vertices[faces[f, 2]])
+            ex, ey, ez = point_triangle_offset(
+                points[i, 0],
+                points[i, 1],
+                points[i, 2],
+                vertices[faces[f, 0]],
+                vertices[faces[f, 1]],
+                vertices[faces[f, 2]],
+            )
             best = min(best, ex * ex + ey * ey + ez * ez)
         out[i] = np.sqrt(best)
     return out
@@ -48,7 +54,9 @@ def inner_poles(points: np.ndarray, normals: np.ndarray):
     try:
         vor = Voronoi(points)
     except QhullError as exc:
-        raise ValueError(f"element mesh has no interior (Voronoi of its surface failed: {str(exc).splitlines()[0]})") from None
+        raise ValueError(
+            f"element mesh has no interior (Voronoi of its surface failed: {str(exc).splitlines()[0]})"
+        ) from None
     centers = np.full((len(points), 3), np.nan)
     for i, region_index in enumerate(vor.point_region):
         region = [v for v in vor.regions[region_index] if v >= 0]
@@ -70,8 +78,7 @@ def element_length(vertices: np.ndarray) -> float:
     return float(np.ptp(vertices, axis=0).max())
 
 
-def medial_spheres(vertices: np.ndarray, faces: np.ndarray, tolerance: float, max_spheres: int,
-                   samples: int = 2000):
+def medial_spheres(vertices: np.ndarray, faces: np.ndarray, tolerance: float, max_spheres: int, samples: int = 2000):
     """Spheres (centres, radii) whose union matches the mesh within ``tolerance``·length.
 
     Raises ValueError for an element without interior (flat or open): no inner pole survives.
@@ -124,8 +131,9 @@ def largest_inscribed_radius(vertices: np.ndarray, faces: np.ndarray, samples: i
     return float(distance_to_surface(centers[top], vertices, faces).max())
 
 
-def union_fit(vertices: np.ndarray, faces: np.ndarray, centers: np.ndarray, radii: np.ndarray,
-              grid: int = 24) -> dict[str, float]:
+def union_fit(
+    vertices: np.ndarray, faces: np.ndarray, centers: np.ndarray, radii: np.ndarray, grid: int = 24
+) -> dict[str, float]:
     """How well the union of spheres matches the mesh, in element lengths and volume shares.
 
     ``gap_mean``/``gap_max``: distance from surface samples to the union's surface; ``volume``:
@@ -142,5 +150,9 @@ def union_fit(vertices: np.ndarray, faces: np.ndarray, centers: np.ndarray, radi
     ix, iy, iz = np.nonzero(inside)
     interior = np.stack([axes[0][ix], axes[1][iy], axes[2][iz]], axis=1)
     covered = (np.linalg.norm(interior[:, None, :] - centers[None, :, :], axis=2) <= radii).any(axis=1)
-    return {"gap_mean": float(np.abs(gap).mean() / length), "gap_max": float(np.abs(gap).max() / length),
-            "volume": float(covered.mean()) if len(covered) else 0.0, "spheres": float(len(radii))}
+    return {
+        "gap_mean": float(np.abs(gap).mean() / length),
+        "gap_max": float(np.abs(gap).max() / length),
+        "volume": float(covered.mean()) if len(covered) else 0.0,
+        "spheres": float(len(radii)),
+    }

@@ -1,4 +1,5 @@
-"""The ``mix_ratio`` node: element kinds and variants by user ratios per P_num — SPEC §2.4 (G §3.2.2.3, S rice : chestnut)."""
+"""The ``mix_ratio`` node: element kinds and variants by user ratios per P_num — SPEC §2.4
+(G §3.2.2.3, S rice : chestnut)."""
 
 from __future__ import annotations
 
@@ -8,17 +9,30 @@ import numpy as np
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
+
 from ..values import Aggregate, ElementLibrary, Placement
 
 
 @node(
     "mix_ratio",
     version=1,
-    inputs={"placement": In(Placement, "placed (and rotated) points"),
-            "libraries": In(ElementLibrary, "one library per element kind", many=True)},
-    outputs={"placement": Out(Placement, "points with kinds and variants"),
-             "aggregate": Out(Aggregate, "placement with its libraries")},
-    params={"ratios": Param(list[float], None, "relative amounts per library, e.g. [100, 1]; normalised to sum 1 (empty: equal)", range=(0.0, None), nullable=True)},
+    inputs={
+        "placement": In(Placement, "placed (and rotated) points"),
+        "libraries": In(ElementLibrary, "one library per element kind", many=True),
+    },
+    outputs={
+        "placement": Out(Placement, "points with kinds and variants"),
+        "aggregate": Out(Aggregate, "placement with its libraries"),
+    },
+    params={
+        "ratios": Param(
+            list[float],
+            None,
+            "relative amounts per library, e.g. [100, 1]; normalised to sum 1 (empty: equal)",
+            range=(0.0, None),
+            nullable=True,
+        )
+    },
     random=True,
 )
 def mix_ratio(ctx, placement, libraries, *, ratios):

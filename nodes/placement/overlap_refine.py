@@ -1,4 +1,5 @@
-"""The ``overlap_refine`` node: one golden-section move per element along its normal — SPEC §2.5–2.6 (S eq. 2, G eq. 1)."""
+"""The ``overlap_refine`` node: one golden-section move per element along its normal — SPEC §2.5–2.6
+(S eq. 2, G eq. 1)."""
 
 from __future__ import annotations
 
@@ -7,8 +8,8 @@ import numpy as np
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
-from ..values import Aggregate, ElementLibrary, Placement
 
+from ..values import Aggregate, ElementLibrary, Placement
 from .element_templates import template_params
 
 
@@ -21,28 +22,71 @@ def _check(params: dict) -> list[tuple[str, str]]:
 @node(
     "overlap_refine",
     version=3,
-    inputs={"placement": In(Placement, "placed, rotated, mixed elements"),
-            "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True)},
-    outputs={"placement": Out(Placement, "moved elements: offsets t and residual overlap depth filled"),
-             "aggregate": Out(Aggregate, "placement with its libraries"),
-             "stats": Out(Table, "per element variant: medial spheres and how well their union fits the mesh")},
+    inputs={
+        "placement": In(Placement, "placed, rotated, mixed elements"),
+        "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),
+    },
+    outputs={
+        "placement": Out(Placement, "moved elements: offsets t and residual overlap depth filled"),
+        "aggregate": Out(Aggregate, "placement with its libraries"),
+        "stats": Out(Table, "per element variant: medial spheres and how well their union fits the mesh"),
+    },
     params={
-        "cost": Param(str, "sakurai", "sakurai: S eq. 2 (Σ f + a|t|, t ∈ [−b, b]); gan: G eq. 1 (max f + penalty, t ∈ [0, r·C_refine])", choices=("sakurai", "gan")),
-        "slope": Param(float, 0.1, "a of S eq. 2: cost per unit of travel, keeps elements near the surface", range=(0.0, 1e3)),
-        "range_scale": Param(float, 1.0, "b = range_scale × kind refine_range × element circumradius (S: 1)", range=(0.0, 10.0)),
-        "r": Param(float, None, "Poisson radius r of G eq. 1 (gan cost only)", range=(1e-6, 1e5), units="mm", nullable=True),
+        "cost": Param(
+            str,
+            "sakurai",
+            "sakurai: S eq. 2 (Σ f + a|t|, t ∈ [−b, b]); gan: G eq. 1 (max f + penalty, t ∈ [0, r·C_refine])",
+            choices=("sakurai", "gan"),
+        ),
+        "slope": Param(
+            float, 0.1, "a of S eq. 2: cost per unit of travel, keeps elements near the surface", range=(0.0, 1e3)
+        ),
+        "range_scale": Param(
+            float, 1.0, "b = range_scale × kind refine_range × element circumradius (S: 1)", range=(0.0, 10.0)
+        ),
+        "r": Param(
+            float, None, "Poisson radius r of G eq. 1 (gan cost only)", range=(1e-6, 1e5), units="mm", nullable=True
+        ),
         "c_refine": Param(float, 2.0, "C_refine of G eq. 1: range and penalty r·C_refine", range=(0.0, 100.0)),
-        "offset": Param(float, 0.0, "T of G eq. 2: overlap tolerated before the implicit function turns positive", range=(0.0, 1e3), units="mm"),
-        "passes": Param(int, 1, "refine sweeps, each in a fresh random order (S: 1); later sweeps re-balance within the same range about the surface", range=(1, 64)),
+        "offset": Param(
+            float,
+            0.0,
+            "T of G eq. 2: overlap tolerated before the implicit function turns positive",
+            range=(0.0, 1e3),
+            units="mm",
+        ),
+        "passes": Param(
+            int,
+            1,
+            "refine sweeps, each in a fresh random order (S: 1); later sweeps re-balance within the same range "
+            "about the surface",
+            range=(1, 64),
+        ),
         "tolerance": Param(float, 0.01, "golden-section end bracket as a share of the search range", range=(1e-6, 0.5)),
         **template_params(),
     },
     random=True,
     check=_check,
 )
-def overlap_refine(ctx, placement, libraries, *, cost, slope, range_scale, r, c_refine, offset, passes, tolerance,
-                   sphere_tolerance, max_spheres, cost_points):
-    """Medial-sphere implicit functions per variant, then each element once per pass in random order (colour classes in parallel)."""
+def overlap_refine(
+    ctx,
+    placement,
+    libraries,
+    *,
+    cost,
+    slope,
+    range_scale,
+    r,
+    c_refine,
+    offset,
+    passes,
+    tolerance,
+    sphere_tolerance,
+    max_spheres,
+    cost_points,
+):
+    """Medial-sphere implicit functions per variant, then each element once per pass in random order (colour
+    classes in parallel)."""
     from .element_templates import FIT_KEYS, build_templates, matching_libraries, with_kind_names
     from .refine import RefineSettings, refine_placement
 
@@ -52,8 +96,15 @@ def overlap_refine(ctx, placement, libraries, *, cost, slope, range_scale, r, c_
         return {"placement": placement, "aggregate": Aggregate(placement, libraries), "stats": Table(empty)}
     placement = with_kind_names(placement, libraries)
     templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points, measure_fit=True)
-    settings = RefineSettings(cost=cost, slope=slope, range_scale=range_scale, spacing=r or 0.0,
-                              c_refine=c_refine, offset=offset, tolerance=tolerance)
+    settings = RefineSettings(
+        cost=cost,
+        slope=slope,
+        range_scale=range_scale,
+        spacing=r or 0.0,
+        c_refine=c_refine,
+        offset=offset,
+        tolerance=tolerance,
+    )
     ranges = np.array([lib.refine_range for lib in libraries])
     orders = [ctx.rng.permutation(len(placement)) for _ in range(passes)]
     refined = refine_placement(placement, templates, ranges, settings, orders)

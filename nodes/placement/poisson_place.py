@@ -1,4 +1,5 @@
-"""The ``poisson_place`` node: maximal Poisson-sphere placement on or in a shape — SPEC §2.1–2.2 (S §3.1, G §3.2.2.1)."""
+"""The ``poisson_place`` node: maximal Poisson-sphere placement on or in a shape — SPEC §2.1–2.2
+(S §3.1, G §3.2.2.1)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import numpy as np
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh, Table
+
 from ..values import ElementLibrary, Placement
 
 
@@ -15,20 +17,51 @@ from ..values import ElementLibrary, Placement
     version=3,
     inputs={
         "shape": In(Mesh, "closed target shape (outward normals)"),
-        "elements": In(ElementLibrary, "elements that set r when r is not given (S: half the largest inscribed sphere radius)",
-                       optional=True, many=True),
+        "elements": In(
+            ElementLibrary,
+            "elements that set r when r is not given (S: half the largest inscribed sphere radius)",
+            optional=True,
+            many=True,
+        ),
     },
     outputs={
         "placement": Out(Placement, "placed points: position, normal (volume: local up +z), P_num in placing order"),
         "stats": Out(Table, "candidates, placed, r, min-distance ratio"),
     },
     params={
-        "mode": Param(str, "surface", "surface: a shell on the shape (S); volume: fill the inside (G)", choices=("surface", "volume")),
-        "r": Param(float, None, "exclusion radius; placed points are ≥ 2r apart (empty: from the elements)", range=(1e-6, 1e5), units="mm", nullable=True),
-        "r_scale": Param(float, 1.0, "factor on r derived from the elements (S: 1, neighbours always overlap; 2: r = the inscribed radius, a thinner shell that refines with little overlap)", range=(0.05, 20.0)),
-        "candidates": Param(str, "random", "surface candidates: random (area-weighted) or subdivide (S)", choices=("random", "subdivide")),
-        "candidate_spacing": Param(float, 1.0, "candidate spacing as a share of r (S: edges ≤ r, i.e. 1)", range=(0.05, 4.0)),
-        "max_candidates": Param(int, 5_000_000, "refuse when more candidates than this would be made (memory guard)", range=(1, 500_000_000)),
+        "mode": Param(
+            str,
+            "surface",
+            "surface: a shell on the shape (S); volume: fill the inside (G)",
+            choices=("surface", "volume"),
+        ),
+        "r": Param(
+            float,
+            None,
+            "exclusion radius; placed points are ≥ 2r apart (empty: from the elements)",
+            range=(1e-6, 1e5),
+            units="mm",
+            nullable=True,
+        ),
+        "r_scale": Param(
+            float,
+            1.0,
+            "factor on r derived from the elements (S: 1, neighbours always overlap; 2: r = the inscribed radius, "
+            "a thinner shell that refines with little overlap)",
+            range=(0.05, 20.0),
+        ),
+        "candidates": Param(
+            str,
+            "random",
+            "surface candidates: random (area-weighted) or subdivide (S)",
+            choices=("random", "subdivide"),
+        ),
+        "candidate_spacing": Param(
+            float, 1.0, "candidate spacing as a share of r (S: edges ≤ r, i.e. 1)", range=(0.05, 4.0)
+        ),
+        "max_candidates": Param(
+            int, 5_000_000, "refuse when more candidates than this would be made (memory guard)", range=(1, 500_000_000)
+        ),
     },
     random=True,
 )
@@ -44,14 +77,18 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
         r = r_scale * _radius_from_elements(elements)
     extent = float(np.ptp(solid.vertices, axis=0).max())
     if 2.0 * r > extent:
-        raise ValueError(f"r: {r:g} is larger than the shape (points must be 2r = {2 * r:g} apart, the shape spans "
-                         f"{extent:g}); use r < {extent / 2:g}")
+        raise ValueError(
+            f"r: {r:g} is larger than the shape (points must be 2r = {2 * r:g} apart, the shape spans "
+            f"{extent:g}); use r < {extent / 2:g}"
+        )
     spacing = candidate_spacing * r
     estimate = estimate_candidates(mode, solid.area, solid.volume, spacing)
     if estimate > max_candidates:
-        raise ValueError(f"r: {r:g} with candidate_spacing {candidate_spacing:g} would make ~{estimate:,} candidates "
-                         f"(~{estimate * BYTES_PER_CANDIDATE / 2**20:,.0f} MiB), over max_candidates {max_candidates:,}; "
-                         "raise r or candidate_spacing, or max_candidates if the memory is there")
+        raise ValueError(
+            f"r: {r:g} with candidate_spacing {candidate_spacing:g} would make ~{estimate:,} candidates "
+            f"(~{estimate * BYTES_PER_CANDIDATE / 2**20:,.0f} MiB), over max_candidates {max_candidates:,}; "
+            "raise r or candidate_spacing, or max_candidates if the memory is there"
+        )
     vertices, faces = np.asarray(solid.vertices), np.asarray(solid.faces)
     if mode == "surface":
         points, normals = surface_candidates(vertices, faces, spacing, candidates, ctx.rng)
@@ -67,8 +104,14 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
 
         ctx.rerun.log("candidates", rr.Points3D(points, radii=0.1 * r))
         ctx.rerun.log("placed", rr.Points3D(placement.positions, radii=r))
-    stats = Table({"candidates": np.array([len(points)]), "placed": np.array([len(placement)]),
-                   "r": np.array([r]), "min_distance_ratio": np.array([ratio])})
+    stats = Table(
+        {
+            "candidates": np.array([len(points)]),
+            "placed": np.array([len(placement)]),
+            "r": np.array([r]),
+            "min_distance_ratio": np.array([ratio]),
+        }
+    )
     return {"placement": placement, "stats": stats}
 
 

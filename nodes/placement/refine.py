@@ -11,7 +11,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..values import Placement
-
 from .element_templates import ElementTemplates
 
 COSTS = ("sakurai", "gan")
@@ -24,10 +23,10 @@ class RefineSettings:
     cost: str = "sakurai"
     slope: float = 0.1
     range_scale: float = 1.0
-    spacing: float = 0.0      # G's r (Poisson radius); needed by the gan cost
+    spacing: float = 0.0  # G's r (Poisson radius); needed by the gan cost
     c_refine: float = 2.0
-    offset: float = 0.0       # T of G eq. 2
-    tolerance: float = 0.01   # golden-section bracket at the end, as a share of the search range
+    offset: float = 0.0  # T of G eq. 2
+    tolerance: float = 0.01  # golden-section bracket at the end, as a share of the search range
 
 
 def golden_iterations(tolerance: float) -> int:
@@ -35,8 +34,13 @@ def golden_iterations(tolerance: float) -> int:
     return max(1, int(np.ceil(np.log(tolerance) / np.log((np.sqrt(5.0) - 1.0) / 2.0))))
 
 
-def _search_ranges(placement: Placement, templates: ElementTemplates, tmpl: np.ndarray,
-                   refine_ranges: np.ndarray, settings: RefineSettings):
+def _search_ranges(
+    placement: Placement,
+    templates: ElementTemplates,
+    tmpl: np.ndarray,
+    refine_ranges: np.ndarray,
+    settings: RefineSettings,
+):
     scale = refine_ranges[placement.kinds]
     if settings.cost == "sakurai":
         b = settings.range_scale * scale * templates.circumradius[tmpl]
@@ -58,13 +62,27 @@ def _depths(positions, rotations, tmpl, nb_start, nb, alive, templates: ElementT
     """Per live element the deepest overlap with its live neighbours (refine_kernels.overlap_depths)."""
     from .refine_kernels import overlap_depths
 
-    return overlap_depths(positions, rotations, tmpl, nb_start, nb, alive, templates.pts_start, templates.pts,
-                          templates.sph_start, templates.centers, templates.radii, templates.bound,
-                          templates.circumradius, offset)
+    return overlap_depths(
+        positions,
+        rotations,
+        tmpl,
+        nb_start,
+        nb,
+        alive,
+        templates.pts_start,
+        templates.pts,
+        templates.sph_start,
+        templates.centers,
+        templates.radii,
+        templates.bound,
+        templates.circumradius,
+        offset,
+    )
 
 
-def refine_placement(placement: Placement, templates: ElementTemplates, refine_ranges: np.ndarray,
-                     settings: RefineSettings, orders) -> Placement:
+def refine_placement(
+    placement: Placement, templates: ElementTemplates, refine_ranges: np.ndarray, settings: RefineSettings, orders
+) -> Placement:
     """Move each element along its normal to the golden-section minimum of the cost, once per pass.
 
     ``orders``: one permutation per pass (S: a single pass). Later passes search the same range about
@@ -90,21 +108,44 @@ def refine_placement(placement: Placement, templates: ElementTemplates, refine_r
         nb_start, nb = neighbours(positions, templates, tmpl, travel + np.abs(travelled))
         order = np.asarray(order, np.int64)
         colour = colour_in_order(order, nb_start, nb)
-        moved = refine_offsets(positions, rotations, normals, tmpl, lo - travelled, hi - travelled, nb_start, nb,
-                               colour, order, templates.pts_start, templates.cost_end, templates.pts,
-                               templates.sph_start, templates.centers, templates.radii, templates.bound,
-                               templates.circumradius, settings.offset, cost_kind, settings.slope,
-                               settings.spacing * settings.c_refine, golden_iterations(settings.tolerance), travelled,
-                               4 * numba.get_num_threads())
+        moved = refine_offsets(
+            positions,
+            rotations,
+            normals,
+            tmpl,
+            lo - travelled,
+            hi - travelled,
+            nb_start,
+            nb,
+            colour,
+            order,
+            templates.pts_start,
+            templates.cost_end,
+            templates.pts,
+            templates.sph_start,
+            templates.centers,
+            templates.radii,
+            templates.bound,
+            templates.circumradius,
+            settings.offset,
+            cost_kind,
+            settings.slope,
+            settings.spacing * settings.c_refine,
+            golden_iterations(settings.tolerance),
+            travelled,
+            4 * numba.get_num_threads(),
+        )
         travelled += moved
     nb_start, nb = neighbours(positions, templates, tmpl, np.zeros(n))
     depth = _depths(positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates, settings.offset)
-    return dataclasses.replace(placement, positions=positions, rotations=rotations,
-                               offsets=placement.offsets + travelled, overlap=depth)
+    return dataclasses.replace(
+        placement, positions=positions, rotations=rotations, offsets=placement.offsets + travelled, overlap=depth
+    )
 
 
-def cull_placement(placement: Placement, templates: ElementTemplates, threshold: float,
-                   offset: float) -> tuple[np.ndarray, np.ndarray]:
+def cull_placement(
+    placement: Placement, templates: ElementTemplates, threshold: float, offset: float
+) -> tuple[np.ndarray, np.ndarray]:
     """(keep mask, depth): deepest first, an element goes while its depth with live neighbours > D.
 
     ``depth`` is, for kept elements, the depth against the kept neighbours; for culled ones the
@@ -119,8 +160,22 @@ def cull_placement(placement: Placement, templates: ElementTemplates, threshold:
     nb_start, nb = neighbours(placement.positions, templates, tmpl, np.zeros(n))
     rotations = np.ascontiguousarray(placement.rotations)
     depth = _depths(placement.positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates, offset)
-    keep = cull_deepest(depth, threshold, placement.positions, rotations, tmpl, nb_start, nb, templates.pts_start,
-                        templates.pts, templates.sph_start, templates.centers, templates.radii, templates.bound,
-                        templates.circumradius, offset)
+    keep = cull_deepest(
+        depth,
+        threshold,
+        placement.positions,
+        rotations,
+        tmpl,
+        nb_start,
+        nb,
+        templates.pts_start,
+        templates.pts,
+        templates.sph_start,
+        templates.centers,
+        templates.radii,
+        templates.bound,
+        templates.circumradius,
+        offset,
+    )
     after = _depths(placement.positions, rotations, tmpl, nb_start, nb, keep, templates, offset)
     return keep, np.where(keep, after, depth)

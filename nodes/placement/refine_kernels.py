@@ -105,9 +105,35 @@ def _implicit(q0, q1, q2, centers, radii, s0, s1, offset):
 
 
 @njit(cache=True)
-def _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, cost_end, pts,
-                  sph_start, centers, radii, bound, circumradius, offset, world, pair_range, pair_lo, pair_hi,
-                  bump_t0, bump_perp2, bump_r, bump_lo, bump_hi):
+def _gather_bumps(
+    i,
+    positions,
+    rotations,
+    normals,
+    template,
+    t_lo,
+    t_hi,
+    nb_start,
+    nb,
+    pts_start,
+    cost_end,
+    pts,
+    sph_start,
+    centers,
+    radii,
+    bound,
+    circumradius,
+    offset,
+    world,
+    pair_range,
+    pair_lo,
+    pair_hi,
+    bump_t0,
+    bump_perp2,
+    bump_r,
+    bump_lo,
+    bump_hi,
+):
     """Overlap of i with its neighbours as 1-D bumps in t (S eq. 2 made one-dimensional).
 
     A cost point x moving as x + t·n passes sphere s of neighbour j with depth
@@ -187,8 +213,9 @@ def _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_sta
 
 
 @njit(cache=True)
-def _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset,
-                use_max):
+def _overlap_at(
+    t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset, use_max
+):
     """Σ (or max) over (point, neighbour) pairs of the neighbour's implicit function f > 0 at x + t·n."""
     total = 0.0
     for p in range(npairs):
@@ -209,83 +236,303 @@ def _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bu
 
 
 @njit(cache=True)
-def _cost(t, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
-          bump_lo, bump_hi, offset, start):
+def _cost(
+    t,
+    cost_kind,
+    slope,
+    penalty,
+    npairs,
+    pair_range,
+    pair_lo,
+    pair_hi,
+    bump_t0,
+    bump_perp2,
+    bump_r,
+    bump_lo,
+    bump_hi,
+    offset,
+    start,
+):
     """S eq. 2: Σ f(x + t·n) + a·|t|;  G eq. 1: a(max f(x + t·n)) + t with a(h) = h + r·C_refine if h > 0.
 
     ``start`` is the offset from the surface already travelled in earlier passes: the travel term counts
     from the surface point, not from the current position.
     """
     if cost_kind == SAKURAI:
-        return _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi,
-                           offset, False) + slope * abs(start + t)
-    h = _overlap_at(t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset,
-                    True)
+        return _overlap_at(
+            t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset, False
+        ) + slope * abs(start + t)
+    h = _overlap_at(
+        t, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset, True
+    )
     return (h + penalty if h > 0.0 else 0.0) + start + t
 
 
 @njit(cache=True)
-def _golden_section(lo, hi, iterations, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0,
-                    bump_perp2, bump_r, bump_lo, bump_hi, offset, start):
+def _golden_section(
+    lo,
+    hi,
+    iterations,
+    cost_kind,
+    slope,
+    penalty,
+    npairs,
+    pair_range,
+    pair_lo,
+    pair_hi,
+    bump_t0,
+    bump_perp2,
+    bump_r,
+    bump_lo,
+    bump_hi,
+    offset,
+    start,
+):
     """Golden-section search for the minimum of the cost on [lo, hi] (S §3.2.1, fig. 8)."""
     if npairs == 0:
         return min(max(-start, lo), hi)  # no overlap anywhere in the range: as close to the surface as allowed
     x1 = hi - INV_PHI * (hi - lo)
     x2 = lo + INV_PHI * (hi - lo)
-    f1 = _cost(x1, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
-               bump_lo, bump_hi, offset, start)
-    f2 = _cost(x2, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r,
-               bump_lo, bump_hi, offset, start)
+    f1 = _cost(
+        x1,
+        cost_kind,
+        slope,
+        penalty,
+        npairs,
+        pair_range,
+        pair_lo,
+        pair_hi,
+        bump_t0,
+        bump_perp2,
+        bump_r,
+        bump_lo,
+        bump_hi,
+        offset,
+        start,
+    )
+    f2 = _cost(
+        x2,
+        cost_kind,
+        slope,
+        penalty,
+        npairs,
+        pair_range,
+        pair_lo,
+        pair_hi,
+        bump_t0,
+        bump_perp2,
+        bump_r,
+        bump_lo,
+        bump_hi,
+        offset,
+        start,
+    )
     for _ in range(iterations):
         if f1 <= f2:
             hi, x2, f2 = x2, x1, f1
             x1 = hi - INV_PHI * (hi - lo)
-            f1 = _cost(x1, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2,
-                       bump_r, bump_lo, bump_hi, offset, start)
+            f1 = _cost(
+                x1,
+                cost_kind,
+                slope,
+                penalty,
+                npairs,
+                pair_range,
+                pair_lo,
+                pair_hi,
+                bump_t0,
+                bump_perp2,
+                bump_r,
+                bump_lo,
+                bump_hi,
+                offset,
+                start,
+            )
         else:
             lo, x1, f1 = x1, x2, f2
             x2 = lo + INV_PHI * (hi - lo)
-            f2 = _cost(x2, cost_kind, slope, penalty, npairs, pair_range, pair_lo, pair_hi, bump_t0, bump_perp2,
-                       bump_r, bump_lo, bump_hi, offset, start)
+            f2 = _cost(
+                x2,
+                cost_kind,
+                slope,
+                penalty,
+                npairs,
+                pair_range,
+                pair_lo,
+                pair_hi,
+                bump_t0,
+                bump_perp2,
+                bump_r,
+                bump_lo,
+                bump_hi,
+                offset,
+                start,
+            )
     return 0.5 * (lo + hi)
 
 
 @njit(cache=True)
 def _bump_buffers(capacity):
-    """Scratch for _gather_bumps: pair_range, pair_lo, pair_hi for ``capacity`` pairs, five bump arrays for 4× as many."""
-    return (np.empty(capacity + 1, np.int64), np.empty(capacity), np.empty(capacity), np.empty(4 * capacity),
-            np.empty(4 * capacity), np.empty(4 * capacity), np.empty(4 * capacity), np.empty(4 * capacity))
+    """Scratch for _gather_bumps: pair_range, pair_lo, pair_hi for ``capacity`` pairs, five bump arrays for
+    4× as many."""
+    return (
+        np.empty(capacity + 1, np.int64),
+        np.empty(capacity),
+        np.empty(capacity),
+        np.empty(4 * capacity),
+        np.empty(4 * capacity),
+        np.empty(4 * capacity),
+        np.empty(4 * capacity),
+        np.empty(4 * capacity),
+    )
 
 
 @njit(cache=True)
-def _refine_chunk(members, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start, cost_end, pts,
-                  sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope, penalty, iterations,
-                  max_pts, travelled, offsets):
+def _refine_chunk(
+    members,
+    positions,
+    rotations,
+    normals,
+    template,
+    t_lo,
+    t_hi,
+    nb_start,
+    nb,
+    pts_start,
+    cost_end,
+    pts,
+    sph_start,
+    centers,
+    radii,
+    bound,
+    circumradius,
+    offset,
+    cost_kind,
+    slope,
+    penalty,
+    iterations,
+    max_pts,
+    travelled,
+    offsets,
+):
     """Refine a run of mutually independent elements with one set of scratch buffers (grown on demand)."""
     capacity = 1024
     world = np.empty((max_pts, 3))
     pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi = _bump_buffers(capacity)
     for i in members:
-        npairs, _ = _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, pts_start,
-                                  cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, world, pair_range,
-                                  pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi)
+        npairs, _ = _gather_bumps(
+            i,
+            positions,
+            rotations,
+            normals,
+            template,
+            t_lo,
+            t_hi,
+            nb_start,
+            nb,
+            pts_start,
+            cost_end,
+            pts,
+            sph_start,
+            centers,
+            radii,
+            bound,
+            circumradius,
+            offset,
+            world,
+            pair_range,
+            pair_lo,
+            pair_hi,
+            bump_t0,
+            bump_perp2,
+            bump_r,
+            bump_lo,
+            bump_hi,
+        )
         while npairs < 0:
             capacity *= 4
             pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi = _bump_buffers(capacity)
-            npairs, _ = _gather_bumps(i, positions, rotations, normals, template, t_lo, t_hi, nb_start, nb,
-                                      pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, world,
-                                      pair_range, pair_lo, pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi)
-        t = _golden_section(t_lo[i], t_hi[i], iterations, cost_kind, slope, penalty, npairs, pair_range, pair_lo,
-                            pair_hi, bump_t0, bump_perp2, bump_r, bump_lo, bump_hi, offset, travelled[i])
+            npairs, _ = _gather_bumps(
+                i,
+                positions,
+                rotations,
+                normals,
+                template,
+                t_lo,
+                t_hi,
+                nb_start,
+                nb,
+                pts_start,
+                cost_end,
+                pts,
+                sph_start,
+                centers,
+                radii,
+                bound,
+                circumradius,
+                offset,
+                world,
+                pair_range,
+                pair_lo,
+                pair_hi,
+                bump_t0,
+                bump_perp2,
+                bump_r,
+                bump_lo,
+                bump_hi,
+            )
+        t = _golden_section(
+            t_lo[i],
+            t_hi[i],
+            iterations,
+            cost_kind,
+            slope,
+            penalty,
+            npairs,
+            pair_range,
+            pair_lo,
+            pair_hi,
+            bump_t0,
+            bump_perp2,
+            bump_r,
+            bump_lo,
+            bump_hi,
+            offset,
+            travelled[i],
+        )
         offsets[i] = t
         for d in range(3):
             positions[i, d] += t * normals[i, d]
 
 
 @njit(cache=True, parallel=True)
-def refine_offsets(positions, rotations, normals, template, t_lo, t_hi, nb_start, nb, colour, order,
-                   pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset, cost_kind, slope,
-                   penalty, iterations, travelled, chunks):
+def refine_offsets(
+    positions,
+    rotations,
+    normals,
+    template,
+    t_lo,
+    t_hi,
+    nb_start,
+    nb,
+    colour,
+    order,
+    pts_start,
+    cost_end,
+    pts,
+    sph_start,
+    centers,
+    radii,
+    bound,
+    circumradius,
+    offset,
+    cost_kind,
+    slope,
+    penalty,
+    iterations,
+    travelled,
+    chunks,
+):
     """Offsets t per element (positions updated in place), colour class by colour class in ``order``.
 
     ``travelled``: each element's offset from its surface point before this pass (0 on the first).
@@ -316,15 +563,40 @@ def refine_offsets(positions, rotations, normals, template, t_lo, t_hi, nb_start
         for part in prange(parts):
             lo = start + (size * part) // parts
             hi = start + (size * (part + 1)) // parts
-            _refine_chunk(members[lo:hi], positions, rotations, normals, template, t_lo, t_hi, nb_start, nb,
-                          pts_start, cost_end, pts, sph_start, centers, radii, bound, circumradius, offset,
-                          cost_kind, slope, penalty, iterations, max_pts, travelled, offsets)
+            _refine_chunk(
+                members[lo:hi],
+                positions,
+                rotations,
+                normals,
+                template,
+                t_lo,
+                t_hi,
+                nb_start,
+                nb,
+                pts_start,
+                cost_end,
+                pts,
+                sph_start,
+                centers,
+                radii,
+                bound,
+                circumradius,
+                offset,
+                cost_kind,
+                slope,
+                penalty,
+                iterations,
+                max_pts,
+                travelled,
+                offsets,
+            )
     return offsets
 
 
 @njit(cache=True)
-def _depth_into(i, j, positions, rotations, template, pts_start, pts, sph_start, centers, radii, bound, circumradius,
-                offset):
+def _depth_into(
+    i, j, positions, rotations, template, pts_start, pts, sph_start, centers, radii, bound, circumradius, offset
+):
     """max over i's cost points of j's implicit function (how deep i reaches into j), 0 if nowhere."""
     ti, tj = template[i], template[j]
     dx = positions[i, 0] - positions[j, 0]
@@ -348,36 +620,123 @@ def _depth_into(i, j, positions, rotations, template, pts_start, pts, sph_start,
 
 
 @njit(cache=True)
-def _depth_of(i, alive, positions, rotations, template, nb_start, nb, pts_start, pts, sph_start, centers, radii, bound,
-              circumradius, offset):
+def _depth_of(
+    i,
+    alive,
+    positions,
+    rotations,
+    template,
+    nb_start,
+    nb,
+    pts_start,
+    pts,
+    sph_start,
+    centers,
+    radii,
+    bound,
+    circumradius,
+    offset,
+):
     best = 0.0
     for e in range(nb_start[i], nb_start[i + 1]):
         j = nb[e]
         if alive[j]:
-            best = max(best,
-                       _depth_into(i, j, positions, rotations, template, pts_start, pts, sph_start, centers, radii,
-                                   bound, circumradius, offset),
-                       _depth_into(j, i, positions, rotations, template, pts_start, pts, sph_start, centers, radii,
-                                   bound, circumradius, offset))
+            best = max(
+                best,
+                _depth_into(
+                    i,
+                    j,
+                    positions,
+                    rotations,
+                    template,
+                    pts_start,
+                    pts,
+                    sph_start,
+                    centers,
+                    radii,
+                    bound,
+                    circumradius,
+                    offset,
+                ),
+                _depth_into(
+                    j,
+                    i,
+                    positions,
+                    rotations,
+                    template,
+                    pts_start,
+                    pts,
+                    sph_start,
+                    centers,
+                    radii,
+                    bound,
+                    circumradius,
+                    offset,
+                ),
+            )
     return best
 
 
 @njit(cache=True, parallel=True)
-def overlap_depths(positions, rotations, template, nb_start, nb, alive, pts_start, pts, sph_start, centers, radii,
-                   bound, circumradius, offset):
+def overlap_depths(
+    positions,
+    rotations,
+    template,
+    nb_start,
+    nb,
+    alive,
+    pts_start,
+    pts,
+    sph_start,
+    centers,
+    radii,
+    bound,
+    circumradius,
+    offset,
+):
     """Per element the deepest overlap with any live neighbour, both ways (SPEC §2.7 reading of G eq. 3)."""
     n = positions.shape[0]
     depth = np.zeros(n)
     for i in prange(n):
         if alive[i]:
-            depth[i] = _depth_of(i, alive, positions, rotations, template, nb_start, nb, pts_start, pts, sph_start,
-                                 centers, radii, bound, circumradius, offset)
+            depth[i] = _depth_of(
+                i,
+                alive,
+                positions,
+                rotations,
+                template,
+                nb_start,
+                nb,
+                pts_start,
+                pts,
+                sph_start,
+                centers,
+                radii,
+                bound,
+                circumradius,
+                offset,
+            )
     return depth
 
 
 @njit(cache=True)
-def cull_deepest(depth, threshold, positions, rotations, template, nb_start, nb, pts_start, pts, sph_start, centers,
-                 radii, bound, circumradius, offset):
+def cull_deepest(
+    depth,
+    threshold,
+    positions,
+    rotations,
+    template,
+    nb_start,
+    nb,
+    pts_start,
+    pts,
+    sph_start,
+    centers,
+    radii,
+    bound,
+    circumradius,
+    offset,
+):
     """Remove elements deepest first while their overlap with the still-live neighbours exceeds the threshold."""
     n = depth.shape[0]
     alive = np.ones(n, np.bool_)
@@ -386,7 +745,25 @@ def cull_deepest(depth, threshold, positions, rotations, template, nb_start, nb,
         i = order[step]
         if depth[i] <= threshold:
             break
-        if _depth_of(i, alive, positions, rotations, template, nb_start, nb, pts_start, pts, sph_start, centers,
-                     radii, bound, circumradius, offset) > threshold:
+        if (
+            _depth_of(
+                i,
+                alive,
+                positions,
+                rotations,
+                template,
+                nb_start,
+                nb,
+                pts_start,
+                pts,
+                sph_start,
+                centers,
+                radii,
+                bound,
+                circumradius,
+                offset,
+            )
+            > threshold
+        ):
             alive[i] = False
     return alive

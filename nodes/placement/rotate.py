@@ -8,6 +8,7 @@ import numpy as np
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
+
 from ..values import Placement
 
 FIELDS = ("none", "flow", "radial")
@@ -19,8 +20,20 @@ FIELDS = ("none", "flow", "radial")
     inputs={"placement": In(Placement, "placed points with normals")},
     outputs={"placement": Out(Placement, "the same points with rotations")},
     params={
-        "angles": Param(tuple[float, float, float], (180.0, 180.0, 180.0), "random angle ranges ±(u, v, w) about the local axes", range=(0.0, 180.0), units="degrees"),
-        "field": Param(str, "none", "orientation field for the element's long axis u: none (any tangent), flow (a direction projected on the tangent plane), radial (away from the origin, projected)", choices=FIELDS),
+        "angles": Param(
+            tuple[float, float, float],
+            (180.0, 180.0, 180.0),
+            "random angle ranges ±(u, v, w) about the local axes",
+            range=(0.0, 180.0),
+            units="degrees",
+        ),
+        "field": Param(
+            str,
+            "none",
+            "orientation field for the element's long axis u: none (any tangent), flow (a direction projected on "
+            "the tangent plane), radial (away from the origin, projected)",
+            choices=FIELDS,
+        ),
         "flow": Param(tuple[float, float, float], (0.0, 0.0, 1.0), "direction for field=flow"),
     },
     random=True,
@@ -31,8 +44,11 @@ def rotate(ctx, placement, *, angles, field, flow):
 
     if field == "flow" and not np.any(flow):
         raise ValueError("flow: the flow direction must not be the zero vector")
-    directions = {"none": None, "flow": np.broadcast_to(np.asarray(flow, float), placement.positions.shape),
-                  "radial": placement.positions}[field]
+    directions = {
+        "none": None,
+        "flow": np.broadcast_to(np.asarray(flow, float), placement.positions.shape),
+        "radial": placement.positions,
+    }[field]
     frames = local_frames(placement.normals, directions)
     local = random_rotations(ctx.rng, placement.p_num, np.radians(angles))
     rotations = np.einsum("nij,njk->nik", frames, local)

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-WATER_MAX = 24.0   # % — the range G rendered (water absorbed at 5 °C), SPEC §4
-SIGMA_MAX = 3.0    # rad — beyond this the kernel is flat over the lit half-circle (f_r ≈ 1/π·…); clamped
+WATER_MAX = 24.0  # % — the range G rendered (water absorbed at 5 °C), SPEC §4
+SIGMA_MAX = 3.0  # rad — beyond this the kernel is flat over the lit half-circle (f_r ≈ 1/π·…); clamped
 
 
 def sigma0_from_water(water: float, sigma0_dry: float, sigma0_wet: float) -> float:
@@ -48,8 +48,9 @@ def cdrf_exact(theta: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     """
     from scipy.special import erf
 
-    theta, sigma = np.broadcast_arrays(np.atleast_1d(np.asarray(theta, np.float64)),
-                                       np.atleast_1d(np.asarray(sigma, np.float64)))
+    theta, sigma = np.broadcast_arrays(
+        np.atleast_1d(np.asarray(theta, np.float64)), np.atleast_1d(np.asarray(sigma, np.float64))
+    )
     out = np.maximum(np.cos(theta), 0.0)
     wide = sigma > 1e-6
     t, s = theta[wide], np.minimum(sigma[wide], SIGMA_MAX)
@@ -94,5 +95,4 @@ class CdrfTable:
         j = np.minimum(y.astype(np.int64), n_sigma - 2)
         fx, fy = x - i, y - j
         v = self.values
-        return ((1 - fx) * ((1 - fy) * v[i, j] + fy * v[i, j + 1])
-                + fx * ((1 - fy) * v[i + 1, j] + fy * v[i + 1, j + 1]))
+        return (1 - fx) * ((1 - fy) * v[i, j] + fy * v[i, j + 1]) + fx * ((1 - fy) * v[i + 1, j] + fy * v[i + 1, j + 1])

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from nodegraph.values import Mesh
-from ..values import Aggregate, Material, ShadedScene
 
+from ..values import Aggregate, Material, ShadedScene
 from . import materials as mat
 from .cdrf import CdrfTable
 from .curvature import mean_curvature, vertex_normals
@@ -38,7 +38,7 @@ class ShadeSettings:
 
 @dataclass
 class _Piece:
-    mesh: Mesh          # world-space mesh of one element part (or one scenery mesh)
+    mesh: Mesh  # world-space mesh of one element part (or one scenery mesh)
     material: Material
 
 
@@ -68,8 +68,9 @@ def _element_pieces(aggregate: Aggregate, settings: ShadeSettings, numbers: dict
             parts = np.zeros(len(mesh.faces), np.int32) if mesh.parts is None else mesh.parts
             for part in np.unique(parts):
                 if part not in PART_NAMES:
-                    raise ValueError(f"element {i} ({kinds[p.kinds[i]]}): face part {part} is not an ikura part "
-                                     "(0 membrane, 1 yolk)")
+                    raise ValueError(
+                        f"element {i} ({kinds[p.kinds[i]]}): face part {part} is not an ikura part (0 membrane, 1 yolk)"
+                    )
                 pieces.append(_Piece(_submesh(mesh, parts == part, f"{mesh.name}/{PART_NAMES[part]}"), ikura[part]))
     return pieces
 
@@ -87,8 +88,11 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
     if not pieces:
         raise ValueError("aggregates: no elements to shade (every aggregate is empty)")
     ceramic = mat.ceramic_material(settings.scenery_color)
-    pieces += [_Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), ceramic)
-               for k, m in enumerate(scenery) if len(m.faces)]
+    pieces += [
+        _Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), ceramic)
+        for k, m in enumerate(scenery)
+        if len(m.faces)
+    ]
 
     counts = np.array([len(piece.mesh.vertices) for piece in pieces])
     starts = np.concatenate([[0], np.cumsum(counts)])
@@ -98,9 +102,17 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
     curvature = mean_curvature(vertices, faces, normals)
 
     per_vertex = lambda field: np.repeat(np.array([getattr(piece.material, field) for piece in pieces]), counts, axis=0)
-    colors = cdrf_colors(normals, curvature, per_vertex("base_color"), per_vertex("subsurface_color"),
-                         per_vertex("subsurface"), settings.sigma0, settings.lights, settings.ambient,
-                         settings.table).astype(np.float32)
+    colors = cdrf_colors(
+        normals,
+        curvature,
+        per_vertex("base_color"),
+        per_vertex("subsurface_color"),
+        per_vertex("subsurface"),
+        settings.sigma0,
+        settings.lights,
+        settings.ambient,
+        settings.table,
+    ).astype(np.float32)
 
     materials: list[Material] = []
     material_of = []
@@ -110,6 +122,14 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
             materials.append(piece.material)
         material_of.append(materials.index(piece.material))
         rows = slice(starts[k], starts[k + 1])
-        meshes.append(Mesh(piece.mesh.vertices, piece.mesh.faces, normals=normals[rows], colors=colors[rows],
-                           parts=piece.mesh.parts, name=piece.mesh.name))
+        meshes.append(
+            Mesh(
+                piece.mesh.vertices,
+                piece.mesh.faces,
+                normals=normals[rows],
+                colors=colors[rows],
+                parts=piece.mesh.parts,
+                name=piece.mesh.name,
+            )
+        )
     return ShadedScene(tuple(meshes), tuple(materials), np.array(material_of, np.int32))

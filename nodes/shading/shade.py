@@ -8,6 +8,7 @@ from __future__ import annotations
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
+
 from ..values import Aggregate, ShadedScene
 
 RGB = tuple[float, float, float]
@@ -29,36 +30,77 @@ def _check(params):
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "scenery": In(Mesh, "other meshes to show, e.g. the bowl (glazed ceramic)", optional=True, many=True),
     },
-    outputs={"scene": Out(ShadedScene, "one mesh per element part with CDRF vertex colours (linear RGB) "
-                                       "and its principled material")},
+    outputs={
+        "scene": Out(
+            ShadedScene, "one mesh per element part with CDRF vertex colours (linear RGB) and its principled material"
+        )
+    },
     params={
-        "water_content": Param(float, 15.0, "water absorbed by the rice (G rendered 0–24 %, water at 5 °C): "
-                               "sets σ₀ and the rice material", range=(0.0, 24.0), units="%"),
-        "sigma0_dry": Param(float, 0.15, "σ₀ at 0 % water: CDRF blur per unit curvature (σ = σ₀·|κ|)",
-                            range=(1e-4, 10.0), units="rad·mm"),
-        "sigma0_wet": Param(float, 1.2, "σ₀ at 24 % water (log–log line between the two)",
-                            range=(1e-4, 10.0), units="rad·mm"),
-        "light_directions": Param(list[RGB], [(-0.45, -0.6, 0.75)], "directions towards each distant light "
-                                  "(normalised)", range=(-1.0, 1.0)),
-        "light_colors": Param(list[RGB], [(1.0, 0.97, 0.92)], "linear RGB per light (or one for all)",
-                              range=(0.0, 1.0)),
-        "light_intensities": Param(list[float], [1.2], "intensity per light (or one for all); must be > 0",
-                                   range=(0.0, 100.0)),
+        "water_content": Param(
+            float,
+            15.0,
+            "water absorbed by the rice (G rendered 0–24 %, water at 5 °C): sets σ₀ and the rice material",
+            range=(0.0, 24.0),
+            units="%",
+        ),
+        "sigma0_dry": Param(
+            float,
+            0.15,
+            "σ₀ at 0 % water: CDRF blur per unit curvature (σ = σ₀·|κ|)",
+            range=(1e-4, 10.0),
+            units="rad·mm",
+        ),
+        "sigma0_wet": Param(
+            float, 1.2, "σ₀ at 24 % water (log–log line between the two)", range=(1e-4, 10.0), units="rad·mm"
+        ),
+        "light_directions": Param(
+            list[RGB], [(-0.45, -0.6, 0.75)], "directions towards each distant light (normalised)", range=(-1.0, 1.0)
+        ),
+        "light_colors": Param(
+            list[RGB], [(1.0, 0.97, 0.92)], "linear RGB per light (or one for all)", range=(0.0, 1.0)
+        ),
+        "light_intensities": Param(
+            list[float], [1.2], "intensity per light (or one for all); must be > 0", range=(0.0, 100.0)
+        ),
         "ambient": Param(float, 0.35, "ambient light as a share of the base colour", range=(0.0, 1.0)),
-        "presets": Param(list[str], [], "material preset per element kind, 'kind=preset' (rice, ikura, ice); "
-                         "kinds named like japonica/ikura/ice are matched automatically"),
+        "presets": Param(
+            list[str],
+            [],
+            "material preset per element kind, 'kind=preset' (rice, ikura, ice); "
+            "kinds named like japonica/ikura/ice are matched automatically",
+        ),
         "syrup_color": Param(RGB, (0.75, 0.02, 0.06), "kakigori syrup colour (linear RGB)", range=(0.0, 1.0)),
-        "syrup_coverage": Param(float, 0.5, "share of the ice mound's height, from the top, soaked in syrup",
-                                range=(0.0, 1.0)),
-        "scenery_color": Param(RGB, (0.05, 0.07, 0.16), "glaze colour of scenery meshes (the bowl)",
-                               range=(0.0, 1.0)),
-        "table_size": Param(tuple[int, int], (128, 64), "CDRF lookup table samples (θ, σ): accuracy vs time, see "
-                            "benchmarks/bench_shading.py", range=(2, 4096)),
+        "syrup_coverage": Param(
+            float, 0.5, "share of the ice mound's height, from the top, soaked in syrup", range=(0.0, 1.0)
+        ),
+        "scenery_color": Param(RGB, (0.05, 0.07, 0.16), "glaze colour of scenery meshes (the bowl)", range=(0.0, 1.0)),
+        "table_size": Param(
+            tuple[int, int],
+            (128, 64),
+            "CDRF lookup table samples (θ, σ): accuracy vs time, see benchmarks/bench_shading.py",
+            range=(2, 4096),
+        ),
     },
     check=_check,
 )
-def shade(ctx, aggregates, scenery=None, *, water_content, sigma0_dry, sigma0_wet, light_directions, light_colors,
-          light_intensities, ambient, presets, syrup_color, syrup_coverage, scenery_color, table_size):
+def shade(
+    ctx,
+    aggregates,
+    scenery=None,
+    *,
+    water_content,
+    sigma0_dry,
+    sigma0_wet,
+    light_directions,
+    light_colors,
+    light_intensities,
+    ambient,
+    presets,
+    syrup_color,
+    syrup_coverage,
+    scenery_color,
+    table_size,
+):
     """Curvature from libigl, CDRF eq. 7–9 with σ₀(water), lights, and a material per element kind/part."""
     from .cdrf import CdrfTable, sigma0_from_water
     from .materials import parse_overrides
@@ -68,8 +110,14 @@ def shade(ctx, aggregates, scenery=None, *, water_content, sigma0_dry, sigma0_we
     check_color(syrup_color, "syrup_color")
     check_color(scenery_color, "scenery_color")
     settings = ShadeSettings(
-        water_content=water_content, sigma0=sigma0_from_water(water_content, sigma0_dry, sigma0_wet),
-        lights=make_lights(light_directions, light_colors, light_intensities), ambient=ambient,
-        presets=parse_overrides(presets), syrup_color=tuple(syrup_color), syrup_coverage=syrup_coverage,
-        scenery_color=tuple(scenery_color), table=CdrfTable.build(*table_size))
+        water_content=water_content,
+        sigma0=sigma0_from_water(water_content, sigma0_dry, sigma0_wet),
+        lights=make_lights(light_directions, light_colors, light_intensities),
+        ambient=ambient,
+        presets=parse_overrides(presets),
+        syrup_color=tuple(syrup_color),
+        syrup_coverage=syrup_coverage,
+        scenery_color=tuple(scenery_color),
+        table=CdrfTable.build(*table_size),
+    )
     return shade_scene(list(aggregates), list(scenery or []), settings)

@@ -28,8 +28,10 @@ def make_lights(directions, colors, intensities) -> list[Light]:
     if not directions:
         raise ValueError("light_directions: at least one light is needed")
     if len(colors) not in (1, len(directions)) or len(intensities) not in (1, len(directions)):
-        raise ValueError(f"light_colors ({len(colors)}) and light_intensities ({len(intensities)}) must give "
-                         f"one value or one per light ({len(directions)} directions)")
+        raise ValueError(
+            f"light_colors ({len(colors)}) and light_intensities ({len(intensities)}) must give "
+            f"one value or one per light ({len(directions)} directions)"
+        )
     lights = []
     for k, direction in enumerate(directions):
         d = np.asarray(direction, np.float64)
@@ -38,8 +40,9 @@ def make_lights(directions, colors, intensities) -> list[Light]:
             raise ValueError(f"light_directions[{k}]: a zero vector has no direction")
         intensity = float(intensities[k % len(intensities)])
         if not intensity > 0:
-            raise ValueError(f"light_intensities[{k}] = {intensity}: a light must have intensity > 0 "
-                             "(remove the light instead)")
+            raise ValueError(
+                f"light_intensities[{k}] = {intensity}: a light must have intensity > 0 (remove the light instead)"
+            )
         color = np.asarray(colors[k % len(colors)], np.float64)
         check_color(color, f"light_colors[{k}]")
         lights.append(Light(d / norm, color, intensity))
@@ -53,9 +56,17 @@ def check_color(color, name: str) -> None:
         raise ValueError(f"{name} = {c.tolist()}: colours are linear RGB, three values in [0, 1]")
 
 
-def cdrf_colors(normals: np.ndarray, curvature: np.ndarray, base: np.ndarray, subsurface: np.ndarray,
-                weight: np.ndarray, sigma0: float, lights: list[Light], ambient: float,
-                table: CdrfTable) -> np.ndarray:
+def cdrf_colors(
+    normals: np.ndarray,
+    curvature: np.ndarray,
+    base: np.ndarray,
+    subsurface: np.ndarray,
+    weight: np.ndarray,
+    sigma0: float,
+    lights: list[Light],
+    ambient: float,
+    table: CdrfTable,
+) -> np.ndarray:
     """Linear RGB per vertex (n, 3), clipped to [0, 1]; ``base``/``subsurface`` are (n, 3) or (3,)."""
     sigma = curvature_sigma(curvature, sigma0)
     weight = np.asarray(weight, np.float64).reshape(-1, 1) if np.ndim(weight) else float(weight)

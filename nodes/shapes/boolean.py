@@ -31,11 +31,17 @@ def boolean(ctx, a, b, *, operation):
     solids = []
     for name, mesh in (("a", a), ("b", b)):
         tm = as_trimesh(mesh, f"boolean input {name}")
-        solids.append(manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(tm.vertices, np.float32),
-                                                          tri_verts=np.asarray(tm.faces, np.uint32))))
+        solids.append(
+            manifold3d.Manifold(
+                manifold3d.Mesh(
+                    vert_properties=np.asarray(tm.vertices, np.float32), tri_verts=np.asarray(tm.faces, np.uint32)
+                )
+            )
+        )
     left, right = solids
-    result = {"difference": lambda: left - right, "union": lambda: left + right,
-              "intersection": lambda: left ^ right}[operation]()
+    result = {"difference": lambda: left - right, "union": lambda: left + right, "intersection": lambda: left ^ right}[
+        operation
+    ]()
     if result.is_empty():
         raise ValueError(f"operation: the {operation} of the two shapes is empty")
     out = result.to_mesh()

@@ -31,8 +31,11 @@ def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str) -> trimesh.Tr
         trimesh.repair.fill_holes(mesh)
         trimesh.repair.fix_inversion(mesh)
     if not mesh.is_watertight:
-        fix = "repair (on) could not close them: close the mesh in a modeller" if repair else \
-            "close it in a modeller, or pass repair: true for small holes"
+        fix = (
+            "repair (on) could not close them: close the mesh in a modeller"
+            if repair
+            else "close it in a modeller, or pass repair: true for small holes"
+        )
         raise ValueError(f"{what}: the mesh has holes (not watertight); {fix}")
     if mesh.volume < 0:
         if not repair:

@@ -13,7 +13,13 @@ from nodegraph.values import Mesh
     outputs={"mesh": Out(Mesh, "the closed user mesh, outward normals")},
     params={
         "path": Param(str, doc="mesh file (.stl, .obj, .ply, .off, .glb) readable by trimesh", file=True),
-        "size": Param(float, 0.0, "scale so the circumscribed radius about the centroid is this (0: keep the file's units)", range=(0.0, 1e5), units="mm"),
+        "size": Param(
+            float,
+            0.0,
+            "scale so the circumscribed radius about the centroid is this (0: keep the file's units)",
+            range=(0.0, 1e5),
+            units="mm",
+        ),
         "center": Param(bool, True, "move the bounding-box centre to the origin"),
         "repair": Param(bool, True, "fix inverted normals and fill small holes instead of refusing the mesh"),
     },

@@ -22,13 +22,23 @@ def _check(params: dict) -> list[tuple[str, str]]:
     "shape",
     version=1,
     outputs={
-        "mesh": Out(Mesh, "the closed region the elements fill (for a bowl: the cavity to the fill height plus the mound)"),
+        "mesh": Out(
+            Mesh, "the closed region the elements fill (for a bowl: the cavity to the fill height plus the mound)"
+        ),
         "container": Out(Mesh, "the vessel as a closed solid for a bowl (collider); an empty mesh for other kinds"),
     },
     params={
         "kind": Param(str, "onigiri", "which shape", choices=KINDS),
-        "size": Param(float, 20.0, "sphere/cylinder radius, onigiri circumscribed radius, bowl rim radius", range=(1e-3, 1e4), units="mm"),
-        "extents": Param(tuple[float, float, float], (40.0, 40.0, 40.0), "box edge lengths (x, y, z)", range=(1e-3, 1e4), units="mm"),
+        "size": Param(
+            float,
+            20.0,
+            "sphere/cylinder radius, onigiri circumscribed radius, bowl rim radius",
+            range=(1e-3, 1e4),
+            units="mm",
+        ),
+        "extents": Param(
+            tuple[float, float, float], (40.0, 40.0, 40.0), "box edge lengths (x, y, z)", range=(1e-3, 1e4), units="mm"
+        ),
         "length": Param(float, 60.0, "cylinder length along x (lying cylinder)", range=(1e-3, 1e4), units="mm"),
         "thickness": Param(float, 0.9, "onigiri thickness as a share of its circumscribed radius", range=(0.05, 2.0)),
         "roundness": Param(float, 0.35, "onigiri corner rounding (0 sharp triangle, 1 disc)", range=(0.01, 1.0)),
@@ -37,7 +47,12 @@ def _check(params: dict) -> list[tuple[str, str]]:
         "wall": Param(float, 4.0, "bowl wall thickness", range=(1e-3, 1e3), units="mm"),
         "fill": Param(float, 0.8, "bowl fill height as a share of the depth", range=(0.05, 1.0)),
         "mound": Param(float, 15.0, "height of the rice mound above the fill plane", range=(0.0, 1e4), units="mm"),
-        "resolution": Param(int, 4, "mesh resolution level (icosphere subdivisions; 12·2^(level−1) segments for solids of revolution)", range=(1, 7)),
+        "resolution": Param(
+            int,
+            4,
+            "mesh resolution level (icosphere subdivisions; 12·2^(level−1) segments for solids of revolution)",
+            range=(1, 7),
+        ),
     },
     check=_check,
 )
@@ -55,8 +70,12 @@ def shape(ctx, *, kind, size, extents, length, thickness, roundness, bulge, dept
     elif kind == "onigiri":
         mesh = solids.onigiri(size, thickness * size, roundness, bulge, subdivisions=resolution)
     else:
-        mesh, container = solids.bowl(size, depth, wall, fill, mound, segments=12 * 2 ** (resolution - 1),
-                                      rings=4 * 2 ** (resolution - 1))
-    out_container = Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), name="none") if container is None \
+        mesh, container = solids.bowl(
+            size, depth, wall, fill, mound, segments=12 * 2 ** (resolution - 1), rings=4 * 2 ** (resolution - 1)
+        )
+    out_container = (
+        Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), name="none")
+        if container is None
         else Mesh.from_trimesh(container, name=f"{kind}_container")
+    )
     return {"mesh": Mesh.from_trimesh(mesh, name=kind), "container": out_container}

@@ -50,8 +50,9 @@ def _rounded_triangle_radius(roundness: float, samples: int = 720):
     return lambda angles: np.interp(angles, theta, radius, period=2 * np.pi)
 
 
-def onigiri(circumradius: float, thickness: float, roundness: float, bulge: float,
-            subdivisions: int = 5) -> trimesh.Trimesh:
+def onigiri(
+    circumradius: float, thickness: float, roundness: float, bulge: float, subdivisions: int = 5
+) -> trimesh.Trimesh:
     """A rounded-triangle rice ball (S fig. 10a) standing upright: triangle in the x–z plane, depth along y.
 
     The gauge ``G(p) = (q(p_xz)^m + |p_y / h|^m)^(1/m)`` (q: rounded-triangle gauge, h: half the
@@ -89,8 +90,9 @@ def _quarter_ellipse(a: float, b: float, z_from: float, z_to: float, n: int) -> 
     return np.stack([r, z], axis=1)
 
 
-def bowl(radius: float, depth: float, wall: float, fill: float, mound: float,
-         segments: int = 96, rings: int = 32) -> tuple[trimesh.Trimesh, trimesh.Trimesh]:
+def bowl(
+    radius: float, depth: float, wall: float, fill: float, mound: float, segments: int = 96, rings: int = 32
+) -> tuple[trimesh.Trimesh, trimesh.Trimesh]:
     """A chawan/donburi and the rice region in it: ``(region, container)``.
 
     The cavity is the lower half of an ellipsoid (rim radius ``radius``, depth ``depth``, rim at

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nodegraph.values import Mesh
+
 from ..values import Aggregate
 
 

@@ -28,7 +28,7 @@ def bend_triples(q_rest: np.ndarray, start: np.ndarray, elongation: float = 1.5)
             continue
         q = q_rest[s:e]
         vals, vecs = np.linalg.eigh(q.T @ q)
-        if not vals[2] >= elongation ** 2 * vals[1]:
+        if not vals[2] >= elongation**2 * vals[1]:
             continue
         along = q @ vecs[:, 2]
         chain = np.argsort(along, kind="stable")
@@ -39,8 +39,12 @@ def bend_triples(q_rest: np.ndarray, start: np.ndarray, elongation: float = 1.5)
             frac.append(t)
             rest.append(q[b] - ((1.0 - t) * q[a] + t * q[cc]))
         counts[c] = e - s - 2
-    return (np.array(triples, np.int64).reshape(-1, 3), np.array(frac, float), np.array(rest, float).reshape(-1, 3),
-            np.r_[0, np.cumsum(counts)].astype(np.int64))
+    return (
+        np.array(triples, np.int64).reshape(-1, 3),
+        np.array(frac, float),
+        np.array(rest, float).reshape(-1, 3),
+        np.r_[0, np.cumsum(counts)].astype(np.int64),
+    )
 
 
 @njit(cache=True, parallel=True)

@@ -91,12 +91,19 @@ class PairBuffers:
         effects = settings.effects
         if not PAIR_EFFECTS & effects:
             return None
-        skin = 0.5 * float(model.r[:model.n_moving].max())
+        skin = 0.5 * float(model.r[: model.n_moving].max())
         reach = (settings.capture if "adhesion" in effects else 0.0) + skin
         x = model.x0
-        return cls(NeighbourLists.empty(len(x), half="adhesion" not in effects), skin, reach,
-                   2.0 * float(model.r.max()) + reach, np.full_like(x, np.inf), np.zeros(len(x)), np.empty(0),
-                   np.zeros_like(x) if "adhesion" in effects else None)
+        return cls(
+            NeighbourLists.empty(len(x), half="adhesion" not in effects),
+            skin,
+            reach,
+            2.0 * float(model.r.max()) + reach,
+            np.full_like(x, np.inf),
+            np.zeros(len(x)),
+            np.empty(0),
+            np.zeros_like(x) if "adhesion" in effects else None,
+        )
 
     def stale(self) -> bool:
         """Some particle moved more than half the skin since the last build (or none was built)."""

@@ -72,8 +72,10 @@ def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
     for k, mesh in enumerate(meshes):
         tm = trimesh.Trimesh(np.asarray(mesh.vertices), np.asarray(mesh.faces), process=True)
         if not tm.is_watertight:
-            raise ValueError(f"colliders[{k}] ({mesh.name or 'unnamed'}): mesh is not watertight; a collider "
-                             "must be a closed solid (give the bowl or ground a thickness)")
+            raise ValueError(
+                f"colliders[{k}] ({mesh.name or 'unnamed'}): mesh is not watertight; a collider "
+                "must be a closed solid (give the bowl or ground a thickness)"
+            )
         if tm.volume < 0:
             tm.invert()
         tms.append(tm)
@@ -81,8 +83,9 @@ def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
     vertices, faces = np.asarray(merged.vertices, float), np.asarray(merged.faces, np.int64)
     origin = np.asarray(lo, float)
     shape = tuple(int(s) for s in np.ceil((np.asarray(hi) - origin) / pitch).astype(int) + 1)
-    dist = surface_band(vertices, faces, np.asarray(merged.face_normals, float), origin, pitch, shape,
-                        band_cells * pitch)
+    dist = surface_band(
+        vertices, faces, np.asarray(merged.face_normals, float), origin, pitch, shape, band_cells * pitch
+    )
     # the one inside test (column winding number > 0: the union of overlapping solids, nested shells inside);
     # grid points on the surface itself (φ = 0) belong to the free side of the far field's split
     axes = [origin[d] + np.arange(shape[d]) * pitch for d in range(3)]
@@ -134,10 +137,18 @@ def sample_phi(phi, origin, pitch, px, py, pz):
     c0 = c00 + (c10 - c00) * v
     c1 = c01 + (c11 - c01) * v
     val = c0 + (c1 - c0) * t
-    gx = ((1 - v) * (1 - t) * (c100 - c000) + v * (1 - t) * (c110 - c010)
-          + (1 - v) * t * (c101 - c001) + v * t * (c111 - c011)) / pitch
-    gy = ((1 - u) * (1 - t) * (c010 - c000) + u * (1 - t) * (c110 - c100)
-          + (1 - u) * t * (c011 - c001) + u * t * (c111 - c101)) / pitch
+    gx = (
+        (1 - v) * (1 - t) * (c100 - c000)
+        + v * (1 - t) * (c110 - c010)
+        + (1 - v) * t * (c101 - c001)
+        + v * t * (c111 - c011)
+    ) / pitch
+    gy = (
+        (1 - u) * (1 - t) * (c010 - c000)
+        + u * (1 - t) * (c110 - c100)
+        + (1 - u) * t * (c011 - c001)
+        + u * t * (c111 - c101)
+    ) / pitch
     gz = (c1 - c0) / pitch
     return val, gx, gy, gz
 

@@ -79,8 +79,9 @@ def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
 
 
 @njit(cache=True, inline="always")
-def _project_slab(x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, allowance, wake_step, lift, mu_s, mu_k,
-                  normal, order, p0, p1):
+def _project_slab(
+    x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, allowance, wake_step, lift, mu_s, mu_k, normal, order, p0, p1
+):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
     rows, ``half`` false: each pair from its lower index) but pairs of two asleep particles
     (``awake``, ``integrate.wake_flags``: at rest, nothing to do; with one asleep, ``sleeper_share``):
@@ -145,8 +146,27 @@ def _colour_chunks(cell_start, dims, colour, chunks, out):
 
 
 @njit(cache=True, parallel=True)
-def contact_sweep(x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, cell_start, order, dims, allowance, wake_step,
-                  lift, mu_s, mu_k, normal, chunks):
+def contact_sweep(
+    x,
+    x_prev,
+    awake,
+    pushed,
+    w,
+    r,
+    nbr_start,
+    nbr,
+    half,
+    cell_start,
+    order,
+    dims,
+    allowance,
+    wake_step,
+    lift,
+    mu_s,
+    mu_k,
+    normal,
+    chunks,
+):
     """One Gauss–Seidel sweep over the touching pairs, in place: the non-penetration constraint
     C = |x_i − x_j| − r_i − r_j + allowance ≥ 0 (allowance per list entry; ``normal``) with shock
     propagation ``lift`` (1/length, 0 = off), and in the same pass friction (μs > 0) on each pair
@@ -164,8 +184,26 @@ def contact_sweep(x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, cell_sta
         for t in prange(chunks):
             for k in range(bounds[t], bounds[t + 1]):
                 ix = colour + 3 * k
-                _project_slab(x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, allowance, wake_step, lift, mu_s,
-                              mu_k, normal, order, cell_start[ix * slab], cell_start[(ix + 1) * slab])
+                _project_slab(
+                    x,
+                    x_prev,
+                    awake,
+                    pushed,
+                    w,
+                    r,
+                    nbr_start,
+                    nbr,
+                    half,
+                    allowance,
+                    wake_step,
+                    lift,
+                    mu_s,
+                    mu_k,
+                    normal,
+                    order,
+                    cell_start[ix * slab],
+                    cell_start[(ix + 1) * slab],
+                )
 
 
 @njit(cache=True, inline="always")

@@ -53,8 +53,9 @@ def friction_pair(x, x_prev, i, j, nx, ny, nz, depth, share, mu_s, mu_k):
 def friction_wall(x, x_prev, i, nx, ny, nz, depth, mu_s, mu_k):
     """Friction of particle i against a static wall with unit normal n and penetration ``depth``,
     in place: the pair rule with a partner that does not move and takes no share."""
-    scale, tx, ty, tz = tangential_slip(x[i, 0] - x_prev[i, 0], x[i, 1] - x_prev[i, 1], x[i, 2] - x_prev[i, 2],
-                                        nx, ny, nz, depth, mu_s, mu_k)
+    scale, tx, ty, tz = tangential_slip(
+        x[i, 0] - x_prev[i, 0], x[i, 1] - x_prev[i, 1], x[i, 2] - x_prev[i, 2], nx, ny, nz, depth, mu_s, mu_k
+    )
     if scale < 0.0:
         return
     x[i, 0] -= scale * tx

@@ -122,8 +122,10 @@ def sleep_clusters(x, v, x_start, asleep, pushed, start, h, sleep_speed):
         hit = False
         for i in range(start[c], start[c + 1]):
             hit = hit or pushed[i]
-            fastest = max(fastest, (x[i, 0] - x_start[i, 0]) ** 2 + (x[i, 1] - x_start[i, 1]) ** 2
-                          + (x[i, 2] - x_start[i, 2]) ** 2)
+            fastest = max(
+                fastest,
+                (x[i, 0] - x_start[i, 0]) ** 2 + (x[i, 1] - x_start[i, 1]) ** 2 + (x[i, 2] - x_start[i, 2]) ** 2,
+            )
         asleep[c] = fastest < limit and not hit
         if asleep[c]:
             for i in range(start[c], start[c + 1]):

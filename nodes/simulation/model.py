@@ -118,25 +118,34 @@ class Model:
         """The state at the start of a run: at rest in the initial positions, every element awake."""
         n = len(self.x0)
         awake = np.zeros(n, np.bool_)  # per particle: solved this substep; static obstacles never are
-        awake[:self.n_moving] = True
+        awake[: self.n_moving] = True
         yolks = None
         if self.yolks is not None:
             yx = self.yolks.x0.copy()
             yolks = YolkState(yx, np.zeros_like(yx), np.zeros_like(yx))
-        return State(x=self.x0.copy(), v=np.zeros_like(self.x0), x_prev=self.x0.copy(), quats=self.quats0.copy(),
-                     x_start=np.zeros_like(self.x0), asleep=np.zeros(self.elements, np.bool_), awake=awake,
-                     pushed=np.zeros(n, np.bool_), yolks=yolks)
+        return State(
+            x=self.x0.copy(),
+            v=np.zeros_like(self.x0),
+            x_prev=self.x0.copy(),
+            quats=self.quats0.copy(),
+            x_start=np.zeros_like(self.x0),
+            asleep=np.zeros(self.elements, np.bool_),
+            awake=awake,
+            pushed=np.zeros(n, np.bool_),
+            yolks=yolks,
+        )
 
     def centres(self, x: np.ndarray) -> np.ndarray:
         """Mass-weighted cluster centres (m, 3) of positions ``x``."""
-        x, w = x[:self.n_moving], self.w[:self.n_moving]
+        x, w = x[: self.n_moving], self.w[: self.n_moving]
         m = shape_matching.particle_masses(w)
         sums = np.add.reduceat(x * m[:, None], self.start[:-1], axis=0)
         return sums / np.add.reduceat(m, self.start[:-1])[:, None]
 
 
-def build_model(x, r, w, start, q_rest, quats, settings: SolverSettings, sdf=None, yolks: Yolks | None = None,
-                obstacles=None) -> Model:
+def build_model(
+    x, r, w, start, q_rest, quats, settings: SolverSettings, sdf=None, yolks: Yolks | None = None, obstacles=None
+) -> Model:
     """The model of particles ``x, r, w`` in clusters ``start`` with rest offsets ``q_rest`` and
     rotations ``quats``, holding what ``settings`` use. ``sdf`` = (phi, origin, pitch) of the free
     space, kept with effect 'collider'; ``yolks`` kept with effect 'buoyancy'.

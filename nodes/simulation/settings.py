@@ -105,20 +105,31 @@ def solver_settings(params: XpbdParams, effects, radius: float) -> SolverSetting
     and adhesion (``moisture_scales``). ``radius``: the particles' median radius (mm), the unit of
     the capture radius."""
     p = params
-    scale = moisture_scales(p.water_content) if "moisture" in effects else \
-        {"stiffness": 1.0, "friction": 1.0, "adhesion": 1.0}
+    scale = (
+        moisture_scales(p.water_content)
+        if "moisture" in effects
+        else {"stiffness": 1.0, "friction": 1.0, "adhesion": 1.0}
+    )
     stiffness = p.stiffness * scale["stiffness"]
     adhesion = p.clumping * scale["adhesion"] * ADHESION_STIFFNESS
     mu_s = p.static_threshold * p.friction * scale["friction"]
     return SolverSettings(
-        effects=frozenset(effects), substeps=p.substeps, iterations=p.iterations, dt=p.dt, gravity=p.gravity,
+        effects=frozenset(effects),
+        substeps=p.substeps,
+        iterations=p.iterations,
+        dt=p.dt,
+        gravity=p.gravity,
         compliance=1.0 / (1000.0 * stiffness) if stiffness > 0 else np.inf,  # N/m → s²/g
-        linear_deformation=p.linear_deformation, quadratic=p.deformation == "quadratic",
+        linear_deformation=p.linear_deformation,
+        quadratic=p.deformation == "quadratic",
         bend_compliance=1.0 / (1000.0 * stiffness * p.bend_stiffness) if stiffness * p.bend_stiffness > 0 else np.inf,
-        mu_s=mu_s, mu_k=mu_s * p.dynamic_scale,
+        mu_s=mu_s,
+        mu_k=mu_s * p.dynamic_scale,
         capture=p.capture_radius * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
-        damping=p.damping, sleep_speed=p.sleep_speed, speed_clamp=p.speed_clamp,
+        damping=p.damping,
+        sleep_speed=p.sleep_speed,
+        speed_clamp=p.speed_clamp,
         shock_propagation=p.shock_propagation,
         yolk_accel=p.gravity * (p.white_density / p.part_density - 1.0) if "gravity" in effects else 0.0,
     )

@@ -11,14 +11,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..values import Aggregate, ParticleState, Placement
-
 from .aggregate import DeformedAggregate
+from .buffers import PairBuffers
 from .clusters import element_cluster, matrix_to_quat
 from .collider import free_space_field
 from .deformation import element_bends, element_transforms
 from .model import Model, Yolks, build_model
 from .settings import PAIR_EFFECTS, XpbdParams, solver_settings
-from .buffers import PairBuffers
 from .solver import Diagnostics, XpbdSolver
 from .state import State
 
@@ -78,12 +77,23 @@ def full_placement(aggregate: Aggregate, colliders) -> Placement:
     nx, ny = np.maximum(1, (span // size[:2]).astype(int))
     k = np.arange(n)
     ix, iy, iz = k % nx, (k // nx) % ny, k // (nx * ny)
-    grid = np.stack([(ix - (nx - 1) / 2) * size[0] + centre[0], (iy - (ny - 1) / 2) * size[1] + centre[1],
-                     hi[2] + size[2] * (iz + 1)], axis=1)
+    grid = np.stack(
+        [
+            (ix - (nx - 1) / 2) * size[0] + centre[0],
+            (iy - (ny - 1) / 2) * size[1] + centre[1],
+            hi[2] + size[2] * (iz + 1),
+        ],
+        axis=1,
+    )
     grid -= 0.5 * (mesh.bounds[0] + mesh.bounds[1])
     normals = np.tile([0.0, 0.0, 1.0], (n, 1))
-    return Placement(grid, normals, kinds=np.zeros(n, np.int32), variants=np.zeros(n, np.int32),
-                     kind_names=aggregate.placement.kind_names)
+    return Placement(
+        grid,
+        normals,
+        kinds=np.zeros(n, np.int32),
+        variants=np.zeros(n, np.int32),
+        kind_names=aggregate.placement.kind_names,
+    )
 
 
 def static_obstacles(obstacles, effects):
@@ -99,8 +109,9 @@ def static_obstacles(obstacles, effects):
     return x, r
 
 
-def build_simulation(aggregate: Aggregate, colliders, effects, params: XpbdParams, obstacles=None, moulds=(),
-                     threads: int | None = None) -> Simulation:
+def build_simulation(
+    aggregate: Aggregate, colliders, effects, params: XpbdParams, obstacles=None, moulds=(), threads: int | None = None
+) -> Simulation:
     """Clusters per element (``element_cluster``), the free-space field of the colliders and moulds
     with effect 'collider', yolks with 'buoyancy', static obstacles with a pair effect; the model,
     its initial state and a solver with the settings of ``params`` (``solver_settings``)."""
@@ -110,8 +121,10 @@ def build_simulation(aggregate: Aggregate, colliders, effects, params: XpbdParam
     if "collider" in effects and not (colliders or moulds):
         raise ValueError("effect 'collider' is requested but no mesh is wired to input 'colliders' or 'moulds'")
     if params.mode == "full" and moulds and "collider" in effects:
-        raise ValueError("mode 'full' drops elements in from above, which a closed mould does not let in: "
-                         "use mode 'short' with moulds, or an open container on 'colliders'")
+        raise ValueError(
+            "mode 'full' drops elements in from above, which a closed mould does not let in: "
+            "use mode 'short' with moulds, or an open container on 'colliders'"
+        )
     if params.mode == "full":
         aggregate = Aggregate(full_placement(aggregate, colliders), aggregate.libraries)
     p = aggregate.placement
@@ -151,12 +164,32 @@ def build_simulation(aggregate: Aggregate, colliders, effects, params: XpbdParam
             cl = cache[(int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))]
             room.append(max(0.0, cl.membrane_radius - cl.yolk_radius))
             centre.append(cl.membrane_centre - local_centre[i])  # membrane centre relative to the cluster's
-        yolks = Yolks(np.einsum("nij,nj->ni", p.rotations[owner], yolk_local[owner]) + p.positions[owner],
-                      owner.astype(np.int64), np.array(centre), np.array(room))
-    model = build_model(x, r, w, start, q, matrix_to_quat(p.rotations), settings, sdf=sdf, yolks=yolks,
-                        obstacles=static_obstacles(obstacles, effects))
-    return Simulation(model, model.state(), XpbdSolver(model, settings, threads=threads), aggregate,
-                      np.array(local_centre), yolk_local if yolks is not None else None)
+        yolks = Yolks(
+            np.einsum("nij,nj->ni", p.rotations[owner], yolk_local[owner]) + p.positions[owner],
+            owner.astype(np.int64),
+            np.array(centre),
+            np.array(room),
+        )
+    model = build_model(
+        x,
+        r,
+        w,
+        start,
+        q,
+        matrix_to_quat(p.rotations),
+        settings,
+        sdf=sdf,
+        yolks=yolks,
+        obstacles=static_obstacles(obstacles, effects),
+    )
+    return Simulation(
+        model,
+        model.state(),
+        XpbdSolver(model, settings, threads=threads),
+        aggregate,
+        np.array(local_centre),
+        yolk_local if yolks is not None else None,
+    )
 
 
 def snapshot_aggregate(sim: Simulation) -> Aggregate:
@@ -172,12 +205,14 @@ def snapshot_aggregate(sim: Simulation) -> Aggregate:
     n = m.n_moving  # static obstacle particles (after n) are not part of the output
     x, w = st.x[:n], m.w[:n]
     centres = m.centres(st.x)
-    positions, rotations, deformations = element_transforms(x, w, m.start, m.q_rest, rotations, centres, pinv, null,
-                                                            sim.local_centre)
+    positions, rotations, deformations = element_transforms(
+        x, w, m.start, m.q_rest, rotations, centres, pinv, null, sim.local_centre
+    )
     bends = None
     if m.quadratic is not None and m.quadratic.flags.any():  # flagged clusters bend
-        positions, deformations, bends = element_bends(x, w, m.start, m.q_rest, rotations, centres, positions,
-                                                       deformations, m.quadratic.flags, sim.local_centre)
+        positions, deformations, bends = element_bends(
+            x, w, m.start, m.q_rest, rotations, centres, positions, deformations, m.quadratic.flags, sim.local_centre
+        )
     placement = dataclasses.replace(sim.aggregate.placement, positions=positions, rotations=rotations)
     if sim.yolk_local is None:
         return Aggregate(placement, sim.aggregate.libraries, deformations, bends)
@@ -194,6 +229,7 @@ def snapshot_aggregate(sim: Simulation) -> Aggregate:
 def finish_simulation(sim: Simulation) -> dict:
     """The relaxed aggregate (positions, rotations, deformations, yolk offsets) and the particle state."""
     m, st, n = sim.model, sim.state, sim.model.n_moving
-    particles = ParticleState(st.x[:n].copy(), st.v[:n].copy(), m.r[:n].copy(), m.w[:n].copy(),
-                              m.elem[:n].astype(np.int32), st.time)
+    particles = ParticleState(
+        st.x[:n].copy(), st.v[:n].copy(), m.r[:n].copy(), m.w[:n].copy(), m.elem[:n].astype(np.int32), st.time
+    )
     return {"aggregate": snapshot_aggregate(sim), "particles": particles}

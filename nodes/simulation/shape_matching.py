@@ -89,8 +89,11 @@ def _step_to_goal(x, w, lam, alpha_tilde, i, k, g):
 
 @njit(cache=True, inline="always")
 def _det3(a):
-    return (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]) - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
-            + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+    return (
+        a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+        - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+        + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
+    )
 
 
 @njit(cache=True, inline="always")
@@ -157,8 +160,9 @@ def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta,
 
 
 @njit(cache=True)
-def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_tilde, beta, rot_iters, apq, rot,
-                             apq9, goal9):
+def _match_cluster_quadratic(
+    x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_tilde, beta, rot_iters, apq, rot, apq9, goal9
+):
     """Project one cluster with the quadratic goal (SPEC §5); returns its max |C|.
 
     The linear 3×3 block of Ã is volume-normalised as in the linear mode; the quadratic block is
@@ -204,8 +208,23 @@ def _match_cluster_quadratic(x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_til
 
 
 @njit(cache=True, parallel=True)
-def shape_match_project(x, quats, awake, w, q_rest, start, aqq_pinv, null_proj, lam, alpha_tilde, beta, rot_iters,
-                        qt=None, qpinv=None, quadratic=None):
+def shape_match_project(
+    x,
+    quats,
+    awake,
+    w,
+    q_rest,
+    start,
+    aqq_pinv,
+    null_proj,
+    lam,
+    alpha_tilde,
+    beta,
+    rot_iters,
+    qt=None,
+    qpinv=None,
+    quadratic=None,
+):
     """One XPBD sweep of C_i = x_i − g_i per particle, g_i = (β·A + (1−β)·R)·q_i + x_cm (SPEC §5);
     with ``qt, qpinv, quadratic`` (``quadratic_moments``), the quadratic goal for the clusters whose
     flag is set (the others, too few or degenerate particles, keep the linear goal). Clusters whose
@@ -228,11 +247,42 @@ def shape_match_project(x, quats, awake, w, q_rest, start, aqq_pinv, null_proj, 
             if start[c + 1] - start[c] < 2 or not awake[start[c]]:
                 continue
             if quadratic is not None and quadratic[c]:
-                worst[c] = _match_cluster_quadratic(x, w, q_rest, qt, start[c], start[c + 1], quats[c], qpinv[c],
-                                                    lam, alpha_tilde, beta, rot_iters, apq, rot, apq9, goal9)
+                worst[c] = _match_cluster_quadratic(
+                    x,
+                    w,
+                    q_rest,
+                    qt,
+                    start[c],
+                    start[c + 1],
+                    quats[c],
+                    qpinv[c],
+                    lam,
+                    alpha_tilde,
+                    beta,
+                    rot_iters,
+                    apq,
+                    rot,
+                    apq9,
+                    goal9,
+                )
             else:
-                worst[c] = _match_cluster(x, w, q_rest, start[c], start[c + 1], quats[c], aqq_pinv[c],
-                                          null_proj[c], lam, alpha_tilde, beta, rot_iters, apq, rot, goal)
+                worst[c] = _match_cluster(
+                    x,
+                    w,
+                    q_rest,
+                    start[c],
+                    start[c + 1],
+                    quats[c],
+                    aqq_pinv[c],
+                    null_proj[c],
+                    lam,
+                    alpha_tilde,
+                    beta,
+                    rot_iters,
+                    apq,
+                    rot,
+                    goal,
+                )
     return worst.max() if m > 0 else 0.0
 
 
@@ -286,8 +336,8 @@ def rest_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, tolerance
     null = np.zeros((m, 3, 3))
     mass = particle_masses(w)
     for c in range(m):
-        q = q_rest[start[c]:start[c + 1]]
-        aqq = (q * mass[start[c]:start[c + 1], None]).T @ q
+        q = q_rest[start[c] : start[c + 1]]
+        aqq = (q * mass[start[c] : start[c + 1], None]).T @ q
         vals, vecs = np.linalg.eigh(aqq)
         keep = vals > tolerance * max(vals.max(), 1e-300)
         pinv[c] = (vecs[:, keep] / vals[keep]) @ vecs[:, keep].T

@@ -68,16 +68,23 @@ class Coefficients:
     def of(cls, model: Model, settings: SolverSettings) -> Coefficients:
         s, h, effects = settings, settings.h, settings.effects
         gravity = "gravity" in effects
-        lift = (np.log(s.shock_propagation) / (2.0 * float(np.median(model.r[:model.n_moving])))
-                if gravity and s.shock_propagation > 1.0 else 0.0)
+        lift = (
+            np.log(s.shock_propagation) / (2.0 * float(np.median(model.r[: model.n_moving])))
+            if gravity and s.shock_propagation > 1.0
+            else 0.0
+        )
         return cls(
-            h=h, accel=np.array([[0.0, 0.0, -s.gravity]]) if gravity else np.zeros((1, 3)),
-            mu_s=s.mu_s if "friction" in effects else 0.0, mu_k=s.mu_k if "friction" in effects else 0.0,
-            damping=(1.0 - s.damping) ** (h * 60.0) if "damping" in effects else 1.0, lift=lift,
-            wake_step=h * s.sleep_speed + (s.gravity if gravity else 0.0) * h ** 2,
+            h=h,
+            accel=np.array([[0.0, 0.0, -s.gravity]]) if gravity else np.zeros((1, 3)),
+            mu_s=s.mu_s if "friction" in effects else 0.0,
+            mu_k=s.mu_k if "friction" in effects else 0.0,
+            damping=(1.0 - s.damping) ** (h * 60.0) if "damping" in effects else 1.0,
+            lift=lift,
+            wake_step=h * s.sleep_speed + (s.gravity if gravity else 0.0) * h**2,
             decay=s.overlap_decay_rate * h,
             alpha=s.compliance / (h * h) if model.moments is not None else 0.0,
-            bend_alpha=s.bend_compliance / (h * h), adhesion_alpha=s.adhesion_compliance / (h * h),
+            bend_alpha=s.bend_compliance / (h * h),
+            adhesion_alpha=s.adhesion_compliance / (h * h),
             yolk_accel=np.array([0.0, 0.0, s.yolk_accel]),
         )
 
@@ -104,8 +111,9 @@ class XpbdSolver:
     leave free (``threads.FreeCores``); the results are the same either way.
     """
 
-    def __init__(self, model: Model, settings: SolverSettings, dispatch: KernelDispatch | None = None,
-                 threads: int | None = None):
+    def __init__(
+        self, model: Model, settings: SolverSettings, dispatch: KernelDispatch | None = None, threads: int | None = None
+    ):
         self.model = model
         self.settings = settings
         self.dispatch = dispatch or KernelDispatch()
@@ -116,8 +124,11 @@ class XpbdSolver:
         self.x_mark = model.x0.copy()  # positions at the start of a frame's last substep (diagnostics)
         self.solved = 0  # particles solved over the substeps of the current frame
         # threads: fixed, or None = one below PARALLEL_PARTICLES, else the free cores, re-measured per frame
-        most = min(threads, numba.config.NUMBA_NUM_THREADS) if threads else \
-            (numba.get_num_threads() if len(model.x0) >= PARALLEL_PARTICLES else 1)
+        most = (
+            min(threads, numba.config.NUMBA_NUM_THREADS)
+            if threads
+            else (numba.get_num_threads() if len(model.x0) >= PARALLEL_PARTICLES else 1)
+        )
         self.cores = FreeCores(most) if threads is None else None
         self.threads = most
 
@@ -148,15 +159,51 @@ class XpbdSolver:
             self._prestabilise(st)
         y = st.yolks
         if y is not None:  # drag towards the egg velocity of the last substep
-            d("buoyancy", buoyancy.yolk_predict, y.x, y.v, y.x_prev, st.x, st.v, m.w, m.start, m.yolks.owner,
-              k.yolk_accel, k.h, s.yolk_drag)
+            d(
+                "buoyancy",
+                buoyancy.yolk_predict,
+                y.x,
+                y.v,
+                y.x_prev,
+                st.x,
+                st.v,
+                m.w,
+                m.start,
+                m.yolks.owner,
+                k.yolk_accel,
+                k.h,
+                s.yolk_drag,
+            )
         residual = self._solve(st) if awake else 0.0
         if y is not None:
-            d("buoyancy", buoyancy.yolk_contain, y.x, y.v, y.x_prev, st.x, st.quats, m.w, m.start, m.yolks.owner,
-              m.yolks.centre, m.yolks.room, k.h)
+            d(
+                "buoyancy",
+                buoyancy.yolk_contain,
+                y.x,
+                y.v,
+                y.x_prev,
+                st.x,
+                st.quats,
+                m.w,
+                m.start,
+                m.yolks.owner,
+                m.yolks.centre,
+                m.yolks.room,
+                k.h,
+            )
         if s.sleep_speed > 0:
-            d("sleep", integrate.sleep_clusters, st.x, st.v, st.x_start, st.asleep, st.pushed, m.start, k.h,
-              s.sleep_speed)
+            d(
+                "sleep",
+                integrate.sleep_clusters,
+                st.x,
+                st.v,
+                st.x_start,
+                st.asleep,
+                st.pushed,
+                m.start,
+                k.h,
+                s.sleep_speed,
+            )
         st.time += k.h
         return residual
 
@@ -164,12 +211,32 @@ class XpbdSolver:
         """Predict, the constraint iterations, velocities from positions; returns the residual."""
         s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
         pairs, clusters = self.pairs, self.clusters
-        moved = d("integrate", integrate.predict, st.x, st.v, st.x_prev, st.awake, m.w, m.r, *self._tracking(),
-                  k.accel, k.h, s.speed_clamp)
+        moved = d(
+            "integrate",
+            integrate.predict,
+            st.x,
+            st.v,
+            st.x_prev,
+            st.awake,
+            m.w,
+            m.r,
+            *self._tracking(),
+            k.accel,
+            k.h,
+            s.speed_clamp,
+        )
         self._track(moved)
         if self._refresh_neighbours(st) and "contact" in s.effects:  # overlap tolerated: as at the substep start
-            d("contact", contact_constraints.overlap_allowance, st.x_prev, st.awake, m.r, *pairs.lists.rows(),
-              k.decay, pairs.allowance)
+            d(
+                "contact",
+                contact_constraints.overlap_allowance,
+                st.x_prev,
+                st.awake,
+                m.r,
+                *pairs.lists.rows(),
+                k.decay,
+                pairs.allowance,
+            )
         if clusters is not None:
             clusters.clear()
         quadratic = m.quadratic.args() if m.quadratic is not None else ()
@@ -185,17 +252,51 @@ class XpbdSolver:
                 self._contacts(st, friction=True)
             # the element's shape is restored after the contacts, the walls have the last word
             if m.moments is not None:
-                residual = d("shape_matching", shape_matching.shape_match_project, st.x, st.quats, st.awake, m.w,
-                             m.q_rest, m.start, *m.moments.args(), clusters.lam, k.alpha, s.linear_deformation,
-                             s.rotation_iterations, *quadratic)
+                residual = d(
+                    "shape_matching",
+                    shape_matching.shape_match_project,
+                    st.x,
+                    st.quats,
+                    st.awake,
+                    m.w,
+                    m.q_rest,
+                    m.start,
+                    *m.moments.args(),
+                    clusters.lam,
+                    k.alpha,
+                    s.linear_deformation,
+                    s.rotation_iterations,
+                    *quadratic,
+                )
             if m.bend is not None:
-                residual = max(residual, d("bending", bending.bend_project, st.x, st.quats, st.awake, m.w,
-                                           *m.bend.args(), clusters.bend_lam, k.bend_alpha))
+                residual = max(
+                    residual,
+                    d(
+                        "bending",
+                        bending.bend_project,
+                        st.x,
+                        st.quats,
+                        st.awake,
+                        m.w,
+                        *m.bend.args(),
+                        clusters.bend_lam,
+                        k.bend_alpha,
+                    ),
+                )
             if m.collider is not None:
-                d("collider", collider.collider_project, st.x, st.x_prev, m.w, m.r, *m.collider.args(), k.mu_s,
-                  k.mu_k)
-        moved = d("integrate", integrate.update_velocity, st.x, st.v, st.x_prev, m.r, *self._tracking(), k.h,
-                  s.speed_clamp, k.damping)
+                d("collider", collider.collider_project, st.x, st.x_prev, m.w, m.r, *m.collider.args(), k.mu_s, k.mu_k)
+        moved = d(
+            "integrate",
+            integrate.update_velocity,
+            st.x,
+            st.v,
+            st.x_prev,
+            m.r,
+            *self._tracking(),
+            k.h,
+            s.speed_clamp,
+            k.damping,
+        )
         self._track(moved)
         return residual
 
@@ -212,8 +313,17 @@ class XpbdSolver:
         pairs, m = self.pairs, self.model
         if pairs is None or not pairs.stale():
             return False
-        nbr_start, nbr, *grid = self.dispatch("neighbours", spatial_hash.neighbour_lists, st.x, m.r, m.elem,
-                                              pairs.reach, pairs.cell, m.n_moving, pairs.lists.half)
+        nbr_start, nbr, *grid = self.dispatch(
+            "neighbours",
+            spatial_hash.neighbour_lists,
+            st.x,
+            m.r,
+            m.elem,
+            pairs.reach,
+            pairs.cell,
+            m.n_moving,
+            pairs.lists.half,
+        )
         pairs.lists = NeighbourLists(nbr_start, nbr, pairs.lists.half, *grid)
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
@@ -230,8 +340,16 @@ class XpbdSolver:
         if "contact" in self.settings.effects:
             pairs.allowance[:] = 0.0  # none tolerated here
             self._contacts(st, wake_step=np.inf)
-            d("contact", contact_constraints.overlap_allowance, st.x, st.awake, m.r, *pairs.lists.rows(), k.decay,
-              pairs.allowance)
+            d(
+                "contact",
+                contact_constraints.overlap_allowance,
+                st.x,
+                st.awake,
+                m.r,
+                *pairs.lists.rows(),
+                k.decay,
+                pairs.allowance,
+            )
         if m.collider is not None:
             d("collider", collider.collider_project, st.x, st.x, m.w, m.r, *m.collider.args(), 0.0, 0.0)
 
@@ -246,16 +364,43 @@ class XpbdSolver:
         rub = friction and "friction" in s.effects
         family = ("contact",) * normal + ("friction",) * rub
         wake_step = k.wake_step if wake_step is None else wake_step
-        self.dispatch(family, contact_constraints.contact_sweep, st.x, st.x_prev, st.awake, st.pushed, m.w, m.r,
-                      *lists.rows(), *lists.grid(), pairs.allowance, wake_step, k.lift, k.mu_s if rub else 0.0,
-                      k.mu_k, normal, self.threads)
+        self.dispatch(
+            family,
+            contact_constraints.contact_sweep,
+            st.x,
+            st.x_prev,
+            st.awake,
+            st.pushed,
+            m.w,
+            m.r,
+            *lists.rows(),
+            *lists.grid(),
+            pairs.allowance,
+            wake_step,
+            k.lift,
+            k.mu_s if rub else 0.0,
+            k.mu_k,
+            normal,
+            self.threads,
+        )
 
     def _adhesion(self, st: State) -> None:
         """One Jacobi sweep of the adhesion bonds into the scratch copy, which becomes the positions."""
         k, m, pairs = self.coefficients, self.model, self.pairs
         out = pairs.scratch
-        self.dispatch("adhesion", adhesion.adhesion_project, st.x, st.awake, m.w, m.r, *pairs.lists.csr(),
-                      self.settings.capture, k.adhesion_alpha, k.lift, out)
+        self.dispatch(
+            "adhesion",
+            adhesion.adhesion_project,
+            st.x,
+            st.awake,
+            m.w,
+            m.r,
+            *pairs.lists.csr(),
+            self.settings.capture,
+            k.adhesion_alpha,
+            k.lift,
+            out,
+        )
         st.x, pairs.scratch = out, st.x
 
     # -- one frame --------------------------------------------------------------------------

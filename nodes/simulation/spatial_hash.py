@@ -127,8 +127,23 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
     slots = np.empty(n * ROW_CAPACITY, np.int64)
     for p in prange(n):
         if order[p] < n_active:
-            counts[order[p] + 1] = _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, half, n_active, slots,
-                                          p * ROW_CAPACITY, ROW_CAPACITY)
+            counts[order[p] + 1] = _visit(
+                xs,
+                rs,
+                es,
+                order,
+                p,
+                start,
+                lo,
+                dims,
+                cell,
+                reach,
+                half,
+                n_active,
+                slots,
+                p * ROW_CAPACITY,
+                ROW_CAPACITY,
+            )
     for i in range(n):
         counts[i + 1] += counts[i]
     nbr = np.empty(counts[n], np.int64)

@@ -11,8 +11,8 @@ import numpy as np
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
-from ..values import Aggregate, ParticleState
 
+from ..values import Aggregate, ParticleState
 from .settings import EFFECTS, XpbdParams
 
 # particle-iterations per second of a substep's work (10 substeps × 2 iterations of a 2,000-grain bowl,
@@ -34,19 +34,34 @@ def _check(params):
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "colliders": In(Mesh, "watertight container / ground solids (mm)", optional=True, many=True),
-        "moulds": In(Mesh, "watertight shapes the elements must stay inside (onigiri mould, bunny; mm): the "
-                     "free space is their inside (effect 'collider')", optional=True, many=True),
+        "moulds": In(
+            Mesh,
+            "watertight shapes the elements must stay inside (onigiri mould, bunny; mm): the "
+            "free space is their inside (effect 'collider')",
+            optional=True,
+            many=True,
+        ),
         # particles, not the Aggregate: the settled pile's own collision geometry, no re-clustering
-        "obstacles": In(ParticleState, "settled particles of other aggregates (static, w = 0): contact and "
-                        "friction, no adhesion bonds; never moved, not in the outputs", optional=True, many=True),
+        "obstacles": In(
+            ParticleState,
+            "settled particles of other aggregates (static, w = 0): contact and "
+            "friction, no adhesion bonds; never moved, not in the outputs",
+            optional=True,
+            many=True,
+        ),
     },
     outputs={
         "aggregate": Out(Aggregate, "elements at rest: new positions, rotations, per-element deformations"),
         "particles": Out(ParticleState, "the simulation particles at the last frame"),
     },
     params={
-        "mode": Param(str, "short", "short: relax the given placement; full: drop identical elements "
-                      "packed on a regular grid in one orientation (G §3.2.1)", choices=("short", "full")),
+        "mode": Param(
+            str,
+            "short",
+            "short: relax the given placement; full: drop identical elements "
+            "packed on a regular grid in one orientation (G §3.2.1)",
+            choices=("short", "full"),
+        ),
         "frames": Param(int, 60, "frames to simulate", range=(1, 100000), units="frames"),
         "dt": Param(float, 1 / 60, "frame duration", range=(1e-4, 1.0), units="s"),
         # 10 × 2 from the accuracy sweeps (bench_xpbd.py --only accuracy: 150-grain bowl, 8-cube stack):
@@ -56,50 +71,106 @@ def _check(params):
         # (1 × 8: 1.07 r). The 2,000-grain bowl runs in ≈ 8.5 s of its 30 s budget at 10 × 2.
         "substeps": Param(int, 10, "XPBD substeps per frame (accuracy: see the accuracy benchmark)", range=(1, 256)),
         "iterations": Param(int, 2, "constraint iterations per substep", range=(1, 64)),
-        "particles_per_element": Param(int, 8, "particles per element cluster (G Table 3 'number of points')",
-                                       range=(1, 64)),
+        "particles_per_element": Param(
+            int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
+        ),
         "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
-        "stiffness": Param(float, 2000.0, "shape-matching stiffness, compliance = 1/stiffness; 0 lets a "
-                           "cluster fall apart", range=(0.0, 100000.0), units="N/m"),
-        "linear_deformation": Param(float, 0.3, "β: share of the volume-preserving linear fit in the goal "
-                                    "(SPEC §5, U eq. 3.19); 0 = rigid goal", range=(0.0, 1.0)),
-        "deformation": Param(str, "linear", "goal of the β share: linear (A) or quadratic (Ã, 3×9: also bends "
-                             "and twists, SPEC §5); clusters with < 10 particles or collinear/planar ones stay "
-                             "linear", choices=("linear", "quadratic")),
-        "bend_stiffness": Param(float, 0.0, "bend constraints along the long axis of elongated grains (G: 10 for "
-                                "rice): stiffness of each chain triple's midpoint offset, in units of the shape-"
-                                "matching stiffness; 0 = none", range=(0.0, 10.0)),
+        "stiffness": Param(
+            float,
+            2000.0,
+            "shape-matching stiffness, compliance = 1/stiffness; 0 lets a cluster fall apart",
+            range=(0.0, 100000.0),
+            units="N/m",
+        ),
+        "linear_deformation": Param(
+            float,
+            0.3,
+            "β: share of the volume-preserving linear fit in the goal (SPEC §5, U eq. 3.19); 0 = rigid goal",
+            range=(0.0, 1.0),
+        ),
+        "deformation": Param(
+            str,
+            "linear",
+            "goal of the β share: linear (A) or quadratic (Ã, 3×9: also bends "
+            "and twists, SPEC §5); clusters with < 10 particles or collinear/planar ones stay "
+            "linear",
+            choices=("linear", "quadratic"),
+        ),
+        "bend_stiffness": Param(
+            float,
+            0.0,
+            "bend constraints along the long axis of elongated grains (G: 10 for "
+            "rice): stiffness of each chain triple's midpoint offset, in units of the shape-"
+            "matching stiffness; 0 = none",
+            range=(0.0, 10.0),
+        ),
         "damping": Param(float, 0.1, "velocity fraction removed per 1/60 s (effect 'damping')", range=(0.0, 1.0)),
-        "friction": Param(float, 1.0, "multiplier on both friction coefficients (effect 'friction')",
-                          range=(0.0, 1.0)),
-        "static_threshold": Param(float, 0.6, "μs, static friction coefficient (Houdini's reading)",
-                                  range=(0.0, 1.0)),
+        "friction": Param(float, 1.0, "multiplier on both friction coefficients (effect 'friction')", range=(0.0, 1.0)),
+        "static_threshold": Param(float, 0.6, "μs, static friction coefficient (Houdini's reading)", range=(0.0, 1.0)),
         "dynamic_scale": Param(float, 0.7, "μk / μs", range=(0.0, 1.0)),
-        "capture_radius": Param(float, 0.2, "adhesion reach beyond contact, in particle radii (effect "
-                                "'adhesion')", range=(0.0, 1.0), units="radii"),
-        "clumping": Param(float, 0.3, "adhesion strength (breakable bonds within the capture radius)",
-                          range=(0.0, 1.0)),
-        "water_content": Param(float, 15.0, "water absorbed by the grains (effect 'moisture': scales "
-                               "stiffness, friction, adhesion)", range=(0.0, 40.0), units="%"),
-        "sleep_speed": Param(float, 2.0, "elements slower than this are put to rest each substep (0 = never)",
-                             range=(0.0, 1000.0), units="mm/s"),
-        "shock_propagation": Param(float, 4.0, "contact mass ratio of a particle to one a diameter above it "
-                                   "(Macklin et al. 2014 mass scaling): carries a tall pile's weight down in few "
-                                   "iterations; 1 = off (a 2,000-sphere pile then sinks to 2 r of overlap)",
-                                   range=(1.0, 1000.0)),
-        "speed_clamp": Param(float, 1.0, "max particle travel per substep (anti-tunnelling)", range=(0.1, 2.0),
-                             units="radii"),
-        "gravity": Param(float, 9810.0, "gravitational acceleration (effect 'gravity'), along −z",
-                         range=(0.0, 100000.0), units="mm/s²"),
-        "white_density": Param(float, 1.03, "density of the medium around the buoyant part (ikura white)",
-                               range=(0.1, 10.0), units="g/cm³"),
-        "part_density": Param(float, 0.93, "density of the buoyant part (faces with parts == 1: the yolk)",
-                              range=(0.1, 10.0), units="g/cm³"),
-        "log_every": Param(int, 10, "log particles to Rerun every k frames (0 = never)", range=(0, 100000),
-                           units="frames"),
-        "log_meshes_every": Param(int, 30, "log the element meshes to Rerun every k frames and at the last "
-                                  "(0 = never; a 2,000-grain bowl logs ≈ 10 MB per snapshot)", range=(0, 100000),
-                                  units="frames"),
+        "capture_radius": Param(
+            float,
+            0.2,
+            "adhesion reach beyond contact, in particle radii (effect 'adhesion')",
+            range=(0.0, 1.0),
+            units="radii",
+        ),
+        "clumping": Param(
+            float, 0.3, "adhesion strength (breakable bonds within the capture radius)", range=(0.0, 1.0)
+        ),
+        "water_content": Param(
+            float,
+            15.0,
+            "water absorbed by the grains (effect 'moisture': scales stiffness, friction, adhesion)",
+            range=(0.0, 40.0),
+            units="%",
+        ),
+        "sleep_speed": Param(
+            float,
+            2.0,
+            "elements slower than this are put to rest each substep (0 = never)",
+            range=(0.0, 1000.0),
+            units="mm/s",
+        ),
+        "shock_propagation": Param(
+            float,
+            4.0,
+            "contact mass ratio of a particle to one a diameter above it "
+            "(Macklin et al. 2014 mass scaling): carries a tall pile's weight down in few "
+            "iterations; 1 = off (a 2,000-sphere pile then sinks to 2 r of overlap)",
+            range=(1.0, 1000.0),
+        ),
+        "speed_clamp": Param(
+            float, 1.0, "max particle travel per substep (anti-tunnelling)", range=(0.1, 2.0), units="radii"
+        ),
+        "gravity": Param(
+            float,
+            9810.0,
+            "gravitational acceleration (effect 'gravity'), along −z",
+            range=(0.0, 100000.0),
+            units="mm/s²",
+        ),
+        "white_density": Param(
+            float, 1.03, "density of the medium around the buoyant part (ikura white)", range=(0.1, 10.0), units="g/cm³"
+        ),
+        "part_density": Param(
+            float,
+            0.93,
+            "density of the buoyant part (faces with parts == 1: the yolk)",
+            range=(0.1, 10.0),
+            units="g/cm³",
+        ),
+        "log_every": Param(
+            int, 10, "log particles to Rerun every k frames (0 = never)", range=(0, 100000), units="frames"
+        ),
+        "log_meshes_every": Param(
+            int,
+            30,
+            "log the element meshes to Rerun every k frames and at the last "
+            "(0 = never; a 2,000-grain bowl logs ≈ 10 MB per snapshot)",
+            range=(0, 100000),
+            units="frames",
+        ),
     },
     effects=EFFECTS,
     check=_check,
@@ -114,8 +185,10 @@ def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
     sim = build_simulation(aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds)
     frames, every, meshes_every, substeps = p.frames, p.log_every, p.log_meshes_every, p.substeps
     moving = sim.model.n_moving
-    ctx.expect_cost(moving * frames * substeps * p.iterations / PARTICLE_ITERATIONS_PER_SECOND,
-                    f"{frames:,} frames × {substeps} substeps × {p.iterations} iterations of {moving:,} particles")
+    ctx.expect_cost(
+        moving * frames * substeps * p.iterations / PARTICLE_ITERATIONS_PER_SECOND,
+        f"{frames:,} frames × {substeps} substeps × {p.iterations} iterations of {moving:,} particles",
+    )
     done = 0
     resumed = ctx.checkpoint.load() if ctx.checkpoint is not None else None
     if resumed is not None:
@@ -172,7 +245,14 @@ def _log_scalars(ctx, dg, substeps):
     import rerun as rr
 
     steps = (np.arange(len(dg.penetration)) + 1) * substeps
-    for name, values in (("penetration_over_radius", dg.penetration), ("residual", dg.residual),
-                         ("kinetic_energy", dg.kinetic_energy), ("sleeping_share", dg.sleeping)):
-        ctx.rerun.send_columns(f"scalars/{name}", indexes=[rr.TimeColumn("sim_step", sequence=steps)],
-                               columns=rr.Scalars.columns(scalars=np.asarray(values)))
+    for name, values in (
+        ("penetration_over_radius", dg.penetration),
+        ("residual", dg.residual),
+        ("kinetic_energy", dg.kinetic_energy),
+        ("sleeping_share", dg.sleeping),
+    ):
+        ctx.rerun.send_columns(
+            f"scalars/{name}",
+            indexes=[rr.TimeColumn("sim_step", sequence=steps)],
+            columns=rr.Scalars.columns(scalars=np.asarray(values)),
+        )

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from nodegraph.params import ParamValueError
-from nodes.values import SphereSet
 from nodes.elements import distance_field, expand, remesh, sphere_scatter, voxelise
+from nodes.values import SphereSet
 
 
 @pytest.mark.parametrize("resolution", [1, 100_000])

@@ -54,6 +54,7 @@ def test_ice_flake_is_thin_irregular_and_depends_on_shape_seed():
 
 def test_user_mesh_is_recentred_and_aligned(tmp_path):
     import trimesh
+
     box = trimesh.creation.box(extents=(2.0, 6.0, 1.0))
     box.apply_transform(trimesh.transformations.rotation_matrix(0.4, [1, 1, 0]))
     box.apply_translation([1e5, -3e4, 7.0])  # far from the origin
@@ -70,6 +71,7 @@ def test_user_mesh_is_recentred_and_aligned(tmp_path):
 
 def test_inverted_mesh_is_repaired(tmp_path):
     import trimesh
+
     box = trimesh.creation.box(extents=(3.0, 2.0, 1.0))
     box.invert()
     path = tmp_path / "inverted.ply"
@@ -80,6 +82,7 @@ def test_inverted_mesh_is_repaired(tmp_path):
 
 def test_degenerate_faces_are_dropped(tmp_path):
     import trimesh
+
     box = trimesh.creation.box(extents=(3.0, 2.0, 1.0))
     faces = np.vstack([box.faces, [[0, 0, 1], [2, 2, 2]]])  # zero-area faces
     path = tmp_path / "degenerate.off"
@@ -90,6 +93,7 @@ def test_degenerate_faces_are_dropped(tmp_path):
 
 def test_open_mesh_is_refused(tmp_path):
     import trimesh
+
     box = trimesh.creation.box()
     path = tmp_path / "open.stl"
     trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(path)
@@ -114,6 +118,7 @@ def test_nan_in_file_is_refused(tmp_path):
 
 def test_missing_and_unreadable_files_are_refused(tmp_path):
     import trimesh
+
     with pytest.raises(MeshFileError, match="no such mesh file"):
         load_element_mesh(tmp_path / "nope.stl")
     junk = tmp_path / "junk.stl"

@@ -35,7 +35,7 @@ def test_winding_occupancy_matches_exact_volume():
     grid = grid_for(vertices.min(0), vertices.max(0), 96, None, 2)
     inside = mesh_occupancy(grid, vertices, faces)
     volume, _ = volume_centroid(vertices, faces)
-    assert inside.sum() * grid.voxel_size ** 3 == pytest.approx(volume, rel=0.01)
+    assert inside.sum() * grid.voxel_size**3 == pytest.approx(volume, rel=0.01)
     # a nested, outward shell (ikura yolk) stays inside
     nested = mesh_occupancy(grid, np.vstack([vertices, vertices * 0.5]), np.vstack([faces, faces + len(vertices)]))
     assert (nested == inside).all()
@@ -48,7 +48,7 @@ def test_grain_is_watertight_centred_and_expanded(japonica):
     _, centroid = volume_centroid(grain.vertices, grain.faces)
     assert np.allclose(centroid, 0.0, atol=1e-9)
     _, _, _, plain = chain(japonica, seed=3, resolution=40)
-    assert tm.volume / as_trimesh(plain).volume == pytest.approx(1.2 ** 3, rel=1e-6)  # eq. 6 is exact scaling
+    assert tm.volume / as_trimesh(plain).volume == pytest.approx(1.2**3, rel=1e-6)  # eq. 6 is exact scaling
     assert grain.expansion == pytest.approx(1.2)
     assert np.ptp(grain.vertices[:, 0]) > np.ptp(grain.vertices[:, 1])  # long axis stays x
 
@@ -91,7 +91,7 @@ def test_same_seed_is_bit_identical(japonica):
 def test_target_faces_is_met_and_closed(japonica):
     _, _, _, grain = chain(japonica, seed=7, resolution=48, target_faces=800)
     tm = as_trimesh(grain)
-    assert len(grain.faces) <= 800 * 1.15 ** 3 and tm.is_watertight and tm.is_winding_consistent
+    assert len(grain.faces) <= 800 * 1.15**3 and tm.is_watertight and tm.is_winding_consistent
 
 
 def test_smoothing_keeps_the_grain_closed(japonica):
@@ -156,7 +156,7 @@ def test_ikura_through_the_chain():
     volume = voxelise.call(mesh=egg, resolution=40)
     assert volume.data[tuple(np.array(volume.data.shape) // 2)]  # yolk centre is inside the solid
     grain = remesh.call(field=distance_field.call(volume=volume, mesh=egg))
-    assert as_trimesh(grain).volume == pytest.approx(4 / 3 * np.pi * 2.0 ** 3, rel=0.02)
+    assert as_trimesh(grain).volume == pytest.approx(4 / 3 * np.pi * 2.0**3, rel=0.02)
 
 
 @pytest.mark.parametrize("method", ["euclidean", "manhattan"])

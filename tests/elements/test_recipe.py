@@ -21,8 +21,9 @@ def test_rice_grains_recipe_builds_a_cached_library(tmp_path):
     assert library.kind == "japonica" and len(library) == 3
     assert np.allclose(library.props["expansion"], 1.5)  # the japonica preset P
     assert len({m.vertices.shape for m in library.meshes}) > 1 or not np.allclose(
-        library.meshes[0].vertices, library.meshes[1].vertices)  # three distinct grains
-    assert all(len(m.faces) <= 400 * 1.15 ** 3 for m in library.meshes)
+        library.meshes[0].vertices, library.meshes[1].vertices
+    )  # three distinct grains
+    assert all(len(m.faces) <= 400 * 1.15**3 for m in library.meshes)
     decode(encode(library))  # the library and its GrainMesh values store without pickle
     again = run_recipe(recipe, outputs=["japonica.library"], cache=cache)
     assert encode(again.output("japonica.library")) == encode(library)  # cached and bit-identical

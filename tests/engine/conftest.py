@@ -26,4 +26,5 @@ def recipe_file(tmp_path):
         path = tmp_path / name
         path.write_text(text)
         return path
+
     return write

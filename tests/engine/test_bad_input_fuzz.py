@@ -13,12 +13,32 @@ from hypothesis import strategies as st
 
 from nodegraph.cli import main
 
-SCALARS = st.one_of(st.none(), st.booleans(), st.integers(-10**12, 10**12), st.floats(allow_nan=True),
-                    st.text(max_size=12))
-KEYS = st.sampled_from(["name", "seed", "effects", "outputs", "nodes", "type", "params", "inputs", "variants",
-                        "base_mesh", "voxelise", "mesh", "b", "b.mesh", "count", "resolution"]) | st.text(max_size=6)
-STRUCTURES = st.recursive(SCALARS, lambda inner: st.lists(inner, max_size=4) | st.dictionaries(KEYS, inner, max_size=5),
-                          max_leaves=30)
+SCALARS = st.one_of(
+    st.none(), st.booleans(), st.integers(-(10**12), 10**12), st.floats(allow_nan=True), st.text(max_size=12)
+)
+KEYS = st.sampled_from(
+    [
+        "name",
+        "seed",
+        "effects",
+        "outputs",
+        "nodes",
+        "type",
+        "params",
+        "inputs",
+        "variants",
+        "base_mesh",
+        "voxelise",
+        "mesh",
+        "b",
+        "b.mesh",
+        "count",
+        "resolution",
+    ]
+) | st.text(max_size=6)
+STRUCTURES = st.recursive(
+    SCALARS, lambda inner: st.lists(inner, max_size=4) | st.dictionaries(KEYS, inner, max_size=5), max_leaves=30
+)
 
 
 def check(tmp_path: Path, data: bytes, capsys) -> tuple[int, str]:
@@ -59,10 +79,13 @@ def test_an_alias_bomb_is_refused_within_bounded_memory(tmp_path):
     for i in range(1, 12):
         lines.append(f"l{i}: &l{i} [" + ", ".join([f"*{'a' if i == 1 else f'l{i - 1}'}"] * 9) + "]")
     (tmp_path / "bomb.yaml").write_text("\n".join(lines) + "\n")
-    probe = ("import resource, sys; from nodegraph.cli import main; code = main(['check', sys.argv[1]]); "
-             "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr); sys.exit(code)")
-    done = subprocess.run([sys.executable, "-c", probe, str(tmp_path / "bomb.yaml")], capture_output=True, text=True,
-                          timeout=120)
+    probe = (
+        "import resource, sys; from nodegraph.cli import main; code = main(['check', sys.argv[1]]); "
+        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr); sys.exit(code)"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe, str(tmp_path / "bomb.yaml")], capture_output=True, text=True, timeout=120
+    )
     assert done.returncode == 2 and "expands to more than" in done.stderr and "bomb.yaml:" in done.stderr
     peak_kib = int(done.stderr.strip().splitlines()[-1])
     baseline = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -71,11 +94,23 @@ def test_an_alias_bomb_is_refused_within_bounded_memory(tmp_path):
 
 def test_a_damaged_numba_cache_names_the_fix(tmp_path):
     recipe = tmp_path / "v.yaml"
-    recipe.write_text("outputs: [v]\nnodes:\n  b: {type: base_mesh}\n"
-                      "  v: {type: voxelise, inputs: {mesh: b.mesh}, params: {resolution: 16}}\n")
+    recipe.write_text(
+        "outputs: [v]\nnodes:\n  b: {type: base_mesh}\n"
+        "  v: {type: voxelise, inputs: {mesh: b.mesh}, params: {resolution: 16}}\n"
+    )
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
-    cmd = [sys.executable, "-m", "nodegraph.cli", "run", str(recipe), "--no-cache", "--no-rrd", "-q",
-           "--out-dir", str(tmp_path / "out")]
+    cmd = [
+        sys.executable,
+        "-m",
+        "nodegraph.cli",
+        "run",
+        str(recipe),
+        "--no-cache",
+        "--no-rrd",
+        "-q",
+        "--out-dir",
+        str(tmp_path / "out"),
+    ]
     subprocess.run(cmd, env=env, check=True, capture_output=True, timeout=300)
     damaged = list((tmp_path / "numba").rglob("*.nbc"))
     assert damaged
@@ -87,8 +122,9 @@ def test_a_damaged_numba_cache_names_the_fix(tmp_path):
 
 
 NODE_TYPES = st.sampled_from(["base_mesh", "sphere_scatter", "voxelise", "shape", "poisson_place", "xpbd", "shade"])
-PARAM_NAMES = st.sampled_from(["count", "resolution", "size", "kind", "r", "frames", "mode", "path", "variety",
-                               "water_content", "seed"]) | st.text(max_size=5)
+PARAM_NAMES = st.sampled_from(
+    ["count", "resolution", "size", "kind", "r", "frames", "mode", "path", "variety", "water_content", "seed"]
+) | st.text(max_size=5)
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

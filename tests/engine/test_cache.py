@@ -118,8 +118,21 @@ def test_killed_run_keeps_finished_nodes_and_no_torn_entries(tmp_path, registry)
     recipe = tmp_path / "slow.yaml"
     recipe.write_text(SLOW)
     cache_dir = tmp_path / "cache"
-    cmd = [sys.executable, "-m", "nodegraph.cli", "run", str(recipe), "--plugin", str(TOY),
-           "--cache-dir", str(cache_dir), "--no-rrd", "--out-dir", str(tmp_path / "out"), "-q"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "nodegraph.cli",
+        "run",
+        str(recipe),
+        "--plugin",
+        str(TOY),
+        "--cache-dir",
+        str(cache_dir),
+        "--no-rrd",
+        "--out-dir",
+        str(tmp_path / "out"),
+        "-q",
+    ]
     proc = subprocess.Popen(cmd, cwd=tmp_path)
     deadline = time.time() + 60
     while time.time() < deadline and not list(cache_dir.glob("entries/*/*.json")):

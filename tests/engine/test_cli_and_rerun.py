@@ -109,8 +109,11 @@ def test_nodes_describe_graph(recipe, capsys):
 
 
 def test_failing_node_exit_status_1(recipe, capsys):
-    recipe.write_text(RECIPE.replace("type: toy_merge", "type: toy_fail").replace("merge.spheres, ", "")
-                      .replace("{parts: phys.spheres}", "{spheres: phys.spheres}"))
+    recipe.write_text(
+        RECIPE.replace("type: toy_merge", "type: toy_fail")
+        .replace("merge.spheres, ", "")
+        .replace("{parts: phys.spheres}", "{spheres: phys.spheres}")
+    )
     assert cli("run", str(recipe), "--no-rrd") == 1
     err = capsys.readouterr().err
     assert "node 'merge[0]' (type toy_fail) failed" in err
@@ -126,8 +129,12 @@ def test_cache_info_and_clear(recipe, tmp_path, capsys):
 
 
 def test_console_script_runs(recipe, tmp_path):
-    done = subprocess.run(["nodegraph", "run", str(recipe), "--plugin", TOY, "--no-cache", "-q"],
-                          capture_output=True, text=True, cwd=tmp_path)
+    done = subprocess.run(
+        ["nodegraph", "run", str(recipe), "--plugin", TOY, "--no-cache", "-q"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr
 
 
@@ -155,13 +162,34 @@ def test_two_processes_write_bit_identical_outputs(recipe, tmp_path):
     digests = []
     for run_dir in ("a", "b"):
         out = tmp_path / run_dir
-        done = subprocess.run([sys.executable, "-m", "nodegraph.cli", "run", str(recipe), "--plugin", TOY,
-                               "--no-cache", "--no-rrd", "--out-dir", str(out), "-q"],
-                              capture_output=True, text=True, cwd=tmp_path)
+        done = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "nodegraph.cli",
+                "run",
+                str(recipe),
+                "--plugin",
+                TOY,
+                "--no-cache",
+                "--no-rrd",
+                "--out-dir",
+                str(out),
+                "-q",
+            ],
+            capture_output=True,
+            text=True,
+            cwd=tmp_path,
+        )
         assert done.returncode == 0, done.stderr
         assert (out / "manifest.json").is_file()  # says when it was written: not part of the comparison
-        digests.append({p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(out.iterdir())
-                        if p.name != "manifest.json"})
+        digests.append(
+            {
+                p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in sorted(out.iterdir())
+                if p.name != "manifest.json"
+            }
+        )
     assert digests[0] == digests[1] and set(digests[0]) == {"merge.spheres.npz", "surf.ply"}
 
 
@@ -183,6 +211,11 @@ def test_every_value_type_logs_with_its_archetype(tmp_path):
     recording.close()
     store = RrdReader(str(tmp_path / "v.rrd")).stream().collect()
     columns = set(store.schema().column_names())
-    assert {"/vol/cells:Points3D:positions", "/vol/slice:Tensor:data", "/field/cells:Points3D:colors",
-            "/mesh:Mesh3D:vertex_positions", "/table/energy:Scalars:scalars"} <= columns
+    assert {
+        "/vol/cells:Points3D:positions",
+        "/vol/slice:Tensor:data",
+        "/field/cells:Points3D:colors",
+        "/mesh:Mesh3D:vertex_positions",
+        "/table/energy:Scalars:scalars",
+    } <= columns
     assert "/vol/cells:Points3D:colors" not in columns

@@ -13,8 +13,9 @@ def tetra(name=""):
 
 
 def test_round_trip_is_exact_and_bytes_are_stable():
-    lib = ElementLibrary("rice", (tetra("a"), tetra("b")), props={"p": np.array([1.2, 1.5]), "l": np.array([5.0, 5.1])},
-                         refine_range=0.1)
+    lib = ElementLibrary(
+        "rice", (tetra("a"), tetra("b")), props={"p": np.array([1.2, 1.5]), "l": np.array([5.0, 5.1])}, refine_range=0.1
+    )
     data = codec.encode(lib)
     back = codec.decode(data, ElementLibrary)
     assert codec.encode(back) == data

@@ -7,8 +7,9 @@ import sys
 from pathlib import Path
 
 ENGINE = Path(__file__).resolve().parents[2] / "nodegraph"
-FOOD = re.compile(r"\b(rice|grains?|ikura|eggs?|yolks?|roe|onigiri|sushi|kakigori|bowl|japonica|indica|chestnut)\b",
-                  re.IGNORECASE)
+FOOD = re.compile(
+    r"\b(rice|grains?|ikura|eggs?|yolks?|roe|onigiri|sushi|kakigori|bowl|japonica|indica|chestnut)\b", re.IGNORECASE
+)
 
 
 def test_no_engine_module_imports_a_node_package():
@@ -30,6 +31,8 @@ def test_engine_sources_name_no_food():
 
 
 def test_importing_the_engine_loads_no_node_package():
-    probe = "import sys, nodegraph.api, nodegraph.cli; print(sorted(m for m in sys.modules if m.split('.')[0] == 'nodes'))"
+    probe = (
+        "import sys, nodegraph.api, nodegraph.cli; print(sorted(m for m in sys.modules if m.split('.')[0] == 'nodes'))"
+    )
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"

@@ -46,9 +46,13 @@ def test_effects_are_those_asked_for_and_implemented(registry):
 
 
 def test_check_between_parameters_applies():
-    @node("toy_range", version=1, outputs={"mesh": Out(Mesh)},
-          params={"lo": Param(float, 0.0), "hi": Param(float, 1.0)},
-          check=lambda p: [("hi", "must exceed lo")] if p["hi"] <= p["lo"] else [])
+    @node(
+        "toy_range",
+        version=1,
+        outputs={"mesh": Out(Mesh)},
+        params={"lo": Param(float, 0.0), "hi": Param(float, 1.0)},
+        check=lambda p: [("hi", "must exceed lo")] if p["hi"] <= p["lo"] else [],
+    )
     def toy_range(ctx, *, lo, hi):
         return Mesh(np.eye(3) * hi, [[0, 1, 2]])
 

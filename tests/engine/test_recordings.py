@@ -34,8 +34,19 @@ def write(tmp_path, seconds=0.0) -> Path:
 
 
 def command(tmp_path, *extra, quiet=True):
-    return [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slowrun.yaml"), "--plugin", TOY,
-            "--cache-dir", str(tmp_path / "cache"), *(["-q"] if quiet else []), *extra]
+    return [
+        sys.executable,
+        "-m",
+        "nodegraph.cli",
+        "run",
+        str(tmp_path / "slowrun.yaml"),
+        "--plugin",
+        TOY,
+        "--cache-dir",
+        str(tmp_path / "cache"),
+        *(["-q"] if quiet else []),
+        *extra,
+    ]
 
 
 def blueprint_view_names(path: Path) -> set[str]:
@@ -73,8 +84,23 @@ def test_recording_ids_differ_between_settings_and_repeat_for_one(tmp_path, monk
     write(tmp_path)
     ids = []
     for name, extra in (("a", []), ("b", []), ("c", ["--set", "pts.count=7"])):
-        assert main(["run", "slowrun.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), "-q",
-                     "--rrd", f"{name}.rrd", *extra]) == 0
+        assert (
+            main(
+                [
+                    "run",
+                    "slowrun.yaml",
+                    "--plugin",
+                    TOY,
+                    "--cache-dir",
+                    str(tmp_path / "cache"),
+                    "-q",
+                    "--rrd",
+                    f"{name}.rrd",
+                    *extra,
+                ]
+            )
+            == 0
+        )
         ids.append(RrdReader(f"{name}.rrd").recordings()[0].recording_id)
     assert ids[0] == ids[1] != ids[2]
 
@@ -109,8 +135,9 @@ def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_temp_file
 def test_spawn_without_a_display_says_so_first_and_still_writes_the_file(tmp_path):
     write(tmp_path)
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    done = subprocess.run(command(tmp_path, "--spawn", quiet=False), cwd=tmp_path, env=env, capture_output=True, text=True,
-                          timeout=120)
+    done = subprocess.run(
+        command(tmp_path, "--spawn", quiet=False), cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120
+    )
     assert done.returncode == 0, done.stderr
     assert "no display" in done.stderr
     assert done.stderr.index("no display") < done.stderr.index("pts")  # before the run's table of nodes

@@ -31,10 +31,14 @@ def test_entry_point_package_is_scanned_through_its_init(tmp_path, monkeypatch):
     (package / "sub" / "consts.py").write_text(PLUGIN)
     (package / "sub" / "__init__.py").write_text("from .consts import user_constant\n")
     (package / "__init__.py").write_text("")
-    (package / "unrelated_kernel.py").write_text("raise RuntimeError('kernel modules are not imported to list nodes')\n")
+    (package / "unrelated_kernel.py").write_text(
+        "raise RuntimeError('kernel modules are not imported to list nodes')\n"
+    )
     monkeypatch.syspath_prepend(str(tmp_path))
     fake = [EntryPoint("mine", "my_food_nodes", registry_module.ENTRY_POINT_GROUP)]
-    monkeypatch.setattr(registry_module, "entry_points", lambda group: fake if group == registry_module.ENTRY_POINT_GROUP else [])
+    monkeypatch.setattr(
+        registry_module, "entry_points", lambda group: fake if group == registry_module.ENTRY_POINT_GROUP else []
+    )
     reg = registry_module.default_registry()
     assert "user_constant" in reg and reg["user_constant"].version == "2"
     sys.modules.pop("my_food_nodes", None)
@@ -58,6 +62,7 @@ def test_duplicate_type_names_are_refused(tmp_path):
 def test_declaration_errors_are_caught_when_declared():
     with pytest.raises(NodeDeclarationError, match="both as input and parameter"):
         node("bad", version=1, inputs={"x": In(Mesh)}, outputs={"y": Out(Mesh)}, params={"x": Param(int, 1)})(
-            lambda ctx, x: x)
+            lambda ctx, x: x
+        )
     with pytest.raises(NodeDeclarationError, match="lacks arguments"):
         node("bad", version=1, inputs={"mesh": In(Mesh)}, outputs={"y": Out(Table)})(lambda ctx: None)

@@ -87,8 +87,10 @@ def test_missing_required_input(registry):
 
 
 def test_unknown_wire_source_node_and_port(registry):
-    issues = issues_of(VALID.replace("{spheres: pts.spheres}", "{spheres: pst.spheres}")
-                       .replace("phys.spheres]", "phys.sphers]"), registry)
+    issues = issues_of(
+        VALID.replace("{spheres: pts.spheres}", "{spheres: pst.spheres}").replace("phys.spheres]", "phys.sphers]"),
+        registry,
+    )
     messages = sorted((i.location.line, i.suggestion) for i in issues)
     assert messages == [(11, "pts"), (19, "spheres")]
 
@@ -117,7 +119,9 @@ def test_unknown_effect_and_unimplemented_effect(registry):
 
 
 def test_duplicate_key_reported(registry):
-    text = VALID.replace("    params: {count: 20, scale: 2.0}\n", "    params: {count: 20, scale: 2.0}\n    type: toy_points\n")
+    text = VALID.replace(
+        "    params: {count: 20, scale: 2.0}\n", "    params: {count: 20, scale: 2.0}\n    type: toy_points\n"
+    )
     (issue,) = issues_of(text, registry)
     assert "duplicate key 'type'" in issue.message and issue.location.line == 9
 
@@ -130,8 +134,9 @@ def test_yaml_syntax_error_has_line():
 
 
 def test_all_problems_reported_at_once(registry):
-    text = (VALID.replace("dx: 1.5", "dx: 99").replace("type: toy_merge", "type: toy_merg")
-            .replace("count: 20", "count: 0"))
+    text = (
+        VALID.replace("dx: 1.5", "dx: 99").replace("type: toy_merge", "type: toy_merg").replace("count: 20", "count: 0")
+    )
     issues = issues_of(text, registry)
     assert len(issues) >= 3
     assert sorted(i.location.line for i in issues)[:3] == [8, 13, 18]
@@ -144,9 +149,13 @@ def test_outputs_must_exist(registry):
 
 
 def test_variant_families_must_agree(registry):
-    text = VALID.replace("    params: {count: 20, scale: 2.0}\n", "    variants: 4\n    params: {count: 20, scale: 2.0}\n")
-    text = text.replace("    inputs: {spheres: pts.spheres}\n    params:\n      dx: 1.5\n",
-                        "    variants: 3\n    inputs: {spheres: pts.spheres}\n    params:\n      dx: 1.5\n")
+    text = VALID.replace(
+        "    params: {count: 20, scale: 2.0}\n", "    variants: 4\n    params: {count: 20, scale: 2.0}\n"
+    )
+    text = text.replace(
+        "    inputs: {spheres: pts.spheres}\n    params:\n      dx: 1.5\n",
+        "    variants: 3\n    inputs: {spheres: pts.spheres}\n    params:\n      dx: 1.5\n",
+    )
     (issue,) = issues_of(text, registry)
     assert issue.node == "shifted" and "different sizes" in issue.message and "4 from pts" in issue.message
 

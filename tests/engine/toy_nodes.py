@@ -30,11 +30,17 @@ def _(value: SphereSet, log) -> None:
     log.log("", rr.Points3D(value.centers.astype(np.float32), radii=value.radii.astype(np.float32)), static=True)
 
 
-@node("toy_points", version=1, random=True,
-      outputs={"spheres": Out(SphereSet, "random spheres")},
-      params={"count": Param(int, 10, "number of points", range=(1, 100_000)),
-              "scale": Param(float, 1.0, "extent", range=(0.0, 100.0), units="mm"),
-              "mode": Param(str, "cube", "distribution", choices=("cube", "ball"))})
+@node(
+    "toy_points",
+    version=1,
+    random=True,
+    outputs={"spheres": Out(SphereSet, "random spheres")},
+    params={
+        "count": Param(int, 10, "number of points", range=(1, 100_000)),
+        "scale": Param(float, 1.0, "extent", range=(0.0, 100.0), units="mm"),
+        "mode": Param(str, "cube", "distribution", choices=("cube", "ball")),
+    },
+)
 def toy_points(ctx, *, count, scale, mode):
     """Random spheres in a cube or ball."""
     centers = ctx.rng.uniform(-scale, scale, size=(count, 3))
@@ -43,67 +49,88 @@ def toy_points(ctx, *, count, scale, mode):
     return SphereSet(centers, ctx.rng.uniform(0.1, 0.2, count))
 
 
-@node("toy_shift", version=1,
-      inputs={"spheres": In(SphereSet, "to move")},
-      outputs={"spheres": Out(SphereSet, "moved")},
-      params={"dx": Param(float, 0.0, "shift along x", range=(-10.0, 10.0), units="mm")})
+@node(
+    "toy_shift",
+    version=1,
+    inputs={"spheres": In(SphereSet, "to move")},
+    outputs={"spheres": Out(SphereSet, "moved")},
+    params={"dx": Param(float, 0.0, "shift along x", range=(-10.0, 10.0), units="mm")},
+)
 def toy_shift(ctx, spheres, *, dx):
     """Move spheres along x."""
     return SphereSet(spheres.centers + np.array([dx, 0.0, 0.0]), spheres.radii)
 
 
-@node("toy_merge", version=1,
-      inputs={"parts": In(SphereSet, "sets to merge", many=True)},
-      outputs={"spheres": Out(SphereSet, "all spheres"), "stats": Out(Table, "count per part")})
+@node(
+    "toy_merge",
+    version=1,
+    inputs={"parts": In(SphereSet, "sets to merge", many=True)},
+    outputs={"spheres": Out(SphereSet, "all spheres"), "stats": Out(Table, "count per part")},
+)
 def toy_merge(ctx, parts):
     """Concatenate sphere sets."""
     merged = SphereSet(np.concatenate([p.centers for p in parts]), np.concatenate([p.radii for p in parts]))
     return {"spheres": merged, "stats": Table({"count": np.array([len(p) for p in parts])})}
 
 
-@node("toy_mesh", version=1,
-      outputs={"mesh": Out(Mesh, "a tetrahedron")},
-      params={"size": Param(float, 1.0, "edge scale", range=(0.001, 10.0), units="mm")})
+@node(
+    "toy_mesh",
+    version=1,
+    outputs={"mesh": Out(Mesh, "a tetrahedron")},
+    params={"size": Param(float, 1.0, "edge scale", range=(0.001, 10.0), units="mm")},
+)
 def toy_mesh(ctx, *, size):
     """A tetrahedron."""
     v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * size
     return Mesh(v, [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
 
 
-@node("toy_measure", version=1,
-      inputs={"mesh": In(Mesh, "mesh to measure")},
-      outputs={"table": Out(Table, "vertex count")})
+@node(
+    "toy_measure",
+    version=1,
+    inputs={"mesh": In(Mesh, "mesh to measure")},
+    outputs={"table": Out(Table, "vertex count")},
+)
 def toy_measure(ctx, mesh):
     """Count vertices."""
     return Table({"vertices": np.array([len(mesh.vertices)])})
 
 
-@node("toy_physics", version=1, effects=("gravity", "friction", "adhesion"),
-      inputs={"spheres": In(SphereSet, "particles")},
-      outputs={"spheres": Out(SphereSet, "after one step"), "effects": Out(Table, "effects seen")},
-      params={"dt": Param(float, 0.01, "time step", range=(0.0, 1.0), units="s")})
+@node(
+    "toy_physics",
+    version=1,
+    effects=("gravity", "friction", "adhesion"),
+    inputs={"spheres": In(SphereSet, "particles")},
+    outputs={"spheres": Out(SphereSet, "after one step"), "effects": Out(Table, "effects seen")},
+    params={"dt": Param(float, 0.01, "time step", range=(0.0, 1.0), units="s")},
+)
 def toy_physics(ctx, spheres, *, dt):
     """Drops particles under gravity if asked; reports the effects it was given."""
     centers = spheres.centers.copy()
     if ctx.wants("gravity"):
         centers[:, 2] -= 9.81 * dt * dt
     names = sorted(ctx.effects)
-    return {"spheres": SphereSet(centers, spheres.radii),
-            "effects": Table({"gravity": np.array([ctx.wants("gravity")]), "count": np.array([len(names)])})}
+    return {
+        "spheres": SphereSet(centers, spheres.radii),
+        "effects": Table({"gravity": np.array([ctx.wants("gravity")]), "count": np.array([len(names)])}),
+    }
 
 
-@node("toy_fail", version=1,
-      inputs={"spheres": In(SphereSet, "anything")},
-      outputs={"spheres": Out(SphereSet, "never")})
+@node(
+    "toy_fail", version=1, inputs={"spheres": In(SphereSet, "anything")}, outputs={"spheres": Out(SphereSet, "never")}
+)
 def toy_fail(ctx, spheres):
     """Always fails."""
     raise ValueError("toy failure: radius must be positive")
 
 
-@node("toy_slow", version=1,
-      inputs={"spheres": In(SphereSet, "passed through")},
-      outputs={"spheres": Out(SphereSet, "same")},
-      params={"seconds": Param(float, 0.0, "sleep", range=(0.0, 60.0), units="s")})
+@node(
+    "toy_slow",
+    version=1,
+    inputs={"spheres": In(SphereSet, "passed through")},
+    outputs={"spheres": Out(SphereSet, "same")},
+    params={"seconds": Param(float, 0.0, "sleep", range=(0.0, 60.0), units="s")},
+)
 def toy_slow(ctx, spheres, *, seconds):
     """Sleeps, with progress and a per-step scalar on the sim_step timeline, then passes the spheres on."""
     import rerun as rr
@@ -117,20 +144,26 @@ def toy_slow(ctx, spheres, *, seconds):
     return SphereSet(spheres.centers.copy(), spheres.radii.copy())
 
 
-@node("toy_sphere_mesh", version=1,
-      inputs={"spheres": In(SphereSet, "centres")},
-      outputs={"mesh": Out(Mesh, "one tetrahedron per sphere")})
+@node(
+    "toy_sphere_mesh",
+    version=1,
+    inputs={"spheres": In(SphereSet, "centres")},
+    outputs={"mesh": Out(Mesh, "one tetrahedron per sphere")},
+)
 def toy_sphere_mesh(ctx, spheres):
     """A tiny tetrahedron at each centre."""
     base = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 0.1
     verts = (spheres.centers[:, None, :] + base[None]).reshape(-1, 3)
-    faces = (np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])[None] + 4 * np.arange(len(spheres))[:, None, None])
+    faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])[None] + 4 * np.arange(len(spheres))[:, None, None]
     return Mesh(verts, faces.reshape(-1, 3))
 
 
-@node("toy_file_table", version=1,
-      outputs={"table": Out(Table, "one row per line of the file")},
-      params={"path": Param(str, doc="text file", file=True)})
+@node(
+    "toy_file_table",
+    version=1,
+    outputs={"table": Out(Table, "one row per line of the file")},
+    params={"path": Param(str, doc="text file", file=True)},
+)
 def toy_file_table(ctx, *, path):
     """The lengths of a text file's lines."""
     with open(path, encoding="utf-8") as handle:

@@ -18,7 +18,7 @@ def _files(scene, formats):
 
 def _gltf_json(data: bytes) -> dict:
     length = struct.unpack_from("<I", data, 12)[0]
-    return json.loads(data[20:20 + length])
+    return json.loads(data[20 : 20 + length])
 
 
 def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
@@ -27,8 +27,12 @@ def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
     assert report["numErrors"] == 0, report["messages"][:5]
     assert report["numWarnings"] == 0, report["messages"][:5]
     doc = _gltf_json(data)
-    assert {"KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior",
-            "KHR_materials_clearcoat"} <= set(doc["extensionsUsed"])
+    assert {
+        "KHR_materials_transmission",
+        "KHR_materials_volume",
+        "KHR_materials_ior",
+        "KHR_materials_clearcoat",
+    } <= set(doc["extensionsUsed"])
     assert len(doc["meshes"]) == len(shaded.meshes)
     assert all("COLOR_0" in m["primitives"][0]["attributes"] for m in doc["meshes"])
     membrane = next(m for m in doc["materials"] if m["name"] == "ikura_membrane")
@@ -42,7 +46,7 @@ def test_validator_catches_a_broken_glb(shaded, gltf_validator):
     text = json.dumps(doc).encode()
     text += b" " * ((-len(text)) % 4)
     old = struct.unpack_from("<I", data, 12)[0]
-    broken = bytes(data[:12]) + struct.pack("<I4s", len(text), b"JSON") + text + bytes(data[20 + old:])
+    broken = bytes(data[:12]) + struct.pack("<I4s", len(text), b"JSON") + text + bytes(data[20 + old :])
     broken = broken[:8] + struct.pack("<I", len(broken)) + broken[12:]
     assert gltf_validator(broken)["numErrors"] > 0
 
@@ -90,8 +94,9 @@ def test_ply_and_obj_round_trip_with_srgb_colours(shaded):
     assert np.allclose(ply.vertices[: len(shaded.meshes[0].vertices)], shaded.meshes[0].vertices, atol=1e-5)
     from nodes.export.mesh_files import linear_to_srgb8
 
-    assert np.array_equal(ply.visual.vertex_colors[: len(shaded.meshes[0].vertices), :3],
-                          linear_to_srgb8(shaded.meshes[0].colors))
+    assert np.array_equal(
+        ply.visual.vertex_colors[: len(shaded.meshes[0].vertices), :3], linear_to_srgb8(shaded.meshes[0].colors)
+    )
 
 
 def test_export_is_deterministic(shaded):
@@ -99,9 +104,14 @@ def test_export_is_deterministic(shaded):
     assert a == b
 
 
-@pytest.mark.parametrize("params, match", [({"basename": "../escape"}, "plain file name"),
-                                           ({"formats": ["fbx"]}, "unknown format"),
-                                           ({"formats": []}, "at least one")])
+@pytest.mark.parametrize(
+    "params, match",
+    [
+        ({"basename": "../escape"}, "plain file name"),
+        ({"formats": ["fbx"]}, "unknown format"),
+        ({"formats": []}, "at least one"),
+    ],
+)
 def test_bad_export_parameters(shaded, params, match):
     with pytest.raises(ValueError, match=match):
         export(Context.standalone(seed=0), scene=shaded, **{**export.resolve_params({}), **params})

@@ -27,8 +27,10 @@ def _side(vertices, faces, points):
 def _concat(*parts):
     """Closed parts in one mesh, without a boolean union (what a recipe gets by concatenating meshes)."""
     offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
-    return (np.vstack([v for v, _ in parts]),
-            np.vstack([np.asarray(f, np.int64) + o for (_, f), o in zip(parts, offsets)]))
+    return (
+        np.vstack([v for v, _ in parts]),
+        np.vstack([np.asarray(f, np.int64) + o for (_, f), o in zip(parts, offsets)]),
+    )
 
 
 def _users(vertices, faces, origin, h, shape):

@@ -9,9 +9,9 @@ import pytest
 from scipy.spatial import cKDTree
 
 from nodegraph.values import Mesh
-from nodes.values import ElementLibrary
 from nodes.placement import poisson_place
 from nodes.shapes import shape
+from nodes.values import ElementLibrary
 
 from .conftest import digest, ellipsoid
 

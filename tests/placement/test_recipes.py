@@ -26,12 +26,23 @@ def test_pile_onigiri_recipe_places_refines_and_culls(tmp_path):
 
 def test_rice_bunny_recipe_fills_a_user_mesh_given_on_the_command_line(tmp_path):
     trimesh.creation.icosphere(3).export(tmp_path / "blob.stl")
-    overrides = [f"bunny.path={tmp_path / 'blob.stl'}", "bunny.size=12.0", "grain_spheres.variants=2",
-                 "grain_volume.resolution=24", "press.frames=3", "preview.width=48", "preview.height=36",
-                 "preview.samples=1"]
+    overrides = [
+        f"bunny.path={tmp_path / 'blob.stl'}",
+        "bunny.size=12.0",
+        "grain_spheres.variants=2",
+        "grain_volume.resolution=24",
+        "press.frames=3",
+        "preview.width=48",
+        "preview.height=36",
+        "preview.samples=1",
+    ]
     recipe = load_recipe(GRAPHS / "rice_bunny.yaml", default_registry(), overrides=overrides)
-    result = run_recipe(recipe, cache=Cache(tmp_path / "cache"), out_dir=tmp_path / "out",
-                        outputs=["pile.aggregate", "press.aggregate", "export.files", "preview.image"])
+    result = run_recipe(
+        recipe,
+        cache=Cache(tmp_path / "cache"),
+        out_dir=tmp_path / "out",
+        outputs=["pile.aggregate", "press.aggregate", "export.files", "preview.image"],
+    )
     pile = result.output("pile.aggregate").placement
     assert len(pile) > 10
     assert np.allclose(pile.normals, [0.0, 0.0, 1.0]) and pile.offsets.min() >= 0.0

@@ -1,4 +1,5 @@
-"""overlap_refine and cull: medial-sphere fit, cost ranges, overlap reduction, determinism, hard elements (SPEC §2.5–2.7)."""
+"""overlap_refine and cull: medial-sphere fit, cost ranges, overlap reduction, determinism, hard elements
+(SPEC §2.5–2.7)."""
 
 from __future__ import annotations
 
@@ -6,9 +7,9 @@ import numpy as np
 import pytest
 
 from nodegraph.values import Mesh
-from nodes.values import ElementLibrary, Placement
 from nodes.placement import cull, mix_ratio, overlap_refine, poisson_place, rotate
 from nodes.placement.medial_spheres import medial_spheres, union_fit
+from nodes.values import ElementLibrary, Placement
 
 from .conftest import digest, ellipsoid
 
@@ -43,8 +44,9 @@ def test_sakurai_refine_reduces_overlap_within_the_range(pile, rice):
 
 
 def test_gan_refine_stays_in_zero_to_r_c_refine(pile, rice):
-    refined = overlap_refine.call(seed=2, placement=pile, libraries=[rice], cost="gan", r=0.35,
-                  c_refine=2.0)["placement"]
+    refined = overlap_refine.call(seed=2, placement=pile, libraries=[rice], cost="gan", r=0.35, c_refine=2.0)[
+        "placement"
+    ]
     assert refined.offsets.min() >= 0.0 and refined.offsets.max() <= 0.7 + 1e-9
 
 
@@ -97,11 +99,12 @@ def test_flat_element_is_refused_and_thin_elements_work(pile):
     flat = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]), np.array([[0, 1, 2], [1, 3, 2]]))
     with pytest.raises(ValueError, match="no interior"):
         overlap_refine.call(placement=pile, libraries=[ElementLibrary("rice", (flat,))])
-    rod = ellipsoid((1.1, 0.05, 0.05))      # S §5: rods
-    plate = ellipsoid((1.1, 1.0, 0.04))     # S §5: plates
+    rod = ellipsoid((1.1, 0.05, 0.05))  # S §5: rods
+    plate = ellipsoid((1.1, 1.0, 0.04))  # S §5: plates
     for thin in (rod, plate):
-        out = overlap_refine.call(placement=pile.subset(np.arange(200)),
-                  libraries=[ElementLibrary("rice", (thin,))])["placement"]
+        out = overlap_refine.call(placement=pile.subset(np.arange(200)), libraries=[ElementLibrary("rice", (thin,))])[
+            "placement"
+        ]
         assert np.isfinite(out.positions).all() and np.abs(out.offsets).max() <= 1.1 + 1e-9
 
 
@@ -126,8 +129,9 @@ def test_carried_medial_spheres_give_the_same_refine_and_cull(pile, rice):
     plain = overlap_refine.call(seed=2, placement=pile, libraries=[rice])["placement"]
     fast = overlap_refine.call(seed=2, placement=pile, libraries=[library])["placement"]
     assert digest(plain.positions, plain.overlap) == digest(fast.positions, fast.overlap)
-    assert digest(cull.call(placement=plain, libraries=[rice])["placement"].positions) == \
-        digest(cull.call(placement=fast, libraries=[library])["placement"].positions)
+    assert digest(cull.call(placement=plain, libraries=[rice])["placement"].positions) == digest(
+        cull.call(placement=fast, libraries=[library])["placement"].positions
+    )
 
 
 def test_more_passes_stay_in_range_and_do_not_deepen_the_overlap(pile, rice):

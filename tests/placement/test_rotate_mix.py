@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.values import Placement
 from nodes.placement import mix_ratio, rotate
+from nodes.values import Placement
 
 from .conftest import digest, rice_library
 
@@ -58,8 +58,9 @@ def test_rotation_and_kind_follow_p_num_not_the_array_index():
     assert np.array_equal(full.rotations[keep], part.rotations)
     libs = [rice_library("rice"), rice_library("chestnut")]
     mixed_full = mix_ratio.call(seed=5, placement=placement, libraries=libs, ratios=[3.0, 1.0])["placement"]
-    mixed_part = mix_ratio.call(seed=5, placement=placement.subset(keep), libraries=libs,
-                                ratios=[3.0, 1.0])["placement"]
+    mixed_part = mix_ratio.call(seed=5, placement=placement.subset(keep), libraries=libs, ratios=[3.0, 1.0])[
+        "placement"
+    ]
     assert np.array_equal(mixed_full.kinds[keep], mixed_part.kinds)
 
 

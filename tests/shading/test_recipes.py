@@ -8,8 +8,16 @@ import pytest
 from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
 
 REPO = Path(__file__).resolve().parents[2]
-SMALL = ["rice_place.r=3.0", "rice_sim.frames=2", "egg_sim.frames=2", "egg_place.r=4.0",
-         "grain_mesh.target_faces=200", "preview.width=64", "preview.height=48", "preview.samples=1"]
+SMALL = [
+    "rice_place.r=3.0",
+    "rice_sim.frames=2",
+    "egg_sim.frames=2",
+    "egg_place.r=4.0",
+    "grain_mesh.target_faces=200",
+    "preview.width=64",
+    "preview.height=48",
+    "preview.samples=1",
+]
 
 
 def _run(recipe_name, overrides, tmp_path):

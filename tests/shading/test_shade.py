@@ -13,7 +13,7 @@ from nodes.shading import shade
 def test_materials_per_kind_and_ikura_parts(shaded):
     names = [m.name for m in shaded.materials]
     assert names == ["rice", "ikura_membrane", "ikura_yolk", "ceramic"]
-    membrane, yolk = shaded.materials[1], shaded.materials[2]
+    membrane = shaded.materials[1]
     assert membrane.transmission > 0 and membrane.base_color[0] > membrane.base_color[2]
     assert len(shaded.meshes) == 16 + 3 * 2 + 1
     assert sum(m.name.endswith("/yolk") for m in shaded.meshes) == 3
@@ -51,20 +51,34 @@ def test_ice_with_syrup_on_top(scene_inputs):
 
     rice, _ = scene_inputs["aggregates"]
     heights = rice.placement.positions + np.c_[np.zeros((len(rice.placement), 2)), np.arange(len(rice.placement))]
-    ice = replace(rice, placement=replace(rice.placement, positions=heights),
-                  libraries=(replace(rice.libraries[0], kind="ice"),))
+    ice = replace(
+        rice, placement=replace(rice.placement, positions=heights), libraries=(replace(rice.libraries[0], kind="ice"),)
+    )
     scene = shade.call(aggregates=[ice], syrup_coverage=0.5)
     assert {m.name for m in scene.materials} == {"ice", "ice_syrup"}
     assert all(m.ior == pytest.approx(1.31) and m.transmission > 0 for m in scene.materials)
-    syrup = [mesh.vertices[:, 2].mean() for mesh, k in zip(scene.meshes, scene.material_of)
-             if scene.materials[k].name == "ice_syrup"]
-    plain = [mesh.vertices[:, 2].mean() for mesh, k in zip(scene.meshes, scene.material_of)
-             if scene.materials[k].name == "ice"]
+    syrup = [
+        mesh.vertices[:, 2].mean()
+        for mesh, k in zip(scene.meshes, scene.material_of)
+        if scene.materials[k].name == "ice_syrup"
+    ]
+    plain = [
+        mesh.vertices[:, 2].mean()
+        for mesh, k in zip(scene.meshes, scene.material_of)
+        if scene.materials[k].name == "ice"
+    ]
     assert min(syrup) > max(plain)  # syrup soaks the top of the mound
 
 
-@pytest.mark.parametrize("name, value", [("water_content", 30.0), ("syrup_color", (1.2, 0.0, 0.0)),
-                                         ("scenery_color", (-0.1, 0.2, 0.2)), ("light_colors", [(0.5, 2.0, 0.5)])])
+@pytest.mark.parametrize(
+    "name, value",
+    [
+        ("water_content", 30.0),
+        ("syrup_color", (1.2, 0.0, 0.0)),
+        ("scenery_color", (-0.1, 0.2, 0.2)),
+        ("light_colors", [(0.5, 2.0, 0.5)]),
+    ],
+)
 def test_out_of_range_parameters_are_refused_before_running(name, value):
     with pytest.raises(ParamValueError):
         shade.params[name].validate(value)
@@ -83,8 +97,9 @@ def test_bad_input_at_run_time_gives_clear_errors(scene_inputs):
         shade(Context.standalone(), **{**unchecked, "water_content": 25.0})
     with pytest.raises(ValueError, match="presets"):
         shade.call(**scene_inputs, presets=["japonica=marble"])
-    assert shade.check({"light_directions": [(0, 0, 1)] * 2, "light_colors": [(1, 1, 1)] * 3,
-                        "light_intensities": [1.0]})
+    assert shade.check(
+        {"light_directions": [(0, 0, 1)] * 2, "light_colors": [(1, 1, 1)] * 3, "light_intensities": [1.0]}
+    )
 
 
 def test_unknown_kind_and_empty_aggregates_are_refused(scene_inputs):

@@ -12,11 +12,11 @@ from scipy.spatial.transform import Rotation
 
 from nodegraph import codec
 from nodegraph.values import Mesh
-from nodes.values import Aggregate, ElementLibrary, Placement
 from nodes.simulation.aggregate import DeformedAggregate
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation, snapshot_aggregate
 from nodes.simulation.xpbd import xpbd
+from nodes.values import Aggregate, ElementLibrary, Placement
 
 LENGTH = 12.0  # mm, a long grain: several particles along its axis
 BEND_RADIUS = 10.0  # mm, arc the particles are laid on (sag ≈ 1.6 mm over the grain)
@@ -35,8 +35,9 @@ def aggregate(mesh=None) -> Aggregate:
 
 
 def params(**given) -> XpbdParams:
-    return XpbdParams(**xpbd.resolve_params({"frames": 1, "particles_per_element": 16, "linear_deformation": 1.0,
-                                             **given}))
+    return XpbdParams(
+        **xpbd.resolve_params({"frames": 1, "particles_per_element": 16, "linear_deformation": 1.0, **given})
+    )
 
 
 def arc(local):
@@ -168,5 +169,6 @@ def test_yolk_offsets_still_move_the_part_faces_of_a_bent_element():
     yolk[np.unique(egg.faces[egg.parts == 1])] = True
     moved = shifted.element_mesh(0).vertices - bent.element_mesh(0).vertices
     assert np.allclose(moved[yolk], offset) and np.all(moved[~yolk] == 0.0)
-    assert not np.allclose(bent.element_mesh(0).vertices, Aggregate(placement, libraries, bent.deformations)
-                           .element_mesh(0).vertices)  # the bend is applied under the offsets
+    assert not np.allclose(
+        bent.element_mesh(0).vertices, Aggregate(placement, libraries, bent.deformations).element_mesh(0).vertices
+    )  # the bend is applied under the offsets

@@ -30,8 +30,9 @@ class StopAfter(Checkpoint):
 def run(aggregate, colliders, checkpoint=None, **params):
     ctx = Context.standalone(node_type="xpbd", effects=EFFECTS)
     ctx.checkpoint = checkpoint
-    return xpbd(ctx, aggregate=aggregate, colliders=colliders,
-                **xpbd.resolve_params({"frames": 8, "substeps": 4, **params}))
+    return xpbd(
+        ctx, aggregate=aggregate, colliders=colliders, **xpbd.resolve_params({"frames": 8, "substeps": 4, **params})
+    )
 
 
 def test_an_interrupted_simulation_resumes_bit_for_bit(tmp_path):
@@ -66,16 +67,27 @@ def test_the_recording_shows_each_steps_particles(tmp_path):
     recording = RunRecording(tmp_path / "sim.rrd", "sim")
     ctx = Context.standalone(node_type="xpbd", effects=EFFECTS)
     ctx.rerun = recording.logger("/sim/log")
-    xpbd(ctx, aggregate=aggregate, colliders=colliders,
-         **xpbd.resolve_params({"frames": 6, "substeps": 4, "log_every": 1, "sleep_speed": 0.0}))
+    xpbd(
+        ctx,
+        aggregate=aggregate,
+        colliders=colliders,
+        **xpbd.resolve_params({"frames": 6, "substeps": 4, "log_every": 1, "sleep_speed": 0.0}),
+    )
     recording.close()
     session = datafusion.SessionContext()  # must outlive the query
-    table = RrdReader(str(tmp_path / "sim.rrd")).stream().collect().reader(
-        "sim_step", contents="/sim/log/particles", ctx=session).to_arrow_table()
+    table = (
+        RrdReader(str(tmp_path / "sim.rrd"))
+        .stream()
+        .collect()
+        .reader("sim_step", contents="/sim/log/particles", ctx=session)
+        .to_arrow_table()
+    )
     steps = table.column("sim_step").to_pylist()
     assert steps == [0, 4, 8, 12, 16, 20, 24]  # the start and after each frame
-    logged = {s: np.asarray(p, np.float32).reshape(-1, 3)
-              for s, p in zip(steps, table.column("/sim/log/particles:Points3D:positions").to_pylist())}
+    logged = {
+        s: np.asarray(p, np.float32).reshape(-1, 3)
+        for s, p in zip(steps, table.column("/sim/log/particles:Points3D:positions").to_pylist())
+    }
     for frames in (1, 4):
         alone = run(aggregate, colliders, frames=frames, sleep_speed=0.0)["particles"].positions.astype(np.float32)
         assert np.array_equal(logged[4 * frames], alone)  # the state after that many frames, exactly

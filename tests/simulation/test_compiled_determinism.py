@@ -24,9 +24,14 @@ print(hashlib.sha256(out["particles"].positions.tobytes()).hexdigest())
 @pytest.mark.slow  # compiles every simulation kernel once more (≈ 30 s)
 def test_fresh_and_cached_kernels_give_the_same_bits(tmp_path):
     scenes = str(Path(xpbd_scenes.__file__).parent)  # the scene builders import by name there, too
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
-           "PYTHONPATH": os.pathsep.join(filter(None, [scenes, os.environ.get("PYTHONPATH")]))}
-    runs = [subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True, check=True).stdout
-            for _ in range(2)]  # the first compiles and fills the cache, the second loads from it
+    env = {
+        **os.environ,
+        "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+        "PYTHONPATH": os.pathsep.join(filter(None, [scenes, os.environ.get("PYTHONPATH")])),
+    }
+    runs = [
+        subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True, check=True).stdout
+        for _ in range(2)
+    ]  # the first compiles and fills the cache, the second loads from it
     assert any((tmp_path / "numba").rglob("*.nbi"))
     assert len(runs[0].strip()) == 64 and runs[0] == runs[1]

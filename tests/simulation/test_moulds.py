@@ -7,8 +7,8 @@ from scipy.spatial.transform import Rotation
 from xpbd_scenes import rice_library
 
 from nodegraph.values import Mesh
-from nodes.values import Aggregate, Placement
 from nodes.simulation.xpbd import xpbd
+from nodes.values import Aggregate, Placement
 
 PRESS = ("contact", "friction", "adhesion", "collider", "moisture", "damping")
 
@@ -23,8 +23,13 @@ def crowded_ball(n=60, radius=12.0, seed=1) -> Aggregate:
     d = rng.normal(size=(n, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     positions = d * rng.uniform(0.6 * radius, radius - 0.5, (n, 1))
-    placement = Placement(positions, np.tile([0.0, 0.0, 1.0], (n, 1)), Rotation.random(n, random_state=seed).as_matrix(),
-                          variants=rng.integers(0, 4, n).astype(np.int32), kind_names=("japonica",))
+    placement = Placement(
+        positions,
+        np.tile([0.0, 0.0, 1.0], (n, 1)),
+        Rotation.random(n, random_state=seed).as_matrix(),
+        variants=rng.integers(0, 4, n).astype(np.int32),
+        kind_names=("japonica",),
+    )
     return Aggregate(placement, (rice_library(seed=seed),))
 
 

@@ -14,8 +14,9 @@ RADIUS = 0.6
 TETRA = np.array([[0.0, 0, 0], [1, 0, 0], [0.5, 0.87, 0], [0.5, 0.29, 0.82]])
 PLATE = np.array([[0.0, 0, 0], [1.2, 0, 0], [0, 1.2, 0], [1.2, 1.2, 0]])
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
-GROUND = signed_distance_grid([box_mesh([-40, -40, -4], [40, 40, 0], "ground")], np.array([-20.0, -20, -3]),
-                              np.array([20.0, 20, 30]), 0.5)
+GROUND = signed_distance_grid(
+    [box_mesh([-40, -40, -4], [40, 40, 0], "ground")], np.array([-20.0, -20, -3]), np.array([20.0, 20, 30]), 0.5
+)
 
 
 def solver(elements, sleep_speed):
@@ -25,8 +26,16 @@ def solver(elements, sleep_speed):
     start = np.r_[0, np.cumsum([len(qe) for qe in q])]
     w = np.concatenate([np.full(len(qe), len(qe) / 0.025) for qe in q])
     settings = SolverSettings(EFFECTS, damping=0.1, sleep_speed=sleep_speed)
-    return solver_run(x, np.full(len(x), RADIUS), w, start, np.concatenate(q), np.tile([1.0, 0, 0, 0], (len(q), 1)),
-                      settings, sdf=GROUND)
+    return solver_run(
+        x,
+        np.full(len(x), RADIUS),
+        w,
+        start,
+        np.concatenate(q),
+        np.tile([1.0, 0, 0, 0], (len(q), 1)),
+        settings,
+        sdf=GROUND,
+    )
 
 
 def pile(sleep_speed, lift=0.0, extra=()):
@@ -82,7 +91,7 @@ def drop_on_floor(sleep_speed):
     for _ in range(30):
         s.frame()
         woke |= ~s.state.asleep
-    return s, woke, np.linalg.norm((s.state.x - x0)[:s.model.start[-2]], axis=1).reshape(-1, 4).max(axis=1)
+    return s, woke, np.linalg.norm((s.state.x - x0)[: s.model.start[-2]], axis=1).reshape(-1, 4).max(axis=1)
 
 
 def test_a_dropped_element_wakes_the_sleepers_it_hits():

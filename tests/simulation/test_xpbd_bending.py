@@ -24,11 +24,18 @@ def sag(bend_stiffness, stiffness=0.1):
     ends = np.abs(q[:, 0]) > q[:, 0].max() - 0.5
     w[ends] = 0.0
     compliance = 1.0 / (1000.0 * stiffness)
-    settings = SolverSettings(frozenset({"gravity", "damping"}), compliance=compliance, linear_deformation=0.3,
-                              damping=0.3, substeps=10, iterations=2,
-                              bend_compliance=compliance / bend_stiffness if bend_stiffness > 0 else np.inf)
-    s = solver_run(q + [0, 0, 10.0], np.full(len(q), 0.5), w, np.array([0, len(q)]), q, np.array([[1.0, 0, 0, 0]]),
-                   settings)
+    settings = SolverSettings(
+        frozenset({"gravity", "damping"}),
+        compliance=compliance,
+        linear_deformation=0.3,
+        damping=0.3,
+        substeps=10,
+        iterations=2,
+        bend_compliance=compliance / bend_stiffness if bend_stiffness > 0 else np.inf,
+    )
+    s = solver_run(
+        q + [0, 0, 10.0], np.full(len(q), 0.5), w, np.array([0, len(q)]), q, np.array([[1.0, 0, 0, 0]]), settings
+    )
     for _ in range(60):
         s.frame()
     x = s.state.x
@@ -61,8 +68,15 @@ def test_bend_off_allocates_nothing_and_node_stays_deterministic():
     aggregate, colliders = rice_bowl(10, seed=4)
     digests = []
     for bend in (0.0, 10.0, 10.0):
-        out = xpbd.call(effects=("gravity", "contact"), aggregate=aggregate, colliders=colliders, frames=5, substeps=4,
-                        log_every=0, bend_stiffness=bend)
+        out = xpbd.call(
+            effects=("gravity", "contact"),
+            aggregate=aggregate,
+            colliders=colliders,
+            frames=5,
+            substeps=4,
+            log_every=0,
+            bend_stiffness=bend,
+        )
         assert np.isfinite(out["particles"].positions).all()
         digests.append(hashlib.sha256(out["particles"].positions.tobytes()).hexdigest())
     assert digests[1] == digests[2] != digests[0]

@@ -32,8 +32,16 @@ def make(elements, radius, masses, settings, sdf=None):
         sizes.append(len(q))
         quats.append(Rotation.from_matrix(rot).as_quat()[[3, 0, 1, 2]])
     x = np.concatenate(xs)
-    return solver_run(x, np.full(len(x), radius), np.concatenate(ws), np.r_[0, np.cumsum(sizes)], np.concatenate(qs),
-                      np.array(quats), settings, sdf=sdf)
+    return solver_run(
+        x,
+        np.full(len(x), radius),
+        np.concatenate(ws),
+        np.r_[0, np.cumsum(sizes)],
+        np.concatenate(qs),
+        np.array(quats),
+        settings,
+        sdf=sdf,
+    )
 
 
 def finite(run):
@@ -45,17 +53,20 @@ def pairwise(p):
 
 
 def test_zero_compliance_keeps_shape():
-    settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), compliance=0.0, substeps=10,
-                              iterations=4)
+    settings = SolverSettings(
+        frozenset({"gravity", "contact", "friction", "collider"}), compliance=0.0, substeps=10, iterations=4
+    )
     bar = cluster_bar()
-    elements = [(bar, np.array([0, 0, 2.0 + 3 * k]), Rotation.from_euler("z", 30 * k, degrees=True).as_matrix())
-                for k in range(3)]
+    elements = [
+        (bar, np.array([0, 0, 2.0 + 3 * k]), Rotation.from_euler("z", 30 * k, degrees=True).as_matrix())
+        for k in range(3)
+    ]
     s = make(elements, 0.6, [0.025] * 3, settings, ground_sdf())
     for _ in range(60):
         s.frame()
     assert finite(s)
     for c in range(3):
-        p = s.state.x[s.model.start[c]:s.model.start[c + 1]]
+        p = s.state.x[s.model.start[c] : s.model.start[c + 1]]
         assert np.abs(pairwise(p) - pairwise(bar)).max() < 0.05
     assert s.state.x[:, 2].min() > 0.6 * 0.9  # resting on the ground, not through it
 
@@ -82,8 +93,15 @@ def test_deep_initial_overlap_separates_without_explosion(damping):
     settings = SolverSettings(frozenset(effects), substeps=10, iterations=2, damping=damping)
     n = 64
     x = np.zeros((n, 3))  # every particle at the same point
-    s = solver_run(x, np.full(n, 0.5), np.full(n, 40.0), np.arange(n + 1), np.zeros((n, 3)),
-                   np.tile([1.0, 0, 0, 0], (n, 1)), settings)
+    s = solver_run(
+        x,
+        np.full(n, 0.5),
+        np.full(n, 40.0),
+        np.arange(n + 1),
+        np.zeros((n, 3)),
+        np.tile([1.0, 0, 0, 0], (n, 1)),
+        settings,
+    )
     clamp = 0.5 / settings.h
     for _ in range(120):
         s.frame()
@@ -95,8 +113,9 @@ def test_deep_initial_overlap_separates_without_explosion(damping):
 
 
 def test_large_time_step_stays_bounded():
-    settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), dt=0.5, substeps=1,
-                              iterations=2, compliance=1e-6)
+    settings = SolverSettings(
+        frozenset({"gravity", "contact", "friction", "collider"}), dt=0.5, substeps=1, iterations=2, compliance=1e-6
+    )
     bar = cluster_bar(3)
     elements = [(bar, np.array([0.3 * k, 0, 1 + 2.0 * k]), np.eye(3)) for k in range(6)]
     s = make(elements, 0.6, [0.025] * 6, settings, ground_sdf())
@@ -113,8 +132,16 @@ def test_fast_grains_do_not_tunnel_through_thin_bowl_wall():
     rng = np.random.default_rng(1)
     n = 200
     x = rng.uniform(-4, 4, (n, 3))
-    s = solver_run(x, np.full(n, 0.5), np.full(n, 40.0), np.arange(n + 1), np.zeros((n, 3)),
-                   np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf)
+    s = solver_run(
+        x,
+        np.full(n, 0.5),
+        np.full(n, 40.0),
+        np.arange(n + 1),
+        np.zeros((n, 3)),
+        np.tile([1.0, 0, 0, 0], (n, 1)),
+        settings,
+        sdf=sdf,
+    )
     direction = x / np.linalg.norm(x, axis=1, keepdims=True)
     direction[:, 2] = -np.abs(direction[:, 2])
     s.state.v[:] = 20000.0 * direction  # 20 m/s towards the wall: 160× a radius per substep before the clamp
@@ -126,12 +153,17 @@ def test_fast_grains_do_not_tunnel_through_thin_bowl_wall():
 
 
 def test_long_rest_decays_without_jitter_growth():
-    settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider", "damping"}), damping=0.1,
-                              compliance=1e-6, sleep_speed=1.0)
+    settings = SolverSettings(
+        frozenset({"gravity", "contact", "friction", "collider", "damping"}),
+        damping=0.1,
+        compliance=1e-6,
+        sleep_speed=1.0,
+    )
     bar = cluster_bar(3)
     rng = np.random.default_rng(0)
-    elements = [(bar, np.r_[rng.uniform(-2, 2, 2), 1 + 1.3 * k], Rotation.random(random_state=k).as_matrix())
-                for k in range(12)]
+    elements = [
+        (bar, np.r_[rng.uniform(-2, 2, 2), 1 + 1.3 * k], Rotation.random(random_state=k).as_matrix()) for k in range(12)
+    ]
     s = make(elements, 0.6, [0.025] * 12, settings, ground_sdf())
     for _ in range(240):
         s.frame()
@@ -144,11 +176,15 @@ def test_long_rest_decays_without_jitter_growth():
 
 @pytest.mark.parametrize("shape", ["collinear", "planar", "single"])
 def test_degenerate_clusters_keep_proper_rotations(shape):
-    local = {"collinear": cluster_bar(5), "planar": np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [2, 2, 0.0]]),
-             "single": np.zeros((1, 3))}[shape]
+    local = {
+        "collinear": cluster_bar(5),
+        "planar": np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [2, 2, 0.0]]),
+        "single": np.zeros((1, 3)),
+    }[shape]
     settings = SolverSettings(frozenset({"gravity", "contact", "collider"}), compliance=1e-7, linear_deformation=0.5)
-    elements = [(local, np.array([0.5 * k, 0, 1.5 + 2.5 * k]), Rotation.random(random_state=k).as_matrix())
-                for k in range(4)]
+    elements = [
+        (local, np.array([0.5 * k, 0, 1.5 + 2.5 * k]), Rotation.random(random_state=k).as_matrix()) for k in range(4)
+    ]
     s = make(elements, 0.6, [0.025] * 4, settings, ground_sdf())
     for _ in range(60):
         s.frame()
@@ -157,7 +193,7 @@ def test_degenerate_clusters_keep_proper_rotations(shape):
     assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3), atol=1e-6)
     assert np.allclose(np.linalg.det(rot), 1.0, atol=1e-6)
     for c in range(4):
-        p = s.state.x[s.model.start[c]:s.model.start[c + 1]]
+        p = s.state.x[s.model.start[c] : s.model.start[c + 1]]
         assert np.abs(pairwise(p) - pairwise(local)).max() < 0.25
 
 
@@ -178,6 +214,7 @@ def test_bad_settings_are_rejected():
     with pytest.raises(ValueError, match="watertight"):
         open_mesh = box_mesh([0, 0, 0], [1, 1, 1])
         from nodegraph.values import Mesh
+
         signed_distance_grid([Mesh(open_mesh.vertices, open_mesh.faces[:-2])], np.zeros(3), np.ones(3), 0.1)
 
 
@@ -187,15 +224,30 @@ def tall_pile(n, side, shock, frames, iterations=1):
 
     per_row = int(side / 2.1)
     k = np.arange(n)
-    x = np.stack([k % per_row, (k // per_row) % per_row, k // per_row ** 2], 1) * 2.1 + 1.05
+    x = np.stack([k % per_row, (k // per_row) % per_row, k // per_row**2], 1) * 2.1 + 1.05
     x = x + np.random.default_rng(0).uniform(-0.04, 0.04, x.shape)
     top = x[:, 2].max() + 2
-    sdf = signed_distance_grid(open_box(side, wall=2.0, height=top), np.array([-2.0, -2, -2]),
-                               np.array([side + 2, side + 2, top]), 0.5)
-    settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), substeps=10,
-                              iterations=iterations, mu_s=0.5, mu_k=0.35, shock_propagation=shock)
-    s = solver_run(x, np.full(n, 1.0), np.full(n, 1.0), np.arange(n + 1), np.zeros((n, 3)),
-                   np.tile([1.0, 0, 0, 0], (n, 1)), settings, sdf=sdf)
+    sdf = signed_distance_grid(
+        open_box(side, wall=2.0, height=top), np.array([-2.0, -2, -2]), np.array([side + 2, side + 2, top]), 0.5
+    )
+    settings = SolverSettings(
+        frozenset({"gravity", "contact", "friction", "collider"}),
+        substeps=10,
+        iterations=iterations,
+        mu_s=0.5,
+        mu_k=0.35,
+        shock_propagation=shock,
+    )
+    s = solver_run(
+        x,
+        np.full(n, 1.0),
+        np.full(n, 1.0),
+        np.arange(n + 1),
+        np.zeros((n, 3)),
+        np.tile([1.0, 0, 0, 0], (n, 1)),
+        settings,
+        sdf=sdf,
+    )
     for _ in range(frames):
         s.frame()
     return s
@@ -206,10 +258,19 @@ def test_tall_column_rests_on_its_base():
     n = 30
     x = np.stack([np.zeros(n), np.zeros(n), 1.05 + 2.1 * np.arange(n)], 1)
     sdf = signed_distance_grid(GROUND, np.array([-5.0, -5, -3]), np.array([5.0, 5, 70]), 0.5)
-    settings = SolverSettings(frozenset({"gravity", "contact", "collider"}), substeps=10, iterations=1,
-                              shock_propagation=4.0)
-    s = solver_run(x, np.ones(n), np.ones(n), np.arange(n + 1), np.zeros((n, 3)), np.tile([1.0, 0, 0, 0], (n, 1)),
-                   settings, sdf=sdf)
+    settings = SolverSettings(
+        frozenset({"gravity", "contact", "collider"}), substeps=10, iterations=1, shock_propagation=4.0
+    )
+    s = solver_run(
+        x,
+        np.ones(n),
+        np.ones(n),
+        np.arange(n + 1),
+        np.zeros((n, 3)),
+        np.tile([1.0, 0, 0, 0], (n, 1)),
+        settings,
+        sdf=sdf,
+    )
     for _ in range(120):
         s.frame()
     assert finite(s)
@@ -227,5 +288,5 @@ def test_tall_pile_keeps_spheres_apart():
     assert max(s.solver.diagnostics.penetration[-10:]) < 0.2
     z = s.state.x[:, 2]
     cut = 0.8 * np.percentile(z, 95)
-    packing = (z < cut).sum() * (4 / 3) * np.pi / (24.0 ** 2 * cut)
+    packing = (z < cut).sum() * (4 / 3) * np.pi / (24.0**2 * cut)
     assert 0.5 < packing < 0.68

@@ -8,12 +8,12 @@ import pytest
 from xpbd_scenes import box_mesh, ikura_mesh, rice_bowl
 
 from nodegraph.context import Context, EntityLogger
-from nodes.values import Aggregate, ElementLibrary, Placement
 from nodes.simulation.aggregate import DeformedAggregate
 from nodes.simulation.settings import EFFECTS as ALL
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.xpbd import xpbd
+from nodes.values import Aggregate, ElementLibrary, Placement
 
 
 def params(**given):
@@ -60,8 +60,12 @@ def test_no_pair_effect_builds_no_neighbour_lists(bowl):
 
 def test_grains_settle_inside_the_bowl(bowl):
     aggregate, colliders = bowl
-    out = xpbd.call(effects=("gravity", "contact", "friction", "collider", "damping"), aggregate=aggregate,
-                    colliders=colliders, **params(frames=40, substeps=8))
+    out = xpbd.call(
+        effects=("gravity", "contact", "friction", "collider", "damping"),
+        aggregate=aggregate,
+        colliders=colliders,
+        **params(frames=40, substeps=8),
+    )
     placement = out["aggregate"].placement
     assert placement.positions[:, 2].mean() < aggregate.placement.positions[:, 2].mean()  # fell
     assert np.linalg.norm(out["particles"].positions, axis=1).max() < 60.0 - 3.0 + 0.1  # inside the cavity
@@ -80,8 +84,7 @@ def test_same_seed_is_bit_identical(bowl):
     for _ in range(2):
         out = xpbd.call(effects=ALL, aggregate=aggregate, colliders=colliders, **params())
         h = hashlib.sha256()
-        for array in (out["particles"].positions, out["aggregate"].placement.positions,
-                      out["aggregate"].deformations):
+        for array in (out["particles"].positions, out["aggregate"].placement.positions, out["aggregate"].deformations):
             h.update(np.ascontiguousarray(array).tobytes())
         digests.append(h.hexdigest())
     assert digests[0] == digests[1]
@@ -94,8 +97,12 @@ def egg_on_ground():
 
 def test_buoyant_yolk_rises_inside_its_egg():
     aggregate, colliders = egg_on_ground()
-    out = xpbd.call(effects=("gravity", "collider", "buoyancy", "damping"), aggregate=aggregate, colliders=colliders,
-                    **params(frames=30, mass=190.0))
+    out = xpbd.call(
+        effects=("gravity", "collider", "buoyancy", "damping"),
+        aggregate=aggregate,
+        colliders=colliders,
+        **params(frames=30, mass=190.0),
+    )
     assert isinstance(out["aggregate"], DeformedAggregate)
     offset = out["aggregate"].part_offsets[0]
     assert offset[2] > 0.5  # rose by more than half a millimetre
@@ -103,8 +110,12 @@ def test_buoyant_yolk_rises_inside_its_egg():
     yolk = mesh.vertices[np.unique(mesh.faces[mesh.parts == 1])]
     white = mesh.vertices[np.unique(mesh.faces[mesh.parts == 0])]
     assert yolk[:, 2].max() <= white[:, 2].max()  # still inside the membrane
-    out = xpbd.call(effects=("gravity", "collider", "damping"), aggregate=aggregate, colliders=colliders,
-                    **params(frames=5, mass=190.0))
+    out = xpbd.call(
+        effects=("gravity", "collider", "damping"),
+        aggregate=aggregate,
+        colliders=colliders,
+        **params(frames=5, mass=190.0),
+    )
     assert not isinstance(out["aggregate"], DeformedAggregate)
 
 
@@ -158,8 +169,10 @@ def test_registry_lists_xpbd_without_loading_kernels():
     import subprocess
     import sys
 
-    code = ("import sys; from nodegraph.api import default_registry; r = default_registry(); "
-            "print('xpbd' in r, 'numba' in sys.modules, 'nodes.simulation.solver' in sys.modules)")
+    code = (
+        "import sys; from nodegraph.api import default_registry; r = default_registry(); "
+        "print('xpbd' in r, 'numba' in sys.modules, 'nodes.simulation.solver' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out[0] == "True"  # the package namespace exposes the node to the registry
     assert out[2] == "False"  # kernels are imported only when the node runs

@@ -6,10 +6,10 @@ import pytest
 from scipy.spatial import cKDTree
 from xpbd_scenes import ikura_mesh, rice_bowl
 
-from nodes.values import Aggregate, ElementLibrary, ParticleState, Placement
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation, finish_simulation
 from nodes.simulation.xpbd import xpbd
+from nodes.values import Aggregate, ElementLibrary, ParticleState, Placement
 
 PAIRS = ("gravity", "contact", "friction", "adhesion", "damping")
 
@@ -26,8 +26,19 @@ def particle_bed(half=20.0, spacing=1.5, radius=1.0, layers=2) -> ParticleState:
     """Square grid layers of unit spheres, top layer at z = 0 (holes narrower than any egg particle)."""
     axis = np.arange(-half, half + 1e-9, spacing)
     gx, gy = np.meshgrid(axis, axis, indexing="ij")
-    x = np.concatenate([np.stack([gx.ravel() + 0.5 * spacing * (k % 2), gy.ravel() + 0.5 * spacing * (k % 2),
-                                  np.full(gx.size, -k * spacing)], 1) for k in range(layers)])
+    x = np.concatenate(
+        [
+            np.stack(
+                [
+                    gx.ravel() + 0.5 * spacing * (k % 2),
+                    gy.ravel() + 0.5 * spacing * (k % 2),
+                    np.full(gx.size, -k * spacing),
+                ],
+                1,
+            )
+            for k in range(layers)
+        ]
+    )
     n = len(x)
     return ParticleState(x, np.zeros_like(x), np.full(n, radius), np.zeros(n), np.zeros(n, np.int32))
 
@@ -75,8 +86,9 @@ def test_eggs_dropped_on_a_particle_bed_rest_on_it(effects):
 
 def test_obstacles_through_the_node_match_the_builder():
     bed = particle_bed(half=10.0)
-    out = xpbd.call(effects=("gravity", "contact"), aggregate=eggs_above(n_side=1), obstacles=[bed],
-                    **params(frames=20))
+    out = xpbd.call(
+        effects=("gravity", "contact"), aggregate=eggs_above(n_side=1), obstacles=[bed], **params(frames=20)
+    )
     assert out["particles"].positions[:, 2].min() > -0.5  # landed on the bed instead of falling through
     assert len(out["particles"]) == 4
 
@@ -89,12 +101,22 @@ def test_unwired_obstacles_allocate_nothing():
     for sim in (plain, empty):
         m, st, pairs = sim.model, sim.state, sim.solver.pairs
         assert m.n_moving == len(m.x0) == len(m.w) == len(m.elem) == m.start[-1]
-        per_particle = (st.x, st.v, st.x_prev, st.x_start, st.awake, st.pushed, pairs.x_built, pairs.moved,
-                        sim.solver.clusters.lam)
+        per_particle = (
+            st.x,
+            st.v,
+            st.x_prev,
+            st.x_start,
+            st.awake,
+            st.pushed,
+            pairs.x_built,
+            pairs.moved,
+            sim.solver.clusters.lam,
+        )
         assert all(len(a) == m.n_moving for a in per_particle)
     # wired, but no pair effect would touch them: nothing appended either
-    lone = build_simulation(aggregate, colliders, frozenset({"gravity", "collider"}), typed(),
-                            obstacles=[particle_bed(half=5.0)])
+    lone = build_simulation(
+        aggregate, colliders, frozenset({"gravity", "collider"}), typed(), obstacles=[particle_bed(half=5.0)]
+    )
     assert len(lone.state.x) == lone.model.n_moving
     for _ in range(2):
         plain.frame()
@@ -106,5 +128,6 @@ def test_bad_obstacles_are_reported():
     bed = particle_bed(half=3.0)
     broken = ParticleState(bed.positions, bed.velocities, np.zeros(len(bed)), bed.inv_mass, bed.element)
     with pytest.raises(ValueError, match="obstacles"):
-        xpbd.call(effects=("gravity", "contact"), aggregate=eggs_above(n_side=1), obstacles=[broken],
-                  **params(frames=1))
+        xpbd.call(
+            effects=("gravity", "contact"), aggregate=eggs_above(n_side=1), obstacles=[broken], **params(frames=1)
+        )

@@ -17,8 +17,9 @@ from nodes.values import Aggregate, ElementLibrary, Placement
 def grain_mesh(length=5.0, width=3.0, height=2.5, name="grain") -> Mesh:
     """A cooked japonica grain as an ellipsoid, mm."""
     sphere = trimesh.creation.icosphere(subdivisions=2)
-    return Mesh.from_trimesh(trimesh.Trimesh(sphere.vertices * [length / 2, width / 2, height / 2], sphere.faces),
-                             name=name)
+    return Mesh.from_trimesh(
+        trimesh.Trimesh(sphere.vertices * [length / 2, width / 2, height / 2], sphere.faces), name=name
+    )
 
 
 def ikura_mesh(radius=3.5, lipid=0.145) -> Mesh:
@@ -48,11 +49,13 @@ def box_mesh(lo, hi, name="box") -> Mesh:
 def open_box(inner, wall=1.0, height=None) -> list[Mesh]:
     """Floor and four walls (each a watertight slab) of an open box whose inside is [0, inner]²×[0, height]."""
     h = inner if height is None else height
-    return [box_mesh([-wall, -wall, -wall], [inner + wall, inner + wall, 0.0], "floor"),
-            box_mesh([-wall, -wall, 0.0], [0.0, inner + wall, h], "wall_x0"),
-            box_mesh([inner, -wall, 0.0], [inner + wall, inner + wall, h], "wall_x1"),
-            box_mesh([0.0, -wall, 0.0], [inner, 0.0, h], "wall_y0"),
-            box_mesh([0.0, inner, 0.0], [inner, inner + wall, h], "wall_y1")]
+    return [
+        box_mesh([-wall, -wall, -wall], [inner + wall, inner + wall, 0.0], "floor"),
+        box_mesh([-wall, -wall, 0.0], [0.0, inner + wall, h], "wall_x0"),
+        box_mesh([inner, -wall, 0.0], [inner + wall, inner + wall, h], "wall_x1"),
+        box_mesh([0.0, -wall, 0.0], [inner, 0.0, h], "wall_y0"),
+        box_mesh([0.0, inner, 0.0], [inner, inner + wall, h], "wall_y1"),
+    ]
 
 
 def bowl_placement(n, spacing=4.0, radius=60.0, wall=3.0, seed=0, jitter=0.3) -> Placement:
@@ -69,14 +72,20 @@ def bowl_placement(n, spacing=4.0, radius=60.0, wall=3.0, seed=0, jitter=0.3) ->
         raise ValueError(f"bowl holds only {len(grid)} grid points at spacing {spacing}")
     positions = grid + rng.uniform(-jitter, jitter, grid.shape)
     rotations = Rotation.random(n, random_state=seed).as_matrix()
-    return Placement(positions, np.tile([0.0, 0.0, 1.0], (n, 1)), rotations,
-                     variants=rng.integers(0, 4, n).astype(np.int32), kind_names=("japonica",))
+    return Placement(
+        positions,
+        np.tile([0.0, 0.0, 1.0], (n, 1)),
+        rotations,
+        variants=rng.integers(0, 4, n).astype(np.int32),
+        kind_names=("japonica",),
+    )
 
 
 def rice_library(count=4, seed=0) -> ElementLibrary:
     rng = np.random.default_rng(seed)
-    meshes = [grain_mesh(*(np.array([5.0, 3.0, 2.5]) * rng.uniform(0.9, 1.1, 3)), name=f"grain{k}")
-              for k in range(count)]
+    meshes = [
+        grain_mesh(*(np.array([5.0, 3.0, 2.5]) * rng.uniform(0.9, 1.1, 3)), name=f"grain{k}") for k in range(count)
+    ]
     return ElementLibrary("japonica", meshes)
 
 
@@ -90,8 +99,13 @@ def ikura_don(n=310, seed=0, radius=3.5):
     """(aggregate, colliders): n eggs on a jittered grid in a bowl (ikura on rice, rice left out)."""
     rng = np.random.default_rng(seed)
     placement = bowl_placement(n, spacing=2 * radius + 0.2, seed=seed, jitter=0.1)
-    placement = Placement(placement.positions, placement.normals, placement.rotations,
-                          variants=np.zeros(n, np.int32), kind_names=("ikura",))
+    placement = Placement(
+        placement.positions,
+        placement.normals,
+        placement.rotations,
+        variants=np.zeros(n, np.int32),
+        kind_names=("ikura",),
+    )
     del rng
     return Aggregate(placement, (ElementLibrary("ikura", [ikura_mesh(radius)]),)), [bowl_mesh()]
 
@@ -147,12 +161,25 @@ def stack_column(layers=8, radius=1.0, per_side=2, mass=25.0, gap=0.1, **setting
     ground = box_mesh([-2 * side, -2 * side, -depth - side], [2 * side, 2 * side, 0.0], "ground")
     top = rest[-1, 2] + lift[-1] + side
     sdf = signed_distance_grid([ground], np.array([-side, -side, -depth]), np.array([side, side, top]), radius / 2)
-    options = dict(effects=frozenset({"gravity", "contact", "friction", "collider"}),
-                   compliance=1.0 / (1000.0 * 2000.0), linear_deformation=0.0, mu_s=0.6, mu_k=0.42,
-                   shock_propagation=4.0)
+    options = dict(
+        effects=frozenset({"gravity", "contact", "friction", "collider"}),
+        compliance=1.0 / (1000.0 * 2000.0),
+        linear_deformation=0.0,
+        mu_s=0.6,
+        mu_k=0.42,
+        shock_propagation=4.0,
+    )
     options.update(settings)
-    run = solver_run(x, np.full(len(x), radius), np.full(len(x), n_el / (mass * 1e-3)), np.arange(layers + 1) * n_el,
-                     np.tile(q, (layers, 1)), np.tile([1.0, 0, 0, 0], (layers, 1)), SolverSettings(**options), sdf=sdf)
+    run = solver_run(
+        x,
+        np.full(len(x), radius),
+        np.full(len(x), n_el / (mass * 1e-3)),
+        np.arange(layers + 1) * n_el,
+        np.tile(q, (layers, 1)),
+        np.tile([1.0, 0, 0, 0], (layers, 1)),
+        SolverSettings(**options),
+        sdf=sdf,
+    )
     return run, rest, mass * 1e-3
 
 
