@@ -1,0 +1,49 @@
+"""The measure node reads overlaps from the element meshes: known depths of spheres, none when apart."""
+
+import numpy as np
+import trimesh
+
+from nodegraph.values import Mesh
+from nodes.quality import measure
+from nodes.values import Aggregate, ElementLibrary, Placement
+
+
+def balls(*xs) -> Aggregate:
+    """Unit spheres (2 mm across) on the x axis."""
+    box = Mesh.from_trimesh(trimesh.creation.icosphere(4), name="box")
+    positions = np.array([[x, 0.0, 0.0] for x in xs])
+    return Aggregate(
+        Placement(positions, np.tile([0.0, 0.0, 1.0], (len(xs), 1)), kind_names=("box",)),
+        (ElementLibrary("box", (box,)),),
+    )
+
+
+def column(table, name):
+    return float(table.columns[name][0])
+
+
+def test_known_overlap_depth_in_element_lengths():
+    table = measure.call(aggregates=[balls(0.0, 1.8)])
+    assert column(table, "elements") == 2
+    assert np.isclose(column(table, "overlap_max"), 0.2 / 2.0, atol=0.003)  # 0.2 mm deep in balls 2 mm across
+    assert np.isclose(column(table, "contacts_per_element"), 1.0)
+
+
+def test_apart_touching_and_several_aggregates():
+    assert column(measure.call(aggregates=[balls(0.0, 3.0)]), "overlap_max") == 0.0
+    apart = measure.call(aggregates=[balls(0.0, 3.0)])
+    assert column(apart, "contacts_per_element") == 0.0
+    touching = measure.call(aggregates=[balls(0.0), balls(2.02)])  # 0.02 mm gap < 0.02 × 2 mm
+    assert column(touching, "overlap_max") == 0.0 and column(touching, "contacts_per_element") == 1.0
+    packed = measure.call(aggregates=[balls(0.0, 2.0, 4.0)])  # a capsule hull around three balls
+    capsule = np.pi * (4.0 + 4.0 / 3.0)
+    assert np.isclose(column(packed, "packing_fraction"), 3 * 4.0 / 3.0 * np.pi / capsule, rtol=0.02)
+    assert np.isclose(column(packed, "fill_height"), 2.0, rtol=0.01)
+
+
+def test_a_sample_is_drawn_from_the_seed():
+    row = balls(*np.arange(20) * 1.9)
+    a = measure.call(seed=1, aggregates=[row], sample=5)
+    assert column(a, "sampled") == 5
+    assert column(a, "overlap_max") == column(measure.call(seed=1, aggregates=[row], sample=5), "overlap_max")
+    assert np.isclose(column(measure.call(aggregates=[row]), "overlap_p50"), 0.05, atol=0.003)
