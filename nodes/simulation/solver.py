@@ -366,7 +366,7 @@ class XpbdSolver:
         tolerated by the substep's solve (``allowance``), so overlap resolution injects no velocity
         at all: deep initial overlaps separate and come to rest instead of bursting (a decay inside
         the solve turned into velocity: a 64-particle blob flew apart for ever at 88 mm/s)."""
-        d, k, m, pairs = self.dispatch, self.coefficients, self.model, self.pairs
+        d, m, pairs = self.dispatch, self.model, self.pairs
         self._refresh_neighbours(st)
         if "contact" in self.settings.effects:
             allowance = contact_constraints.overlap_allowance
