@@ -143,8 +143,8 @@ def _check(params):
         "speed_clamp": Param(
             float,
             1.0,
-            "max particle travel per substep (anti-tunnelling); above 1 the substep runs as ceil(clamp) solves of ≤ 1 r "
-            "each (a wall or particle is never crossed); refused when gravity alone exceeds it (g·h² > clamp·r)",
+            "max particle travel per substep (anti-tunnelling); above 1 the substep runs as ceil(clamp) solves of "
+            "≤ 1 r each (a wall or particle is never crossed); refused when gravity alone exceeds it (g·h² > clamp·r)",
             range=(0.1, 2.0),
             units="radii",
         ),
