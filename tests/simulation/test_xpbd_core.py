@@ -90,10 +90,10 @@ def inter_element_penetration(s):
 
 def test_mass_ratio_1_to_1000_launches_nothing():
     """A 25 g element dropped 0.2 mm onto a 0.025 g one (issue 11: the light one was shot out at
-    409 mm/s, 48 mm/s at equal masses). Every frame: the light element is no faster than free fall
-    over the drop height allows the heavy one (≈ 200 mm/s; measured ≤ 421 mm/s before the fixes... and
-    now) — here the geometry tips the heavy one off the light one's apex, so the bound is energy:
-    the total energy never exceeds the start (gravity does the only work)."""
+    409 mm/s, 48 mm/s at equal masses). The heavy one stands on the light one's apex 0.3 mm off its
+    centre of mass and tips off (still, after the fixes: the light one then reaches 421 mm/s, which
+    the heavy one's fall pays for), so the bound is energy: every frame the total energy stays below
+    the start + 0.05 M_heavy·g·r (gravity does the only work), penetration < 1 r."""
     from xpbd_scenes import mechanical_energy
 
     settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), compliance=1e-6)
