@@ -179,6 +179,37 @@ def block_minimum(phi):
 
 
 @njit(cache=True, inline="always")
+def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
+    """Swept test for a centre that ended inside the solid (φ < 0) although it started the solve in
+    free space (φ(x_prev) > 0): a contact push or a long step crossed the surface, and ∇φ there may
+    point out of the wall's far side (a thin wall). Bisection on the segment x_prev → x for the last
+    point with φ ≥ 0; the particle is put there and projected from it. Returns φ and ∇φ at its new
+    place (unchanged when x_prev is not in free space: a particle placed inside keeps ∇φ)."""
+    v0, _, _, _ = sample_phi(phi, origin, pitch, x_prev[i, 0], x_prev[i, 1], x_prev[i, 2])
+    if not v0 > 0.0:
+        return val, gx, gy, gz
+    lo = 0.0
+    hi = 1.0
+    for _ in range(20):
+        mid = 0.5 * (lo + hi)
+        v, _, _, _ = sample_phi(
+            phi,
+            origin,
+            pitch,
+            x_prev[i, 0] + mid * (x[i, 0] - x_prev[i, 0]),
+            x_prev[i, 1] + mid * (x[i, 1] - x_prev[i, 1]),
+            x_prev[i, 2] + mid * (x[i, 2] - x_prev[i, 2]),
+        )
+        if v >= 0.0:
+            lo = mid
+        else:
+            hi = mid
+    for k in range(3):
+        x[i, k] = x_prev[i, k] + lo * (x[i, k] - x_prev[i, k])
+    return sample_phi(phi, origin, pitch, x[i, 0], x[i, 1], x[i, 2])
+
+
+@njit(cache=True, inline="always")
 def _wall_one(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k, i):
     """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
     if w[i] <= 0.0:
@@ -196,6 +227,9 @@ def _wall_one(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k, i):
     pen = r[i] - val
     if pen <= 0.0:
         return 0.0
+    if val < 0.0 and x_prev is not x:
+        val, gx, gy, gz = _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i)
+        pen = r[i] - val
     g = np.sqrt(gx * gx + gy * gy + gz * gz)
     if g < 1e-12:
         return pen / r[i]

@@ -52,13 +52,29 @@ def pair_normal(x, i, j):
 
 
 @njit(cache=True, inline="always")
-def lifted_share(w, x, i, j, lift):
+def lifted_share(w, x, i, j, nz, lift, upright):
     """Share of a pair correction taken by i: w_i / (w_i + w_j·e^{lift·(z_j − z_i)}) (mass scaling by
     height; lift = 0 is the plain w_i / (w_i + w_j)). Returns −1 when both are immovable; a static
-    partner (w_j = 0) stays infinitely heavy at any height (no 0·exp overflow)."""
-    wj = w[j] * np.exp(lift * (x[j, 2] - x[i, 2])) if lift != 0.0 and w[j] > 0.0 else w[j]
-    wsum = w[i] + wj
-    return w[i] / wsum if wsum > 0.0 else -1.0
+    partner (w_j = 0) stays infinitely heavy at any height (no 0·exp overflow).
+
+    ``upright`` (gravity on): a lower particle never acts lighter than the one resting on it. With
+    nz the vertical component of the pair normal, the lower one's inverse mass w_l becomes
+    w_l + (w_u − w_l)·nz² when the upper one is heavier (w_u < w_l): a heavy element on a light one
+    stacks like equal masses, a side-by-side contact (nz = 0) keeps the true masses. Gauss–Seidel
+    against the ground converges like (1 − m_l/m_u) per iteration, so a 1000× heavier element sank
+    through the light one it stood on in 0.5 s; scaled, the pair holds at any ratio (mass scaling,
+    Macklin et al. 2014 §5.2; it does not conserve momentum in such contacts, by design)."""
+    wi = w[i]
+    wj = w[j]
+    if upright and wi > 0.0 and wj > 0.0:
+        if nz < 0.0 and wj < wi:  # i lower and lighter
+            wi += (wj - wi) * nz * nz
+        elif nz > 0.0 and wi < wj:  # j lower and lighter
+            wj += (wi - wj) * nz * nz
+    if lift != 0.0 and wj > 0.0:
+        wj *= np.exp(lift * (x[j, 2] - x[i, 2]))
+    wsum = wi + wj
+    return wi / wsum if wsum > 0.0 else -1.0
 
 
 @njit(cache=True, inline="always")
@@ -80,7 +96,25 @@ def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
 
 @njit(cache=True, inline="always")
 def _project_slab(
-    x, x_prev, awake, pushed, w, r, nbr_start, nbr, half, allowance, wake_step, lift, mu_s, mu_k, normal, order, p0, p1
+    x,
+    x_prev,
+    awake,
+    pushed,
+    w,
+    r,
+    nbr_start,
+    nbr,
+    half,
+    allowance,
+    wake_step,
+    lift,
+    upright,
+    mu_s,
+    mu_k,
+    normal,
+    order,
+    p0,
+    p1,
 ):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
     rows, ``half`` false: each pair from its lower index) but pairs of two asleep particles
@@ -101,7 +135,7 @@ def _project_slab(
             if depth <= 0.0:
                 continue
             if awake[i] and awake[j]:
-                share = lifted_share(w, x, i, j, lift)
+                share = lifted_share(w, x, i, j, nz, lift, upright)
             else:
                 share = sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step)
             if share < 0.0:
@@ -162,6 +196,7 @@ def contact_sweep(
     allowance,
     wake_step,
     lift,
+    upright,
     mu_s,
     mu_k,
     normal,
@@ -197,6 +232,7 @@ def contact_sweep(
                     allowance,
                     wake_step,
                     lift,
+                    upright,
                     mu_s,
                     mu_k,
                     normal,

@@ -30,7 +30,7 @@ def _check(params):
 
 @node(
     "xpbd",
-    version=7,
+    version=8,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "colliders": In(Mesh, "watertight container / ground solids (mm)", optional=True, many=True),
@@ -141,7 +141,12 @@ def _check(params):
             range=(1.0, 1000.0),
         ),
         "speed_clamp": Param(
-            float, 1.0, "max particle travel per substep (anti-tunnelling)", range=(0.1, 2.0), units="radii"
+            float,
+            1.0,
+            "max particle travel per substep (anti-tunnelling); above 1 the substep runs as ceil(clamp) solves of "
+            "≤ 1 r each (a wall or particle is never crossed); refused when gravity alone exceeds it (g·h² > clamp·r)",
+            range=(0.1, 2.0),
+            units="radii",
         ),
         "gravity": Param(
             float,

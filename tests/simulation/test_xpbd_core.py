@@ -71,30 +71,77 @@ def test_zero_compliance_keeps_shape():
     assert s.state.x[:, 2].min() > 0.6 * 0.9  # resting on the ground, not through it
 
 
-def test_mass_ratio_1_to_1000_is_stable():
+def run_frames(s, frames, each=None):
+    """Step ``frames`` frames; ``each(s)`` after every frame (the whole run is asserted, not its end)."""
+    for _ in range(frames):
+        s.frame()
+        assert finite(s)
+        if each is not None:
+            each(s)
+
+
+def inter_element_penetration(s):
+    """max over pairs of particles of different elements of (r_i + r_j − d) / min(r_i, r_j), brute force."""
+    x, r, e = s.state.x, s.model.r, s.model.elem
+    d = pairwise(x)
+    pen = (r[:, None] + r[None] - d) / np.minimum(r[:, None], r[None])
+    return float(np.where(e[:, None] != e[None], pen, 0.0).max())
+
+
+def test_mass_ratio_1_to_1000_launches_nothing():
+    """A 25 g element dropped 0.2 mm onto a 0.025 g one (issue 11: the light one was shot out at
+    409 mm/s, 48 mm/s at equal masses). The heavy one stands on the light one's apex 0.3 mm off its
+    centre of mass and tips off (still, after the fixes: the light one then reaches 421 mm/s, which
+    the heavy one's fall pays for), so the bound is energy: every frame the total energy stays below
+    the start + 0.05 M_heavy·g·r (gravity does the only work), penetration < 1 r."""
+    from xpbd_scenes import mechanical_energy
+
     settings = SolverSettings(frozenset({"gravity", "contact", "friction", "collider"}), compliance=1e-6)
     square = np.array([[-1, -1, 0], [1, -1, 0], [-1, 1, 0], [1, 1, 0], [0, 0, 1.0]])
     elements = [(square, np.array([0, 0, 1.0]), np.eye(3)), (square, np.array([0.3, 0, 3.2]), np.eye(3))]
-    s = make(elements, 0.9, [0.025, 25.0], settings, ground_sdf())  # heavy element on the light one
-    for _ in range(90):
-        s.frame()
-    assert finite(s)
-    dg = s.solver.diagnostics
-    assert dg.penetration[-1] < 0.5
-    assert s.state.x[:, 2].max() < 6.0  # nothing launched
-    assert dg.kinetic_energy[-1] < 1e-2 * max(dg.kinetic_energy)
+    s = make(elements, 0.9, [0.025, 25.0], settings, ground_sdf())
+    e0 = mechanical_energy(s)
+    scale = 25.0 * settings.gravity * 0.9  # heavy element lifted by one radius
+
+    def check(s):
+        assert mechanical_energy(s) <= e0 + 0.05 * scale
+        assert s.solver.diagnostics.penetration[-1] < 1.0
+
+    run_frames(s, 90, check)
+
+
+def test_heavy_on_light_stack_holds():
+    """Two cubes of 8 particles on the ground, the upper 1000× heavier (issue 11). Gauss–Seidel
+    against the ground converges like 1 − 1/1000 per iteration: before the stack-aware mass scaling
+    the heavy cube sank through the light one (ended a cube lower, 477 mm/s). Every frame: max speed
+    < 40 mm/s (the 0.1 r drop gives ≈ 44 mm/s of free fall; measured 16), inter-element penetration
+    < 0.15 r (measured 0.034); the rest within 0.1 r of the analytic stack (measured 0.075)."""
+    from xpbd_scenes import stack_column
+
+    s, rest, _ = stack_column(2)
+    s.model.w[8:] /= 1000.0  # the upper cube 1000× heavier
+
+    def check(s):
+        assert np.linalg.norm(s.state.v, axis=1).max() < 40.0
+        assert s.solver.diagnostics.penetration[-1] < 0.15
+
+    run_frames(s, 60, check)
+    assert np.linalg.norm(s.centres() - rest, axis=1).max() < 0.1
+    assert np.abs(s.centres()[:, :2]).max() < 1e-9
 
 
 @pytest.mark.parametrize("damping", [0.0, 0.1])
 def test_deep_initial_overlap_separates_without_explosion(damping):
-    """Pre-stabilisation separates the blob without velocity; only the allowance decay (documented
-    speed ≤ decay rate·r per contact) adds some, and damping takes that out again."""
+    """64 particles at one point (issue 11: undamped, the blob flew apart for ever at 88 mm/s, 179 mm
+    from its centre after 2 s; damped it spread 16.5 mm). Pre-stabilisation separates overlaps
+    without velocity and the solve tolerates what is left: every frame max speed < 1 mm/s (measured
+    0), the blob ends compact (radius < 6 mm; a random packing of 64 has ≈ 2.3, measured 5.1) with
+    penetration < 0.05 r."""
     effects = {"contact", "damping"} if damping else {"contact"}
     settings = SolverSettings(frozenset(effects), substeps=10, iterations=2, damping=damping)
     n = 64
-    x = np.zeros((n, 3))  # every particle at the same point
     s = solver_run(
-        x,
+        np.zeros((n, 3)),
         np.full(n, 0.5),
         np.full(n, 40.0),
         np.arange(n + 1),
@@ -102,33 +149,45 @@ def test_deep_initial_overlap_separates_without_explosion(damping):
         np.tile([1.0, 0, 0, 0], (n, 1)),
         settings,
     )
-    clamp = 0.5 / settings.h
-    for _ in range(120):
-        s.frame()
-        assert np.linalg.norm(s.state.v, axis=1).max() < 0.4 * clamp  # no burst towards the speed clamp
-    assert finite(s)
-    assert s.solver.diagnostics.penetration[-1] < 0.25
-    if damping:
-        assert np.linalg.norm(s.state.x, axis=1).max() < 20.0  # a compact cluster
+    run_frames(s, 120, lambda s: np.linalg.norm(s.state.v, axis=1).max() < 1.0 or pytest.fail("burst"))
+    assert np.linalg.norm(s.state.x - s.state.x.mean(axis=0), axis=1).max() < 6.0
+    assert s.solver.diagnostics.penetration[-1] < 0.05
 
 
-def test_large_time_step_stays_bounded():
+def test_large_time_step_is_refused():
+    """dt 0.5 s in one substep: gravity alone moves a particle 2,450 mm per substep, 4,000× the speed
+    clamp; every resting particle was pushed a radius into its support each substep (issue 11: 1.99 r
+    penetration, shape error 0.30 mm). Refused with the reason and the substeps that would do."""
     settings = SolverSettings(
         frozenset({"gravity", "contact", "friction", "collider"}), dt=0.5, substeps=1, iterations=2, compliance=1e-6
     )
     bar = cluster_bar(3)
     elements = [(bar, np.array([0.3 * k, 0, 1 + 2.0 * k]), np.eye(3)) for k in range(6)]
+    with pytest.raises(ValueError, match=r"substeps ≥ \d+"):
+        make(elements, 0.6, [0.025] * 6, settings, ground_sdf())
+
+
+def test_long_time_step_at_the_allowed_substeps_stays_apart():
+    """The same six bars at dt 0.5 s with the substeps the refusal asks for (256 here): every frame
+    the inter-element penetration stays < 0.25 r (measured 0.07)."""
+    settings = SolverSettings(
+        frozenset({"gravity", "contact", "friction", "collider"}), dt=0.5, substeps=256, iterations=2, compliance=1e-6
+    )
+    bar = cluster_bar(3)
+    elements = [(bar, np.array([0.3 * k, 0, 1 + 2.0 * k]), np.eye(3)) for k in range(6)]
     s = make(elements, 0.6, [0.025] * 6, settings, ground_sdf())
-    for _ in range(20):
-        s.frame()
-    assert finite(s)
-    assert s.state.x[:, 2].min() > 0.0 and s.state.x[:, 2].max() < 30.0
+    run_frames(s, 4, lambda s: inter_element_penetration(s) < 0.25 or pytest.fail("penetration"))
 
 
-def test_fast_grains_do_not_tunnel_through_thin_bowl_wall():
+@pytest.mark.parametrize("clamp", [1.0, 2.0, 4.0])
+def test_fast_grains_do_not_tunnel_through_thin_bowl_wall(clamp):
+    """200 particles fired at 20 m/s at a 0.8 mm bowl wall. Issue 11: at speed clamp 2.0 (allowed by
+    the node) 46 of 200 crossed, at 4.0 all did; clamps above 1 r now run as solves of ≤ 1 r and
+    the collider's swept test puts back a centre pushed across. Every frame, no centre is outside
+    the wall below the rim (those that slide up and over the rim are not through it)."""
     bowl = bowl_mesh(radius=20.0, wall=0.8, rim=0.3, segments=64)
     sdf = signed_distance_grid([bowl], np.array([-24.0, -24, -24]), np.array([24.0, 24, 10]), 0.25)
-    settings = SolverSettings(frozenset({"contact", "collider"}), substeps=4, iterations=1)
+    settings = SolverSettings(frozenset({"contact", "collider"}), substeps=4, iterations=1, speed_clamp=clamp)
     rng = np.random.default_rng(1)
     n = 200
     x = rng.uniform(-4, 4, (n, 3))
@@ -144,20 +203,29 @@ def test_fast_grains_do_not_tunnel_through_thin_bowl_wall():
     )
     direction = x / np.linalg.norm(x, axis=1, keepdims=True)
     direction[:, 2] = -np.abs(direction[:, 2])
-    s.state.v[:] = 20000.0 * direction  # 20 m/s towards the wall: 160× a radius per substep before the clamp
-    inner = 20.0 - 0.8
-    for _ in range(30):
-        s.frame()
-        assert np.linalg.norm(s.state.x, axis=1).max() < inner  # no particle ever reached the wall's far side
-    assert finite(s)
+    s.state.v[:] = 20000.0 * direction
+    inner, rim = 20.0 - 0.8, 0.3 * 20.0
+
+    def check(s):
+        x = s.state.x
+        through = (np.linalg.norm(x, axis=1) > inner) & (x[:, 2] < rim)
+        assert not through.any(), f"{through.sum()} of {n} through the wall"
+
+    run_frames(s, 30, check)
 
 
-def test_long_rest_decays_without_jitter_growth():
+@pytest.mark.parametrize("sleep_speed", [0.0, 1.0])
+def test_long_rest_decays_without_jitter_growth(sleep_speed):
+    """Twelve bars dropped on the ground, 4 s. Issue 11: with sleeping on, everything froze by frame
+    15 and "no jitter growth" could not fail; without it, velocities measured from the solve alone
+    left resting particles at 7 mm/s. Every frame of the last 2 s: max particle speed < 2 mm/s
+    (measured 1.1 without sleeping, 0 with), penetration < 0.1 r; KE over the last second no higher
+    than over the second before (+ 10 %)."""
     settings = SolverSettings(
         frozenset({"gravity", "contact", "friction", "collider", "damping"}),
         damping=0.1,
         compliance=1e-6,
-        sleep_speed=1.0,
+        sleep_speed=sleep_speed,
     )
     bar = cluster_bar(3)
     rng = np.random.default_rng(0)
@@ -165,17 +233,27 @@ def test_long_rest_decays_without_jitter_growth():
         (bar, np.r_[rng.uniform(-2, 2, 2), 1 + 1.3 * k], Rotation.random(random_state=k).as_matrix()) for k in range(12)
     ]
     s = make(elements, 0.6, [0.025] * 12, settings, ground_sdf())
-    for _ in range(240):
-        s.frame()
+    run_frames(s, 120)
+
+    def check(s):
+        assert np.linalg.norm(s.state.v, axis=1).max() < 2.0
+        assert s.solver.diagnostics.penetration[-1] < 0.1
+
+    run_frames(s, 120, check)
     ke = np.array(s.solver.diagnostics.kinetic_energy)
-    assert finite(s)
-    assert ke[-60:].max() <= 1e-3 * ke.max()
-    assert ke[-30:].max() <= ke[-60:-30].max() + 1e-12  # no jitter growth at rest
-    assert s.solver.diagnostics.sleeping[-1] > 0.5
+    assert ke[-60:].max() <= 1.1 * ke[-120:-60].max() + 1e-12
+    if sleep_speed:
+        assert s.solver.diagnostics.sleeping[-1] > 0.5
 
 
 @pytest.mark.parametrize("shape", ["collinear", "planar", "single"])
-def test_degenerate_clusters_keep_proper_rotations(shape):
+def test_degenerate_clusters_keep_their_shape_and_stay_apart(shape):
+    """Collinear, planar and one-particle clusters dropped in a heap (issue 11: the old test checked
+    det R = 1 and RᵀR = I, true by construction of the quaternion). Every frame: each cluster's
+    pairwise distances within 0.15 mm of its rest shape (a rotation the polar decomposition got wrong
+    would pull them apart; measured 0.10), inter-element penetration < 0.75 r (measured 0.65, in the
+    landing), no centre below the ground where the ground's field reaches (|x|, |y| < 30: frictionless
+    singles slide off it)."""
     local = {
         "collinear": cluster_bar(5),
         "planar": np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [2, 2, 0.0]]),
@@ -186,15 +264,16 @@ def test_degenerate_clusters_keep_proper_rotations(shape):
         (local, np.array([0.5 * k, 0, 1.5 + 2.5 * k]), Rotation.random(random_state=k).as_matrix()) for k in range(4)
     ]
     s = make(elements, 0.6, [0.025] * 4, settings, ground_sdf())
-    for _ in range(60):
-        s.frame()
-    assert finite(s)
-    rot = s.state.rotations()
-    assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3), atol=1e-6)
-    assert np.allclose(np.linalg.det(rot), 1.0, atol=1e-6)
-    for c in range(4):
-        p = s.state.x[s.model.start[c] : s.model.start[c + 1]]
-        assert np.abs(pairwise(p) - pairwise(local)).max() < 0.25
+
+    def check(s):
+        for c in range(4):
+            p = s.state.x[s.model.start[c] : s.model.start[c + 1]]
+            assert np.abs(pairwise(p) - pairwise(local)).max() < 0.15
+        assert inter_element_penetration(s) < 0.75
+        on = np.abs(s.state.x[:, :2]).max(axis=1) < 29.0
+        assert (s.state.x[on, 2] > 0.0).all()
+
+    run_frames(s, 60, check)
 
 
 def test_rotation_extraction_from_rank_one_matrix():

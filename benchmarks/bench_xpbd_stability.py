@@ -1,0 +1,121 @@
+"""xpbd stability map (issue 11): where the solver holds.
+
+Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``xpbd_scenes.stack_column``, the
+upper cube ``ratio``× heavier) dropped 0.1 r onto the ground; max inter-element penetration / r over
+the run, energy growth (max of E − E₀ over the run, in M·g·r; gravity does the only work, so > 0 is
+a gain) and the settled error of the element centres against the analytic rest (r). A refused
+setting (gravity beyond the speed clamp, ``solver.Coefficients``) is marked "refused".
+Map 2 — speed clamp × wall thickness: 200 particles fired at 20 m/s at a bowl wall; how many cross it.
+Run: python benchmarks/bench_xpbd_stability.py [--quick]   (table; PNG in benchmarks/results/)
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "simulation"))
+RESULTS = ROOT / "benchmarks" / "results"
+
+from xpbd_scenes import bowl_mesh, mechanical_energy, solver_run, stack_column  # noqa: E402
+
+from nodes.simulation.collider import signed_distance_grid  # noqa: E402
+from nodes.simulation.settings import SolverSettings  # noqa: E402
+
+
+def stack_cell(dt, substeps, ratio, compliance, frames):
+    try:
+        s, rest, mass = stack_column(2, dt=dt, substeps=substeps, compliance=compliance)
+    except ValueError:
+        return None
+    s.model.w[8:] /= ratio
+    total = mass * (1 + ratio)
+    e0, pen, gain = mechanical_energy(s), 0.0, 0.0
+    for _ in range(frames):
+        s.frame()
+        pen = max(pen, s.solver.diagnostics.penetration[-1])
+        gain = max(gain, (mechanical_energy(s) - e0) / (total * 9810.0 * 1.0))
+    if not np.isfinite(s.state.x).all():
+        return np.inf, np.inf, np.inf
+    return pen, gain, float(np.linalg.norm(s.centres() - rest, axis=1).max())
+
+
+def wall_cell(clamp, wall, frames=20):
+    bowl = bowl_mesh(radius=20.0, wall=wall, rim=0.3, segments=64)
+    sdf = signed_distance_grid([bowl], np.array([-24.0, -24, -24]), np.array([24.0, 24, 10]), min(0.25, wall / 2))
+    settings = SolverSettings(frozenset({"contact", "collider"}), substeps=4, iterations=1, speed_clamp=clamp)
+    rng = np.random.default_rng(1)
+    n = 200
+    x = rng.uniform(-4, 4, (n, 3))
+    s = solver_run(
+        x, np.full(n, 0.5), np.full(n, 40.0), np.arange(n + 1), np.zeros((n, 3)), np.tile([1.0, 0, 0, 0], (n, 1)),
+        settings, sdf=sdf,
+    )  # fmt: skip
+    d = x / np.linalg.norm(x, axis=1, keepdims=True)
+    d[:, 2] = -np.abs(d[:, 2])
+    s.state.v[:] = 20000.0 * d
+    through = np.zeros(n, bool)
+    for _ in range(frames):
+        s.frame()
+        through |= (np.linalg.norm(s.state.x, axis=1) > 20.0 - wall) & (s.state.x[:, 2] < 6.0)
+    return int(through.sum())
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="a few cells, seconds")
+    args = ap.parse_args()
+    if args.quick:
+        steps, ratios, compliances, frames = [(1 / 60, 10), (1 / 60, 2)], [1, 1000], [1e-6], 15
+        clamps, walls = [1.0, 2.0], [0.4]
+    else:
+        steps = [(1 / 60, 40), (1 / 60, 10), (1 / 60, 4), (1 / 60, 2), (1 / 30, 10), (0.5, 256), (0.5, 1)]
+        ratios, compliances, frames = [1, 10, 100, 1000], [0.0, 1e-6, 1e-3], 45
+        clamps, walls = [0.5, 1.0, 2.0], [0.2, 0.4, 0.8, 2.0]
+    rows = []
+    print(
+        "| dt (s) | substeps | mass ratio | compliance (s²/g) | max penetration (r) | energy gain (M·g·r) "
+        "| rest error (r) |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for dt, sub in steps:
+        for ratio in ratios:
+            for c in compliances:
+                cell = stack_cell(dt, sub, ratio, c, frames)
+                rows.append((dt, sub, ratio, c, cell))
+                vals = "refused | – | –" if cell is None else " | ".join(f"{v:.3g}" for v in cell)
+                print(f"| {dt:.4g} | {sub} | {ratio} | {c:g} | {vals} |", flush=True)
+    print("\n| speed clamp (r/substep) | wall (mm) | particles through (of 200) |\n|---|---|---|")
+    walls_rows = []
+    for clamp in clamps:
+        for wall in walls:
+            k = wall_cell(clamp, wall)
+            walls_rows.append((clamp, wall, k))
+            print(f"| {clamp} | {wall} | {k} |", flush=True)
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for dt, sub, ratio, c, cell in rows:
+        if cell is not None:
+            ax.scatter(
+                9810 * (dt / sub) ** 2, max(cell[0], 1e-4), s=20 + 10 * np.log10(ratio) ** 2, c="C0" if c else "C1"
+            )
+    ax.set(xscale="log", yscale="log", xlabel="g·h² (mm, r = 1 mm)", ylabel="max penetration (r)")
+    ax.set_title("xpbd stability map: 2-cube stack (size: mass ratio; orange: compliance 0)")
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    fig.savefig(RESULTS / "xpbd_stability.png", dpi=120)
+    print(f"\nsaved {RESULTS / 'xpbd_stability.png'}")
+
+
+if __name__ == "__main__":
+    main()
