@@ -4,7 +4,8 @@ the node's whole range, initial overlaps, degenerate (one-particle, collinear) c
 a ground slab. Invariants, every frame: finite; energy ≤ initial + ε (gravity's work is in the
 potential term, nothing else does work); no particle centre inside the ground; same seed ⇒ same bits.
 Scenes the solver refuses (``SolverSettings``/``Coefficients`` ValueError: gravity beyond the speed
-clamp) are skipped. CI runs a few examples; ``XPBD_FUZZ_EXAMPLES=500`` runs many more."""
+clamp) are skipped. CI runs a few derandomized examples; ``XPBD_FUZZ_EXAMPLES=500`` also runs that many
+random ones."""
 
 import os
 
@@ -106,8 +107,27 @@ def test_same_seed_same_bits():
     assert a.state.x.tobytes() == b.state.x.tobytes() and a.state.v.tobytes() == b.state.v.tobytes()
 
 
-@pytest.mark.slow
-@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+# found by the 200-example run (lead's merge run): two elements of masses 1 : 31.6 overlapping by 0.75 r,
+# one substep of 1/240 s, rigid clusters, clamp 2 — the energy rose 1.53e6 against a bound of 1.47e6.
+# Open (issue 11): strict, so the day it holds this test says so.
+OPEN = (
+    2,
+    1,
+    1.5,
+    0.75,
+    [1.0, 31.622776601683793],
+    0,
+    dict(dt=1 / 240, substeps=1, iterations=2, compliance=0.0, speed_clamp=2.0, shock_propagation=4.0),
+)
+
+
+@pytest.mark.xfail(strict=True, reason="open: energy gain separating a deep light-under-heavy overlap")
+def test_open_energy_gain_found_by_fuzzing():
+    run(OPEN)
+
+
+@pytest.mark.skipif("XPBD_FUZZ_EXAMPLES" not in os.environ, reason="many examples: XPBD_FUZZ_EXAMPLES=200")
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(scenes())
 def test_many_random_scenes(scene):
     run(scene)
