@@ -114,7 +114,7 @@ def build_blueprint(recipe: Recipe, index: LogIndex):
             for path in logged
         ]
         views += [
-            rrb.TimeSeriesView(name=f"{node_id}: {top.strip('/')}", origin="/", contents=[f"+ {top}/**"])
+            rrb.TimeSeriesView(name=f"{node_id}: {top[len(node_id) + 2 :]}", origin="/", contents=[f"+ {top}/**"])
             for top in _output_subtrees([p for p in node.series if p not in logged], node_id)
         ]
         views += [rrb.Spatial2DView(name=f"{node_id}: {path.rsplit('/', 1)[-1]}", origin=path) for path in node.images]
