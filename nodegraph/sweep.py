@@ -376,9 +376,10 @@ def sweep_markdown(result: SweepResult, image: str | None = None) -> str:
         "",
         *([decl.doc, ""] if decl.doc else []),
         f"{len(result.points)} points on {result.executor}, {result.wall_seconds:.1f} s in all; {common}. "
-        "*seconds*: wall time of the point's own node instances; *pareto*: the metrics on whose "
-        "time–metric Pareto front the point lies (lower is better); *outputs sha256*: of the pulled outputs' "
-        "stored bytes; *recipe setting*: the recipe's own values"
+        "*seconds*: wall time of the point's own node instances; *ran*: of those, computed during this sweep "
+        "(for this point or an earlier one that shares them); *cached*: found in the cache before; "
+        "*pareto*: the metrics on whose time–metric Pareto front the point lies (lower is better); "
+        "*outputs sha256*: of the pulled outputs' stored bytes; *recipe setting*: the recipe's own values"
         + (f"; fixed: `{' '.join(decl.fixed)}`" if decl.fixed else "")
         + ".",
         "",

@@ -116,10 +116,15 @@ def check_sweeps(validator, raw_sweeps: dict, entries: dict, raw_nodes: dict) ->
         base = ("sweeps", name)
         try:
             model = SweepModel.model_validate(body if body is not None else {})
+            ok = True
         except ValidationError as exc:
             validator._pydantic_issues(exc, base, None, SweepModel)
-            continue
-        ok = True
+            known = {k: v for k, v in body.items() if k in SweepModel.model_fields} if isinstance(body, dict) else {}
+            try:  # an unknown key alone: the rest is still checked, so every problem is reported at once
+                model = SweepModel.model_validate(known)
+            except ValidationError:
+                continue
+            ok = False
 
         def check_target(target: str, values: list, path: tuple, one_value: bool) -> bool:
             if target == "seed":
