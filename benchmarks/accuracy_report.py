@@ -43,7 +43,8 @@ def machine() -> str:
         memory = f", {mem:.0f} GiB RAM"
     except (OSError, ValueError, IndexError):
         memory = ""
-    return f"{model}, {os.cpu_count()} cores{memory}; {platform.system()} {platform.release()}, Python {platform.python_version()}"
+    system = f"{platform.system()} {platform.release()}, Python {platform.python_version()}"
+    return f"{model}, {os.cpu_count()} cores{memory}; {system}"
 
 
 def run(args: list[str], results: Path, log: list[str]) -> str:
