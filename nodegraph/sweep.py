@@ -163,6 +163,13 @@ def sweep_from_args(recipe: Recipe, name: str | None, grids, metrics, outputs) -
     from .sweep_decl import metric_problem, parse_grid, parse_metric
 
     issues = []
+    refs = []
+    for i, text in enumerate(metrics, 1):
+        problem = metric_problem(text, recipe.nodes)
+        if problem is not None:
+            issues.append(Issue(Location("--metric", i), problem[0], given=text, suggestion=problem[1]))
+        else:
+            refs.append(parse_metric(text))
     if grids:
         axes = []
         for i, text in enumerate(grids, 1):
@@ -170,13 +177,6 @@ def sweep_from_args(recipe: Recipe, name: str | None, grids, metrics, outputs) -
                 axes.append(parse_grid(text))
             except ValueError as exc:
                 issues.append(Issue(Location("--grid", i), f"cannot read '{text}': {exc}"))
-        refs = []
-        for i, text in enumerate(metrics, 1):
-            problem = metric_problem(text, recipe.nodes)
-            if problem is not None:
-                issues.append(Issue(Location("--metric", i), problem[0], given=text, suggestion=problem[1]))
-            else:
-                refs.append(parse_metric(text))
         if issues:
             raise RecipeError(issues)
         return SweepDecl(name or "grid", tuple((t, tuple(v)) for t, v in axes), (), tuple(refs), tuple(outputs))
@@ -192,10 +192,10 @@ def sweep_from_args(recipe: Recipe, name: str | None, grids, metrics, outputs) -
     if name not in recipe.sweeps:
         raise NodegraphError(f"--sweep {name}: {recipe.path} declares {', '.join(recipe.sweeps)}")
     decl = recipe.sweeps[name]
+    if issues:
+        raise RecipeError(issues)
     if metrics or outputs:
-        from .sweep_decl import parse_metric
-
-        extra = tuple(parse_metric(m) for m in metrics)
+        extra = tuple(refs)
         decl = SweepDecl(
             decl.name, decl.grid, decl.fixed, decl.metrics + extra, decl.outputs + tuple(outputs), decl.doc
         )
