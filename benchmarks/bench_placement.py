@@ -170,8 +170,8 @@ def main():
         return
     import numba
 
-    size = 8.0 if args.quick else 20.0
-    big_size = 10.0 if args.quick else 44.0
+    size = 6.0 if args.quick else 20.0
+    big_size = 7.0 if args.quick else 44.0
     onigiri = shape.call(kind="onigiri", size=size)["mesh"]
     from nodes.placement.element_templates import with_medial_spheres
 

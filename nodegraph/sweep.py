@@ -205,7 +205,7 @@ def sweep_from_args(recipe: Recipe, name: str | None, grids, metrics, outputs) -
 def _point_recipes(path, registry, decl: SweepDecl, overrides) -> list[tuple[dict, tuple[str, ...], Recipe]]:
     """Every point's recipe, all validated before anything runs (an invalid value names its point)."""
     points, issues = [], []
-    base = [*overrides, *decl.fixed]
+    base = [*decl.fixed, *overrides]  # the command line's --set wins over the sweep's own set:
     for i, values in enumerate(decl.points(), 1):
         texts = tuple(override_text(t, v) for t, v in values.items())
         try:
@@ -213,7 +213,7 @@ def _point_recipes(path, registry, decl: SweepDecl, overrides) -> list[tuple[dic
         except RecipeError as exc:
             label = " ".join(texts)
             for issue in exc.issues:
-                if issue.location.file == "--set" and (issue.location.line or 0) > len(overrides):
+                if issue.location.file == "--set" and (issue.location.line or 0) > len(base):
                     issue = Issue(Location(f"sweep point {i} ({label})"), issue.message, issue.node, issue.param,
                                   issue.given, issue.allowed, issue.suggestion)  # fmt: skip
                 if issue not in issues:
@@ -238,7 +238,7 @@ def run_sweep(
     """Run every point of ``decl`` on the recipe at ``path`` (see the module docstring)."""
     reporter = reporter or Reporter(quiet=True)
     started = time.perf_counter()
-    base = load_recipe(path, registry, [*overrides, *decl.fixed])
+    base = load_recipe(path, registry, [*decl.fixed, *overrides])
     points = _point_recipes(path, registry, decl, overrides)
     refs = [f"{m.node}.{m.port}" for m in decl.metrics] + list(decl.outputs)
     wires = resolve_outputs(base, list(dict.fromkeys(refs))) if refs else list(base.outputs)
