@@ -269,7 +269,7 @@ def main():
         )
 
     # ---- sweeps on the S setup
-    for spacing in (2.0, 1.0) if args.quick else (2.0, 1.0, 0.5, 0.25):
+    for spacing in (2.0, 1.0, 0.5) if args.quick else (2.0, 1.0, 0.5, 0.25):
         p, s, t = place(onigiri, library, candidate_spacing=spacing)
         record(
             "candidate spacing (×r)",
@@ -280,7 +280,7 @@ def main():
             placed=len(p),
             min_dist_ratio=float(s.columns["min_distance_ratio"][0]),
         )
-    for tol in (0.1, 0.01) if args.quick else (0.1, 0.03, 0.01, 0.003, 0.001):
+    for tol in (0.1, 0.01, 0.001) if args.quick else (0.1, 0.03, 0.01, 0.003, 0.001):
         ref, _, tb, tr = refine_timed(base_placement, library, tolerance=tol)
         mean, worst = residual(ref)
         record(
@@ -292,7 +292,7 @@ def main():
             overlap_max_L=worst,
             culled=culled_share(ref, carried),
         )
-    for sph_tol in (0.05, 0.01) if args.quick else (0.05, 0.02, 0.01, 0.005):
+    for sph_tol in (0.05, 0.02, 0.01) if args.quick else (0.05, 0.02, 0.01, 0.005):
         ref, tm, tb, tr = refine_timed(base_placement, library, sphere_tolerance=sph_tol, max_spheres=4096)
         mean, worst = residual(ref)
         fit = tm.fit

@@ -139,6 +139,24 @@ def test_sweep_on_a_cluster_is_bit_identical_to_in_process(cluster, setup, tmp_p
     assert local.files
 
 
+def test_cli_run_and_sweep_on_the_scheduler(cluster, setup, tmp_path, capsys):
+    from nodegraph.cli import main
+
+    address, _, _ = cluster
+    path = setup[0]
+    common = ["--plugin", TOY, "--cache-dir", str(tmp_path / "shared")]
+    outputs = {}
+    for name, extra in (("cluster", ["--scheduler", address]), ("local", ["--cache-dir", str(tmp_path / "own")])):
+        out = tmp_path / name
+        assert main(["run", str(path), *common, *extra, "--out-dir", str(out), "--no-rrd", "-q"]) == 0
+        outputs[name] = {p.name: p.read_bytes() for p in out.iterdir() if p.name != "manifest.json"}
+    assert outputs["cluster"] == outputs["local"] and outputs["local"]
+    assert main(["sweep", str(path), *common, "--scheduler", address, "--out-dir", str(tmp_path / "s"), "-q"]) == 0
+    assert (tmp_path / "s" / "shift.csv").is_file()
+    assert main(["run", str(path), "--plugin", TOY, "--workers", "2", "--no-cache", "--no-rrd", "-q"]) == 2
+    assert "drop --no-cache" in capsys.readouterr().err
+
+
 def test_a_worker_killed_mid_node_loses_nothing(cluster, setup, tmp_path):
     address, workers, scheduler_file = cluster
     path, registry, decl, reference = setup
