@@ -59,8 +59,13 @@ def place(onigiri, library, seed=0, **params):
     return placement, stats, seconds
 
 
-def refine_timed(placement, library, **params):
-    """(refined placement, fit table, seconds for implicit functions, seconds for the refine kernels)."""
+_TEMPLATES = {}
+
+
+def refine_timed(placement, library, reuse=False, **params):
+    """(refined placement, fit table, seconds for implicit functions, seconds for the refine kernels).
+    ``reuse``: take the implicit functions built for the same settings before (rows that do not report
+    their build time), so a sweep does not rebuild them per row."""
     from nodes.placement.element_templates import build_templates
     from nodes.placement.refine import RefineSettings, refine_placement
 
@@ -70,7 +75,12 @@ def refine_timed(placement, library, **params):
         params.pop("cost_points", 64),
     )
     passes = params.pop("passes", 1)
-    templates, t_build = timed(lambda: build_templates((library,), tol, spheres, points, measure_fit=True))
+    memo = (id(library), tol, spheres, points)
+    if reuse and memo in _TEMPLATES:
+        templates, t_build = _TEMPLATES[memo], 0.0
+    else:
+        templates, t_build = timed(lambda: build_templates((library,), tol, spheres, points, measure_fit=True))
+        _TEMPLATES[memo] = templates
     settings = RefineSettings(**params)
     rng = np.random.default_rng(1)
     orders = [rng.permutation(len(placement)) for _ in range(passes)]
@@ -186,7 +196,7 @@ def main():
     small = shape.call(kind="onigiri", size=5.0)["mesh"]
     warm, _, _ = place(small, library)
     for cost in ("sakurai", "gan"):
-        refine_timed(warm, library, cost=cost, spacing=0.22)
+        refine_timed(warm, library, reuse=True, cost=cost, spacing=0.22)
     cull.call(placement=warm, libraries=[library])
 
     # ---- the S setup (S table 2 row 1)
@@ -252,7 +262,7 @@ def main():
         ((1.0, 1), (2.0, 2)) if args.quick else ((1.0, 1), (1.0, 2), (1.5, 2), (2.0, 1), (2.0, 2), (2.5, 2))
     ):
         p, s, t = place(onigiri, library, candidates="subdivide", r_scale=scale)
-        ref, _, tb, tr = refine_timed(p, library, passes=passes)
+        ref, _, tb, tr = refine_timed(p, library, reuse=True, passes=passes)
         mean, worst = residual(ref)
         record(
             "shell density (r_scale, passes)",
@@ -281,7 +291,7 @@ def main():
             min_dist_ratio=float(s.columns["min_distance_ratio"][0]),
         )
     for tol in (0.1, 0.01, 0.001) if args.quick else (0.1, 0.03, 0.01, 0.003, 0.001):
-        ref, _, tb, tr = refine_timed(base_placement, library, tolerance=tol)
+        ref, _, tb, tr = refine_timed(base_placement, library, reuse=True, tolerance=tol)
         mean, worst = residual(ref)
         record(
             "golden tolerance",
@@ -310,7 +320,7 @@ def main():
             culled=culled_share(ref, carried),
         )
     for cost in ("sakurai", "gan"):
-        ref, _, tb, tr = refine_timed(base_placement, library, cost=cost, spacing=r)
+        ref, _, tb, tr = refine_timed(base_placement, library, reuse=True, cost=cost, spacing=r)
         mean, worst = residual(ref)
         record(
             "cost",
