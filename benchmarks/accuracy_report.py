@@ -1,7 +1,7 @@
 """docs/accuracy.md: what accuracy costs in time, for every knob the benchmarks measure, in one command.
 
     python benchmarks/accuracy_report.py            # --quick modes (minutes on 2 loaded cores)
-    python benchmarks/accuracy_report.py --full     # the benchmarks' full sweeps (an hour or more)
+    python benchmarks/accuracy_report.py --full     # the benchmarks' full sweeps (many times longer)
 
 Runs ``bench_elements``, ``bench_placement``, ``bench_xpbd --only accuracy`` and ``bench_shading`` (each in
 a child process, results in a temporary folder) and ``nodegraph sweep graphs/sweeps/rice_bowl_solver.yaml``
@@ -448,7 +448,8 @@ def main() -> None:
         load_end = os.getloadavg()
         mode = (
             "**quick mode** (`--quick`: fewer resolutions, smaller scenes, fewer repeats) because the full "
-            "sweeps take an hour or more on this loaded 2-core machine; `--full` runs the full ones"
+            "sweeps (resolutions up to 256, the full-size S setup, a 50,000-element refine, 150-grain bowls) take "
+            "many times longer on this loaded 2-core machine; `--full` runs them"
             if quick
             else "full mode"
         )
