@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
 import subprocess
 import sys
@@ -33,7 +34,7 @@ from nodes.elements.voxel_grid import Grid, mesh_occupancy, sphere_field
 from nodes.mesh_inside import inside_points
 from nodes.triangle_distance import point_triangle_offset
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or Path(__file__).parent / "results")
 RESOLUTIONS = (32, 48, 64, 96, 128, 192, 256)
 OFFSET_VOXELS = -2.0
 METHODS = ("exact", "euclidean", "manhattan")
@@ -237,7 +238,7 @@ def baseline_child() -> None:
     print(json.dumps({"peak_mib": peak_rss_mib()}))
 
 
-def measure_memory(resolution):
+def measure_memory(resolution, configs=(("rice", "exact"), ("rice", "euclidean"), ("ikura", "exact"))):
     rows = []
     script = str(Path(__file__).resolve())
     base = json.loads(
@@ -245,7 +246,7 @@ def measure_memory(resolution):
         .stdout.strip()
         .splitlines()[-1]
     )["peak_mib"]
-    for shape, method in (("rice", "exact"), ("rice", "euclidean"), ("ikura", "exact")):
+    for shape, method in configs:
         run = subprocess.run(
             [sys.executable, script, "--memory-child", str(resolution), shape, method],
             capture_output=True,
@@ -340,7 +341,7 @@ def main() -> None:
     resolutions = (32, 64) if args.quick else RESOLUTIONS
     rows, length = sweep(resolutions, grains=1 if args.quick else 2, samples=2000 if args.quick else 10000)
     sixteen = sixteen_grains(DEFAULT_RESOLUTION, repeats=1 if args.quick else 3)
-    memory = measure_memory(64 if args.quick else 256)
+    memory = measure_memory(64, (("rice", "exact"),)) if args.quick else measure_memory(256)
     write_results(rows, length, sixteen, memory, DEFAULT_RESOLUTION)
 
 

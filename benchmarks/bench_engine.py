@@ -52,7 +52,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--nodes", type=int, default=50)
     parser.add_argument("--repeat", type=int, default=20)
+    parser.add_argument("--quick", action="store_true", help="a 10-node recipe, 3 repeats (a smoke run)")
     args = parser.parse_args()
+    if args.quick:
+        args.nodes, args.repeat = 10, 3
     registry = Registry()
     registry.add_plugin_file(TOY)
     with tempfile.TemporaryDirectory() as tmp:

@@ -13,6 +13,7 @@ Timings are warm (each kernel runs once before it is timed). ``--quick`` shrinks
 from __future__ import annotations
 
 import argparse
+import os
 import time
 from pathlib import Path
 
@@ -25,7 +26,7 @@ from nodes.placement import cull, mix_ratio, poisson_place, rotate
 from nodes.shapes import shape
 from nodes.values import ElementLibrary
 
-RESULTS = Path(__file__).resolve().parent / "results"
+RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or Path(__file__).resolve().parent / "results")
 GRAIN_LENGTH = 2.2  # circumscribed radius 1.1 (S table 2)
 CULL_D = 0.1  # mm ≈ 0.045 element lengths
 
@@ -58,8 +59,13 @@ def place(onigiri, library, seed=0, **params):
     return placement, stats, seconds
 
 
-def refine_timed(placement, library, **params):
-    """(refined placement, fit table, seconds for implicit functions, seconds for the refine kernels)."""
+_TEMPLATES = {}
+
+
+def refine_timed(placement, library, reuse=False, **params):
+    """(refined placement, fit table, seconds for implicit functions, seconds for the refine kernels).
+    ``reuse``: take the implicit functions built for the same settings before (rows that do not report
+    their build time), so a sweep does not rebuild them per row."""
     from nodes.placement.element_templates import build_templates
     from nodes.placement.refine import RefineSettings, refine_placement
 
@@ -69,7 +75,12 @@ def refine_timed(placement, library, **params):
         params.pop("cost_points", 64),
     )
     passes = params.pop("passes", 1)
-    templates, t_build = timed(lambda: build_templates((library,), tol, spheres, points, measure_fit=True))
+    memo = (id(library), tol, spheres, points)
+    if reuse and memo in _TEMPLATES:
+        templates, t_build = _TEMPLATES[memo], 0.0
+    else:
+        templates, t_build = timed(lambda: build_templates((library,), tol, spheres, points, measure_fit=True))
+        _TEMPLATES[memo] = templates
     settings = RefineSettings(**params)
     rng = np.random.default_rng(1)
     orders = [rng.permutation(len(placement)) for _ in range(passes)]
@@ -169,8 +180,8 @@ def main():
         return
     import numba
 
-    size = 8.0 if args.quick else 20.0
-    big_size = 10.0 if args.quick else 44.0
+    size = 6.0 if args.quick else 20.0
+    big_size = 7.0 if args.quick else 44.0
     onigiri = shape.call(kind="onigiri", size=size)["mesh"]
     from nodes.placement.element_templates import with_medial_spheres
 
@@ -185,7 +196,7 @@ def main():
     small = shape.call(kind="onigiri", size=5.0)["mesh"]
     warm, _, _ = place(small, library)
     for cost in ("sakurai", "gan"):
-        refine_timed(warm, library, cost=cost, spacing=0.22)
+        refine_timed(warm, library, reuse=True, cost=cost, spacing=0.22)
     cull.call(placement=warm, libraries=[library])
 
     # ---- the S setup (S table 2 row 1)
@@ -251,7 +262,7 @@ def main():
         ((1.0, 1), (2.0, 2)) if args.quick else ((1.0, 1), (1.0, 2), (1.5, 2), (2.0, 1), (2.0, 2), (2.5, 2))
     ):
         p, s, t = place(onigiri, library, candidates="subdivide", r_scale=scale)
-        ref, _, tb, tr = refine_timed(p, library, passes=passes)
+        ref, _, tb, tr = refine_timed(p, library, reuse=True, passes=passes)
         mean, worst = residual(ref)
         record(
             "shell density (r_scale, passes)",
@@ -268,7 +279,7 @@ def main():
         )
 
     # ---- sweeps on the S setup
-    for spacing in (2.0, 1.0) if args.quick else (2.0, 1.0, 0.5, 0.25):
+    for spacing in (2.0, 1.0, 0.5) if args.quick else (2.0, 1.0, 0.5, 0.25):
         p, s, t = place(onigiri, library, candidate_spacing=spacing)
         record(
             "candidate spacing (×r)",
@@ -279,8 +290,8 @@ def main():
             placed=len(p),
             min_dist_ratio=float(s.columns["min_distance_ratio"][0]),
         )
-    for tol in (0.1, 0.01) if args.quick else (0.1, 0.03, 0.01, 0.003, 0.001):
-        ref, _, tb, tr = refine_timed(base_placement, library, tolerance=tol)
+    for tol in (0.1, 0.01, 0.001) if args.quick else (0.1, 0.03, 0.01, 0.003, 0.001):
+        ref, _, tb, tr = refine_timed(base_placement, library, reuse=True, tolerance=tol)
         mean, worst = residual(ref)
         record(
             "golden tolerance",
@@ -291,7 +302,7 @@ def main():
             overlap_max_L=worst,
             culled=culled_share(ref, carried),
         )
-    for sph_tol in (0.05, 0.01) if args.quick else (0.05, 0.02, 0.01, 0.005):
+    for sph_tol in (0.05, 0.02, 0.01) if args.quick else (0.05, 0.02, 0.01, 0.005):
         ref, tm, tb, tr = refine_timed(base_placement, library, sphere_tolerance=sph_tol, max_spheres=4096)
         mean, worst = residual(ref)
         fit = tm.fit
@@ -309,7 +320,7 @@ def main():
             culled=culled_share(ref, carried),
         )
     for cost in ("sakurai", "gan"):
-        ref, _, tb, tr = refine_timed(base_placement, library, cost=cost, spacing=r)
+        ref, _, tb, tr = refine_timed(base_placement, library, reuse=True, cost=cost, spacing=r)
         mean, worst = residual(ref)
         record(
             "cost",

@@ -12,6 +12,7 @@ Run: python benchmarks/bench_xpbd.py [--quick] [--only speed effects accuracy]
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -22,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "simulation"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-RESULTS = ROOT / "benchmarks" / "results"
+RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
 from machine import conditions  # noqa: E402
 from xpbd_scenes import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column  # noqa: E402

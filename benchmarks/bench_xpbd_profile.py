@@ -11,6 +11,7 @@ rebuilt. Run: python benchmarks/bench_xpbd_profile.py [--quick] [--sizes 10000 5
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from collections import Counter
@@ -20,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "simulation"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-RESULTS = ROOT / "benchmarks" / "results"
+RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
 from bench_xpbd_newton import SUBSTEPS, box_solver  # noqa: E402
 from machine import conditions  # noqa: E402

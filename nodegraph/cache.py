@@ -153,12 +153,17 @@ class Cache:
                 raise CacheCorruption(f"blob {path} cannot be decoded: {exc}") from None
         return outputs
 
-    def store(self, key: str, outputs: dict[str, Any], node_id: str, node_type: str) -> None:
-        """Store a node's outputs atomically: blobs first, then the entry that makes them visible."""
+    def store(
+        self, key: str, outputs: dict[str, Any], node_id: str, node_type: str, seconds: float | None = None
+    ) -> None:
+        """Store a node's outputs atomically: blobs first, then the entry that makes them visible. ``seconds``,
+        the node's wall time when it ran, is kept beside them (a sweep reports it for points already cached)."""
         marker = self.directory / MARKER
         if not marker.exists():
             atomic_write(marker, MARKER_TEXT)
         manifest = {"key": key, "node": node_id, "type": node_type, "outputs": {}}
+        if seconds is not None:
+            manifest["seconds"] = round(float(seconds), 6)
         for port, value in outputs.items():
             data = codec.encode(value)
             digest = hashlib.sha256(data).hexdigest()
@@ -167,6 +172,14 @@ class Cache:
                 atomic_write(blob, data)
             manifest["outputs"][port] = {"blob": digest, "size": len(data)}
         atomic_write(self._entry_path(key), json.dumps(manifest, sort_keys=True, indent=1).encode())
+
+    def recorded_seconds(self, key: str) -> float | None:
+        """The wall time the node took when entry ``key`` was computed (None: unknown or no entry)."""
+        try:
+            value = self._manifest(key).get("seconds")
+        except (CacheCorruption, FileNotFoundError):
+            return None
+        return float(value) if isinstance(value, (int, float)) else None
 
     def discard(self, key: str) -> None:
         """Forget entry ``key`` (its blobs may be shared, so they stay until ``clear``)."""

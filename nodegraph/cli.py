@@ -1,4 +1,4 @@
-"""The ``nodegraph`` command: run, check, nodes, describe, graph, cache.
+"""The ``nodegraph`` command: run, sweep, check, nodes, describe, graph, cache.
 
 Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid.
 """
@@ -6,6 +6,7 @@ Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is inv
 from __future__ import annotations
 
 import argparse
+import contextlib
 import signal
 import sys
 from pathlib import Path
@@ -31,6 +32,23 @@ def _common(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--cache-dir", type=Path, default=None, help="cache directory (default: $NODEGRAPH_CACHE or .nodegraph/cache)"
+    )
+
+
+def _distributed(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="compute node instances on this Dask scheduler's workers (they share the cache by path)",
+    )
+    group.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="start a Dask LocalCluster of N worker processes here for the node instances",
     )
 
 
@@ -72,7 +90,41 @@ def build_parser() -> argparse.ArgumentParser:
         help="a node whose own estimate is longer than this refuses to start (default 10)",
     )
     run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    _distributed(run)
     _common(run)
+
+    sweep = sub.add_parser("sweep", help="run a recipe at every point of a parameter grid: cost against metrics")
+    sweep.add_argument("recipe", type=Path)
+    sweep.add_argument(
+        "--grid",
+        dest="grids",
+        action="append",
+        default=[],
+        metavar="NODE.PARAM=V1,V2,...",
+        help="one axis of the grid (repeatable; every combination runs); default: the recipe's sweeps: block",
+    )
+    sweep.add_argument(
+        "--metric",
+        dest="metrics",
+        action="append",
+        default=[],
+        metavar="NODE.PORT[.COLUMN][:AGG]",
+        help="a number read from a Table output per point (AGG: last, first, min, max, mean, sum; default last)",
+    )
+    sweep.add_argument("--sweep", dest="sweep_name", default=None, help="which of the recipe's sweeps to run")
+    sweep.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    sweep.add_argument(
+        "--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]", help="also pull this output"
+    )
+    sweep.add_argument(
+        "--out-dir", type=Path, default=None, help="where the table and plot go (default outputs/<recipe>/sweeps)"
+    )
+    sweep.add_argument("--no-cache", action="store_true", help="neither read nor write the cache (every point cold)")
+    sweep.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors and the written files")
+    sweep.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
+    sweep.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    _distributed(sweep)
+    _common(sweep)
 
     check = sub.add_parser("check", help="validate a recipe; nothing runs")
     check.add_argument("recipe", type=Path)
@@ -128,16 +180,19 @@ def _cmd_run(args, registry) -> int:
         )
         spawn = False
     try:
-        result = run_recipe(
-            recipe,
-            outputs=args.outputs or None,
-            cache=cache,
-            out_dir=out_dir,
-            rrd=rrd,
-            spawn=spawn,
-            reporter=reporter,
-            max_seconds=None if args.yes else 60 * args.max_minutes,
-        )
+        with _pool(args, cache, reporter) as pool:
+            result = run_recipe(
+                recipe,
+                outputs=args.outputs or None,
+                cache=cache,
+                out_dir=out_dir,
+                rrd=rrd,
+                spawn=spawn,
+                reporter=reporter,
+                max_seconds=None if args.yes else 60 * args.max_minutes,
+                pool=pool,
+                plugins=args.plugin,
+            )
     except (NodeFailure, KeyboardInterrupt):
         reporter.print_summary()
         raise
@@ -150,12 +205,60 @@ def _cmd_run(args, registry) -> int:
     return 0
 
 
+@contextlib.contextmanager
+def _pool(args, cache, reporter):
+    """The Dask pool that --scheduler or --workers asks for (None: in-process), closed afterwards."""
+    if args.scheduler is None and args.workers is None:
+        yield None
+        return
+    if cache is None:
+        raise NodegraphError("--scheduler/--workers: workers hand results over through the cache; drop --no-cache")
+    from .dask_pool import DaskPool
+
+    pool = DaskPool(address=args.scheduler, workers=args.workers, warn=reporter.warn)
+    try:
+        reporter.info(f"node instances go to {pool.description}")
+        yield pool
+    finally:
+        pool.close()
+
+
+def _cmd_sweep(args, registry) -> int:
+    from .sweep import run_sweep, sweep_from_args, write_sweep
+
+    base = load_recipe(args.recipe, registry, args.overrides)
+    decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
+    out_dir = args.out_dir or Path("outputs") / base.name / "sweeps"
+    cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
+    check_writable(out_dir, "sweep table", "choose another folder with --out-dir")
+    if cache is not None:
+        check_writable(cache.directory, "cache", "choose another with --cache-dir (or $NODEGRAPH_CACHE), or --no-cache")
+    reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
+    with _pool(args, cache, reporter) as pool:
+        result = run_sweep(
+            args.recipe,
+            registry,
+            decl,
+            overrides=args.overrides,
+            cache=cache,
+            pool=pool,
+            plugins=args.plugin,
+            reporter=reporter,
+            max_seconds=None if args.yes else 60 * args.max_minutes,
+        )
+    for path in write_sweep(result, out_dir):
+        print(f"wrote {path}")
+    return 0
+
+
 def _cmd_check(args, registry) -> int:
     recipe = load_recipe(args.recipe, registry, args.overrides)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())
+    sweeps = "".join(f", sweep {d.name} ({len(d.points())} points)" for d in recipe.sweeps.values())
     print(
         f"{args.recipe}: OK — {len(recipe.nodes)} nodes ({instances} instances), "
         f"outputs {', '.join(map(str, recipe.outputs))}, effects: {', '.join(sorted(recipe.effects)) or 'none'}"
+        + sweeps
     )
     return 0
 
@@ -319,6 +422,7 @@ def _interrupt(signum, frame):
 
 COMMANDS = {
     "run": _cmd_run,
+    "sweep": _cmd_sweep,
     "check": _cmd_check,
     "nodes": _cmd_nodes,
     "describe": _cmd_describe,

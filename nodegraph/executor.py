@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -107,6 +107,7 @@ class Executor:
         self.values: dict[Instance, dict[str, Any]] = {}
         self.status: dict[Instance, NodeRecord] = {}
         self.hits: set[str] = set()
+        self.ran_elsewhere: dict[str, NodeRecord] = {}  # by cache key: instances a pool computed for this run
 
     # planning ---------------------------------------------------------------------------------
     def instances(self, node_id: str) -> list[Instance]:
@@ -184,6 +185,9 @@ class Executor:
                         self._log_outputs(inst)
         finally:
             for inst in order:
+                elsewhere = self.ran_elsewhere.get(self.keys[inst])
+                if elsewhere is not None and inst in self.status and self.status[inst].status == "cached":
+                    self.status[inst] = replace(elsewhere, log_seconds=self.status[inst].log_seconds)
                 if inst in self.status:
                     self.reporter.record(self.status[inst])
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
@@ -251,7 +255,7 @@ class Executor:
         for value in outputs.values():
             codec.freeze(value)
         if self.cache is not None:
-            self.cache.store(key, outputs, inst.node, spec.type_name)
+            self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed)
             ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
         self.values[inst] = outputs
         self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
@@ -311,9 +315,15 @@ def run_recipe(
     spawn: bool = False,
     reporter: Reporter | None = None,
     max_seconds: float | None = None,
+    pool=None,
+    plugins=(),
 ) -> RunResult:
     """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``; a node
     that expects to run longer than ``max_seconds`` refuses to start (``Context.expect_cost``).
+
+    With a ``pool`` (``pool.InstancePool``, e.g. ``dask_pool.DaskPool``) the node instances missing from
+    the cache are computed by its workers first (``plugins``: the plugin files they load); the run then
+    finds them in the cache, and its closing table shows the workers' wall times.
 
     The recording is written beside ``rrd`` as ``*.partial.rrd`` and moved over ``rrd`` only when the run
     completes; its id is derived from what the recipe computes (``Recipe.digest``), so two settings of a
@@ -330,6 +340,8 @@ def run_recipe(
     executor = Executor(recipe, cache, reporter, recording, max_seconds)
     ok = False
     try:
+        if pool is not None:
+            executor.ran_elsewhere = compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds)
         result = executor.run(wires)
         if out_dir is not None:
             executor.write_outputs(result, wires, out_dir)
@@ -368,6 +380,19 @@ def run_recipe(
             elif warn is not None:
                 warn(f"the run did not complete: its recording is {written}; {recording.path} was left as it was")
     return result
+
+
+def compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds=None) -> dict[str, NodeRecord]:
+    """Have ``pool`` compute every instance the outputs need that the cache lacks; their records by key."""
+    from .pool import RecipeRef, plan_jobs
+
+    if cache is None:
+        raise NodegraphError("workers hand results over through the cache: a pool needs it (no --no-cache)")
+    jobs = plan_jobs(recipe, wires, cache, RecipeRef.of(recipe, plugins), max_seconds)
+    if not jobs:
+        return {}
+    results = pool.compute(jobs, cache.directory, reporter or Reporter(quiet=True))
+    return {key: r.record for key, r in results.items() if r.record.status != "cached"}
 
 
 def recording_name(recipe: Recipe) -> str:

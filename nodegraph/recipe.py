@@ -23,6 +23,7 @@ from .errors import Issue, Location, RecipeError
 from .node import NodeSpec
 from .params import ParamValueError, canonical
 from .registry import Registry
+from .sweep_decl import SweepDecl, check_sweeps
 from .yaml_source import SourceMap, load_yaml, load_yaml_file
 
 NODE_ID = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -52,6 +53,7 @@ class RecipeModel(BaseModel):
     effects: list[str] = Field(default_factory=list)
     outputs: list[str] = Field(min_length=1)
     nodes: dict[str, Any] = Field(min_length=1)
+    sweeps: dict[str, Any] = Field(default_factory=dict)  # checked by sweep_decl.check_sweeps
 
 
 @dataclass(frozen=True)
@@ -91,6 +93,7 @@ class Recipe:
     source: SourceMap
     graph: nx.DiGraph = field(repr=False)
     overrides: tuple[str, ...] = ()  # the --set texts applied on top of the file
+    sweeps: dict[str, SweepDecl] = field(default_factory=dict)  # the recipe's own sweeps (``nodegraph sweep``)
 
     def digest(self) -> str:
         """sha256 of what the recipe computes (name, seed, effects, outputs, every node's type, parameters,
@@ -297,6 +300,8 @@ class _Validator:
             self._check_families(entries, graph)
         outputs = self._check_outputs(model.outputs if model else [], entries, raw_nodes)
         effects = self._check_effects(model.effects if model else [], entries)
+        raw_sweeps = self.raw.get("sweeps")
+        sweeps = check_sweeps(self, raw_sweeps, entries, raw_nodes) if isinstance(raw_sweeps, dict) else {}
         if model is not None and model.name is not None and not RECIPE_NAME.match(model.name):
             self.issue(
                 ("name",),
@@ -318,6 +323,7 @@ class _Validator:
             source=self.source,
             graph=graph,
             overrides=tuple(self.overrides),
+            sweeps=sweeps,
         )
 
     def _node(self, node_id: str, model: NodeModel, path: tuple, wire_sources) -> NodeEntry | None:

@@ -1,0 +1,56 @@
+"""Every benchmark runs in its ``--quick`` mode (seconds each), so none can rot unnoticed (one did: it failed
+at import for weeks because nothing ran it). Found by glob: a benchmark added to ``benchmarks/`` is covered.
+
+A benchmark that needs packages outside the project's dependencies names them in a module-level
+``REQUIRES = ("pkg", ...)`` and is skipped where they are missing. Results go to a temporary folder
+(``NODEGRAPH_BENCH_RESULTS``), not to ``benchmarks/results/``. Marked ``bench_quick``: CI runs them with
+the rest (``-m "not bench_quick"`` leaves them out).
+"""
+
+import ast
+import importlib.util
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+BENCHMARKS = sorted((ROOT / "benchmarks").glob("bench_*.py"))
+LIMIT_S = 240  # one benchmark's --quick run, compile of its kernels included (a cold numba cache on 2 cores)
+
+
+def requires(path: Path) -> tuple[str, ...]:
+    for statement in ast.parse(path.read_text()).body:
+        if isinstance(statement, ast.Assign) and any(getattr(t, "id", None) == "REQUIRES" for t in statement.targets):
+            return tuple(ast.literal_eval(statement.value))
+    return ()
+
+
+@pytest.mark.bench_quick
+@pytest.mark.parametrize("path", BENCHMARKS, ids=[p.stem for p in BENCHMARKS])
+def test_benchmark_quick_mode_runs(path, tmp_path):
+    assert "--quick" in path.read_text(), f"{path.name} needs a --quick mode (seconds) for CI"
+    missing = [name for name in requires(path) if importlib.util.find_spec(name) is None]
+    if missing:
+        pytest.skip(f"needs {', '.join(missing)} (REQUIRES)")
+    env = dict(
+        os.environ,
+        NODEGRAPH_BENCH_RESULTS=str(tmp_path),
+        MPLBACKEND="Agg",
+        PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
+    )
+    start = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, str(path), "--quick"],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=LIMIT_S,
+    )
+    seconds = time.perf_counter() - start
+    assert done.returncode == 0, f"{path.name} --quick failed:\n{done.stdout[-2000:]}\n{done.stderr[-4000:]}"
+    print(f"{path.name} --quick: {seconds:.1f} s")
