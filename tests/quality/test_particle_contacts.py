@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from nodes.measures import particle_contacts
+from nodes.quality import particle_contacts
 from nodes.values import ParticleState
 
 
