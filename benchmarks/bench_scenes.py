@@ -36,19 +36,20 @@ REFERENCE = {
     "ikura_don": ("G", None, 65, 310, 746_062),
     "onigiri": ("G", 2567, 1307, 3064, 2_818_880),
     "rice_bunny": ("G", 8561, 4376, 5111, 4_702_120),
-    "rice_chestnut": ("S", None, 6.27 + 194.30, 5365, None),
+    "onigiri_cylinder": ("G", 2567, 1307, 3064, 2_818_880),
+    "sushi": ("G", 17_622, None, None, None),  # G ch.4: sushi rice, full simulation 4 h 53 m 42 s
+    "rice_chestnut": ("S", None, 6.27 + 194.30, 5365, None),  # S: initial placement + adjustment
 }
 
 # Reduced sizes (seconds each): the same graph, a smaller shape, fewer variants, frames and pixels.
 PREVIEW = ["preview.width=64", "preview.height=48", "preview.samples=1", "measure.sample=60"]
+GRAINS = ["grain_spheres.variants=4", "grain_volume.resolution=24", "grain_mesh.target_faces=400"]
 QUICK = {
     "rice_bowl": [
         "bowl.size=14.0",
         "bowl.depth=12.0",
         "bowl.mound=5.0",
-        "grain_spheres.variants=4",
-        "grain_volume.resolution=24",
-        "grain_mesh.target_faces=400",
+        *GRAINS,
         "rice_sim.frames=3",
         *PREVIEW,
     ],
@@ -60,6 +61,33 @@ QUICK = {
         "grain_mesh.target_faces=200",
         "grain_spheres.variants=4",
         "grain_volume.resolution=24",
+        *PREVIEW,
+    ],
+    "onigiri": [
+        "onigiri.size=12.0",
+        "plate.offset=[0.0, 0.0, -14.5]",
+        *GRAINS,
+        "press.frames=3",
+        "rest.frames=3",
+        *PREVIEW,
+    ],
+    "onigiri_cylinder": [
+        "onigiri.size=7.0",
+        "onigiri.length=20.0",
+        "plate.offset=[0.0, 0.0, -10.5]",
+        *GRAINS,
+        "press.frames=3",
+        "rest.frames=3",
+        *PREVIEW,
+    ],
+    "sushi": ["nigiri.extents=[30.0, 14.0, 11.0]", *GRAINS, "press.frames=3", *PREVIEW],
+    "kakigori": ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2", *PREVIEW],
+    "rice_chestnut": [
+        "onigiri.size=6.0",
+        "grain_spheres.variants=4",
+        "grain_volume.resolution=24",
+        "chestnut_spheres.variants=2",
+        "chestnut_volume.resolution=24",
         *PREVIEW,
     ],
 }
