@@ -51,7 +51,7 @@ EXPECTED = {
     "ikura_don": ((140, 220), 0.17, 0.20),  # 179 elements: p95 0.120, max 0.139
     "onigiri": ((45, 75), 0.21, 0.29),  # 60 grains: p95 0.157, max 0.216
     "sushi": ((65, 110), 0.21, 0.26),  # 87 grains: p95 0.161, max 0.195
-    "kakigori": ((80, 140), 0.06, 0.08),  # 109 flakes: p95 0.040, max 0.055
+    "kakigori": ((220, 350), 0.06, 0.07),  # 283 flakes: p95 0.039, max 0.049
     "rice_chestnut": ((200, 340), 0.10, 0.13),  # 268 elements: p95 0.077, max 0.096 (S: no physics)
 }
 SLOW = {"rice_chestnut"}  # 18 s at load 10: 16 grain variants' medial spheres at S's resolution
