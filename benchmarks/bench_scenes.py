@@ -68,7 +68,6 @@ QUICK = {
         "plate.offset=[0.0, 0.0, -14.5]",
         *GRAINS,
         "press.frames=3",
-        "rest.frames=3",
         *PREVIEW,
     ],
     "onigiri_cylinder": [
@@ -77,7 +76,6 @@ QUICK = {
         "plate.offset=[0.0, 0.0, -10.5]",
         *GRAINS,
         "press.frames=3",
-        "rest.frames=3",
         *PREVIEW,
     ],
     "sushi": ["nigiri.extents=[30.0, 14.0, 11.0]", *GRAINS, "press.frames=3", *PREVIEW],
