@@ -148,7 +148,8 @@ def main(argv: list[str] | None = None) -> int:
     for name in names:
         quick = QUICK.get(name, PREVIEW)
         run_cold(name, quick)  # compiles the kernels (numba cache) so the timed run is cold, not compiling
-        rows.append((name, run_cold(name, quick if args.quick else [])))
+        preview = None if args.quick else REPO / "benchmarks" / "results" / f"{name}.png"  # for a look
+        rows.append((name, run_cold(name, quick if args.quick else [], preview_to=preview)))
         _print_row(name, rows[-1][1], args.top)
     print()
     print(_table(rows))
