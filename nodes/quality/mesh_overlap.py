@@ -54,7 +54,15 @@ def element_overlaps(
             if j == i or np.linalg.norm(centres[j] - centres[i]) > radii[i] + radii[j] + contact * length:
                 continue
             other_v, other_f, _ = meshes[j]
-            signed = igl.signed_distance(vertices, other_v, other_f, sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL)[0]
+            # Only vertices in the neighbour's box grown by the contact distance can touch or cut it: the rest
+            # are farther than ``contact`` from it (exact, and most of a neighbour's vertices are far).
+            margin = contact * length
+            near = np.all((vertices >= other_v.min(axis=0) - margin) & (vertices <= other_v.max(axis=0) + margin), 1)
+            if not near.any():
+                continue
+            signed = igl.signed_distance(
+                vertices[near], other_v, other_f, sign_type=igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL
+            )[0]
             closest = float(signed.min())
             if closest < contact * length:
                 contacts[row] += 1

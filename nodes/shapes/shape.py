@@ -8,7 +8,7 @@ from nodegraph.node import Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
 
-KINDS = ("bowl", "onigiri", "sphere", "box", "cylinder")
+KINDS = ("bowl", "onigiri", "sphere", "box", "cylinder", "block")
 
 
 def _check(params: dict) -> list[tuple[str, str]]:
@@ -20,12 +20,15 @@ def _check(params: dict) -> list[tuple[str, str]]:
 
 @node(
     "shape",
-    version=1,
+    version=2,
     outputs={
         "mesh": Out(
             Mesh, "the closed region the elements fill (for a bowl: the cavity to the fill height plus the mound)"
         ),
-        "container": Out(Mesh, "the vessel as a closed solid for a bowl (collider); an empty mesh for other kinds"),
+        "container": Out(
+            Mesh,
+            "the vessel as a closed solid for a bowl, an open-top tray for a block (collider); empty for other kinds",
+        ),
     },
     params={
         "kind": Param(str, "onigiri", "which shape", choices=KINDS),
@@ -37,16 +40,30 @@ def _check(params: dict) -> list[tuple[str, str]]:
             units="mm",
         ),
         "extents": Param(
-            tuple[float, float, float], (40.0, 40.0, 40.0), "box edge lengths (x, y, z)", range=(1e-3, 1e4), units="mm"
+            tuple[float, float, float],
+            (40.0, 40.0, 40.0),
+            "box / block edge lengths (x, y, z)",
+            range=(1e-3, 1e4),
+            units="mm",
         ),
         "length": Param(float, 60.0, "cylinder length along x (lying cylinder)", range=(1e-3, 1e4), units="mm"),
         "thickness": Param(float, 0.9, "onigiri thickness as a share of its circumscribed radius", range=(0.05, 2.0)),
         "roundness": Param(float, 0.35, "onigiri corner rounding (0 sharp triangle, 1 disc)", range=(0.01, 1.0)),
         "bulge": Param(float, 0.8, "onigiri face bulge: 1 ellipsoidal, towards 0 flat faces", range=(0.1, 1.0)),
         "depth": Param(float, 45.0, "bowl cavity depth below the rim", range=(1e-3, 1e4), units="mm"),
-        "wall": Param(float, 4.0, "bowl wall thickness", range=(1e-3, 1e3), units="mm"),
+        "wall": Param(float, 4.0, "bowl wall / block tray wall thickness", range=(1e-3, 1e3), units="mm"),
+        "exponent": Param(
+            float, 4.0, "block: superellipsoid exponent (2 an ellipsoid, larger towards a box)", range=(2.0, 20.0)
+        ),
         "fill": Param(float, 0.8, "bowl fill height as a share of the depth", range=(0.05, 1.0)),
         "mound": Param(float, 15.0, "height of the rice mound above the fill plane", range=(0.0, 1e4), units="mm"),
+        "offset": Param(
+            tuple[float, float, float],
+            (0.0, 0.0, 0.0),
+            "translation of the shape and its container (e.g. a plate under a pressed onigiri)",
+            range=(-1e4, 1e4),
+            units="mm",
+        ),
         "resolution": Param(
             int,
             4,
@@ -56,8 +73,25 @@ def _check(params: dict) -> list[tuple[str, str]]:
     },
     check=_check,
 )
-def shape(ctx, *, kind, size, extents, length, thickness, roundness, bulge, depth, wall, fill, mound, resolution):
-    """A closed target shape (outward normals), in millimetres, centred at the origin (bowl: rim at z = 0)."""
+def shape(
+    ctx,
+    *,
+    kind,
+    size,
+    extents,
+    length,
+    thickness,
+    roundness,
+    bulge,
+    depth,
+    wall,
+    exponent,
+    fill,
+    mound,
+    offset,
+    resolution,
+):
+    """A closed target shape (outward normals), in millimetres, centred at ``offset`` (bowl: rim at z = offset z)."""
     from . import solids
 
     container = None
@@ -67,12 +101,19 @@ def shape(ctx, *, kind, size, extents, length, thickness, roundness, bulge, dept
         mesh = solids.box(extents)
     elif kind == "cylinder":
         mesh = solids.lying_cylinder(size, length, sections=12 * 2**resolution // 4)
+    elif kind == "block":  # a nigiri's rice; its container: an open-top tray mould around it
+        mesh = solids.rounded_block(extents, exponent, subdivisions=resolution)
+        container = solids.tray(extents, wall)
     elif kind == "onigiri":
         mesh = solids.onigiri(size, thickness * size, roundness, bulge, subdivisions=resolution)
     else:
         mesh, container = solids.bowl(
             size, depth, wall, fill, mound, segments=12 * 2 ** (resolution - 1), rings=4 * 2 ** (resolution - 1)
         )
+    if any(offset):
+        mesh.apply_translation(offset)
+        if container is not None:
+            container.apply_translation(offset)
     out_container = (
         Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), name="none")
         if container is None

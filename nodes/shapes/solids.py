@@ -122,3 +122,26 @@ def _dedupe(profile: np.ndarray) -> np.ndarray:
     if np.linalg.norm(profile[0] - profile[-1]) < 1e-9:
         profile = profile[:-1]
     return profile
+
+
+def rounded_block(extents: tuple[float, float, float], exponent: float, subdivisions: int = 4) -> trimesh.Trimesh:
+    """A rounded block (a nigiri's rice, a sushi mould's fill): the superellipsoid
+    ``|x/a|^m + |y/b|^m + |z/c|^m = 1`` with half extents (a, b, c), ``m = exponent`` (2 an ellipsoid, larger
+    towards a box). An icosphere mapped radially by the gauge, as ``onigiri``: closed and evenly meshed."""
+    ball = trimesh.creation.icosphere(subdivisions=subdivisions)
+    u = np.asarray(ball.vertices)
+    half = 0.5 * np.asarray(extents, float)
+    gauge = (np.abs(u / half) ** exponent).sum(axis=1) ** (1.0 / exponent)
+    return trimesh.Trimesh(u / gauge[:, None], np.asarray(ball.faces), process=False)
+
+
+def tray(extents: tuple[float, float, float], wall: float) -> trimesh.Trimesh:
+    """An open-top box mould around a region of ``extents`` centred at the origin (inside = the region's
+    bounding box; its rim at the region's top), as a closed solid (manifold3d difference)."""
+    import manifold3d
+
+    a, b, c = (float(e) for e in extents)
+    outer = manifold3d.Manifold.cube([a + 2 * wall, b + 2 * wall, c + wall], center=True).translate([0, 0, -wall / 2])
+    inner = manifold3d.Manifold.cube([a, b, c + wall], center=True).translate([0, 0, wall / 2])
+    out = (outer - inner).to_mesh()
+    return trimesh.Trimesh(np.asarray(out.vert_properties)[:, :3], np.asarray(out.tri_verts), process=True)

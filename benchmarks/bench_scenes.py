@@ -1,0 +1,220 @@
+"""The food scenes at their real scale — issue 17: each recipe run cold (empty node cache, numba kernels
+already compiled), its elements, vertices, wall time per node and in total, and the mesh-level quality
+of the ``measure`` node (overlap p50 / p95 / max of touching pairs in element lengths, contacts per
+element, packing fraction), with G table 2's times and counts beside (SPEC §6).
+
+    python benchmarks/bench_scenes.py                 # every recipe at full size (minutes on 2 cores)
+    python benchmarks/bench_scenes.py --quick         # reduced sizes through --set overrides: seconds
+    python benchmarks/bench_scenes.py rice_bowl ikura_don     # some recipes only
+    python benchmarks/bench_scenes.py --full-vs-short [--quick]   # the rice bowl by both of G's methods
+
+``--full-vs-short`` (G fig. 4.3.2 / 4.5, G §3.2.1): the rice bowl's XPBD run in mode ``full`` (identical
+grains packed on a grid in one orientation, dropped into the bowl for ``--full-frames`` frames) against
+the short method (aperiodic fill, refine, cull, a short run): fill height, packing fraction, contacts per
+grain, overlap and the time of each, and both previews side by side in ``benchmarks/results/`` (G's
+full/short time ratio is 1.89).
+
+Kernels are compiled by a first quick run of the same recipe (numba's cache then serves later runs), so
+the timed run's cold time is the recipe's, not the compiler's. The load average is printed beside: on a
+shared machine the times are only comparable under the same line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+# G table 2 (i9-9900X, CPU): (full s, short s, elements, vertices); S table 2 for the mixed rice.
+REFERENCE = {
+    "rice_bowl": ("G", 3867, 2041, 2000, 1_840_000),
+    "ikura_don": ("G", None, 65, 310, 746_062),
+    "onigiri": ("G", 2567, 1307, 3064, 2_818_880),
+    "rice_bunny": ("G", 8561, 4376, 5111, 4_702_120),
+    "onigiri_cylinder": ("G", 2567, 1307, 3064, 2_818_880),
+    "sushi": ("G", 17_622, None, None, None),  # G ch.4: sushi rice, full simulation 4 h 53 m 42 s
+    "rice_chestnut": ("S", None, 6.27 + 194.30, 5365, None),  # S: initial placement + adjustment
+}
+
+# Reduced sizes (seconds each): the same graph, a smaller shape, fewer variants, frames and pixels.
+PREVIEW = ["preview.width=64", "preview.height=48", "preview.samples=1", "measure.sample=60"]
+GRAINS = ["grain_spheres.variants=4", "grain_volume.resolution=24", "grain_mesh.target_faces=400"]
+QUICK = {
+    "rice_bowl": [
+        "bowl.size=14.0",
+        "bowl.depth=12.0",
+        "bowl.mound=5.0",
+        *GRAINS,
+        "rice_sim.frames=3",
+        *PREVIEW,
+    ],
+    "ikura_don": [
+        "rice_place.r=3.0",
+        "rice_sim.frames=2",
+        "egg_sim.frames=2",
+        "egg_place.r=4.0",
+        "grain_mesh.target_faces=200",
+        "grain_spheres.variants=4",
+        "grain_volume.resolution=24",
+        *PREVIEW,
+    ],
+    "onigiri": [
+        "onigiri.size=12.0",
+        "plate.offset=[0.0, 0.0, -14.5]",
+        *GRAINS,
+        "press.frames=3",
+        *PREVIEW,
+    ],
+    "onigiri_cylinder": [
+        "onigiri.size=7.0",
+        "onigiri.length=20.0",
+        "plate.offset=[0.0, 0.0, -10.5]",
+        *GRAINS,
+        "press.frames=3",
+        *PREVIEW,
+    ],
+    "sushi": ["nigiri.extents=[30.0, 14.0, 11.0]", *GRAINS, "press.frames=3", *PREVIEW],
+    "kakigori": ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2", *PREVIEW],
+    "rice_chestnut": [
+        "onigiri.size=6.0",
+        "grain_spheres.variants=4",
+        "grain_volume.resolution=24",
+        "chestnut_spheres.variants=2",
+        "chestnut_volume.resolution=24",
+        *PREVIEW,
+    ],
+}
+
+
+def recipe_path(name: str) -> Path:
+    return REPO / "graphs" / f"{name}.yaml"
+
+
+def run_cold(name: str, overrides: list[str], preview_to: Path | None = None) -> dict:
+    """One run in a fresh cache; per-node wall, total, elements, vertices and the measure row."""
+    from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
+
+    recipe = load_recipe(recipe_path(name), default_registry(), overrides)
+    with tempfile.TemporaryDirectory(prefix="bench-scenes-") as tmp:
+        start = time.perf_counter()
+        result = run_recipe(recipe, cache=Cache(Path(tmp) / "cache"), out_dir=Path(tmp) / "out")
+        total = time.perf_counter() - start
+        if preview_to is not None:
+            preview_to.parent.mkdir(parents=True, exist_ok=True)
+            preview_to.write_bytes((Path(tmp) / "out" / "preview.png").read_bytes())
+    table = result.output("measure.table").columns
+    nodes = {}
+    for record in result.records:
+        nodes[record.node] = nodes.get(record.node, 0.0) + record.seconds
+    vertices = 0
+    for ref in _final_aggregates(recipe):
+        aggregate = result.output(ref)
+        vertices += sum(len(aggregate.element_mesh(i).vertices) for i in range(len(aggregate.placement)))
+    return {
+        "total": total,
+        "nodes": nodes,
+        "vertices": vertices,
+        **{k: float(v[0]) for k, v in table.items()},
+    }
+
+
+def _final_aggregates(recipe) -> list[str]:
+    """The aggregates the ``measure`` node reads (``node.port``)."""
+    wires = recipe.nodes["measure"].inputs["aggregates"]
+    return [str(w) for w in (wires if isinstance(wires, (list, tuple)) else [wires])]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("recipes", nargs="*", help="recipe names (default: every one with a row below)")
+    parser.add_argument("--quick", action="store_true", help="reduced sizes: seconds per recipe")
+    parser.add_argument("--top", type=int, default=4, help="slowest nodes shown per recipe")
+    parser.add_argument("--full-vs-short", action="store_true", help="the rice bowl by G's full and short method")
+    parser.add_argument("--full-frames", type=int, default=60, help="frames of the full method's drop")
+    args = parser.parse_args(argv)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from machine import conditions
+
+    if args.full_vs_short:
+        return full_vs_short(args.quick, args.full_frames, conditions)
+
+    names = args.recipes or [n for n in QUICK if recipe_path(n).exists()]
+    rows = []
+    for name in names:
+        quick = QUICK.get(name, PREVIEW)
+        run_cold(name, quick)  # compiles the kernels (numba cache) so the timed run is cold, not compiling
+        preview = None if args.quick else REPO / "benchmarks" / "results" / f"{name}.png"  # for a look
+        rows.append((name, run_cold(name, quick if args.quick else [], preview_to=preview)))
+        _print_row(name, rows[-1][1], args.top)
+    print()
+    print(_table(rows))
+    print(f"\n{'quick sizes' if args.quick else 'full sizes'}; {conditions()}; pid {os.getpid()}")
+    return 0
+
+
+def full_vs_short(quick: bool, full_frames: int, conditions) -> int:
+    """The rice bowl's simulation by G's full method (grid drop) and the short one, side by side."""
+    base = QUICK["rice_bowl"] if quick else []
+    run_cold("rice_bowl", QUICK["rice_bowl"])  # compile
+    out = REPO / "benchmarks" / "results"
+    rows = []
+    for method, extra in (("short", []), ("full", ["rice_sim.mode=full", f"rice_sim.frames={full_frames}"])):
+        row = run_cold("rice_bowl", base + extra, preview_to=out / f"rice_bowl_{method}.png")
+        rows.append((method, row))
+        _print_row(f"rice_bowl {method}", row, 4)
+    print("\n| method | grains | sim s | total s | fill mm | packing | contacts | p95 | max |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for method, row in rows:
+        print(
+            f"| {method} | {row['elements']:.0f} | {row['nodes']['rice_sim']:.1f} | {row['total']:.1f} | "
+            f"{row['fill_height']:.1f} | {row['packing_fraction']:.2f} | {row['contacts_per_element']:.1f} | "
+            f"{row['overlap_p95']:.3f} | {row['overlap_max']:.3f} |"
+        )
+    ratio = rows[1][1]["nodes"]["rice_sim"] / max(rows[0][1]["nodes"]["rice_sim"], 1e-9)
+    print(f"\nfull/short simulation time {ratio:.2f} (G: 3867 / 2041 = 1.89); previews in {out}")
+    _side_by_side(out / "rice_bowl_short.png", out / "rice_bowl_full.png", out / "rice_bowl_full_vs_short.png")
+    print(f"{'quick sizes' if quick else 'full sizes'}; {conditions()}")
+    return 0
+
+
+def _side_by_side(left: Path, right: Path, out: Path) -> None:
+    import numpy as np
+    from PIL import Image
+
+    a, b = (np.asarray(Image.open(p).convert("RGB")) for p in (left, right))
+    Image.fromarray(np.concatenate([a, b], axis=1)).save(out)
+
+
+def _print_row(name: str, row: dict, top: int) -> None:
+    slow = sorted(row["nodes"].items(), key=lambda kv: -kv[1])[:top]
+    print(f"{name}: {row['total']:.1f} s — " + ", ".join(f"{n} {s:.1f} s" for n, s in slow), flush=True)
+
+
+def _table(rows) -> str:
+    head = (
+        "| recipe | elements | vertices | total s | p50 | p95 | max | >1 % | contacts | packing "
+        "| fill mm | ref | ref short s | ref full s | ref elements | ref vertices |"
+    )
+    lines = [head, "|" + "---|" * 16]
+    for name, row in rows:
+        src, full, short, count, verts = REFERENCE.get(name, ("", None, None, None, None))
+        lines.append(
+            f"| {name} | {row['elements']:.0f} | {row['vertices']:,} | {row['total']:.1f} | "
+            f"{row['overlap_p50']:.3f} | {row['overlap_p95']:.3f} | {row['overlap_max']:.3f} | "
+            f"{row['deeper_than_1pct']:.2f} | {row['contacts_per_element']:.1f} | {row['packing_fraction']:.2f} | "
+            f"{row['fill_height']:.1f} | {src} | {_num(short)} | {_num(full)} | {_num(count)} | {_num(verts)} |"
+        )
+    return "\n".join(lines)
+
+
+def _num(x) -> str:
+    return "—" if x is None else (f"{x:,.0f}" if x >= 100 else f"{x:g}")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
