@@ -93,7 +93,8 @@ def main():
     sun = params["sun_direction"]
 
     t = time.perf_counter()
-    reference = linear_to_srgb8(tone_map(render_layers(scene, camera, width, height, reference_spp, sun, 1, crop).color))
+    converged = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop)
+    reference = linear_to_srgb8(tone_map(converged.color))
     reference_time = time.perf_counter() - t
 
     rows = []

@@ -5,7 +5,8 @@ The path tracer does the lighting, so surfaces get their materials, not the bake
 - translucent materials (``subsurface`` > 0: rice, the ikura yolk) are Mitsuba's ``principledthin`` with
   diffuse transmission ``subsurface × cdrf.translucency(σ)`` per vertex, σ = σ₀|κ| the CDRF kernel width the
   shade node stored: the CDRF (eq. 7–9) evaluated in the BSDF as light passing through the grain, so
-  strongly curved, wet parts glow past the terminator; sheen for the water film;
+  strongly curved, wet parts glow past the terminator; sheen for the water film, and its clearcoat as a
+  share of the surface rendered by ``principled`` (``coat_share``; principledthin has no coat lobe);
 - transmissive materials (``transmission`` ≥ 0.5: the ikura membrane, ice, syrup) are (rough) dielectrics
   whose transmittance per crossing is √``subsurface_color`` (two crossings give that colour): the yolk
   shows through the orange egg, the rice through the ice;
@@ -35,7 +36,7 @@ TABLE_COLOR = (0.42, 0.36, 0.30)  # linear RGB of the matte table under the scen
 EXPOSURE = 1.0  # linear scale before the tone curve
 KNEE = 0.75  # the tone curve is linear below this and rolls off above it (white rice keeps its gloss, not clipped)
 MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) and a few grains of rice
-COAT_SHARE_MAX = 0.5  # at most half a translucent surface is the coated lobe (the other half transmits)
+COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 GUIDE_SPP = 4  # the guides need antialiased edges, not converged light: a cheap pass of its own (≈ ⅓ of a path)
@@ -118,6 +119,15 @@ def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
     return _principled(material)
 
 
+def diffuse_transmission(material: Material, sigma: np.ndarray) -> np.ndarray:
+    """Per-vertex ``diff_trans`` of a translucent material: ``subsurface × cdrf.translucency(σ)`` (SPEC §4 eq. 7–9
+    as light through the grain), raised on the uncoated share so the whole surface transmits that much."""
+    from ..shading.cdrf import translucency
+
+    weight = material.subsurface * translucency(sigma) / (1.0 - coat_share(material))
+    return np.clip(weight, 0.0, 1.0)
+
+
 def coat_share(material: Material) -> float:
     """Share of a translucent surface rendered with the clearcoat lobe (the rest carries the transmission)."""
     return float(np.clip(material.clearcoat, 0.0, COAT_SHARE_MAX))
@@ -152,7 +162,6 @@ def look_at(bounds: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
 
 def _shapes(scene: ShadedScene, folder: Path) -> tuple[dict, np.ndarray]:
     """One PLY shape per material (written into ``folder``) and the scene's bounds."""
-    from ..shading.cdrf import translucency
     from .mesh_files import stacked
 
     shapes = {}
@@ -171,8 +180,7 @@ def _shapes(scene: ShadedScene, folder: Path) -> tuple[dict, np.ndarray]:
         trans = None
         if per_vertex:
             sigma = np.concatenate([scene.cdrf_sigma[k] for k in members])
-            weight = material.subsurface * translucency(sigma) / (1.0 - coat_share(material))
-            trans = np.clip(weight, 0.0, 1.0)
+            trans = diffuse_transmission(material, sigma)
         path = folder / f"material_{index}.ply"
         write_ply(path, vertices, faces, normals, colors, trans)
         shapes[f"shape_{index}"] = {

@@ -4,7 +4,8 @@ Z-up, millimetres (``metersPerUnit`` 0.001). Per-vertex CDRF colours go to ``pri
 fallback colour of viewers without materials) and the CDRF's per-vertex σ to ``primvars:cdrf_sigma``;
 each material's principled parameters map onto UsdPreviewSurface (transmission has no input there,
 so it lowers ``opacity``), and the full principled set the preview renders (sheen, transmission, diffuse
-transmission, attenuation) is kept on the Material prim as ``nodegraph:principled:*`` attributes. ``.usda`` comes from the in-memory layer; ``.usdc`` (crate) can only be
+transmission, attenuation) is kept on the Material prim as ``nodegraph:principled:*`` attributes.
+``.usda`` comes from the in-memory layer; ``.usdc`` (crate) can only be
 written to a path, so it goes through a private temporary directory and is read back as bytes.
 """
 
