@@ -88,14 +88,15 @@ def main():
         reference_spp, spps, timed_spps = 64, (1, 4), (1, 4)
     else:
         scene, camera, params = main_job_scene(args.cache_dir)
-        width, height, crop = 1280, 720, Crop(480, 270, 320, 180)
-        reference_spp, spps, timed_spps = 1024, (1, 2, 4, 8, 16, 32), (1, 2, 4, 8, 16)
+        width, height, crop = 1280, 720, Crop(544, 306, 192, 108)
+        reference_spp, spps, timed_spps = 1024, (1, 2, 4, 8, 16, 32), (2, 4, 8, 16)
     sun = params["sun_direction"]
 
     t = time.perf_counter()
     converged = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop)
     reference = linear_to_srgb8(tone_map(converged.color))
     reference_time = time.perf_counter() - t
+    print(f"reference: {reference_spp} spp in {reference_time:.0f} s", flush=True)
 
     rows = []
     for spp in spps:
@@ -110,6 +111,7 @@ def main():
                 render(scene, camera, width, height, spp, sun, denoised=denoised)
                 wall, cpu = time.perf_counter() - t, cpu_seconds() - c
             rows.append((spp, denoised, psnr, ssim, wall, cpu))
+            print(f"  {spp} spp, denoise {denoised}: {psnr:.1f} dB, SSIM {ssim:.3f}, {wall:.1f} s", flush=True)
 
     load = os.getloadavg()[0]
     lines = [

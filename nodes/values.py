@@ -265,6 +265,7 @@ class Material:
     clearcoat: float = 0.0
     clearcoat_roughness: float = 0.03
     ior: float = 1.45
+    exterior_ior: float = 1.0  # IOR of what surrounds the surface (the ikura yolk sits in the egg fluid: 1.36)
     transmission: float = 0.0
     transmission_roughness: float = 0.0
     emission: tuple[float, float, float] = (0.0, 0.0, 0.0)

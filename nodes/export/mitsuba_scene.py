@@ -29,16 +29,21 @@ import numpy as np
 
 from ..values import Material, ShadedScene
 
-SKY = 0.4  # radiance of the uniform sky (fill light); with the key, lit white rice sits at the tone curve's knee
-KEY_SHARE = 2.5  # the key light's irradiance as a multiple of the sky's: modelled, not flat, shadows still open
-KEY_ANGLE = 0.25  # rad, angular radius of the key (a large softbox): soft shadows, and caustics into the eggs find it
+SKY = 0.4  # radiance of the uniform sky (fill light)
+# key irradiance / sky irradiance: 2 models the rice more but cost 2.6 dB at 8 spp (the noisiest paths are the
+# key's light through the eggs), measured with benchmarks/bench_preview.py's scene
+KEY_SHARE = 1.0
+# rad, angular radius of the key (a large softbox): soft shadows, and a low radiance, so light focused through
+# the eggs onto the rice (caustics, found only by chance) makes faint speckles, not fireflies
+KEY_ANGLE = 0.35
 TABLE_COLOR = (0.42, 0.36, 0.30)  # linear RGB of the matte table under the scene (a warm light wood)
-EXPOSURE = 1.0  # linear scale before the tone curve
+EXPOSURE = 1.5  # linear scale before the tone curve: lit white rice (key + sky) near the knee
 KNEE = 0.75  # the tone curve is linear below this and rolls off above it (white rice keeps its gloss, not clipped)
 MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) and a few grains of rice
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
+SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
 GUIDE_SPP = 4  # the guides need antialiased edges, not converged light: a cheap pass of its own (≈ ⅓ of a path)
 
 
@@ -90,7 +95,7 @@ def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
     if material.transmission >= TRANSMISSIVE:
         tint = np.sqrt(np.clip(material.subsurface_color, 0.0, 1.0)) * material.transmission
         a = alpha(material.transmission_roughness)
-        bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": 1.0}
+        bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
         if a > 1e-3:
             bsdf = {**bsdf, "type": "roughdielectric", "alpha": a, "distribution": "ggx"}
         return {**bsdf, "specular_transmittance": _rgb(tint)}
@@ -236,7 +241,7 @@ def scene_dict(
             "fov_axis": "x",
             "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=target.tolist(), up=[0, 0, 1]),
             "film": film,
-            "sampler": {"type": "independent", "sample_count": spp},
+            "sampler": {"type": SAMPLER, "sample_count": spp},
         },
         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": SKY}},
         "key": {

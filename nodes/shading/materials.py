@@ -75,17 +75,19 @@ def rice_material(water: float, name: str = "rice") -> Material:
 
 
 def ikura_materials() -> tuple[Material, Material]:
-    """(membrane, yolk): a clear dielectric skin (IOR 1.36) holding an orange fluid, around an oil-yellow yolk.
+    """(membrane, yolk): a clear dielectric skin (IOR 1.36) holding an orange fluid, around an oil yolk.
 
-    The membrane is transmissive: ``subsurface_color`` is the colour light keeps after crossing the egg
-    (absorption over ``subsurface_radius`` mm), so the yolk shows through it; the yolk scatters (subsurface).
+    Both are transmissive: ``subsurface_color`` is the colour light keeps after crossing the part (absorption
+    over ``subsurface_radius`` mm), so the yolk shows through the membrane as a deeper, frosted orange core
+    (oil, IOR 1.47, in the egg fluid). All-specular eggs also keep the preview's caustic noise low: no diffuse
+    surface inside an egg is lit only through its skin.
     """
     membrane = Material(
         name="ikura_membrane",
         base_color=(0.90, 0.20, 0.02),
         subsurface=0.0,
         subsurface_radius=(4.0, 1.2, 0.5),
-        subsurface_color=(0.95, 0.24, 0.03),
+        subsurface_color=(0.97, 0.30, 0.045),
         specular=0.5,
         roughness=0.2,
         clearcoat=1.0,
@@ -96,13 +98,15 @@ def ikura_materials() -> tuple[Material, Material]:
     )
     yolk = Material(
         name="ikura_yolk",
-        base_color=(1.0, 0.62, 0.16),
-        subsurface=0.3,
+        base_color=(1.0, 0.55, 0.10),
+        subsurface=0.0,
         subsurface_radius=(1.0, 0.4, 0.1),
-        subsurface_color=(1.0, 0.62, 0.16),
-        roughness=0.35,
+        subsurface_color=(1.0, 0.70, 0.30),
+        roughness=0.3,
         ior=1.47,
-        transmission=0.2,
+        exterior_ior=1.36,
+        transmission=1.0,
+        transmission_roughness=0.3,
     )
     return membrane, yolk
 
