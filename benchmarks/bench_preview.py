@@ -89,7 +89,7 @@ def main():
     else:
         scene, camera, params = main_job_scene(args.cache_dir)
         width, height, crop = 1280, 720, Crop(544, 306, 192, 108)
-        reference_spp, spps, timed_spps = 1024, (1, 2, 4, 8, 16, 32), (2, 4, 8, 16)
+        reference_spp, spps, timed_spps = 1024, (1, 2, 4, 8, 12, 16, 32), (2, 4, 8, 12, 16)
     sun = params["sun_direction"]
 
     t = time.perf_counter()
