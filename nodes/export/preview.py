@@ -24,8 +24,8 @@ from ..values import ShadedScene
         "width": Param(int, 1280, "image width", range=(16, 4096), units="px"),
         "height": Param(int, 720, "image height", range=(16, 4096), units="px"),
         # 12, denoised: benchmarks/bench_preview.py on the main job (its hardest pixels: eggs over rice, against
-        # 1,024 spp) measured OIDN at 8 spp 29.6 dB / 15 s, at 16 spp 30.7 dB / 31 s (time on 2 free cores);
-        # 12 is the fewest samples that reach 30 dB there within 30 s. Without OIDN, 32 spp gives 22.7 dB.
+        # 1,024 spp) measured with OIDN 8 spp 29.6 dB / 14 s, 12 spp 30.2 dB / 21 s, 16 spp 30.7 dB / 27 s at
+        # 1280 × 720 on 2 cores: 12 is the fewest that reach 30 dB there within 30 s. Without OIDN, 32 spp: 22.7 dB.
         "samples": Param(
             int, 12, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)
         ),
