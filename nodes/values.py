@@ -260,23 +260,37 @@ class Material:
     roughness: float = 0.5
     anisotropic: float = 0.0
     anisotropic_rotation: float = 0.0
+    sheen: float = 0.0  # soft rim of a wet film (Blender principled v1 sheen, KHR_materials_sheen)
+    sheen_tint: float = 0.5  # 0: white sheen, 1: sheen in the base colour
     clearcoat: float = 0.0
     clearcoat_roughness: float = 0.03
     ior: float = 1.45
+    exterior_ior: float = 1.0  # IOR of what surrounds the surface (the ikura yolk sits in the egg fluid: 1.36)
     transmission: float = 0.0
+    transmission_roughness: float = 0.0
     emission: tuple[float, float, float] = (0.0, 0.0, 0.0)
     emission_strength: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
 class ShadedScene:
-    """Meshes with per-vertex colours and one material each (``material_of[i]`` indexes ``materials``)."""
+    """Meshes with per-vertex colours and one material each (``material_of[i]`` indexes ``materials``).
+
+    ``cdrf_sigma[i]`` holds mesh i's per-vertex CDRF kernel width σ = σ₀·|κ| (rad, SPEC §4 eq. 9): what a
+    renderer needs to evaluate the curvature-dependent translucency itself instead of the baked colours
+    (the preview turns it into diffuse transmission, ``nodes.shading.cdrf.translucency``). Empty: none.
+    """
 
     meshes: tuple[Mesh, ...]
     materials: tuple[Material, ...]
     material_of: np.ndarray
+    cdrf_sigma: tuple[np.ndarray, ...] = ()
 
     def __post_init__(self):
         object.__setattr__(self, "meshes", tuple(self.meshes))
         object.__setattr__(self, "materials", tuple(self.materials))
         object.__setattr__(self, "material_of", np.asarray(self.material_of, dtype=np.int32))
+        sigma = tuple(np.asarray(s, dtype=np.float32) for s in self.cdrf_sigma)
+        if sigma and [len(s) for s in sigma] != [len(m.vertices) for m in self.meshes]:
+            raise ValueError("cdrf_sigma: one array per mesh, one value per vertex")
+        object.__setattr__(self, "cdrf_sigma", sigma)

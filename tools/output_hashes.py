@@ -68,6 +68,24 @@ SMALL = {
         "preview.height=36",
         "preview.samples=1",
     ],
+    "water_series": [
+        "mound.size=4.0",
+        "grain_spheres.variants=2",
+        "grain_volume.resolution=24",
+        "press.frames=2",
+        "preview_00.width=48",
+        "preview_00.height=48",
+        "preview_00.samples=1",
+        "preview_08.width=48",
+        "preview_08.height=48",
+        "preview_08.samples=1",
+        "preview_16.width=48",
+        "preview_16.height=48",
+        "preview_16.samples=1",
+        "preview_24.width=48",
+        "preview_24.height=48",
+        "preview_24.samples=1",
+    ],
 }
 
 

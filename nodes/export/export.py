@@ -31,7 +31,7 @@ def _check(params):
 
 @node(
     "export",
-    version=1,
+    version=2,  # 2: KHR sheen, diffuse transmission, volume; _CDRF_SIGMA instead of COLOR_0; USD principled attributes
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={

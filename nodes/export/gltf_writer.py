@@ -1,10 +1,13 @@
 """A shaded scene as binary glTF 2.0 (.glb) with KHR_materials_* extensions — SPEC §4 output.
 
 Hand-written JSON + one binary buffer because trimesh's exporter (the library at hand) maps
-materials to core PBR only and drops transmission, volume, IOR, specular, clearcoat and emissive
+materials to core PBR only and drops transmission, volume, IOR, specular, clearcoat, sheen and emissive
 strength. One glTF mesh and node per element part; the root node turns our Z-up millimetres into
-glTF's Y-up metres. ``COLOR_0`` holds the CDRF colour divided by the base colour, so a viewer's
-``baseColorFactor × COLOR_0`` shows the CDRF colour while the material keeps its own base colour.
+glTF's Y-up metres. The materials carry what the preview renders (``mitsuba_scene``): the ikura membrane,
+ice and syrup as transmission + volume (IOR, attenuation), rice and yolk as diffuse transmission (the CDRF's
+translucency at the material's median curvature) with sheen and clearcoat, the bowl's glaze as clearcoat.
+No ``COLOR_0``: the CDRF vertex colours hold lighting, which a viewer multiplying them into the base colour
+would light again; the CDRF's per-vertex σ travels as the custom attribute ``_CDRF_SIGMA`` (rad).
 """
 
 from __future__ import annotations
@@ -19,19 +22,28 @@ from ..values import Material, ShadedScene
 FLOAT, UINT = 5126, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 Z_UP_TO_Y_UP = [-np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)]  # quaternion (x, y, z, w): −90° about x
+SHEEN_ROUGHNESS = 0.5  # a water film's soft rim (glTF's sheen roughness; Blender principled v1 has none)
 
 
-def material_json(material: Material) -> tuple[dict, set[str]]:
-    """Principled parameters → glTF PBR plus the KHR extensions that carry the rest."""
+def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, set[str]]:
+    """Principled parameters → glTF PBR plus the KHR extensions that carry the rest; ``translucency`` is the
+    material's diffuse-transmission weight (``subsurface × cdrf.translucency(σ)`` at its median σ)."""
     ext: dict[str, dict] = {}
+    thickness = float(np.mean(material.subsurface_radius))  # mm, the mesh's units
+    volume = {
+        "thicknessFactor": thickness,
+        "attenuationColor": [float(c) for c in material.subsurface_color],
+        "attenuationDistance": max(thickness * 1e-3, 1e-6),  # world units: m
+    }
     if material.transmission > 0:
         ext["KHR_materials_transmission"] = {"transmissionFactor": material.transmission}
-        radius = float(np.mean(material.subsurface_radius))  # mm
-        ext["KHR_materials_volume"] = {
-            "thicknessFactor": radius,
-            "attenuationColor": list(material.subsurface_color),
-            "attenuationDistance": max(radius * 1e-3, 1e-6),
-        }  # mm → m
+        ext["KHR_materials_volume"] = volume
+    elif translucency > 0:
+        ext["KHR_materials_diffuse_transmission"] = {
+            "diffuseTransmissionFactor": float(translucency),
+            "diffuseTransmissionColorFactor": [float(c) for c in material.subsurface_color],
+        }
+        ext["KHR_materials_volume"] = volume
     if material.ior != 1.5:
         ext["KHR_materials_ior"] = {"ior": material.ior}
     if material.specular != 0.5:
@@ -41,6 +53,12 @@ def material_json(material: Material) -> tuple[dict, set[str]]:
         ext["KHR_materials_clearcoat"] = {
             "clearcoatFactor": material.clearcoat,
             "clearcoatRoughnessFactor": material.clearcoat_roughness,
+        }
+    if material.sheen > 0:
+        tint = (1.0 - material.sheen_tint) + material.sheen_tint * np.asarray(material.base_color)
+        ext["KHR_materials_sheen"] = {
+            "sheenColorFactor": [float(c) for c in np.clip(material.sheen * tint, 0.0, 1.0)],
+            "sheenRoughnessFactor": SHEEN_ROUGHNESS,
         }
     out = {
         "name": material.name,
@@ -57,6 +75,21 @@ def material_json(material: Material) -> tuple[dict, set[str]]:
     if ext:
         out["extensions"] = ext
     return out, set(ext)
+
+
+def material_translucency(scene: ShadedScene) -> list[float]:
+    """Per material: its diffuse-transmission weight at the median CDRF σ of its vertices (0 without σ)."""
+    from ..shading.cdrf import translucency
+
+    out = []
+    for index, material in enumerate(scene.materials):
+        sigmas = [s for s, k in zip(scene.cdrf_sigma, scene.material_of) if k == index and len(s)]
+        if not sigmas or material.subsurface <= 0:
+            out.append(0.0)
+            continue
+        median = float(np.median(np.concatenate(sigmas)))
+        out.append(round(float(material.subsurface * translucency(median)), 4))
+    return out
 
 
 class _Buffer:
@@ -93,17 +126,12 @@ def unit_normals(normals: np.ndarray) -> np.ndarray:
     return (n / np.linalg.norm(n, axis=1, keepdims=True)).astype(np.float32)
 
 
-def color_factor(colors: np.ndarray, base: tuple[float, float, float]) -> np.ndarray:
-    """COLOR_0 such that base × COLOR_0 = the CDRF colour (clipped to [0, 1])."""
-    return np.clip(np.asarray(colors, np.float32)[:, :3] / np.maximum(np.float32(base), 1e-3), 0.0, 1.0)
-
-
 def glb_bytes(scene: ShadedScene) -> bytes:
     """The scene as a .glb (glTF 2.0 binary): JSON chunk + BIN chunk."""
     buffer = _Buffer()
     materials, used = [], set()
-    for material in scene.materials:
-        entry, ext = material_json(material)
+    for material, weight in zip(scene.materials, material_translucency(scene)):
+        entry, ext = material_json(material, weight)
         materials.append(entry)
         used |= ext
     meshes, nodes = [], []
@@ -114,9 +142,9 @@ def glb_bytes(scene: ShadedScene) -> bytes:
         attributes = {"POSITION": buffer.add(positions, FLOAT, "VEC3", ARRAY_BUFFER, bounds=True)}
         if mesh.normals is not None:
             attributes["NORMAL"] = buffer.add(unit_normals(mesh.normals), FLOAT, "VEC3", ARRAY_BUFFER)
-        if mesh.colors is not None:
-            base = scene.materials[scene.material_of[k]].base_color
-            attributes["COLOR_0"] = buffer.add(color_factor(mesh.colors, base), FLOAT, "VEC3", ARRAY_BUFFER)
+        if scene.cdrf_sigma:
+            sigma = np.asarray(scene.cdrf_sigma[k], np.float32)
+            attributes["_CDRF_SIGMA"] = buffer.add(sigma, FLOAT, "SCALAR", ARRAY_BUFFER)
         indices = buffer.add(np.asarray(mesh.faces, np.uint32).reshape(-1), UINT, "SCALAR", ELEMENT_ARRAY_BUFFER)
         name = mesh.name or f"mesh_{k}"
         meshes.append(

@@ -1,11 +1,23 @@
-"""A shaded scene as a Mitsuba 3 scene (``scalar_rgb``, headless) — the preview of SPEC §4 colours.
+"""A shaded scene as a Mitsuba 3 scene (``scalar_rgb``, headless) and its denoised render — SPEC §4 preview.
 
-The CDRF vertex colours already hold the direct lighting, so every surface is a diffuse BSDF whose
-reflectance is its vertex colour under a uniform sky of radiance ≈ 1: the path tracer then adds only
-what the per-vertex shading cannot — occlusion between grains and eggs, and contact shadows. A small
-bright "sun" along the key light gives glossy materials (ikura's clearcoat) their highlights.
-Meshes go to Mitsuba as binary PLY files in a temporary folder, one per material (its PLY loader is
-~50× faster than filling ``mi.Mesh`` buffers from Python).
+The path tracer does the lighting, so surfaces get their materials, not the baked CDRF colours:
+
+- translucent materials (``subsurface`` > 0: rice, the ikura yolk) are Mitsuba's ``principledthin`` with
+  diffuse transmission ``subsurface × cdrf.translucency(σ)`` per vertex, σ = σ₀|κ| the CDRF kernel width the
+  shade node stored: the CDRF (eq. 7–9) evaluated in the BSDF as light passing through the grain, so
+  strongly curved, wet parts glow past the terminator; sheen for the water film, and its clearcoat as a
+  share of the surface rendered by ``principled`` (``coat_share``; principledthin has no coat lobe);
+- transmissive materials (``transmission`` ≥ 0.5: the ikura membrane, ice, syrup) are (rough) dielectrics
+  whose transmittance per crossing is √``subsurface_color`` (two crossings give that colour): the yolk
+  shows through the orange egg, the rice through the ice;
+- the rest (the bowl's glaze) is ``principled`` with its clearcoat.
+
+Light: a soft key (a sphere emitter along the shade node's key light), a uniform sky and a matte table
+under the scene. Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass;
+Intel Open Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels
+independent (what OIDN expects) and makes the render bit-reproducible: image blocks do not overlap, so
+the order threads finish in cannot change a sum. Meshes go to Mitsuba as binary PLY files in a temporary
+folder, one per material (its PLY loader is ~50× faster than filling ``mi.Mesh`` buffers from Python).
 """
 
 from __future__ import annotations
@@ -17,10 +29,22 @@ import numpy as np
 
 from ..values import Material, ShadedScene
 
-SKY = 1.0  # radiance of the uniform sky (the CDRF colours are multiplied by ≈ this × visibility)
-SUN_SHARE = 0.1  # the sun's irradiance as a share of the sky's: highlights without re-lighting much
-SUN_ANGLE = 0.06  # rad, angular radius of the sun
-GLOSS = 0.08  # mirror share of glossy materials (≈ Fresnel reflectance of a wet surface)
+SKY = 0.4  # radiance of the uniform sky (fill light)
+# key irradiance / sky irradiance: 2 models the rice more but cost 2.6 dB at 8 spp (the noisiest paths are the
+# key's light through the eggs), measured with benchmarks/bench_preview.py's scene
+KEY_SHARE = 1.0
+# rad, angular radius of the key (a large softbox): soft shadows, and a low radiance, so light focused through
+# the eggs onto the rice (caustics, found only by chance) makes faint speckles, not fireflies
+KEY_ANGLE = 0.35
+TABLE_COLOR = (0.42, 0.36, 0.30)  # linear RGB of the matte table under the scene (a warm light wood)
+EXPOSURE = 1.5  # linear scale before the tone curve: lit white rice (key + sky) near the knee
+KNEE = 0.75  # the tone curve is linear below this and rolls off above it (white rice keeps its gloss, not clipped)
+MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) and a few grains of rice
+COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
+TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
+ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
+SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
+GUIDE_SPP = 4  # the guides need antialiased edges, not converged light: a cheap pass of its own (≈ ⅓ of a path)
 
 
 @dataclass(frozen=True)
@@ -33,112 +57,280 @@ class Camera:
     margin: float  # 1 = the bounding sphere touches the frame
 
 
-def write_ply(path: Path, vertices, faces, normals, colors) -> None:
-    """Binary little-endian PLY with float normals and float linear colours (Mitsuba: ``vertex_color``)."""
+@dataclass(frozen=True)
+class Crop:
+    """A window of the film in pixels (the benchmark renders its reference in one)."""
+
+    x: int
+    y: int
+    width: int
+    height: int
+
+
+def write_ply(path: Path, vertices, faces, normals, colors, translucency=None) -> None:
+    """Binary little-endian PLY with float normals, float linear colours (Mitsuba: ``vertex_color``) and
+    optionally a per-vertex diffuse transmission (``trans_x``: Mitsuba's ``vertex_trans``)."""
     from .mesh_files import binary_ply
 
-    rows = np.hstack([vertices, normals, colors[:, :3]]).astype("<f4")
-    path.write_bytes(binary_ply([(("x", "y", "z", "nx", "ny", "nz", "r", "g", "b"), rows)], faces))
+    names = ("x", "y", "z", "nx", "ny", "nz", "r", "g", "b")
+    columns = [vertices, normals, colors[:, :3]]
+    if translucency is not None:
+        names += ("trans_x",)
+        columns.append(np.asarray(translucency).reshape(-1, 1))
+    rows = np.hstack(columns).astype("<f4")
+    path.write_bytes(binary_ply([(names, rows)], faces))
 
 
-def _bsdf(material: Material) -> dict:
-    colour = {"type": "mesh_attribute", "name": "vertex_color"}
-    if material.clearcoat >= 0.5 or material.roughness <= 0.15:
-        # a thin mirror layer (Mitsuba's plastic needs a texture mean that vertex colours lack)
-        return {
-            "type": "blendbsdf",
-            "weight": GLOSS,
-            "bsdf_0": {"type": "diffuse", "reflectance": colour},
-            "bsdf_1": {"type": "conductor", "material": "none"},
+def _rgb(value) -> dict:
+    return {"type": "rgb", "value": [float(c) for c in value]}
+
+
+def alpha(roughness: float) -> float:
+    """Microfacet α from a principled roughness (Disney: α = roughness²)."""
+    return float(roughness) ** 2
+
+
+def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
+    """Mitsuba BSDF for a principled parameter set (see the module note for the three families)."""
+    if material.transmission >= TRANSMISSIVE:
+        tint = np.sqrt(np.clip(material.subsurface_color, 0.0, 1.0)) * material.transmission
+        a = alpha(material.transmission_roughness)
+        bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
+        if a > 1e-3:
+            bsdf = {**bsdf, "type": "roughdielectric", "alpha": a, "distribution": "ggx"}
+        return {**bsdf, "specular_transmittance": _rgb(tint)}
+    if material.subsurface > 0:
+        diff_trans = (
+            {"type": "mesh_attribute", "name": "vertex_trans"}
+            if translucent_vertices
+            else float(min(1.0, material.subsurface / (1.0 - coat_share(material))))
+        )
+        thin = {
+            "type": "principledthin",
+            "base_color": _rgb(material.base_color),
+            "roughness": float(material.roughness),
+            "diff_trans": diff_trans,
+            "spec_trans": float(material.transmission),
+            "eta": float(material.ior),
+            "sheen": float(material.sheen),
+            "sheen_tint": float(material.sheen_tint),
         }
-    return {"type": "diffuse", "reflectance": colour}
+        if material.clearcoat <= 0:
+            return thin
+        # principledthin has no clearcoat lobe: a share (``coat_share``) of the surface is principled with the
+        # coat; the thin share's transmission is raised to keep the whole surface's (``_shapes``).
+        coated = {**_principled(material), "clearcoat": 1.0}
+        return {"type": "blendbsdf", "weight": coat_share(material), "bsdf_0": thin, "bsdf_1": coated}
+    return _principled(material)
 
 
-def look_at(bounds: np.ndarray, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
-    """(origin, target) so that the bounding sphere fits the horizontal field of view."""
+def diffuse_transmission(material: Material, sigma: np.ndarray) -> np.ndarray:
+    """Per-vertex ``diff_trans`` of a translucent material: ``subsurface × cdrf.translucency(σ)`` (SPEC §4 eq. 7–9
+    as light through the grain), raised on the uncoated share so the whole surface transmits that much."""
+    from ..shading.cdrf import translucency
+
+    weight = material.subsurface * translucency(sigma) / (1.0 - coat_share(material))
+    return np.clip(weight, 0.0, 1.0)
+
+
+def coat_share(material: Material) -> float:
+    """Share of a translucent surface rendered with the clearcoat lobe (the rest carries the transmission)."""
+    return float(np.clip(material.clearcoat, 0.0, COAT_SHARE_MAX))
+
+
+def _principled(material: Material) -> dict:
+    return {
+        "type": "principled",
+        "base_color": _rgb(material.base_color),
+        "roughness": float(material.roughness),
+        "metallic": float(material.metallic),
+        "sheen": float(material.sheen),
+        "sheen_tint": float(material.sheen_tint),
+        "clearcoat": float(material.clearcoat),
+        "clearcoat_gloss": float(1.0 - material.clearcoat_roughness),
+        "spec_trans": float(material.transmission),
+        "eta": float(material.ior),
+    }
+
+
+def look_at(bounds: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(origin, target) so that the bounding sphere fits the narrower field of view (``aspect`` = width / height:
+    a wide frame is fitted in height)."""
     centre = bounds.mean(axis=0)
     radius = 0.5 * np.linalg.norm(bounds[1] - bounds[0])
     el, az = np.radians(camera.elevation), np.radians(camera.azimuth)
     view = np.array([np.sin(az) * np.cos(el), -np.cos(az) * np.cos(el), np.sin(el)])
-    distance = camera.margin * radius / np.sin(np.radians(camera.fov) / 2)
+    half = np.arctan(np.tan(np.radians(camera.fov) / 2) / max(aspect, 1.0))
+    distance = camera.margin * radius / np.sin(half)
     return centre + distance * view, centre
 
 
-def scene_dict(
-    scene: ShadedScene, folder: Path, camera: Camera, width: int, height: int, spp: int, light_direction: np.ndarray
-) -> dict:
-    """The Mitsuba scene description; PLY files are written into ``folder``."""
-    import mitsuba as mi
-
+def _shapes(scene: ShadedScene, folder: Path) -> tuple[dict, np.ndarray]:
+    """One PLY shape per material (written into ``folder``) and the scene's bounds."""
     from .mesh_files import stacked
 
     shapes = {}
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     for index, material in enumerate(scene.materials):
-        members = [m for m, k in zip(scene.meshes, scene.material_of) if k == index and len(m.faces)]
+        members = [k for k, m in enumerate(scene.material_of) if m == index and len(scene.meshes[k].faces)]
         if not members:
             continue
-        vertices, faces = stacked(members)
+        meshes = [scene.meshes[k] for k in members]
+        vertices, faces = stacked(meshes)
         normals = np.concatenate(
-            [m.normals if m.normals is not None else np.zeros((len(m.vertices), 3)) for m in members]
+            [m.normals if m.normals is not None else np.zeros((len(m.vertices), 3)) for m in meshes]
         )
-        colors = np.concatenate(
-            [
-                m.colors[:, :3] if m.colors is not None else np.tile(material.base_color, (len(m.vertices), 1))
-                for m in members
-            ]
-        )
+        colors = np.tile(material.base_color, (len(vertices), 1))
+        per_vertex = bool(scene.cdrf_sigma) and material.subsurface > 0 and material.transmission < TRANSMISSIVE
+        trans = None
+        if per_vertex:
+            sigma = np.concatenate([scene.cdrf_sigma[k] for k in members])
+            trans = diffuse_transmission(material, sigma)
         path = folder / f"material_{index}.ply"
-        write_ply(path, vertices, faces, normals, colors)
+        write_ply(path, vertices, faces, normals, colors, trans)
         shapes[f"shape_{index}"] = {
             "type": "ply",
             "filename": str(path),
-            "bsdf": _bsdf(material),
+            "bsdf": material_bsdf(material, per_vertex),
             "face_normals": False,
         }
         lo, hi = np.minimum(lo, vertices.min(0)), np.maximum(hi, vertices.max(0))
     if not shapes:
         raise ValueError("scene: no mesh with faces to render")
-    bounds = np.stack([lo, hi])
-    origin, target = look_at(bounds, camera)
+    return shapes, np.stack([lo, hi])
+
+
+def scene_dict(
+    scene: ShadedScene,
+    folder: Path,
+    camera: Camera,
+    width: int,
+    height: int,
+    spp: int,
+    light_direction,
+    crop: Crop | None = None,
+) -> dict:
+    """The Mitsuba scene description; PLY files are written into ``folder``."""
+    import mitsuba as mi
+
+    shapes, bounds = _shapes(scene, folder)
+    lo, hi = bounds
+    origin, target = look_at(bounds, camera, width / height)
     radius = 0.5 * np.linalg.norm(hi - lo)
-    sun_distance = 50 * radius
-    sun_radius = sun_distance * np.tan(SUN_ANGLE)
-    solid_angle = np.pi * np.tan(SUN_ANGLE) ** 2
-    sun_radiance = SUN_SHARE * SKY * np.pi / solid_angle
+    key_distance = 50 * radius
+    solid_angle = np.pi * np.tan(KEY_ANGLE) ** 2
+    key_radiance = KEY_SHARE * SKY * np.pi / solid_angle
     d = np.asarray(light_direction, np.float64) / np.linalg.norm(light_direction)
+    film = {
+        "type": "hdrfilm",
+        "width": width,
+        "height": height,
+        "pixel_format": "rgb",
+        "rfilter": {"type": "box"},
+    }
+    if crop is not None:
+        film |= {"crop_offset_x": crop.x, "crop_offset_y": crop.y, "crop_width": crop.width, "crop_height": crop.height}
+    table_size = 40 * radius
+    table = mi.ScalarTransform4f().translate([*target[:2].tolist(), float(lo[2]) - 1e-3 * radius])
     return {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": 3},
+        "integrator": {"type": "path", "max_depth": MAX_DEPTH},
         "sensor": {
             "type": "perspective",
             "fov": camera.fov,
             "fov_axis": "x",
             "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=target.tolist(), up=[0, 0, 1]),
-            "film": {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "rgb"},
-            "sampler": {"type": "independent", "sample_count": spp},
+            "film": film,
+            "sampler": {"type": SAMPLER, "sample_count": spp},
         },
         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": SKY}},
-        "sun": {
+        "key": {
             "type": "sphere",
-            "center": (target + sun_distance * d).tolist(),
-            "radius": float(sun_radius),
-            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": float(sun_radiance)}},
+            "center": (target + key_distance * d).tolist(),
+            "radius": float(key_distance * np.tan(KEY_ANGLE)),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": float(key_radiance)}},
+        },
+        "table": {
+            "type": "rectangle",
+            "to_world": table @ mi.ScalarTransform4f().scale([table_size, table_size, 1.0]),
+            "bsdf": {"type": "diffuse", "reflectance": _rgb(TABLE_COLOR)},
         },
         **shapes,
     }
 
 
-def render(scene: ShadedScene, camera: Camera, width: int, height: int, spp: int, light_direction) -> np.ndarray:
-    """Path-traced preview, 8-bit sRGB (height, width, 3)."""
+@dataclass(frozen=True)
+class Layers:
+    """A render's linear colour and the denoiser's guides, float32 (height, width, 3) each."""
+
+    color: np.ndarray
+    albedo: np.ndarray
+    normal: np.ndarray
+
+
+def render_layers(
+    scene: ShadedScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    spp: int,
+    light_direction,
+    seed: int = 0,
+    crop: Crop | None = None,
+) -> Layers:
+    """Path-traced linear colour with albedo and normal AOVs; same inputs and seed ⇒ the same bits."""
     import tempfile
 
     import mitsuba as mi
 
-    from .mesh_files import linear_to_srgb8
-
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
-        loaded = mi.load_dict(scene_dict(scene, Path(folder), camera, width, height, spp, light_direction))
-        image = np.asarray(mi.render(loaded, seed=0), np.float64)
-    return linear_to_srgb8(image)
+        description = scene_dict(scene, Path(folder), camera, width, height, spp, light_direction, crop)
+        loaded = mi.load_dict(description)
+        image = np.asarray(mi.render(loaded, seed=seed), np.float32)
+        guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV})
+        aov = np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=min(spp, GUIDE_SPP)), np.float32)
+    color = np.nan_to_num(image[..., 0:3], nan=0.0, posinf=0.0) * np.float32(EXPOSURE)
+    return Layers(np.maximum(color, 0.0), np.clip(aov[..., 0:3], 0.0, 1.0), np.clip(aov[..., 3:6], -1.0, 1.0))
+
+
+def denoise(layers: Layers) -> np.ndarray:
+    """Intel Open Image Denoise (``pyoidn``, the RT filter, HDR) guided by albedo and normals."""
+    try:
+        import pyoidn
+    except ImportError as error:  # a dependency of the package; say what to install if it is missing
+        raise ImportError("denoising previews needs Intel Open Image Denoise: pip install pyoidn") from error
+    out = pyoidn.denoise(
+        np.ascontiguousarray(layers.color),
+        albedo=np.ascontiguousarray(layers.albedo),
+        normal=np.ascontiguousarray(layers.normal),
+        hdr=True,
+        quality="high",
+    )
+    return np.maximum(np.asarray(out, np.float32), 0.0)
+
+
+def tone_map(color: np.ndarray) -> np.ndarray:
+    """Linear below ``KNEE``, then an exponential shoulder towards 1 (C¹ at the knee): highlights on white rice
+    and wet eggs keep a gradient instead of clipping. Input and output are linear RGB."""
+    x = np.maximum(np.asarray(color, np.float32), 0.0)
+    span = 1.0 - KNEE
+    shoulder = KNEE + span * (1.0 - np.exp(-(x - KNEE) / span))
+    return np.where(x <= KNEE, x, shoulder).astype(np.float32)
+
+
+def render(
+    scene: ShadedScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    spp: int,
+    light_direction,
+    denoised: bool = True,
+    seed: int = 0,
+) -> np.ndarray:
+    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3)."""
+    from .mesh_files import linear_to_srgb8
+
+    layers = render_layers(scene, camera, width, height, spp, light_direction, seed)
+    return linear_to_srgb8(tone_map(denoise(layers) if denoised else layers.color))

@@ -1,8 +1,11 @@
 """A shaded scene as USD (usd-core): UsdGeom meshes, UsdPreviewSurface materials — SPEC §4 output.
 
-Z-up, millimetres (``metersPerUnit`` 0.001). Per-vertex CDRF colours go to ``primvars:displayColor``;
+Z-up, millimetres (``metersPerUnit`` 0.001). Per-vertex CDRF colours go to ``primvars:displayColor`` (the
+fallback colour of viewers without materials) and the CDRF's per-vertex σ to ``primvars:cdrf_sigma``;
 each material's principled parameters map onto UsdPreviewSurface (transmission has no input there,
-so it lowers ``opacity``). ``.usda`` comes from the in-memory layer; ``.usdc`` (crate) can only be
+so it lowers ``opacity``), and the full principled set the preview renders (sheen, transmission, diffuse
+transmission, attenuation) is kept on the Material prim as ``nodegraph:principled:*`` attributes.
+``.usda`` comes from the in-memory layer; ``.usdc`` (crate) can only be
 written to a path, so it goes through a private temporary directory and is read back as bytes.
 """
 
@@ -22,7 +25,7 @@ def prim_name(text: str, k: int) -> str:
     return f"m{k:05d}_" + (re.sub(r"[^A-Za-z0-9_]", "_", text) or "mesh")
 
 
-def _material(stage, path: str, material: Material):
+def _material(stage, path: str, material: Material, translucency: float):
     from pxr import Gf, Sdf, UsdShade
 
     look = UsdShade.Material.Define(stage, path)
@@ -44,12 +47,33 @@ def _material(stage, path: str, material: Material):
     for name, (kind, value) in inputs.items():
         shader.CreateInput(name, kind).Set(value)
     look.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    prim = look.GetPrim()
+    for name, value in _principled(material, translucency).items():
+        kind = Sdf.ValueTypeNames.Color3f if isinstance(value, tuple) else Sdf.ValueTypeNames.Float
+        prim.CreateAttribute(f"nodegraph:principled:{name}", kind, custom=True).Set(
+            Gf.Vec3f(*value) if isinstance(value, tuple) else float(value)
+        )
     return look
+
+
+def _principled(material: Material, translucency: float) -> dict:
+    """What UsdPreviewSurface cannot say: the rest of the principled set (colours as tuples)."""
+    return {
+        "subsurface": material.subsurface,
+        "subsurfaceColor": tuple(float(c) for c in material.subsurface_color),
+        "subsurfaceRadius": tuple(float(c) for c in material.subsurface_radius),
+        "diffuseTransmission": translucency,
+        "transmission": material.transmission,
+        "transmissionRoughness": material.transmission_roughness,
+        "sheen": material.sheen,
+        "sheenTint": material.sheen_tint,
+        "specular": material.specular,
+    }
 
 
 def build_stage(scene: ShadedScene):
     """An in-memory stage holding the scene under ``/Scene`` (the default prim)."""
-    from pxr import Usd, UsdGeom, UsdShade, Vt
+    from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
 
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
@@ -57,7 +81,12 @@ def build_stage(scene: ShadedScene):
     root = UsdGeom.Xform.Define(stage, "/Scene")
     stage.SetDefaultPrim(root.GetPrim())
     UsdGeom.Scope.Define(stage, "/Scene/Looks")
-    looks = [_material(stage, f"/Scene/Looks/{prim_name(m.name, k)}", m) for k, m in enumerate(scene.materials)]
+    from .gltf_writer import material_translucency
+
+    weights = material_translucency(scene)
+    looks = [
+        _material(stage, f"/Scene/Looks/{prim_name(m.name, k)}", m, weights[k]) for k, m in enumerate(scene.materials)
+    ]
     UsdGeom.Scope.Define(stage, "/Scene/Elements")
     for k, mesh in enumerate(scene.meshes):
         if len(mesh.faces) == 0:
@@ -75,6 +104,11 @@ def build_stage(scene: ShadedScene):
         if mesh.colors is not None:
             color = geom.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
             color.Set(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.colors, np.float32)[:, :3]))
+        if scene.cdrf_sigma:
+            sigma = UsdGeom.PrimvarsAPI(geom).CreatePrimvar(
+                "cdrf_sigma", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex
+            )
+            sigma.Set(Vt.FloatArray.FromNumpy(np.asarray(scene.cdrf_sigma[k], np.float32)))
         binding = UsdShade.MaterialBindingAPI.Apply(geom.GetPrim())
         binding.Bind(looks[scene.material_of[k]])
     return stage

@@ -50,62 +50,79 @@ def _mix(dry, wet, t):
 
 
 def rice_material(water: float, name: str = "rice") -> Material:
-    """Cooked (or raw) rice at a water content in % — translucency, whiteness, gloss grow with water."""
+    """Cooked (or raw) rice at a water content in % — translucency, whiteness, gloss grow with water.
+
+    ``subsurface`` scales the CDRF's diffuse transmission (``cdrf.translucency``, per vertex from σ₀|κ|);
+    the water film adds a clearcoat and a sheen at grazing angles (G fig. 3.1.2.1: dull at 0 %, glossy at 24 %).
+    """
     if not 0.0 <= water <= WATER_MAX:
         raise ValueError(f"water_content {water} % is outside 0–{WATER_MAX:g} %")
     t = water / WATER_MAX
     return Material(
         name=name,
-        base_color=_mix((0.62, 0.55, 0.40), (0.86, 0.85, 0.80), t),
-        subsurface=0.25 + 0.6 * t,
+        base_color=_mix((0.66, 0.60, 0.47), (0.90, 0.89, 0.84), t),
+        subsurface=0.3 + 0.6 * t,
         subsurface_radius=_mix((0.3, 0.2, 0.1), (1.2, 0.9, 0.6), t),
-        subsurface_color=_mix((0.80, 0.72, 0.55), (0.95, 0.93, 0.88), t),
+        subsurface_color=_mix((0.80, 0.72, 0.55), (0.96, 0.94, 0.88), t),
         specular=0.5,
-        roughness=0.65 - 0.3 * t,
-        clearcoat=0.4 * t,
-        clearcoat_roughness=0.1,
+        roughness=0.7 - 0.35 * t,
+        sheen=0.6 * t,
+        sheen_tint=0.3,
+        clearcoat=0.5 * t,
+        clearcoat_roughness=0.25 - 0.15 * t,
         ior=1.45 - 0.08 * t,
     )
 
 
 def ikura_materials() -> tuple[Material, Material]:
-    """(membrane, yolk): a translucent orange skin with a wet clearcoat around an oil-yellow yolk."""
+    """(membrane, yolk): a clear dielectric skin (IOR 1.36) holding an orange fluid, around an oil yolk.
+
+    Both are transmissive: ``subsurface_color`` is the colour light keeps after crossing the part (absorption
+    over ``subsurface_radius`` mm), so the yolk shows through the membrane as a deeper, frosted orange core
+    (oil, IOR 1.47, in the egg fluid). All-specular eggs also keep the preview's caustic noise low: no diffuse
+    surface inside an egg is lit only through its skin.
+    """
     membrane = Material(
         name="ikura_membrane",
-        base_color=(0.85, 0.12, 0.02),
-        subsurface=0.8,
-        subsurface_radius=(2.0, 0.6, 0.2),
-        subsurface_color=(0.95, 0.25, 0.04),
+        base_color=(0.90, 0.20, 0.02),
+        subsurface=0.0,
+        subsurface_radius=(4.0, 1.2, 0.5),
+        subsurface_color=(0.97, 0.30, 0.045),
         specular=0.5,
-        roughness=0.08,
+        roughness=0.2,
         clearcoat=1.0,
-        clearcoat_roughness=0.03,
+        clearcoat_roughness=0.02,
         ior=1.36,
-        transmission=0.4,
+        transmission=1.0,
+        transmission_roughness=0.2,
     )
     yolk = Material(
         name="ikura_yolk",
-        base_color=(0.95, 0.40, 0.04),
-        subsurface=0.5,
+        base_color=(1.0, 0.55, 0.10),
+        subsurface=0.0,
         subsurface_radius=(1.0, 0.4, 0.1),
-        subsurface_color=(1.0, 0.45, 0.05),
-        roughness=0.2,
+        subsurface_color=(1.0, 0.70, 0.30),
+        roughness=0.3,
         ior=1.47,
-        transmission=0.2,
+        exterior_ior=1.36,
+        transmission=1.0,
+        transmission_roughness=0.3,
     )
     return membrane, yolk
 
 
 def ice_materials(syrup_color) -> tuple[Material, Material]:
-    """(plain ice, syrup-soaked ice): transmissive, IOR 1.31; the syrup tints and thickens it."""
+    """(plain ice, syrup-soaked ice): transmissive, IOR 1.31, slightly frosted; the syrup tints and glosses it."""
     ice = Material(
         name="ice",
         base_color=(0.92, 0.96, 1.0),
         subsurface=0.1,
+        subsurface_radius=(5.0, 5.0, 5.0),
         subsurface_color=(0.9, 0.95, 1.0),
         roughness=0.15,
         ior=1.31,
         transmission=1.0,
+        transmission_roughness=0.15,
     )
     syrup = Material(
         name="ice_syrup",
@@ -113,22 +130,24 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
         subsurface=0.4,
         subsurface_radius=(1.0, 0.3, 0.3),
         subsurface_color=tuple(float(c) for c in syrup_color),
-        roughness=0.1,
-        clearcoat=0.5,
+        roughness=0.05,
+        clearcoat=0.8,
+        clearcoat_roughness=0.03,
         ior=1.31,
-        transmission=0.6,
+        transmission=0.9,
+        transmission_roughness=0.05,
     )
     return ice, syrup
 
 
 def ceramic_material(color) -> Material:
-    """The bowl (scenery): a glazed ceramic."""
+    """The bowl (scenery): a glazed ceramic — a coloured body under a glossy clear glaze."""
     return Material(
         name="ceramic",
         base_color=tuple(float(c) for c in color),
-        roughness=0.3,
-        clearcoat=0.6,
-        clearcoat_roughness=0.05,
+        roughness=0.35,
+        clearcoat=1.0,
+        clearcoat_roughness=0.04,
         ior=1.5,
     )
 

@@ -1,4 +1,4 @@
-"""Aggregates → a shaded scene: world meshes, curvature, materials, CDRF vertex colours — SPEC §4.
+"""Aggregates → a shaded scene: world meshes, curvature, materials, CDRF vertex colours and σ — SPEC §4.
 
 All element meshes are concatenated so normals and curvature come from one libigl call (elements
 are disjoint components, so this equals per-element evaluation), shaded in one vectorised pass,
@@ -16,7 +16,7 @@ from nodegraph.values import Mesh
 
 from ..values import Aggregate, Material, ShadedScene
 from . import materials as mat
-from .cdrf import CdrfTable
+from .cdrf import CdrfTable, curvature_sigma
 from .curvature import mean_curvature, vertex_normals
 from .vertex_shading import Light, cdrf_colors
 
@@ -113,6 +113,7 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
         settings.ambient,
         settings.table,
     ).astype(np.float32)
+    sigma = curvature_sigma(curvature, settings.sigma0).astype(np.float32)
 
     materials: list[Material] = []
     material_of = []
@@ -132,4 +133,5 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
                 name=piece.mesh.name,
             )
         )
-    return ShadedScene(tuple(meshes), tuple(materials), np.array(material_of, np.int32))
+    sigmas = tuple(sigma[starts[k] : starts[k + 1]] for k in range(len(pieces)))
+    return ShadedScene(tuple(meshes), tuple(materials), np.array(material_of, np.int32), cdrf_sigma=sigmas)

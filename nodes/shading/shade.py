@@ -25,14 +25,18 @@ def _check(params):
 
 @node(
     "shade",
-    version=2,  # 2: meshes named <kind>/<number>[/<part>] (Rerun entity paths, glTF node names)
+    # 2: meshes named <kind>/<number>[/<part>] (Rerun entity paths, glTF node names)
+    # 3: per-vertex CDRF σ in the scene (renderers evaluate the CDRF), sheen; ikura membrane a clear dielectric
+    version=3,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "scenery": In(Mesh, "other meshes to show, e.g. the bowl (glazed ceramic)", optional=True, many=True),
     },
     outputs={
         "scene": Out(
-            ShadedScene, "one mesh per element part with CDRF vertex colours (linear RGB) and its principled material"
+            ShadedScene,
+            "one mesh per element part with CDRF vertex colours (linear RGB), per-vertex CDRF σ "
+            "and its principled material",
         )
     },
     params={

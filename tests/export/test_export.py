@@ -32,11 +32,22 @@ def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
         "KHR_materials_volume",
         "KHR_materials_ior",
         "KHR_materials_clearcoat",
+        "KHR_materials_sheen",
+        "KHR_materials_diffuse_transmission",
     } <= set(doc["extensionsUsed"])
     assert len(doc["meshes"]) == len(shaded.meshes)
-    assert all("COLOR_0" in m["primitives"][0]["attributes"] for m in doc["meshes"])
-    membrane = next(m for m in doc["materials"] if m["name"] == "ikura_membrane")
-    assert membrane["extensions"]["KHR_materials_ior"]["ior"] == pytest.approx(1.36)
+    attributes = [m["primitives"][0]["attributes"] for m in doc["meshes"]]
+    assert all("_CDRF_SIGMA" in a and "COLOR_0" not in a for a in attributes)  # σ travels; baked light does not
+    materials = {m["name"]: m["extensions"] for m in doc["materials"]}
+    membrane = materials["ikura_membrane"]
+    assert membrane["KHR_materials_ior"]["ior"] == pytest.approx(1.36)
+    assert membrane["KHR_materials_transmission"]["transmissionFactor"] == 1.0  # the yolk shows through
+    red, green, blue = membrane["KHR_materials_volume"]["attenuationColor"]
+    assert red > green > blue  # an orange egg
+    rice = materials["rice"]
+    assert 0.05 < rice["KHR_materials_diffuse_transmission"]["diffuseTransmissionFactor"] < 1.0
+    assert rice["KHR_materials_sheen"]["sheenColorFactor"][0] > 0 and "KHR_materials_clearcoat" in rice
+    assert "KHR_materials_clearcoat" in materials["ceramic"]  # the glaze
 
 
 def test_validator_catches_a_broken_glb(shaded, gltf_validator):
@@ -71,6 +82,9 @@ def test_usd_passes_usd_validation(shaded, tmp_path, fmt):
     assert len(meshes) == len(shaded.meshes)
     bound = UsdShade.MaterialBindingAPI(meshes[0]).ComputeBoundMaterial()[0]
     assert bound.GetPrim().GetName().endswith("rice")
+    assert 0.05 < bound.GetPrim().GetAttribute("nodegraph:principled:diffuseTransmission").Get() < 1.0
+    sigma = UsdGeom.PrimvarsAPI(meshes[0]).GetPrimvar("cdrf_sigma").Get()
+    assert len(sigma) == len(shaded.meshes[0].vertices)
 
 
 def test_usd_validation_is_not_vacuous():

@@ -56,3 +56,13 @@ def test_mean_curvature_of_a_sphere():
     assert np.allclose(h, 0.5, rtol=0.01)
     inside_out = mean_curvature(sphere.vertices, sphere.faces[:, ::-1])
     assert np.allclose(inside_out, -0.5, rtol=0.01)  # normals flip, so does the sign
+
+
+def test_translucency_is_the_cdrf_share_past_the_terminator():
+    """σ → 0 is Lambert (no light from past the terminator); wider kernels bring more, below an even split."""
+    from nodes.shading.cdrf import SIGMA_MAX, translucency
+
+    sigma = np.linspace(0.0, SIGMA_MAX, 50)
+    t = translucency(sigma)
+    assert t[0] == pytest.approx(0.0, abs=1e-9)
+    assert (np.diff(t) > 0).all() and 0.5 < t[-1] <= 1.0

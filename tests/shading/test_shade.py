@@ -113,3 +113,14 @@ def test_unknown_kind_and_empty_aggregates_are_refused(scene_inputs):
     empty = replace(rice, placement=rice.placement.subset(np.zeros(len(rice.placement), bool)))
     with pytest.raises(ValueError, match="no elements"):
         shade.call(aggregates=[empty])
+
+
+def test_scene_carries_the_cdrf_sigma_per_vertex(scene_inputs):
+    """σ = σ₀|κ| per vertex for renderers (the preview's translucency); wetter rice, wider kernels."""
+    dry = shade.call(**scene_inputs, water_content=0.0)
+    wet = shade.call(**scene_inputs, water_content=24.0)
+    assert [len(s) for s in wet.cdrf_sigma] == [len(m.vertices) for m in wet.meshes]
+    assert wet.cdrf_sigma[0].mean() > dry.cdrf_sigma[0].mean() > 0
+    rice_wet, rice_dry = wet.materials[0], dry.materials[0]
+    assert rice_wet.sheen > rice_dry.sheen and rice_wet.clearcoat > rice_dry.clearcoat
+    assert rice_wet.roughness < rice_dry.roughness  # the water film glosses

@@ -1,0 +1,165 @@
+"""Preview accuracy vs time — SPEC §4 preview: samples per pixel × OIDN denoising on/off against a 1,024-spp
+reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 preview.
+
+    python benchmarks/bench_preview.py [--quick] [--cache-dir DIR]
+
+The scene is the main job's (``graphs/ikura_don.yaml`` up to ``shade``, from the cache; computed the first
+time), seen by its preview camera. Quality is measured in a window of the 1280 × 720 frame over the
+eggs and rice (the hardest pixels: caustics inside the eggs, light through the grains; the table around
+the bowl is easier), so the reference stays affordable on 2 cores; the denoiser sees the same pixel scale
+as in the full frame. Times are the whole ``preview`` path at 1280 × 720 (PLY files, scene load, render,
+guide pass, denoising). ``--quick``: a small synthetic scene and a 64-spp reference (seconds).
+Writes benchmarks/results/bench_preview.{md,png} (the plot needs matplotlib).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+def main_job_scene(cache_dir: Path | None):
+    """The ikura don's shaded scene and its preview camera (from the recipe)."""
+    from nodegraph.api import Cache, default_cache_dir, default_registry, load_recipe, run_recipe
+    from nodes.export.mitsuba_scene import Camera
+
+    recipe = load_recipe(ROOT / "graphs" / "ikura_don.yaml", default_registry(), [])
+    result = run_recipe(recipe, outputs=["shade.scene"], cache=Cache(cache_dir or default_cache_dir()))
+    p = recipe.nodes["preview"].params
+    return result.output("shade.scene"), Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"]), p
+
+
+def quick_scene():
+    """A few capsule grains and eggs in a bowl (as tests/conftest.py builds)."""
+    import trimesh
+
+    from nodegraph.values import Mesh
+    from nodes.elements import base_mesh
+    from nodes.export.mitsuba_scene import Camera
+    from nodes.export.preview import preview
+    from nodes.shading import shade
+    from nodes.shapes import shape
+    from nodes.values import Aggregate, ElementLibrary, Placement
+
+    bowl = shape.call(kind="bowl", size=12.0, depth=8.0, mound=2.0, resolution=2)
+    egg = base_mesh.call(shape="ikura", subdivisions=1)
+    grain = Mesh.from_trimesh(trimesh.creation.capsule(height=3.0, radius=1.0, count=[8, 8]))
+    g = np.linspace(-6, 6, 4)
+    xy = np.array([(x, y) for x in g for y in g])
+    rice = Aggregate(
+        Placement(np.c_[xy, np.full(len(xy), -3.0)], np.tile([0, 0, 1.0], (len(xy), 1)), kind_names=("japonica",)),
+        (ElementLibrary("japonica", (grain,)),),
+    )
+    eggs = Aggregate(
+        Placement([[0, 0, 0.5], [3, 0, 0.5], [-3, 1, 0.5]], np.tile([0, 0, 1.0], (3, 1)), kind_names=("ikura",)),
+        (ElementLibrary("ikura", (egg,)),),
+    )
+    scene = shade.call(aggregates=[rice, eggs], scenery=[bowl["container"]])
+    params = preview.resolve_params({})
+    return scene, Camera(50.0, 20.0, 35.0, 0.9), params
+
+
+def cpu_seconds() -> float:
+    """CPU time of this process (all threads): with other work on the machine, wall time alone misleads."""
+    return time.process_time()
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--quick", action="store_true", help="small synthetic scene, 64-spp reference (seconds)")
+    parser.add_argument("--cache-dir", type=Path, default=None, help="nodegraph cache holding the main job")
+    args = parser.parse_args()
+    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+    from nodes.export.mesh_files import linear_to_srgb8
+    from nodes.export.mitsuba_scene import Crop, denoise, render, render_layers, tone_map
+
+    if args.quick:
+        scene, camera, params = quick_scene()
+        width, height, crop = 320, 180, Crop(112, 63, 96, 54)
+        reference_spp, spps, timed_spps = 64, (1, 4), (1, 4)
+    else:
+        scene, camera, params = main_job_scene(args.cache_dir)
+        width, height, crop = 1280, 720, Crop(544, 306, 192, 108)
+        reference_spp, spps, timed_spps = 1024, (1, 2, 4, 8, 12, 16, 32), (2, 4, 8, 12, 16)
+    sun = params["sun_direction"]
+
+    t = time.perf_counter()
+    converged = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop)
+    reference = linear_to_srgb8(tone_map(converged.color))
+    reference_time = time.perf_counter() - t
+    print(f"reference: {reference_spp} spp in {reference_time:.0f} s", flush=True)
+
+    rows = []
+    for spp in spps:
+        layers = render_layers(scene, camera, width, height, spp, sun, 0, crop)
+        for denoised in (False, True):
+            image = linear_to_srgb8(tone_map(denoise(layers) if denoised else layers.color))
+            psnr = peak_signal_noise_ratio(reference, image, data_range=255)
+            ssim = structural_similarity(reference, image, channel_axis=2, data_range=255)
+            wall = cpu = float("nan")
+            if spp in timed_spps:
+                t, c = time.perf_counter(), cpu_seconds()
+                render(scene, camera, width, height, spp, sun, denoised=denoised)
+                wall, cpu = time.perf_counter() - t, cpu_seconds() - c
+            rows.append((spp, denoised, psnr, ssim, wall, cpu))
+            print(f"  {spp} spp, denoise {denoised}: {psnr:.1f} dB, SSIM {ssim:.3f}, {wall:.1f} s", flush=True)
+
+    load = os.getloadavg()[0]
+    lines = [
+        f"Preview of {'a synthetic scene' if args.quick else 'the ikura don (main job)'}: PSNR/SSIM in the "
+        f"{crop.width}×{crop.height} window at ({crop.x}, {crop.y}) of the {width}×{height} frame against "
+        f"{reference_spp} spp ({reference_time:.0f} s); time = the whole preview at {width}×{height}; "
+        f"CPU s / {os.cpu_count()} ≈ the time on {os.cpu_count()} free cores; load average {load:.2f} on "
+        f"{os.cpu_count()} cores",
+        "",
+        "| spp | denoise | PSNR (dB) | SSIM | wall (s) | CPU (s) |",
+        "|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {spp} | {'OIDN' if d else 'off'} | {psnr:.1f} | {ssim:.3f} | {wall:.1f} | {cpu:.1f} |"
+        for spp, d, psnr, ssim, wall, cpu in rows
+    ]
+    text = "\n".join(lines)
+    print(text)
+    out = Path(__file__).parent / "results"
+    out.mkdir(exist_ok=True)
+    suffix = "_quick" if args.quick else ""
+    (out / f"bench_preview{suffix}.md").write_text(text + "\n")
+    try:
+        import matplotlib
+    except ImportError:
+        print("matplotlib not installed (pip install -e '.[bench]'): no plot")
+        return
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for denoised, marker in ((False, "o-"), (True, "s-")):
+        pts = [(cpu / (os.cpu_count() or 1), psnr, spp) for spp, d, psnr, _, _, cpu in rows if d == denoised]
+        pts = [p for p in pts if np.isfinite(p[0])]
+        if pts:
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], marker, label="OIDN" if denoised else "no denoising")
+            for x, y, spp in pts:
+                ax.annotate(f"{spp}", (x, y), textcoords="offset points", xytext=(4, -10), fontsize=8)
+    ax.axhline(30.0, color="k", ls=":", label="30 dB target")
+    ax.set_xscale("log")
+    ax.set_xlabel(f"preview time at {width}×{height} on {os.cpu_count()} free cores (CPU s / cores)")
+    ax.set_ylabel(f"PSNR vs {reference_spp} spp (dB)")
+    ax.set_title("Preview: samples per pixel × denoising")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / f"bench_preview{suffix}.png", dpi=120)
+    print(f"wrote {out / f'bench_preview{suffix}.md'} and {out / f'bench_preview{suffix}.png'}")
+
+
+if __name__ == "__main__":
+    main()
