@@ -24,6 +24,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "simulation"))  # the shared scene builders
 
 
 def main_job_scene(cache_dir: Path | None):
@@ -38,31 +39,14 @@ def main_job_scene(cache_dir: Path | None):
 
 
 def quick_scene():
-    """A few capsule grains and eggs in a bowl (as tests/conftest.py builds)."""
-    import trimesh
+    """A few capsule grains and eggs in a bowl (``xpbd_scenes.small_food_scene``, as the tests use)."""
+    from xpbd_scenes import small_food_scene
 
-    from nodegraph.values import Mesh
-    from nodes.elements import base_mesh
     from nodes.export.mitsuba_scene import Camera
     from nodes.export.preview import preview
     from nodes.shading import shade
-    from nodes.shapes import shape
-    from nodes.values import Aggregate, ElementLibrary, Placement
 
-    bowl = shape.call(kind="bowl", size=12.0, depth=8.0, mound=2.0, resolution=2)
-    egg = base_mesh.call(shape="ikura", subdivisions=1)
-    grain = Mesh.from_trimesh(trimesh.creation.capsule(height=3.0, radius=1.0, count=[8, 8]))
-    g = np.linspace(-6, 6, 4)
-    xy = np.array([(x, y) for x in g for y in g])
-    rice = Aggregate(
-        Placement(np.c_[xy, np.full(len(xy), -3.0)], np.tile([0, 0, 1.0], (len(xy), 1)), kind_names=("japonica",)),
-        (ElementLibrary("japonica", (grain,)),),
-    )
-    eggs = Aggregate(
-        Placement([[0, 0, 0.5], [3, 0, 0.5], [-3, 1, 0.5]], np.tile([0, 0, 1.0], (3, 1)), kind_names=("ikura",)),
-        (ElementLibrary("ikura", (egg,)),),
-    )
-    scene = shade.call(aggregates=[rice, eggs], scenery=[bowl["container"]])
+    scene = shade.call(**small_food_scene())
     params = preview.resolve_params({})
     return scene, Camera(50.0, 20.0, 35.0, 0.9), params
 

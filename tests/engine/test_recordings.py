@@ -127,9 +127,9 @@ def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_temp_file
     if sig != signal.SIGKILL:
         assert "did not complete" in err and "slowrun.partial.rrd" in err
         RrdReader(str(partial)).recordings()  # closed properly: readable
-    write(tmp_path)  # the next complete run replaces the recording
+    write(tmp_path)  # the next complete run replaces the recording and leaves no partial beside it
     subprocess.run(command(tmp_path), check=True, cwd=tmp_path)
-    assert rrd.read_bytes() != complete or rrd.stat().st_size > 0
+    assert not partial.exists() and len(RrdReader(str(rrd)).recordings()) == 1
 
 
 def test_spawn_without_a_display_says_so_first_and_still_writes_the_file(tmp_path):

@@ -47,7 +47,7 @@ def test_an_interrupted_simulation_resumes_bit_for_bit(tmp_path):
     for name in ("positions", "velocities"):
         assert np.array_equal(getattr(resumed["particles"], name), getattr(straight["particles"], name))
     assert np.array_equal(resumed["aggregate"].placement.rotations, straight["aggregate"].placement.rotations)
-    # and it did not start again: a checkpoint from frame 3 of a run that asked to stop at 5 does not exist
+    # the checkpoint holds the frame it was taken at
     with pytest.raises(KeyboardInterrupt):
         run(aggregate, colliders, StopAfter(tmp_path / "other.npz", stop=5))
     assert Checkpoint(tmp_path / "other.npz").load().frames_done == 5

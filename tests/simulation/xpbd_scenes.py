@@ -209,3 +209,25 @@ def energy_drift(energies, mass, gravity, radius) -> tuple[float, float]:
     k0 = -(len(e) // 3) - 1
     unit = mass * gravity * radius
     return float((e[-1] - e[k0]) / unit), float((e[k0:] - e[k0]).max() / unit)
+
+
+def small_food_scene() -> dict:
+    """Shade's inputs for a small synthetic dish: 16 capsule grains, three ikura eggs (membrane + yolk parts)
+    and a bowl — what the shading/export tests and the preview benchmark's quick mode render."""
+    from nodes.elements import base_mesh
+    from nodes.shapes import shape
+
+    bowl = shape.call(kind="bowl", size=12.0, depth=8.0, mound=2.0, resolution=2)
+    egg = base_mesh.call(shape="ikura", subdivisions=1)
+    grain = Mesh.from_trimesh(trimesh.creation.capsule(height=3.0, radius=1.0, count=[8, 8]))
+    g = np.linspace(-6, 6, 4)
+    xy = np.array([(x, y) for x in g for y in g])
+    rice = Aggregate(
+        Placement(np.c_[xy, np.full(len(xy), -3.0)], np.tile([0, 0, 1.0], (len(xy), 1)), kind_names=("japonica",)),
+        (ElementLibrary("japonica", (grain,)),),
+    )
+    eggs = Aggregate(
+        Placement([[0, 0, 0.5], [3, 0, 0.5], [-3, 1, 0.5]], np.tile([0, 0, 1.0], (3, 1)), kind_names=("ikura",)),
+        (ElementLibrary("ikura", (egg,)),),
+    )
+    return {"aggregates": [rice, eggs], "scenery": [bowl["container"]]}
