@@ -128,8 +128,9 @@ def _moment_matrix(x, w, q, s, e, cx, cy, cz, out):
 
 
 @njit(cache=True)
-def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta, rot_iters, apq, rot, goal):
-    """Project one cluster; returns its max |C|."""
+def linear_goal_matrix(x, w, q_rest, s, e, quat, pinv, null, beta, rot_iters, apq, rot, goal):
+    """Goal map of cluster s..e into ``goal`` (3×3): R, or β·A/∛det A + (1−β)·R (SPEC §5, U eq. 3.19);
+    returns x_cm. Shared by the xpbd constraint and the tearing body's integration."""
     cx, cy, cz = centre_of_mass(x, w, s, e)
     _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
     extract_rotation(apq, quat, rot_iters, rot)
@@ -150,6 +151,13 @@ def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta,
                     goal[r_, c] = f * goal[r_, c] + (1.0 - beta) * rot[r_, c]
         else:
             goal[:, :] = rot
+    return cx, cy, cz
+
+
+@njit(cache=True)
+def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta, rot_iters, apq, rot, goal):
+    """Project one cluster; returns its max |C|."""
+    cx, cy, cz = linear_goal_matrix(x, w, q_rest, s, e, quat, pinv, null, beta, rot_iters, apq, rot, goal)
     res = 0.0
     cm = (cx, cy, cz)
     for i in range(s, e):
@@ -160,14 +168,10 @@ def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta,
 
 
 @njit(cache=True)
-def _match_cluster_quadratic(
-    x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_tilde, beta, rot_iters, apq, rot, apq9, goal9
-):
-    """Project one cluster with the quadratic goal (SPEC §5); returns its max |C|.
-
-    The linear 3×3 block of Ã is volume-normalised as in the linear mode; the quadratic block is
-    scaled by β only. ``qt`` holds centred quadratic columns, so the goal keeps the cluster's x_cm.
-    """
+def quadratic_goal_matrix(x, w, q_rest, qt, s, e, quat, qpinv, beta, rot_iters, apq, rot, apq9, goal9):
+    """Quadratic goal map of cluster s..e into ``goal9`` (3×9): (β·Ã + (1−β)·[R 0 0]) (SPEC §5);
+    returns x_cm. The linear 3×3 block of Ã is volume-normalised as in the linear mode; the quadratic
+    block is scaled by β only. ``qt`` holds centred quadratic columns, so the goal keeps x_cm."""
     cx, cy, cz = centre_of_mass(x, w, s, e)
     _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
     _moment_matrix(x, w, qt, s, e, cx, cy, cz, apq9)
@@ -196,6 +200,15 @@ def _match_cluster_quadratic(
             for r_ in range(3):
                 for c in range(3):
                     goal9[r_, c] = rot[r_, c]
+    return cx, cy, cz
+
+
+@njit(cache=True)
+def _match_cluster_quadratic(
+    x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_tilde, beta, rot_iters, apq, rot, apq9, goal9
+):
+    """Project one cluster with the quadratic goal (SPEC §5); returns its max |C|."""
+    cx, cy, cz = quadratic_goal_matrix(x, w, q_rest, qt, s, e, quat, qpinv, beta, rot_iters, apq, rot, apq9, goal9)
     res = 0.0
     cm = (cx, cy, cz)
     for i in range(s, e):
@@ -284,6 +297,45 @@ def shape_match_project(
                     goal,
                 )
     return worst.max() if m > 0 else 0.0
+
+
+@njit(cache=True)
+def shape_match_goals(x, w, q_rest, start, quats, aqq_pinv, null_proj, beta, rot_iters, qt, qpinv, quadratic, goals):
+    """Goal positions g_i of every particle (SPEC §5: g_i = (β·A + (1−β)·R)·q_i + x_cm, quadratic where
+    ``quadratic[c]``) into ``goals``, for integrators that move towards them themselves (U eq. 3.16) —
+    the same goal maps as ``shape_match_project``. A cluster of one particle has no shape: g = x."""
+    apq = np.empty((3, 3))
+    rot = np.empty((3, 3))
+    goal = np.empty((3, 3))
+    apq9 = np.empty((3, 9))
+    goal9 = np.empty((3, 9))
+    for c in range(start.shape[0] - 1):
+        s, e = start[c], start[c + 1]
+        if e - s < 2:
+            for i in range(s, e):
+                goals[i, :] = x[i, :]
+        elif quadratic[c]:
+            cx, cy, cz = quadratic_goal_matrix(
+                x, w, q_rest, qt, s, e, quats[c], qpinv[c], beta, rot_iters, apq, rot, apq9, goal9
+            )
+            for i in range(s, e):
+                for k in range(3):
+                    g = (cx, cy, cz)[k]
+                    for j in range(9):
+                        g += goal9[k, j] * qt[i, j]
+                    goals[i, k] = g
+        else:
+            cx, cy, cz = linear_goal_matrix(
+                x, w, q_rest, s, e, quats[c], aqq_pinv[c], null_proj[c], beta, rot_iters, apq, rot, goal
+            )
+            for i in range(s, e):
+                for k in range(3):
+                    goals[i, k] = (
+                        (cx, cy, cz)[k]
+                        + goal[k, 0] * q_rest[i, 0]
+                        + goal[k, 1] * q_rest[i, 1]
+                        + goal[k, 2] * q_rest[i, 2]
+                    )
 
 
 def quadratic_moments(q_rest: np.ndarray, w: np.ndarray, start: np.ndarray, conditioning: float = 1e-4):

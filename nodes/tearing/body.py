@@ -1,0 +1,232 @@
+"""An elastic surface body that springs back and tears — SPEC §5 (U §3.1–3.3).
+
+Each step (U fig. 3.5): the goal of every vertex from its cluster's shape matching
+(``shape_matching.shape_match_goals``, the xpbd node's goal maps), then U eq. 3.16–3.17,
+``v += α(g − x)/Δt + Δt·f/m``, ``x += Δt·v``, then — only with tearing on — the break test and,
+when an edge breaks, the split, relabel, re-cluster and capping (``tearing``, ``surface_mesh``).
+``α = min(1, k·Δt²)`` from a stiffness ``k`` (1/s²): the same material at any step count, and
+never past U's stable bound α ≤ 1.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..simulation.shape_matching import quadratic_moments, rest_moments, shape_match_goals
+from . import tearing
+from .surface_mesh import SurfaceMesh, fan_caps
+
+
+@dataclass(frozen=True)
+class BodySettings:
+    """Per-step settings: substep ``h`` (s), stiffness (1/s²), β and goal kind (SPEC §5), rotation
+    iterations (Müller 2016), damping (1/s), and the tearing effect with its rule and threshold."""
+
+    h: float
+    stiffness: float = 1e4
+    beta: float = 0.0
+    quadratic: bool = False
+    rotation_iterations: int = 4
+    damping: float = 0.0
+    tearing: bool = False
+    threshold: float = 3.0
+    rule: str = "vertex"
+
+    def __post_init__(self):
+        if not self.h > 0 or not self.stiffness >= 0:
+            raise ValueError(f"step h = {self.h} and stiffness = {self.stiffness}: need h > 0, stiffness ≥ 0")
+        if self.rule not in tearing.RULES:
+            raise ValueError(f"tear rule {self.rule!r}; allowed: {', '.join(tearing.RULES)}")
+        if not self.threshold > 1.0:
+            raise ValueError(f"tear threshold {self.threshold}: must exceed 1 (× rest length)")
+
+    @property
+    def alpha(self) -> float:
+        """U eq. 3.16's α = min(1, k·h²)."""
+        return min(1.0, self.stiffness * self.h * self.h)
+
+
+@njit(cache=True)
+def integrate(x, v, goals, accel, moving, alpha, h, keep):
+    """U eq. 3.16–3.17: v += α(g − x)/h + h·a, v *= keep (damping), x += h·v; held vertices stay."""
+    for i in range(x.shape[0]):
+        if not moving[i]:
+            v[i, :] = 0.0
+            continue
+        for k in range(3):
+            v[i, k] = (v[i, k] + alpha * (goals[i, k] - x[i, k]) / h + h * accel[i, k]) * keep
+            x[i, k] += h * v[i, k]
+
+
+class ElasticBody:
+    """Vertices sorted by cluster (struct of arrays), their surface mesh and per-cluster rest data.
+
+    ``calls`` counts what ran (``shape_matching``, ``integrate``, ``tear_check``, ``tear``): without the
+    tearing effect the tear entries stay 0.
+    """
+
+    def __init__(self, vertices, faces, mass: float, settings: BodySettings, accel=None, moving=None):
+        x = np.ascontiguousarray(vertices, dtype=np.float64)
+        n = len(x)
+        if n == 0 or not np.all(np.isfinite(x)):
+            raise ValueError("vertices: need a non-empty set of finite positions")
+        if not mass > 0:
+            raise ValueError(f"mass {mass}: must be > 0")
+        self.settings = settings
+        self.mesh = SurfaceMesh.from_faces(faces, n)
+        self.x = x.copy()
+        self.x0 = x.copy()
+        self.v = np.zeros_like(x)
+        self.accel = np.zeros_like(x) if accel is None else np.array(accel, dtype=np.float64)
+        self.moving = np.ones(n, bool) if moving is None else np.array(moving, dtype=bool)
+        self.inv_mass = np.full(n, n / mass)
+        self.goals = np.empty_like(x)
+        self.calls: Counter[str] = Counter()
+        self.tears = 0  # tear events (steps at which at least one edge broke)
+        self.broken_edges = 0
+        self._ratio = np.empty(len(self.mesh.twin))
+        self._recluster(np.zeros(n, np.int64), np.array([[1.0, 0.0, 0.0, 0.0]]))
+
+    @property
+    def n_clusters(self) -> int:
+        return len(self.start) - 1
+
+    def _recluster(self, old_cluster: np.ndarray, old_quats: np.ndarray) -> None:
+        """Sort vertices by connected component, rebuild rest data (U §3.2.2 steps 3–4); a new cluster
+        warm-starts its rotation from the cluster its first vertex came from."""
+        order, start, _ = tearing.cluster_order(self.mesh)
+        inverse = np.empty_like(order)
+        inverse[order] = np.arange(len(order))
+        for name in ("x", "x0", "v", "accel", "moving", "inv_mass"):
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[order]))
+        old_cluster = old_cluster[order]
+        m = self.mesh
+        self.mesh = SurfaceMesh(inverse[m.faces], m.twin, m.cracked, m.n_vertices)
+        self.start = start
+        self.cluster = np.repeat(np.arange(len(start) - 1), np.diff(start))
+        mass = 1.0 / self.inv_mass
+        sums = np.add.reduceat(self.x0 * mass[:, None], start[:-1], axis=0)
+        cm0 = sums / np.add.reduceat(mass, start[:-1])[:, None]
+        self.q_rest = self.x0 - cm0[self.cluster]
+        self.aqq_pinv, self.null_proj = rest_moments(self.q_rest, self.inv_mass, start)
+        if self.settings.quadratic:
+            self.qt, self.qpinv, self.quadratic = quadratic_moments(self.q_rest, self.inv_mass, start)
+        else:
+            self.qt, self.qpinv = np.zeros((len(self.x), 9)), np.zeros((self.n_clusters, 9, 9))
+            self.quadratic = np.zeros(self.n_clusters, np.bool_)
+        self.quats = np.ascontiguousarray(old_quats[old_cluster[start[:-1]]])
+        self.rest_length = np.linalg.norm(self.x0[self.mesh.origin] - self.x0[self.mesh.dest], axis=1)
+        self._ratio = np.empty(len(self.mesh.twin))
+        self.loop_start, self.loop = self.mesh.boundary_loops()
+
+    def compute_goals(self) -> None:
+        """Every vertex's goal g_i from its cluster (SPEC §5) into ``self.goals``."""
+        s = self.settings
+        self.calls["shape_matching"] += 1
+        shape_match_goals(
+            self.x,
+            self.inv_mass,
+            self.q_rest,
+            self.start,
+            self.quats,
+            self.aqq_pinv,
+            self.null_proj,
+            s.beta,
+            s.rotation_iterations,
+            self.qt,
+            self.qpinv,
+            self.quadratic,
+            self.goals,
+        )
+
+    def step(self) -> bool:
+        """One time step (U fig. 3.5); returns True when the body tore in it."""
+        s = self.settings
+        self.compute_goals()
+        self.calls["integrate"] += 1
+        integrate(self.x, self.v, self.goals, self.accel, self.moving, s.alpha, s.h, np.exp(-s.damping * s.h))
+        if not s.tearing:
+            return False
+        self.calls["tear_check"] += 1
+        m = self.mesh
+        if tearing.stretch_ratios(self.x, m.origin, m.dest, self.rest_length, self._ratio) <= s.threshold:
+            return False
+        broken = tearing.broken_half_edges(m, self._ratio, s.threshold, s.rule)
+        broken = (m.twin >= 0) & ~m.cracked & (broken | broken[np.maximum(m.twin, 0)])  # glued pairs, both halves
+        if not broken.any():
+            return False
+        self.tear(broken)
+        return True
+
+    def tear(self, broken: np.ndarray) -> None:
+        """Split along ``broken`` glued half-edge pairs (both halves flagged), relabel, re-cluster and
+        cap (U §3.2.3)."""
+        self.calls["tear"] += 1
+        self.tears += 1
+        self.broken_edges += int(np.count_nonzero(broken)) // 2
+        mesh, source = self.mesh.cut(broken)
+        for name in ("x", "x0", "v", "accel", "moving", "inv_mass"):
+            setattr(self, name, getattr(self, name)[source])
+        self.goals = np.empty_like(self.x)
+        self.mesh = mesh
+        self._recluster(self.cluster[source], self.quats)
+
+    def cap_positions(self) -> np.ndarray:
+        """Centroid vertex of each opening (U §3.2.3's fan centre), following its rim. (L, 3)."""
+        if len(self.loop) == 0:
+            return np.zeros((0, 3))
+        sums = np.add.reduceat(self.x[self.loop], self.loop_start[:-1], axis=0)
+        return sums / np.diff(self.loop_start)[:, None]
+
+    def closed_surface(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vertices (body, then cap centres), faces (mesh, then caps) and the cluster of each vertex."""
+        n = len(self.x)
+        caps = fan_caps(self.loop_start, self.loop, n)
+        vertices = np.concatenate([self.x, self.cap_positions()])
+        cluster = np.concatenate([self.cluster, self.cluster[self.loop[self.loop_start[:-1]]]])
+        return vertices, np.concatenate([self.mesh.faces, caps]), cluster
+
+    def pieces(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each cluster with faces as its own closed mesh (vertices, faces); lone vertices have none."""
+        vertices, faces, cluster = self.closed_surface()
+        face_cluster = cluster[faces[:, 0]]
+        out = []
+        for c in range(self.n_clusters):
+            f = faces[face_cluster == c]
+            if len(f) == 0:
+                continue
+            used, local = np.unique(f, return_inverse=True)
+            out.append((vertices[used], local.reshape(-1, 3)))
+        return out
+
+    def energy(self) -> float:
+        """U's discrete invariant Σ m (α|u|² − α u·w + |w|²)/(2h²), u = x − g, w = h·v: constant for a
+        fixed goal (spectral radius 1, U eq. 3.18), so its growth without external work is instability.
+        Computed on a copy of the rotation warm starts, so it does not change the run."""
+        s = self.settings
+        quats = self.quats.copy()
+        goals = np.empty_like(self.x)
+        shape_match_goals(
+            self.x,
+            self.inv_mass,
+            self.q_rest,
+            self.start,
+            quats,
+            self.aqq_pinv,
+            self.null_proj,
+            s.beta,
+            s.rotation_iterations,
+            self.qt,
+            self.qpinv,
+            self.quadratic,
+            goals,
+        )
+        u = self.x - goals
+        w = s.h * self.v
+        a = s.alpha
+        per = a * (u * u).sum(1) - a * (u * w).sum(1) + (w * w).sum(1)
+        return float((per / self.inv_mass).sum() / (2 * s.h * s.h))
