@@ -41,7 +41,9 @@ def _check(params):
     outputs={
         "mesh": Out(Mesh, "the surface at the last frame, openings capped; colours and parts: piece id"),
         "pieces": Out(ShadedScene, "each piece as its own closed mesh (for 'export': .glb / USD)"),
-        "history": Out(Table, "per frame: pieces, tears, broken edges, energy, stretch, shape error"),
+        "history": Out(
+            Table, "per frame: pieces, tears, broken edges, openings, break tests run, energy, stretch, shape error"
+        ),
     },
     params={
         "shape": Param(
@@ -176,6 +178,8 @@ def frame_row(body, frame, dt, size):
         "pieces": body.n_clusters,
         "tears": body.tears,
         "broken_edges": body.broken_edges,
+        "openings": len(body.loop_start) - 1,
+        "tear_checks": body.calls["tear_check"],
         "energy": body.energy(),
         "kinetic": 0.5 * float((mass * (body.v * body.v).sum(1)).sum()),
         "max_stretch": float(stretch.max()),
