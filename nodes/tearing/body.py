@@ -95,33 +95,58 @@ class ElasticBody:
     def n_clusters(self) -> int:
         return len(self.start) - 1
 
-    def _recluster(self, old_cluster: np.ndarray, old_quats: np.ndarray) -> None:
-        """Sort vertices by connected component, rebuild rest data (U §3.2.2 steps 3–4); a new cluster
-        warm-starts its rotation from the cluster its first vertex came from."""
+    def _recluster(self, old_cluster: np.ndarray, old_quats: np.ndarray, reuse: bool = False) -> None:
+        """Sort vertices by connected component and rebuild rest data (U §3.2.2 steps 3–4); a new cluster
+        warm-starts its rotation from the cluster its first vertex came from. With ``reuse``, a cluster
+        whose vertices all come from one old cluster, as many as it had, keeps that cluster's rest data
+        (the same rest positions: a split vertex's copies share its rest position and mass), so tearing
+        out one fan costs two clusters' moments, not all."""
         order, start, _ = tearing.cluster_order(self.mesh)
         inverse = np.empty_like(order)
         inverse[order] = np.arange(len(order))
-        for name in ("x", "x0", "v", "accel", "moving", "inv_mass"):
+        per_vertex = ("x", "x0", "v", "accel", "moving", "inv_mass") + (("q_rest", "qt") if reuse else ())
+        for name in per_vertex:
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[order]))
         old_cluster = old_cluster[order]
+        first = old_cluster[start[:-1]]
         m = self.mesh
         self.mesh = SurfaceMesh(inverse[m.faces], m.twin, m.cracked, m.n_vertices)
-        self.start = start
-        self.cluster = np.repeat(np.arange(len(start) - 1), np.diff(start))
-        mass = 1.0 / self.inv_mass
-        sums = np.add.reduceat(self.x0 * mass[:, None], start[:-1], axis=0)
-        cm0 = sums / np.add.reduceat(mass, start[:-1])[:, None]
-        self.q_rest = self.x0 - cm0[self.cluster]
-        self.aqq_pinv, self.null_proj = rest_moments(self.q_rest, self.inv_mass, start)
-        if self.settings.quadratic:
-            self.qt, self.qpinv, self.quadratic = quadratic_moments(self.q_rest, self.inv_mass, start)
+        count = len(start) - 1
+        if not reuse:
+            changed = np.ones(count, bool)
+            self.q_rest, self.qt = np.zeros_like(self.x), np.zeros((len(self.x), 9))
+            self.aqq_pinv, self.null_proj = np.zeros((count, 3, 3)), np.zeros((count, 3, 3))
+            self.qpinv, self.quadratic = np.zeros((count, 9, 9)), np.zeros(count, np.bool_)
         else:
-            self.qt, self.qpinv = np.zeros((len(self.x), 9)), np.zeros((self.n_clusters, 9, 9))
-            self.quadratic = np.zeros(self.n_clusters, np.bool_)
-        self.quats = np.ascontiguousarray(old_quats[old_cluster[start[:-1]]])
+            one_source = np.minimum.reduceat(old_cluster, start[:-1]) == np.maximum.reduceat(old_cluster, start[:-1])
+            changed = ~(one_source & (np.diff(start) == np.diff(self.start)[first]))
+            self.aqq_pinv, self.null_proj = self.aqq_pinv[first], self.null_proj[first]
+            self.qpinv, self.quadratic = self.qpinv[first], self.quadratic[first]
+        self.start = start
+        self.cluster = np.repeat(np.arange(count), np.diff(start))
+        self._rest_data(np.flatnonzero(changed))
+        self.quats = np.ascontiguousarray(old_quats[first])
         self.rest_length = np.linalg.norm(self.x0[self.mesh.origin] - self.x0[self.mesh.dest], axis=1)
         self._ratio = np.empty(len(self.mesh.twin))
         self.loop_start, self.loop = self.mesh.boundary_loops()
+
+    def _rest_data(self, clusters: np.ndarray) -> None:
+        """q_i = x⁰_i − x⁰_cm, A_qq⁺ and its null projector, and the quadratic moments (SPEC §5) of
+        ``clusters``, through the xpbd node's ``rest_moments`` / ``quadratic_moments``."""
+        if len(clusters) == 0:
+            return
+        rows = np.concatenate([np.arange(self.start[c], self.start[c + 1]) for c in clusters])
+        sizes = np.diff(self.start)[clusters]
+        sub_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        mass = 1.0 / self.inv_mass[rows]
+        cm0 = np.add.reduceat(self.x0[rows] * mass[:, None], sub_start[:-1], axis=0)
+        cm0 /= np.add.reduceat(mass, sub_start[:-1])[:, None]
+        q = self.x0[rows] - np.repeat(cm0, sizes, axis=0)
+        self.q_rest[rows] = q
+        self.aqq_pinv[clusters], self.null_proj[clusters] = rest_moments(q, self.inv_mass[rows], sub_start)
+        if self.settings.quadratic:
+            qt, qpinv, quadratic = quadratic_moments(q, self.inv_mass[rows], sub_start)
+            self.qt[rows], self.qpinv[clusters], self.quadratic[clusters] = qt, qpinv, quadratic
 
     def compute_goals(self) -> None:
         """Every vertex's goal g_i from its cluster (SPEC §5) into ``self.goals``."""
@@ -169,11 +194,11 @@ class ElasticBody:
         self.tears += 1
         self.broken_edges += int(np.count_nonzero(broken)) // 2
         mesh, source = self.mesh.cut(broken)
-        for name in ("x", "x0", "v", "accel", "moving", "inv_mass"):
+        for name in ("x", "x0", "v", "accel", "moving", "inv_mass", "q_rest", "qt"):
             setattr(self, name, getattr(self, name)[source])
         self.goals = np.empty_like(self.x)
         self.mesh = mesh
-        self._recluster(self.cluster[source], self.quats)
+        self._recluster(self.cluster[source], self.quats, reuse=True)
 
     def cap_positions(self) -> np.ndarray:
         """Centroid vertex of each opening (U §3.2.3's fan centre), following its rim. (L, 3)."""

@@ -127,3 +127,25 @@ def test_tearing_every_edge_one_by_one_keeps_pieces_closed_and_finite():
     for _ in range(200):  # single triangles: planar clusters, still stable
         body.step()
     assert np.all(np.isfinite(body.x))
+
+
+@pytest.mark.parametrize("quadratic", [False, True])
+def test_rest_data_kept_for_untouched_clusters_equals_a_fresh_computation(quadratic):
+    """After several tears, the reused per-cluster rest data matches recomputing every cluster."""
+    vertices, faces = cube_surface(5, 1.0)
+    body = ElasticBody(vertices, faces, 1.0, BodySettings(h=1e-2, quadratic=quadratic, tearing=True))
+    rng = np.random.default_rng(3)
+    for _ in range(6):
+        biggest = int(np.argmax(np.diff(body.start)))
+        vertex = int(rng.integers(body.start[biggest], body.start[biggest + 1]))
+        corner = np.flatnonzero(body.mesh.origin == vertex)
+        broken = np.zeros(len(body.mesh.twin), bool)
+        broken[3 * (corner // 3) + (corner % 3 + 1) % 3] = True
+        twin = body.mesh.twin
+        body.tear((twin >= 0) & (broken | broken[np.maximum(twin, 0)]))
+    kept = [body.q_rest.copy(), body.aqq_pinv.copy(), body.null_proj.copy(), body.qt.copy(), body.qpinv.copy()]
+    body._rest_data(np.arange(body.n_clusters))
+    fresh = [body.q_rest, body.aqq_pinv, body.null_proj, body.qt, body.qpinv]
+    assert body.n_clusters >= 4
+    for a, b in zip(kept, fresh):
+        assert np.allclose(a, b, atol=1e-9)
