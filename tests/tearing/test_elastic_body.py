@@ -104,3 +104,36 @@ def test_bad_parameters_are_refused_with_the_parameter_named():
         from nodegraph.values import Mesh
 
         elastic_body.call(mesh=Mesh(np.eye(3), [[0, 1, 2]]), frames=2, pull_frames=2)
+
+
+def test_rerun_logs_the_mesh_per_step_coloured_by_cluster_with_tears_marked(tmp_path, monkeypatch):
+    import datafusion
+    from rerun.chunk import RrdReader
+
+    from nodegraph.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    rrd = tmp_path / "t.rrd"
+    args = [
+        "run",
+        str(REPO / "graphs" / "tear_block.yaml"),
+        "--set",
+        "block.frames=20",
+        "--set",
+        "block.pull_frames=20",
+        "--no-cache",
+        "--rrd",
+        str(rrd),
+    ]
+    assert main(args) == 0
+    store = RrdReader(str(rrd)).stream().collect()
+    ctx = datafusion.SessionContext()  # must outlive the queries
+    body = store.reader("sim_step", contents="/block/log/body", ctx=ctx).to_arrow_table()
+    assert body.column("sim_step").to_pylist() == [10 * f for f in range(21)]  # every frame, on the sim timeline
+    colours = [
+        np.unique(np.asarray(c), axis=0) for c in body.column("/block/log/body:Mesh3D:vertex_colors").to_pylist()
+    ]
+    assert len(colours[0]) == 1 and len(colours[-1]) >= 2  # one cluster, then the pieces in their own colours
+    tears = store.reader("sim_step", contents="/block/log/tears", ctx=ctx).to_arrow_table()
+    marked = [len(p) for p in tears.column("/block/log/tears:Points3D:positions").to_pylist()]
+    assert marked[0] == 0 and marked[-1] > 0  # the openings' rims, once torn
