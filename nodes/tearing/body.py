@@ -88,7 +88,6 @@ class ElasticBody:
         self.calls: Counter[str] = Counter()
         self.tears = 0  # tear events (steps at which at least one edge broke)
         self.broken_edges = 0
-        self._ratio = np.empty(len(self.mesh.twin))
         self._recluster(np.zeros(n, np.int64), np.array([[1.0, 0.0, 0.0, 0.0]]))
 
     @property
@@ -128,6 +127,8 @@ class ElasticBody:
         self.quats = np.ascontiguousarray(old_quats[first])
         self.rest_length = np.linalg.norm(self.x0[self.mesh.origin] - self.x0[self.mesh.dest], axis=1)
         self._ratio = np.empty(len(self.mesh.twin))
+        watched = tearing.watched_edges(self.mesh, self.settings.rule)
+        self._watched = (self.mesh.origin[watched], self.mesh.dest[watched], self.rest_length[watched])
         self.loop_start, self.loop = self.mesh.boundary_loops()
 
     def _rest_data(self, clusters: np.ndarray) -> None:
@@ -177,9 +178,10 @@ class ElasticBody:
         if not s.tearing:
             return False
         self.calls["tear_check"] += 1
-        m = self.mesh
-        if tearing.stretch_ratios(self.x, m.origin, m.dest, self.rest_length, self._ratio) <= s.threshold:
+        if tearing.largest_stretch(self.x, *self._watched) <= s.threshold:
             return False
+        m = self.mesh
+        tearing.stretch_ratios(self.x, m.origin, m.dest, self.rest_length, self._ratio)
         broken = tearing.broken_half_edges(m, self._ratio, s.threshold, s.rule)
         broken = (m.twin >= 0) & ~m.cracked & (broken | broken[np.maximum(m.twin, 0)])  # glued pairs, both halves
         if not broken.any():

@@ -36,6 +36,17 @@ def stretch_ratios(x, origin, dest, rest_length, out):
 
 
 @njit(cache=True)
+def largest_stretch(x, a, b, rest_length):
+    """The largest current-over-rest length of the edges (a[i], b[i]): the per-step break test."""
+    worst = 0.0
+    for i in range(a.shape[0]):
+        p, q = a[i], b[i]
+        d2 = (x[p, 0] - x[q, 0]) ** 2 + (x[p, 1] - x[q, 1]) ** 2 + (x[p, 2] - x[q, 2]) ** 2
+        worst = max(worst, d2 / (rest_length[i] * rest_length[i]))
+    return np.sqrt(worst)
+
+
+@njit(cache=True)
 def _fully_stretched(ratio, origin, dest, n, threshold):
     """Per vertex: every incident half-edge's ratio exceeds ``threshold`` (vertices in no face: False)."""
     least = np.full(n, np.inf)
@@ -43,6 +54,13 @@ def _fully_stretched(ratio, origin, dest, n, threshold):
         least[origin[h]] = min(least[origin[h]], ratio[h])
         least[dest[h]] = min(least[dest[h]], ratio[h])
     return (least > threshold) & (least < np.inf)
+
+
+def watched_edges(mesh: SurfaceMesh, rule: str) -> np.ndarray:
+    """One half-edge per edge the break test must watch: rule 'edge', the glued ones not yet cracked
+    (only they can break); rule 'vertex', every edge (a vertex tears when all of its edges are long)."""
+    h = mesh.edges()
+    return h if rule == "vertex" else h[(mesh.twin[h] >= 0) & ~mesh.cracked[h]]
 
 
 def broken_half_edges(mesh: SurfaceMesh, ratio: np.ndarray, threshold: float, rule: str) -> np.ndarray:
