@@ -137,3 +137,12 @@ def test_rerun_logs_the_mesh_per_step_coloured_by_cluster_with_tears_marked(tmp_
     tears = store.reader("sim_step", contents="/block/log/tears", ctx=ctx).to_arrow_table()
     marked = [len(p) for p in tears.column("/block/log/tears:Points3D:positions").to_pylist()]
     assert marked[0] == 0 and marked[-1] > 0  # the openings' rims, once torn
+
+
+@pytest.mark.parametrize("recipe", ["elastic_block", "tear_block", "tear_mesh", "ikura_tear"])
+def test_recipes_validate_and_the_sphere_variant_is_one_set_away(recipe):
+    loaded = load_recipe(REPO / "graphs" / f"{recipe}.yaml", default_registry(), [])
+    assert ("tearing" in loaded.effects) == (recipe != "elastic_block")
+    if recipe == "tear_block":
+        sphere = load_recipe(REPO / "graphs" / "tear_block.yaml", default_registry(), ["block.shape=sphere"])
+        assert sphere.nodes["block"].params["shape"] == "sphere"
