@@ -94,16 +94,16 @@ class ElasticBody:
     def n_clusters(self) -> int:
         return len(self.start) - 1
 
-    def _recluster(self, old_cluster: np.ndarray, old_quats: np.ndarray, reuse: bool = False) -> None:
+    def _recluster(self, old_cluster: np.ndarray, old_quats: np.ndarray, split: np.ndarray | None = None) -> None:
         """Sort vertices by connected component and rebuild rest data (U §3.2.2 steps 3–4); a new cluster
-        warm-starts its rotation from the cluster its first vertex came from. With ``reuse``, a cluster
-        whose vertices all come from one old cluster, as many as it had, keeps that cluster's rest data
-        (the same rest positions: a split vertex's copies share its rest position and mass), so tearing
-        out one fan costs two clusters' moments, not all."""
+        warm-starts its rotation from the cluster its first vertex came from. With ``split`` (per vertex:
+        its old vertex was split, so its mass was shared), a cluster made of one old cluster's unsplit
+        vertices, as many as it had, keeps that cluster's rest data: tearing out one fan then costs
+        two clusters' moments, not all."""
         order, start, _ = tearing.cluster_order(self.mesh)
         inverse = np.empty_like(order)
         inverse[order] = np.arange(len(order))
-        per_vertex = ("x", "x0", "v", "accel", "moving", "inv_mass") + (("q_rest", "qt") if reuse else ())
+        per_vertex = ("x", "x0", "v", "accel", "moving", "inv_mass") + (() if split is None else ("q_rest", "qt"))
         for name in per_vertex:
             setattr(self, name, np.ascontiguousarray(getattr(self, name)[order]))
         old_cluster = old_cluster[order]
@@ -111,14 +111,15 @@ class ElasticBody:
         m = self.mesh
         self.mesh = SurfaceMesh(inverse[m.faces], m.twin, m.cracked, m.n_vertices)
         count = len(start) - 1
-        if not reuse:
+        if split is None:
             changed = np.ones(count, bool)
             self.q_rest, self.qt = np.zeros_like(self.x), np.zeros((len(self.x), 9))
             self.aqq_pinv, self.null_proj = np.zeros((count, 3, 3)), np.zeros((count, 3, 3))
             self.qpinv, self.quadratic = np.zeros((count, 9, 9)), np.zeros(count, np.bool_)
         else:
             one_source = np.minimum.reduceat(old_cluster, start[:-1]) == np.maximum.reduceat(old_cluster, start[:-1])
-            changed = ~(one_source & (np.diff(start) == np.diff(self.start)[first]))
+            same = one_source & (np.diff(start) == np.diff(self.start)[first])
+            changed = ~same | np.logical_or.reduceat(split[order], start[:-1])
             self.aqq_pinv, self.null_proj = self.aqq_pinv[first], self.null_proj[first]
             self.qpinv, self.quadratic = self.qpinv[first], self.quadratic[first]
         self.start = start
@@ -191,16 +192,19 @@ class ElasticBody:
 
     def tear(self, broken: np.ndarray) -> None:
         """Split along ``broken`` glued half-edge pairs (both halves flagged), relabel, re-cluster and
-        cap (U §3.2.3)."""
+        cap (U §3.2.3). A vertex split into c copies gives each 1/c of its mass (same velocity), so the
+        split conserves mass, momentum and kinetic energy."""
         self.calls["tear"] += 1
         self.tears += 1
         self.broken_edges += int(np.count_nonzero(broken)) // 2
         mesh, source = self.mesh.cut(broken)
         for name in ("x", "x0", "v", "accel", "moving", "inv_mass", "q_rest", "qt"):
             setattr(self, name, getattr(self, name)[source])
+        copies = np.bincount(source)[source]
+        self.inv_mass = self.inv_mass * copies
         self.goals = np.empty_like(self.x)
         self.mesh = mesh
-        self._recluster(self.cluster[source], self.quats, reuse=True)
+        self._recluster(self.cluster[source], self.quats, split=copies > 1)
 
     def cap_positions(self) -> np.ndarray:
         """Centroid vertex of each opening (U §3.2.3's fan centre), following its rim. (L, 3)."""

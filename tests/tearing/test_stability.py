@@ -143,9 +143,35 @@ def test_rest_data_kept_for_untouched_clusters_equals_a_fresh_computation(quadra
         broken[3 * (corner // 3) + (corner % 3 + 1) % 3] = True
         twin = body.mesh.twin
         body.tear((twin >= 0) & (broken | broken[np.maximum(twin, 0)]))
+    # one triangle off the body: its three vertices split, the body keeps as many vertices as it had
+    face = int(np.flatnonzero(body.cluster[body.mesh.faces[:, 0]] == np.argmax(np.diff(body.start)))[-1])
+    twin = body.mesh.twin
+    broken = np.zeros(len(twin), bool)
+    broken[3 * face : 3 * face + 3] = True
+    before = body.n_clusters
+    body.tear((twin >= 0) & (broken | broken[np.maximum(twin, 0)]))
+    assert body.n_clusters == before + 1
     kept = [body.q_rest.copy(), body.aqq_pinv.copy(), body.null_proj.copy(), body.qt.copy(), body.qpinv.copy()]
     body._rest_data(np.arange(body.n_clusters))
     fresh = [body.q_rest, body.aqq_pinv, body.null_proj, body.qt, body.qpinv]
     assert body.n_clusters >= 4
     for a, b in zip(kept, fresh):
         assert np.allclose(a, b, atol=1e-9)
+
+
+def test_a_tear_conserves_mass_momentum_and_kinetic_energy():
+    """Split vertices share their mass: the split itself adds no momentum or kinetic energy."""
+    vertices, faces = cube_surface(4, 1.0)
+    body = ElasticBody(vertices, faces, 2.0, BodySettings(h=1e-2, tearing=True, rule="edge"))
+    body.v[:] = np.random.default_rng(5).normal(0.0, 1.0, body.v.shape)
+    totals = lambda: (  # noqa: E731
+        (1 / body.inv_mass).sum(),
+        ((1 / body.inv_mass)[:, None] * body.v).sum(0),
+        0.5 * ((1 / body.inv_mass) * (body.v**2).sum(1)).sum(),
+    )
+    mass, momentum, kinetic = totals()
+    body.tear(np.ones(len(body.mesh.twin), bool))  # every triangle alone: every vertex split
+    assert body.n_clusters == len(faces)
+    after = totals()
+    assert after[0] == pytest.approx(mass) and after[0] == pytest.approx(2.0)
+    assert after[1] == pytest.approx(momentum) and after[2] == pytest.approx(kinetic)
