@@ -95,6 +95,13 @@ def test_recipe_exports_torn_pieces_as_closed_meshes(recipe, tmp_path):
     scene = trimesh.load(glb[0])
     meshes = list(scene.geometry.values())
     assert len(meshes) >= 2 and all(m.is_watertight for m in meshes)
+    usd = [p for p in result.files if p.suffix == ".usdc"]
+    if recipe == "tear_block":  # and as USD, one mesh prim per piece
+        from pxr import Usd, UsdGeom
+
+        stage = Usd.Stage.Open(str(usd[0]))  # kept: its prims expire with it
+        prims = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+        assert len(prims) == len(meshes)
 
 
 def test_bad_parameters_are_refused_with_the_parameter_named():
