@@ -100,7 +100,7 @@ class ElasticBody:
         its old vertex was split, so its mass was shared), a cluster made of one old cluster's unsplit
         vertices, as many as it had, keeps that cluster's rest data: tearing out one fan then costs
         two clusters' moments, not all."""
-        order, start, _ = tearing.cluster_order(self.mesh)
+        order, start = tearing.cluster_order(self.mesh)
         inverse = np.empty_like(order)
         inverse[order] = np.arange(len(order))
         per_vertex = ("x", "x0", "v", "accel", "moving", "inv_mass") + (() if split is None else ("q_rest", "qt"))

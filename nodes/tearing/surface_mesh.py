@@ -5,7 +5,7 @@ Half-edge ``3f + k`` runs ``faces[f, k] → faces[f, (k + 1) % 3]``; ``twin`` pa
 of the face across, or holds −1 on an opening. A face's half-edges and its corners share indices, so
 splitting along edges is a union of corners: corners of one vertex stay one vertex while an unbroken
 edge joins their faces (``cut``). Arrays, not linked objects; the unions run in numba
-(``union_labels``): 9–20× faster than scipy's connected components on the same corner graph
+(``union_labels``): 7–37× faster than scipy's connected components on the same corner graph
 (``benchmarks/bench_tearing.py --only split``), the tear's main cost after re-clustering.
 """
 

@@ -24,15 +24,11 @@ RULES = ("vertex", "edge")
 
 @njit(cache=True)
 def stretch_ratios(x, origin, dest, rest_length, out):
-    """Current over rest length of every half-edge (U §3.2.2's break measure); returns the largest."""
-    worst = 0.0
+    """Current over rest length of every half-edge into ``out`` (U §3.2.2's break measure)."""
     for h in range(origin.shape[0]):
         a, b = origin[h], dest[h]
         d = np.sqrt((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2 + (x[a, 2] - x[b, 2]) ** 2)
-        r = d / rest_length[h]
-        out[h] = r
-        worst = max(worst, r)
-    return worst
+        out[h] = d / rest_length[h]
 
 
 @njit(cache=True)
@@ -76,11 +72,11 @@ def broken_half_edges(mesh: SurfaceMesh, ratio: np.ndarray, threshold: float, ru
     return broken
 
 
-def cluster_order(mesh: SurfaceMesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def cluster_order(mesh: SurfaceMesh) -> tuple[np.ndarray, np.ndarray]:
     """Relabel connected components as clusters (U §3.2.2 step 3): ``order`` sorts the vertices by
     cluster (stable, so a cluster keeps its vertices' relative order), ``start`` (m + 1) the cluster
-    ranges in that order, ``labels`` the cluster of each vertex before sorting."""
+    ranges in that order."""
     labels = mesh.components()
     order = np.argsort(labels, kind="stable")
     start = np.concatenate([[0], np.cumsum(np.bincount(labels))]).astype(np.int64)
-    return order, start, labels
+    return order, start
