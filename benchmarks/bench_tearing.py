@@ -235,6 +235,9 @@ def _pareto(rows) -> None:
         ax.set_yscale("log")
         ax.set_xlabel("wall time of both runs (s)")
         ax.set_ylabel(label)
+    for it in (1, 2, 4, 8):
+        axes[0].scatter([], [], c=f"C{(1, 2, 4, 8).index(it)}", label=f"{it} rotation iteration{'s' * (it > 1)}")
+    axes[0].legend(fontsize=7, loc="upper right")
     fig.suptitle("tearing: substeps × rotation iterations (labels), Pareto front in black")
     fig.tight_layout()
     RESULTS.mkdir(parents=True, exist_ok=True)
