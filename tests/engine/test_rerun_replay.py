@@ -1,0 +1,116 @@
+"""A cached re-run's recording is the cold run's, from the Rerun fragments kept with the cache entries:
+same entities, timelines and component values (``rerun rrd compare``), without logging values again."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from rerun.chunk import RrdReader
+
+from nodegraph.cli import main
+
+TOY = str(Path(__file__).with_name("toy_nodes.py"))
+# slow and slow_twin are the same computation (one cache key), logged at two entity paths
+RECIPE = """\
+name: replay
+seed: 2
+outputs: [surf, twin]
+nodes:
+  pts: {type: toy_points, variants: 2, params: {count: 6}}
+  merge: {type: toy_merge, inputs: {parts: pts.spheres}}
+  slow: {type: toy_slow, inputs: {spheres: merge.spheres}}
+  slow_twin: {type: toy_slow, inputs: {spheres: merge.spheres}}
+  surf: {type: toy_sphere_mesh, inputs: {spheres: slow.spheres}}
+  twin: {type: toy_sphere_mesh, inputs: {spheres: slow_twin.spheres}}
+"""
+
+
+def run(tmp_path, *extra, quiet=True) -> int:
+    flags = ["-q"] if quiet else []
+    return main(["run", "replay.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), *flags, *extra])
+
+
+def compare(a: Path, b: Path) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "compare", "--unordered", str(a), str(b)], capture_output=True, text=True
+    )
+
+
+def entities(path: Path) -> set[str]:
+    return set(RrdReader(str(path)).stream().collect().schema().entity_paths())
+
+
+def energy_steps(path: Path, entity: str) -> list[int]:
+    import datafusion
+
+    ctx = datafusion.SessionContext()
+    store = RrdReader(str(path)).stream().collect()
+    return store.reader("sim_step", contents=entity, ctx=ctx).to_arrow_table().column("sim_step").to_pylist()
+
+
+def fragments(tmp_path) -> dict[str, dict]:
+    out = {}
+    for entry in (tmp_path / "cache" / "entries").glob("*/*.json"):
+        manifest = json.loads(entry.read_text())
+        out[manifest["node"]] = manifest.get("rerun")
+    return out
+
+
+def test_a_cached_rerun_replays_the_cold_runs_logs_identically(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "replay.yaml").write_text(RECIPE)
+    assert run(tmp_path, "--rrd", "cold.rrd") == 0
+    capsys.readouterr()
+    assert run(tmp_path, "--rrd", "cached.rrd", quiet=False) == 0
+    err = capsys.readouterr().err  # every instance of the second run came from the cache
+    assert "cached" in err and "ran" not in err.replace("nodegraph run", "")
+    assert run(tmp_path, "--rrd", "again.rrd") == 0
+    done = compare(tmp_path / "cold.rrd", tmp_path / "cached.rrd")
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert compare(tmp_path / "cached.rrd", tmp_path / "again.rrd").returncode == 0
+    # what the nodes logged as they ran is there on a cached run too (it was lost before fragments)
+    names = entities(tmp_path / "cached.rrd")
+    assert {"/slow/log/energy", "/slow_twin/log/energy", "/pts/0/spheres", "/pts/1/spheres", "/surf/mesh"} <= names
+    assert energy_steps(tmp_path / "cached.rrd", "/slow/log/energy") == list(range(10))
+    assert energy_steps(tmp_path / "cached.rrd", "/slow_twin/log/energy") == list(range(10))
+    kept = fragments(tmp_path)
+    assert set(kept) == {"pts", "merge", "slow_twin", "twin"} and all(kept.values())  # one entry per key
+    # surf's logs come from the entry twin stored (same key): moved to /surf on the way in
+    assert kept["twin"]["entity"] == "/twin" and kept["twin"]["logged"] == {"/mesh": ["Mesh3D"]}
+    leftovers = [p.name for p in (tmp_path / "cache").rglob("*") if p.suffix == ".tmp"]
+    assert not leftovers, leftovers
+
+
+def test_a_different_setting_differs_so_the_comparison_can_fail(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "replay.yaml").write_text(RECIPE)
+    assert run(tmp_path, "--rrd", "a.rrd") == 0
+    assert run(tmp_path, "--rrd", "b.rrd", "--set", "pts.count=7") == 0
+    assert compare(tmp_path / "a.rrd", tmp_path / "b.rrd").returncode != 0
+
+
+def test_entries_without_fragments_get_them_and_a_damaged_one_is_logged_again(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "replay.yaml").write_text(RECIPE)
+    assert run(tmp_path, "--no-rrd") == 0  # entries without fragments (as a worker leaves them)
+    assert not any(fragments(tmp_path).values())
+    assert run(tmp_path, "--rrd", "first.rrd") == 0  # outputs logged from the values, fragments kept
+    kept = fragments(tmp_path)
+    assert all(kept.values()), kept
+    surf = next((tmp_path / "cache" / "rerun").glob(f"*/{_key_of(tmp_path, 'twin')}.rrd"))
+    surf.write_bytes(surf.read_bytes()[:-100])  # truncated
+    capsys.readouterr()
+    assert run(tmp_path, "--rrd", "second.rrd", quiet=False) == 0
+    assert "does not match its entry" in " ".join(capsys.readouterr().err.split())
+    done = compare(tmp_path / "first.rrd", tmp_path / "second.rrd")
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "/surf/mesh" in entities(tmp_path / "second.rrd")
+
+
+def _key_of(tmp_path, node: str) -> str:
+    for entry in (tmp_path / "cache" / "entries").glob("*/*.json"):
+        manifest = json.loads(entry.read_text())
+        if manifest["node"] == node:
+            return manifest["key"]
+    raise AssertionError(f"no entry for {node}")
