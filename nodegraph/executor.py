@@ -407,10 +407,7 @@ def run_recipe(
     warn = reporter.warn if reporter is not None else None
     recording = None
     if rrd is not None:
-        digest = recipe.digest()
-        recording = RunRecording(
-            rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=f"{recipe.name}-{digest[:16]}"
-        )
+        recording = RunRecording(rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=recording_id(recipe))
     executor = Executor(recipe, cache, reporter, recording, max_seconds)
     ok = False
     try:
@@ -467,6 +464,12 @@ def compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds=N
         return {}
     results = pool.compute(jobs, cache.directory, reporter or Reporter(quiet=True))
     return {key: r.record for key, r in results.items() if r.record.status != "cached"}
+
+
+def recording_id(recipe: Recipe) -> str:
+    """The recording's id: the recipe's name and a digest of what it computes (overrides included), so a
+    setting is always the same recording and two settings are two."""
+    return f"{recipe.name}-{recipe.digest()[:16]}"
 
 
 def recording_name(recipe: Recipe) -> str:

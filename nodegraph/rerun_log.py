@@ -150,6 +150,25 @@ class RunRecording:
         return self.path
 
 
+def merge_recordings(parts: list[Path], path: Path) -> Path:
+    """Write the recordings of ``parts`` into one .rrd at ``path`` (each stays its own recording, e.g. one
+    per sweep point, for a viewer to show side by side), by Rerun's own ``rerun rrd merge``; written to
+    ``name.partial.rrd`` and renamed, so ``path`` is a complete file or the previous one."""
+    import subprocess
+
+    partial = partial_path(path)
+    done = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "merge", "-o", str(partial), *map(str, parts)],
+        capture_output=True,
+        text=True,
+    )
+    if done.returncode != 0:
+        partial.unlink(missing_ok=True)
+        raise RuntimeError(f"rerun rrd merge failed: {done.stderr.strip()[-500:]}")
+    os.replace(partial, path)
+    return path
+
+
 @singledispatch
 def log_value(value: Any, log: EntityLogger) -> None:
     """Fallback: log the scalar fields of a dataclass as text, so every output leaves a trace."""
