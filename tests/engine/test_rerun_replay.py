@@ -114,3 +114,21 @@ def _key_of(tmp_path, node: str) -> str:
         if manifest["node"] == node:
             return manifest["key"]
     raise AssertionError(f"no entry for {node}")
+
+
+def test_inspect_prints_entities_timelines_and_blueprint_views(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "replay.yaml").write_text(RECIPE.replace("variants: 2", "variants: 3"))
+    assert run(tmp_path, "--rrd", "r.rrd") == 0
+    capsys.readouterr()
+    assert main(["inspect", "r.rrd", "--depth", "3"]) == 0
+    text = capsys.readouterr().out
+    rid = RrdReader("r.rrd").recordings()[0].recording_id
+    assert f"recording {rid} (nodegraph): replay" in text
+    assert "timelines: row 0…2, sim_step 0…9" in text
+    assert "0…2 (3 alike; the first shown)" in text  # pts/0, pts/1, pts/2 folded
+    assert "\n  slow\n    log\n      energy  [Scalars]\n" in text  # /slow/log/energy: 3 levels
+    assert "slow: energy [TimeSeries] origin /: + /slow/log/energy" in text
+    assert "final scene (twin) [3D]" in text and "replay [tabs]" in text
+    assert main(["inspect", "missing.rrd"]) == 2
+    assert "missing.rrd: no such file" in capsys.readouterr().err
