@@ -132,3 +132,17 @@ def test_inspect_prints_entities_timelines_and_blueprint_views(tmp_path, monkeyp
     assert "final scene (twin) [3D]" in text and "replay [tabs]" in text
     assert main(["inspect", "missing.rrd"]) == 2
     assert "missing.rrd: no such file" in capsys.readouterr().err
+
+
+def test_a_failed_nodes_logs_go_to_the_partial_recording_only(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "replay.yaml").write_text(RECIPE)
+    assert run(tmp_path, "--rrd", "r.rrd") == 0
+    complete = (tmp_path / "r.rrd").read_bytes()
+    (tmp_path / "replay.yaml").write_text(RECIPE.replace("slow_twin: {type: toy_slow", "slow_twin: {type: toy_fail"))
+    assert run(tmp_path, "--rrd", "r.rrd") == 1
+    assert (tmp_path / "r.rrd").read_bytes() == complete
+    partial = tmp_path / "r.partial.rrd"
+    assert energy_steps(partial, "/slow_twin/log/energy") == [0, 1]  # what it logged before it failed
+    assert "/slow/spheres" in entities(partial)  # and the nodes before it
+    assert not [p.name for p in tmp_path.rglob("*") if p.suffix == ".tmp" or p.name.startswith("nodegraph-")]
