@@ -9,10 +9,11 @@ Layout under the cache directory::
                             a cached re-run's recording instead of logging the values again
     checkpoints/<key>.npz   a long node's progress while it runs (``checkpoint``), removed when it completes
 
-Every file is written to a temporary name in its final directory and renamed into place, blobs
-and the Rerun fragment before the entry that names them, so a crash at any moment leaves either no entry or a whole one.
-A blob whose bytes no longer hash to its name is reported as corruption and recomputed. ``clear``
-removes only what a cache holds, and only from a directory carrying the marker.
+Every file is written to a temporary name in its final directory and renamed into place, blobs and
+the Rerun fragment before the entry that names them, so a crash at any moment leaves either no entry or
+a whole one (a fragment is checked against the sha256 its entry records before it is replayed). A blob
+whose bytes no longer hash to its name is reported as corruption and recomputed. ``clear`` removes only
+what a cache holds, and only from a directory carrying the marker.
 """
 
 from __future__ import annotations

@@ -258,24 +258,23 @@ class Executor:
         elapsed = now() - start
         for value in outputs.values():
             codec.freeze(value)
-        log_start = now()
-        fragment = None if capture is None else self._capture_outputs(inst, capture, outputs)
-        log_seconds = now() - log_start
-        if self.cache is not None:
-            self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
-            ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
-        self.values[inst] = outputs
-        self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
-        if fragment is not None:  # the recording gets the node's logs as a cached re-run will: from the fragment
+        try:
             log_start = now()
-            if self.cache is None:
-                try:
-                    self._append(inst, fragment, capture.live)
-                finally:
-                    fragment.path.unlink(missing_ok=True)
-            else:
-                self._append(inst, replace(fragment, path=self.cache.fragment_path(key)), capture.live)
-            self.status[inst].log_seconds = log_seconds + now() - log_start
+            fragment = None if capture is None else self._capture_outputs(inst, capture, outputs)
+            log_seconds = now() - log_start
+            if self.cache is not None:
+                self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
+                ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
+            self.values[inst] = outputs
+            self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
+            if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment
+                log_start = now()
+                kept = fragment if self.cache is None else replace(fragment, path=self.cache.fragment_path(key))
+                self._append(inst, kept, capture.live)
+                self.status[inst].log_seconds = log_seconds + now() - log_start
+        finally:
+            if capture is not None:  # moved into the cache by store; without a cache, not needed any more
+                capture.path.unlink(missing_ok=True)
         return outputs
 
     def _capture_path(self, key: str) -> Path:
@@ -295,10 +294,13 @@ class Executor:
         return Fragment(capture.path, inst.entity, capture.index.relative(inst.entity))
 
     def _append_unfinished(self, inst: Instance, capture: NodeCapture) -> None:
-        """Append what a node that failed or was interrupted had logged, then remove its capture."""
+        """Append what a node that failed or was interrupted had logged, then remove its capture (a capture
+        that cannot be read is reported, never put in place of the node's own error)."""
         try:
             capture.close()
             self._append(inst, Fragment(capture.path, inst.entity, capture.index.relative(inst.entity)), capture.live)
+        except Exception as exc:
+            self.reporter.warn(f"node '{inst.label}': what it logged before it stopped is lost ({exc})")
         finally:
             capture.path.unlink(missing_ok=True)
 
@@ -336,9 +338,12 @@ class Executor:
         fragment = self._kept_fragment(inst)
         if fragment is None:
             capture = self.recording.capture(self.cache.capture_path(key))
-            fragment = self._capture_outputs(inst, capture, self.values[inst])
-            self.cache.add_fragment(key, fragment)
-            fragment = replace(fragment, path=self.cache.fragment_path(key))
+            try:
+                made = self._capture_outputs(inst, capture, self.values[inst])
+                self.cache.add_fragment(key, made)
+            finally:
+                capture.path.unlink(missing_ok=True)  # a leftover only if add_fragment did not move it
+            fragment = replace(made, path=self.cache.fragment_path(key))
         self._append(inst, fragment, live=False)
         self.status[inst].log_seconds = now() - start
 

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .context import EntityLogger, LogIndex
+from .errors import NodegraphError
 from .values import FileSet, Image, Mesh, Table
 
 
@@ -164,7 +165,7 @@ def merge_recordings(parts: list[Path], path: Path) -> Path:
     )
     if done.returncode != 0:
         partial.unlink(missing_ok=True)
-        raise RuntimeError(f"rerun rrd merge failed: {done.stderr.strip()[-500:]}")
+        raise NodegraphError(f"cannot write {path}: rerun rrd merge failed: {done.stderr.strip()[-500:]}")
     os.replace(partial, path)
     return path
 

@@ -14,8 +14,10 @@ what is upstream of the simulation). Per point:
 
 The table is written as Markdown and CSV, and a PNG plots each metric against the time with the Pareto
 front marked (both lower is better: metrics are errors); the recipe's own setting is marked too.
-With a pool (``pool.InstancePool``) the instances of every point are computed by its workers first,
-as one task graph in which shared instances are one task.
+With ``rrd`` every point is also logged as its own recording (id from recipe and overrides), all in
+one .rrd, so two settings can be scrubbed side by side in a viewer. With a pool (``pool.InstancePool``)
+the instances of every point are computed by its workers first, as one task graph in which shared
+instances are one task.
 """
 
 from __future__ import annotations
