@@ -110,12 +110,18 @@ class Cache:
     def _blob_path(self, digest: str) -> Path:
         return self.directory / "blobs" / digest[:2] / f"{digest}.npz"
 
+    def _mark(self) -> None:
+        marker = self.directory / MARKER
+        if not marker.exists():
+            atomic_write(marker, MARKER_TEXT)
+
     def fragment_path(self, key: str) -> Path:
         return self.directory / "rerun" / key[:2] / f"{key}.rrd"
 
     def capture_path(self, key: str) -> Path:
         """A fresh temporary file beside entry ``key``'s Rerun fragment, for a ``NodeCapture`` to write;
         ``store`` or ``add_fragment`` renames it into place."""
+        self._mark()  # before anything else lands in the directory: `cache clear` knows it as a cache
         folder = self.fragment_path(key).parent
         folder.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{key}.rrd.", suffix=".tmp", dir=folder)
@@ -231,9 +237,7 @@ class Cache:
         """Store a node's outputs atomically: blobs (and the Rerun ``fragment``) first, then the entry that
         makes them visible. ``seconds``, the node's wall time when it ran, is kept beside them (a sweep
         reports it for points already cached)."""
-        marker = self.directory / MARKER
-        if not marker.exists():
-            atomic_write(marker, MARKER_TEXT)
+        self._mark()
         manifest = {"key": key, "node": node_id, "type": node_type, "outputs": {}}
         if seconds is not None:
             manifest["seconds"] = round(float(seconds), 6)

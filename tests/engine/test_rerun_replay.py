@@ -146,3 +146,13 @@ def test_a_failed_nodes_logs_go_to_the_partial_recording_only(tmp_path, monkeypa
     assert energy_steps(partial, "/slow_twin/log/energy") == [0, 1]  # what it logged before it failed
     assert "/slow/spheres" in entities(partial)  # and the nodes before it
     assert not [p.name for p in tmp_path.rglob("*") if p.suffix == ".tmp" or p.name.startswith("nodegraph-")]
+
+
+def test_a_capture_started_in_a_new_cache_leaves_it_clearable(tmp_path):
+    from nodegraph.cache import Cache
+
+    cache = Cache(tmp_path / "fresh")
+    cache.capture_path("ab" * 32)  # a run interrupted in its first node leaves only this behind
+    assert cache.is_cache()
+    cache.clear()
+    assert not (tmp_path / "fresh").exists()
