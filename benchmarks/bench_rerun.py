@@ -29,6 +29,7 @@ from nodegraph.cache import Cache, default_cache_dir
 from nodegraph.executor import run_recipe
 from nodegraph.recipe import load_recipe
 from nodegraph.registry import default_registry
+from nodegraph.rerun_log import RunRecording
 
 ROOT = Path(__file__).resolve().parent.parent
 TOY = ROOT / "tests" / "engine" / "toy_nodes.py"
@@ -107,6 +108,8 @@ def main() -> None:
             compare = [sys.executable, "-m", "rerun", "rrd", "compare", "--unordered"]
             done = subprocess.run([*compare, str(tmp / f"a{i}.rrd"), str(tmp / f"b{i}.rrd")], capture_output=True)
             same.append(done.returncode == 0)
+            if i == args.repeat - 1:
+                probe = interleaved(recipe, cache, result.keys, tmp / "probe.rrd", max(2, args.repeat))
             shutil.rmtree(cache.directory)
     sizes = {k: v // args.repeat for k, v in sizes.items()}
     print(
@@ -134,12 +137,49 @@ def main() -> None:
         f"{_ratio(totals[2], totals[1])} | {_ratio(totals[2], totals[0])} | {sum(sizes.values()) / 2**20:.2f} |"
     )
     print(
+        f"\nthe same, one node at a time, load and replay alternated {max(2, args.repeat)} times (the least time "
+        "each); replay flushed to the file, so it includes writing the chunks\n"
+    )
+    print("| node | load ms | replay + flush ms | replay / load |\n|---|---|---|---|")
+    for node in sorted(probe, key=lambda n: -probe[n][1]):
+        load, replay = probe[node]
+        print(f"| {node} | {load * 1e3:.1f} | {replay * 1e3:.1f} | {_ratio(replay, load)} |")
+    load, replay = (sum(v[j] for v in probe.values()) for j in (0, 1))
+    print(f"| **all** | {load * 1e3:.1f} | {replay * 1e3:.1f} | {_ratio(replay, load)} |")
+    print(
         f"\nwhole run with a recording, median: A (cold logging) {statistics.median(whole['A']):.2f} s, "
         f"B (fragments appended) {statistics.median(whole['B']):.2f} s; "
         f"recordings A and B identical in content (rerun rrd compare): {all(same)}"
     )
     if not all(same):
         raise SystemExit("the cached run's recording differs from the cold run's")
+
+
+def interleaved(recipe, cache: Cache, keys, rrd: Path, repeat: int) -> dict[str, tuple[float, float]]:
+    """Per node: the least time over ``repeat`` alternations of loading its instances' values and of
+    appending their kept fragments to a recording (flushed)."""
+    recording = RunRecording(rrd, "probe")
+    by_node = defaultdict(list)
+    for inst, key in keys.items():
+        by_node[inst.node].append((inst, key))
+    out = {}
+    for node, instances in by_node.items():
+        expected = {port: o.type for port, o in recipe.nodes[node].spec.outputs.items()}
+        loads, replays = [], []
+        for _ in range(repeat):
+            start = time.perf_counter()
+            for _inst, key in instances:
+                cache.load(key, expected)
+            loads.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            for inst, key in instances:
+                fragment = cache.fragment(key)
+                recording.append(fragment.path, inst.entity, fragment.logged, fragment.entity, live=False)
+            recording.stream.flush()
+            replays.append(time.perf_counter() - start)
+        out[node] = (min(loads), min(replays))
+    recording.close()
+    return out
 
 
 def _ratio(a: float, b: float) -> str:
