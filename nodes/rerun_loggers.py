@@ -83,9 +83,33 @@ def elements_mesh3d(value: Aggregate):
 
 @log_value.register
 def _(value: Aggregate, log: EntityLogger) -> None:
-    archetype = elements_mesh3d(value)
-    if archetype is not None:
-        log.log("elements", archetype, static=True)
+    """Elements drawn by instancing: each library mesh once, at ``elements/<kind>/<mesh>``, with a pose per
+    element that uses it (its linear map D·R and position t: SPEC §3's x = D·R·v + t), so the recording
+    (and a cached re-run's replay) holds each mesh once, not every element's vertices. An aggregate with
+    bends (SPEC §5 quadratic) or its own element meshes (a subclass) is logged as one world-space mesh."""
+    if type(value) is not Aggregate or value.bends is not None:
+        archetype = elements_mesh3d(value)
+        if archetype is not None:
+            log.log("elements", archetype, static=True)
+        return
+    rr = rerun_module()
+    p = value.placement
+    linear = (p.rotations if value.deformations is None else value.deformations @ p.rotations).astype(np.float32)
+    names = ["_".join(_entity_parts(library.kind)) or "kind" for library in value.libraries]
+    for kind, library in enumerate(value.libraries):
+        name = names[kind] if names.count(names[kind]) == 1 else f"{names[kind]}_{kind}"
+        for m, mesh in enumerate(library.meshes):
+            use = np.flatnonzero((p.kinds == kind) & (p.variants % len(library) == m))
+            if len(use):
+                child = log.child(f"elements/{name}/{m:03d}")
+                faces = mesh.faces.astype(np.uint32)
+                child.log(
+                    "",
+                    rr.Mesh3D(vertex_positions=mesh.vertices.astype(np.float32), triangle_indices=faces),
+                    static=True,
+                )
+                poses = rr.InstancePoses3D(translations=p.positions[use].astype(np.float32), mat3x3=linear[use])
+                child.log("", poses, static=True)
 
 
 @log_value.register
