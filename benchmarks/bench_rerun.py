@@ -173,7 +173,7 @@ def interleaved(recipe, cache: Cache, keys, rrd: Path, repeat: int) -> dict[str,
             loads.append(time.perf_counter() - start)
             start = time.perf_counter()
             for inst, key in instances:
-                fragment = cache.fragment(key)
+                fragment = cache.fragment(key, recording.loggers)
                 recording.append(fragment.path, inst.entity, fragment.logged, fragment.entity, live=False)
             recording.stream.flush()
             replays.append(time.perf_counter() - start)

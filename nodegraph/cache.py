@@ -88,6 +88,7 @@ class Fragment:
     path: Path
     entity: str
     logged: dict[str, list[str]]
+    loggers: str  # ``rerun_log.logger_digest`` when it was logged: a fragment of other loggers is not replayed
 
 
 @dataclass(frozen=True)
@@ -139,6 +140,7 @@ class Cache:
             "size": len(data),
             "entity": fragment.entity,
             "logged": fragment.logged,
+            "loggers": fragment.loggers,
         }
 
     def add_fragment(self, key: str, fragment: Fragment) -> None:
@@ -148,14 +150,14 @@ class Cache:
         manifest["rerun"] = self._keep_fragment(key, fragment)
         atomic_write(self._entry_path(key), json.dumps(manifest, sort_keys=True, indent=1).encode())
 
-    def fragment(self, key: str) -> Fragment | None:
-        """Entry ``key``'s Rerun fragment (None: the entry or its fragment is missing); CacheCorruption (and
-        the fragment removed) when its bytes do not match the entry."""
+    def fragment(self, key: str, loggers: str) -> Fragment | None:
+        """Entry ``key``'s Rerun fragment (None: the entry or its fragment is missing, or it was logged by other
+        loggers than ``loggers``); CacheCorruption (and the fragment removed) when its bytes do not match."""
         try:
             record = self._manifest(key).get("rerun")
         except FileNotFoundError:
             return None
-        if not isinstance(record, dict):
+        if not isinstance(record, dict) or record.get("loggers") != loggers:
             return None
         path = self.fragment_path(key)
         try:
@@ -167,7 +169,7 @@ class Cache:
         if len(data) != record.get("size") or hashlib.sha256(data).hexdigest() != record.get("sha256"):
             path.unlink(missing_ok=True)  # the entry's values are still good: only the fragment is logged again
             raise CacheCorruption(f"Rerun fragment {path} does not match its entry (truncated or edited)")
-        return Fragment(path, record["entity"], record["logged"])
+        return Fragment(path, record["entity"], record["logged"], loggers)
 
     def has(self, key: str) -> bool:
         """True when a complete entry for ``key`` exists (blobs present with the recorded sizes)."""

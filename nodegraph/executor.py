@@ -285,20 +285,17 @@ class Executor:
         os.close(fd)
         return Path(tmp)
 
-    @staticmethod
-    def _capture_outputs(inst: Instance, capture: NodeCapture, outputs: dict[str, Any]) -> Fragment:
+    def _capture_outputs(self, inst: Instance, capture: NodeCapture, outputs: dict[str, Any]) -> Fragment:
         """Log each output of ``inst`` into ``capture`` (at ``/<node>[/<variant>]/<port>``) and close it."""
         for port, value in outputs.items():
             log_value(value, capture.logger(f"{inst.entity}/{port}"))
-        capture.close()
-        return Fragment(capture.path, inst.entity, capture.index.relative(inst.entity))
+        return capture.close(inst.entity, self.recording.loggers)
 
     def _append_unfinished(self, inst: Instance, capture: NodeCapture) -> None:
         """Append what a node that failed or was interrupted had logged, then remove its capture (a capture
         that cannot be read is reported, never put in place of the node's own error)."""
         try:
-            capture.close()
-            self._append(inst, Fragment(capture.path, inst.entity, capture.index.relative(inst.entity)), capture.live)
+            self._append(inst, capture.close(inst.entity, self.recording.loggers), capture.live)
         except Exception as exc:
             self.reporter.warn(f"node '{inst.label}': what it logged before it stopped is lost ({exc})")
         finally:
@@ -324,7 +321,7 @@ class Executor:
 
     def _kept_fragment(self, inst: Instance) -> Fragment | None:
         try:
-            return self.cache.fragment(self.keys[inst])
+            return self.cache.fragment(self.keys[inst], self.recording.loggers)
         except CacheCorruption as exc:
             self.reporter.warn(f"node '{inst.label}': {exc}; logging its outputs again")
             return None

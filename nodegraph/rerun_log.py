@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .cache import Fragment
 from .context import EntityLogger, LogIndex
 from .errors import NodegraphError
 from .values import FileSet, Image, Mesh, Table
@@ -65,11 +66,11 @@ class NodeCapture:
     def logger(self, prefix: str) -> EntityLogger:
         return EntityLogger(self.stream, prefix, self.index)
 
-    def close(self) -> Path:
-        """Flush and write the fragment's footer; returns its path."""
+    def close(self, entity: str, loggers: str) -> Fragment:
+        """Flush and write the fragment's footer: what was logged under ``entity``, by ``loggers``."""
         self.stream.flush()
         self.stream.disconnect()
-        return self.path
+        return Fragment(self.path, entity, self.index.relative(entity), loggers)
 
 
 class RunRecording:
@@ -90,6 +91,7 @@ class RunRecording:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.partial = partial_path(self.path)
         self.index = LogIndex()
+        self.loggers = logger_digest()
         self.recording_id = recording_id or str(uuid.uuid4())
         self.stream = new_stream(self.recording_id)
         self.stream.set_sinks(rr.FileSink(str(self.partial)))
@@ -149,6 +151,18 @@ class RunRecording:
             return self.partial
         os.replace(self.partial, self.path)
         return self.path
+
+
+def logger_digest() -> str:
+    """A digest of what an output's logged form depends on besides the value: the rerun-sdk version and the
+    source of every registered ``log_value`` implementation (the engine's, the node packages', plugins')."""
+    import hashlib
+    import inspect
+
+    digest = hashlib.sha256(rerun_module().__version__.encode())
+    for source in sorted({inspect.getsourcefile(fn) or "" for fn in log_value.registry.values()}):
+        digest.update(Path(source).read_bytes() if source else b"?")
+    return digest.hexdigest()[:16]
 
 
 def merge_recordings(parts: list[Path], path: Path) -> Path:

@@ -208,3 +208,17 @@ def test_an_aggregate_is_logged_by_instancing_and_draws_its_elements_where_they_
         rows = np.round(drawn, 3), np.round(expected, 3)  # rows in one order, float32 noise rounded off
         rows = [r[np.lexsort(r.T[::-1])] for r in rows]
         assert np.allclose(rows[0], rows[1], atol=2e-3)
+
+
+def test_a_fragment_logged_by_other_loggers_is_not_replayed(tmp_path, monkeypatch):
+    import nodegraph.rerun_log
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "replay.yaml").write_text(RECIPE)
+    assert run(tmp_path, "--rrd", "old.rrd") == 0
+    before = {node: record["loggers"] for node, record in fragments(tmp_path).items()}
+    monkeypatch.setattr(nodegraph.rerun_log, "logger_digest", lambda: "a-changed-logger")
+    assert run(tmp_path, "--rrd", "new.rrd") == 0  # outputs logged again by today's loggers, fragments replaced
+    after = {node: record["loggers"] for node, record in fragments(tmp_path).items()}
+    assert set(before.values()) != {"a-changed-logger"} and set(after.values()) == {"a-changed-logger"}
+    assert {"/surf/mesh", "/pts/0/spheres"} <= entities(tmp_path / "new.rrd")
