@@ -166,6 +166,7 @@ def test_an_aggregate_is_logged_by_instancing_and_draws_its_elements_where_they_
 
     from nodegraph.rerun_log import RunRecording, log_value
     from nodegraph.values import Mesh
+    from nodes.simulation.aggregate import DeformedAggregate
     from nodes.values import Aggregate, ElementLibrary, Placement
 
     rng = np.random.default_rng(4)
@@ -181,7 +182,22 @@ def test_an_aggregate_is_logged_by_instancing_and_draws_its_elements_where_they_
         variants=rng.integers(0, 5, n),
     )
     deformations = np.eye(3) + 0.2 * rng.normal(size=(n, 3, 3))
-    for aggregate in (Aggregate(placement, libraries), Aggregate(placement, libraries, deformations)):
+    # an egg: a shell and an inner part (parts == 1) that the solver moved by its own offset per element
+    egg = Mesh(
+        np.concatenate([tetra.vertices, tetra.vertices * 0.3 + 0.1]),
+        np.concatenate([tetra.faces, tetra.faces + 4]),
+        parts=np.repeat([0, 1], 4),
+    )
+    eggs = (ElementLibrary("grain", (tetra, stick)), ElementLibrary("egg", (egg,)))
+    offsets = rng.normal(size=(n, 3)) * 0.1
+    for aggregate, names in (
+        (Aggregate(placement, libraries), {"grain/000", "grain/001", "egg/000"}),
+        (Aggregate(placement, libraries, deformations), {"grain/000", "grain/001", "egg/000"}),
+        (
+            DeformedAggregate(placement, eggs, deformations, part_offsets=offsets),
+            {"grain/000", "grain/001", "egg/000/rest", "egg/000/part1"},
+        ),
+    ):
         recording = RunRecording(tmp_path / "a.rrd", "agg")
         log_value(aggregate, recording.logger("/agg"))
         recording.close()
@@ -194,7 +210,7 @@ def test_an_aggregate_is_logged_by_instancing_and_draws_its_elements_where_they_
                 if ":" in column:
                     by_path.setdefault(chunk.entity_path, {})[column] = batch.column(column).to_pylist()[0]
         meshes = {p: f for p, f in by_path.items() if p.startswith("/agg/")}
-        assert set(meshes) == {"/agg/elements/grain/000", "/agg/elements/grain/001", "/agg/elements/egg/000"}
+        assert set(meshes) == {f"/agg/elements/{name}" for name in names}
         for fields in meshes.values():
             vertices = np.asarray(fields["Mesh3D:vertex_positions"], np.float64).reshape(-1, 3)
             moves = np.asarray(fields["InstancePoses3D:translations"], np.float64).reshape(-1, 3)
