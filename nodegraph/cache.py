@@ -5,12 +5,15 @@ Layout under the cache directory::
     CACHEDIR.TAG            marks the directory as a nodegraph cache (https://bford.info/cachedir/)
     entries/ab/<key>.json   {"key", "node", "type", "outputs": {port: {"blob": sha, "size": n}}}
     blobs/cd/<sha>.npz      one encoded value (see ``codec``); identical outputs are stored once
+    rerun/ab/<key>.rrd      what the node logged to Rerun (as it ran, then its outputs): replayed into
+                            a cached re-run's recording instead of logging the values again
     checkpoints/<key>.npz   a long node's progress while it runs (``checkpoint``), removed when it completes
 
-Every file is written to a temporary name in its final directory and renamed into place, blobs
-before the entry that names them, so a crash at any moment leaves either no entry or a whole one.
-A blob whose bytes no longer hash to its name is reported as corruption and recomputed. ``clear``
-removes only what a cache holds, and only from a directory carrying the marker.
+Every file is written to a temporary name in its final directory and renamed into place, blobs and
+the Rerun fragment before the entry that names them, so a crash at any moment leaves either no entry or
+a whole one (a fragment is checked against the sha256 its entry records before it is replayed). A blob
+whose bytes no longer hash to its name is reported as corruption and recomputed. ``clear`` removes only
+what a cache holds, and only from a directory carrying the marker.
 """
 
 from __future__ import annotations
@@ -78,6 +81,17 @@ def atomic_write(path: Path, data: bytes) -> None:
 
 
 @dataclass(frozen=True)
+class Fragment:
+    """An .rrd file of what one node instance logged under ``entity``; ``logged``: the paths below the
+    entity and the archetypes logged at each (what the recording's blueprint is built from)."""
+
+    path: Path
+    entity: str
+    logged: dict[str, list[str]]
+    loggers: str  # ``rerun_log.logger_digest`` when it was logged: a fragment of other loggers is not replayed
+
+
+@dataclass(frozen=True)
 class CacheInfo:
     directory: Path
     entries: int
@@ -96,6 +110,66 @@ class Cache:
 
     def _blob_path(self, digest: str) -> Path:
         return self.directory / "blobs" / digest[:2] / f"{digest}.npz"
+
+    def _mark(self) -> None:
+        marker = self.directory / MARKER
+        if not marker.exists():
+            atomic_write(marker, MARKER_TEXT)
+
+    def fragment_path(self, key: str) -> Path:
+        return self.directory / "rerun" / key[:2] / f"{key}.rrd"
+
+    def capture_path(self, key: str) -> Path:
+        """A fresh temporary file beside entry ``key``'s Rerun fragment, for a ``NodeCapture`` to write;
+        ``store`` or ``add_fragment`` renames it into place."""
+        self._mark()  # before anything else lands in the directory: `cache clear` knows it as a cache
+        folder = self.fragment_path(key).parent
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{key}.rrd.", suffix=".tmp", dir=folder)
+        os.close(fd)
+        return Path(tmp)
+
+    def _keep_fragment(self, key: str, fragment: Fragment) -> dict[str, Any]:
+        """Move a captured fragment into place; its record for the entry. Not fsync-ed (one disk flush per
+        node instance saved): a fragment torn by a crash fails its sha256 in ``fragment`` and is logged again."""
+        data = fragment.path.read_bytes()
+        os.chmod(fragment.path, 0o666 & ~_UMASK)
+        os.replace(fragment.path, self.fragment_path(key))
+        return {
+            "sha256": hashlib.sha256(data).hexdigest(),
+            "size": len(data),
+            "entity": fragment.entity,
+            "logged": fragment.logged,
+            "loggers": fragment.loggers,
+        }
+
+    def add_fragment(self, key: str, fragment: Fragment) -> None:
+        """Keep ``fragment`` with the existing entry ``key`` (computed without a recording: by a worker,
+        or by a run with no .rrd); the entry is rewritten atomically."""
+        manifest = self._manifest(key)
+        manifest["rerun"] = self._keep_fragment(key, fragment)
+        atomic_write(self._entry_path(key), json.dumps(manifest, sort_keys=True, indent=1).encode())
+
+    def fragment(self, key: str, loggers: str) -> Fragment | None:
+        """Entry ``key``'s Rerun fragment (None: the entry or its fragment is missing, or it was logged by other
+        loggers than ``loggers``); CacheCorruption (and the fragment removed) when its bytes do not match."""
+        try:
+            record = self._manifest(key).get("rerun")
+        except FileNotFoundError:
+            return None
+        if not isinstance(record, dict) or record.get("loggers") != loggers:
+            return None
+        path = self.fragment_path(key)
+        try:
+            data = path.read_bytes()
+        except FileNotFoundError:
+            return None
+        except OSError as exc:
+            raise CacheCorruption(f"Rerun fragment {path} is unreadable: {exc}") from None
+        if len(data) != record.get("size") or hashlib.sha256(data).hexdigest() != record.get("sha256"):
+            path.unlink(missing_ok=True)  # the entry's values are still good: only the fragment is logged again
+            raise CacheCorruption(f"Rerun fragment {path} does not match its entry (truncated or edited)")
+        return Fragment(path, record["entity"], record["logged"], loggers)
 
     def has(self, key: str) -> bool:
         """True when a complete entry for ``key`` exists (blobs present with the recorded sizes)."""
@@ -154,13 +228,18 @@ class Cache:
         return outputs
 
     def store(
-        self, key: str, outputs: dict[str, Any], node_id: str, node_type: str, seconds: float | None = None
+        self,
+        key: str,
+        outputs: dict[str, Any],
+        node_id: str,
+        node_type: str,
+        seconds: float | None = None,
+        fragment: Fragment | None = None,
     ) -> None:
-        """Store a node's outputs atomically: blobs first, then the entry that makes them visible. ``seconds``,
-        the node's wall time when it ran, is kept beside them (a sweep reports it for points already cached)."""
-        marker = self.directory / MARKER
-        if not marker.exists():
-            atomic_write(marker, MARKER_TEXT)
+        """Store a node's outputs atomically: blobs (and the Rerun ``fragment``) first, then the entry that
+        makes them visible. ``seconds``, the node's wall time when it ran, is kept beside them (a sweep
+        reports it for points already cached)."""
+        self._mark()
         manifest = {"key": key, "node": node_id, "type": node_type, "outputs": {}}
         if seconds is not None:
             manifest["seconds"] = round(float(seconds), 6)
@@ -171,6 +250,8 @@ class Cache:
             if not (blob.exists() and blob.stat().st_size == len(data)):
                 atomic_write(blob, data)
             manifest["outputs"][port] = {"blob": digest, "size": len(data)}
+        if fragment is not None:
+            manifest["rerun"] = self._keep_fragment(key, fragment)
         atomic_write(self._entry_path(key), json.dumps(manifest, sort_keys=True, indent=1).encode())
 
     def recorded_seconds(self, key: str) -> float | None:
@@ -188,7 +269,8 @@ class Cache:
     def info(self) -> CacheInfo:
         entries = list((self.directory / "entries").glob("*/*.json"))
         blobs = list((self.directory / "blobs").glob("*/*.npz"))
-        size = sum(p.stat().st_size for p in entries + blobs)
+        fragments = list((self.directory / "rerun").glob("*/*.rrd"))
+        size = sum(p.stat().st_size for p in entries + blobs + fragments)
         return CacheInfo(self.directory, len(entries), len(blobs), size)
 
     def is_cache(self) -> bool:
@@ -214,7 +296,7 @@ class Cache:
                 "nothing removed. Give --cache-dir the cache directory itself"
             )
         failed = []
-        for part in ("entries", "blobs", "checkpoints", MARKER):
+        for part in ("entries", "blobs", "rerun", "checkpoints", MARKER):
             target = self.directory / part
             try:
                 if target.is_dir():

@@ -1,4 +1,4 @@
-"""The ``nodegraph`` command: run, sweep, check, nodes, describe, graph, cache.
+"""The ``nodegraph`` command: run, sweep, check, nodes, describe, graph, cache, docs, inspect.
 
 Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid.
 """
@@ -20,6 +20,8 @@ from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
 from .rerun_log import has_display
+
+SWEEP_RRD = Path("<sweep>.rrd")  # --rrd given without a path
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -119,6 +121,15 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument(
         "--out-dir", type=Path, default=None, help="where the table and plot go (default outputs/<recipe>/sweeps)"
     )
+    sweep.add_argument(
+        "--rrd",
+        type=Path,
+        nargs="?",
+        const=SWEEP_RRD,
+        default=None,
+        metavar="PATH",
+        help="log each point as its own recording, all in this one .rrd (default path: <out-dir>/<sweep>.rrd)",
+    )
     sweep.add_argument("--no-cache", action="store_true", help="neither read nor write the cache (every point cold)")
     sweep.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors and the written files")
     sweep.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
@@ -147,6 +158,13 @@ def build_parser() -> argparse.ArgumentParser:
     graph.add_argument("--dot", action="store_true", help="Graphviz DOT instead of text")
     graph.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
     _common(graph)
+
+    inspect = sub.add_parser("inspect", help="what a .rrd holds: recordings, entity tree, timelines, blueprint views")
+    inspect.add_argument("rrd", type=Path)
+    inspect.add_argument(
+        "--depth", type=int, default=6, metavar="N", help="entity tree levels shown (default 6; deeper ones counted)"
+    )
+    _common(inspect)
 
     cache = sub.add_parser("cache", help="inspect or clear the cache")
     cache.add_argument("action", choices=["info", "clear"])
@@ -233,6 +251,9 @@ def _cmd_sweep(args, registry) -> int:
     check_writable(out_dir, "sweep table", "choose another folder with --out-dir")
     if cache is not None:
         check_writable(cache.directory, "cache", "choose another with --cache-dir (or $NODEGRAPH_CACHE), or --no-cache")
+    rrd = None if args.rrd is None else (out_dir / f"{decl.name}.rrd" if args.rrd == SWEEP_RRD else args.rrd)
+    if rrd is not None:
+        check_writable(rrd.parent, "Rerun recording", "choose another path with --rrd")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
     with _pool(args, cache, reporter) as pool:
         result = run_sweep(
@@ -245,9 +266,21 @@ def _cmd_sweep(args, registry) -> int:
             plugins=args.plugin,
             reporter=reporter,
             max_seconds=None if args.yes else 60 * args.max_minutes,
+            rrd=rrd,
         )
     for path in write_sweep(result, out_dir):
         print(f"wrote {path}")
+    if rrd is not None:
+        print(f"wrote {rrd}: {len(result.points)} recordings, one per point (open with: rerun {rrd})")
+    return 0
+
+
+def _cmd_inspect(args, registry) -> int:
+    from .inspect_rrd import describe_rrd
+
+    if not args.rrd.is_file():
+        raise NodegraphError(f"{args.rrd}: no such file (give a .rrd written by nodegraph run or sweep)")
+    print(describe_rrd(args.rrd, depth=args.depth))
     return 0
 
 
@@ -429,6 +462,7 @@ COMMANDS = {
     "graph": _cmd_graph,
     "cache": _cmd_cache,
     "docs": _cmd_docs,
+    "inspect": _cmd_inspect,
 }
 
 
@@ -440,7 +474,7 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signal.SIGTERM, _interrupt)
     args = build_parser().parse_args(argv)
     try:
-        registry = default_registry(plugins=args.plugin) if args.command != "cache" else None
+        registry = default_registry(plugins=args.plugin) if args.command not in ("cache", "inspect") else None
         return COMMANDS[args.command](args, registry)
     except RecipeError as exc:  # plain text: a terminal-width wrap would split file:line:column
         print(str(exc), file=sys.stderr)

@@ -24,17 +24,29 @@ class ProgressTask:
 
 
 class LogIndex:
-    """What a run logged: entity path → the archetype names logged there, and whether any of it was
-    temporal (on a timeline) — what the recording's blueprint is built from."""
+    """What a run logged: entity path → the archetype names logged there (what the recording's
+    blueprint is built from)."""
 
     def __init__(self):
         self.archetypes: dict[str, set[str]] = {}
-        self.temporal: set[str] = set()
 
-    def add(self, path: str, archetype: str, static: bool) -> None:
+    def add(self, path: str, archetype: str) -> None:
         self.archetypes.setdefault(path, set()).add(archetype)
-        if not static:
-            self.temporal.add(path)
+
+    def relative(self, entity: str) -> dict[str, list[str]]:
+        """The paths at or below ``entity``, relative to it (``""``: the entity itself), as stored with
+        a node's cache entry."""
+        cut = len(entity)
+        return {
+            path[cut:]: sorted(kinds)
+            for path, kinds in sorted(self.archetypes.items())
+            if path == entity or path.startswith(entity + "/")
+        }
+
+    def add_relative(self, entity: str, logged: dict[str, list[str]]) -> None:
+        """Merge what ``relative`` gave, placed under ``entity``."""
+        for sub, kinds in logged.items():
+            self.archetypes.setdefault(entity + sub, set()).update(kinds)
 
 
 class EntityLogger:
@@ -63,7 +75,7 @@ class EntityLogger:
             path = self.path(sub)
             self.recording.log(path, archetype, static=static)
             if self.index is not None:
-                self.index.add(path, type(archetype).__name__, static)
+                self.index.add(path, type(archetype).__name__)
 
     def set_time(self, timeline: str, sequence: int) -> None:
         if self.recording is not None:
@@ -79,7 +91,7 @@ class EntityLogger:
             path = self.path(sub)
             self.recording.send_columns(path, indexes=indexes, columns=columns)
             if self.index is not None:
-                self.index.add(path, archetype, static=False)
+                self.index.add(path, archetype)
 
 
 class CostLimitExceeded(NodegraphError):

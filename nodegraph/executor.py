@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
+import tempfile
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -17,7 +19,7 @@ from typing import Any
 
 from . import __version__, codec
 from .blueprint import LOG, build_blueprint
-from .cache import Cache
+from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
@@ -25,7 +27,7 @@ from .output_files import MANIFEST, write_manifest, write_output
 from .params import canonical
 from .recipe import NodeEntry, Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
-from .rerun_log import RunRecording, log_value
+from .rerun_log import NodeCapture, RunRecording, log_value
 
 CACHE_FORMAT = 2  # 2: the domain value types moved from nodegraph.values to nodes.values (stored type names)
 
@@ -108,6 +110,7 @@ class Executor:
         self.status: dict[Instance, NodeRecord] = {}
         self.hits: set[str] = set()
         self.ran_elsewhere: dict[str, NodeRecord] = {}  # by cache key: instances a pool computed for this run
+        self.logged: set[Instance] = set()  # instances whose logs are in the recording
 
     # planning ---------------------------------------------------------------------------------
     def instances(self, node_id: str) -> list[Instance]:
@@ -175,14 +178,11 @@ class Executor:
                     tick()
                     if inst in self.status:
                         continue
-                    if self.keys[inst] in self.hits and self.recording is None and inst.node not in output_nodes:
-                        self.status[inst] = NodeRecord(
-                            inst.label, self.recipe.nodes[inst.node].spec.type_name, "cached"
-                        )
+                    if self.keys[inst] in self.hits and inst.node not in output_nodes and self._skip_load(inst):
                         continue
                     self.materialise(inst)
-                    if self.recording is not None:
-                        self._log_outputs(inst)
+                    if self.recording is not None and inst not in self.logged:
+                        self._log_cached(inst)
         finally:
             for inst in order:
                 elsewhere = self.ran_elsewhere.get(self.keys[inst])
@@ -221,6 +221,9 @@ class Executor:
             values = [self.materialise(src)[out] for src, out in pairs]
             kwargs[port_name] = values if port.many else (values[0] if values else None)
         kwargs.update(entry.params)
+        capture = None
+        if self.recording is not None:  # the node's logs and outputs go to a fragment, kept with its entry
+            capture = self.recording.capture(self._capture_path(key))
         ctx = Context(
             node_id=inst.node,
             node_type=spec.type_name,
@@ -229,7 +232,7 @@ class Executor:
             variant=inst.variant,
             # the node's own logging under /<node>/log: never at an output's path, where the static output
             # (the final state) would shadow what the node logged on a timeline (a simulation per step)
-            rerun=self.recording.logger(f"{inst.entity}/{LOG}") if self.recording else EntityLogger(None, inst.entity),
+            rerun=capture.logger(f"{inst.entity}/{LOG}") if capture else EntityLogger(None, inst.entity),
             reporter=self.reporter,
             max_seconds=self.max_seconds,
             checkpoint=None if self.cache is None else Checkpoint(self.cache.directory / "checkpoints" / f"{key}.npz"),
@@ -240,13 +243,14 @@ class Executor:
             with memory:
                 result = spec.run(ctx, **kwargs)
             outputs = self._check_outputs(spec, result)
-        except NodegraphError as exc:
+        except BaseException as exc:
+            if capture is not None:  # what the node logged before it stopped goes into the partial recording
+                self._append_unfinished(inst, capture)
+            if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
+                raise
             self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", now() - start)
             if isinstance(exc, NodeFailure):
                 raise
-            raise NodeFailure(inst.node, spec.type_name, exc, inst.variant, self._where(inst)) from exc
-        except Exception as exc:
-            self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", now() - start)
             raise NodeFailure(inst.node, spec.type_name, exc, inst.variant, self._where(inst)) from exc
         finally:
             if ctx.rerun.enabled:
@@ -254,12 +258,91 @@ class Executor:
         elapsed = now() - start
         for value in outputs.values():
             codec.freeze(value)
-        if self.cache is not None:
-            self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed)
-            ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
-        self.values[inst] = outputs
-        self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
+        try:
+            log_start = now()
+            fragment = None if capture is None else self._capture_outputs(inst, capture, outputs)
+            log_seconds = now() - log_start
+            if self.cache is not None:
+                self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
+                ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
+            self.values[inst] = outputs
+            self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
+            if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment
+                log_start = now()
+                kept = fragment if self.cache is None else replace(fragment, path=self.cache.fragment_path(key))
+                self._append(inst, kept, capture.live)
+                self.status[inst].log_seconds = log_seconds + now() - log_start
+        finally:
+            if capture is not None:  # moved into the cache by store; without a cache, not needed any more
+                capture.path.unlink(missing_ok=True)
         return outputs
+
+    def _capture_path(self, key: str) -> Path:
+        """Where a node's capture is written: beside its cache entry, or a temporary file without a cache."""
+        if self.cache is not None:
+            return self.cache.capture_path(key)
+        fd, tmp = tempfile.mkstemp(prefix="nodegraph-", suffix=".rrd")
+        os.close(fd)
+        return Path(tmp)
+
+    def _capture_outputs(self, inst: Instance, capture: NodeCapture, outputs: dict[str, Any]) -> Fragment:
+        """Log each output of ``inst`` into ``capture`` (at ``/<node>[/<variant>]/<port>``) and close it."""
+        for port, value in outputs.items():
+            log_value(value, capture.logger(f"{inst.entity}/{port}"))
+        return capture.close(inst.entity, self.recording.loggers)
+
+    def _append_unfinished(self, inst: Instance, capture: NodeCapture) -> None:
+        """Append what a node that failed or was interrupted had logged, then remove its capture (a capture
+        that cannot be read is reported, never put in place of the node's own error)."""
+        try:
+            self._append(inst, capture.close(inst.entity, self.recording.loggers), capture.live)
+        except Exception as exc:
+            self.reporter.warn(f"node '{inst.label}': what it logged before it stopped is lost ({exc})")
+        finally:
+            capture.path.unlink(missing_ok=True)
+
+    def _append(self, inst: Instance, fragment: Fragment, live: bool) -> None:
+        self.recording.append(fragment.path, inst.entity, fragment.logged, fragment.entity, live)
+        self.logged.add(inst)
+
+    def _skip_load(self, inst: Instance) -> bool:
+        """Record a cached instance without loading its values, when only the recording would want them
+        and its entry keeps what it logged (appended as it is). False: it must be loaded."""
+        start = now()
+        fragment = None if self.recording is None else self._kept_fragment(inst)
+        if self.recording is not None and fragment is None:
+            return False
+        record = NodeRecord(inst.label, self.recipe.nodes[inst.node].spec.type_name, "cached")
+        if fragment is not None:
+            self._append(inst, fragment, live=False)
+            record.log_seconds = now() - start
+        self.status[inst] = record
+        return True
+
+    def _kept_fragment(self, inst: Instance) -> Fragment | None:
+        try:
+            return self.cache.fragment(self.keys[inst], self.recording.loggers)
+        except CacheCorruption as exc:
+            self.reporter.warn(f"node '{inst.label}': {exc}; logging its outputs again")
+            return None
+
+    def _log_cached(self, inst: Instance) -> None:
+        """Put a loaded cached instance into the recording: the fragment kept with its entry; for an entry
+        without one (computed by a worker, or by a run with no recording) or with a damaged one, its outputs
+        are logged into a new fragment, kept with the entry for the next run."""
+        key = self.keys[inst]
+        start = now()
+        fragment = self._kept_fragment(inst)
+        if fragment is None:
+            capture = self.recording.capture(self.cache.capture_path(key))
+            try:
+                made = self._capture_outputs(inst, capture, self.values[inst])
+                self.cache.add_fragment(key, made)
+            finally:
+                capture.path.unlink(missing_ok=True)  # a leftover only if add_fragment did not move it
+            fragment = replace(made, path=self.cache.fragment_path(key))
+        self._append(inst, fragment, live=False)
+        self.status[inst].log_seconds = now() - start
 
     def _where(self, inst: Instance):
         return self.recipe.source.at(("nodes", inst.node), key=True)
@@ -277,13 +360,6 @@ class Executor:
             if not isinstance(value, declared):
                 raise TypeError(f"output '{port}' is a {type(value).__name__}, declared {declared.__name__}")
         return result
-
-    def _log_outputs(self, inst: Instance) -> None:
-        outputs = self.materialise(inst)
-        start = now()
-        for port, value in outputs.items():
-            log_value(value, self.recording.logger(f"{inst.entity}/{port}"))
-        self.status[inst].log_seconds = now() - start
 
     # writing ----------------------------------------------------------------------------------
     def write_outputs(self, result: RunResult, outputs: list[Wire], directory: Path) -> list[Path]:
@@ -333,10 +409,7 @@ def run_recipe(
     warn = reporter.warn if reporter is not None else None
     recording = None
     if rrd is not None:
-        digest = recipe.digest()
-        recording = RunRecording(
-            rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=f"{recipe.name}-{digest[:16]}"
-        )
+        recording = RunRecording(rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=recording_id(recipe))
     executor = Executor(recipe, cache, reporter, recording, max_seconds)
     ok = False
     try:
@@ -393,6 +466,12 @@ def compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds=N
         return {}
     results = pool.compute(jobs, cache.directory, reporter or Reporter(quiet=True))
     return {key: r.record for key, r in results.items() if r.record.status != "cached"}
+
+
+def recording_id(recipe: Recipe) -> str:
+    """The recording's id: the recipe's name and a digest of what it computes (overrides included), so a
+    setting is always the same recording and two settings are two."""
+    return f"{recipe.name}-{recipe.digest()[:16]}"
 
 
 def recording_name(recipe: Recipe) -> str:

@@ -17,7 +17,9 @@ from typing import Any
 
 import numpy as np
 
+from .cache import Fragment
 from .context import EntityLogger, LogIndex
+from .errors import NodegraphError
 from .values import FileSet, Image, Mesh, Table
 
 
@@ -37,14 +39,49 @@ def has_display() -> bool:
     return not sys.platform.startswith("linux") or bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
+def new_stream(recording_id: str):
+    """A stream of recording ``recording_id`` that stamps no wall-clock ``log_time``: what a run logs
+    depends only on the recipe, so a cached re-run's recording equals a cold run's in content."""
+    rr = rerun_module()
+    stream = rr.RecordingStream("nodegraph", recording_id=recording_id)
+    stream.set_log_time_enabled(False)
+    return stream
+
+
+class NodeCapture:
+    """What one node instance logs (as it runs, then its outputs) captured as an .rrd fragment at ``path``.
+
+    The fragment is replayed into the run's recording (``RunRecording.append``) and kept with the
+    node's cache entry, so a cached re-run appends these chunks instead of logging the values again.
+    ``live`` also streams them to the run's viewer as they are logged."""
+
+    def __init__(self, path: Path, recording_id: str, live: bool = False):
+        rr = rerun_module()
+        self.path = Path(path)
+        self.index = LogIndex()
+        self.live = live
+        self.stream = new_stream(recording_id)
+        self.stream.set_sinks(rr.FileSink(str(self.path)), *([rr.GrpcSink()] if live else []))
+
+    def logger(self, prefix: str) -> EntityLogger:
+        return EntityLogger(self.stream, prefix, self.index)
+
+    def close(self, entity: str, loggers: str) -> Fragment:
+        """Flush and write the fragment's footer: what was logged under ``entity``, by ``loggers``."""
+        self.stream.flush()
+        self.stream.disconnect()
+        return Fragment(self.path, entity, self.index.relative(entity), loggers)
+
+
 class RunRecording:
-    """One ``rr.RecordingStream`` per run, written to ``name.partial.rrd`` and renamed over ``name.rrd``
+    """One recording per run, written to ``name.partial.rrd`` and renamed over ``name.rrd``
     only when the run completes, so an interrupted or failed run never replaces a complete recording
     (its partial file stays beside it, named as partial; the next complete run removes it).
 
     ``recording_id`` names the run (e.g. a digest of recipe and overrides), so runs of two settings
-    are two recordings that a viewer shows side by side. ``spawn`` also streams to a viewer; a viewer
-    that cannot start is reported through ``warn`` and the file is still written."""
+    are two recordings that a viewer shows side by side. ``spawn`` also streams to a viewer (a second
+    stream of the same recording); a viewer that cannot start is reported through ``warn`` and the
+    file is still written. Nodes log into a ``NodeCapture`` whose fragment is then ``append``-ed."""
 
     def __init__(
         self, path: str | Path, recipe_name: str, spawn: bool = False, recording_id: str | None = None, warn=None
@@ -54,32 +91,97 @@ class RunRecording:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.partial = partial_path(self.path)
         self.index = LogIndex()
-        self.stream = rr.RecordingStream("nodegraph", recording_id=recording_id or str(uuid.uuid4()))
-        self.stream.send_recording_name(recipe_name)
-        sinks = [rr.FileSink(str(self.partial))]
+        self.loggers = logger_digest()
+        self.recording_id = recording_id or str(uuid.uuid4())
+        self.stream = new_stream(self.recording_id)
+        self.stream.set_sinks(rr.FileSink(str(self.partial)))
+        self.viewer = None
         if spawn:
             try:
-                self.stream.spawn(connect=False)
-                sinks.append(rr.GrpcSink())
+                viewer = new_stream(self.recording_id)
+                viewer.spawn(connect=False)
+                viewer.set_sinks(rr.GrpcSink())
+                self.viewer = viewer
             except Exception as exc:  # no viewer binary, no port: the file is what matters
                 if warn is not None:
                     warn(f"--spawn: the Rerun viewer did not start ({exc}); recording to {self.path} only")
-        self.stream.set_sinks(*sinks)
+        for stream in self.streams:
+            stream.send_recording_name(recipe_name)
+
+    @property
+    def streams(self) -> list:
+        return [self.stream] + ([self.viewer] if self.viewer is not None else [])
 
     def logger(self, prefix: str) -> EntityLogger:
+        """Log straight into the file (what a test or a tool without a cache does)."""
         return EntityLogger(self.stream, prefix, self.index)
+
+    def capture(self, path: Path) -> NodeCapture:
+        """A capture of one node instance's logging into the fragment ``path`` (live in the viewer)."""
+        return NodeCapture(path, self.recording_id, live=self.viewer is not None)
+
+    def append(self, fragment: Path, entity: str, logged: dict[str, list[str]], stored_as: str, live: bool) -> None:
+        """Send the chunks of ``fragment`` (logged under ``stored_as``) into this recording under ``entity``;
+        ``logged`` maps paths below the entity to their archetypes (for the blueprint). ``live``: the
+        viewer saw them while they were logged."""
+        from rerun.chunk import RrdReader
+
+        chunks = RrdReader(str(fragment)).stream().filter(content=f"{stored_as}/**")
+        if stored_as != entity:  # an identical node elsewhere in the recipe (same cache key) logged it
+            cut = len(stored_as)
+            chunks = chunks.map(lambda chunk: chunk.with_entity_path(entity + chunk.entity_path[cut:]))
+        targets = [self.stream] if live or self.viewer is None else self.streams
+        if len(targets) == 1:
+            targets[0].send_chunks(chunks)
+        else:
+            loaded = chunks.to_chunks()
+            for stream in targets:
+                stream.send_chunks(loaded)
+        self.index.add_relative(entity, logged)
 
     def close(self, complete: bool = True, blueprint=None) -> Path:
         """Send the blueprint, flush, write the footer (by disconnecting the sinks); a complete run's
         file replaces ``path``, an incomplete one stays at ``partial``. Returns where the file is."""
-        if blueprint is not None:
-            self.stream.send_blueprint(blueprint)
-        self.stream.flush()
-        self.stream.disconnect()
+        for stream in self.streams:
+            if blueprint is not None:
+                stream.send_blueprint(blueprint)
+            stream.flush()
+            stream.disconnect()
         if not complete:
             return self.partial
         os.replace(self.partial, self.path)
         return self.path
+
+
+def logger_digest() -> str:
+    """A digest of what an output's logged form depends on besides the value: the rerun-sdk version and the
+    source of every registered ``log_value`` implementation (the engine's, the node packages', plugins')."""
+    import hashlib
+    import inspect
+
+    digest = hashlib.sha256(rerun_module().__version__.encode())
+    for source in sorted({inspect.getsourcefile(fn) or "" for fn in log_value.registry.values()}):
+        digest.update(Path(source).read_bytes() if source else b"?")
+    return digest.hexdigest()[:16]
+
+
+def merge_recordings(parts: list[Path], path: Path) -> Path:
+    """Write the recordings of ``parts`` into one .rrd at ``path`` (each stays its own recording, e.g. one
+    per sweep point, for a viewer to show side by side), by Rerun's own ``rerun rrd merge``; written to
+    ``name.partial.rrd`` and renamed, so ``path`` is a complete file or the previous one."""
+    import subprocess
+
+    partial = partial_path(path)
+    done = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "merge", "-o", str(partial), *map(str, parts)],
+        capture_output=True,
+        text=True,
+    )
+    if done.returncode != 0:
+        partial.unlink(missing_ok=True)
+        raise NodegraphError(f"cannot write {path}: rerun rrd merge failed: {done.stderr.strip()[-500:]}")
+    os.replace(partial, path)
+    return path
 
 
 @singledispatch

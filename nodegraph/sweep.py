@@ -14,8 +14,10 @@ what is upstream of the simulation). Per point:
 
 The table is written as Markdown and CSV, and a PNG plots each metric against the time with the Pareto
 front marked (both lower is better: metrics are errors); the recipe's own setting is marked too.
-With a pool (``pool.InstancePool``) the instances of every point are computed by its workers first,
-as one task graph in which shared instances are one task.
+With ``rrd`` every point is also logged as its own recording (id from recipe and overrides), all in
+one .rrd, so two settings can be scrubbed side by side in a viewer. With a pool (``pool.InstancePool``)
+the instances of every point are computed by its workers first, as one task graph in which shared
+instances are one task.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import csv
 import hashlib
 import io
 import math
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +40,7 @@ from .errors import Issue, Location, NodegraphError, RecipeError
 from .executor import Executor, Instance, resolve_outputs, run_recipe
 from .recipe import Recipe, load_recipe
 from .report import Reporter
+from .rerun_log import merge_recordings
 from .sweep_decl import MetricRef, SweepDecl, override_text
 from .values import Table
 
@@ -234,8 +238,11 @@ def run_sweep(
     plugins=(),
     reporter: Reporter | None = None,
     max_seconds: float | None = None,
+    rrd: Path | None = None,
 ) -> SweepResult:
-    """Run every point of ``decl`` on the recipe at ``path`` (see the module docstring)."""
+    """Run every point of ``decl`` on the recipe at ``path`` (see the module docstring). With ``rrd``, each
+    point is logged as its own recording (id from recipe and overrides: ``executor.recording_id``), all
+    in that one file, so two settings can be scrubbed side by side in a viewer."""
     reporter = reporter or Reporter(quiet=True)
     started = time.perf_counter()
     base = load_recipe(path, registry, [*decl.fixed, *overrides])
@@ -266,13 +273,16 @@ def run_sweep(
                 if result.record.status != "cached":
                     times[key] = result.record.seconds
     results = []
-    with reporter.task(f"sweep {decl.name}: {len(points)} points", len(points)) as tick:
+    task = reporter.task(f"sweep {decl.name}: {len(points)} points", len(points))
+    with tempfile.TemporaryDirectory(prefix="nodegraph-sweep-") as scratch, task as tick:
+        parts = None if rrd is None else Path(scratch)  # each point's recording, merged into rrd at the end
         for (values, texts, recipe), keys in zip(points, plans):
             cached_before = {k for k in keys.values() if cache is not None and cache.has(k) and k not in times}
             run = run_recipe(
                 recipe,
                 outputs=[str(w) for w in wires],
                 cache=cache,
+                rrd=None if parts is None else parts / f"{len(results):04d}.rrd",
                 reporter=Reporter(quiet=True),
                 max_seconds=max_seconds,
             )
@@ -300,6 +310,8 @@ def run_sweep(
             )
             tick()
             reporter.info(f"point {len(results)}/{len(points)} {' '.join(texts)}: {describe_point(results[-1])}")
+        if parts is not None:
+            merge_recordings(sorted(parts.glob("*.rrd")), rrd)
     names = list(dict.fromkeys(n for p in results for n in p.metrics))
     return SweepResult(
         recipe=base.name,

@@ -81,11 +81,52 @@ def elements_mesh3d(value: Aggregate):
     )
 
 
+def _instance_groups(value: Aggregate, mesh) -> list[tuple[str, np.ndarray, bool]] | None:
+    """How one library mesh is drawn by instancing: (entity suffix, its faces, moved by the part offset).
+    A part-offset aggregate (the yolk that rose inside its egg) splits the mesh into its part-1 faces and
+    the rest; None when it cannot be instanced exactly (the two share vertices)."""
+    offsets = getattr(value, "part_offsets", None)
+    if offsets is None or mesh.parts is None or not np.any(mesh.parts == 1):
+        return [("", mesh.faces, False)]
+    moved, rest = mesh.faces[mesh.parts == 1], mesh.faces[mesh.parts != 1]
+    if np.intersect1d(moved, rest).size:
+        return None
+    return [("rest", rest, False), ("part1", moved, True)]
+
+
 @log_value.register
 def _(value: Aggregate, log: EntityLogger) -> None:
-    archetype = elements_mesh3d(value)
-    if archetype is not None:
-        log.log("elements", archetype, static=True)
+    """Elements drawn by instancing: each library mesh once, at ``elements/<kind>/<mesh>``, with a pose per
+    element that uses it (its linear map D·R and position t: SPEC §3's x = D·R·v + t; a displaced inner part
+    also moved by its offset), so the recording (and a cached re-run's replay) holds each mesh once, not
+    every element's vertices. An aggregate with bends (SPEC §5 quadratic), or whose parts cannot be split,
+    is logged as one world-space mesh."""
+    from .simulation.aggregate import DeformedAggregate
+
+    p = value.placement
+    plans = [[_instance_groups(value, mesh) for mesh in library.meshes] for library in value.libraries]
+    if type(value) not in (Aggregate, DeformedAggregate) or value.bends is not None or None in sum(plans, []):
+        archetype = elements_mesh3d(value)
+        if archetype is not None:
+            log.log("elements", archetype, static=True)
+        return
+    rr = rerun_module()
+    linear = (p.rotations if value.deformations is None else value.deformations @ p.rotations).astype(np.float32)
+    names = ["_".join(_entity_parts(library.kind)) or "kind" for library in value.libraries]
+    for kind, library in enumerate(value.libraries):
+        name = names[kind] if names.count(names[kind]) == 1 else f"{names[kind]}_{kind}"
+        for m, mesh in enumerate(library.meshes):
+            use = np.flatnonzero((p.kinds == kind) & (p.variants % len(library) == m))
+            for suffix, faces, moved in plans[kind][m] if len(use) else []:
+                child = log.child("/".join(x for x in ("elements", name, f"{m:03d}", suffix) if x))
+                kept, local = np.unique(faces, return_inverse=True)  # this group's vertices, re-indexed
+                mesh3d = rr.Mesh3D(
+                    vertex_positions=mesh.vertices[kept].astype(np.float32),
+                    triangle_indices=local.reshape(-1, 3).astype(np.uint32),
+                )
+                child.log("", mesh3d, static=True)
+                at = p.positions[use] + (value.part_offsets[use] if moved else 0.0)
+                child.log("", rr.InstancePoses3D(translations=at.astype(np.float32), mat3x3=linear[use]), static=True)
 
 
 @log_value.register

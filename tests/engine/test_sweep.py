@@ -153,3 +153,30 @@ def test_cli_sweep_errors_exit_2(sweep_file, tmp_path, capsys):
     assert "--metric:1" in capsys.readouterr().err
     assert main(["sweep", str(sweep_file), "--sweep", "nope", *args]) == 2
     assert "declares shift" in capsys.readouterr().err
+
+
+def test_cli_sweep_rrd_holds_one_recording_per_point_with_its_id(sweep_file, registry, tmp_path, capsys):
+    from rerun.chunk import RrdReader
+
+    from nodegraph.executor import recording_id
+    from nodegraph.recipe import load_recipe
+
+    out = tmp_path / "sweeps"
+    assert main(["sweep", str(sweep_file), "--plugin", TOY, "--out-dir", str(out), "-q", "--rrd"]) == 0
+    assert "4 recordings, one per point" in capsys.readouterr().out
+    rrd = out / "shift.rrd"  # --rrd without a path: beside the table, named after the sweep
+    reader = RrdReader(str(rrd))
+    found = {entry.recording_id for entry in reader.recordings()}
+    expected = set()
+    for dx in ("0.0", "1.0"):
+        for count in ("20", "30"):
+            overrides = ["slow.seconds=0.0", f"shift.dx={dx}", f"pts.count={count}"]
+            expected.add(recording_id(load_recipe(sweep_file, registry, overrides)))
+    assert len(expected) == 4 and found == expected
+    for entry in reader.recordings():  # each point's recording is whole: its entities and the sim steps
+        names = set(reader.stream(store=entry).collect().schema().entity_paths())
+        assert {"/pts/0/spheres", "/shift/0/spheres", "/slow/0/log/energy", "/merge/spheres"} <= names, names
+    again = tmp_path / "again.rrd"  # deterministic ids: the same sweep again gives the same recordings
+    assert main(["sweep", str(sweep_file), "--plugin", TOY, "--out-dir", str(out), "-q", "--rrd", str(again)]) == 0
+    assert {entry.recording_id for entry in RrdReader(str(again)).recordings()} == found
+    assert not [p.name for p in out.iterdir() if "partial" in p.name or p.suffix == ".tmp"]

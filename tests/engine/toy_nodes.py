@@ -120,7 +120,12 @@ def toy_physics(ctx, spheres, *, dt):
     "toy_fail", version=1, inputs={"spheres": In(SphereSet, "anything")}, outputs={"spheres": Out(SphereSet, "never")}
 )
 def toy_fail(ctx, spheres):
-    """Always fails."""
+    """Logs two steps of a scalar, then always fails."""
+    import rerun as rr
+
+    for step in range(2):
+        ctx.rerun.set_time("sim_step", step)
+        ctx.rerun.log("energy", rr.Scalars(float(step)))
     raise ValueError("toy failure: radius must be positive")
 
 
