@@ -57,6 +57,7 @@ FAT_LINES = {"salmon": (7.0, 1.4, 25.0, 6.0), "tuna": (9.0, 0.6, 20.0, 4.0)}
             0.5,
             "grid cell of the plate and of the slab's mesh (fat lines need < their width)",
             range=(0.05, 10.0),
+            units="mm",
         ),
     },
 )
