@@ -243,10 +243,14 @@ def ceramic_material(color) -> Material:
     )
 
 
-def soak_depths(vertices: list[np.ndarray], cell: float) -> np.ndarray:
-    """Each element's depth below the aggregate's top surface (mm): the top surface is the upper envelope of
-    all element vertices over a horizontal grid of ``cell`` mm (the highest vertex in each column); an element's
-    depth is that envelope over its own highest vertex's column minus that vertex's height (0: it is on top)."""
+def soak_depths(vertices: list[np.ndarray], cell: float, spread: float) -> np.ndarray:
+    """Each element's depth below the aggregate's top surface as the syrup sees it (mm). The top is the upper
+    envelope of all element vertices over a horizontal grid of ``cell`` mm (the highest vertex per column),
+    widened by a maximum over a disc of radius ``spread`` (syrup poured on top runs that far sideways as it
+    soaks down, so a flank lies below the summit beside it, not on a surface of its own); an element's depth
+    is that top over its highest vertex minus the vertex's height (0: on top)."""
+    from scipy.ndimage import maximum_filter
+
     if not vertices:
         return np.zeros(0)
     tops = np.array([v[np.argmax(v[:, 2])] for v in vertices])
@@ -254,10 +258,14 @@ def soak_depths(vertices: list[np.ndarray], cell: float) -> np.ndarray:
     lo = points[:, :2].min(axis=0)
     cells = np.floor((points[:, :2] - lo) / cell).astype(np.int64)
     shape = cells.max(axis=0) + 1
-    envelope = np.full(int(shape[0] * shape[1]), -np.inf)
-    np.maximum.at(envelope, cells[:, 0] * shape[1] + cells[:, 1], points[:, 2])
+    envelope = np.full((int(shape[0]), int(shape[1])), -np.inf)
+    np.maximum.at(envelope, (cells[:, 0], cells[:, 1]), points[:, 2])
+    reach = int(np.floor(spread / cell))
+    if reach > 0:
+        i, j = np.mgrid[-reach : reach + 1, -reach : reach + 1]
+        envelope = maximum_filter(envelope, footprint=i**2 + j**2 <= reach**2, mode="constant", cval=-np.inf)
     own = np.floor((tops[:, :2] - lo) / cell).astype(np.int64)
-    return np.maximum(envelope[own[:, 0] * shape[1] + own[:, 1]] - tops[:, 2], 0.0)
+    return np.maximum(envelope[own[:, 0], own[:, 1]] - tops[:, 2], 0.0)
 
 
 def syrup_levels(depths: np.ndarray, soak_depth: float, levels: int) -> np.ndarray:

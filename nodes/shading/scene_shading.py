@@ -30,6 +30,7 @@ class ShadeSettings:
     presets: dict[str, str]
     syrup_color: tuple[float, float, float]
     syrup_depth: float
+    syrup_spread: float
     syrup_levels: int
     scenery_color: tuple[float, float, float]
     table: CdrfTable
@@ -69,7 +70,7 @@ def _element_pieces(
     if is_ice.any():
         ice_vertices = [meshes[i].vertices for i in np.flatnonzero(is_ice)]
         cell = float(np.median([np.ptp(v, axis=0).max() for v in ice_vertices]))  # one element length
-        depths = mat.soak_depths(ice_vertices, cell)
+        depths = mat.soak_depths(ice_vertices, cell, settings.syrup_spread)
         grade[is_ice] = mat.syrup_levels(depths, settings.syrup_depth, settings.syrup_levels)
     pieces = []
     for i in range(len(p)):

@@ -27,7 +27,7 @@ def _check(params):
     "shade",
     # 2: meshes named <kind>/<number>[/<part>] (Rerun entity paths, glTF node names)
     # 3: per-vertex CDRF σ in the scene (renderers evaluate the CDRF), sheen; ikura membrane a clear dielectric
-    # 4: syrup graded by depth below the mound's top (syrup_depth, syrup_levels); chestnut, salmon, tuna presets
+    # 4: syrup graded by depth below the mound's top (syrup_depth, _spread, _levels); chestnut, salmon, tuna presets
     version=4,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
@@ -83,6 +83,14 @@ def _check(params):
             range=(0.0, 1e4),
             units="mm",
         ),
+        "syrup_spread": Param(
+            float,
+            10.0,
+            "kakigori: how far the syrup runs sideways as it soaks down: the top surface is the highest point "
+            "within this radius, so flanks below the summit get less (0: every column's own top is soaked)",
+            range=(0.0, 1e4),
+            units="mm",
+        ),
         "syrup_levels": Param(
             int, 6, "kakigori: syrup grades between plain ice and soaked (one material each)", range=(1, 64)
         ),
@@ -111,6 +119,7 @@ def shade(
     presets,
     syrup_color,
     syrup_depth,
+    syrup_spread,
     syrup_levels,
     scenery_color,
     table_size,
@@ -131,6 +140,7 @@ def shade(
         presets=parse_overrides(presets),
         syrup_color=tuple(syrup_color),
         syrup_depth=syrup_depth,
+        syrup_spread=syrup_spread,
         syrup_levels=syrup_levels,
         scenery_color=tuple(scenery_color),
         table=CdrfTable.build(*table_size),

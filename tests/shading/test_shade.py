@@ -69,7 +69,7 @@ def test_syrup_is_graded_by_depth_below_the_local_top_surface(scene_inputs):
     column's own top, so the short column's top flake is soaked although it sits lower than the tall
     column's half-soaked ones (a share of the mound's absolute height would leave it dry)."""
     ice = _ice_columns(scene_inputs, {0.0: 10, 20.0: 3})
-    scene = shade.call(aggregates=[ice], syrup_depth=15.0, syrup_levels=5)
+    scene = shade.call(aggregates=[ice], syrup_depth=15.0, syrup_spread=0.0, syrup_levels=5)
     assert all(m.ior == pytest.approx(1.31) and m.transmission > 0 for m in scene.materials)
     grade = _grade(scene)
     tall, short = grade[:10], grade[10:]
@@ -78,6 +78,8 @@ def test_syrup_is_graded_by_depth_below_the_local_top_surface(scene_inputs):
     assert short[-1] > tall[2]  # the same height in the tall column is deeper below its top
     tints = {m.name: m.subsurface_color for m in scene.materials}
     assert tints["ice_syrup_100"][1] < tints["ice_syrup_40"][1] < tints["ice"][1]  # deeper red with more syrup
+    poured = _grade(shade.call(aggregates=[ice], syrup_depth=15.0, syrup_spread=25.0, syrup_levels=5))
+    assert poured[9] == 100 and poured[-1] < 60  # run sideways from the summit: the low column is a flank
     dry = shade.call(aggregates=[ice], syrup_depth=0.0)
     assert {m.name for m in dry.materials} == {"ice"}
 
