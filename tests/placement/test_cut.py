@@ -102,3 +102,24 @@ def test_rice_bunny_recipe_has_the_cut_view():
         ("shade_cut", "aggregates"): ["cut.aggregate"],
         ("cut_preview", "scene"): ["shade_cut.scene"],
     }
+
+
+def test_rice_bunny_cut_preview_at_a_small_size(tmp_path):
+    """The recipe end to end at a small size: the cut view keeps fewer grains than the pressed bunny, all on
+    the far side of its plane, and writes cut_preview.png beside the whole bunny's preview."""
+    from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
+
+    tiny = [f"{node}.{p}={v}" for node in ("preview", "cut_preview") for p, v in (("width", 48), ("height", 36))]
+    small = ["bunny.size=16.0", "grain_spheres.variants=2", "grain_volume.resolution=24", "press.frames=2"]
+    recipe = load_recipe(REPO / "graphs" / "rice_bunny.yaml", default_registry(), small + tiny)
+    result = run_recipe(
+        recipe,
+        cache=Cache(tmp_path / "cache"),
+        out_dir=tmp_path / "out",
+        outputs=["press.aggregate", "cut.aggregate", "preview.image", "cut_preview.image"],
+    )
+    pressed, opened = result.output("press.aggregate").placement, result.output("cut.aggregate").placement
+    assert 0 < len(opened) < len(pressed) and len(pressed) > 20
+    middle = 0.5 * (pressed.positions.min(axis=0) + pressed.positions.max(axis=0))
+    assert (opened.positions[:, 1] >= middle[1]).all()
+    assert {"preview.png", "cut_preview.png"} <= {p.name for p in result.files}
