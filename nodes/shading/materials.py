@@ -3,7 +3,8 @@
 Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice is interpolated
 by water content (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a
 water film: clearcoat). Ikura has two parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is
-transmissive (IOR 1.31) and the flakes at the top of the mound carry syrup.
+transmissive (IOR 1.31) and carries syrup graded by its depth below the mound's top surface; chestnut (kuri
+gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh, 1 fat.
 """
 
 from __future__ import annotations
@@ -13,12 +14,16 @@ import numpy as np
 from ..values import Material
 from .cdrf import WATER_MAX
 
-PRESETS = ("rice", "ikura", "ice")
+PRESETS = ("rice", "ikura", "ice", "chestnut", "salmon", "tuna")
 _KIND_WORDS = {
     "rice": ("rice", "japonica", "indica", "aromatic", "grain"),
     "ikura": ("ikura", "roe", "egg"),
     "ice": ("ice", "kakigori", "flake"),
+    "chestnut": ("chestnut", "kuri"),
+    "salmon": ("salmon", "sake"),
+    "tuna": ("tuna", "maguro"),
 }
+PARTS = {"ikura": ("membrane", "yolk"), "salmon": ("flesh", "fat"), "tuna": ("flesh", "fat")}  # Mesh.parts ids
 
 
 def preset_for_kind(kind: str, overrides: dict[str, str]) -> str:
@@ -140,6 +145,92 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
     return ice, syrup
 
 
+def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material, ...]:
+    """``levels`` + 1 materials from plain ice (0) to fully soaked (``levels``): share k/levels of the syrup's
+    colour, tint, transmission, gloss and coat, linearly mixed (a soaked flake is ice with syrup in its pores)."""
+    if levels < 1:
+        raise ValueError(f"syrup levels must be ≥ 1, got {levels}")
+    graded = [ice]
+    for k in range(1, levels + 1):
+        t = k / levels
+        graded.append(
+            Material(
+                name=f"ice_syrup_{round(100 * t):d}",
+                base_color=_mix(ice.base_color, syrup.base_color, t),
+                subsurface=ice.subsurface + (syrup.subsurface - ice.subsurface) * t,
+                subsurface_radius=_mix(ice.subsurface_radius, syrup.subsurface_radius, t),
+                subsurface_color=_mix(ice.subsurface_color, syrup.subsurface_color, t),
+                roughness=ice.roughness + (syrup.roughness - ice.roughness) * t,
+                clearcoat=syrup.clearcoat * t,
+                clearcoat_roughness=syrup.clearcoat_roughness,
+                ior=ice.ior,
+                transmission=ice.transmission + (syrup.transmission - ice.transmission) * t,
+                transmission_roughness=ice.transmission_roughness
+                + (syrup.transmission_roughness - ice.transmission_roughness) * t,
+            )
+        )
+    return tuple(graded)
+
+
+def chestnut_material() -> Material:
+    """Chestnut (kuri, as in kuri gohan): yellow, matte and slightly waxy — an opaque body with a little light
+    through it (subsurface 0.2, far less than rice) under a soft, rough coat (the waxy sheen), so it reads as
+    a different solid from the translucent, glossy rice around it."""
+    return Material(
+        name="chestnut",
+        base_color=(0.80, 0.50, 0.06),
+        subsurface=0.2,
+        subsurface_radius=(0.6, 0.35, 0.1),
+        subsurface_color=(0.90, 0.62, 0.15),
+        specular=0.4,
+        roughness=0.65,
+        sheen=0.15,
+        sheen_tint=0.6,
+        clearcoat=0.15,
+        clearcoat_roughness=0.4,
+        ior=1.45,
+    )
+
+
+def fish_materials(kind: str) -> tuple[Material, Material]:
+    """(flesh, fat) of a raw fish topping: translucent flesh (subsurface) with a moist coat, and the whiter
+    fat lines (myocommata) with more sheen. ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep
+    red flesh, faint fat)."""
+    if kind == "salmon":
+        flesh_color, flesh_sss, fat_color, fat_sheen = (0.90, 0.22, 0.07), (0.98, 0.38, 0.16), (0.95, 0.62, 0.45), 0.5
+    elif kind == "tuna":
+        flesh_color, flesh_sss, fat_color, fat_sheen = (0.42, 0.03, 0.04), (0.70, 0.08, 0.08), (0.75, 0.30, 0.30), 0.3
+    else:
+        raise ValueError(f"fish kind '{kind}': expected salmon or tuna")
+    flesh = Material(
+        name=f"{kind}_flesh",
+        base_color=flesh_color,
+        subsurface=0.6,
+        subsurface_radius=(3.0, 1.0, 0.5),
+        subsurface_color=flesh_sss,
+        roughness=0.4,
+        sheen=0.2,
+        sheen_tint=0.5,
+        clearcoat=0.4,
+        clearcoat_roughness=0.12,
+        ior=1.38,
+    )
+    fat = Material(
+        name=f"{kind}_fat",
+        base_color=fat_color,
+        subsurface=0.4,
+        subsurface_radius=(1.5, 1.0, 0.7),
+        subsurface_color=fat_color,
+        roughness=0.3,
+        sheen=fat_sheen,
+        sheen_tint=0.2,
+        clearcoat=0.5,
+        clearcoat_roughness=0.08,
+        ior=1.47,
+    )
+    return flesh, fat
+
+
 def ceramic_material(color) -> Material:
     """The bowl (scenery): a glazed ceramic — a coloured body under a glossy clear glaze."""
     return Material(
@@ -152,9 +243,36 @@ def ceramic_material(color) -> Material:
     )
 
 
-def syrup_mask(heights: np.ndarray, coverage: float) -> np.ndarray:
-    """Elements in the top ``coverage`` share of the mound's height carry syrup (poured from above)."""
-    if len(heights) == 0 or coverage <= 0:
-        return np.zeros(len(heights), bool)
-    lo, hi = heights.min(), heights.max()
-    return heights >= hi - coverage * (hi - lo)
+def soak_depths(vertices: list[np.ndarray], cell: float, spread: float) -> np.ndarray:
+    """Each element's depth below the aggregate's top surface as the syrup sees it (mm). The top is the upper
+    envelope of all element vertices over a horizontal grid of ``cell`` mm (the highest vertex per column),
+    widened by a maximum over a disc of radius ``spread`` (syrup poured on top runs that far sideways as it
+    soaks down, so a flank lies below the summit beside it, not on a surface of its own); an element's depth
+    is that top over its highest vertex minus the vertex's height (0: on top)."""
+    from scipy.ndimage import maximum_filter
+
+    if not vertices:
+        return np.zeros(0)
+    tops = np.array([v[np.argmax(v[:, 2])] for v in vertices])
+    points = np.concatenate(vertices)
+    lo = points[:, :2].min(axis=0)
+    cells = np.floor((points[:, :2] - lo) / cell).astype(np.int64)
+    shape = cells.max(axis=0) + 1
+    envelope = np.full((int(shape[0]), int(shape[1])), -np.inf)
+    np.maximum.at(envelope, (cells[:, 0], cells[:, 1]), points[:, 2])
+    reach = int(np.floor(spread / cell))
+    if reach > 0:
+        i, j = np.mgrid[-reach : reach + 1, -reach : reach + 1]
+        envelope = maximum_filter(envelope, footprint=i**2 + j**2 <= reach**2, mode="constant", cval=-np.inf)
+    own = np.floor((tops[:, :2] - lo) / cell).astype(np.int64)
+    return np.maximum(envelope[own[:, 0], own[:, 1]] - tops[:, 2], 0.0)
+
+
+def syrup_levels(depths: np.ndarray, soak_depth: float, levels: int) -> np.ndarray:
+    """Syrup grade per element, 0 (plain ice) … ``levels`` (soaked): the concentration falls linearly from 1 at
+    the top surface to 0 at ``soak_depth`` below it (syrup poured on top, drawn down by gravity through the
+    flakes), rounded to the nearest of ``levels`` steps."""
+    if soak_depth <= 0:
+        return np.zeros(len(depths), np.int64)
+    concentration = np.clip(1.0 - np.asarray(depths) / soak_depth, 0.0, 1.0)
+    return np.rint(concentration * levels).astype(np.int64)

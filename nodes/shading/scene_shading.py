@@ -2,7 +2,7 @@
 
 All element meshes are concatenated so normals and curvature come from one libigl call (elements
 are disjoint components, so this equals per-element evaluation), shaded in one vectorised pass,
-then split back into one mesh per element part (ikura: membrane, yolk).
+then split back into one mesh per element part (ikura: membrane, yolk; fish: flesh, fat).
 """
 
 from __future__ import annotations
@@ -20,8 +20,6 @@ from .cdrf import CdrfTable, curvature_sigma
 from .curvature import mean_curvature, vertex_normals
 from .vertex_shading import Light, cdrf_colors
 
-PART_NAMES = {0: "membrane", 1: "yolk"}
-
 
 @dataclass(frozen=True)
 class ShadeSettings:
@@ -31,7 +29,9 @@ class ShadeSettings:
     ambient: float
     presets: dict[str, str]
     syrup_color: tuple[float, float, float]
-    syrup_coverage: float
+    syrup_depth: float
+    syrup_spread: float
+    syrup_levels: int
     scenery_color: tuple[float, float, float]
     table: CdrfTable
 
@@ -42,36 +42,55 @@ class _Piece:
     material: Material
 
 
-def _element_pieces(aggregate: Aggregate, settings: ShadeSettings, numbers: dict[str, int]) -> list[_Piece]:
+def _materials(settings: ShadeSettings) -> dict[str, tuple[Material, ...]]:
+    """Each preset's materials: one for a plain solid, one per part (``materials.PARTS``), one per syrup grade."""
+    ice, syrup = mat.ice_materials(settings.syrup_color)
+    return {
+        "rice": (mat.rice_material(settings.water_content),),
+        "chestnut": (mat.chestnut_material(),),
+        "ikura": mat.ikura_materials(),
+        "salmon": mat.fish_materials("salmon"),
+        "tuna": mat.fish_materials("tuna"),
+        "ice": mat.syrup_grades(ice, syrup, settings.syrup_levels),
+    }
+
+
+def _element_pieces(
+    aggregate: Aggregate, settings: ShadeSettings, materials: dict[str, tuple[Material, ...]], numbers: dict[str, int]
+) -> list[_Piece]:
     """The aggregate's element parts with their materials, named ``<kind>/<number>[/<part>]``, numbered per
-    kind across the scene's aggregates (``numbers``: the next number of each kind)."""
+    kind across the scene's aggregates (``numbers``: the next number of each kind). Ice gets the syrup grade
+    of its depth below the aggregate's top surface (``materials.soak_depths``, ``materials.syrup_levels``)."""
     p = aggregate.placement
     kinds = [lib.kind for lib in aggregate.libraries]
     presets = [mat.preset_for_kind(kind, settings.presets) for kind in kinds]
+    meshes = [aggregate.element_mesh(i) for i in range(len(p))]
     is_ice = np.array([presets[k] == "ice" for k in p.kinds], bool)
-    syrup = np.zeros(len(p), bool)
-    syrup[is_ice] = mat.syrup_mask(p.positions[is_ice, 2], settings.syrup_coverage)
-    rice = mat.rice_material(settings.water_content)
-    ikura = mat.ikura_materials()
-    ice = mat.ice_materials(settings.syrup_color)
+    grade = np.zeros(len(p), np.int64)
+    if is_ice.any():
+        ice_vertices = [meshes[i].vertices for i in np.flatnonzero(is_ice)]
+        cell = float(np.median([np.ptp(v, axis=0).max() for v in ice_vertices]))  # one element length
+        depths = mat.soak_depths(ice_vertices, cell, settings.syrup_spread)
+        grade[is_ice] = mat.syrup_levels(depths, settings.syrup_depth, settings.syrup_levels)
     pieces = []
     for i in range(len(p)):
         preset = presets[p.kinds[i]]
         kind = kinds[p.kinds[i]]
         numbers[kind] = numbers.get(kind, -1) + 1
-        mesh = dataclasses.replace(aggregate.element_mesh(i), name=f"{kind}/{numbers[kind]:04d}")
-        if preset == "rice":
-            pieces.append(_Piece(mesh, rice))
-        elif preset == "ice":
-            pieces.append(_Piece(mesh, ice[int(syrup[i])]))
+        mesh = dataclasses.replace(meshes[i], name=f"{kind}/{numbers[kind]:04d}")
+        if preset == "ice":
+            pieces.append(_Piece(mesh, materials["ice"][grade[i]]))
+        elif preset not in mat.PARTS:
+            pieces.append(_Piece(mesh, materials[preset][0]))
         else:
+            names = mat.PARTS[preset]
             parts = np.zeros(len(mesh.faces), np.int32) if mesh.parts is None else mesh.parts
             for part in np.unique(parts):
-                if part not in PART_NAMES:
-                    raise ValueError(
-                        f"element {i} ({kinds[p.kinds[i]]}): face part {part} is not an ikura part (0 membrane, 1 yolk)"
-                    )
-                pieces.append(_Piece(_submesh(mesh, parts == part, f"{mesh.name}/{PART_NAMES[part]}"), ikura[part]))
+                if not 0 <= part < len(names):
+                    allowed = ", ".join(f"{k} {name}" for k, name in enumerate(names))
+                    raise ValueError(f"element {i} ({kind}): face part {part} is not a {preset} part ({allowed})")
+                submesh = _submesh(mesh, parts == part, f"{mesh.name}/{names[part]}")
+                pieces.append(_Piece(submesh, materials[preset][part]))
     return pieces
 
 
@@ -84,7 +103,8 @@ def _submesh(mesh: Mesh, face_mask: np.ndarray, name: str) -> Mesh:
 def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: ShadeSettings) -> ShadedScene:
     """CDRF-shaded meshes, one per element part and scenery mesh, with their materials."""
     numbers: dict[str, int] = {}
-    pieces = [piece for aggregate in aggregates for piece in _element_pieces(aggregate, settings, numbers)]
+    materials = _materials(settings)
+    pieces = [piece for a in aggregates for piece in _element_pieces(a, settings, materials, numbers)]
     if not pieces:
         raise ValueError("aggregates: no elements to shade (every aggregate is empty)")
     ceramic = mat.ceramic_material(settings.scenery_color)

@@ -27,7 +27,8 @@ def _check(params):
     "shade",
     # 2: meshes named <kind>/<number>[/<part>] (Rerun entity paths, glTF node names)
     # 3: per-vertex CDRF σ in the scene (renderers evaluate the CDRF), sheen; ikura membrane a clear dielectric
-    version=3,
+    # 4: syrup graded by depth below the mound's top (syrup_depth, _spread, _levels); chestnut, salmon, tuna presets
+    version=4,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "scenery": In(Mesh, "other meshes to show, e.g. the bowl (glazed ceramic)", optional=True, many=True),
@@ -70,12 +71,28 @@ def _check(params):
         "presets": Param(
             list[str],
             [],
-            "material preset per element kind, 'kind=preset' (rice, ikura, ice); "
-            "kinds named like japonica/ikura/ice are matched automatically",
+            "material preset per element kind, 'kind=preset' (rice, ikura, ice, chestnut, salmon, tuna); "
+            "kinds named like japonica/ikura/ice/chestnut/salmon/tuna are matched automatically",
         ),
         "syrup_color": Param(RGB, (0.75, 0.02, 0.06), "kakigori syrup colour (linear RGB)", range=(0.0, 1.0)),
-        "syrup_coverage": Param(
-            float, 0.5, "share of the ice mound's height, from the top, soaked in syrup", range=(0.0, 1.0)
+        "syrup_depth": Param(
+            float,
+            15.0,
+            "kakigori: how deep the syrup soaks below the mound's top surface (its concentration falls "
+            "linearly from 1 at the surface to 0 at this depth); 0 = no syrup",
+            range=(0.0, 1e4),
+            units="mm",
+        ),
+        "syrup_spread": Param(
+            float,
+            10.0,
+            "kakigori: how far the syrup runs sideways as it soaks down: the top surface is the highest point "
+            "within this radius, so flanks below the summit get less (0: every column's own top is soaked)",
+            range=(0.0, 1e4),
+            units="mm",
+        ),
+        "syrup_levels": Param(
+            int, 6, "kakigori: syrup grades between plain ice and soaked (one material each)", range=(1, 64)
         ),
         "scenery_color": Param(RGB, (0.05, 0.07, 0.16), "glaze colour of scenery meshes (the bowl)", range=(0.0, 1.0)),
         "table_size": Param(
@@ -101,7 +118,9 @@ def shade(
     ambient,
     presets,
     syrup_color,
-    syrup_coverage,
+    syrup_depth,
+    syrup_spread,
+    syrup_levels,
     scenery_color,
     table_size,
 ):
@@ -120,7 +139,9 @@ def shade(
         ambient=ambient,
         presets=parse_overrides(presets),
         syrup_color=tuple(syrup_color),
-        syrup_coverage=syrup_coverage,
+        syrup_depth=syrup_depth,
+        syrup_spread=syrup_spread,
+        syrup_levels=syrup_levels,
         scenery_color=tuple(scenery_color),
         table=CdrfTable.build(*table_size),
     )

@@ -1,9 +1,11 @@
 """Target shapes of an aggregate — SPEC §2 inputs: primitives and bowls (``shape``), user meshes
-(``mesh_file``) and manifold3d booleans (``boolean``). Kernels: ``solids``, ``closed_mesh``.
+(``mesh_file``) and manifold3d booleans (``boolean``); a topping slab draped over an aggregate (``drape``: the
+fish on nigiri). Kernels: ``solids``, ``closed_mesh``, ``plate_drape``.
 """
 
 from .boolean import boolean
+from .drape import drape
 from .mesh_file import mesh_file
 from .shape import shape
 
-__all__ = ["boolean", "mesh_file", "shape"]
+__all__ = ["boolean", "drape", "mesh_file", "shape"]

@@ -46,28 +46,84 @@ def test_same_input_gives_bit_identical_colours(scene_inputs):
     assert digest() == digest()
 
 
-def test_ice_with_syrup_on_top(scene_inputs):
+def _ice_columns(scene_inputs, heights: dict[float, int]):
+    """Ice columns: at each x (key), a stack of that many capsule 'flakes' 3 mm apart from z = 0 up."""
+    from dataclasses import replace
+
+    from nodes.values import Placement
+
+    rice, _ = scene_inputs["aggregates"]
+    positions = np.array([(x, 0.0, 3.0 * k) for x, n in heights.items() for k in range(n)])
+    placement = Placement(positions, np.tile([0, 0, 1.0], (len(positions), 1)), kind_names=("ice",))
+    return replace(rice, placement=placement, libraries=(replace(rice.libraries[0], kind="ice"),))
+
+
+def _grade(scene, name_prefix="ice"):
+    """Syrup share per element in scene order (0 plain ice … 100 soaked), from the material names."""
+    names = [scene.materials[k].name for k in scene.material_of]
+    return np.array([0 if n == "ice" else int(n.rsplit("_", 1)[1]) for n in names if n.startswith(name_prefix)])
+
+
+def test_syrup_is_graded_by_depth_below_the_local_top_surface(scene_inputs):
+    """A tall column (10 flakes) and a short one (3) side by side: syrup falls with the depth below each
+    column's own top, so the short column's top flake is soaked although it sits lower than the tall
+    column's half-soaked ones (a share of the mound's absolute height would leave it dry)."""
+    ice = _ice_columns(scene_inputs, {0.0: 10, 20.0: 3})
+    scene = shade.call(aggregates=[ice], syrup_depth=15.0, syrup_spread=0.0, syrup_levels=5)
+    assert all(m.ior == pytest.approx(1.31) and m.transmission > 0 for m in scene.materials)
+    grade = _grade(scene)
+    tall, short = grade[:10], grade[10:]
+    assert tall[-1] == 100 and short[-1] == 100  # each column's top is soaked
+    assert (np.diff(tall) >= 0).all() and tall[0] == 0 and len(set(tall)) >= 4  # graded down the column
+    assert short[-1] > tall[2]  # the same height in the tall column is deeper below its top
+    tints = {m.name: m.subsurface_color for m in scene.materials}
+    assert tints["ice_syrup_100"][1] < tints["ice_syrup_40"][1] < tints["ice"][1]  # deeper red with more syrup
+    poured = _grade(shade.call(aggregates=[ice], syrup_depth=15.0, syrup_spread=25.0, syrup_levels=5))
+    assert poured[9] == 100 and poured[-1] < 60  # run sideways from the summit: the low column is a flank
+    dry = shade.call(aggregates=[ice], syrup_depth=0.0)
+    assert {m.name for m in dry.materials} == {"ice"}
+
+
+def test_chestnut_is_its_own_matte_yellow_material(scene_inputs):
     from dataclasses import replace
 
     rice, _ = scene_inputs["aggregates"]
-    heights = rice.placement.positions + np.c_[np.zeros((len(rice.placement), 2)), np.arange(len(rice.placement))]
-    ice = replace(
-        rice, placement=replace(rice.placement, positions=heights), libraries=(replace(rice.libraries[0], kind="ice"),)
+    half = np.arange(len(rice.placement)) % 2
+    mixed = replace(
+        rice,
+        placement=replace(rice.placement, kinds=half, kind_names=("japonica", "chestnut")),
+        libraries=(rice.libraries[0], replace(rice.libraries[0], kind="chestnut")),
     )
-    scene = shade.call(aggregates=[ice], syrup_coverage=0.5)
-    assert {m.name for m in scene.materials} == {"ice", "ice_syrup"}
-    assert all(m.ior == pytest.approx(1.31) and m.transmission > 0 for m in scene.materials)
-    syrup = [
-        mesh.vertices[:, 2].mean()
-        for mesh, k in zip(scene.meshes, scene.material_of)
-        if scene.materials[k].name == "ice_syrup"
-    ]
-    plain = [
-        mesh.vertices[:, 2].mean()
-        for mesh, k in zip(scene.meshes, scene.material_of)
-        if scene.materials[k].name == "ice"
-    ]
-    assert min(syrup) > max(plain)  # syrup soaks the top of the mound
+    scene = shade.call(aggregates=[mixed], water_content=18.0)
+    materials = {m.name: m for m in scene.materials}
+    assert set(materials) == {"rice", "chestnut"}
+    kuri, grain = materials["chestnut"], materials["rice"]
+    r, g, b = kuri.base_color
+    assert r > g > 3 * b  # yellow
+    assert kuri.roughness > grain.roughness and kuri.subsurface < grain.subsurface  # matte, nearly opaque
+    assert 0 < kuri.clearcoat < grain.clearcoat and kuri.clearcoat_roughness > grain.clearcoat_roughness  # waxy
+
+
+@pytest.mark.parametrize("kind", ["salmon", "tuna"])
+def test_fish_topping_parts_get_flesh_and_fat(scene_inputs, kind):
+    from dataclasses import replace
+
+    from nodegraph.values import Mesh
+
+    rice, _ = scene_inputs["aggregates"]
+    grain = rice.libraries[0].meshes[0]
+    parts = (grain.vertices[grain.faces].mean(axis=1)[:, 0] > 0).astype(np.int32)  # half the faces are fat
+    slab = Mesh(grain.vertices, grain.faces, parts=parts, name=kind)
+    library = replace(rice.libraries[0], kind=kind, meshes=(slab,))
+    fish = replace(rice, placement=rice.placement.subset([0]), libraries=(library,))
+    scene = shade.call(aggregates=[fish])
+    assert [m.name for m in scene.meshes] == [f"{kind}/0000/flesh", f"{kind}/0000/fat"]
+    flesh, fat = (scene.materials[k] for k in scene.material_of)
+    assert flesh.name == f"{kind}_flesh" and fat.name == f"{kind}_fat"
+    assert flesh.subsurface > 0 and fat.sheen > flesh.sheen and np.mean(fat.base_color) > np.mean(flesh.base_color)
+    bad = replace(fish, libraries=(replace(fish.libraries[0], meshes=(replace(slab, parts=parts * 2),)),))
+    with pytest.raises(ValueError, match="flesh"):
+        shade.call(aggregates=[bad])
 
 
 @pytest.mark.parametrize(
