@@ -225,8 +225,12 @@ class XpbdSolver:
                 st.v,
                 st.x_start,
                 st.asleep,
+                st.awake,
                 st.pushed,
+                m.r,
+                m.elem,
                 m.start,
+                *self._contact_rows(),
                 k.h,
                 s.sleep_speed,
             )
@@ -326,6 +330,12 @@ class XpbdSolver:
         )
         self._track(moved)
         return residual
+
+    def _contact_rows(self):
+        """(nbr_start, nbr) of the neighbour lists, or empty lists (no pair effects)."""
+        if self.pairs is None:
+            return np.zeros(1, np.int64), np.zeros(0, np.int64)
+        return self.pairs.lists.nbr_start, self.pairs.lists.nbr
 
     def _tracking(self):
         """(x_built, moved) for the displacement check folded into predict / update_velocity."""
