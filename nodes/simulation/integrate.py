@@ -151,6 +151,7 @@ def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, nbr_sta
     m = start.shape[0] - 1
     limit = (sleep_speed * h) ** 2
     slow = np.empty(m, np.bool_)
+    falling = 0  # awake elements that would fall asleep now: without any, the touching rule has nothing to do
     for c in prange(m):
         fastest = 0.0
         hit = False
@@ -159,7 +160,10 @@ def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, nbr_sta
             fastest = max(fastest, _moved_sq(x, x_start, i))
         slow[c] = fastest < limit
         asleep[c] = slow[c] and not hit
-    for i in prange(nbr_start.shape[0] - 1):  # the touching rule: both awake, one fast (each side written alone)
+        if asleep[c] and start[c + 1] > start[c] and awake[start[c]]:
+            falling += 1
+    rows = nbr_start.shape[0] - 1 if falling else 0
+    for i in prange(rows):  # the touching rule: both awake, one fast (each side written alone)
         if not awake[i] or elem[i] >= m:
             continue
         for a in range(nbr_start[i], nbr_start[i + 1]):
