@@ -4,14 +4,16 @@ Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``xpbd_sce
 upper cube ``ratio``× heavier) dropped 0.1 r onto the ground; max inter-element penetration / r over
 the run, energy growth (max of E − E₀ over the run, in M·g·r; gravity does the only work, so > 0 is
 a gain) and the settled error of the element centres against the analytic rest (r). A refused
-setting (gravity beyond the speed clamp, ``solver.Coefficients``) is marked "refused".
+setting (``solver.check_gravity_step``: g·h² beyond what the iterations hold or the speed clamp)
+is marked "refused".
 Map 2 — speed clamp × wall thickness: 200 particles fired at 20 m/s at a bowl wall; how many cross it.
-Run: python benchmarks/bench_xpbd_stability.py [--quick]   (table; PNG in benchmarks/results/)
+Run: python benchmarks/bench_xpbd_stability.py [--quick]   (tables; benchmarks/results/xpbd_stability[_quick].png)
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -20,17 +22,19 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "simulation"))
-RESULTS = ROOT / "benchmarks" / "results"
+RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
 from xpbd_scenes import bowl_mesh, mechanical_energy, solver_run, stack_column  # noqa: E402
 
 from nodes.simulation.collider import signed_distance_grid  # noqa: E402
 from nodes.simulation.settings import SolverSettings  # noqa: E402
 
+ITERATIONS = 2  # the node's default
+
 
 def stack_cell(dt, substeps, ratio, compliance, frames):
     try:
-        s, rest, mass = stack_column(2, dt=dt, substeps=substeps, compliance=compliance)
+        s, rest, mass = stack_column(2, dt=dt, substeps=substeps, iterations=ITERATIONS, compliance=compliance)
     except ValueError:
         return None
     s.model.w[8:] /= ratio
@@ -74,7 +78,7 @@ def main():
         steps, ratios, compliances, frames = [(1 / 60, 10), (1 / 60, 2)], [1, 1000], [1e-6], 15
         clamps, walls = [1.0, 2.0], [0.4]
     else:
-        steps = [(1 / 60, 40), (1 / 60, 10), (1 / 60, 4), (1 / 60, 2), (1 / 30, 10), (0.5, 256), (0.5, 1)]
+        steps = [(1 / 60, 40), (1 / 60, 10), (1 / 60, 4), (1 / 60, 3), (1 / 60, 2), (1 / 30, 10), (0.5, 256), (0.5, 1)]
         ratios, compliances, frames = [1, 10, 100, 1000], [0.0, 1e-6, 1e-3], 45
         clamps, walls = [0.5, 1.0, 2.0], [0.2, 0.4, 0.8, 2.0]
     rows = []
@@ -101,20 +105,60 @@ def main():
         import matplotlib
 
         matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
     except ImportError:
         return
-    fig, ax = plt.subplots(figsize=(7, 5))
+    plot(rows, walls_rows, RESULTS / f"xpbd_stability{'_quick' if args.quick else ''}.png")
+
+
+def plot(rows, walls_rows, path):
+    """Left: max penetration against g·h²/r per iteration (the refusal's measure: refused at
+    g·h² > iterations/4·r, dashed), marker size = mass ratio, colour = compliance, refused cells as
+    crosses at the top; right: particles through the wall, speed clamp × wall thickness."""
+    import matplotlib.pyplot as plt
+
+    from nodes.simulation.solver import HOLD, SINK
+
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5))
+    colours = {c: f"C{k}" for k, c in enumerate(sorted({row[3] for row in rows}))}
     for dt, sub, ratio, c, cell in rows:
-        if cell is not None:
-            ax.scatter(
-                9810 * (dt / sub) ** 2, max(cell[0], 1e-4), s=20 + 10 * np.log10(ratio) ** 2, c="C0" if c else "C1"
-            )
-    ax.set(xscale="log", yscale="log", xlabel="g·h² (mm, r = 1 mm)", ylabel="max penetration (r)")
-    ax.set_title("xpbd stability map: 2-cube stack (size: mass ratio; orange: compliance 0)")
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    fig.savefig(RESULTS / "xpbd_stability.png", dpi=120)
-    print(f"\nsaved {RESULTS / 'xpbd_stability.png'}")
+        load = 9810 * (dt / sub) ** 2 / ITERATIONS
+        size = 20 + 12 * np.log10(ratio) ** 2
+        if cell is None:
+            ax.scatter(load, 3.0, s=size, marker="x", c=colours[c])
+        else:
+            ax.scatter(load, min(max(cell[0], 1e-3), 3.0), s=size, c=colours[c], alpha=0.7)
+    ax.axvline(HOLD / SINK, ls="--", c="k", lw=1)
+    ax.axhline(1.0, ls=":", c="grey", lw=1)
+    for c, colour in colours.items():
+        ax.scatter([], [], c=colour, label=f"compliance {c:g} s²/g")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.set(
+        xscale="log",
+        yscale="log",
+        xlabel="g·h² / iterations (mm, r = 1 mm)",
+        ylabel="max penetration over the run (r)",
+        title="two-cube stack: size = mass ratio 1…1000, × = refused",
+    )
+    clamps = sorted({row[0] for row in walls_rows})
+    walls = sorted({row[1] for row in walls_rows})
+    grid = np.array([[next(k for cl, w, k in walls_rows if cl == c and w == wall) for wall in walls] for c in clamps])
+    bx.imshow(grid, cmap="Reds", vmin=0, vmax=200, origin="lower", aspect="auto")
+    for i in range(len(clamps)):
+        for j in range(len(walls)):
+            bx.text(j, i, str(grid[i, j]), ha="center", va="center")
+    bx.set(
+        xticks=range(len(walls)),
+        xticklabels=[f"{w:g}" for w in walls],
+        yticks=range(len(clamps)),
+        yticklabels=[f"{c:g}" for c in clamps],
+        xlabel="wall thickness (mm; particles r = 0.5)",
+        ylabel="speed clamp (r per substep)",
+        title="particles through the bowl wall (of 200 at 20 m/s)",
+    )
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    print(f"\nsaved {path}")
 
 
 if __name__ == "__main__":

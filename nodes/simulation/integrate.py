@@ -117,13 +117,32 @@ def wake_flags(x, x_start, asleep, awake, pushed, start, probe):
     return count
 
 
+@njit(cache=True, inline="always")
+def _moved_sq(x, x_start, i):
+    return (x[i, 0] - x_start[i, 0]) ** 2 + (x[i, 1] - x_start[i, 1]) ** 2 + (x[i, 2] - x_start[i, 2]) ** 2
+
+
+@njit(cache=True, inline="always")
+def _touching(x, r, i, j):
+    """Particles i and j in contact, within 5 % of their radii sum (a resting contact the solve left
+    just apart still counts)."""
+    reach = 1.05 * (r[i] + r[j])
+    return (x[i, 0] - x[j, 0]) ** 2 + (x[i, 1] - x[j, 1]) ** 2 + (x[i, 2] - x[j, 2]) ** 2 < reach * reach
+
+
 @njit(cache=True, parallel=True)
-def sleep_clusters(x, v, x_start, asleep, pushed, start, h, sleep_speed):
+def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, nbr_start, nbr, h, sleep_speed):
     """Put to sleep (and zero the velocities of) every element whose particles all lie within
-    sleep_speed·h of x_start, measured from before pre-stabilisation, and none of which was
-    ``pushed`` (``contact_constraints.sleeper_share``): an element pinned in an overlap that
-    pre-stabilisation and the solve undo in turn has a velocity but no motion, and sleeps. Every
-    other element is awake: an asleep one that a fast neighbour ran into wakes here.
+    sleep_speed·h of x_start, measured from before pre-stabilisation, none of which was ``pushed``
+    (``contact_constraints.sleeper_share``) and none of which touches a particle of another awake
+    element that moved farther (``nbr_start, nbr``: the contact lists, half or full; none without
+    them). An element pinned in an overlap that pre-stabilisation and the solve undo in turn has a
+    velocity but no motion, and sleeps. Every other element is awake: an asleep one that a fast
+    neighbour ran into wakes here.
+
+    The touching rule keeps the supports of a moving element awake until it has settled on them:
+    supports that fell asleep under it held still as obstacles, it bounced on them at up to 11 mm/s
+    and woke them (``pushed``) every few substeps, for seconds (issue 11, long-rest test).
 
     Sleeping removes jitter (no kinetic energy creeps into resting piles) and work: the solver
     skips asleep elements in prediction, shape matching, bending and adhesion, and pairs of two
@@ -131,16 +150,29 @@ def sleep_clusters(x, v, x_start, asleep, pushed, start, h, sleep_speed):
     """
     m = start.shape[0] - 1
     limit = (sleep_speed * h) ** 2
+    slow = np.empty(m, np.bool_)
+    falling = 0  # awake elements that would fall asleep now: without any, the touching rule has nothing to do
     for c in prange(m):
         fastest = 0.0
         hit = False
         for i in range(start[c], start[c + 1]):
             hit = hit or pushed[i]
-            fastest = max(
-                fastest,
-                (x[i, 0] - x_start[i, 0]) ** 2 + (x[i, 1] - x_start[i, 1]) ** 2 + (x[i, 2] - x_start[i, 2]) ** 2,
-            )
-        asleep[c] = fastest < limit and not hit
+            fastest = max(fastest, _moved_sq(x, x_start, i))
+        slow[c] = fastest < limit
+        asleep[c] = slow[c] and not hit
+        if asleep[c] and start[c + 1] > start[c] and awake[start[c]]:
+            falling += 1
+    rows = nbr_start.shape[0] - 1 if falling else 0
+    for i in prange(rows):  # the touching rule: both awake, one fast (each side written alone)
+        if not awake[i] or elem[i] >= m:
+            continue
+        for a in range(nbr_start[i], nbr_start[i + 1]):
+            j = nbr[a]
+            if not awake[j] or elem[j] >= m or elem[j] == elem[i] or slow[elem[i]] == slow[elem[j]]:
+                continue
+            if _touching(x, r, i, j):
+                asleep[elem[i] if slow[elem[i]] else elem[j]] = False
+    for c in prange(m):
         if asleep[c]:
             for i in range(start[c], start[c + 1]):
                 v[i, 0] = 0.0

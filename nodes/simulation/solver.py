@@ -47,6 +47,45 @@ class KernelDispatch:
         return kernel(*args)
 
 
+# a resting stack sinks ≈ SINK·g·h²/iterations into its support every substep before the solve carries
+# the weight (stack of two cubes, 30 frames, r = 1 mm: max penetration / (g·h²/r) = 2.6, 1.8, 0.7, 0.2
+# at 1, 2, 4, 8 iterations, with g·h² from 0.17 to 0.68 r; 4/iterations bounds all of them)
+SINK = 4.0
+HOLD = 1.0  # resting overlap, radii, beyond which a stack has collapsed (centres past the contact): refused
+
+
+def check_gravity_step(settings: SolverSettings, pieces: int, r_min: float, r_typical: float) -> None:
+    """Refuse a step in which gravity alone sinks resting particles deeper than the solver holds:
+    g·h² ≤ HOLD·iterations/SINK·r, r the median radius (the particles that carry a pile; stacks then
+    rest within HOLD radii: 2 substeps × 2 iterations of 1/60 s let a stack of 1 mm particles
+    collapse to 1.2 r, issue 11), and g·h² ≤ clamp·r_min (the speed clamp would hold the smallest
+    particle to less than gravity's step). ``pieces``: solves per substep. Raises ValueError naming
+    the substeps (and iterations) that would do."""
+    s = settings
+    h = s.h / pieces
+    step = s.gravity * h * h  # mm
+    hold = HOLD * s.iterations / SINK * r_typical
+    clamped = s.speed_clamp / pieces * r_min
+    if step <= min(hold, clamped):
+        return
+    need = int(np.ceil(s.dt / pieces * np.sqrt(s.gravity / min(hold, clamped)) - 1e-9))
+    options = [f"substeps ≥ {need}"]
+    iterations = int(np.ceil(SINK * step / (HOLD * r_typical) - 1e-9))
+    if step <= clamped and iterations <= 64:
+        options.append(f"iterations ≥ {iterations}")
+    why = (
+        f"the speed clamp ({s.speed_clamp / pieces:.3g} r per solve: {clamped:.3g} mm)"
+        if clamped < hold
+        else f"what {s.iterations} iterations hold ({hold:.3g} mm: ≈ {SINK:g}·g·h²/iterations of overlap, "
+        f"at most {HOLD:g} r of the median r = {r_typical:.3g} mm)"
+    )
+    raise ValueError(
+        f"substeps: dt / substeps = {s.h:.3g} s lets gravity alone move a particle g·h² = {step:.3g} mm per "
+        f"substep, more than {why}: resting stacks would sink "
+        f"into each other; use {' or '.join(options)}, or a shorter dt"
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class Coefficients:
     """The settings as the kernels take them, derived once per run; effects that are off give the
@@ -77,18 +116,11 @@ class Coefficients:
         pieces = max(1, int(np.ceil(s.speed_clamp / MAX_TRAVEL - 1e-12)))
         h = settings.h / pieces
         gravity = "gravity" in effects
-        r_min = float(model.r[: model.n_moving].min())
-        if gravity and s.gravity * h * h > s.speed_clamp / pieces * r_min:
-            need = int(np.ceil(s.dt * np.sqrt(s.gravity / (s.speed_clamp * r_min))))
-            raise ValueError(
-                f"dt / substeps = {settings.h:.3g} s: gravity alone moves a particle g·h² = {s.gravity * h * h:.3g} mm "
-                f"per substep, more than the speed clamp ({s.speed_clamp / pieces:.3g} × r = "
-                f"{s.speed_clamp / pieces * r_min:.3g} mm for the smallest particle): every resting particle "
-                f"would be pushed that far into its support each substep and stacks collapse into each other; "
-                f"use substeps ≥ {need} or a shorter dt"
-            )
+        radii = model.r[: model.n_moving]
+        if gravity:
+            check_gravity_step(s, pieces, float(radii.min()), float(np.median(radii)))
         lift = (
-            np.log(s.shock_propagation) / (2.0 * float(np.median(model.r[: model.n_moving])))
+            np.log(s.shock_propagation) / (2.0 * float(np.median(radii)))
             if gravity and s.shock_propagation > 1.0
             else 0.0
         )
@@ -225,8 +257,12 @@ class XpbdSolver:
                 st.v,
                 st.x_start,
                 st.asleep,
+                st.awake,
                 st.pushed,
+                m.r,
+                m.elem,
                 m.start,
+                *self._contact_rows(),
                 k.h,
                 s.sleep_speed,
             )
@@ -326,6 +362,12 @@ class XpbdSolver:
         )
         self._track(moved)
         return residual
+
+    def _contact_rows(self):
+        """(nbr_start, nbr) of the neighbour lists, or empty lists (no pair effects)."""
+        if self.pairs is None:
+            return np.zeros(1, np.int64), np.zeros(0, np.int64)
+        return self.pairs.lists.nbr_start, self.pairs.lists.nbr
 
     def _tracking(self):
         """(x_built, moved) for the displacement check folded into predict / update_velocity."""
