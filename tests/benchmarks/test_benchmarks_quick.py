@@ -31,7 +31,7 @@ def requires(path: Path) -> tuple[str, ...]:
 
 @pytest.mark.bench_quick
 @pytest.mark.parametrize("path", BENCHMARKS, ids=[p.stem for p in BENCHMARKS])
-def test_benchmark_quick_mode_runs(path, tmp_path):
+def test_benchmark_quick_mode_runs(path, tmp_path, monkeypatch):
     assert "--quick" in path.read_text(), f"{path.name} needs a --quick mode (seconds) for CI"
     missing = [name for name in requires(path) if importlib.util.find_spec(name) is None]
     if missing:
@@ -54,3 +54,20 @@ def test_benchmark_quick_mode_runs(path, tmp_path):
     seconds = time.perf_counter() - start
     assert done.returncode == 0, f"{path.name} --quick failed:\n{done.stdout[-2000:]}\n{done.stderr[-4000:]}"
     print(f"{path.name} --quick: {seconds:.1f} s")
+    report_sections_read(path.stem, done.stdout, tmp_path, monkeypatch)
+
+
+def report_sections_read(stem, stdout, results, monkeypatch):
+    """docs/accuracy.md's sections for this benchmark are made from its output: each finds its table and
+    the knob's default row in it (so a changed table format or a default left out of the grid fails here,
+    not when the report is next regenerated)."""
+    spec = importlib.util.spec_from_file_location("accuracy_report", ROOT / "benchmarks" / "accuracy_report.py")
+    report = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(report)
+    monkeypatch.setattr(report, "IMAGES", results / "images")
+    defaults = report.defaults()
+    for make in report.SECTIONS.get(stem, ()):
+        lines = make(stdout, defaults, results, True)
+        text = "\n".join(lines)
+        assert lines[0].startswith("## ") and "**Default" in text, f"{make.__name__}: no default stated"
+        assert any(line.startswith("| **") for line in text.splitlines()), f"{make.__name__}: no default row in bold"
