@@ -661,7 +661,7 @@ def particles_section(sweep_md: str, d, results, command: str) -> list[str]:
 #: The benchmarks the report runs (extra arguments before --quick) and the sections made from their output;
 #: tests/benchmarks feeds each section its benchmark's --quick output, so a changed table format fails there.
 BENCHMARKS = {
-    "bench_elements": [],
+    "bench_elements": ["--knobs"],
     "bench_placement": ["--knobs"],
     "bench_xpbd": ["--only", "accuracy"],
     "bench_solver_default": [],

@@ -520,6 +520,9 @@ def main() -> None:
     parser.add_argument("--memory-child", nargs=3, metavar=("RES", "SHAPE", "METHOD"), help=argparse.SUPPRESS)
     parser.add_argument("--baseline-child", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--memory", type=int, metavar="RES", help="only the peak-memory measurement at RES")
+    parser.add_argument(
+        "--knobs", action="store_true", help="only the sweeps docs/accuracy.md reads (no 16-grain timing, no memory)"
+    )
     args = parser.parse_args()
     if args.memory_child:
         memory_child(int(args.memory_child[0]), args.memory_child[1], args.memory_child[2])
@@ -547,8 +550,8 @@ def main() -> None:
         grains=1 if args.quick else 2,
         samples=2000 if args.quick else 10000,
     )
-    sixteen = sixteen_grains(DEFAULT_RESOLUTION, repeats=1 if args.quick else 3)
-    memory = measure_memory(64, (("rice", "exact"),)) if args.quick else measure_memory(256)
+    sixteen = {} if args.knobs else sixteen_grains(DEFAULT_RESOLUTION, repeats=1 if args.quick else 3)
+    memory = [] if args.knobs else measure_memory(64, (("rice", "exact"),)) if args.quick else measure_memory(256)
     write_results(rows, length, sixteen, memory, DEFAULT_RESOLUTION, expansion, budgets, knob_resolution)
 
 
