@@ -70,7 +70,7 @@ def _check(params):
         # few substeps and many iterations win on the resting stack but let the bowl's drop sink in
         # (1 × 8: 1.07 r). The 2,000-grain bowl runs in ≈ 8.5 s of its 30 s budget at 10 × 2.
         # Re-checked in CPU time (benchmarks/bench_solver_default.py, docs/accuracy.md): at equal passes a substep
-        # costs more than an iteration (20 × 1: ≈ 1.35× the CPU, for half the stack's rest error); no setting of
+        # costs more than an iteration (20 × 1: 1.2–1.4× the CPU, for half the stack's rest error); no setting of
         # 16–20 passes is better on every error at no more CPU, so 10 × 2 stays.
         "substeps": Param(int, 10, "XPBD substeps per frame (accuracy: see the accuracy benchmark)", range=(1, 256)),
         "iterations": Param(int, 2, "constraint iterations per substep", range=(1, 64)),
