@@ -714,26 +714,28 @@ def sweep(name: str, quick: bool, results: Path, log: list[str]) -> tuple[str, s
     return md.read_text(), f"nodegraph sweep {recipe}{' ' + ' '.join(grid) if grid else ''}"
 
 
-def measure_all(results: Path, quick: bool) -> dict:
+def measure_all(results: Path, quick: bool, quick_only=()) -> dict:
     """Run every benchmark and sweep into ``results``; returns what the report is written from (also saved
-    there as ``report_inputs.json``, so ``--render`` can write the report again without running anything)."""
-    flag = ["--quick"] if quick else []
+    there as ``report_inputs.json``, so ``--render`` can write the report again without running anything).
+    ``quick_only``: benchmarks run in their quick mode even in a full report (what fits the machine's time)."""
+    flag = lambda bench: ["--quick"] if quick or bench in quick_only else []  # noqa: E731
     started = datetime.datetime.now().astimezone()
     source = commit()  # before the run: the report copies its plots into the work tree
     load_start = os.getloadavg()[0]
     t0 = time.perf_counter()
     log: list[str] = []
     outs = {
-        bench: run([f"benchmarks/{bench}.py", *args, *flag], results, log)
+        bench: run([f"benchmarks/{bench}.py", *args, *flag(bench)], results, log)
         for bench, args in BENCHMARKS.items()
         if bench != "bench_preview"
     }
     sweeps = {name: sweep(name, quick, results, log) for name in SWEEPS}
     outs["bench_preview"] = run(  # full mode: the main job's scene is computed into the report's cache
-        ["benchmarks/bench_preview.py", *flag, "--cache-dir", str(results / "cache")], results, log
+        ["benchmarks/bench_preview.py", *flag("bench_preview"), "--cache-dir", str(results / "cache")], results, log
     )
     inputs = {
         "quick": quick,
+        "quick_benchmarks": sorted(quick_only),
         "started": started.isoformat(),
         "commit": source,
         "load": [load_start, os.getloadavg()[0]],
@@ -751,14 +753,18 @@ def write_report(inputs: dict, results: Path) -> None:
     quick, outs, log = inputs["quick"], inputs["outputs"], inputs["log"]
     d = defaults()
     started = datetime.datetime.fromisoformat(inputs["started"])
-    sections = {bench: [line for make in SECTIONS[bench] for line in make(outs[bench], d, results, quick)]
-                for bench in BENCHMARKS}  # fmt: skip
+    cut = inputs.get("quick_benchmarks", [])
+    sections = {
+        bench: [line for make in SECTIONS[bench] for line in make(outs[bench], d, results, quick or bench in cut)]
+        for bench in BENCHMARKS
+    }
     solver_md_and_command, particles_md_and_command = (inputs["sweeps"][n] for n in SWEEPS)
     mode = (
         "**quick mode** (`--quick`: fewer resolutions, smaller scenes, fewer repeats and sweep points) because "
         "the full sweeps take many times longer on this loaded 2-core machine; `--full` runs them"
         if quick
         else "full mode"
+        + (f", except {', '.join(cut)} in its quick mode (the full run did not fit this session's time)" if cut else "")
     )
     lines = [
         "# Accuracy against time",
@@ -788,6 +794,14 @@ def write_report(inputs: dict, results: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--full", action="store_true", help="the benchmarks' full modes (slow), not --quick")
+    parser.add_argument(
+        "--quick-only",
+        nargs="+",
+        default=[],
+        choices=list(BENCHMARKS),
+        metavar="BENCH",
+        help="with --full: run these benchmarks in their quick mode (what fits)",
+    )
     parser.add_argument("--keep", type=Path, metavar="DIR", help="keep the results in DIR (for --render)")
     parser.add_argument(
         "--render", type=Path, metavar="DIR", help="write the report again from a --keep folder; runs nothing"
@@ -798,10 +812,10 @@ def main() -> None:
         return
     if args.keep:
         args.keep.mkdir(parents=True, exist_ok=True)
-        write_report(measure_all(args.keep, not args.full), args.keep)
+        write_report(measure_all(args.keep, not args.full, args.quick_only), args.keep)
         return
     with tempfile.TemporaryDirectory() as tmp:
-        write_report(measure_all(Path(tmp), not args.full), Path(tmp))
+        write_report(measure_all(Path(tmp), not args.full, args.quick_only), Path(tmp))
 
 
 def commit() -> str:
