@@ -6,8 +6,14 @@
    mean distance (in grain lengths and in voxels), volume error, triangle count; and the offset
    surface at level −2 voxels (grown by two cells) against the exact offset: mean |SDF − level| of
    its vertices in voxels (one-sided), where the metric of eq. 5 matters.
-2. The issue's target: 16 japonica grains at the default resolution, as the recipe builds them.
-3. Peak memory (resident set of a child process) of one element at resolution 256.
+2. Expansion P (G eq. 6) at the default resolution: the ``expand`` node scales the field exactly (the
+   grid with it, so the voxels grow by P in mm) against re-voxelising the swollen grain at the unswollen
+   voxel size (P³ the cells): time per grain, surface error in mm and in swollen-grain lengths, volume
+   error against P³ × the exact volume.
+3. Remesh triangle budget (``remesh.target_faces``) at the default resolution: time of the remesh
+   (marching cubes + quadric decimation), triangles, surface and volume error of the decimated grain.
+4. The issue's target: 16 japonica grains at the default resolution, as the recipe builds them.
+5. Peak memory (resident set of a child process) of one element at resolution 256.
 
 Run: ``python benchmarks/bench_elements.py`` (``--quick`` for a smoke run). Writes
 ``benchmarks/results/bench_elements.{md,png}``.
@@ -188,6 +194,140 @@ def sweep(resolutions, grains, samples):
     return rows, length
 
 
+class ScaledGrain(ExactGrain):
+    """The exact solid of ``grain`` scaled by ``p`` about ``centre`` (G eq. 6 applied to the exact surface)."""
+
+    def __init__(self, grain: ExactGrain, p: float, centre):
+        self.vertices = centre + p * (grain.vertices - centre)
+        self.faces = grain.faces
+        self.centers, self.radii = centre + p * (grain.centers - centre), p * grain.radii
+        self.rng = grain.rng
+
+
+def swelling_centre(field) -> np.ndarray:
+    """The centre ``expand`` scales about: the occupied cells' centroid (level_set_mesh.expand_field)."""
+    inside = np.argwhere(np.asarray(field.data) > 0)
+    return np.asarray(field.origin) + inside.mean(axis=0) * field.voxel_size
+
+
+def expansion_sweep(resolution, expansions, grains, samples):
+    """G eq. 6 two ways at each P: ``expand`` on the field (the node) or re-voxelise the swollen grain.
+
+    The node scales grid and distances together (no resampling), so its error relative to the grain is
+    that of P = 1 while its voxels, and its error in mm, grow by P; holding the voxel size in mm instead
+    means re-voxelising the swollen solid: ≈ P³ the cells. Both against the exact swollen solid; the time
+    is the whole chain from the scatter on.
+    """
+    from nodegraph.values import Mesh
+    from nodes.values import SphereSet
+
+    mesh = base_mesh.call()
+    warm = grain_chain(mesh, 0, resolution, "exact")[0]  # imports and kernels compiled before any timing
+    voxelise.call(mesh=mesh, spheres=warm, voxel_size=0.2)
+    found: dict[tuple[float, str], list] = {}
+    for p in expansions:
+        for seed in range(grains):
+            rng = np.random.default_rng(seed)
+            t0 = time.perf_counter()
+            spheres = sphere_scatter.call(seed=seed, mesh=mesh)
+            volume = voxelise.call(mesh=mesh, spheres=spheres, resolution=resolution)
+            field = distance_field.call(volume=volume, mesh=mesh, spheres=spheres, method="exact")
+            grown = expand.call(field=field, expansion=(p, p))
+            v, f = grain_surface(np.asarray(grown.data), grown.origin, grown.voxel_size, 0.0, 0, None)
+            seconds = time.perf_counter() - t0
+            exact = ScaledGrain(ExactGrain(mesh, spheres, rng), p, swelling_centre(field))
+            found.setdefault((p, "expand"), []).append((seconds, grown, v, f, exact))
+
+            t0 = time.perf_counter()
+            spheres = sphere_scatter.call(seed=seed, mesh=mesh)
+            exact = ScaledGrain(ExactGrain(mesh, spheres, rng), p, mesh.vertices.mean(axis=0))
+            swollen, balls = Mesh(exact.vertices, exact.faces), SphereSet(exact.centers, exact.radii)
+            volume = voxelise.call(mesh=swollen, spheres=balls, voxel_size=field.voxel_size)
+            grown = distance_field.call(volume=volume, mesh=swollen, spheres=balls, method="exact")
+            v, f = grain_surface(np.asarray(grown.data), grown.origin, grown.voxel_size, 0.0, 0, None)
+            seconds = time.perf_counter() - t0
+            found.setdefault((p, "re-voxelise"), []).append((seconds, grown, v, f, exact))
+    rows = []
+    for (p, route), runs in found.items():
+        haus, mean, haus_l, vol_err = [], [], [], []
+        for _, _, v, f, exact in runs:
+            h, m = surface_errors(exact, v, f, exact.surface_samples(samples))
+            haus.append(h)
+            mean.append(m)
+            haus_l.append(h / float(np.ptp(exact.vertices[:, 0])))
+            vol_err.append(trimesh_volume(v, f) / exact.volume() - 1.0)
+        grown = runs[0][1]
+        rows.append(
+            {
+                "P": p,
+                "route": route,
+                "grid": "×".join(map(str, np.asarray(grown.data).shape)),
+                "voxel_mm": float(grown.voxel_size),
+                "ms_per_grain": 1e3 * float(np.median([r[0] for r in runs])),
+                "hausdorff_mm": float(np.mean(haus)),
+                "mean_mm": float(np.mean(mean)),
+                "hausdorff_L": float(np.mean(haus_l)),
+                "volume_error": float(np.mean(vol_err)),
+                "triangles": int(np.mean([len(r[3]) for r in runs])),
+            }
+        )
+        r = rows[-1]
+        print(
+            f"P {p:.2f} {route:11s} {r['grid']:>12s} {r['ms_per_grain']:8.1f} ms  H {r['hausdorff_mm']:.4f} mm "
+            f"mean {r['mean_mm']:.4f} mm  vol {100 * r['volume_error']:+.2f} %",
+            flush=True,
+        )
+    return rows
+
+
+def trimesh_volume(vertices, faces) -> float:
+    import trimesh
+
+    return float(trimesh.Trimesh(vertices, faces, process=False).volume)
+
+
+def remesh_sweep(resolution, budgets, grains, samples):
+    """``remesh.target_faces``: the remesh's time (marching cubes + decimation) and the decimated grain's error."""
+    mesh = base_mesh.call()
+    length = float(np.ptp(mesh.vertices[:, 0]))
+    fields = []
+    for seed in range(grains):
+        spheres, _, field, _, _ = grain_chain(mesh, seed, resolution, "exact")
+        exact = ExactGrain(mesh, spheres, np.random.default_rng(seed))
+        fields.append((field, exact, exact.surface_samples(samples), exact.volume()))
+    rows = []
+    for budget in budgets:
+        times, haus, mean, vol_err, tris, verts = [], [], [], [], [], []
+        for field, exact, points, true_volume in fields:
+            t0 = time.perf_counter()
+            v, f = grain_surface(np.asarray(field.data), field.origin, field.voxel_size, 0.0, 0, budget)
+            times.append(time.perf_counter() - t0)
+            h, m = surface_errors(exact, v, f, points)
+            haus.append(h / length)
+            mean.append(m / length)
+            vol_err.append(trimesh_volume(v, f) / true_volume - 1.0)
+            tris.append(len(f))
+            verts.append(len(v))
+        rows.append(
+            {
+                "target_faces": budget,
+                "vertices": int(np.mean(verts)),
+                "triangles": int(np.mean(tris)),
+                "ms_remesh": 1e3 * float(np.median(times)),
+                "hausdorff": float(np.mean(haus)),
+                "mean": float(np.mean(mean)),
+                "volume_error": float(np.mean(vol_err)),
+            }
+        )
+        r = rows[-1]
+        print(
+            f"target_faces {budget!s:>6s}: {r['triangles']:6d} tris {r['ms_remesh']:7.1f} ms  "
+            f"H {100 * r['hausdorff']:.3f} %  mean {100 * r['mean']:.3f} %  vol {100 * r['volume_error']:+.2f} %",
+            flush=True,
+        )
+    return rows
+
+
 def sixteen_grains(resolution, repeats):
     """16 japonica grains as graphs/rice_grains.yaml builds them (exact route, P = 1.5, 2000 faces)."""
     mesh = base_mesh.call()
@@ -264,7 +404,7 @@ def measure_memory(resolution, configs=(("rice", "exact"), ("rice", "euclidean")
     return rows
 
 
-def write_results(rows, length, sixteen, memory, resolution):
+def write_results(rows, length, sixteen, memory, resolution, expansion, budgets, knob_resolution):
     RESULTS.mkdir(parents=True, exist_ok=True)
     lines = [
         f"Grain: japonica base 5 × 3 × 2 mm + 40 spheres r ∈ [0.2, 0.5] mm (length L = {length:.2f} mm), "
@@ -282,6 +422,38 @@ def write_results(rows, length, sixteen, memory, resolution):
             f"{100 * r['hausdorff']:.3f} % | {100 * r['mean']:.3f} % | {r['mean_voxels']:.3f} | "
             f"{100 * r['volume_error']:+.2f} % | {r['triangles']} | {r['offset_voxels']:.3f} |"
         )
+    lines += [
+        "",
+        f"Expansion P (G eq. 6) at resolution {knob_resolution}, exact route: `expand` scales the field (voxels "
+        "grow by P) or the swollen grain is re-voxelised at the unswollen voxel size; errors against the exact swollen "
+        "solid (L = swollen grain length), time of the whole chain per grain.",
+        "",
+        "| P | route | grid | voxel (mm) | ms/grain | Hausdorff (mm) | mean (mm) | Hausdorff (L) | volume err "
+        "| triangles |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {r['P']:g} | {r['route']} | {r['grid']} | {r['voxel_mm']:.4f} | {r['ms_per_grain']:.1f} | "
+        f"{r['hausdorff_mm']:.4f} | {r['mean_mm']:.4f} | {100 * r['hausdorff_L']:.3f} % | "
+        f"{100 * r['volume_error']:+.2f} % | {r['triangles']} |"
+        for r in expansion
+    ]
+    lines += [
+        "",
+        f"Remesh triangle budget at resolution {knob_resolution}, exact route, P = 1: time of the remesh alone "
+        "(marching cubes, outer shell, quadric decimation), error of the result against the exact surface; what "
+        "every later node (shade, export, preview, measure) handles per element is its vertices.",
+        "",
+        "| target_faces | triangles | ms/grain remesh | Hausdorff (L) | mean (L) | volume err "
+        "| vertices in a 2,000-grain scene |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {'none' if r['target_faces'] is None else r['target_faces']} | {r['triangles']} | {r['ms_remesh']:.1f} | "
+        f"{100 * r['hausdorff']:.3f} % | {100 * r['mean']:.3f} % | {100 * r['volume_error']:+.2f} % | "
+        f"{2000 * r['vertices'] / 1e6:.2f} M |"
+        for r in budgets
+    ]
     lines += ["", f"16 japonica grains, resolution {resolution}, exact route, P = 1.5 (best of repeats, warm):", ""]
     lines += [f"- {label}: {seconds:.3f} s ({1e3 * seconds / 16:.0f} ms/grain)" for label, seconds in sixteen.items()]
     lines += ["", "Peak resident memory of one element (child process):", ""]
@@ -317,6 +489,28 @@ def write_results(rows, length, sixteen, memory, resolution):
         ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(RESULTS / "bench_elements.png", dpi=110)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    for route, marker in (("expand", "o-"), ("re-voxelise", "s--")):
+        sel = [r for r in expansion if r["route"] == route]
+        axes[0].plot([r["ms_per_grain"] for r in sel], [r["mean_mm"] for r in sel], marker, label=route)
+        for r in sel:
+            axes[0].annotate(f"P {r['P']:g}", (r["ms_per_grain"], r["mean_mm"]), fontsize=7, xytext=(3, 3),
+                             textcoords="offset points")  # fmt: skip
+    axes[0].set(xlabel="ms per grain", ylabel="mean surface error (mm)", title="expansion P: two routes")
+    axes[1].plot([r["ms_remesh"] for r in budgets], [100 * r["hausdorff"] for r in budgets], "o-", label="Hausdorff")
+    axes[1].plot([r["ms_remesh"] for r in budgets], [100 * r["mean"] for r in budgets], "s-", label="mean")
+    for r in budgets:
+        axes[1].annotate(f"{r['triangles']}", (r["ms_remesh"], 100 * r["hausdorff"]), fontsize=7, xytext=(3, 3),
+                         textcoords="offset points")  # fmt: skip
+    axes[1].set(xlabel="ms per grain (remesh)", ylabel="% of grain length", yscale="log",
+                title="remesh target_faces (labels: triangles)")  # fmt: skip
+    for ax in axes:
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(RESULTS / "bench_elements_knobs.png", dpi=110)
     print(f"wrote {RESULTS / 'bench_elements.md'} and {RESULTS / 'bench_elements.png'}")
 
 
@@ -326,6 +520,9 @@ def main() -> None:
     parser.add_argument("--memory-child", nargs=3, metavar=("RES", "SHAPE", "METHOD"), help=argparse.SUPPRESS)
     parser.add_argument("--baseline-child", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--memory", type=int, metavar="RES", help="only the peak-memory measurement at RES")
+    parser.add_argument(
+        "--knobs", action="store_true", help="only the sweeps docs/accuracy.md reads (no 16-grain timing, no memory)"
+    )
     args = parser.parse_args()
     if args.memory_child:
         memory_child(int(args.memory_child[0]), args.memory_child[1], args.memory_child[2])
@@ -340,9 +537,22 @@ def main() -> None:
 
     resolutions = (32, 64) if args.quick else RESOLUTIONS
     rows, length = sweep(resolutions, grains=1 if args.quick else 2, samples=2000 if args.quick else 10000)
-    sixteen = sixteen_grains(DEFAULT_RESOLUTION, repeats=1 if args.quick else 3)
-    memory = measure_memory(64, (("rice", "exact"),)) if args.quick else measure_memory(256)
-    write_results(rows, length, sixteen, memory, DEFAULT_RESOLUTION)
+    knob_resolution = 32 if args.quick else DEFAULT_RESOLUTION
+    expansion = expansion_sweep(
+        knob_resolution,
+        (1.0, 1.5) if args.quick else (1.0, 1.2, 1.5, 2.0),
+        grains=1 if args.quick else 2,
+        samples=2000 if args.quick else 10000,
+    )
+    budgets = remesh_sweep(
+        knob_resolution,
+        (None, 1000, 250) if args.quick else (None, 8000, 4000, 1800, 1000, 500, 250),
+        grains=1 if args.quick else 2,
+        samples=2000 if args.quick else 10000,
+    )
+    sixteen = {} if args.knobs else sixteen_grains(DEFAULT_RESOLUTION, repeats=1 if args.quick else 3)
+    memory = [] if args.knobs else measure_memory(64, (("rice", "exact"),)) if args.quick else measure_memory(256)
+    write_results(rows, length, sixteen, memory, DEFAULT_RESOLUTION, expansion, budgets, knob_resolution)
 
 
 if __name__ == "__main__":

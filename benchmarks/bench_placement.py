@@ -174,12 +174,16 @@ def main():
         metavar="N",
         help="only time the S setup (placement, implicit functions, refine) N times and print medians",
     )
+    parser.add_argument(
+        "--knobs",
+        action="store_true",
+        help="only what docs/accuracy.md reads: the knob sweeps on the S setup (skips the setup's subdivide row, "
+        "the 50,000-element run and the shell-density group)",
+    )
     args = parser.parse_args()
     if args.s_setup:
         s_setup_timing(args.s_setup)
         return
-    import numba
-
     size = 6.0 if args.quick else 20.0
     big_size = 7.0 if args.quick else 44.0
     onigiri = shape.call(kind="onigiri", size=size)["mesh"]
@@ -187,7 +191,7 @@ def main():
 
     library = rice_library()
     carried = with_medial_spheres(library, 0.02, 64)  # cull reads these instead of recomputing them
-    rows, lines = [], []
+    rows = []
 
     def record(group, setting, **values):
         rows.append({"group": group, "setting": setting, **values})
@@ -200,28 +204,12 @@ def main():
     cull.call(placement=warm, libraries=[library])
 
     # ---- the S setup (S table 2 row 1)
-    placement, stats, t_place = place(onigiri, library, candidates="subdivide")
-    refined, templates, t_build, t_refine = refine_timed(placement, library)
-    mean, worst = residual(refined)
-    r = float(stats.columns["r"][0])
-    record(
-        "S setup",
-        "subdivide (S)",
-        time_s=t_place + t_build + t_refine,
-        place_s=t_place,
-        implicit_s=t_build,
-        refine_s=t_refine,
-        candidates=int(stats.columns["candidates"][0]),
-        placed=len(placement),
-        min_dist_ratio=float(stats.columns["min_distance_ratio"][0]),
-        overlap_mean_L=mean,
-        overlap_max_L=worst,
-        culled=culled_share(refined, carried),
-        coverage=coverage(onigiri, refined, library, 0.44),
-    )
+    if not args.knobs:
+        s_table_row(onigiri, library, carried, record)
     placement, stats, t_place = place(onigiri, library)
     refined, templates, t_build, t_refine = refine_timed(placement, library)
     mean, worst = residual(refined)
+    r = float(stats.columns["r"][0])
     record(
         "S setup",
         "random candidates",
@@ -238,29 +226,44 @@ def main():
         coverage=coverage(onigiri, refined, library, 0.44),
     )
     base_placement = placement
+    if not args.knobs:
+        scale_rows(onigiri, library, carried, big_size, args.quick, record)  # quick: the shell row alone
+    sweeps_on_s_setup(onigiri, library, carried, base_placement, r, args.quick, record)
+    centres, g_ours, g_lattice, peak_ours, peak_lattice = aperiodicity(onigiri, library, 2.0 * r if args.quick else 1.0)
+    record("aperiodicity (volume fill)", "ours (dart throwing)", rdf_peak=peak_ours)
+    record("aperiodicity (volume fill)", "cubic lattice (G §3.2.1)", rdf_peak=peak_lattice)
+    write_table(rows, args.quick, centres, g_ours, g_lattice)
 
-    # ---- 50,000 elements
-    big = shape.call(kind="onigiri", size=big_size)["mesh"]
-    big_placement, big_stats, t_big_place = place(big, library)
-    big_refined, _, t_big_build, t_big_refine = refine_timed(big_placement, library)
-    mean, worst = residual(big_refined)
+
+def s_table_row(onigiri, library, carried, record):
+    """S table 2 row 1 as S ran it: subdivided candidates, placement, implicit functions, refine."""
+    placement, stats, t_place = place(onigiri, library, candidates="subdivide")
+    refined, templates, t_build, t_refine = refine_timed(placement, library)
+    mean, worst = residual(refined)
     record(
-        "large",
-        f"onigiri R={big_size:g}",
-        time_s=t_big_place + t_big_build + t_big_refine,
-        place_s=t_big_place,
-        implicit_s=t_big_build,
-        refine_s=t_big_refine,
-        candidates=int(big_stats.columns["candidates"][0]),
-        placed=len(big_placement),
+        "S setup",
+        "subdivide (S)",
+        time_s=t_place + t_build + t_refine,
+        place_s=t_place,
+        implicit_s=t_build,
+        refine_s=t_refine,
+        candidates=int(stats.columns["candidates"][0]),
+        placed=len(placement),
+        min_dist_ratio=float(stats.columns["min_distance_ratio"][0]),
         overlap_mean_L=mean,
         overlap_max_L=worst,
+        culled=culled_share(refined, carried),
+        coverage=coverage(onigiri, refined, library, 0.44),
     )
 
+
+def scale_rows(onigiri, library, carried, big_size, quick, record):
+    """50,000 elements (not in quick mode: the S setup's own calls), and the shell density (S's r against
+    larger r, extra refine passes)."""
+    if not quick:
+        large_row(library, big_size, record)
     # ---- shell density: S's r (r_scale 1) against larger r, and extra refine passes
-    for scale, passes in (
-        ((1.0, 1), (2.0, 2)) if args.quick else ((1.0, 1), (1.0, 2), (1.5, 2), (2.0, 1), (2.0, 2), (2.5, 2))
-    ):
+    for scale, passes in ((2.0, 2),) if quick else ((1.0, 1), (1.0, 2), (1.5, 2), (2.0, 1), (2.0, 2), (2.5, 2)):
         p, s, t = place(onigiri, library, candidates="subdivide", r_scale=scale)
         ref, _, tb, tr = refine_timed(p, library, reuse=True, passes=passes)
         mean, worst = residual(ref)
@@ -278,8 +281,30 @@ def main():
             coverage=coverage(onigiri, ref, library, 0.44),
         )
 
-    # ---- sweeps on the S setup
-    for spacing in (2.0, 1.0, 0.5) if args.quick else (2.0, 1.0, 0.5, 0.25):
+
+def large_row(library, big_size, record):
+    """The S setup's placement and refine at 50,000 elements."""
+    big = shape.call(kind="onigiri", size=big_size)["mesh"]
+    big_placement, big_stats, t_big_place = place(big, library)
+    big_refined, _, t_big_build, t_big_refine = refine_timed(big_placement, library)
+    mean, worst = residual(big_refined)
+    record(
+        "large",
+        f"onigiri R={big_size:g}",
+        time_s=t_big_place + t_big_build + t_big_refine,
+        place_s=t_big_place,
+        implicit_s=t_big_build,
+        refine_s=t_big_refine,
+        candidates=int(big_stats.columns["candidates"][0]),
+        placed=len(big_placement),
+        overlap_mean_L=mean,
+        overlap_max_L=worst,
+    )
+
+
+def sweeps_on_s_setup(onigiri, library, carried, base_placement, r, quick, record):
+    """The knobs docs/accuracy.md reports: candidate spacing, golden tolerance, medial spheres, cost."""
+    for spacing in (2.0, 1.0) if quick else (2.0, 1.0, 0.5, 0.25):
         p, s, t = place(onigiri, library, candidate_spacing=spacing)
         record(
             "candidate spacing (×r)",
@@ -290,7 +315,7 @@ def main():
             placed=len(p),
             min_dist_ratio=float(s.columns["min_distance_ratio"][0]),
         )
-    for tol in (0.1, 0.01, 0.001) if args.quick else (0.1, 0.03, 0.01, 0.003, 0.001):
+    for tol in (0.1, 0.01) if quick else (0.1, 0.03, 0.01, 0.003, 0.001):
         ref, _, tb, tr = refine_timed(base_placement, library, reuse=True, tolerance=tol)
         mean, worst = residual(ref)
         record(
@@ -302,7 +327,7 @@ def main():
             overlap_max_L=worst,
             culled=culled_share(ref, carried),
         )
-    for sph_tol in (0.05, 0.02, 0.01) if args.quick else (0.05, 0.02, 0.01, 0.005):
+    for sph_tol in (0.05, 0.02) if quick else (0.05, 0.02, 0.01, 0.005):
         ref, tm, tb, tr = refine_timed(base_placement, library, sphere_tolerance=sph_tol, max_spheres=4096)
         mean, worst = residual(ref)
         fit = tm.fit
@@ -333,9 +358,9 @@ def main():
             coverage=coverage(onigiri, ref, library, 0.44),
         )
 
-    centres, g_ours, g_lattice, peak_ours, peak_lattice = aperiodicity(onigiri, library, 2.0 * r if args.quick else 1.0)
-    record("aperiodicity (volume fill)", "ours (dart throwing)", rdf_peak=peak_ours)
-    record("aperiodicity (volume fill)", "cubic lattice (G §3.2.1)", rdf_peak=peak_lattice)
+
+def write_table(rows, quick, centres, g_ours, g_lattice):
+    import numba
 
     columns = [
         "group",
@@ -368,7 +393,7 @@ def main():
 
     header = "| " + " | ".join(columns) + " |"
     lines = [
-        f"threads: {numba.get_num_threads()}, quick: {args.quick}, cull D = {CULL_D} mm, "
+        f"threads: {numba.get_num_threads()}, quick: {quick}, cull D = {CULL_D} mm, "
         f"coverage distance 0.44 mm, S table 2: 5,788 placed (6,242 candidates), 6.71 s + 272.86 s",
         "",
         header,

@@ -9,7 +9,7 @@ eggs and rice (the hardest pixels: caustics inside the eggs, light through the g
 the bowl is easier), so the reference stays affordable on 2 cores; the denoiser sees the same pixel scale
 as in the full frame. Times are the whole ``preview`` path at 1280 × 720 (PLY files, scene load, render,
 guide pass, denoising). ``--quick``: a small synthetic scene and a 64-spp reference (seconds).
-Writes benchmarks/results/bench_preview.{md,png} (the plot needs matplotlib).
+Writes benchmarks/results/bench_preview.{md,png} (or under $NODEGRAPH_BENCH_RESULTS; the plot needs matplotlib).
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ def main():
     if args.quick:
         scene, camera, params = quick_scene()
         width, height, crop = 320, 180, Crop(112, 63, 96, 54)
-        reference_spp, spps, timed_spps = 64, (1, 4), (1, 4)
+        reference_spp, spps, timed_spps = 64, (1, 4, 12), (1, 4, 12)
     else:
         scene, camera, params = main_job_scene(args.cache_dir)
         width, height, crop = 1280, 720, Crop(544, 306, 192, 108)
@@ -114,8 +114,8 @@ def main():
     ]
     text = "\n".join(lines)
     print(text)
-    out = Path(__file__).parent / "results"
-    out.mkdir(exist_ok=True)
+    out = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or Path(__file__).parent / "results")
+    out.mkdir(parents=True, exist_ok=True)
     suffix = "_quick" if args.quick else ""
     (out / f"bench_preview{suffix}.md").write_text(text + "\n")
     try:

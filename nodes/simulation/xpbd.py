@@ -69,6 +69,9 @@ def _check(params):
         # is on the bowl's front and rests the stack within 0.19 r, gaining no energy; settings with
         # few substeps and many iterations win on the resting stack but let the bowl's drop sink in
         # (1 × 8: 1.07 r). The 2,000-grain bowl runs in ≈ 8.5 s of its 30 s budget at 10 × 2.
+        # Re-checked in CPU time (benchmarks/bench_solver_default.py, docs/accuracy.md): at equal passes a substep
+        # costs more than an iteration (20 × 1: 1.2–1.4× the CPU, for half the stack's rest error); no setting of
+        # 16–20 passes is better on every error at no more CPU, so 10 × 2 stays.
         "substeps": Param(
             int,
             10,
