@@ -1,10 +1,12 @@
 """Elements → particle clusters: a sphere packing of each element's volume — SPEC §3 (G: simulate
-a low-resolution proxy, carry the high-resolution grain along).
+a low-resolution proxy, carry the high-resolution grain along), and the element's own distance field.
 
-Per distinct element mesh: a signed distance grid of the body (yolk faces, ``parts == 1``, excluded),
-interior grid points at least half as deep as the deepest one, farthest-point sampling of
-``count`` of them (deterministic, from the deepest), each a sphere of radius = its depth, so the
-spheres touch the surface from inside.
+Per distinct element mesh: a signed distance grid φ of the body (yolk faces, ``parts == 1``, excluded).
+The spheres are medial-style (SPEC §2.5's medial spheres, S §3.2.2): each is centred on an interior grid
+point with radius = its depth −φ, so it touches the surface from inside; the first is the deepest, and
+each next one is the largest that touches the shell vertex farthest outside the spheres so far, so the
+union reaches the surface everywhere — small spheres at the tips, big ones in the core. φ and the
+shell go with the cluster for the mesh-level depenetration after the run (``depenetration``).
 """
 
 from __future__ import annotations
@@ -24,6 +26,10 @@ class ElementCluster:
     yolk_radius: float = 0.0
     membrane_centre: np.ndarray | None = None  # local frame
     membrane_radius: float = 0.0  # inner room of the body around its centre (for the yolk)
+    field: np.ndarray | None = None  # φ of the body on a local grid (< 0 inside)
+    field_origin: np.ndarray | None = None
+    field_pitch: float = 0.0
+    surface: np.ndarray | None = None  # (v, 3) shell vertices (farthest-point sample), local frame
 
 
 def _body_and_yolk(mesh):
@@ -34,8 +40,23 @@ def _body_and_yolk(mesh):
     return faces[parts != 1], faces[parts == 1]
 
 
-def element_cluster(mesh, count: int, depth_fraction: float = 0.5, cells: int = 24) -> ElementCluster:
-    """Sphere packing of ``mesh`` with ``count`` particles (fewer if the mesh is tiny)."""
+def farthest_points(points: np.ndarray, count: int) -> np.ndarray:
+    """``count`` of ``points`` (all if fewer) spread by farthest-point sampling from the first:
+    deterministic, and every point is near a kept one."""
+    if len(points) <= count:
+        return np.ascontiguousarray(points, np.float64)
+    chosen = [0]
+    gap = np.linalg.norm(points - points[0], axis=1)
+    for _ in range(count - 1):
+        chosen.append(int(np.argmax(gap)))
+        gap = np.minimum(gap, np.linalg.norm(points - points[chosen[-1]], axis=1))
+    return np.ascontiguousarray(points[np.sort(chosen)], np.float64)
+
+
+def element_cluster(mesh, count: int, cells: int = 24, samples: int = 256) -> ElementCluster:
+    """Medial-style sphere packing of ``mesh`` with ``count`` particles (fewer once every shell vertex
+    is within a quarter grid cell of a sphere), its φ grid, and ``samples`` of its shell vertices
+    (farthest-point spread) that the depenetration tests against neighbours."""
     import trimesh
 
     from .collider import signed_distance_grid
@@ -47,33 +68,37 @@ def element_cluster(mesh, count: int, depth_fraction: float = 0.5, cells: int = 
         body = body.convex_hull  # documented repair: an open element mesh is packed by its hull
     lo, hi = body.bounds
     pitch = float((hi - lo).max()) / cells
-    phi, origin, pitch = signed_distance_grid([body], lo - pitch, hi + pitch, pitch)
+    phi, origin, pitch = signed_distance_grid([body], lo - 2 * pitch, hi + 2 * pitch, pitch)
     depth = -phi
-    deepest = depth.max()
-    if not deepest > 0:
+    if not depth.max() > 0:
         raise ValueError(f"element mesh {mesh.name or ''!r} has no interior at {pitch:.3g} resolution")
-    idx = np.argwhere(depth >= depth_fraction * deepest)
+    idx = np.argwhere(depth > 0)
     points = origin + idx * pitch
     depths = depth[tuple(idx.T)]
+    shell = np.asarray(body.vertices, np.float64)
     chosen = [int(np.argmax(depths))]
-    gap = np.linalg.norm(points - points[chosen[0]], axis=1)
-    for _ in range(min(count, len(points)) - 1):
-        nxt = int(np.argmax(gap))
-        if gap[nxt] <= 0:
+    outside = np.linalg.norm(shell - points[chosen[0]], axis=1) - depths[chosen[0]]  # gap to the union
+    while len(chosen) < min(count, len(points)):
+        v = int(np.argmax(outside))
+        if outside[v] <= 0.25 * pitch:
             break
-        chosen.append(nxt)
-        gap = np.minimum(gap, np.linalg.norm(points - points[nxt], axis=1))
+        reach = np.linalg.norm(points - shell[v], axis=1) - depths  # ≈ 0 for spheres touching vertex v
+        near = np.flatnonzero(reach <= max(reach.min(), 0.0) + 0.5 * pitch)
+        best = int(near[np.argmax(depths[near])])
+        chosen.append(best)
+        outside = np.minimum(outside, np.linalg.norm(shell - points[best], axis=1) - depths[best])
     centres = points[chosen]
     radii = depths[chosen]
+    fields = {"field": phi, "field_origin": origin, "field_pitch": pitch, "surface": farthest_points(shell, samples)}
     if yolk_faces is None:
-        return ElementCluster(centres, radii)
+        return ElementCluster(centres, radii, **fields)
     yolk_vertices = vertices[np.unique(yolk_faces)]
     yolk_centre = yolk_vertices.mean(axis=0)
     yolk_radius = float(np.linalg.norm(yolk_vertices - yolk_centre, axis=1).mean())
     body = vertices[np.unique(body_faces)]
     body_centre = body.mean(axis=0)
     membrane = float(np.linalg.norm(body - body_centre, axis=1).min())
-    return ElementCluster(centres, radii, yolk_centre, yolk_radius, body_centre, membrane)
+    return ElementCluster(centres, radii, yolk_centre, yolk_radius, body_centre, membrane, **fields)
 
 
 def matrix_to_quat(rotations: np.ndarray) -> np.ndarray:
