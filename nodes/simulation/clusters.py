@@ -5,8 +5,9 @@ Per distinct element mesh: a signed distance grid φ of the body (yolk faces, ``
 The spheres are medial-style (SPEC §2.5's medial spheres, S §3.2.2): each is centred on an interior grid
 point with radius = its depth −φ, so it touches the surface from inside; the first is the deepest, and
 each next one is the largest that touches the shell vertex farthest outside the spheres so far, so the
-union reaches the surface everywhere — small spheres at the tips, big ones in the core. φ and the
-shell go with the cluster for the mesh-level depenetration after the run (``depenetration``).
+union reaches the surface everywhere — small spheres at the tips, big ones in the core (any left of
+the count then spread through the volume). φ and the shell go with the cluster for the mesh-level
+depenetration after the run (``depenetration``).
 """
 
 from __future__ import annotations
@@ -54,9 +55,10 @@ def farthest_points(points: np.ndarray, count: int) -> np.ndarray:
 
 
 def element_cluster(mesh, count: int, cells: int = 24, samples: int = 256) -> ElementCluster:
-    """Medial-style sphere packing of ``mesh`` with ``count`` particles (fewer once every shell vertex
-    is within a quarter grid cell of a sphere), its φ grid, and ``samples`` of its shell vertices
-    (farthest-point spread) that the depenetration tests against neighbours."""
+    """Medial-style sphere packing of ``mesh`` with ``count`` particles (fewer only if the mesh is tiny):
+    spheres reaching the surface until every shell vertex is within a quarter grid cell of one, then
+    spread through the volume; its φ grid, and ``samples`` of its shell vertices (farthest-point
+    spread) that the depenetration tests against neighbours."""
     import trimesh
 
     from .collider import signed_distance_grid
@@ -87,6 +89,13 @@ def element_cluster(mesh, count: int, cells: int = 24, samples: int = 256) -> El
         best = int(near[np.argmax(depths[near])])
         chosen.append(best)
         outside = np.minimum(outside, np.linalg.norm(shell - points[best], axis=1) - depths[best])
+    # the surface is covered: the rest of ``count`` spread through the volume (farthest from those kept),
+    # so a cluster keeps its particles for the shape-matching fit (the quadratic goal needs ≥ 10, not collinear)
+    spread = np.min(np.linalg.norm(points[:, None, :] - points[chosen][None, :, :], axis=2), axis=1)
+    while len(chosen) < min(count, len(points)) and spread.max() > 0:
+        best = int(np.argmax(spread))
+        chosen.append(best)
+        spread = np.minimum(spread, np.linalg.norm(points - points[best], axis=1))
     centres = points[chosen]
     radii = depths[chosen]
     fields = {"field": phi, "field_origin": origin, "field_pitch": pitch, "surface": farthest_points(shell, samples)}
