@@ -1,13 +1,15 @@
 """Elements → particle clusters: a sphere packing of each element's volume — SPEC §3 (G: simulate
-a low-resolution proxy, carry the high-resolution grain along), and the element's own distance field.
+a low-resolution proxy, carry the high-resolution grain along).
 
-Per distinct element mesh: a signed distance grid φ of the body (yolk faces, ``parts == 1``, excluded).
-The spheres are medial-style (SPEC §2.5's medial spheres, S §3.2.2): each is centred on an interior grid
-point with radius = its depth −φ, so it touches the surface from inside; the first is the deepest, and
-each next one is the largest that touches the shell vertex farthest outside the spheres so far, so the
-union reaches the surface everywhere — small spheres at the tips, big ones in the core (any left of
-the count then spread through the volume). φ and the shell go with the cluster for the mesh-level
-depenetration after the run (``depenetration``).
+Per distinct element mesh: a signed distance grid φ of the body (yolk faces, ``parts == 1``, excluded);
+every sphere is centred on an interior grid point with radius = its depth −φ, so it touches the surface
+from inside. Half the count is medial-style (SPEC §2.5's medial spheres, S §3.2.2): the deepest point
+first, then each time the largest sphere touching the shell vertex farthest outside the spheres so far,
+so the union reaches the tips and edges (the former packing used only points at least half as deep as
+the deepest: its spheres covered the core, and meshes settled ≈ 15 % of a length into each other). The
+other half spreads through that core (farthest-point), so the shape-matching fit keeps a cluster spread
+in three directions (the quadratic goal needs ≥ 10 non-collinear particles; a round grain's medial
+spheres all lie on its axis).
 """
 
 from __future__ import annotations
@@ -27,10 +29,6 @@ class ElementCluster:
     yolk_radius: float = 0.0
     membrane_centre: np.ndarray | None = None  # local frame
     membrane_radius: float = 0.0  # inner room of the body around its centre (for the yolk)
-    field: np.ndarray | None = None  # φ of the body on a local grid (< 0 inside)
-    field_origin: np.ndarray | None = None
-    field_pitch: float = 0.0
-    surface: np.ndarray | None = None  # (v, 3) shell vertices (farthest-point sample), local frame
 
 
 def _body_and_yolk(mesh):
@@ -41,24 +39,10 @@ def _body_and_yolk(mesh):
     return faces[parts != 1], faces[parts == 1]
 
 
-def farthest_points(points: np.ndarray, count: int) -> np.ndarray:
-    """``count`` of ``points`` (all if fewer) spread by farthest-point sampling from the first:
-    deterministic, and every point is near a kept one."""
-    if len(points) <= count:
-        return np.ascontiguousarray(points, np.float64)
-    chosen = [0]
-    gap = np.linalg.norm(points - points[0], axis=1)
-    for _ in range(count - 1):
-        chosen.append(int(np.argmax(gap)))
-        gap = np.minimum(gap, np.linalg.norm(points - points[chosen[-1]], axis=1))
-    return np.ascontiguousarray(points[np.sort(chosen)], np.float64)
-
-
-def element_cluster(mesh, count: int, cells: int = 24, samples: int = 256) -> ElementCluster:
-    """Medial-style sphere packing of ``mesh`` with ``count`` particles (fewer only if the mesh is tiny):
-    spheres reaching the surface until every shell vertex is within a quarter grid cell of one, then
-    spread through the volume; its φ grid, and ``samples`` of its shell vertices (farthest-point
-    spread) that the depenetration tests against neighbours."""
+def element_cluster(mesh, count: int, cells: int = 24) -> ElementCluster:
+    """Sphere packing of ``mesh`` with ``count`` particles (fewer only if the mesh is tiny): up to half
+    reaching the surface (until every shell vertex is within a quarter grid cell of a sphere), the rest
+    spread through the core."""
     import trimesh
 
     from .collider import signed_distance_grid
@@ -80,34 +64,37 @@ def element_cluster(mesh, count: int, cells: int = 24, samples: int = 256) -> El
     shell = np.asarray(body.vertices, np.float64)
     chosen = [int(np.argmax(depths))]
     outside = np.linalg.norm(shell - points[chosen[0]], axis=1) - depths[chosen[0]]  # gap to the union
-    while len(chosen) < min(count, len(points)):
+    while len(chosen) < min((count + 1) // 2, len(points)):
         v = int(np.argmax(outside))
         if outside[v] <= 0.25 * pitch:
             break
         reach = np.linalg.norm(points - shell[v], axis=1) - depths  # ≈ 0 for spheres touching vertex v
         near = np.flatnonzero(reach <= max(reach.min(), 0.0) + 0.5 * pitch)
         best = int(near[np.argmax(depths[near])])
+        if best in chosen:  # the sphere reaching v is kept already: v is as covered as the grid allows
+            outside[v] = 0.0
+            continue
         chosen.append(best)
         outside = np.minimum(outside, np.linalg.norm(shell - points[best], axis=1) - depths[best])
-    # the surface is covered: the rest of ``count`` spread through the volume (farthest from those kept),
-    # so a cluster keeps its particles for the shape-matching fit (the quadratic goal needs ≥ 10, not collinear)
-    spread = np.min(np.linalg.norm(points[:, None, :] - points[chosen][None, :, :], axis=2), axis=1)
+    # the rest of ``count`` spread through the core (points at least half as deep as the deepest, farthest
+    # from those kept): the shape-matching fit needs a cluster spread in three directions
+    core = np.flatnonzero(depths >= 0.5 * depths.max())
+    spread = np.min(np.linalg.norm(points[core, None, :] - points[chosen][None, :, :], axis=2), axis=1)
     while len(chosen) < min(count, len(points)) and spread.max() > 0:
         best = int(np.argmax(spread))
-        chosen.append(best)
-        spread = np.minimum(spread, np.linalg.norm(points - points[best], axis=1))
+        chosen.append(int(core[best]))
+        spread = np.minimum(spread, np.linalg.norm(points[core] - points[core[best]], axis=1))
     centres = points[chosen]
     radii = depths[chosen]
-    fields = {"field": phi, "field_origin": origin, "field_pitch": pitch, "surface": farthest_points(shell, samples)}
     if yolk_faces is None:
-        return ElementCluster(centres, radii, **fields)
+        return ElementCluster(centres, radii)
     yolk_vertices = vertices[np.unique(yolk_faces)]
     yolk_centre = yolk_vertices.mean(axis=0)
     yolk_radius = float(np.linalg.norm(yolk_vertices - yolk_centre, axis=1).mean())
     body = vertices[np.unique(body_faces)]
     body_centre = body.mean(axis=0)
     membrane = float(np.linalg.norm(body - body_centre, axis=1).min())
-    return ElementCluster(centres, radii, yolk_centre, yolk_radius, body_centre, membrane, **fields)
+    return ElementCluster(centres, radii, yolk_centre, yolk_radius, body_centre, membrane)
 
 
 def matrix_to_quat(rotations: np.ndarray) -> np.ndarray:

@@ -16,7 +16,6 @@ from .buffers import PairBuffers
 from .clusters import element_cluster, matrix_to_quat
 from .collider import free_space_field
 from .deformation import element_bends, element_transforms
-from .depenetration import ShapeFields, separate_elements, shape_fields
 from .model import Model, Yolks, build_model
 from .settings import PAIR_EFFECTS, XpbdParams, solver_settings
 from .solver import Diagnostics, XpbdSolver
@@ -34,8 +33,6 @@ class Simulation:
     aggregate: Aggregate
     local_centre: np.ndarray  # (m, 3) particle centre of mass in each element's local frame
     yolk_local: np.ndarray | None  # (m, 3) yolk centre in the local frame (rows of elements without one unused)
-    fields: ShapeFields  # φ and shell of each distinct element mesh (``depenetration``)
-    shape: np.ndarray  # (m,) each element's row of ``fields``
 
     def frame(self) -> None:
         """One frame of the solver on the state (``XpbdSolver.frame``)."""
@@ -132,14 +129,13 @@ def build_simulation(
         aggregate = Aggregate(full_placement(aggregate, colliders), aggregate.libraries)
     p = aggregate.placement
     cache = {}
-    xs, rs, ws, qs, sizes, local_centre, yolk_local, shape = [], [], [], [], [], [], [], []
+    xs, rs, ws, qs, sizes, local_centre, yolk_local = [], [], [], [], [], [], []
     for i in range(len(p)):
         lib = aggregate.libraries[p.kinds[i]]
         key = (int(p.kinds[i]), int(p.variants[i]) % len(lib))
         if key not in cache:
             cache[key] = element_cluster(lib.meshes[key[1]], params.particles_per_element)
         cl = cache[key]
-        shape.append(list(cache).index(key))
         c0 = cl.centres.mean(axis=0)
         xs.append(cl.centres @ p.rotations[i].T + p.positions[i])
         rs.append(cl.radii)
@@ -193,8 +189,6 @@ def build_simulation(
         aggregate,
         np.array(local_centre),
         yolk_local if yolks is not None else None,
-        shape_fields(list(cache.values())),
-        np.array(shape, np.int64),
     )
 
 
@@ -233,17 +227,9 @@ def snapshot_aggregate(sim: Simulation) -> Aggregate:
 
 
 def finish_simulation(sim: Simulation) -> dict:
-    """The relaxed aggregate (positions, rotations, deformations, yolk offsets) and the particle state;
-    with effect 'contact' the element meshes are then moved apart where they still cut into each other
-    or, with 'collider', into a wall (``depenetration.separate_elements``), the particles with them."""
+    """The relaxed aggregate (positions, rotations, deformations, yolk offsets) and the particle state."""
     m, st, n = sim.model, sim.state, sim.model.n_moving
-    aggregate = snapshot_aggregate(sim)
-    x = st.x[:n].copy()
-    if "contact" in sim.solver.settings.effects:
-        collider = m.collider.grid() if m.collider is not None else None
-        shift, _ = separate_elements(aggregate, sim.fields, sim.shape, collider)
-        placement = dataclasses.replace(aggregate.placement, positions=aggregate.placement.positions + shift)
-        aggregate = dataclasses.replace(aggregate, placement=placement)
-        x += shift[m.elem[:n]]
-    particles = ParticleState(x, st.v[:n].copy(), m.r[:n].copy(), m.w[:n].copy(), m.elem[:n].astype(np.int32), st.time)
-    return {"aggregate": aggregate, "particles": particles}
+    particles = ParticleState(
+        st.x[:n].copy(), st.v[:n].copy(), m.r[:n].copy(), m.w[:n].copy(), m.elem[:n].astype(np.int32), st.time
+    )
+    return {"aggregate": snapshot_aggregate(sim), "particles": particles}
