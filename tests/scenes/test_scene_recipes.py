@@ -74,7 +74,7 @@ def test_scene_at_reduced_size_counts_and_quality(recipe_name, tmp_path_factory)
     reason="issue 17's target (p95 ≤ 3 %, max ≤ 10 %) is not met after XPBD: the clusters' spheres now reach the "
     "surface (nodes/simulation/clusters.py), but the relaxed pile still rests ≈ 10–15 % of a length deep in its "
     "neighbours' meshes (the solver's tolerated contact overlap under the pile's weight); a mesh-level pass on the "
-    "element distance fields (commit e429cf1..eefd904) met it on a 118-grain bowl but did not converge in time on "
+    "element distance fields (branch overlap-pass) met it on a 118-grain bowl but did not converge in time on "
     "the 2,087-grain one",
 )
 def test_rice_bowl_meets_the_overlap_target(tmp_path_factory):
