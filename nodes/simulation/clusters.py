@@ -1,10 +1,15 @@
 """Elements → particle clusters: a sphere packing of each element's volume — SPEC §3 (G: simulate
 a low-resolution proxy, carry the high-resolution grain along).
 
-Per distinct element mesh: a signed distance grid of the body (yolk faces, ``parts == 1``, excluded),
-interior grid points at least half as deep as the deepest one, farthest-point sampling of
-``count`` of them (deterministic, from the deepest), each a sphere of radius = its depth, so the
-spheres touch the surface from inside.
+Per distinct element mesh: a signed distance grid φ of the body (yolk faces, ``parts == 1``, excluded);
+every sphere is centred on an interior grid point with radius = its depth −φ, so it touches the surface
+from inside. Half the count is medial-style (SPEC §2.5's medial spheres, S §3.2.2): the deepest point
+first, then each time the largest sphere touching the shell vertex farthest outside the spheres so far,
+so the union reaches the tips and edges (the former packing used only points at least half as deep as
+the deepest: its spheres covered the core, and meshes settled ≈ 15 % of a length into each other). The
+other half spreads through that core (farthest-point), so the shape-matching fit keeps a cluster spread
+in three directions (the quadratic goal needs ≥ 10 non-collinear particles; a round grain's medial
+spheres all lie on its axis).
 """
 
 from __future__ import annotations
@@ -34,8 +39,10 @@ def _body_and_yolk(mesh):
     return faces[parts != 1], faces[parts == 1]
 
 
-def element_cluster(mesh, count: int, depth_fraction: float = 0.5, cells: int = 24) -> ElementCluster:
-    """Sphere packing of ``mesh`` with ``count`` particles (fewer if the mesh is tiny)."""
+def element_cluster(mesh, count: int, cells: int = 24) -> ElementCluster:
+    """Sphere packing of ``mesh`` with ``count`` particles (fewer only if the mesh is tiny): up to half
+    reaching the surface (until every shell vertex is within a quarter grid cell of a sphere), the rest
+    spread through the core."""
     import trimesh
 
     from .collider import signed_distance_grid
@@ -47,22 +54,36 @@ def element_cluster(mesh, count: int, depth_fraction: float = 0.5, cells: int = 
         body = body.convex_hull  # documented repair: an open element mesh is packed by its hull
     lo, hi = body.bounds
     pitch = float((hi - lo).max()) / cells
-    phi, origin, pitch = signed_distance_grid([body], lo - pitch, hi + pitch, pitch)
+    phi, origin, pitch = signed_distance_grid([body], lo - 2 * pitch, hi + 2 * pitch, pitch)
     depth = -phi
-    deepest = depth.max()
-    if not deepest > 0:
+    if not depth.max() > 0:
         raise ValueError(f"element mesh {mesh.name or ''!r} has no interior at {pitch:.3g} resolution")
-    idx = np.argwhere(depth >= depth_fraction * deepest)
+    idx = np.argwhere(depth > 0)
     points = origin + idx * pitch
     depths = depth[tuple(idx.T)]
+    shell = np.asarray(body.vertices, np.float64)
     chosen = [int(np.argmax(depths))]
-    gap = np.linalg.norm(points - points[chosen[0]], axis=1)
-    for _ in range(min(count, len(points)) - 1):
-        nxt = int(np.argmax(gap))
-        if gap[nxt] <= 0:
+    outside = np.linalg.norm(shell - points[chosen[0]], axis=1) - depths[chosen[0]]  # gap to the union
+    while len(chosen) < min((count + 1) // 2, len(points)):
+        v = int(np.argmax(outside))
+        if outside[v] <= 0.25 * pitch:
             break
-        chosen.append(nxt)
-        gap = np.minimum(gap, np.linalg.norm(points - points[nxt], axis=1))
+        reach = np.linalg.norm(points - shell[v], axis=1) - depths  # ≈ 0 for spheres touching vertex v
+        near = np.flatnonzero(reach <= max(reach.min(), 0.0) + 0.5 * pitch)
+        best = int(near[np.argmax(depths[near])])
+        if best in chosen:  # the sphere reaching v is kept already: v is as covered as the grid allows
+            outside[v] = 0.0
+            continue
+        chosen.append(best)
+        outside = np.minimum(outside, np.linalg.norm(shell - points[best], axis=1) - depths[best])
+    # the rest of ``count`` spread through the core (points at least half as deep as the deepest, farthest
+    # from those kept): the shape-matching fit needs a cluster spread in three directions
+    core = np.flatnonzero(depths >= 0.5 * depths.max())
+    spread = np.min(np.linalg.norm(points[core, None, :] - points[chosen][None, :, :], axis=2), axis=1)
+    while len(chosen) < min(count, len(points)) and spread.max() > 0:
+        best = int(np.argmax(spread))
+        chosen.append(int(core[best]))
+        spread = np.minimum(spread, np.linalg.norm(points[core] - points[core[best]], axis=1))
     centres = points[chosen]
     radii = depths[chosen]
     if yolk_faces is None:
