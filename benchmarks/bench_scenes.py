@@ -6,13 +6,8 @@ element, packing fraction), with G table 2's times and counts beside (SPEC §6).
     python benchmarks/bench_scenes.py                 # every recipe at full size (minutes on 2 cores)
     python benchmarks/bench_scenes.py --quick         # reduced sizes through --set overrides: seconds
     python benchmarks/bench_scenes.py rice_bowl ikura_don     # some recipes only
-    python benchmarks/bench_scenes.py --full-vs-short [--quick]   # the rice bowl by both of G's methods
 
-``--full-vs-short`` (G fig. 4.3.2 / 4.5, G §3.2.1): the rice bowl's XPBD run in mode ``full`` (identical
-grains packed on a grid in one orientation, dropped into the bowl for ``--full-frames`` frames) against
-the short method (aperiodic fill, refine, cull, a short run): fill height, packing fraction, contacts per
-grain, overlap and the time of each, and both previews side by side in ``benchmarks/results/`` (G's
-full/short time ratio is 1.89).
+G's full method against the short one on the rice bowl is ``benchmarks/bench_full_vs_short.py``.
 
 Kernels are compiled by a first quick run of the same recipe (numba's cache then serves later runs), so
 the timed run's cold time is the recipe's, not the compiler's. The load average is printed beside: on a
@@ -134,14 +129,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("recipes", nargs="*", help="recipe names (default: every one with a row below)")
     parser.add_argument("--quick", action="store_true", help="reduced sizes: seconds per recipe")
     parser.add_argument("--top", type=int, default=4, help="slowest nodes shown per recipe")
-    parser.add_argument("--full-vs-short", action="store_true", help="the rice bowl by G's full and short method")
-    parser.add_argument("--full-frames", type=int, default=60, help="frames of the full method's drop")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from machine import conditions
-
-    if args.full_vs_short:
-        return full_vs_short(args.quick, args.full_frames, conditions)
 
     names = args.recipes or [n for n in QUICK if recipe_path(n).exists()]
     rows = []
@@ -155,39 +145,6 @@ def main(argv: list[str] | None = None) -> int:
     print(_table(rows))
     print(f"\n{'quick sizes' if args.quick else 'full sizes'}; {conditions()}; pid {os.getpid()}")
     return 0
-
-
-def full_vs_short(quick: bool, full_frames: int, conditions) -> int:
-    """The rice bowl's simulation by G's full method (grid drop) and the short one, side by side."""
-    base = QUICK["rice_bowl"] if quick else []
-    run_cold("rice_bowl", QUICK["rice_bowl"])  # compile
-    out = REPO / "benchmarks" / "results"
-    rows = []
-    for method, extra in (("short", []), ("full", ["rice_sim.mode=full", f"rice_sim.frames={full_frames}"])):
-        row = run_cold("rice_bowl", base + extra, preview_to=out / f"rice_bowl_{method}.png")
-        rows.append((method, row))
-        _print_row(f"rice_bowl {method}", row, 4)
-    print("\n| method | grains | sim s | total s | fill mm | packing | contacts | p95 | max |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for method, row in rows:
-        print(
-            f"| {method} | {row['elements']:.0f} | {row['nodes']['rice_sim']:.1f} | {row['total']:.1f} | "
-            f"{row['fill_height']:.1f} | {row['packing_fraction']:.2f} | {row['contacts_per_element']:.1f} | "
-            f"{row['overlap_p95']:.3f} | {row['overlap_max']:.3f} |"
-        )
-    ratio = rows[1][1]["nodes"]["rice_sim"] / max(rows[0][1]["nodes"]["rice_sim"], 1e-9)
-    print(f"\nfull/short simulation time {ratio:.2f} (G: 3867 / 2041 = 1.89); previews in {out}")
-    _side_by_side(out / "rice_bowl_short.png", out / "rice_bowl_full.png", out / "rice_bowl_full_vs_short.png")
-    print(f"{'quick sizes' if quick else 'full sizes'}; {conditions()}")
-    return 0
-
-
-def _side_by_side(left: Path, right: Path, out: Path) -> None:
-    import numpy as np
-    from PIL import Image
-
-    a, b = (np.asarray(Image.open(p).convert("RGB")) for p in (left, right))
-    Image.fromarray(np.concatenate([a, b], axis=1)).save(out)
 
 
 def _print_row(name: str, row: dict, top: int) -> None:
