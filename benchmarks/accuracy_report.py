@@ -662,8 +662,9 @@ def particles_section(sweep_md: str, command: str, d, results) -> list[str]:
                 "met from " + ", ".join(c[axis] for c in reached) + " particles per grain."
                 if reached
                 else "met by no count measured: more particles per grain lower the mesh overlap, at the time the "
-                "table shows, but none of these counts reaches it, so the recipe's 8 stays until the clusters "
-                "themselves change (issue 17: particles packed out to the grain surface)."
+                "table shows (its seconds include the measure node and are noisy at this size; the XPBD run alone "
+                "doubles from 8 to 16 particles), but none of these counts reaches it, so the recipe keeps 8 until "
+                "one does (issue 17)."
             )
         )
     return [
