@@ -99,13 +99,14 @@ def _(value: Aggregate, log: EntityLogger) -> None:
     """Elements drawn by instancing: each library mesh once, at ``elements/<kind>/<mesh>``, with a pose per
     element that uses it (its linear map D·R and position t: SPEC §3's x = D·R·v + t; a displaced inner part
     also moved by its offset), so the recording (and a cached re-run's replay) holds each mesh once, not
-    every element's vertices. An aggregate with bends (SPEC §5 quadratic), or whose parts cannot be split,
-    is logged as one world-space mesh."""
+    every element's vertices. An aggregate with bends (SPEC §5 quadratic), flattened contacts, or whose parts
+    cannot be split, is logged as one world-space mesh."""
     from .simulation.aggregate import DeformedAggregate
 
     p = value.placement
     plans = [[_instance_groups(value, mesh) for mesh in library.meshes] for library in value.libraries]
-    if type(value) not in (Aggregate, DeformedAggregate) or value.bends is not None or None in sum(plans, []):
+    dented = getattr(value, "dented", False)  # flattened contacts move vertices of each element its own way
+    if type(value) not in (Aggregate, DeformedAggregate) or value.bends is not None or dented or None in sum(plans, []):
         archetype = elements_mesh3d(value)
         if archetype is not None:
             log.log("elements", archetype, static=True)

@@ -74,6 +74,8 @@ def cut(ctx, aggregate, *, kind, normal, offset, center, radius):
     keep = cut_mask(aggregate.placement.positions, kind, normal, offset, center, radius)
     if not keep.any():
         raise ValueError(f"the {kind} cut removes every element; move it (offset, center) or shrink it (radius)")
+    if hasattr(aggregate, "subset"):  # an aggregate with per-vertex state (flattened contacts, yolk offsets)
+        return aggregate.subset(keep)
     per_element = {
         name: getattr(aggregate, name)[keep]
         for name in ("deformations", "bends")

@@ -9,6 +9,7 @@ module (``shape_matching``, ``contact_constraints``, ``friction``, ``adhesion``,
 effects. The kernels are imported when the node runs, so listing nodes stays cheap.
 """
 
+from .flatten_contacts import flatten_contacts
 from .xpbd import xpbd
 
-__all__ = ["xpbd"]
+__all__ = ["flatten_contacts", "xpbd"]

@@ -1,0 +1,405 @@
+"""Contact flattening: the soft grains' meshes pressed flat where they meet — SPEC §3 (G: a low-resolution
+simulation carries the high-resolution grains), measured by issue 17's mesh-level overlap.
+
+The XPBD run resolves contacts between the particle clusters, whose spheres lie inside each grain and
+leave its surface uncovered by up to ≈ 0.1 of a grain length (``clusters``): two grains whose spheres only
+touch still cut into each other's meshes. Cooked rice is soft; where two grains press together each one
+flattens. This pass does that on the meshes, locally, with no pile-wide propagation: a shell vertex x of
+element i inside neighbour j (φⱼ(x) < 0, φⱼ on j's own local grid carried through j's map, SPEC §5
+x = D·R·u + R·B·m(u) + t) moves along j's outward normal by ``share`` of its depth plus a clearance; j's
+vertices inside i do the same, so with ``share`` ½ both surfaces meet on the bisector of the overlap
+(where φᵢ = φⱼ) — the contact patch of two equally soft bodies. A vertex inside a collider wall, or outside
+a mould, moves all the way back (walls are rigid). No vertex moves more than ``cap`` of its element's
+thickness, so a grain placed deep across another is not folded through itself: what that leaves is
+measured, not hidden.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit, prange
+
+from .collider import sample_phi
+
+
+@dataclass(frozen=True, eq=False)
+class ShapeFields:
+    """Per distinct element mesh: φ of its outer shell on its local grid (padded to one shape, φ > 0 out)."""
+
+    phi: np.ndarray  # (s, nx, ny, nz)
+    origin: np.ndarray  # (s, 3)
+    pitch: np.ndarray  # (s,)
+    dims: np.ndarray  # (s, 3) int64, each grid's own size
+
+
+def shape_fields(shells: list[tuple[np.ndarray, np.ndarray]], cells: int = 32) -> ShapeFields:
+    """φ of each closed shell (vertices, faces) in its local frame, ``cells`` across its longest side plus a
+    3-cell border: the pitch is a grain length / 32 ≈ 0.2 mm for rice (``collider.signed_distance_grid``)."""
+    import trimesh
+
+    from .collider import signed_distance_grid
+
+    grids = []
+    for vertices, faces in shells:
+        body = trimesh.Trimesh(vertices, faces, process=False)
+        lo, hi = body.bounds
+        pitch = float((hi - lo).max()) / cells
+        grids.append(signed_distance_grid([body], lo - 3 * pitch, hi + 3 * pitch, pitch))
+    dims = np.array([g[0].shape for g in grids], np.int64)
+    phi = np.full((len(grids), *dims.max(axis=0)), np.inf)
+    for s, (grid, _, _) in enumerate(grids):
+        phi[s, : grid.shape[0], : grid.shape[1], : grid.shape[2]] = grid
+    origin = np.array([g[1] for g in grids], np.float64)
+    return ShapeFields(phi, origin, np.array([g[2] for g in grids], np.float64), dims)
+
+
+@njit(cache=True, inline="always")
+def _local(x, lin_inv, rot, bend, t, u):
+    """u with x = L·u + R·B·m(u) + t (two fixed-point steps from the affine inverse: bends are small)."""
+    y0, y1, y2 = x[0] - t[0], x[1] - t[1], x[2] - t[2]
+    for a in range(3):
+        u[a] = lin_inv[a, 0] * y0 + lin_inv[a, 1] * y1 + lin_inv[a, 2] * y2
+    for _ in range(2):
+        m = (u[0] * u[0], u[1] * u[1], u[2] * u[2], u[0] * u[1], u[1] * u[2], u[2] * u[0])
+        b = np.zeros(3)
+        for a in range(3):
+            for c in range(6):
+                b[a] += bend[a, c] * m[c]
+        z0 = y0 - (rot[0, 0] * b[0] + rot[0, 1] * b[1] + rot[0, 2] * b[2])
+        z1 = y1 - (rot[1, 0] * b[0] + rot[1, 1] * b[1] + rot[1, 2] * b[2])
+        z2 = y2 - (rot[2, 0] * b[0] + rot[2, 1] * b[1] + rot[2, 2] * b[2])
+        for a in range(3):
+            u[a] = lin_inv[a, 0] * z0 + lin_inv[a, 1] * z1 + lin_inv[a, 2] * z2
+
+
+@njit(cache=True)
+def _inside(
+    world, v0, v1, shell, j, lin_inv, rot, bend, t, lo, hi, phi, origin, pitch, dims, clearance, rows, depth, normal
+):
+    """Shell vertices of rows v0…v1 of ``world`` closer to element j than ``clearance`` (inside: depth > 0):
+    their rows, world depth and j's outward unit normal there (j's φ on its local grid, scaled by
+    |∇ₓφ| = |(D·R)⁻ᵀ∇ᵤφ|). Returns how many."""
+    count = 0
+    u = np.empty(3)
+    grid = phi[j, : dims[j, 0], : dims[j, 1], : dims[j, 2]]
+    for k in range(v0, v1):
+        if not shell[k]:
+            continue
+        x = world[k]
+        if x[0] < lo[0] or x[1] < lo[1] or x[2] < lo[2] or x[0] > hi[0] or x[1] > hi[1] or x[2] > hi[2]:
+            continue
+        _local(x, lin_inv, rot, bend, t, u)
+        val, gx, gy, gz = sample_phi(grid, origin[j], pitch[j], u[0], u[1], u[2])
+        if not val < np.inf:
+            continue
+        w0 = lin_inv[0, 0] * gx + lin_inv[1, 0] * gy + lin_inv[2, 0] * gz
+        w1 = lin_inv[0, 1] * gx + lin_inv[1, 1] * gy + lin_inv[2, 1] * gz
+        w2 = lin_inv[0, 2] * gx + lin_inv[1, 2] * gy + lin_inv[2, 2] * gz
+        norm = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+        if not norm > 0.0 or -val / norm + clearance <= 0.0:
+            continue
+        rows[count] = k
+        depth[count] = -val / norm
+        normal[count, 0] = w0 / norm
+        normal[count, 1] = w1 / norm
+        normal[count, 2] = w2 / norm
+        count += 1
+    return count
+
+
+@njit(cache=True, parallel=True)
+def neighbour_pushes(
+    world,
+    vstart,
+    shell,
+    nstart,
+    neighbours,
+    shape,
+    lin_inv,
+    rot,
+    bend,
+    t,
+    lo,
+    hi,
+    phi,
+    origin,
+    pitch,
+    dims,
+    clearance,
+    share,
+):
+    """Per shell vertex of each of the first elements (rows of ``nstart``): its move onto the contact plane
+    of each neighbour j it is inside (CSR ``nstart``/``neighbours``, in order). The plane of a pair: normal
+    n from the centroid of j's vertices inside i to that of i's vertices inside j (the lens' axis, which the
+    nearest-surface normals miss when two thin grains cross deeply; their sum when one set is empty), at
+    a − ``share``·(a − b) along n, [b, a] the overlap's extent along n (from the vertices and their depths);
+    i's vertices inside j and past the plane go back onto it, less half the ``clearance``. The pair's other
+    element computes the same plane from its side. One element per thread, each writing only its own
+    vertices: deterministic."""
+    push = np.zeros((vstart[nstart.shape[0] - 1], 3))
+    most = 0
+    for e in range(vstart.shape[0] - 1):
+        most = max(most, vstart[e + 1] - vstart[e])
+    for i in prange(nstart.shape[0] - 1):
+        rows_x = np.empty(most, np.int64)
+        rows_y = np.empty(most, np.int64)
+        depth_x = np.empty(most)
+        depth_y = np.empty(most)
+        normal_x = np.empty((most, 3))
+        normal_y = np.empty((most, 3))
+        n = np.empty(3)
+        for q in range(nstart[i], nstart[i + 1]):
+            j = neighbours[q]
+            si, sj = shape[i], shape[j]
+            cx = _inside(
+                world, vstart[i], vstart[i + 1], shell, sj, lin_inv[j], rot[j], bend[j], t[j], lo[j], hi[j],
+                phi, origin, pitch, dims, clearance, rows_x, depth_x, normal_x,
+            )  # fmt: skip
+            if cx == 0:
+                continue
+            cy = _inside(
+                world, vstart[j], vstart[j + 1], shell, si, lin_inv[i], rot[i], bend[i], t[i], lo[i], hi[i],
+                phi, origin, pitch, dims, clearance, rows_y, depth_y, normal_y,
+            )  # fmt: skip
+            for a in range(3):  # the lens' axis: depth-weighted outward normals of both sides
+                n[a] = 0.0
+                for k in range(cy):
+                    n[a] += depth_y[k] * normal_y[k, a]
+                for k in range(cx):
+                    n[a] -= depth_x[k] * normal_x[k, a]
+            norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+            if not norm > 0.0:
+                continue
+            for a in range(3):
+                n[a] /= norm
+            top = -np.inf  # a: how far i reaches along n (its vertices in j; without any, from j's in i and depths)
+            bottom = np.inf  # b: how far j reaches back (its vertices in i; without any, from i's in j)
+            for k in range(cx):
+                h = world[rows_x[k], 0] * n[0] + world[rows_x[k], 1] * n[1] + world[rows_x[k], 2] * n[2]
+                top = max(top, h)
+                if cy == 0:
+                    bottom = min(bottom, h - depth_x[k])
+            for k in range(cy):
+                h = world[rows_y[k], 0] * n[0] + world[rows_y[k], 1] * n[1] + world[rows_y[k], 2] * n[2]
+                bottom = min(bottom, h)
+                if cx == 0:
+                    top = max(top, h + depth_y[k])
+            plane = top - share * (top - bottom) - 0.5 * clearance
+            for k in range(cx):
+                r = rows_x[k]
+                h = 0.0
+                for a in range(3):
+                    h += (world[r, a] + push[r, a]) * n[a]
+                if h > plane:
+                    for a in range(3):
+                        push[r, a] -= (h - plane) * n[a]
+    return push
+
+
+@njit(cache=True, parallel=True)
+def wall_pushes(world, shell, cphi, corigin, cpitch, clearance, reach):
+    """Per shell vertex inside the free-space field's solid (φ_c < ``clearance``) but no deeper than
+    ``reach`` (beyond, it may be past a thin wall's middle, where ∇φ_c points out the far side): the
+    whole way back along ∇φ_c, plus the clearance — walls do not give."""
+    push = np.zeros_like(world)
+    for k in prange(world.shape[0]):
+        if not shell[k]:
+            continue
+        val, gx, gy, gz = sample_phi(cphi, corigin, cpitch, world[k, 0], world[k, 1], world[k, 2])
+        if not val < clearance or val < -reach:
+            continue
+        norm = np.sqrt(gx * gx + gy * gy + gz * gz)
+        if norm > 0.0:
+            move = (clearance - val) / norm
+            push[k, 0] = move * gx
+            push[k, 1] = move * gy
+            push[k, 2] = move * gz
+    return push
+
+
+def capped(push: np.ndarray, vstart: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """``push`` with each vertex's move shortened to its element's ``limit`` (same direction)."""
+    per_vertex = np.repeat(limit, np.diff(vstart))
+    length = np.linalg.norm(push, axis=1)
+    scale = np.minimum(1.0, per_vertex / np.maximum(length, 1e-300))
+    return push * scale[:, None]
+
+
+@dataclass(frozen=True, eq=False)
+class Dents:
+    """Per-vertex moves of the flattened elements (world frame), one row per moved vertex, sorted by element."""
+
+    element: np.ndarray  # (k,) int64
+    vertex: np.ndarray  # (k,) int64, index into the element's mesh
+    offset: np.ndarray  # (k, 3)
+
+
+@dataclass(frozen=True, eq=False)
+class _Elements:
+    """The elements of several aggregates as flat arrays: maps, shapes, world shells, bounding boxes."""
+
+    lin_inv: np.ndarray
+    rot: np.ndarray
+    bend: np.ndarray
+    t: np.ndarray
+    shape: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    centre: np.ndarray
+    radius: np.ndarray
+    thickness: np.ndarray  # smallest extent of each element's shell in its own frame
+    world: list  # per element: its mesh's world vertices
+    shell: list  # per element: True for the vertices of its outer shell
+
+
+def outer_vertices(mesh) -> np.ndarray:
+    """True for vertices of the outer shell (faces of part 0) and of no inner part (the ikura yolk)."""
+    if mesh.parts is None:
+        return np.ones(len(mesh.vertices), bool)
+    mask = np.zeros(len(mesh.vertices), bool)
+    mask[np.unique(mesh.faces[mesh.parts == 0])] = True
+    mask[np.unique(mesh.faces[mesh.parts != 0])] = False
+    return mask
+
+
+def _gather(aggregates, fields_of) -> _Elements:
+    """Flatten ``aggregates`` into one list of elements; ``fields_of(mesh)`` gives a mesh's shape index."""
+    rows = {k: [] for k in ("lin_inv", "rot", "bend", "t", "shape", "lo", "hi", "thickness")}
+    world, shell = [], []
+    for aggregate in aggregates:
+        p = aggregate.placement
+        rot = np.asarray(p.rotations, np.float64)
+        lin = rot if aggregate.deformations is None else np.einsum("nij,njk->nik", aggregate.deformations, rot)
+        bend = np.zeros((len(p), 3, 6)) if aggregate.bends is None else np.asarray(aggregate.bends, np.float64)
+        t = np.asarray(p.positions, np.float64).copy()  # part offsets move inner parts only, not the shell
+        for i in range(len(p)):
+            library = aggregate.libraries[p.kinds[i]]
+            base = library.meshes[p.variants[i] % len(library)]
+            mesh = aggregate.element_mesh(i)
+            outer = outer_vertices(base)
+            points = mesh.vertices[outer]
+            rows["lo"].append(points.min(axis=0))
+            rows["hi"].append(points.max(axis=0))
+            rows["thickness"].append(float(np.ptp(base.vertices[outer], axis=0).min()))
+            rows["shape"].append(fields_of(base))
+            world.append(np.asarray(mesh.vertices, np.float64))
+            shell.append(outer)
+        rows["lin_inv"].append(np.linalg.inv(lin))
+        rows["rot"].append(rot)
+        rows["bend"].append(bend)
+        rows["t"].append(t)
+    lo, hi = np.array(rows["lo"]).reshape(-1, 3), np.array(rows["hi"]).reshape(-1, 3)
+    centre = 0.5 * (lo + hi)
+    return _Elements(
+        np.ascontiguousarray(np.concatenate(rows["lin_inv"])),
+        np.ascontiguousarray(np.concatenate(rows["rot"])),
+        np.ascontiguousarray(np.concatenate(rows["bend"])),
+        np.ascontiguousarray(np.concatenate(rows["t"])),
+        np.array(rows["shape"], np.int64),
+        lo,
+        hi,
+        centre,
+        0.5 * np.linalg.norm(hi - lo, axis=1),
+        np.array(rows["thickness"]),
+        world,
+        shell,
+    )
+
+
+def _neighbour_lists(elements: _Elements, own: int, margin: float):
+    """CSR of each of the first ``own`` elements' neighbours among all (bounding spheres within ``margin``),
+    in index order (deterministic)."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(elements.centre)
+    reach = 2.0 * float(elements.radius.max()) + margin
+    lists = []
+    for i in range(own):
+        near = np.array(sorted(tree.query_ball_point(elements.centre[i], reach)), np.int64)
+        gap = np.linalg.norm(elements.centre[near] - elements.centre[i], axis=1)
+        keep = (near != i) & (gap <= elements.radius[i] + elements.radius[near] + margin)
+        lists.append(near[keep])
+    start = np.concatenate([[0], np.cumsum([len(x) for x in lists])]).astype(np.int64)
+    flat = np.concatenate(lists) if lists else np.zeros(0, np.int64)
+    return start, flat.astype(np.int64)
+
+
+def flatten(
+    aggregate, neighbours=(), free_space=None, clearance: float = 0.005, share: float = 0.5, cap: float = 0.5
+) -> tuple[Dents, dict]:
+    """The dents of ``aggregate``'s elements pressed against each other and the ``neighbours``' elements
+    (which are not moved here: flatten them with this aggregate as their neighbour) and, with ``free_space``
+    (φ, origin, pitch of the colliders' free space), against the walls. ``clearance`` is in element lengths
+    (the median), ``cap`` in each element's thickness. Returns the dents and figures of what moved."""
+    fields: dict[int, int] = {}
+    shells: list = []
+
+    def fields_of(mesh) -> int:
+        key = id(mesh)
+        if key not in fields:
+            fields[key] = len(shells)
+            used = outer_vertices(mesh)
+            faces = mesh.faces if mesh.parts is None else mesh.faces[mesh.parts == 0]
+            remap = np.cumsum(used) - 1
+            shells.append((mesh.vertices[used], remap[faces]))
+        return fields[key]
+
+    everything = [aggregate, *neighbours]
+    elements = _gather(everything, fields_of)
+    grids = shape_fields(shells)
+    own = len(aggregate.placement)
+    world = np.concatenate(elements.world) if elements.world else np.zeros((0, 3))
+    shell = np.concatenate(elements.shell) if elements.shell else np.zeros(0, bool)
+    vstart = np.concatenate([[0], np.cumsum([len(w) for w in elements.world])]).astype(np.int64)
+    length = float(np.median(np.ptp(np.stack([elements.lo, elements.hi]), axis=0).max(axis=1)))
+    gap = clearance * length
+    nstart, near = _neighbour_lists(elements, own, 2.0 * gap)
+    pad = np.full(3, gap)
+    push = neighbour_pushes(
+        world, vstart, shell, nstart, near, elements.shape, elements.lin_inv, elements.rot, elements.bend,
+        elements.t, elements.lo - pad, elements.hi + pad, grids.phi, grids.origin, grids.pitch, grids.dims,
+        gap, share,
+    )  # fmt: skip
+    if free_space is not None:
+        cphi, corigin, cpitch = free_space
+        reach = 0.5 * float(np.min(elements.thickness[:own])) if own else 0.0
+        mine = vstart[own]
+        push += wall_pushes(
+            world[:mine] + push, shell[:mine], np.ascontiguousarray(cphi), np.asarray(corigin, float), float(cpitch),
+            gap, reach,
+        )  # fmt: skip
+    push = capped(push, vstart[: own + 1], cap * elements.thickness[:own])
+    moved = np.flatnonzero(np.any(push != 0.0, axis=1))
+    owner = np.searchsorted(vstart, moved, side="right") - 1
+    dents = Dents(owner.astype(np.int64), (moved - vstart[owner]).astype(np.int64), push[moved])
+    depth = np.linalg.norm(push[moved], axis=1) / length
+    dented = np.unique(owner)
+    figures = {
+        "elements": own,
+        "dented_elements": len(dented),
+        "moved_vertices": len(moved),
+        "dent_p50": float(np.percentile(depth, 50)) if len(depth) else 0.0,
+        "dent_p95": float(np.percentile(depth, 95)) if len(depth) else 0.0,
+        "dent_max": float(depth.max()) if len(depth) else 0.0,
+        "capped_vertices": int(
+            np.sum(np.isclose(np.linalg.norm(push[moved], axis=1), cap * elements.thickness[owner]))
+        ),
+    }
+    return dents, figures
+
+
+def merged_dents(aggregate, dents: Dents) -> dict:
+    """The ``DeformedAggregate`` dent fields of ``dents`` added to those ``aggregate`` carries already (a
+    second pass starts from the first's flattened meshes)."""
+    element, vertex, offset = dents.element, dents.vertex, dents.offset
+    if getattr(aggregate, "dented", False):
+        element = np.concatenate([aggregate.dent_element, element])
+        vertex = np.concatenate([aggregate.dent_vertex, vertex])
+        offset = np.concatenate([aggregate.dent_offset, offset])
+    key = element * (int(vertex.max()) + 1 if len(vertex) else 1) + vertex
+    unique, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    summed = np.zeros((len(unique), 3))
+    np.add.at(summed, inverse, offset)
+    return {"dent_element": element[first], "dent_vertex": vertex[first], "dent_offset": summed}
