@@ -14,7 +14,7 @@ from ..values import Aggregate
 
 @node(
     "measure",
-    version=1,
+    version=2,
     random=True,
     inputs={"aggregates": In(Aggregate, "the final aggregates (their element meshes are measured)", many=True)},
     outputs={

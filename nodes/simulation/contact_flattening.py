@@ -94,6 +94,10 @@ def _inside(
         val, gx, gy, gz = sample_phi(grid, origin[j], pitch[j], u[0], u[1], u[2])
         if not val < np.inf:
             continue
+        g = np.sqrt(gx * gx + gy * gy + gz * gz)
+        if not g > 0.0:
+            continue
+        gx, gy, gz = gx / g, gy / g, gz / g  # unit: deep inside, the trilinear gradient is short, not φ wrong
         w0 = lin_inv[0, 0] * gx + lin_inv[1, 0] * gy + lin_inv[2, 0] * gz
         w1 = lin_inv[0, 1] * gx + lin_inv[1, 1] * gy + lin_inv[2, 1] * gz
         w2 = lin_inv[0, 2] * gx + lin_inv[1, 2] * gy + lin_inv[2, 2] * gz
@@ -129,14 +133,18 @@ def neighbour_pushes(
     dims,
     clearance,
     share,
+    adjacency,
+    ring_start,
+    ring,
 ):
     """Per shell vertex of each of the first elements (rows of ``nstart``): its move onto the contact plane
     of each neighbour j it is inside (CSR ``nstart``/``neighbours``, in order). The plane of a pair: normal
     n from the centroid of j's vertices inside i to that of i's vertices inside j (the lens' axis, which the
     nearest-surface normals miss when two thin grains cross deeply; their sum when one set is empty), at
     a − ``share``·(a − b) along n, [b, a] the overlap's extent along n (from the vertices and their depths);
-    i's vertices inside j and past the plane go back onto it, less half the ``clearance``. The pair's other
-    element computes the same plane from its side. One element per thread, each writing only its own
+    i's vertices inside j and past the plane go back onto it, less half the ``clearance``, and the cap they
+    form is relaxed in the plane (``relax_cap``). The pair's other element computes the same plane from its
+    side. One element per thread, each writing only its own
     vertices: deterministic."""
     push = np.zeros((vstart[nstart.shape[0] - 1], 3))
     most = 0
@@ -187,6 +195,7 @@ def neighbour_pushes(
                 if cx == 0:
                     top = max(top, h + depth_y[k])
             plane = top - share * (top - bottom) - 0.5 * clearance
+            capped = 0
             for k in range(cx):
                 r = rows_x[k]
                 h = 0.0
@@ -195,7 +204,36 @@ def neighbour_pushes(
                 if h > plane:
                     for a in range(3):
                         push[r, a] -= (h - plane) * n[a]
+                    rows_x[capped] = r  # the cap: i's vertices now on the plane
+                    capped += 1
+            if capped > 1:
+                relax_cap(world, push, rows_x, capped, vstart[i], adjacency[shape[i]], ring_start, ring, n, plane)
     return push
+
+
+@njit(cache=True)
+def relax_cap(world, push, cap, count, first, row, ring_start, ring, n, plane, sweeps=40):
+    """The cap (rows ``cap[:count]``) relaxed in the plane n·x = ``plane``: each vertex to the mean of its
+    ring neighbours, projected back onto the plane, Gauss–Seidel, its rim fixed (Tutte: a disk whose
+    rim is convex embeds without folds). Plain projection folds the cap where its faces look away from
+    n (a grain's edge or tip pressed flat), which a renderer shows as creases."""
+    p = np.empty(3)
+    for _ in range(sweeps):
+        for c in range(count):
+            v = cap[c]
+            local = v - first
+            lo, hi = ring_start[row + local], ring_start[row + local + 1]
+            p[:] = 0.0
+            for q in range(lo, hi):
+                u = first + ring[q]
+                for a in range(3):
+                    p[a] += world[u, a] + push[u, a]
+            h = 0.0
+            for a in range(3):
+                p[a] /= hi - lo
+                h += p[a] * n[a]
+            for a in range(3):
+                push[v, a] = p[a] - (h - plane) * n[a] - world[v, a]
 
 
 @njit(cache=True, parallel=True)
@@ -308,6 +346,25 @@ def _gather(aggregates, fields_of) -> _Elements:
     )
 
 
+def vertex_rings(meshes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each (vertex count, faces) mesh's vertex neighbours as one CSR: shape s's vertex v has neighbours
+    ``ring[ring_start[row[s] + v] : ring_start[row[s] + v + 1]]`` (its own vertex indices)."""
+    rows, starts, rings, offset = [], [], [], 0
+    for count, faces in meshes:
+        edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+        edges = np.unique(np.concatenate([edges, edges[:, ::-1]]), axis=0)  # sorted by vertex, then neighbour
+        start = np.searchsorted(edges[:, 0], np.arange(count + 1))
+        rows.append(sum(len(x) for x in starts))
+        starts.append(start + offset)
+        rings.append(edges[:, 1])
+        offset += len(edges)
+    return (
+        np.array(rows, np.int64),
+        np.concatenate(starts).astype(np.int64),
+        np.concatenate(rings).astype(np.int64),
+    )
+
+
 def _neighbour_lists(elements: _Elements, own: int, margin: float):
     """CSR of each of the first ``own`` elements' neighbours among all (bounding spheres within ``margin``),
     in index order (deterministic)."""
@@ -335,6 +392,7 @@ def flatten(
     (the median), ``cap`` in each element's thickness. Returns the dents and figures of what moved."""
     fields: dict[int, int] = {}
     shells: list = []
+    faces_of: list = []
 
     def fields_of(mesh) -> int:
         key = id(mesh)
@@ -344,6 +402,7 @@ def flatten(
             faces = mesh.faces if mesh.parts is None else mesh.faces[mesh.parts == 0]
             remap = np.cumsum(used) - 1
             shells.append((mesh.vertices[used], remap[faces]))
+            faces_of.append((len(mesh.vertices), np.asarray(mesh.faces)))
         return fields[key]
 
     everything = [aggregate, *neighbours]
@@ -357,10 +416,11 @@ def flatten(
     gap = clearance * length
     nstart, near = _neighbour_lists(elements, own, 2.0 * gap)
     pad = np.full(3, gap)
+    adjacency, ring_start, ring = vertex_rings(faces_of)
     push = neighbour_pushes(
         world, vstart, shell, nstart, near, elements.shape, elements.lin_inv, elements.rot, elements.bend,
         elements.t, elements.lo - pad, elements.hi + pad, grids.phi, grids.origin, grids.pitch, grids.dims,
-        gap, share,
+        gap, share, adjacency, ring_start, ring,
     )  # fmt: skip
     if free_space is not None:
         cphi, corigin, cpitch = free_space
@@ -375,6 +435,10 @@ def flatten(
     owner = np.searchsorted(vstart, moved, side="right") - 1
     dents = Dents(owner.astype(np.int64), (moved - vstart[owner]).astype(np.int64), push[moved])
     depth = np.linalg.norm(push[moved], axis=1) / length
+    folded = sum(
+        folded_faces(world[vstart[i] : vstart[i + 1]], push[vstart[i] : vstart[i + 1]], faces_of[elements.shape[i]][1])
+        for i in np.unique(owner)
+    )
     dented = np.unique(owner)
     figures = {
         "elements": own,
@@ -383,11 +447,21 @@ def flatten(
         "dent_p50": float(np.percentile(depth, 50)) if len(depth) else 0.0,
         "dent_p95": float(np.percentile(depth, 95)) if len(depth) else 0.0,
         "dent_max": float(depth.max()) if len(depth) else 0.0,
+        "folded_faces": int(folded),
         "capped_vertices": int(
             np.sum(np.isclose(np.linalg.norm(push[moved], axis=1), cap * elements.thickness[owner]))
         ),
     }
     return dents, figures
+
+
+def folded_faces(vertices: np.ndarray, push: np.ndarray, faces: np.ndarray) -> int:
+    """How many faces the moves turn over (their normal reversed): folds a renderer would show as creases."""
+
+    def normals(x):
+        return np.cross(x[faces[:, 1]] - x[faces[:, 0]], x[faces[:, 2]] - x[faces[:, 0]])
+
+    return int(np.sum(np.einsum("ij,ij->i", normals(vertices), normals(vertices + push)) < 0.0))
 
 
 def merged_dents(aggregate, dents: Dents) -> dict:

@@ -14,7 +14,7 @@ from ..values import Aggregate
 
 @node(
     "flatten_contacts",
-    version=6,
+    version=8,
     inputs={
         "aggregate": In(Aggregate, "the relaxed elements whose meshes are flattened (xpbd.aggregate)"),
         "neighbours": In(
