@@ -17,7 +17,7 @@ from nodegraph.values import Mesh
 from ..values import Aggregate, Material, ShadedScene
 from . import materials as mat
 from .cdrf import CdrfTable, curvature_sigma
-from .curvature import mean_curvature, vertex_normals
+from .curvature import normals_and_curvature
 from .vertex_shading import Light, cdrf_colors
 
 
@@ -118,8 +118,7 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
     starts = np.concatenate([[0], np.cumsum(counts)])
     vertices = np.concatenate([piece.mesh.vertices for piece in pieces])
     faces = np.concatenate([piece.mesh.faces + starts[k] for k, piece in enumerate(pieces)])
-    normals = vertex_normals(vertices, faces)
-    curvature = mean_curvature(vertices, faces, normals)
+    normals, curvature = normals_and_curvature(vertices, faces)
 
     per_vertex = lambda field: np.repeat(np.array([getattr(piece.material, field) for piece in pieces]), counts, axis=0)
     colors = cdrf_colors(
