@@ -74,15 +74,15 @@ def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:
     camera = ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"])
     width, height, spp = (96, 72, 8) if quick else (240, 180, 8)
 
-    def luminance(material: Material, depth: int) -> tuple[np.ndarray, float]:
+    def luminance(material: Material, depth: int) -> tuple[np.ndarray, float, float]:
         materials = tuple(material if is_ice(m) else m for m in scene.materials)
         description = dataclasses.replace(scene, materials=materials)
-        t = time.perf_counter()
+        t, c = time.perf_counter(), cpu_seconds()
         layers = ms.render_layers(description, camera, width, height, spp, p["sun_direction"], max_depth=depth)
-        return layers.color @ np.array([0.2126, 0.7152, 0.0722]), time.perf_counter() - t
+        return layers.color @ np.array([0.2126, 0.7152, 0.0722]), time.perf_counter() - t, cpu_seconds() - c
 
-    white, _ = luminance(Material("white", base_color=(0.9, 0.9, 0.9), roughness=1.0), ms.MAX_DEPTH)
-    black, _ = luminance(Material("black", base_color=(0.0, 0.0, 0.0), roughness=1.0), ms.MAX_DEPTH)
+    white, _, _ = luminance(Material("white", base_color=(0.9, 0.9, 0.9), roughness=1.0), ms.MAX_DEPTH)
+    black, _, _ = luminance(Material("black", base_color=(0.0, 0.0, 0.0), roughness=1.0), ms.MAX_DEPTH)
     mound = white - black > 0.2
     plain = ice_materials((0.75, 0.02, 0.06))[0]
     lines = [
@@ -90,12 +90,12 @@ def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:
         f"{int(mound.sum())} pixels / the same mound in white diffuse (0.9), {width}×{height}, {spp} spp; "
         f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores",
         "",
-        "| max_depth | ice / white | render (s) |",
-        "|---|---|---|",
+        "| max_depth | ice / white | render wall (s) | render CPU (s) |",
+        "|---|---|---|---|",
     ]
     for depth in (10, 32, 64, 128, 256):
-        ice, seconds = luminance(plain, depth)
-        lines.append(f"| {depth} | {ice[mound].mean() / white[mound].mean():.3f} | {seconds:.1f} |")
+        ice, wall, cpu = luminance(plain, depth)
+        lines.append(f"| {depth} | {ice[mound].mean() / white[mound].mean():.3f} | {wall:.1f} | {cpu:.1f} |")
         print(lines[-1], flush=True)
     return "\n".join(lines)
 
