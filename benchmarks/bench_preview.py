@@ -2,6 +2,7 @@
 reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 preview.
 
     python benchmarks/bench_preview.py [--quick] [--cache-dir DIR]
+    python benchmarks/bench_preview.py --ice [--quick] [--cache-dir DIR]    # kakigori ice vs path length
 
 The scene is the main job's (``graphs/ikura_don.yaml`` up to ``shade``, from the cache; computed the first
 time), seen by its preview camera. Quality is measured in a window of the 1280 × 720 frame over the
@@ -9,6 +10,9 @@ eggs and rice (the hardest pixels: caustics inside the eggs, light through the g
 the bowl is easier), so the reference stays affordable on 2 cores; the denoiser sees the same pixel scale
 as in the full frame. Times are the whole ``preview`` path at 1280 × 720 (PLY files, scene load, render,
 guide pass, denoising). ``--quick``: a small synthetic scene and a 64-spp reference (seconds).
+``--ice``: the kakigori mound (``graphs/kakigori.yaml``, reduced sizes with ``--quick``) all in plain ice, its
+pixels' mean linear luminance against the same mound in a white diffuse material under the same light, and the
+render time, per path length (the path tracer's ``max_depth``): why ice got ``mitsuba_scene.MAX_DEPTH_FLAKES``.
 Writes benchmarks/results/bench_preview.{md,png} (or under $NODEGRAPH_BENCH_RESULTS; the plot needs matplotlib).
 """
 
@@ -51,6 +55,51 @@ def quick_scene():
     return scene, Camera(50.0, 20.0, 35.0, 0.9), params
 
 
+KAKIGORI_QUICK = ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2"]
+
+
+def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:
+    """The kakigori mound in plain ice against white diffuse, per path length: luminance ratio and render time."""
+    import dataclasses
+
+    from nodegraph.api import Cache, default_cache_dir, default_registry, load_recipe, run_recipe
+    from nodes.export import mitsuba_scene as ms
+    from nodes.shading.materials import ice_materials, is_ice
+    from nodes.values import Material
+
+    recipe = load_recipe(ROOT / "graphs" / "kakigori.yaml", default_registry(), KAKIGORI_QUICK if quick else [])
+    result = run_recipe(recipe, outputs=["shade.scene"], cache=Cache(cache_dir or default_cache_dir()))
+    scene = result.output("shade.scene")
+    p = recipe.nodes["preview"].params
+    camera = ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"])
+    width, height, spp = (96, 72, 8) if quick else (240, 180, 8)
+
+    def luminance(material: Material, depth: int) -> tuple[np.ndarray, float, float]:
+        materials = tuple(material if is_ice(m) else m for m in scene.materials)
+        description = dataclasses.replace(scene, materials=materials)
+        t, c = time.perf_counter(), cpu_seconds()
+        layers = ms.render_layers(description, camera, width, height, spp, p["sun_direction"], max_depth=depth)
+        return layers.color @ np.array([0.2126, 0.7152, 0.0722]), time.perf_counter() - t, cpu_seconds() - c
+
+    white, _, _ = luminance(Material("white", base_color=(0.9, 0.9, 0.9), roughness=1.0), ms.MAX_DEPTH)
+    black, _, _ = luminance(Material("black", base_color=(0.0, 0.0, 0.0), roughness=1.0), ms.MAX_DEPTH)
+    mound = white - black > 0.2
+    plain = ice_materials((0.75, 0.02, 0.06))[0]
+    lines = [
+        f"Kakigori ({'reduced' if quick else 'full'} recipe) in plain ice: mean linear luminance of its "
+        f"{int(mound.sum())} pixels / the same mound in white diffuse (0.9), {width}×{height}, {spp} spp; "
+        f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores",
+        "",
+        "| max_depth | ice / white | render wall (s) | render CPU (s) |",
+        "|---|---|---|---|",
+    ]
+    for depth in (10, 32, 64, 128, 256):
+        ice, wall, cpu = luminance(plain, depth)
+        lines.append(f"| {depth} | {ice[mound].mean() / white[mound].mean():.3f} | {wall:.1f} | {cpu:.1f} |")
+        print(lines[-1], flush=True)
+    return "\n".join(lines)
+
+
 def cpu_seconds() -> float:
     """CPU time of this process (all threads): with other work on the machine, wall time alone misleads."""
     return time.process_time()
@@ -60,7 +109,15 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true", help="small synthetic scene, 64-spp reference (seconds)")
     parser.add_argument("--cache-dir", type=Path, default=None, help="nodegraph cache holding the main job")
+    parser.add_argument("--ice", action="store_true", help="kakigori ice brightness vs path length instead")
     args = parser.parse_args()
+    if args.ice:
+        text = ice_vs_depth(args.quick, args.cache_dir)
+        print(text)
+        out = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or Path(__file__).parent / "results")
+        out.mkdir(parents=True, exist_ok=True)
+        (out / f"bench_preview_ice{'_quick' if args.quick else ''}.md").write_text(text + "\n")
+        return
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from nodes.export.mesh_files import linear_to_srgb8

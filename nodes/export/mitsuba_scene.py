@@ -40,6 +40,12 @@ TABLE_COLOR = (0.42, 0.36, 0.30)  # linear RGB of the matte table under the scen
 EXPOSURE = 1.5  # linear scale before the tone curve: lit white rice (key + sky) near the knee
 KNEE = 0.75  # the tone curve is linear below this and rolls off above it (white rice keeps its gloss, not clipped)
 MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) and a few grains of rice
+# path length in a heap of ice flakes: light crosses two interfaces per flake and reflects off some, so what comes
+# back out of the heap (why shaved ice is white) has walked through tens of flakes; at MAX_DEPTH the walk was cut
+# off and the ice rendered dark grey. Kakigori's mound, all plain ice, linear luminance of its pixels against the same
+# mound in white diffuse (benchmarks/bench_preview.py --ice, 240 × 180, 8 spp): 0.10 at depth 10, 0.34 at 32, 0.45 at
+# 64, 0.47 at 128 and 256 (converged); Russian roulette ends the paths that carry little.
+MAX_DEPTH_FLAKES = 128
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
@@ -79,6 +85,15 @@ def write_ply(path: Path, vertices, faces, normals, colors, translucency=None) -
         columns.append(np.asarray(translucency).reshape(-1, 1))
     rows = np.hstack(columns).astype("<f4")
     path.write_bytes(binary_ply([(names, rows)], faces))
+
+
+def path_depth(scene: ShadedScene) -> int:
+    """The path tracer's longest path: ``MAX_DEPTH_FLAKES`` where the scene has ice (a heap of thin transmissive
+    flakes, many interfaces deep), else ``MAX_DEPTH`` (eggs and rice end paths sooner; the longer cap costs there
+    without changing much)."""
+    from ..shading.materials import is_ice
+
+    return MAX_DEPTH_FLAKES if any(is_ice(m) for m in scene.materials) else MAX_DEPTH
 
 
 def _rgb(value) -> dict:
@@ -209,8 +224,10 @@ def scene_dict(
     spp: int,
     light_direction,
     crop: Crop | None = None,
+    max_depth: int | None = None,
 ) -> dict:
-    """The Mitsuba scene description; PLY files are written into ``folder``."""
+    """The Mitsuba scene description; PLY files are written into ``folder``. ``max_depth``: the longest path
+    (default ``path_depth``: by the scene's materials)."""
     import mitsuba as mi
 
     shapes, bounds = _shapes(scene, folder)
@@ -234,7 +251,7 @@ def scene_dict(
     table = mi.ScalarTransform4f().translate([*target[:2].tolist(), float(lo[2]) - 1e-3 * radius])
     return {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": MAX_DEPTH},
+        "integrator": {"type": "path", "max_depth": max_depth or path_depth(scene)},
         "sensor": {
             "type": "perspective",
             "fov": camera.fov,
@@ -277,6 +294,7 @@ def render_layers(
     light_direction,
     seed: int = 0,
     crop: Crop | None = None,
+    max_depth: int | None = None,
 ) -> Layers:
     """Path-traced linear colour with albedo and normal AOVs; same inputs and seed ⇒ the same bits."""
     import tempfile
@@ -285,7 +303,7 @@ def render_layers(
 
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
-        description = scene_dict(scene, Path(folder), camera, width, height, spp, light_direction, crop)
+        description = scene_dict(scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth)
         loaded = mi.load_dict(description)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV})

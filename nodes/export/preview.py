@@ -17,7 +17,8 @@ from ..values import ShadedScene
     "preview",
     # 2: materials in the path tracer (dielectric ikura, translucent rice from the CDRF σ, glazed bowl),
     #    key light + sky + table, OIDN denoising, 1280 × 720 and 12 spp by default
-    version=2,
+    # 3: paths through ice up to 128 bounces (mitsuba_scene.path_depth): a heap of flakes was cut off dark grey
+    version=3,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={

@@ -23,6 +23,7 @@ _KIND_WORDS = {
     "salmon": ("salmon", "sake"),
     "tuna": ("tuna", "maguro"),
 }
+ICE = "ice"  # the plain ice material's name; its syrup grades are named ice_syrup_<percent>
 PARTS = {"ikura": ("membrane", "yolk"), "salmon": ("flesh", "fat"), "tuna": ("flesh", "fat")}  # Mesh.parts ids
 
 
@@ -117,13 +118,17 @@ def ikura_materials() -> tuple[Material, Material]:
 
 
 def ice_materials(syrup_color) -> tuple[Material, Material]:
-    """(plain ice, syrup-soaked ice): transmissive, IOR 1.31, slightly frosted; the syrup tints and glosses it."""
+    """(plain ice, syrup-soaked ice): transmissive, IOR 1.31, slightly frosted; the syrup tints and glosses it.
+
+    ``subsurface_color`` is what light keeps crossing one part (a 0.4 mm flake): clear ice absorbs almost nothing
+    over a millimetre (its blue shows over metres), so plain ice keeps ≈ 99 %: a heap is white from the light its
+    many interfaces reflect, not grey from absorption compounded over tens of flakes."""
     ice = Material(
-        name="ice",
+        name=ICE,
         base_color=(0.92, 0.96, 1.0),
         subsurface=0.1,
         subsurface_radius=(5.0, 5.0, 5.0),
-        subsurface_color=(0.9, 0.95, 1.0),
+        subsurface_color=(0.99, 0.995, 1.0),
         roughness=0.15,
         ior=1.31,
         transmission=1.0,
@@ -143,6 +148,12 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
         transmission_roughness=0.05,
     )
     return ice, syrup
+
+
+def is_ice(material: Material) -> bool:
+    """Whether a material is kakigori ice (plain or a syrup grade): a thin transmissive flake (the preview traces
+    longer paths through a heap of them, ``mitsuba_scene.path_depth``)."""
+    return material.name == ICE or material.name.startswith(ICE + "_syrup")
 
 
 def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material, ...]:

@@ -17,7 +17,7 @@ from nodegraph.values import Mesh
 from ..values import Aggregate, Material, ShadedScene
 from . import materials as mat
 from .cdrf import CdrfTable, curvature_sigma
-from .curvature import mean_curvature, vertex_normals
+from .curvature import normals_and_curvature
 from .vertex_shading import Light, cdrf_colors
 
 
@@ -73,6 +73,7 @@ def _element_pieces(
         depths = mat.soak_depths(ice_vertices, cell, settings.syrup_spread)
         grade[is_ice] = mat.syrup_levels(depths, settings.syrup_depth, settings.syrup_levels)
     pieces = []
+    splits: dict[tuple[int, int], list[tuple[int, np.ndarray, np.ndarray]]] = {}  # per (kind, variant): see _parts
     for i in range(len(p)):
         preset = presets[p.kinds[i]]
         kind = kinds[p.kinds[i]]
@@ -84,20 +85,28 @@ def _element_pieces(
             pieces.append(_Piece(mesh, materials[preset][0]))
         else:
             names = mat.PARTS[preset]
-            parts = np.zeros(len(mesh.faces), np.int32) if mesh.parts is None else mesh.parts
-            for part in np.unique(parts):
-                if not 0 <= part < len(names):
-                    allowed = ", ".join(f"{k} {name}" for k, name in enumerate(names))
-                    raise ValueError(f"element {i} ({kind}): face part {part} is not a {preset} part ({allowed})")
-                submesh = _submesh(mesh, parts == part, f"{mesh.name}/{names[part]}")
-                pieces.append(_Piece(submesh, materials[preset][part]))
+            key = (int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))
+            if key not in splits:
+                splits[key] = _parts(mesh, names, f"element {i} ({kind})", preset)
+            for part, used, faces in splits[key]:
+                pieces.append(
+                    _Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{names[part]}"), materials[preset][part])
+                )
     return pieces
 
 
-def _submesh(mesh: Mesh, face_mask: np.ndarray, name: str) -> Mesh:
-    faces = mesh.faces[face_mask]
-    used, inverse = np.unique(faces, return_inverse=True)
-    return Mesh(mesh.vertices[used], inverse.reshape(-1, 3), name=name)
+def _parts(mesh: Mesh, names: tuple[str, ...], what: str, preset: str) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """(part, the vertices it uses, its faces renumbered to them) per face part: the same for every element of a
+    library mesh (its faces and parts), so found once per variant, not per element."""
+    parts = np.zeros(len(mesh.faces), np.int32) if mesh.parts is None else mesh.parts
+    out = []
+    for part in np.unique(parts):
+        if not 0 <= part < len(names):
+            allowed = ", ".join(f"{k} {name}" for k, name in enumerate(names))
+            raise ValueError(f"{what}: face part {part} is not a {preset} part ({allowed})")
+        used, inverse = np.unique(mesh.faces[parts == part], return_inverse=True)
+        out.append((int(part), used, inverse.reshape(-1, 3)))
+    return out
 
 
 def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: ShadeSettings) -> ShadedScene:
@@ -118,8 +127,7 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
     starts = np.concatenate([[0], np.cumsum(counts)])
     vertices = np.concatenate([piece.mesh.vertices for piece in pieces])
     faces = np.concatenate([piece.mesh.faces + starts[k] for k, piece in enumerate(pieces)])
-    normals = vertex_normals(vertices, faces)
-    curvature = mean_curvature(vertices, faces, normals)
+    normals, curvature = normals_and_curvature(vertices, faces)
 
     per_vertex = lambda field: np.repeat(np.array([getattr(piece.material, field) for piece in pieces]), counts, axis=0)
     colors = cdrf_colors(

@@ -28,7 +28,8 @@ def _check(params):
     # 2: meshes named <kind>/<number>[/<part>] (Rerun entity paths, glTF node names)
     # 3: per-vertex CDRF σ in the scene (renderers evaluate the CDRF), sheen; ikura membrane a clear dielectric
     # 4: syrup graded by depth below the mound's top (syrup_depth, _spread, _levels); chestnut, salmon, tuna presets
-    version=4,
+    # 5: plain ice keeps ≈ 99 % of the light per flake crossing (was 90–95 %: 5 mm of ice per 0.4 mm flake)
+    version=5,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "scenery": In(Mesh, "other meshes to show, e.g. the bowl (glazed ceramic)", optional=True, many=True),

@@ -58,6 +58,34 @@ def test_mean_curvature_of_a_sphere():
     assert np.allclose(inside_out, -0.5, rtol=0.01)  # normals flip, so does the sign
 
 
+def test_normals_and_curvature_match_libigl_on_a_bumpy_mesh_with_obtuse_and_degenerate_faces():
+    """The one-pass kernel against libigl's cotmatrix, Voronoi massmatrix and area-weighted normals (what the
+    shade node used before): a randomly displaced sphere (obtuse triangles), two meshes in one array, one
+    collapsed face (no area: adds nothing) and an unused vertex (normal 0, curvature 0)."""
+    import igl
+    import trimesh
+
+    from nodes.shading.curvature import normals_and_curvature
+
+    rng = np.random.default_rng(1)
+    sphere = trimesh.creation.icosphere(3, radius=2.0)
+    bumpy = sphere.vertices * rng.uniform(0.8, 1.2, (len(sphere.vertices), 1))
+    vertices = np.concatenate([bumpy, bumpy + [5.0, 0.0, 0.0], [[9.0, 9.0, 9.0]]])
+    faces = np.concatenate([sphere.faces, sphere.faces + len(bumpy)])
+    degenerate = np.concatenate([faces, [[0, 0, 1]]])
+    normals, curvature = normals_and_curvature(vertices, degenerate)
+
+    used = slice(0, -1)  # libigl sizes its matrices by the faces: without the unused vertex
+    expected_normals = igl.per_vertex_normals(vertices[used], faces, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)
+    laplacian = igl.cotmatrix(vertices[used], faces)
+    mass = igl.massmatrix(vertices[used], faces, igl.MASSMATRIX_TYPE_VORONOI).diagonal()
+    hn = -0.5 * (laplacian @ vertices[used]) / mass[:, None]
+    expected = np.einsum("ij,ij->i", hn, expected_normals)
+    assert np.allclose(normals[used], expected_normals, atol=1e-12)
+    assert np.allclose(curvature[used], expected, rtol=1e-9, atol=1e-9)
+    assert (np.ptp(curvature[used]) > 1.0) and np.all(normals[-1] == 0) and curvature[-1] == 0
+
+
 def test_translucency_is_the_cdrf_share_past_the_terminator():
     """σ → 0 is Lambert (no light from past the terminator); wider kernels bring more, below an even split."""
     from nodes.shading.cdrf import SIGMA_MAX, translucency
