@@ -43,6 +43,15 @@ def test_volume_points_lie_inside_with_up_normals():
     assert cKDTree(points).query(points, k=2)[0][:, 1].min() >= 1.0 - 1e-9
 
 
+def test_volume_inset_keeps_points_off_the_surface():
+    ball = shape.call(kind="sphere", size=5.0)["mesh"]
+    inset = poisson_place.call(shape=ball, r=0.5, mode="volume", inset=1.0)["placement"].positions
+    full = poisson_place.call(shape=ball, r=0.5, mode="volume")["placement"].positions
+    assert np.linalg.norm(full, axis=1).max() > 4.5  # without: up to the wall
+    assert np.linalg.norm(inset, axis=1).max() <= 4.0 + 0.05  # the sphere's facets lie a little inside r = 5
+    assert len(inset) > 0.3 * len(full)
+
+
 def test_r_from_the_element_is_half_its_inscribed_radius(small_onigiri):
     library = ElementLibrary("rice", (ellipsoid((1.1, 0.64, 0.44)),))
     out = poisson_place.call(shape=small_onigiri, elements=[library])

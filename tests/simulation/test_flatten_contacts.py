@@ -71,7 +71,9 @@ def test_grains_crossing_at_angles_stop_cutting_into_each_other():
         assert deepest(before) > 0.3
         out = run(before)
         assert deepest(out["aggregate"]) < 0.01, (offset, turn)
-        assert float(out["table"].columns["dent_max"][0]) * 6.0 < deepest(before)  # half each, plus the in-plane relaxing
+        assert float(out["table"].columns["dent_max"][0]) * 6.0 < deepest(
+            before
+        )  # half each, plus the in-plane relaxing
 
 
 def test_apart_nothing_moves_and_the_meshes_are_unchanged():
