@@ -155,6 +155,7 @@ def _cover(gaps, points, fixed, total: int, tolerance: float, reach: float, samp
     for by_sum in (False, True):
         for _ in range(2 if by_sum else 3):
             moved = False
+            order = np.argsort(-gaps[chosen].min(axis=0), kind="stable")  # worst vertices first: prunes early
             for j in range(len(fixed), total):
                 others = np.delete(chosen, j)
                 gap = gaps[others].min(axis=0)
@@ -162,7 +163,6 @@ def _cover(gaps, points, fixed, total: int, tolerance: float, reach: float, samp
                 allowed = ~taken
                 if by_sum:  # the summed gap moves a sphere locally: candidates within ``reach`` of it
                     allowed &= np.linalg.norm(points - points[chosen[j]], axis=1) <= reach
-                order = np.argsort(-gap, kind="stable")
                 best = _best_candidate(gaps, gap, order, allowed, now.max(), np.maximum(now, 0).sum(), by_sum)
                 if best >= 0:
                     taken[chosen[j]], taken[best] = False, True
@@ -193,9 +193,11 @@ def _body_and_yolk(mesh):
     return faces[parts != 1], faces[parts == 1]
 
 
-def element_cluster(mesh, count: int, cells: int = 24) -> ElementCluster:
+def element_cluster(mesh, count: int, cells: int = 24, quadratic: bool = True) -> ElementCluster:
     """Sphere packing of ``mesh`` with ``count`` particles (fewer only if the mesh is tiny) whose union
-    covers its surface (``_cover``); spread through the core where the quadratic goal needs it."""
+    covers its surface (``_cover``). ``quadratic``: spread through the core where the quadratic goal
+    (SPEC §5) could not observe the cover's centres; a linear run can pass False for the best cover."""
+    import igl
     import trimesh
 
     from .collider import signed_distance_grid
@@ -217,18 +219,26 @@ def element_cluster(mesh, count: int, cells: int = 24) -> ElementCluster:
     points = origin + idx * pitch
     depths = depth[tuple(idx.T)]
     shell = np.ascontiguousarray(body.vertices, np.float64)
+    # φ is exact within 3 cells of the surface (``surface_band``); deeper, its distance transform reaches
+    # the nearest outside grid point, up to a cell too far: measure those depths on the mesh, so every
+    # sphere lies inside it
+    far = np.flatnonzero(depths > 3.0 * pitch)
+    faces = np.ascontiguousarray(body.faces, np.int64)
+    depths[far] = np.sqrt(igl.point_mesh_squared_distance(points[far], shell, faces)[0])
     total = min(count, len(points))
     gaps = _gap_matrix(points, depths, shell)
     deepest = np.array([np.argmax(depths)], np.int64)
     tolerance, reach = 0.05 * pitch, 2 * pitch  # on τ: 0.2 % of the length; a summed-gap swap: 2 cells
     chosen = _cover(gaps, points, deepest, total, tolerance, reach)
-    if total >= 10 and not _quadratic_observable(points[chosen]):
+    if quadratic and total >= 10 and not _quadratic_observable(points[chosen]):
         # centres near one quadric surface (a round grain's lie on its axis): the quadratic goal would
-        # fall back to linear. Cover with half and spread the rest through the core; kept only if that
-        # makes the cluster observable (else the better cover stays)
-        spread = _core_fill(points, depths, _cover(gaps, points, deepest, (total + 1) // 2, tolerance, reach), total)
-        if _quadratic_observable(points[spread]):
-            chosen = spread
+        # fall back to linear. Cover with ¾, else ½, and spread the rest through the core; kept only if
+        # that makes the cluster observable (else the better cover stays)
+        for share in (total - total // 4, (total + 1) // 2):
+            spread = _core_fill(points, depths, _cover(gaps, points, deepest, share, tolerance, reach), total)
+            if _quadratic_observable(points[spread]):
+                chosen = spread
+                break
     centres = points[chosen]
     radii = depths[chosen]
     if yolk_faces is None:
