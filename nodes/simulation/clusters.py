@@ -2,14 +2,16 @@
 a low-resolution proxy, carry the high-resolution grain along).
 
 Per distinct element mesh: a signed distance grid φ of the body (yolk faces, ``parts == 1``, excluded);
-every sphere is centred on an interior grid point with radius = its depth −φ, so it touches the surface
-from inside and never sticks out (SPEC §2.5's medial spheres, S §3.2.2). The spheres are chosen to cover
-the shell (issue 17: where the union leaves the surface uncovered, meshes whose spheres merely touch cut
-into each other): the deepest point, then a greedy set cover at the least tolerance τ (bisected) that the
-count allows, refined by single-sphere swaps (``_cover``). The gap of a shell vertex v to the union,
-gap(v) = min_k(|v − c_k| − r_k), is what the cover minimises (worst first, then summed). When the count
-could carry the quadratic goal (≥ 10) but the cover's centres cannot observe its nine modes (a round
-grain's maximal spheres all lie on its axis), half the count covers and half spreads through the core.
+every sphere is centred on an interior grid point with radius = its depth (−φ; measured on the mesh
+beyond φ's exact band), so it touches the surface from inside and never sticks out (SPEC §2.5's medial
+spheres, S §3.2.2). The spheres are chosen to cover the shell (issue 17: where the union leaves the
+surface uncovered, meshes whose spheres merely touch cut into each other): the deepest point, then a
+greedy set cover at the least tolerance τ (bisected) that the count allows, refined by single-sphere
+swaps (``_cover``). The gap of a shell vertex v to the union, gap(v) = min_k(|v − c_k| − r_k), is what
+the cover minimises (worst first, then summed). When the count could carry the quadratic goal (≥ 10)
+but the cover's centres cannot observe its nine modes (a round grain's maximal spheres all lie on its
+axis), cover spheres are traded for core points until it can, and the rest covers anew around them
+(``quadratic=False`` skips this for a linear run).
 """
 
 from __future__ import annotations
@@ -105,18 +107,25 @@ def _whitening(points: np.ndarray) -> np.ndarray:
     return vecs / np.sqrt(np.maximum(vals, 1e-12 * max(vals.max(), 1e-300)))
 
 
-def _core_fill(points: np.ndarray, depths: np.ndarray, chosen: np.ndarray, total: int) -> np.ndarray:
-    """``chosen`` and, up to ``total``, farthest-point picks among the points at least half as deep as
-    the deepest, distances whitened (``_whitening``): spread in three directions for the quadratic goal."""
+def _spread_through_core(gaps, points, depths, chosen: np.ndarray) -> tuple[np.ndarray, int]:
+    """(picks, traded): ``chosen`` (the deepest first) with cover spheres traded one at a time for core
+    points (placed after the deepest) until the quadratic goal observes the cluster
+    (``_quadratic_observable``); (``chosen``, 0) if trading half the count does not do it. Each trade
+    drops the sphere whose loss raises the worst gap least and adds the core point (at least half as
+    deep as the deepest) farthest from the rest, distances whitened (``_whitening``)."""
     core = np.flatnonzero(depths >= 0.5 * depths.max())
     whiten = _whitening(points[core])
-    picks = list(chosen)
-    spread = np.min(np.linalg.norm((points[core, None, :] - points[chosen][None, :, :]) @ whiten, axis=2), axis=1)
-    while len(picks) < total and spread.max() > 0:
-        best = int(np.argmax(spread))
-        picks.append(int(core[best]))
-        spread = np.minimum(spread, np.linalg.norm((points[core] - points[core[best]]) @ whiten, axis=1))
-    return np.asarray(picks, np.int64)
+    picks, traded = list(chosen), 0
+    while not _quadratic_observable(points[picks]):
+        if traded == len(chosen) // 2:
+            return chosen, 0
+        movable = range(1 + traded, len(picks))  # neither the deepest nor a core point already traded in
+        losses = [np.delete(gaps[picks], j, axis=0).min(axis=0).max() for j in movable]
+        picks.pop(movable[int(np.argmin(losses))])
+        away = np.linalg.norm((points[core, None, :] - points[picks][None, :, :]) @ whiten, axis=2).min(axis=1)
+        picks.insert(1 + traded, int(core[np.argmax(away)]))
+        traded += 1
+    return np.asarray(picks, np.int64), traded
 
 
 def _cover(gaps, points, fixed, total: int, tolerance: float, reach: float, sample: int = 300) -> np.ndarray:
@@ -232,13 +241,13 @@ def element_cluster(mesh, count: int, cells: int = 24, quadratic: bool = True) -
     chosen = _cover(gaps, points, deepest, total, tolerance, reach)
     if quadratic and total >= 10 and not _quadratic_observable(points[chosen]):
         # centres near one quadric surface (a round grain's lie on its axis): the quadratic goal would
-        # fall back to linear. Cover with ¾, else ½, and spread the rest through the core; kept only if
-        # that makes the cluster observable (else the better cover stays)
-        for share in (total - total // 4, (total + 1) // 2):
-            spread = _core_fill(points, depths, _cover(gaps, points, deepest, share, tolerance, reach), total)
-            if _quadratic_observable(points[spread]):
-                chosen = spread
-                break
+        # fall back to linear; trade cover spheres for core points until it does not
+        chosen, traded = _spread_through_core(gaps, points, depths, chosen)
+        if traded:  # cover anew around the deepest and the core points traded in; kept if still observable
+            again = _cover(gaps, points, chosen[: 1 + traded], total, tolerance, reach)
+            worst = gaps[again].min(axis=0).max()
+            if _quadratic_observable(points[again]) and worst < gaps[chosen].min(axis=0).max():
+                chosen = again
     centres = points[chosen]
     radii = depths[chosen]
     if yolk_faces is None:
