@@ -107,6 +107,20 @@ def _whitening(points: np.ndarray) -> np.ndarray:
     return vecs / np.sqrt(np.maximum(vals, 1e-12 * max(vals.max(), 1e-300)))
 
 
+def _core_fill(points: np.ndarray, depths: np.ndarray, chosen: np.ndarray, total: int) -> np.ndarray:
+    """``chosen`` and, up to ``total``, farthest-point picks among the points at least half as deep as the
+    deepest (the former clusters' core half): where the cover needs fewer spheres (a round egg), the rest
+    spreads the cluster."""
+    core = np.flatnonzero(depths >= 0.5 * depths.max())
+    picks = list(chosen)
+    away = np.linalg.norm(points[core, None, :] - points[picks][None, :, :], axis=2).min(axis=1)
+    while len(picks) < total and away.max() > 0:
+        best = int(np.argmax(away))
+        picks.append(int(core[best]))
+        away = np.minimum(away, np.linalg.norm(points[core] - points[core[best]], axis=1))
+    return np.asarray(picks, np.int64)
+
+
 def _spread_through_core(gaps, points, depths, chosen: np.ndarray) -> tuple[np.ndarray, int]:
     """(picks, traded): ``chosen`` (the deepest first) with cover spheres traded one at a time for core
     points (placed after the deepest) until the quadratic goal observes the cluster
@@ -128,19 +142,20 @@ def _spread_through_core(gaps, points, depths, chosen: np.ndarray) -> tuple[np.n
     return np.asarray(picks, np.int64), traded
 
 
-def _cover(gaps, points, fixed, total: int, tolerance: float, reach: float, sample: int = 300) -> np.ndarray:
-    """Indices of ``total`` candidate spheres (``fixed`` first) whose union covers the shell vertices:
-    the least tolerance τ (bisected to ``tolerance``) at which a greedy set cover (``_greedy_cover``, on
-    every k-th vertex, about ``sample`` of them) needs at most the spheres left, then single-sphere swaps
-    (all vertices) that lower the worst gap, then the summed outside gap with the worst kept (a sphere
-    moves within ``reach``). ``gaps``: (candidates, vertices) from ``_gap_matrix``; ``points``: the centres."""
+def _cover(gaps, points, fixed, total: int, tolerance: float, reach: float, enough: float, sample: int = 300):
+    """Indices of up to ``total`` candidate spheres (``fixed`` first; fewer once the worst gap is down to
+    ``enough`` or no sphere lowers it) whose union covers the shell vertices: the least tolerance τ
+    (bisected to ``tolerance``) at which a greedy set cover (``_greedy_cover``, on every k-th vertex,
+    about ``sample`` of them) needs at most the spheres left, then single-sphere swaps (all vertices)
+    that lower the worst gap, then the summed outside gap with the worst kept (a sphere moves within
+    ``reach``). ``gaps``: (candidates, vertices) from ``_gap_matrix``; ``points``: the centres."""
     budget = total - len(fixed)
     if budget == 0:
         return fixed
     coarse = np.ascontiguousarray(gaps[:, :: max(1, gaps.shape[1] // sample)])
     coarse_t = np.ascontiguousarray(coarse.T)
     base = coarse[fixed].min(axis=0) if len(fixed) else np.full(coarse.shape[1], np.inf)
-    lo = float(coarse.min(axis=0).max())  # no union does better than each vertex's nearest sphere
+    lo = max(float(coarse.min(axis=0).max()), enough)  # no union beats each vertex's nearest sphere
     single = int(np.argmin(coarse.max(axis=1)))  # the one sphere with the least worst gap
     hi = min(float(base.max()), float(coarse[single].max()))
     picks, covered = _greedy_cover(coarse, coarse_t, base, hi, budget)
@@ -156,16 +171,19 @@ def _cover(gaps, points, fixed, total: int, tolerance: float, reach: float, samp
     chosen = np.concatenate([fixed, picks])
     taken = np.zeros(len(gaps), np.bool_)
     taken[chosen] = True
-    while len(chosen) < total:  # the cover needed fewer: add the sphere that lowers the worst gap most
-        gap = gaps[chosen].min(axis=0)
-        best = _best_candidate(gaps, gap, np.argsort(-gap, kind="stable"), ~taken, np.inf, np.inf, False)
+    gap = gaps[chosen].min(axis=0)
+    while len(chosen) < total and gap.max() > enough:  # the cover needed fewer: lower the worst gap most
+        best = _best_candidate(gaps, gap, np.argsort(-gap, kind="stable"), ~taken, gap.max(), np.inf, False)
+        if best < 0:  # covered as well as the candidates allow (a round egg by its deepest sphere)
+            break
         chosen = np.append(chosen, best)
         taken[best] = True
+        gap = np.minimum(gap, gaps[best])
     for by_sum in (False, True):
         for _ in range(2 if by_sum else 3):
             moved = False
             order = np.argsort(-gaps[chosen].min(axis=0), kind="stable")  # worst vertices first: prunes early
-            for j in range(len(fixed), total):
+            for j in range(len(fixed), len(chosen)):
                 others = np.delete(chosen, j)
                 gap = gaps[others].min(axis=0)
                 now = np.minimum(gap, gaps[chosen[j]])
@@ -224,27 +242,33 @@ def element_cluster(mesh, count: int, cells: int = 24, quadratic: bool = True) -
     depth = -phi
     if not depth.max() > 0:
         raise ValueError(f"element mesh {mesh.name or ''!r} has no interior at {pitch:.3g} resolution")
-    idx = np.argwhere(depth > 0)
+    # candidates: interior grid points at least half a cell deep (a thinner sphere is below what the grid
+    # resolves, and a near-zero radius would set the solver's speed clamp); the deepest if none is
+    idx = np.argwhere(depth >= min(0.5 * pitch, depth.max()))
     points = origin + idx * pitch
     depths = depth[tuple(idx.T)]
     shell = np.ascontiguousarray(body.vertices, np.float64)
     # φ is exact within 3 cells of the surface (``surface_band``); deeper, its distance transform reaches
     # the nearest outside grid point, up to a cell too far: measure those depths on the mesh, so every
     # sphere lies inside it
+    grid_depths = depths.copy()
     far = np.flatnonzero(depths > 3.0 * pitch)
     faces = np.ascontiguousarray(body.faces, np.int64)
     depths[far] = np.sqrt(igl.point_mesh_squared_distance(points[far], shell, faces)[0])
     total = min(count, len(points))
     gaps = _gap_matrix(points, depths, shell)
     deepest = np.array([np.argmax(depths)], np.int64)
-    tolerance, reach = 0.05 * pitch, 2 * pitch  # on τ: 0.2 % of the length; a summed-gap swap: 2 cells
-    chosen = _cover(gaps, points, deepest, total, tolerance, reach)
+    # τ to 0.2 % of the length; a summed-gap swap moves up to 2 cells; a quarter cell is as covered as
+    # the grid resolves (the rest of the count then spreads through the core: a round egg)
+    tolerance, reach, enough = 0.05 * pitch, 2 * pitch, 0.25 * pitch
+    chosen = _cover(gaps, points, deepest, total, tolerance, reach, enough)
+    chosen = _core_fill(points, grid_depths, chosen, total)  # the core as the former clusters chose it
     if quadratic and total >= 10 and not _quadratic_observable(points[chosen]):
         # centres near one quadric surface (a round grain's lie on its axis): the quadratic goal would
         # fall back to linear; trade cover spheres for core points until it does not
         chosen, traded = _spread_through_core(gaps, points, depths, chosen)
         if traded:  # cover anew around the deepest and the core points traded in; kept if still observable
-            again = _cover(gaps, points, chosen[: 1 + traded], total, tolerance, reach)
+            again = _cover(gaps, points, chosen[: 1 + traded], total, tolerance, reach, enough)
             worst = gaps[again].min(axis=0).max()
             if _quadratic_observable(points[again]) and worst < gaps[chosen].min(axis=0).max():
                 chosen = again
