@@ -8,10 +8,11 @@ spheres, S §3.2.2). The spheres are chosen to cover the shell (issue 17: where 
 surface uncovered, meshes whose spheres merely touch cut into each other): the deepest point, then a
 greedy set cover at the least tolerance τ (bisected) that the count allows, refined by single-sphere
 swaps (``_cover``). The gap of a shell vertex v to the union, gap(v) = min_k(|v − c_k| − r_k), is what
-the cover minimises (worst first, then summed). When the count could carry the quadratic goal (≥ 10)
-but the cover's centres cannot observe its nine modes (a round grain's maximal spheres all lie on its
-axis), cover spheres are traded for core points until it can, and the rest covers anew around them
-(``quadratic=False`` skips this for a linear run).
+the cover minimises (worst first, then summed). Once every vertex is within a quarter cell (a round
+egg: its deepest sphere), the rest of the count spreads through the core (farthest-point). When the
+count could carry the quadratic goal (≥ 10) but the cover's centres cannot observe its nine modes (a
+round grain's maximal spheres all lie on its axis), cover spheres are traded for core points until it
+can, and the rest covers anew around them (``quadratic=False`` skips this for a linear run).
 """
 
 from __future__ import annotations
@@ -269,6 +270,7 @@ def element_cluster(mesh, count: int, cells: int = 24, quadratic: bool = True) -
         chosen, traded = _spread_through_core(gaps, points, depths, chosen)
         if traded:  # cover anew around the deepest and the core points traded in; kept if still observable
             again = _cover(gaps, points, chosen[: 1 + traded], total, tolerance, reach, enough)
+            again = _core_fill(points, grid_depths, again, total)
             worst = gaps[again].min(axis=0).max()
             if _quadratic_observable(points[again]) and worst < gaps[chosen].min(axis=0).max():
                 chosen = again
