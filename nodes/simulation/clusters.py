@@ -2,14 +2,17 @@
 a low-resolution proxy, carry the high-resolution grain along).
 
 Per distinct element mesh: a signed distance grid φ of the body (yolk faces, ``parts == 1``, excluded);
-every sphere is centred on an interior grid point with radius = its depth −φ, so it touches the surface
-from inside. Half the count is medial-style (SPEC §2.5's medial spheres, S §3.2.2): the deepest point
-first, then each time the largest sphere touching the shell vertex farthest outside the spheres so far,
-so the union reaches the tips and edges (the former packing used only points at least half as deep as
-the deepest: its spheres covered the core, and meshes settled ≈ 15 % of a length into each other). The
-other half spreads through that core (farthest-point), so the shape-matching fit keeps a cluster spread
-in three directions (the quadratic goal needs ≥ 10 non-collinear particles; a round grain's medial
-spheres all lie on its axis).
+every sphere is centred on an interior grid point with radius = its depth (−φ; measured on the mesh
+beyond φ's exact band), so it touches the surface from inside and never sticks out (SPEC §2.5's medial
+spheres, S §3.2.2). The spheres are chosen to cover the shell (issue 17: where the union leaves the
+surface uncovered, meshes whose spheres merely touch cut into each other): the deepest point, then a
+greedy set cover at the least tolerance τ (bisected) that the count allows, refined by single-sphere
+swaps (``_cover``). The gap of a shell vertex v to the union, gap(v) = min_k(|v − c_k| − r_k), is what
+the cover minimises (worst first, then summed). Once every vertex is within a quarter cell (a round
+egg: its deepest sphere), the rest of the count spreads through the core (farthest-point). When the
+count could carry the quadratic goal (≥ 10) but the cover's centres cannot observe its nine modes (a
+round grain's maximal spheres all lie on its axis), cover spheres are traded for core points until it
+can, and the rest covers anew around them (``quadratic=False`` skips this for a linear run).
 """
 
 from __future__ import annotations
@@ -17,6 +20,185 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _gap_matrix(points, depths, shell):
+    """(candidates, shell vertices) gap |v − c| − r of each vertex to each candidate sphere (> 0: outside)."""
+    out = np.empty((points.shape[0], shell.shape[0]))
+    for c in range(points.shape[0]):
+        for v in range(shell.shape[0]):
+            dx = shell[v, 0] - points[c, 0]
+            dy = shell[v, 1] - points[c, 1]
+            dz = shell[v, 2] - points[c, 2]
+            out[c, v] = np.sqrt(dx * dx + dy * dy + dz * dz) - depths[c]
+    return out
+
+
+@njit(cache=True)
+def _greedy_cover(gaps, gaps_t, base, tau, budget):
+    """Greedy set cover at tolerance ``tau``: pick (lowest index on ties) the candidate covering most
+    vertices still farther than ``tau`` outside (``base``: their gap to the spheres kept already);
+    the picks, and whether they cover every vertex within ``budget`` picks."""
+    n_cand, n_vert = gaps.shape
+    uncovered = base > tau
+    left = int(uncovered.sum())
+    counts = np.zeros(n_cand, np.int64)
+    for c in range(n_cand):
+        n = 0
+        for v in range(n_vert):
+            if uncovered[v] and gaps[c, v] <= tau:
+                n += 1
+        counts[c] = n
+    picks = np.empty(budget, np.int64)
+    k = 0
+    while left > 0 and k < budget:
+        best = int(np.argmax(counts))
+        if counts[best] == 0:
+            break
+        picks[k] = best
+        k += 1
+        for v in range(n_vert):
+            if uncovered[v] and gaps[best, v] <= tau:
+                uncovered[v] = False
+                left -= 1
+                for c in range(n_cand):
+                    if gaps_t[v, c] <= tau:
+                        counts[c] -= 1
+    return picks[:k], left == 0
+
+
+@njit(cache=True)
+def _best_candidate(gaps, others, order, allowed, worst_bound, sum_bound, by_sum):
+    """The ``allowed`` candidate (lowest index on ties) that, joined to spheres whose gap per vertex
+    is ``others``, gives a worst gap below ``worst_bound`` (``by_sum`` false: the least such), or a
+    summed outside gap below ``sum_bound`` with the worst no more than ``worst_bound`` (``by_sum``
+    true: the least such sum); −1 if none. ``order``: vertices, worst first (prunes early)."""
+    best, best_worst, best_sum = -1, worst_bound, sum_bound
+    for c in range(gaps.shape[0]):
+        if not allowed[c]:
+            continue
+        worst, total, better = 0.0, 0.0, True
+        for v in order:
+            g = min(gaps[c, v], others[v])
+            worst = max(worst, g)
+            total += max(g, 0.0)
+            if (worst >= best_worst) if not by_sum else (worst > worst_bound or total >= best_sum):
+                better = False
+                break
+        if better:
+            best, best_worst, best_sum = c, (worst if not by_sum else best_worst), total
+    return best
+
+
+def _quadratic_observable(centres: np.ndarray) -> bool:
+    """Whether the quadratic goal (SPEC §5, ``shape_matching.quadratic_moments``, equal masses) sees all
+    nine modes of a cluster at ``centres``, with a tenfold margin on its conditioning threshold."""
+    from .shape_matching import quadratic_moments
+
+    q = centres - centres.mean(axis=0)
+    return bool(quadratic_moments(q, np.ones(len(q)), np.array([0, len(q)]), conditioning=1e-3)[2][0])
+
+
+def _whitening(points: np.ndarray) -> np.ndarray:
+    """3×3 map that gives ``points`` unit spread along each principal axis (a thin core's cross-section
+    counts as much as its length when spreading particles through it)."""
+    vals, vecs = np.linalg.eigh(np.cov(points.T) if len(points) > 1 else np.eye(3))
+    return vecs / np.sqrt(np.maximum(vals, 1e-12 * max(vals.max(), 1e-300)))
+
+
+def _core_fill(points: np.ndarray, depths: np.ndarray, chosen: np.ndarray, total: int) -> np.ndarray:
+    """``chosen`` and, up to ``total``, farthest-point picks among the points at least half as deep as the
+    deepest (the former clusters' core half): where the cover needs fewer spheres (a round egg), the rest
+    spreads the cluster."""
+    core = np.flatnonzero(depths >= 0.5 * depths.max())
+    picks = list(chosen)
+    away = np.linalg.norm(points[core, None, :] - points[picks][None, :, :], axis=2).min(axis=1)
+    while len(picks) < total and away.max() > 0:
+        best = int(np.argmax(away))
+        picks.append(int(core[best]))
+        away = np.minimum(away, np.linalg.norm(points[core] - points[core[best]], axis=1))
+    return np.asarray(picks, np.int64)
+
+
+def _spread_through_core(gaps, points, depths, chosen: np.ndarray) -> tuple[np.ndarray, int]:
+    """(picks, traded): ``chosen`` (the deepest first) with cover spheres traded one at a time for core
+    points (placed after the deepest) until the quadratic goal observes the cluster
+    (``_quadratic_observable``); (``chosen``, 0) if trading half the count does not do it. Each trade
+    drops the sphere whose loss raises the worst gap least and adds the core point (at least half as
+    deep as the deepest) farthest from the rest, distances whitened (``_whitening``)."""
+    core = np.flatnonzero(depths >= 0.5 * depths.max())
+    whiten = _whitening(points[core])
+    picks, traded = list(chosen), 0
+    while not _quadratic_observable(points[picks]):
+        if traded == len(chosen) // 2:
+            return chosen, 0
+        movable = range(1 + traded, len(picks))  # neither the deepest nor a core point already traded in
+        losses = [np.delete(gaps[picks], j, axis=0).min(axis=0).max() for j in movable]
+        picks.pop(movable[int(np.argmin(losses))])
+        away = np.linalg.norm((points[core, None, :] - points[picks][None, :, :]) @ whiten, axis=2).min(axis=1)
+        picks.insert(1 + traded, int(core[np.argmax(away)]))
+        traded += 1
+    return np.asarray(picks, np.int64), traded
+
+
+def _cover(gaps, points, fixed, total: int, tolerance: float, reach: float, enough: float, sample: int = 300):
+    """Indices of up to ``total`` candidate spheres (``fixed`` first; fewer once the worst gap is down to
+    ``enough`` or no sphere lowers it) whose union covers the shell vertices: the least tolerance τ
+    (bisected to ``tolerance``) at which a greedy set cover (``_greedy_cover``, on every k-th vertex,
+    about ``sample`` of them) needs at most the spheres left, then single-sphere swaps (all vertices)
+    that lower the worst gap, then the summed outside gap with the worst kept (a sphere moves within
+    ``reach``). ``gaps``: (candidates, vertices) from ``_gap_matrix``; ``points``: the centres."""
+    budget = total - len(fixed)
+    if budget == 0:
+        return fixed
+    coarse = np.ascontiguousarray(gaps[:, :: max(1, gaps.shape[1] // sample)])
+    coarse_t = np.ascontiguousarray(coarse.T)
+    base = coarse[fixed].min(axis=0) if len(fixed) else np.full(coarse.shape[1], np.inf)
+    lo = max(float(coarse.min(axis=0).max()), enough)  # no union beats each vertex's nearest sphere
+    single = int(np.argmin(coarse.max(axis=1)))  # the one sphere with the least worst gap
+    hi = min(float(base.max()), float(coarse[single].max()))
+    picks, covered = _greedy_cover(coarse, coarse_t, base, hi, budget)
+    if not covered:
+        picks = np.array([single], np.int64)
+    while hi - lo > tolerance:
+        tau = 0.5 * (lo + hi)
+        found, covered = _greedy_cover(coarse, coarse_t, base, tau, budget)
+        if covered:
+            hi, picks = tau, found
+        else:
+            lo = tau
+    chosen = np.concatenate([fixed, picks])
+    taken = np.zeros(len(gaps), np.bool_)
+    taken[chosen] = True
+    gap = gaps[chosen].min(axis=0)
+    while len(chosen) < total and gap.max() > enough:  # the cover needed fewer: lower the worst gap most
+        best = _best_candidate(gaps, gap, np.argsort(-gap, kind="stable"), ~taken, gap.max(), np.inf, False)
+        if best < 0:  # covered as well as the candidates allow (a round egg by its deepest sphere)
+            break
+        chosen = np.append(chosen, best)
+        taken[best] = True
+        gap = np.minimum(gap, gaps[best])
+    for by_sum in (False, True):
+        for _ in range(2 if by_sum else 3):
+            moved = False
+            order = np.argsort(-gaps[chosen].min(axis=0), kind="stable")  # worst vertices first: prunes early
+            for j in range(len(fixed), len(chosen)):
+                others = np.delete(chosen, j)
+                gap = gaps[others].min(axis=0)
+                now = np.minimum(gap, gaps[chosen[j]])
+                allowed = ~taken
+                if by_sum:  # the summed gap moves a sphere locally: candidates within ``reach`` of it
+                    allowed &= np.linalg.norm(points - points[chosen[j]], axis=1) <= reach
+                best = _best_candidate(gaps, gap, order, allowed, now.max(), np.maximum(now, 0).sum(), by_sum)
+                if best >= 0:
+                    taken[chosen[j]], taken[best] = False, True
+                    chosen[j] = best
+                    moved = True
+            if not moved:
+                break
+    return chosen
 
 
 @dataclass(frozen=True)
@@ -39,14 +221,17 @@ def _body_and_yolk(mesh):
     return faces[parts != 1], faces[parts == 1]
 
 
-def element_cluster(mesh, count: int, cells: int = 24) -> ElementCluster:
-    """Sphere packing of ``mesh`` with ``count`` particles (fewer only if the mesh is tiny): up to half
-    reaching the surface (until every shell vertex is within a quarter grid cell of a sphere), the rest
-    spread through the core."""
+def element_cluster(mesh, count: int, cells: int = 24, quadratic: bool = True) -> ElementCluster:
+    """Sphere packing of ``mesh`` with ``count`` particles (fewer only if the mesh is tiny) whose union
+    covers its surface (``_cover``). ``quadratic``: spread through the core where the quadratic goal
+    (SPEC §5) could not observe the cover's centres; a linear run can pass False for the best cover."""
+    import igl
     import trimesh
 
     from .collider import signed_distance_grid
 
+    if count < 1:
+        raise ValueError(f"element_cluster: count must be ≥ 1 particle, got {count}")
     body_faces, yolk_faces = _body_and_yolk(mesh)
     vertices = np.asarray(mesh.vertices)
     body = trimesh.Trimesh(vertices, body_faces, process=True)
@@ -58,32 +243,37 @@ def element_cluster(mesh, count: int, cells: int = 24) -> ElementCluster:
     depth = -phi
     if not depth.max() > 0:
         raise ValueError(f"element mesh {mesh.name or ''!r} has no interior at {pitch:.3g} resolution")
-    idx = np.argwhere(depth > 0)
+    # candidates: interior grid points at least half a cell deep (a thinner sphere is below what the grid
+    # resolves, and a near-zero radius would set the solver's speed clamp); the deepest if none is
+    idx = np.argwhere(depth >= min(0.5 * pitch, depth.max()))
     points = origin + idx * pitch
     depths = depth[tuple(idx.T)]
-    shell = np.asarray(body.vertices, np.float64)
-    chosen = [int(np.argmax(depths))]
-    outside = np.linalg.norm(shell - points[chosen[0]], axis=1) - depths[chosen[0]]  # gap to the union
-    while len(chosen) < min((count + 1) // 2, len(points)):
-        v = int(np.argmax(outside))
-        if outside[v] <= 0.25 * pitch:
-            break
-        reach = np.linalg.norm(points - shell[v], axis=1) - depths  # ≈ 0 for spheres touching vertex v
-        near = np.flatnonzero(reach <= max(reach.min(), 0.0) + 0.5 * pitch)
-        best = int(near[np.argmax(depths[near])])
-        if best in chosen:  # the sphere reaching v is kept already: v is as covered as the grid allows
-            outside[v] = 0.0
-            continue
-        chosen.append(best)
-        outside = np.minimum(outside, np.linalg.norm(shell - points[best], axis=1) - depths[best])
-    # the rest of ``count`` spread through the core (points at least half as deep as the deepest, farthest
-    # from those kept): the shape-matching fit needs a cluster spread in three directions
-    core = np.flatnonzero(depths >= 0.5 * depths.max())
-    spread = np.min(np.linalg.norm(points[core, None, :] - points[chosen][None, :, :], axis=2), axis=1)
-    while len(chosen) < min(count, len(points)) and spread.max() > 0:
-        best = int(np.argmax(spread))
-        chosen.append(int(core[best]))
-        spread = np.minimum(spread, np.linalg.norm(points[core] - points[core[best]], axis=1))
+    shell = np.ascontiguousarray(body.vertices, np.float64)
+    # φ is exact within 3 cells of the surface (``surface_band``); deeper, its distance transform reaches
+    # the nearest outside grid point, up to a cell too far: measure those depths on the mesh, so every
+    # sphere lies inside it
+    grid_depths = depths.copy()
+    far = np.flatnonzero(depths > 3.0 * pitch)
+    faces = np.ascontiguousarray(body.faces, np.int64)
+    depths[far] = np.sqrt(igl.point_mesh_squared_distance(points[far], shell, faces)[0])
+    total = min(count, len(points))
+    gaps = _gap_matrix(points, depths, shell)
+    deepest = np.array([np.argmax(depths)], np.int64)
+    # τ to 0.2 % of the length; a summed-gap swap moves up to 2 cells; a quarter cell is as covered as
+    # the grid resolves (the rest of the count then spreads through the core: a round egg)
+    tolerance, reach, enough = 0.05 * pitch, 2 * pitch, 0.25 * pitch
+    chosen = _cover(gaps, points, deepest, total, tolerance, reach, enough)
+    chosen = _core_fill(points, grid_depths, chosen, total)  # the core as the former clusters chose it
+    if quadratic and total >= 10 and not _quadratic_observable(points[chosen]):
+        # centres near one quadric surface (a round grain's lie on its axis): the quadratic goal would
+        # fall back to linear; trade cover spheres for core points until it does not
+        chosen, traded = _spread_through_core(gaps, points, depths, chosen)
+        if traded:  # cover anew around the deepest and the core points traded in; kept if still observable
+            again = _cover(gaps, points, chosen[: 1 + traded], total, tolerance, reach, enough)
+            again = _core_fill(points, grid_depths, again, total)
+            worst = gaps[again].min(axis=0).max()
+            if _quadratic_observable(points[again]) and worst < gaps[chosen].min(axis=0).max():
+                chosen = again
     centres = points[chosen]
     radii = depths[chosen]
     if yolk_faces is None:
