@@ -134,7 +134,9 @@ def build_simulation(
         lib = aggregate.libraries[p.kinds[i]]
         key = (int(p.kinds[i]), int(p.variants[i]) % len(lib))
         if key not in cache:
-            cache[key] = element_cluster(lib.meshes[key[1]], params.particles_per_element)
+            cache[key] = element_cluster(
+                lib.meshes[key[1]], params.particles_per_element, quadratic=params.deformation == "quadratic"
+            )
         cl = cache[key]
         c0 = cl.centres.mean(axis=0)
         xs.append(cl.centres @ p.rotations[i].T + p.positions[i])

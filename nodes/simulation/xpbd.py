@@ -30,7 +30,7 @@ def _check(params):
 
 @node(
     "xpbd",
-    version=9,
+    version=10,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "colliders": In(Mesh, "watertight container / ground solids (mm)", optional=True, many=True),
