@@ -14,7 +14,7 @@ from ..values import Aggregate
 
 @node(
     "flatten_contacts",
-    version=8,
+    version=9,
     inputs={
         "aggregate": In(Aggregate, "the relaxed elements whose meshes are flattened (xpbd.aggregate)"),
         "neighbours": In(
