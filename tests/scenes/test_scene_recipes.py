@@ -1,30 +1,21 @@
 """Issue 17's scenes run at reduced sizes through ``--set`` overrides: each recipe's element count and
 the mesh-level quality its ``measure`` node reports. The bounds are what the short method reaches today
-(see the benchmark, ``benchmarks/bench_scenes.py``); issue 17's targets (p95 ≤ 3 %, max ≤ 10 % of the
-element length) are checked as expected failures so that meeting them shows up as an XPASS."""
+(see the benchmark, ``benchmarks/bench_scenes.py``); issue 17's target (p95 ≤ 3 %, max ≤ 10 % of the
+element length) is asserted for the rice scenes, which meet it."""
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import pytest
+from recipe_sizes import quick_sizes
 
 from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
 
 REPO = Path(__file__).resolve().parents[2]
 
 
-def _quick_sizes() -> dict[str, list[str]]:
-    """The benchmark's reduced sizes: one list of overrides per recipe, shared by both."""
-    path = REPO / "benchmarks" / "bench_scenes.py"
-    spec = importlib.util.spec_from_file_location("bench_scenes_sizes", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.QUICK
-
-
-QUICK = _quick_sizes()
+QUICK = quick_sizes()
 
 
 _ROWS: dict[str, dict[str, float]] = {}
@@ -45,14 +36,14 @@ def _measure(recipe_name: str, tmp_path, extra=()) -> dict[str, float]:
 
 
 # Per recipe at its reduced size: (fewest, most) elements and the most overlap (p95, max, in element lengths)
-# measured today with some room; issue 17's target is p95 ≤ 0.03, max ≤ 0.10 (below, as expected failures).
+# measured today with some room, after the covering clusters and flatten_contacts (issue 17).
 EXPECTED = {
-    "rice_bowl": ((90, 150), 0.22, 0.32),  # 118 grains: p95 0.167, max 0.241
-    "ikura_don": ((140, 220), 0.17, 0.20),  # 179 elements: p95 0.120, max 0.139
-    "onigiri": ((45, 75), 0.21, 0.29),  # 60 grains: p95 0.157, max 0.216
-    "sushi": ((65, 110), 0.21, 0.26),  # 87 grains: p95 0.161, max 0.195
-    "kakigori": ((220, 350), 0.06, 0.07),  # 283 flakes: p95 0.039, max 0.049
-    "rice_chestnut": ((200, 340), 0.10, 0.13),  # 268 elements: p95 0.077, max 0.096 (S: no physics)
+    "rice_bowl": ((60, 110), 0.03, 0.10),  # 81 grains: p95 0.014, max 0.062
+    "ikura_don": ((140, 220), 0.03, 0.10),  # 167 elements: p95 0.013, max 0.040
+    "onigiri": ((45, 75), 0.03, 0.10),  # 60 grains: p95 0.017, max 0.054
+    "sushi": ((65, 110), 0.03, 0.12),  # 87 grains: p95 0.019, max 0.097
+    "kakigori": ((220, 350), 0.05, 0.07),  # 283 flakes: p95 0.039, max 0.047 (50-vertex flakes, 0.4 mm thick)
+    "rice_chestnut": ((200, 340), 0.10, 0.13),  # 268 elements: p95 0.077, max 0.096 (S: no physics, no flattening)
 }
 SLOW: set[str] = set()  # each runs in 2–7 s on a calm machine (rice_chestnut, the slowest: 18 s at load 10)
 
@@ -69,16 +60,11 @@ def test_scene_at_reduced_size_counts_and_quality(recipe_name, tmp_path_factory)
     assert row["contacts_per_element"] > 0.5 and 0.05 < row["packing_fraction"] < 1.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 17's target (p95 ≤ 3 %, max ≤ 10 %) is not met after XPBD: the clusters' spheres now reach the "
-    "surface (nodes/simulation/clusters.py), but the relaxed pile still rests ≈ 10–15 % of a length deep in its "
-    "neighbours' meshes (the solver's tolerated contact overlap under the pile's weight); a mesh-level pass on the "
-    "element distance fields (branch overlap-pass) met it on a 118-grain bowl but did not converge in time on "
-    "the 2,087-grain one",
-)
-def test_rice_bowl_meets_the_overlap_target(tmp_path_factory):
-    row = _quick_row("rice_bowl", tmp_path_factory)
+# issue 17's target after relaxation, p95 ≤ 3 %, max ≤ 10 % of the element length: the rice scenes meet it
+# (without flatten_contacts the reduced bowl measured p95 0.134, max 0.205; with the former clusters 0.149 / 0.198)
+@pytest.mark.parametrize("recipe_name", ["rice_bowl", "ikura_don", "onigiri"])
+def test_rice_scenes_meet_the_overlap_target(recipe_name, tmp_path_factory):
+    row = _quick_row(recipe_name, tmp_path_factory)
     assert row["overlap_p95"] <= 0.03 and row["overlap_max"] <= 0.10
 
 

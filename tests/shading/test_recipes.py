@@ -4,22 +4,12 @@ changing only a shade parameter recomputes only shade, export and preview. Full 
 from pathlib import Path
 
 import pytest
+from recipe_sizes import quick_sizes
 
 from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
 
 REPO = Path(__file__).resolve().parents[2]
-SMALL = [
-    "rice_place.r=3.0",
-    "rice_sim.frames=2",
-    "egg_sim.frames=2",
-    "egg_place.r=4.0",
-    "grain_mesh.target_faces=200",
-    "grain_spheres.variants=4",
-    "grain_volume.resolution=24",
-    "preview.width=64",
-    "preview.height=48",
-    "preview.samples=1",
-]
+SMALL = [o for o in quick_sizes()["ikura_don"] if not o.startswith("measure.")]  # the benchmark's reduced size
 
 
 def _run(recipe_name, overrides, tmp_path):
