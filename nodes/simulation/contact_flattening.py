@@ -217,8 +217,8 @@ def relax_cap(world, push, cap, count, first, row, ring_start, ring, n, plane, s
     ring neighbours, projected back onto the plane, Gauss–Seidel, its rim fixed (Tutte: a disk whose
     rim is convex embeds without folds). Plain projection folds the cap where its faces look away from
     n (a grain's edge or tip pressed flat), which a renderer shows as creases: on the 1,984-grain bowl
-    43,067 folded faces without, 33,944 with (of 3.6 M; 200 sweeps fold as many as 40). The rest are
-    where two contact planes of one grain meet."""
+    43,067 folded faces without, 33,944 with (of 3.6 M; 200 sweeps fold as many as 40: the rest do not
+    come from an unconverged relaxation)."""
     p = np.empty(3)
     for _ in range(sweeps):
         for c in range(count):
