@@ -80,9 +80,11 @@ def _check(params):
             range=(1, 256),
         ),
         "iterations": Param(int, 2, "constraint iterations per substep", range=(1, 64)),
-        # 8 from the sweep on a 118-grain bowl (bench_scenes quick size, 15 frames; p95 / max mesh overlap in grain
-        # lengths): 8 → 0.146 / 0.199, 16 → 0.121 / 0.229 at 2× the run time (the former core-only clusters
-        # 0.173 / 0.238 and 0.143 / 0.191). No count reaches issue 17's 0.03 / 0.10: the cheapest stays.
+        # 8 from `nodegraph sweep graphs/sweeps/rice_bowl_particles.yaml` (≈ 340 grains, covering clusters, p95 / max
+        # mesh overlap in grain lengths after flatten_contacts; straight after the run): 4 → 0.022 / 0.151 (0.187 /
+        # 0.244), 8 → 0.015 / 0.044 (0.144 / 0.244) in 15.8 s, 16 → 0.011 / 0.089 (0.105 / 0.153) in 16.3 s, 32 →
+        # 0.011 / 0.026 (0.101 / 0.163) in 19.4 s. 8 is on the time–metric Pareto front of every metric and meets
+        # issue 17's 0.03 / 0.10 after the flattening.
         "particles_per_element": Param(
             int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
         ),
