@@ -4,14 +4,13 @@ simulation carries the high-resolution grains), measured by issue 17's mesh-leve
 The XPBD run resolves contacts between the particle clusters, whose spheres lie inside each grain and
 leave its surface uncovered by up to ≈ 0.1 of a grain length (``clusters``): two grains whose spheres only
 touch still cut into each other's meshes. Cooked rice is soft; where two grains press together each one
-flattens. This pass does that on the meshes, locally, with no pile-wide propagation: a shell vertex x of
-element i inside neighbour j (φⱼ(x) < 0, φⱼ on j's own local grid carried through j's map, SPEC §5
-x = D·R·u + R·B·m(u) + t) moves along j's outward normal by ``share`` of its depth plus a clearance; j's
-vertices inside i do the same, so with ``share`` ½ both surfaces meet on the bisector of the overlap
-(where φᵢ = φⱼ) — the contact patch of two equally soft bodies. A vertex inside a collider wall, or outside
-a mould, moves all the way back (walls are rigid). No vertex moves more than ``cap`` of its element's
-thickness, so a grain placed deep across another is not folded through itself: what that leaves is
-measured, not hidden.
+flattens. This pass does that on the meshes, locally, with no pile-wide propagation. Per touching pair,
+each element's shell vertices inside the other are found on the other's own local grid φ, carried through
+its map (SPEC §5 x = D·R·u + R·B·m(u) + t); those past the plane halfway through the overlap (across the
+lens' axis, ``share`` ½) go onto it, so both surfaces meet there — the contact patch of two equally soft
+bodies (``neighbour_pushes``). A vertex inside a collider wall, or outside a mould, moves all the way back
+(walls are rigid). No vertex moves more than ``cap`` of its element's thickness, so a grain placed deep
+across another is not folded through itself: what that leaves is measured, not hidden.
 """
 
 from __future__ import annotations
@@ -63,13 +62,15 @@ def _local(x, lin_inv, rot, bend, t, u):
         u[a] = lin_inv[a, 0] * y0 + lin_inv[a, 1] * y1 + lin_inv[a, 2] * y2
     for _ in range(2):
         m = (u[0] * u[0], u[1] * u[1], u[2] * u[2], u[0] * u[1], u[1] * u[2], u[2] * u[0])
-        b = np.zeros(3)
-        for a in range(3):
-            for c in range(6):
-                b[a] += bend[a, c] * m[c]
-        z0 = y0 - (rot[0, 0] * b[0] + rot[0, 1] * b[1] + rot[0, 2] * b[2])
-        z1 = y1 - (rot[1, 0] * b[0] + rot[1, 1] * b[1] + rot[1, 2] * b[2])
-        z2 = y2 - (rot[2, 0] * b[0] + rot[2, 1] * b[1] + rot[2, 2] * b[2])
+        b0 = bend[0, 0] * m[0] + bend[0, 1] * m[1] + bend[0, 2] * m[2] + bend[0, 3] * m[3] + bend[0, 4] * m[4]
+        b1 = bend[1, 0] * m[0] + bend[1, 1] * m[1] + bend[1, 2] * m[2] + bend[1, 3] * m[3] + bend[1, 4] * m[4]
+        b2 = bend[2, 0] * m[0] + bend[2, 1] * m[1] + bend[2, 2] * m[2] + bend[2, 3] * m[3] + bend[2, 4] * m[4]
+        b0 += bend[0, 5] * m[5]  # no array per call: this runs for every vertex tested
+        b1 += bend[1, 5] * m[5]
+        b2 += bend[2, 5] * m[5]
+        z0 = y0 - (rot[0, 0] * b0 + rot[0, 1] * b1 + rot[0, 2] * b2)
+        z1 = y1 - (rot[1, 0] * b0 + rot[1, 1] * b1 + rot[1, 2] * b2)
+        z2 = y2 - (rot[2, 0] * b0 + rot[2, 1] * b1 + rot[2, 2] * b2)
         for a in range(3):
             u[a] = lin_inv[a, 0] * z0 + lin_inv[a, 1] * z1 + lin_inv[a, 2] * z2
 
@@ -313,7 +314,7 @@ def _gather(aggregates, fields_of) -> _Elements:
         rot = np.asarray(p.rotations, np.float64)
         lin = rot if aggregate.deformations is None else np.einsum("nij,njk->nik", aggregate.deformations, rot)
         bend = np.zeros((len(p), 3, 6)) if aggregate.bends is None else np.asarray(aggregate.bends, np.float64)
-        t = np.asarray(p.positions, np.float64).copy()  # part offsets move inner parts only, not the shell
+        t = np.asarray(p.positions, np.float64)  # part offsets move inner parts only, not the shell
         for i in range(len(p)):
             library = aggregate.libraries[p.kinds[i]]
             base = library.meshes[p.variants[i] % len(library)]
@@ -386,12 +387,18 @@ def _neighbour_lists(elements: _Elements, own: int, margin: float):
 
 
 def flatten(
-    aggregate, neighbours=(), free_space=None, clearance: float = 0.005, share: float = 0.5, cap: float = 0.5
+    aggregate,
+    neighbours=(),
+    free_space=None,
+    clearance: float = 0.005,
+    share: float = 0.5,
+    cap: float = 0.5,
+    contacts: bool = True,
 ) -> tuple[Dents, dict]:
     """The dents of ``aggregate``'s elements pressed against each other and the ``neighbours``' elements
-    (which are not moved here: flatten them with this aggregate as their neighbour) and, with ``free_space``
-    (φ, origin, pitch of the colliders' free space), against the walls. ``clearance`` is in element lengths
-    (the median), ``cap`` in each element's thickness. Returns the dents and figures of what moved."""
+    (which are not moved here: flatten them with this aggregate as their neighbour) when ``contacts``, and,
+    with ``free_space`` (φ, origin, pitch of the colliders' free space), against the walls. ``clearance`` is
+    in element lengths (the median), ``cap`` in each element's thickness. Returns the dents and what moved."""
     fields: dict[int, int] = {}
     shells: list = []
     faces_of: list = []
@@ -416,7 +423,9 @@ def flatten(
     vstart = np.concatenate([[0], np.cumsum([len(w) for w in elements.world])]).astype(np.int64)
     length = float(np.median(np.ptp(np.stack([elements.lo, elements.hi]), axis=0).max(axis=1)))
     gap = clearance * length
-    nstart, near = _neighbour_lists(elements, own, 2.0 * gap)
+    nstart, near = _neighbour_lists(elements, own if contacts else 0, 2.0 * gap)
+    if not contacts:  # no pair is tested: every element's row is empty
+        nstart = np.zeros(own + 1, np.int64)
     pad = np.full(3, gap)
     adjacency, ring_start, ring = vertex_rings(faces_of)
     push = neighbour_pushes(
@@ -437,11 +446,11 @@ def flatten(
     owner = np.searchsorted(vstart, moved, side="right") - 1
     dents = Dents(owner.astype(np.int64), (moved - vstart[owner]).astype(np.int64), push[moved])
     depth = np.linalg.norm(push[moved], axis=1) / length
+    dented = np.unique(owner)
     folded = sum(
         folded_faces(world[vstart[i] : vstart[i + 1]], push[vstart[i] : vstart[i + 1]], faces_of[elements.shape[i]][1])
-        for i in np.unique(owner)
+        for i in dented
     )
-    dented = np.unique(owner)
     figures = {
         "elements": own,
         "dented_elements": len(dented),

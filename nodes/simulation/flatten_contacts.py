@@ -14,7 +14,7 @@ from ..values import Aggregate
 
 @node(
     "flatten_contacts",
-    version=9,
+    version=10,
     inputs={
         "aggregate": In(Aggregate, "the relaxed elements whose meshes are flattened (xpbd.aggregate)"),
         "neighbours": In(
@@ -82,7 +82,7 @@ def flatten_contacts(ctx, aggregate, neighbours=None, colliders=None, moulds=Non
     if "contact" not in ctx.effects and walls is None:
         dents, figures = None, {"elements": len(aggregate.placement)}
     else:
-        dents, figures = flatten(aggregate, others, walls, clearance, share if "contact" in ctx.effects else 0.0, cap)
+        dents, figures = flatten(aggregate, others, walls, clearance, share, cap, contacts="contact" in ctx.effects)
     fields = {f.name: getattr(aggregate, f.name) for f in dataclasses.fields(aggregate)}
     if dents is not None:
         fields |= merged_dents(aggregate, dents)
