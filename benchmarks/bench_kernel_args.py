@@ -259,7 +259,8 @@ def main() -> None:
         print(f"  {count:3d}  {path}:{line}  {name}")
     with tempfile.TemporaryDirectory(prefix="bench-baseline-") as tmp:
         trees = {"before": checkout(args.baseline, Path(tmp)), "after": ROOT}
-        print(f"\nbefore = {args.baseline}, after = this tree; numba threads {os.environ.get('NUMBA_NUM_THREADS', 'default')}")
+        threads = os.environ.get("NUMBA_NUM_THREADS") or os.cpu_count()
+        print(f"\nbefore = {args.baseline}, after = this tree; numba threads {threads}")
         header = f"{'case':8} {'input':22} {'compile before':>15} {'after':>8} {'run before':>11} {'after':>8}  outputs"
         print(header)
         print("-" * len(header))
