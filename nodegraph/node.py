@@ -143,10 +143,10 @@ def node(
     """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
 
     ``version`` enters the cache key beside the digest of the node's code: bump it to recompute cached
-    results when something outside the project's modules changed them. ``effects`` are the physical effects the node implements; at run time ``ctx.effects`` holds
-    only those the recipe asked for. ``random`` nodes get ``ctx.rng`` and the seed enters their
-    cache key; others cannot draw random numbers. ``check(params)`` returns
-    ``[(param, message), ...]`` for constraints between parameters.
+    results when something outside the project's modules changed them. ``effects`` are the physical
+    effects the node implements; at run time ``ctx.effects`` holds only those the recipe asked for.
+    ``random`` nodes get ``ctx.rng`` and the seed enters their cache key; others cannot draw random
+    numbers. ``check(params)`` returns ``[(param, message), ...]`` for constraints between parameters.
     """
     inputs = dict(inputs or {})
     params = dict(params or {})
