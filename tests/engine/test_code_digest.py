@@ -1,15 +1,17 @@
 """A node's cache key covers the code it runs: editing a helper module it imports (inside its function,
 relative or absolute, at any depth) re-runs it; editing a module it does not import does not."""
 
+import ast
 import sys
 import textwrap
 from importlib.metadata import EntryPoint
+from pathlib import Path
 
 import pytest
 
 from nodegraph import registry as registry_module
 from nodegraph.cache import Cache
-from nodegraph.code_digest import project_modules
+from nodegraph.code_digest import import_statements, project_modules
 from nodegraph.executor import run_recipe
 from nodegraph.recipe import parse_recipe
 
@@ -110,3 +112,50 @@ def test_the_declared_version_still_enters_the_key(kitchen, tmp_path):
     boil = package / "boil.py"
     boil.write_text(boil.read_text().replace('@node("boil", ', '@node("boil", version=2, '))
     assert run(load(), cache)[0] == "ran"
+
+
+TRICKY = b'''
+import a.b as c, d
+from . import e
+from .f import (g,  # a comment with ) in it
+    h)
+from..i import j
+if x: import k
+try: import l
+except ImportError: pass
+x = 1; import m
+def f():
+    from n import \\
+        o
+    class C:
+        import p
+match v:
+    case 1: import q
+text = """
+from r import s
+"""
+'''
+
+
+def every_import(source: bytes) -> set:
+    """The reference: every import node of the whole syntax tree."""
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            found.update((alias.name, ()) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            found.add(("." * node.level + (node.module or ""), tuple(alias.name for alias in node.names)))
+    return found
+
+
+@pytest.mark.parametrize("where", ["tricky", "repository"])
+def test_the_import_scan_finds_every_import_of_the_syntax_tree(where):
+    root = Path(__file__).resolve().parents[2]
+    files = [
+        p for folder in ("nodegraph", "nodes", "tests", "benchmarks", "tools") for p in (root / folder).rglob("*.py")
+    ]
+    sources = [TRICKY] if where == "tricky" else [p.read_bytes() for p in sorted(files)]
+    for source in sources:
+        missed = every_import(source) - import_statements(source)
+        assert not missed  # an import in a string may add a module; a real one is never dropped
+    assert ("r", ("s",)) in import_statements(TRICKY) and len(every_import(TRICKY)) == 11
