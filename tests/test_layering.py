@@ -2,6 +2,7 @@
 ``pool`` did), and no subpackage of the built-in nodes imports one that imports it back (the simulation
 imported the Rerun loggers, which import the simulation's value types)."""
 
+import ast
 from pathlib import Path
 
 import networkx as nx
@@ -32,3 +33,14 @@ def import_graph(package: str, depth: int | None = None) -> nx.DiGraph:
 def test_no_import_cycles(package, depth):
     cycles = sorted(" -> ".join([*cycle, cycle[0]]) for cycle in nx.simple_cycles(import_graph(package, depth)))
     assert not cycles, "imports that point both ways:\n" + "\n".join(cycles)
+
+
+def test_no_engine_module_uses_another_objects_private_names():
+    """``pool`` called ``executor._sources``: a private name is used only on ``self`` or ``cls``."""
+    reaches = []
+    for path in sorted((ROOT / "nodegraph").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            private = isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")
+            if private and not (isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")):
+                reaches.append(f"{path.name}:{node.lineno}: {ast.unparse(node)}")
+    assert not reaches, "\n".join(reaches)
