@@ -2,6 +2,8 @@
 relative or absolute, at any depth) re-runs it; editing a module it does not import does not."""
 
 import ast
+import os
+import subprocess
 import sys
 import textwrap
 from importlib.metadata import EntryPoint
@@ -159,3 +161,30 @@ def test_the_import_scan_finds_every_import_of_the_syntax_tree(where):
         missed = every_import(source) - import_statements(source)
         assert not missed  # an import in a string may add a module; a real one is never dropped
     assert ("r", ("s",)) in import_statements(TRICKY) and len(every_import(TRICKY)) == 11
+
+
+def test_an_installed_plugin_package_reruns_after_its_helper_is_edited(tmp_path):
+    """End to end, as a user meets it: a package installed with an entry point (its dist-info on the path),
+    run by the command line in a new process each time."""
+    site = tmp_path / "site"
+    (site / PACKAGE).mkdir(parents=True)
+    for name, text in FILES.items():
+        (site / PACKAGE / name).write_text(textwrap.dedent(text))
+    info = site / f"{PACKAGE}-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {PACKAGE}\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(f"[{registry_module.ENTRY_POINT_GROUP}]\nkitchen = {PACKAGE}\n")
+    (tmp_path / "kitchen.yaml").write_text(RECIPE)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")]))}
+    cache = tmp_path / "cache"
+
+    def entries_after_a_run() -> int:
+        command = [sys.executable, "-m", "nodegraph.cli", "run", "kitchen.yaml", "--cache-dir", str(cache), "-q"]
+        subprocess.run([*command, "--no-rrd"], cwd=tmp_path, env=env, check=True)
+        return len(list(cache.glob("entries/*/*.json")))
+
+    assert entries_after_a_run() == 1
+    (site / PACKAGE / "unrelated.py").write_text("SALT = 2.0\n")
+    assert entries_after_a_run() == 1  # cached: the node does not import it
+    (site / PACKAGE / "stove.py").write_text("POWER = 30.0\n")
+    assert entries_after_a_run() == 2  # ran again: a module its helper imports changed
