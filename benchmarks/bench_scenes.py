@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -130,7 +129,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="reduced sizes: seconds per recipe")
     parser.add_argument("--top", type=int, default=4, help="slowest nodes shown per recipe")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from machine import conditions
 
     names = args.recipes or [n for n in QUICK if recipe_path(n).exists()]

@@ -15,13 +15,11 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 RERUN_NODES = ("shade", "export", "preview")
 
@@ -46,7 +44,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="the reduced main job (seconds)")
     parser.add_argument("--water", type=float, default=20.0, help="the changed shade.water_content (%%)")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from bench_scenes import QUICK as SIZES
     from machine import conditions
 

@@ -2,14 +2,17 @@
 
 A node module declares a node with the ``@node`` decorator around a plain function::
 
-    @node("decimate", version=1,
+    @node("decimate",
           inputs={"mesh": In(Mesh, "the mesh to simplify")},
           outputs={"mesh": Out(Mesh, "the simplified mesh")},
           params={"faces": Param(int, 1000, "target face count", range=(4, 10_000_000))})
     def decimate(ctx, mesh, *, faces): ...
 
 The decorator returns a ``NodeSpec``; the registry finds specs by scanning module attributes,
-so declaring a node has no side effect and there is no global registry.
+so declaring a node has no side effect and there is no global registry. A node's cached results are
+keyed on the code it runs (``code_digest``), so editing it or a helper it imports re-runs it;
+``version`` is an explicit extra, bumped only for what that code digest cannot see (a data file the
+code reads, a library upgrade that changes results).
 """
 
 from __future__ import annotations
@@ -128,7 +131,7 @@ class NodeSpec:
 def node(
     type_name: str,
     *,
-    version: int | str,
+    version: int | str = 1,
     outputs: Mapping[str, Out],
     inputs: Mapping[str, In] | None = None,
     params: Mapping[str, Param] | None = None,
@@ -139,10 +142,11 @@ def node(
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
     """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
 
-    ``effects`` are the physical effects the node implements; at run time ``ctx.effects`` holds
-    only those the recipe asked for. ``random`` nodes get ``ctx.rng`` and the seed enters their
-    cache key; others cannot draw random numbers. ``check(params)`` returns
-    ``[(param, message), ...]`` for constraints between parameters.
+    ``version`` enters the cache key beside the digest of the node's code: bump it to recompute cached
+    results when something outside the project's modules changed them. ``effects`` are the physical
+    effects the node implements; at run time ``ctx.effects`` holds only those the recipe asked for.
+    ``random`` nodes get ``ctx.rng`` and the seed enters their cache key; others cannot draw random
+    numbers. ``check(params)`` returns ``[(param, message), ...]`` for constraints between parameters.
     """
     inputs = dict(inputs or {})
     params = dict(params or {})

@@ -166,7 +166,7 @@ class _Validator:
         location = self.override_at.get(tuple(path[:4])) or self.source.at(path, key=key)
         self.issues.append(Issue(location, message, **extra))
 
-    def _pydantic_issues(self, exc: ValidationError, base: tuple, node: str | None, model: type[BaseModel]) -> None:
+    def pydantic_issues(self, exc: ValidationError, base: tuple, node: str | None, model: type[BaseModel]) -> None:
         """pydantic errors as issues at their line; a value failing every member of a union is one issue."""
         by_path: dict[tuple, list[dict]] = {}
         for err in exc.errors():
@@ -257,7 +257,7 @@ class _Validator:
         try:
             model = RecipeModel.model_validate(self.raw)
         except ValidationError as exc:
-            self._pydantic_issues(exc, (), None, RecipeModel)
+            self.pydantic_issues(exc, (), None, RecipeModel)
             model = None
         raw_nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
 
@@ -286,7 +286,7 @@ class _Validator:
             try:
                 node_model = NodeModel.model_validate(body if body is not None else {})
             except ValidationError as exc:
-                self._pydantic_issues(exc, path, node_id, NodeModel)
+                self.pydantic_issues(exc, path, node_id, NodeModel)
                 continue
             entry = self._node(node_id, node_model, path, wire_sources)
             if entry is not None:

@@ -6,7 +6,7 @@ import pytest
 
 @pytest.fixture(scope="session")
 def scene_inputs():
-    from xpbd_scenes import small_food_scene
+    from nodes.simulation.scenes import small_food_scene
 
     return small_food_scene()
 

@@ -254,10 +254,12 @@ def _log_particles(ctx, sim, step):
 
 
 def _log_meshes(ctx, aggregate, step):
-    from ..rerun_loggers import elements_mesh3d
+    import rerun as rr
 
+    mesh = aggregate.combined_mesh()  # never empty: build_simulation refuses that
     ctx.rerun.set_time("sim_step", step)
-    ctx.rerun.log("elements", elements_mesh3d(aggregate))  # never empty: build_simulation refuses that
+    vertices, faces = mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32)
+    ctx.rerun.log("elements", rr.Mesh3D(vertex_positions=vertices, triangle_indices=faces))
 
 
 def _log_scalars(ctx, dg, substeps):

@@ -72,10 +72,10 @@ def test_r_larger_than_the_shape_is_refused(small_onigiri):
 
 
 def test_tiny_r_is_refused_quickly_with_a_memory_estimate(small_onigiri):
-    start = time.perf_counter()
+    start = time.process_time()  # CPU seconds: the work done, not how busy the machine is
     with pytest.raises(ValueError, match="MiB"):
         poisson_place.call(shape=small_onigiri, r=1e-4)
-    assert time.perf_counter() - start < 2.0
+    assert time.process_time() - start < 2.0
 
 
 def test_no_r_and_no_elements_is_refused(small_onigiri):

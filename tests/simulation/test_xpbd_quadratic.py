@@ -6,8 +6,8 @@ import hashlib
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-from xpbd_scenes import rice_bowl
 
+from nodes.simulation.scenes import rice_bowl
 from nodes.simulation.shape_matching import quadratic_moments, rest_moments, shape_match_project
 from nodes.simulation.xpbd import xpbd
 
