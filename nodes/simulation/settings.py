@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..material.cooked import WATER_CONTENT
 from .moisture import moisture_scales
 
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
@@ -89,7 +90,6 @@ class XpbdParams:
     dynamic_scale: float
     capture_radius: float  # particle radii
     clumping: float
-    water_content: float  # %
     sleep_speed: float  # mm/s
     shock_propagation: float
     speed_clamp: float  # radii per substep
@@ -98,6 +98,7 @@ class XpbdParams:
     part_density: float  # g/cm³
     log_every: int
     log_meshes_every: int
+    water_content: float = WATER_CONTENT  # % — the cooked material's (xpbd input 'material'), not a parameter
 
 
 def solver_settings(params: XpbdParams, effects, radius: float) -> SolverSettings:
