@@ -346,7 +346,8 @@ class _Validator:
         if target:
             where = self.source.at(("nodes", target, "params", moved.param))
             given = model.params[key]
-            advice = f"that node is '{target}' at {where}: set '{moved.param}' there, or --set {target}.{moved.param}={given}"
+            advice = f"that node is '{target}' at {where}: set '{moved.param}' there"
+            advice += f", or --set {target}.{moved.param}={given}"
         else:
             advice = f"wire a {moved.node_type} node into input '{moved.input}' and set its '{moved.param}' there"
         self.issue(path, f"{moved.advice(key)}; {advice}", key=True, node=node_id)

@@ -11,7 +11,6 @@ import numpy as np
 
 from ..values import RiceVariety
 
-
 #: SPEC §1.1 table (G §3.1.1): indica 1.8 / 1.2, japonica 1.0 / 1.5, aromatic 0.7 / 1.5 (length factor / P).
 RICE_VARIETIES = {
     "indica": RiceVariety("indica", 1.8, 1.2),

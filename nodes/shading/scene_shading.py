@@ -72,8 +72,9 @@ def _element_pieces(
         cell = float(np.median([np.ptp(v, axis=0).max() for v in ice_vertices]))  # one element length
         depths = mat.soak_depths(ice_vertices, cell, settings.syrup_spread)
         grade[is_ice] = mat.syrup_levels(depths, settings.syrup_depth, settings.syrup_levels)
-    if settings.rice is None and "rice" in presets:
-        kind = kinds[presets.index("rice")]
+    rice = [k for k in np.unique(p.kinds) if presets[k] == "rice"]
+    if settings.rice is None and rice:
+        kind = kinds[rice[0]]
         raise ValueError(
             f"element kind '{kind}' is shaded as rice, whose water content and optics are the cooked material's: "
             "wire a cooked_rice node into input 'material' (the one the xpbd node reads)"

@@ -1,6 +1,6 @@
-"""Target shapes of an aggregate — SPEC §2 inputs: primitives and bowls (``shape``), regions derived from a bowl (``vessel_region``), user meshes
-(``mesh_file``) and manifold3d booleans (``boolean``); a topping slab draped over an aggregate (``drape``: the
-fish on nigiri). Kernels: ``solids``, ``closed_mesh``, ``plate_drape``.
+"""Target shapes of an aggregate — SPEC §2 inputs: primitives and bowls (``shape``), regions derived from a
+bowl (``vessel_region``), user meshes (``mesh_file``) and manifold3d booleans (``boolean``); a topping slab
+draped over an aggregate (``drape``: the fish on nigiri). Kernels: ``solids``, ``closed_mesh``, ``plate_drape``.
 """
 
 from .boolean import boolean
