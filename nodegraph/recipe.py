@@ -341,9 +341,10 @@ class _Validator:
     def _moved(self, node_id: str, model: NodeModel, path: tuple, moved, key: str) -> None:
         """A parameter the node type no longer has: say where it lives now (the node wired into the input
         ``moved`` names, at its file:line, or how to wire one)."""
-        wired = model.inputs.get(moved.input)
-        target = (wired[0] if isinstance(wired, list) else wired or "").partition(".")[0]
-        if target:
+        wired = model.inputs.get(moved.input) or ""
+        target = (wired[0] if isinstance(wired, list) else wired).partition(".")[0]
+        nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
+        if target in nodes:
             where = self.source.at(("nodes", target, "params", moved.param))
             given = model.params[key]
             advice = f"that node is '{target}' at {where}: set '{moved.param}' there"
