@@ -22,8 +22,8 @@ from ..values import Aggregate, Vessel
         "aggregates": In(Aggregate, "the final aggregates (their element meshes are measured)", many=True),
         "vessels": In(
             Vessel,
-            "the bowls the elements belong in (a shape node's vessel output): elements whose centre ends outside "
-            "every one are counted and warned about",
+            "the bowls the elements belong in (a shape node's vessel output): elements whose centre ends past "
+            "the outer surface of every one are counted and warned about",
             optional=True,
             many=True,
         ),
@@ -94,7 +94,8 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
 
 
 def _outside_vessels(ctx, centres, vessels) -> int:
-    """How many element centres lie outside every bowl in ``vessels`` (``Vessel.outside``); warns when any do."""
+    """How many element centres lie outside every bowl in ``vessels``: past its wall's outer surface (a grain on
+    the rim's lip is in the bowl; ``Vessel.outside``); warns when any do."""
     import warnings
 
     import numpy as np
@@ -102,7 +103,7 @@ def _outside_vessels(ctx, centres, vessels) -> int:
     bowls = [v for v in vessels if v.kind == "bowl"]
     if not bowls:
         return 0
-    outside = np.logical_and.reduce([v.outside(centres) for v in bowls])
+    outside = np.logical_and.reduce([v.outside(centres, margin=v.wall) for v in bowls])  # past the wall's outside
     count = int(outside.sum())
     if count:
         v = bowls[0]
