@@ -98,16 +98,15 @@ class XpbdParams:
     part_density: float  # g/cm³
     log_every: int
     log_meshes_every: int
-    water_content: float = WATER_CONTENT  # % — the cooked material's (xpbd input 'material'), not a parameter
 
 
-def solver_settings(params: XpbdParams, effects, radius: float) -> SolverSettings:
+def solver_settings(params: XpbdParams, effects, radius: float, water_content: float = WATER_CONTENT) -> SolverSettings:
     """Table-3 style parameters → solver settings (SPEC §3); 'moisture' rescales stiffness, friction
-    and adhesion (``moisture_scales``). ``radius``: the particles' median radius (mm), the unit of
-    the capture radius."""
+    and adhesion (``moisture_scales``) at ``water_content`` % (the cooked material's: the node's input
+    'material'). ``radius``: the particles' median radius (mm), the unit of the capture radius."""
     p = params
     scale = (
-        moisture_scales(p.water_content)
+        moisture_scales(water_content)
         if "moisture" in effects
         else {"stiffness": 1.0, "friction": 1.0, "adhesion": 1.0}
     )

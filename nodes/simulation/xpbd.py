@@ -200,8 +200,10 @@ def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=N
     ``ctx.effects`` are computed."""
     from .setup import build_simulation, finish_simulation, snapshot_aggregate
 
-    p = XpbdParams(**params) if material is None else XpbdParams(**params, water_content=material.water_content)
-    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds)
+    p = XpbdParams(**params)
+    sim = build_simulation(
+        aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds, material=material
+    )
     frames, every, meshes_every, substeps = p.frames, p.log_every, p.log_meshes_every, p.substeps
     moving = sim.model.n_moving
     ctx.expect_cost(
