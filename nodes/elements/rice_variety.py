@@ -26,5 +26,5 @@ from .grain_shapes import RICE_VARIETIES
     },
 )
 def rice_variety(ctx, *, variety):
-    """The SPEC §1.1 preset of ``variety``."""
+    """A rice variety preset (SPEC §1.1), read by base_mesh, expand, element_library and cooked_rice."""
     return RICE_VARIETIES[variety]

@@ -41,7 +41,8 @@ from .cooked import SIGMA0_DRY, SIGMA0_WET, WATER_CONTENT
     },
 )
 def cooked_rice(ctx, variety, *, water_content, sigma0_dry, sigma0_wet):
-    """The cooked material of ``variety`` at ``water_content`` % (``cooked.cooked_material``)."""
+    """One cooked rice, read by xpbd and shade: moisture factors and optics from its water content — SPEC §3–4
+    (``cooked.cooked_material``)."""
     from .cooked import cooked_material
 
     return cooked_material(variety.name, water_content, sigma0_dry, sigma0_wet)

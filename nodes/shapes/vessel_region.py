@@ -55,7 +55,8 @@ SURFACES = ("cavity", "outer")
     },
 )
 def vessel_region(ctx, vessel, *, surface, fill, lower, mound, inset):
-    """The region of ``vessel`` at the fill plane and mound given relative to it (``solids.bowl``)."""
+    """A region derived from a bowl (fill plane, mound, rim and wall as offsets of it), so it follows the bowl
+    (``solids.bowl``)."""
     from . import solids
 
     if vessel.kind != "bowl":
