@@ -330,7 +330,7 @@ class _Validator:
         )
 
     def _check_recipe_rules(self, entries: dict[str, NodeEntry]) -> None:
-        """Each node type's ``check_recipe``: contradictions between nodes (a region that does not fit its vessel)."""
+        """Each node type's ``check_recipe``: contradictions between the nodes of a valid recipe."""
         view = MappingProxyType(entries)
         for node_id, entry in entries.items():
             if entry.spec.check_recipe is None:
