@@ -13,6 +13,7 @@ import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import networkx as nx
@@ -300,6 +301,8 @@ class _Validator:
             self._check_families(entries, graph)
         outputs = self._check_outputs(model.outputs if model else [], entries, raw_nodes)
         effects = self._check_effects(model.effects if model else [], entries)
+        if not self.issues:  # the nodes' checks across the recipe read valid parameters and wires only
+            self._check_recipe_rules(entries)
         raw_sweeps = self.raw.get("sweeps")
         sweeps = check_sweeps(self, raw_sweeps, entries, raw_nodes) if isinstance(raw_sweeps, dict) else {}
         if model is not None and model.name is not None and not RECIPE_NAME.match(model.name):
@@ -326,6 +329,30 @@ class _Validator:
             sweeps=sweeps,
         )
 
+    def _check_recipe_rules(self, entries: dict[str, NodeEntry]) -> None:
+        """Each node type's ``check_recipe``: contradictions between the nodes of a valid recipe."""
+        view = MappingProxyType(entries)
+        for node_id, entry in entries.items():
+            if entry.spec.check_recipe is None:
+                continue
+            for param, message in entry.spec.check_recipe(node_id, view):
+                self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+
+    def _moved(self, node_id: str, model: NodeModel, path: tuple, moved, key: str) -> None:
+        """A parameter the node type no longer has: say where it lives now (the node wired into the input
+        ``moved`` names, at its file:line, or how to wire one)."""
+        wired = model.inputs.get(moved.input) or ""
+        target = (wired[0] if isinstance(wired, list) else wired).partition(".")[0]
+        nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
+        if target in nodes:
+            where = self.source.at(("nodes", target, "params", moved.param))
+            given = model.params[key]
+            advice = f"that node is '{target}' at {where}: set '{moved.param}' there"
+            advice += f", or --set {target}.{moved.param}={given}"
+        else:
+            advice = f"wire a {moved.node_type} node into input '{moved.input}' and set its '{moved.param}' there"
+        self.issue(path, f"{moved.advice(key)}; {advice}", key=True, node=node_id)
+
     def _node(self, node_id: str, model: NodeModel, path: tuple, wire_sources) -> NodeEntry | None:
         spec = self.registry.get(model.type)
         if spec is None:
@@ -341,6 +368,10 @@ class _Validator:
         ok = True
         for key, value in model.params.items():
             param = spec.params.get(key)
+            if param is None and key in spec.moved:
+                self._moved(node_id, model, path + ("params", key), spec.moved[key], key)
+                ok = False
+                continue
             if param is None:
                 self.issue(
                     path + ("params", key),

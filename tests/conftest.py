@@ -13,6 +13,7 @@ def scene_inputs():
 
 @pytest.fixture(scope="session")
 def shaded(scene_inputs):
+    from nodes.material.cooked import cooked_material
     from nodes.shading import shade
 
-    return shade.call(**scene_inputs)
+    return shade.call(**scene_inputs, material=cooked_material())

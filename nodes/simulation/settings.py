@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..material.cooked import WATER_CONTENT
 from .moisture import moisture_scales
 
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
@@ -89,7 +90,6 @@ class XpbdParams:
     dynamic_scale: float
     capture_radius: float  # particle radii
     clumping: float
-    water_content: float  # %
     sleep_speed: float  # mm/s
     shock_propagation: float
     speed_clamp: float  # radii per substep
@@ -100,13 +100,13 @@ class XpbdParams:
     log_meshes_every: int
 
 
-def solver_settings(params: XpbdParams, effects, radius: float) -> SolverSettings:
+def solver_settings(params: XpbdParams, effects, radius: float, water_content: float = WATER_CONTENT) -> SolverSettings:
     """Table-3 style parameters → solver settings (SPEC §3); 'moisture' rescales stiffness, friction
-    and adhesion (``moisture_scales``). ``radius``: the particles' median radius (mm), the unit of
-    the capture radius."""
+    and adhesion (``moisture_scales``) at ``water_content`` % (the cooked material's: the node's input
+    'material'). ``radius``: the particles' median radius (mm), the unit of the capture radius."""
     p = params
     scale = (
-        moisture_scales(p.water_content)
+        moisture_scales(water_content)
         if "moisture" in effects
         else {"stiffness": 1.0, "friction": 1.0, "adhesion": 1.0}
     )

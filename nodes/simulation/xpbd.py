@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodegraph.node import In, Out, node
+from nodegraph.node import In, Moved, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
 
-from ..values import Aggregate, ParticleState
+from ..values import Aggregate, CookedMaterial, ParticleState
 from .settings import EFFECTS, XpbdParams
 
 # particle-iterations per second of a substep's work (10 substeps × 2 iterations of a 2,000-grain bowl,
@@ -33,6 +33,12 @@ def _check(params):
     version=10,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
+        "material": In(
+            CookedMaterial,
+            "the cooked material (a cooked_rice node, the one the shade node reads): effect 'moisture' scales "
+            "stiffness, friction and adhesion by its water content; unwired: the cooked_rice defaults (15 %)",
+            optional=True,
+        ),
         "colliders": In(Mesh, "watertight container / ground solids (mm)", optional=True, many=True),
         "moulds": In(
             Mesh,
@@ -132,13 +138,6 @@ def _check(params):
         "clumping": Param(
             float, 0.3, "adhesion strength (breakable bonds within the capture radius)", range=(0.0, 1.0)
         ),
-        "water_content": Param(
-            float,
-            15.0,
-            "water absorbed by the grains (effect 'moisture': scales stiffness, friction, adhesion)",
-            range=(0.0, 40.0),
-            units="%",
-        ),
         "sleep_speed": Param(
             float,
             2.0,
@@ -193,15 +192,18 @@ def _check(params):
     },
     effects=EFFECTS,
     check=_check,
+    moved={"water_content": Moved("material", "water_content", "cooked_rice")},
 )
-def xpbd(ctx, aggregate, colliders=None, moulds=None, obstacles=None, **params):
+def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=None, **params):
     """XPBD aggregate simulation — SPEC §3: elastic clusters, contact, friction, clumping, containers
     and moulds, buoyant yolks, static obstacle particles (e.g. eggs on settled rice); only the effects in
     ``ctx.effects`` are computed."""
     from .setup import build_simulation, finish_simulation, snapshot_aggregate
 
     p = XpbdParams(**params)
-    sim = build_simulation(aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds)
+    sim = build_simulation(
+        aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds, material=material
+    )
     frames, every, meshes_every, substeps = p.frames, p.log_every, p.log_meshes_every, p.substeps
     moving = sim.model.n_moving
     ctx.expect_cost(
