@@ -1,16 +1,15 @@
 """A cooked rice's constants from its variety and water content — SPEC §3 (moisture scales, G §2.2) and
-§4 (σ₀ by a log–log line in the water content, the principled material). numpy only at import: the
-simulation's settings read ``WATER_CONTENT`` at registry time.
+§4 (σ₀ by a log–log line in the water content, the principled material). The material reads the shading's
+and the simulation's constants, never the other way round.
 """
 
 from __future__ import annotations
 
+from ..shading.cdrf import SIGMA0_DRY, SIGMA0_WET
+from ..simulation.moisture import WATER_CONTENT
 from ..values import CookedMaterial
 
 VARIETY = "japonica"
-WATER_CONTENT = 15.0  # % — G's renders span 0–24 %; 15 % is the rice of G ch.5's bowls
-SIGMA0_DRY = 0.15  # rad·mm at 0 % water
-SIGMA0_WET = 1.2  # rad·mm at 24 % water
 
 
 def cooked_material(

@@ -116,8 +116,8 @@ def shade(
 ):
     """Curvature from libigl, CDRF eq. 7–9 with the cooked material's σ₀(water), lights, and a material per
     element kind/part (rice: the cooked material's)."""
-    from ..material.cooked import cooked_material
-    from .cdrf import CdrfTable
+    from ..simulation.moisture import WATER_CONTENT
+    from .cdrf import SIGMA0_DRY, SIGMA0_WET, CdrfTable, sigma0_from_water
     from .materials import parse_overrides
     from .scene_shading import ShadeSettings, shade_scene
     from .vertex_shading import check_color, make_lights
@@ -126,7 +126,7 @@ def shade(
     check_color(scenery_color, "scenery_color")
     settings = ShadeSettings(
         rice=None if material is None else material.optics,
-        sigma0=(material or cooked_material()).sigma0,
+        sigma0=sigma0_from_water(WATER_CONTENT, SIGMA0_DRY, SIGMA0_WET) if material is None else material.sigma0,
         lights=make_lights(light_directions, light_colors, light_intensities),
         ambient=ambient,
         presets=parse_overrides(presets),

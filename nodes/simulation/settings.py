@@ -13,8 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..material.cooked import WATER_CONTENT
-from .moisture import moisture_scales
+from .moisture import WATER_CONTENT, moisture_scales
 
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 PAIR_EFFECTS = frozenset({"contact", "friction", "adhesion"})  # the effects that need neighbour lists
