@@ -37,6 +37,15 @@ def _common(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _draft(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--draft",
+        action="store_true",
+        help="apply the recipe's draft: block (reduced counts and a small preview: seconds, to iterate on a look); "
+        "--set still wins",
+    )
+
+
 def _distributed(parser: argparse.ArgumentParser) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument(
@@ -82,7 +91,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--no-rrd", action="store_true", help="do not record to Rerun")
     run.add_argument("--spawn", action="store_true", help="also stream to a Rerun viewer")
-    run.add_argument("--out-dir", type=Path, default=None, help="where outputs go (default outputs/<recipe>)")
+    run.add_argument(
+        "--out-dir",
+        type=Path,
+        default=None,
+        help="where outputs go (default outputs/<recipe>, --draft: <recipe>_draft)",
+    )
+    _draft(run)
     run.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
     run.add_argument(
         "--max-minutes",
@@ -115,6 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sweep.add_argument("--sweep", dest="sweep_name", default=None, help="which of the recipe's sweeps to run")
     sweep.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    _draft(sweep)
     sweep.add_argument(
         "--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]", help="also pull this output"
     )
@@ -140,6 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser("check", help="validate a recipe; nothing runs")
     check.add_argument("recipe", type=Path)
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    _draft(check)
     _common(check)
 
     nodes = sub.add_parser("nodes", help="list every node type")
@@ -157,6 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
     graph.add_argument("recipe", type=Path)
     graph.add_argument("--dot", action="store_true", help="Graphviz DOT instead of text")
     graph.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    _draft(graph)
     _common(graph)
 
     inspect = sub.add_parser("inspect", help="what a .rrd holds: recordings, entity tree, timelines, blueprint views")
@@ -179,8 +197,8 @@ def _cmd_run(args, registry) -> int:
         raise NodegraphError(
             f"--no-rrd contradicts {given}: a viewer and a recording file both need the recording; drop one of them"
         )
-    recipe = load_recipe(args.recipe, registry, args.overrides)
-    out_dir = args.out_dir or Path("outputs") / recipe.name
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    out_dir = args.out_dir or Path("outputs") / (recipe.name + ("_draft" if args.draft else ""))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
@@ -244,7 +262,7 @@ def _pool(args, cache, reporter):
 def _cmd_sweep(args, registry) -> int:
     from .sweep import run_sweep, sweep_from_args, write_sweep
 
-    base = load_recipe(args.recipe, registry, args.overrides)
+    base = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
     out_dir = args.out_dir or Path("outputs") / base.name / "sweeps"
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
@@ -260,7 +278,7 @@ def _cmd_sweep(args, registry) -> int:
             args.recipe,
             registry,
             decl,
-            overrides=args.overrides,
+            overrides=list(base.overrides),  # the draft's, then --set
             cache=cache,
             pool=pool,
             plugins=args.plugin,
@@ -285,13 +303,16 @@ def _cmd_inspect(args, registry) -> int:
 
 
 def _cmd_check(args, registry) -> int:
-    recipe = load_recipe(args.recipe, registry, args.overrides)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    if recipe.draft and not args.draft:  # the draft's values are checked too, where they would apply
+        load_recipe(args.recipe, registry, args.overrides, draft=True)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())
     sweeps = "".join(f", sweep {d.name} ({len(d.points())} points)" for d in recipe.sweeps.values())
     print(
         f"{args.recipe}: OK — {len(recipe.nodes)} nodes ({instances} instances), "
         f"outputs {', '.join(map(str, recipe.outputs))}, effects: {', '.join(sorted(recipe.effects)) or 'none'}"
         + sweeps
+        + (f", draft: {len(recipe.draft)} settings" if recipe.draft else "")
     )
     return 0
 
@@ -421,7 +442,7 @@ def format_graph(recipe: Recipe, dot: bool = False) -> str:
 
 
 def _cmd_graph(args, registry) -> int:
-    recipe = load_recipe(args.recipe, registry, args.overrides)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     print(format_graph(recipe, dot=args.dot))
     return 0
 

@@ -1,10 +1,14 @@
 """Run by the Blender venv's Python (bpy 4.5): import one exported file with the repository's add-on enabled,
 report what Blender made as JSON, and render a tiny Cycles image — tests/export/test_blender_roundtrip.py.
 
-    python blender_roundtrip.py SCENE.glb|SCENE.usdc REPORT.json RENDER.png
+    python blender_roundtrip.py SCENE.glb|SCENE.usdc REPORT.json RENDER.png|-     (-: no render)
+
+``tools/blender_import_table.py`` runs it on a recipe's files for the import table (objects, materials,
+transmission, seconds).
 """
 
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -29,15 +33,16 @@ def import_file(path: Path) -> float:
         bpy.ops.import_scene.gltf(filepath=str(path))  # the add-on's glTF user extension runs inside
     else:
         bpy.ops.wm.usd_import(filepath=str(path))
-        # the add-on's USDHook needs Blender's bundled pxr, which the bpy wheel lacks: same function, called here
-        bpy.ops.nodegraph.apply_looks()
+        if "nodegraph_import" in bpy.context.preferences.addons:
+            # the add-on's USDHook needs Blender's bundled pxr, which the bpy wheel lacks: its function, called here
+            bpy.ops.nodegraph.apply_looks()
     return time.perf_counter() - start
 
 
 def material_report(material) -> dict:
-    import nodegraph_import
-
-    bsdf = nodegraph_import._principled(material)
+    bsdf = (
+        next((n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None) if material.use_nodes else None
+    )
     if bsdf is None:
         return {}
     value = lambda name: bsdf.inputs[name].default_value
@@ -92,7 +97,9 @@ def render(path: Path) -> float:
 def main() -> None:
     source, report_path, render_path = (Path(a) for a in sys.argv[-3:])
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    enable_addon()
+    addon = os.environ.get("NODEGRAPH_BLENDER_ADDON", "1") != "0"  # 0: Blender's importers alone
+    if addon:
+        enable_addon()
     seconds = import_file(source)
     meshes = [o for o in bpy.data.objects if o.type == "MESH"]
     report = {
@@ -102,7 +109,8 @@ def main() -> None:
         "vertices": sum(len(o.data.vertices) for o in meshes),
         "materials": {m.name: material_report(m) for m in bpy.data.materials if m.users},
     }
-    report["render_mean"] = render(render_path)
+    if str(render_path) != "-":
+        report["render_mean"] = render(render_path)
     report_path.write_text(json.dumps(report, indent=1))
 
 
