@@ -46,12 +46,12 @@ def import_report(path: Path, addon: bool) -> dict:
 def row(path: Path, got: dict) -> str:
     materials = got["materials"].values()
     transmit = sorted({(round(m["transmission"], 2), round(m["ior"], 2)) for m in materials if m["transmission"] > 0})
-    scatter = [m for m in materials if m["subsurface"] > 0]
+    scatter = [f"{m['subsurface']:.2f}" for m in materials if m["subsurface"] > 0]
     return (
         f"| {path.name} | {got['objects']:,} | {got['vertices']:,} | {', '.join(sorted(got['materials']))} | "
         f"{sum(1 for m in materials if m['transmission'] > 0)} "
         f"({', '.join(f'{t} at IOR {i}' for t, i in transmit) or '—'}) | "
-        f"{len(scatter)} ({', '.join(f'{m["subsurface"]:.2f}' for m in scatter) or '—'}) | "
+        f"{len(scatter)} ({', '.join(scatter) or '—'}) | "
         f"{got['seconds']:.1f} | {path.stat().st_size / 2**20:.1f} |"
     )
 
