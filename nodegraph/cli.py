@@ -22,6 +22,13 @@ from .report import Reporter
 from .rerun_log import has_display
 
 SWEEP_RRD = Path("<sweep>.rrd")  # --rrd given without a path
+RRD_MAGIC = b"RRF2"  # the first bytes of a Rerun recording
+FILE_KINDS = {
+    b"\x89PNG": "a PNG image",
+    b"glTF": "a glTF binary (.glb)",
+    b"PXR-": "a USD crate file",
+    b"ply": "a PLY mesh",
+}
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -298,6 +305,18 @@ def _cmd_inspect(args, registry) -> int:
 
     if not args.rrd.is_file():
         raise NodegraphError(f"{args.rrd}: no such file (give a .rrd written by nodegraph run or sweep)")
+    with open(args.rrd, "rb") as file:
+        head = file.read(4)
+    if head != RRD_MAGIC:
+        kind = (
+            "empty"
+            if not head
+            else next((n for magic, n in FILE_KINDS.items() if head.startswith(magic)), "another file")
+        )
+        raise NodegraphError(
+            f"{args.rrd} is {kind}, not a Rerun recording: inspect reads the .rrd that nodegraph run or sweep writes "
+            "(outputs/<recipe>/<recipe>.rrd)"
+        )
     print(describe_rrd(args.rrd, depth=args.depth))
     return 0
 
@@ -317,9 +336,19 @@ def _cmd_check(args, registry) -> int:
     return 0
 
 
+def doc_summary(doc: str | None) -> str:
+    """A docstring's first sentence, whole: its first paragraph joined into one line, cut at the first full
+    stop followed by a capital (not inside "e.g. a node"; the full text is in `nodegraph describe`)."""
+    import re
+
+    paragraph = " ".join((doc or "").strip().split("\n\n")[0].split())
+    end = re.search(r"\.\s+(?=[A-Z])", paragraph)
+    return paragraph[: end.start() + 1] if end else paragraph
+
+
 def _cmd_nodes(args, registry) -> int:
     for spec in registry.specs():
-        summary = spec.doc.splitlines()[0] if spec.doc else ""
+        summary = doc_summary(spec.doc)
         effects = f"  [effects: {', '.join(sorted(spec.effects))}]" if spec.effects else ""
         print(f"{spec.type_name:<18} v{spec.version:<3} {summary}{effects}")
     if not registry.names():

@@ -294,7 +294,24 @@ class _Validator:
                     allowed="letters, digits and _ (not starting with a digit)",
                 )
                 continue
-            if body is not None and not isinstance(body, dict):
+            if node_id in NodeModel.model_fields:  # a node's key at the nodes' indentation
+                self.issue(
+                    path,
+                    f"'{node_id}' is a key of a node, not a node: indent it under its node, 2 spaces further in "
+                    "than the node's name",
+                    key=True,
+                )
+                continue
+            if body is None:
+                self.issue(
+                    path,
+                    "nothing under it: put its type (and params, inputs) on the lines below, "
+                    f"2 spaces further in than '{node_id}:'",
+                    key=True,
+                    node=node_id,
+                )
+                continue
+            if not isinstance(body, dict):
                 hint = f" (for a node type, write '{node_id}: {{type: {body}}}')" if isinstance(body, str) else ""
                 self.issue(
                     path,
