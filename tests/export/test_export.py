@@ -183,3 +183,18 @@ def test_unwritable_destination_leaves_nothing_half_written(shaded, tmp_path):
         write_output(fileset, blocker / "ikura_don", "export")
     assert [p.name for p in tmp_path.rglob("*")] == ["outputs"]
     assert blocker.read_text().startswith("a file")
+
+
+def test_the_blender_addon_reads_the_keys_the_exporter_writes(shaded):
+    """blender/nodegraph_import runs inside Blender only; its keys are checked here against nodes/export/look.py."""
+    import ast
+    import re
+    from pathlib import Path
+
+    from nodes.export.look import PREFIX, principled_attributes
+
+    source = (Path(__file__).resolve().parents[2] / "blender" / "nodegraph_import" / "__init__.py").read_text()
+    ast.parse(source)
+    assert f'PREFIX = "{PREFIX}"' in source
+    read = set(re.findall(r'look(?:\.get\(|\[)"(\w+)"', source))
+    assert read and read <= set(principled_attributes(shaded.materials[0], 0.0)), read
