@@ -60,7 +60,10 @@ def test_check_reports_the_draft(recipe_file, capsys):
     assert "draft: 2 settings" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("name", ["ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori"])
+@pytest.mark.parametrize(
+    "name",
+    ["ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_chestnut", "rice_bunny"],
+)
 def test_scene_recipes_have_a_valid_draft(name):
     from pathlib import Path
 
