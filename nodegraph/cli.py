@@ -1,4 +1,4 @@
-"""The ``nodegraph`` command: run, sweep, check, nodes, describe, graph, cache, docs, inspect.
+"""The ``nodegraph`` command: run, watch, sweep, check, nodes, describe, graph, cache, docs, inspect.
 
 Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid.
 """
@@ -116,6 +116,23 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
     _distributed(run)
     _common(run)
+
+    watch = sub.add_parser(
+        "watch", help="run a recipe, then again on every save of its file (only what the edit changed recomputes)"
+    )
+    watch.add_argument("recipe", type=Path)
+    watch.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    watch.add_argument("--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]")
+    watch.add_argument("--spawn", action="store_true", help="stream every run to a Rerun viewer (one, kept open)")
+    watch.add_argument("--no-rrd", action="store_true", help="do not record to Rerun")
+    watch.add_argument("--out-dir", type=Path, default=None, help="where outputs go (as for run)")
+    watch.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors and what each run wrote")
+    watch.add_argument("--poll", type=float, default=0.2, metavar="S", help="seconds between looks at the file")
+    watch.add_argument("--runs", type=int, default=None, metavar="N", help="stop after N runs (scripts, tests)")
+    watch.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
+    watch.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    _draft(watch)
+    _common(watch)
 
     sweep = sub.add_parser("sweep", help="run a recipe at every point of a parameter grid: cost against metrics")
     sweep.add_argument("recipe", type=Path)
@@ -264,6 +281,47 @@ def _pool(args, cache, reporter):
         yield pool
     finally:
         pool.close()
+
+
+def _cmd_watch(args, registry) -> int:
+    """Run, then run again whenever the recipe file's bytes change. The cache makes a re-run compute only the
+    nodes an edit changed; a bad edit prints its error (file:line, node, parameter) and the last good outputs
+    and recording stay as they were until the next save."""
+    import hashlib
+    import time
+
+    args.no_cache, args.rrd, args.scheduler, args.workers = False, None, None, None  # the cache is the point
+
+    def digest():
+        try:
+            text = args.recipe.read_bytes()
+        except OSError:
+            text = b""  # an editor replacing the file
+        return hashlib.sha256(text).digest() if text.strip() else None  # None: being written, look again
+
+    seen, runs = None, 0
+    while args.runs is None or runs < args.runs:
+        now = digest()
+        if now is None or now == seen:
+            time.sleep(args.poll)
+            continue
+        time.sleep(args.poll)  # a save in progress: run once the bytes have stayed the same for one poll
+        if digest() != now:
+            continue
+        seen, runs = now, runs + 1
+        started = time.perf_counter()
+        try:
+            _cmd_run(args, registry)
+            print(f"run {runs} done in {time.perf_counter() - started:.1f} s", flush=True)
+        except RecipeError as exc:
+            print(str(exc), file=sys.stderr)
+            print(f"run {runs}: not run; the last good outputs stay", flush=True)
+        except (NodeFailure, NodegraphError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            print(f"run {runs}: failed; the last good outputs stay", flush=True)
+        if args.runs is None or runs < args.runs:
+            print(f"watching {args.recipe} (Ctrl-C to stop)", flush=True)
+    return 0
 
 
 def _cmd_sweep(args, registry) -> int:
@@ -505,6 +563,7 @@ def _interrupt(signum, frame):
 
 COMMANDS = {
     "run": _cmd_run,
+    "watch": _cmd_watch,
     "sweep": _cmd_sweep,
     "check": _cmd_check,
     "nodes": _cmd_nodes,
