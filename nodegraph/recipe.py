@@ -294,7 +294,7 @@ class _Validator:
                     allowed="letters, digits and _ (not starting with a digit)",
                 )
                 continue
-            if node_id in NodeModel.model_fields:  # a node's key at the nodes' indentation
+            if node_id in NodeModel.model_fields and not isinstance(body, dict):  # a node key, indented too little
                 self.issue(
                     path,
                     f"'{node_id}' is a key of a node, not a node: indent it under its node, 2 spaces further in "
