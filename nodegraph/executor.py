@@ -367,7 +367,12 @@ def run_recipe(
             if ok:
                 result.rrd = written
             elif warn is not None:
-                warn(f"the run did not complete: its recording is {written}; {recording.path} was left as it was")
+                kept = (
+                    f"the last complete recording {recording.path} was left as it was"
+                    if Path(recording.path).exists()
+                    else f"no complete recording {recording.path} exists yet"
+                )
+                warn(f"the run did not complete: what it recorded is in {written}; {kept}")
     return result
 
 
