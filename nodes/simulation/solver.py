@@ -438,7 +438,7 @@ class XpbdSolver:
         if "contact" in self.settings.effects:
             allowance = contact_constraints.overlap_allowance
             pairs.allowance[:] = 0.0
-            self._contacts(st, wake_step=np.inf)
+            self._contacts(st, friction=self.settings.anchored_friction, wake_step=np.inf)
             d("contact", allowance, st.x, st.awake, m.r, *pairs.lists.rows(), 0.0, pairs.allowance)
         if m.collider is not None:
             d(
