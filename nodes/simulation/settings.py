@@ -91,6 +91,7 @@ class XpbdParams:
     friction: float
     static_threshold: float
     dynamic_scale: float
+    friction_model: str  # substep | anchored
     capture_radius: float  # particle radii
     clumping: float
     water_content: float  # %
@@ -129,6 +130,7 @@ def solver_settings(params: XpbdParams, effects, radius: float) -> SolverSetting
         bend_compliance=1.0 / (1000.0 * stiffness * p.bend_stiffness) if stiffness * p.bend_stiffness > 0 else np.inf,
         mu_s=mu_s,
         mu_k=mu_s * p.dynamic_scale,
+        anchored_friction=p.friction_model == "anchored",
         capture=p.capture_radius * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
         damping=p.damping,
