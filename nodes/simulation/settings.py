@@ -36,6 +36,10 @@ class SolverSettings:
     bend_compliance: float = np.inf  # s²/g of the long-axis bend constraints (``bending``); inf = none
     mu_s: float = 0.6
     mu_k: float = 0.4
+    # friction measured from where each contact began sticking (``friction``), not per substep: sphere heaps
+    # hold 34° and stop creeping (issue 24, docs/validation.md); off by default until its side effects are
+    # settled (a tall pile's resting overlap 0.37 r against 0.2 r, tests/simulation)
+    anchored_friction: bool = False
     capture: float = 0.2  # mm
     adhesion_compliance: float = 1e-3  # s²/g
     damping: float = 0.0  # fraction of velocity removed per 1/60 s
@@ -87,6 +91,7 @@ class XpbdParams:
     friction: float
     static_threshold: float
     dynamic_scale: float
+    friction_model: str  # substep | anchored
     capture_radius: float  # particle radii
     clumping: float
     sleep_speed: float  # mm/s
@@ -124,6 +129,7 @@ def solver_settings(params: XpbdParams, effects, radius: float, water_content: f
         bend_compliance=1.0 / (1000.0 * stiffness * p.bend_stiffness) if stiffness * p.bend_stiffness > 0 else np.inf,
         mu_s=mu_s,
         mu_k=mu_s * p.dynamic_scale,
+        anchored_friction=p.friction_model == "anchored",
         capture=p.capture_radius * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
         damping=p.damping,
