@@ -11,18 +11,14 @@ applied to each substep's displacement (the default); 'anchored' measures the dr
 sticking (``nodes/simulation/friction.py``).
 """
 
-from __future__ import annotations
-
 import argparse
 import dataclasses
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(REPO), str(REPO / "tests" / "simulation")]
 
 DOC = REPO / "docs" / "validation.md"
 IMAGES = REPO / "docs" / "images" / "validation"
@@ -75,9 +71,8 @@ def ball(n: int, spacing, seed: int = 0) -> np.ndarray:
 
 def ground(half: float, top: float, pitch: float):
     """φ of a ground slab (top face z = 0) over [−half, half]² × [−3, top]."""
-    from xpbd_scenes import box_mesh
-
     from nodes.simulation.collider import signed_distance_grid
+    from nodes.simulation.scenes import box_mesh
 
     slab = box_mesh([-half - 5, -half - 5, -6], [half + 5, half + 5, 0], "ground")
     return signed_distance_grid([slab], np.array([-half, -half, -3.0]), np.array([half, half, top]), pitch)
@@ -88,8 +83,7 @@ def sphere_heap(n, mu, anchored, frames=(150,), substeps=10, radius=1.0, seed=0)
     """Drop a ball of n spheres (radius 1 mm, 25 mg, lattice spacing 2.2 r) on flat ground with the effects
     gravity, contact, friction, collider, damping (0.1) at μs = mu, μk = 0.7·mu; returns the heap angle
     after each count of ``frames`` (1/60 s each) and the seconds taken."""
-    from xpbd_scenes import solver_run
-
+    from nodes.simulation.scenes import solver_run
     from nodes.simulation.settings import SolverSettings
 
     x = ball(n, (2.2 * radius,) * 3, seed)
@@ -130,8 +124,8 @@ def rice_heap(n, anchored, frames=(150,), substeps=10, friction=1.0, seed=0):
     damping; no adhesion: dry rice). Returns (``heap_angle``, ``mound_angle``) after each of ``frames`` and
     the seconds."""
     from scipy.spatial.transform import Rotation
-    from xpbd_scenes import box_mesh, rice_library
 
+    from nodes.simulation.scenes import box_mesh, rice_library
     from nodes.simulation.settings import XpbdParams
     from nodes.simulation.setup import build_simulation
     from nodes.simulation.xpbd import xpbd
@@ -178,9 +172,8 @@ def packing_fraction(n, mu, anchored, frames=150, radius=1.0, seed=0):
     """Pour n spheres (a loose lattice, spacing 2.3 r) into an open box and let them settle; the packing
     fraction is the spheres' volume inside the box's core (two diameters from the walls and floor, below
     the top two diameters of the bed), counted on a 0.1 r sample grid. Returns (φ, seconds)."""
-    from xpbd_scenes import open_box, solver_run
-
     from nodes.simulation.collider import signed_distance_grid
+    from nodes.simulation.scenes import open_box, solver_run
     from nodes.simulation.settings import SolverSettings
 
     side = 16.0 * radius
