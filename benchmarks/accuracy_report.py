@@ -101,7 +101,6 @@ def copy_image(results: Path, name: str, target: str) -> str:
 
 
 def defaults() -> dict[str, object]:
-    sys.path.insert(0, str(ROOT))
     from nodegraph.registry import default_registry
 
     registry = default_registry()

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -53,7 +52,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--full-frames", type=int, default=90, help="frames of the full method's drop (≥ 30)")
     parser.add_argument("--width", type=int, default=640, help="preview width (height 9/16 of it)")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(HERE))
     from bench_scenes import QUICK, run_cold
     from machine import conditions
 

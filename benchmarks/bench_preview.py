@@ -20,15 +20,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "simulation"))  # the shared scene builders
 
 
 def main_job_scene(cache_dir: Path | None):
@@ -43,12 +40,11 @@ def main_job_scene(cache_dir: Path | None):
 
 
 def quick_scene():
-    """A few capsule grains and eggs in a bowl (``xpbd_scenes.small_food_scene``, as the tests use)."""
-    from xpbd_scenes import small_food_scene
-
+    """A few capsule grains and eggs in a bowl (``nodes.simulation.scenes.small_food_scene``, as the tests use)."""
     from nodes.export.mitsuba_scene import Camera
     from nodes.export.preview import preview
     from nodes.shading import shade
+    from nodes.simulation.scenes import small_food_scene
 
     scene = shade.call(**small_food_scene())
     params = preview.resolve_params({})

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -36,58 +35,34 @@ REFERENCE = {
     "rice_chestnut": ("S", None, 6.27 + 194.30, 5365, None),  # S: initial placement + adjustment
 }
 
-# Reduced sizes (seconds each): the same graph, a smaller shape, fewer variants, frames and pixels.
+# Reduced sizes (seconds each): each recipe's own draft: block (what `nodegraph run --draft` applies: a smaller
+# shape, fewer variants and frames), with a still smaller preview on top.
 PREVIEW = ["preview.width=64", "preview.height=48", "preview.samples=1", "measure.sample=60"]
-GRAINS = ["grain_spheres.variants=4", "grain_volume.resolution=24", "grain_mesh.target_faces=400"]
-QUICK = {
-    "rice_bowl": [
-        "bowl.size=14.0",
-        "bowl.depth=12.0",
-        "bowl.mound=5.0",
-        *GRAINS,
-        "rice_sim.frames=3",
-        *PREVIEW,
-    ],
-    "ikura_don": [
-        "rice_place.r=3.0",
-        "rice_sim.frames=2",
-        "egg_sim.frames=2",
-        "egg_place.r=4.0",
-        "grain_mesh.target_faces=200",
-        "grain_spheres.variants=4",
-        "grain_volume.resolution=24",
-        *PREVIEW,
-    ],
-    "onigiri": [
-        "onigiri.size=12.0",
-        "plate.offset=[0.0, 0.0, -14.5]",
-        *GRAINS,
-        "press.frames=3",
-        *PREVIEW,
-    ],
-    "onigiri_cylinder": [
-        "onigiri.size=7.0",
-        "onigiri.length=20.0",
-        "plate.offset=[0.0, 0.0, -10.5]",
-        *GRAINS,
-        "press.frames=3",
-        *PREVIEW,
-    ],
-    "sushi": ["nigiri.extents=[30.0, 14.0, 11.0]", *GRAINS, "press.frames=3", *PREVIEW],
-    "kakigori": ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2", *PREVIEW],
-    "rice_chestnut": [
-        "onigiri.size=6.0",
-        "grain_spheres.variants=4",
-        "grain_volume.resolution=24",
-        "chestnut_spheres.variants=2",
-        "chestnut_volume.resolution=24",
-        *PREVIEW,
-    ],
-}
+SCENES = ("rice_bowl", "ikura_don", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_chestnut")
 
 
 def recipe_path(name: str) -> Path:
     return REPO / "graphs" / f"{name}.yaml"
+
+
+def draft_overrides(name: str) -> list[str]:
+    """A recipe's draft: block as --set texts (as ``Recipe.draft``), read without loading the node registry."""
+    import json
+
+    import yaml
+
+    block = yaml.safe_load(recipe_path(name).read_text()).get("draft") or {}
+    return [f"{key}={json.dumps(value)}" for key, value in block.items()]
+
+
+def _quick(name: str) -> list[str]:
+    """The draft's counts with PREVIEW on top; the walls' distance field at its default resolution (the scene
+    tests' quality targets were set with it; the draft coarsens it for speed)."""
+    keep = [t for t in draft_overrides(name) if t.split("=")[0] not in {p.split("=")[0] for p in PREVIEW}]
+    return [t for t in keep if not t.split("=")[0].endswith(".wall_cells")] + PREVIEW
+
+
+QUICK = {name: _quick(name) for name in SCENES}
 
 
 def run_cold(name: str, overrides: list[str], preview_to: Path | None = None) -> dict:
@@ -130,7 +105,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="reduced sizes: seconds per recipe")
     parser.add_argument("--top", type=int, default=4, help="slowest nodes shown per recipe")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
     from machine import conditions
 
     names = args.recipes or [n for n in QUICK if recipe_path(n).exists()]

@@ -12,15 +12,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from nodes.shading.cdrf import CdrfTable, cdrf_exact, cdrf_quadrature, curvature_sigma, sigma0_from_water  # noqa: E402
+from nodes.shading.cdrf import CdrfTable, cdrf_exact, cdrf_quadrature, curvature_sigma, sigma0_from_water
 
 
 def timed(fn, repeats):

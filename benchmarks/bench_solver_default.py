@@ -17,16 +17,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "simulation"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
 SETTINGS = ((10, 2), (20, 1), (16, 1), (8, 2), (5, 4), (10, 1), (20, 2))

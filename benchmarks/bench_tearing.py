@@ -18,19 +18,18 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
+from nodes.tearing.body import BodySettings, ElasticBody
+from nodes.tearing.elastic_body import pull_field
+from nodes.tearing.surface_mesh import SurfaceMesh, cube_surface, union_labels
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
-from nodes.tearing.body import BodySettings, ElasticBody  # noqa: E402
-from nodes.tearing.elastic_body import pull_field  # noqa: E402
-from nodes.tearing.surface_mesh import SurfaceMesh, cube_surface, union_labels  # noqa: E402
 
 U_TABLE = {10: (140.0, 92.0), 15: (65.0, 42.0), 20: (40.0, 23.0), 25: (20.0, 12.0)}  # steps/s: none, 50 splits
 

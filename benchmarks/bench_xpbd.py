@@ -13,24 +13,20 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
+from machine import conditions
+
+from nodes.simulation.scenes import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column
+from nodes.simulation.settings import XpbdParams
+from nodes.simulation.setup import build_simulation
+from nodes.simulation.xpbd import xpbd
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "simulation"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
-from machine import conditions  # noqa: E402
-from xpbd_scenes import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column  # noqa: E402
-
-from nodes.simulation.settings import XpbdParams  # noqa: E402
-from nodes.simulation.setup import build_simulation  # noqa: E402
-from nodes.simulation.xpbd import xpbd  # noqa: E402
 
 RICE = ("gravity", "contact", "friction", "adhesion", "collider", "moisture", "damping")
 IKURA = ("gravity", "contact", "friction", "collider", "buoyancy", "damping")
@@ -170,7 +166,7 @@ def bench_effects(quick):
 
 
 def run_to_rest(run, frames, repeats=1, make=None):
-    """Run ``frames`` frames of a ``setup.Simulation`` or ``xpbd_scenes.SolverRun``; returns (wall of the
+    """Run ``frames`` frames of a ``setup.Simulation`` or ``nodes.simulation.scenes.SolverRun``; returns (wall of the
     frames alone, element centres, max penetration / r over the run, last residual, energy drift and
     rise of ``energy_drift``). With ``repeats`` > 1 the (deterministic) run is repeated on fresh runs
     from ``make`` and the fastest wall kept."""
@@ -270,7 +266,7 @@ def accuracy_table(rows, reference, second):
 
 
 def bench_accuracy(quick):
-    """Substeps × iterations on the rice bowl and on the stack test (``xpbd_scenes.stack_column``),
+    """Substeps × iterations on the rice bowl and on the stack test (``nodes.simulation.scenes.stack_column``),
     plus the xpbd node's defaults (10 × 2); Pareto front on wall time vs error against a reference run.
 
     Both scenes are below ``solver.PARALLEL_PARTICLES``: the solver runs them on one thread (on the

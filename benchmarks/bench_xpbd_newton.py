@@ -14,21 +14,17 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
+from machine import conditions
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "simulation"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 # packages this benchmark needs beyond the project's own (tests/benchmarks skips it without them)
 REQUIRES = ("newton", "warp")
 RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
-from machine import conditions  # noqa: E402
 
 SUBSTEPS, RADIUS, SIDE = 10, 0.01, 0.5  # m
 
@@ -45,10 +41,9 @@ def initial_grid(n, seed=0):
 
 
 def box_solver(n, dispatch=None):
-    """Our solver on the jittered grid in the open box (mm, g, s), ready to run: an ``xpbd_scenes.SolverRun``."""
-    from xpbd_scenes import open_box, solver_run
-
+    """Our solver on the jittered grid in the open box (mm, g, s), ready to run: a ``SolverRun`` (``scenes``)."""
     from nodes.simulation.collider import signed_distance_grid
+    from nodes.simulation.scenes import open_box, solver_run
     from nodes.simulation.settings import SolverSettings
 
     x, side = initial_grid(n)

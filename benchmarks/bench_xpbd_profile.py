@@ -12,21 +12,17 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from collections import Counter
 from pathlib import Path
 
+from bench_xpbd_newton import SUBSTEPS, box_solver
+from machine import conditions
+
+from nodes.simulation.solver import KernelDispatch
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "simulation"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
-
-from bench_xpbd_newton import SUBSTEPS, box_solver  # noqa: E402
-from machine import conditions  # noqa: E402
-
-from nodes.simulation.solver import KernelDispatch  # noqa: E402
 
 
 class TimedDispatch(KernelDispatch):

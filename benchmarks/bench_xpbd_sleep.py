@@ -10,25 +10,21 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from bench_xpbd import RICE, pile_measures
+from machine import conditions
+
+from nodes.simulation.scenes import rice_bowl
+from nodes.simulation.settings import XpbdParams
+from nodes.simulation.setup import build_simulation, finish_simulation
+from nodes.simulation.xpbd import xpbd
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "simulation"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
-from bench_xpbd import RICE, pile_measures  # noqa: E402
-from machine import conditions  # noqa: E402
-from xpbd_scenes import rice_bowl  # noqa: E402
-
-from nodes.simulation.settings import XpbdParams  # noqa: E402
-from nodes.simulation.setup import build_simulation, finish_simulation  # noqa: E402
-from nodes.simulation.xpbd import xpbd  # noqa: E402
 
 TAIL = 10  # frames at the end whose cost is reported apart
 

@@ -1,6 +1,6 @@
 """xpbd stability map (issue 11): where the solver holds.
 
-Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``xpbd_scenes.stack_column``, the
+Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``nodes.simulation.scenes.stack_column``, the
 upper cube ``ratio``× heavier) dropped 0.1 r onto the ground; max inter-element penetration / r over
 the run, energy growth (max of E − E₀ over the run, in M·g·r; gravity does the only work, so > 0 is
 a gain) and the settled error of the element centres against the analytic rest (r). A refused
@@ -14,20 +14,17 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from nodes.simulation.collider import signed_distance_grid
+from nodes.simulation.scenes import bowl_mesh, mechanical_energy, solver_run, stack_column
+from nodes.simulation.settings import SolverSettings
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "simulation"))
 RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
-from xpbd_scenes import bowl_mesh, mechanical_energy, solver_run, stack_column  # noqa: E402
-
-from nodes.simulation.collider import signed_distance_grid  # noqa: E402
-from nodes.simulation.settings import SolverSettings  # noqa: E402
 
 ITERATIONS = 2  # the node's default
 

@@ -6,7 +6,7 @@ numba_cache.configure()  # before any kernel module imports numba
 
 from .context import Context
 from .errors import Issue, NodeFailure, NodegraphError, RecipeError
-from .node import In, NodeSpec, Out, node
+from .node import In, Moved, NodeSpec, Out, node
 from .params import Param
 
 __version__ = "0.1.0"
@@ -14,6 +14,7 @@ __version__ = "0.1.0"
 __all__ = [
     "Context",
     "In",
+    "Moved",
     "Issue",
     "NodeFailure",
     "NodeSpec",

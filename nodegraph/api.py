@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from .cache import Cache, default_cache_dir
-from .executor import Executor, Instance, RunResult, run_recipe
+from .executor import Executor, RunResult, run_recipe
+from .plan import Instance
 from .recipe import Recipe, load_recipe, parse_recipe
 from .registry import Registry, default_registry
 

@@ -1,4 +1,4 @@
-"""The ``nodegraph`` command: run, sweep, check, nodes, describe, graph, cache, docs, inspect.
+"""The ``nodegraph`` command: run, watch, sweep, check, nodes, describe, graph, cache, docs, inspect.
 
 Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid.
 """
@@ -22,6 +22,13 @@ from .report import Reporter
 from .rerun_log import has_display
 
 SWEEP_RRD = Path("<sweep>.rrd")  # --rrd given without a path
+RRD_MAGIC = b"RRF2"  # the first bytes of a Rerun recording
+FILE_KINDS = {
+    b"\x89PNG": "a PNG image",
+    b"glTF": "a glTF binary (.glb)",
+    b"PXR-": "a USD crate file",
+    b"ply": "a PLY mesh",
+}
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -34,6 +41,15 @@ def _common(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--cache-dir", type=Path, default=None, help="cache directory (default: $NODEGRAPH_CACHE or .nodegraph/cache)"
+    )
+
+
+def _draft(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--draft",
+        action="store_true",
+        help="apply the recipe's draft: block (reduced counts and a small preview: seconds, to iterate on a look); "
+        "--set still wins",
     )
 
 
@@ -82,7 +98,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--no-rrd", action="store_true", help="do not record to Rerun")
     run.add_argument("--spawn", action="store_true", help="also stream to a Rerun viewer")
-    run.add_argument("--out-dir", type=Path, default=None, help="where outputs go (default outputs/<recipe>)")
+    run.add_argument(
+        "--out-dir",
+        type=Path,
+        default=None,
+        help="where outputs go (default outputs/<recipe>, --draft: <recipe>_draft)",
+    )
+    _draft(run)
     run.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
     run.add_argument(
         "--max-minutes",
@@ -94,6 +116,23 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
     _distributed(run)
     _common(run)
+
+    watch = sub.add_parser(
+        "watch", help="run a recipe, then again on every save of its file (only what the edit changed recomputes)"
+    )
+    watch.add_argument("recipe", type=Path)
+    watch.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    watch.add_argument("--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]")
+    watch.add_argument("--spawn", action="store_true", help="stream every run to a Rerun viewer (one, kept open)")
+    watch.add_argument("--no-rrd", action="store_true", help="do not record to Rerun")
+    watch.add_argument("--out-dir", type=Path, default=None, help="where outputs go (as for run)")
+    watch.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors and what each run wrote")
+    watch.add_argument("--poll", type=float, default=0.2, metavar="S", help="seconds between looks at the file")
+    watch.add_argument("--runs", type=int, default=None, metavar="N", help="stop after N runs (scripts, tests)")
+    watch.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
+    watch.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    _draft(watch)
+    _common(watch)
 
     sweep = sub.add_parser("sweep", help="run a recipe at every point of a parameter grid: cost against metrics")
     sweep.add_argument("recipe", type=Path)
@@ -115,6 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sweep.add_argument("--sweep", dest="sweep_name", default=None, help="which of the recipe's sweeps to run")
     sweep.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    _draft(sweep)
     sweep.add_argument(
         "--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]", help="also pull this output"
     )
@@ -140,6 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser("check", help="validate a recipe; nothing runs")
     check.add_argument("recipe", type=Path)
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    _draft(check)
     _common(check)
 
     nodes = sub.add_parser("nodes", help="list every node type")
@@ -157,6 +198,7 @@ def build_parser() -> argparse.ArgumentParser:
     graph.add_argument("recipe", type=Path)
     graph.add_argument("--dot", action="store_true", help="Graphviz DOT instead of text")
     graph.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    _draft(graph)
     _common(graph)
 
     inspect = sub.add_parser("inspect", help="what a .rrd holds: recordings, entity tree, timelines, blueprint views")
@@ -179,8 +221,8 @@ def _cmd_run(args, registry) -> int:
         raise NodegraphError(
             f"--no-rrd contradicts {given}: a viewer and a recording file both need the recording; drop one of them"
         )
-    recipe = load_recipe(args.recipe, registry, args.overrides)
-    out_dir = args.out_dir or Path("outputs") / recipe.name
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    out_dir = args.out_dir or Path("outputs") / (recipe.name + ("_draft" if args.draft else ""))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
@@ -241,10 +283,51 @@ def _pool(args, cache, reporter):
         pool.close()
 
 
+def _cmd_watch(args, registry) -> int:
+    """Run, then run again whenever the recipe file's bytes change. The cache makes a re-run compute only the
+    nodes an edit changed; a bad edit prints its error (file:line, node, parameter) and the last good outputs
+    and recording stay as they were until the next save."""
+    import hashlib
+    import time
+
+    args.no_cache, args.rrd, args.scheduler, args.workers = False, None, None, None  # the cache is the point
+
+    def digest():
+        try:
+            text = args.recipe.read_bytes()
+        except OSError:
+            text = b""  # an editor replacing the file
+        return hashlib.sha256(text).digest() if text.strip() else None  # None: being written, look again
+
+    seen, runs = None, 0
+    while args.runs is None or runs < args.runs:
+        now = digest()
+        if now is None or now == seen:
+            time.sleep(args.poll)
+            continue
+        time.sleep(args.poll)  # a save in progress: run once the bytes have stayed the same for one poll
+        if digest() != now:
+            continue
+        seen, runs = now, runs + 1
+        started = time.perf_counter()
+        try:
+            _cmd_run(args, registry)
+            print(f"run {runs} done in {time.perf_counter() - started:.1f} s", flush=True)
+        except RecipeError as exc:
+            print(str(exc), file=sys.stderr)
+            print(f"run {runs}: not run; the last good outputs stay", flush=True)
+        except (NodeFailure, NodegraphError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            print(f"run {runs}: failed; the last good outputs stay", flush=True)
+        if args.runs is None or runs < args.runs:
+            print(f"watching {args.recipe} (Ctrl-C to stop)", flush=True)
+    return 0
+
+
 def _cmd_sweep(args, registry) -> int:
     from .sweep import run_sweep, sweep_from_args, write_sweep
 
-    base = load_recipe(args.recipe, registry, args.overrides)
+    base = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
     out_dir = args.out_dir or Path("outputs") / base.name / "sweeps"
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
@@ -260,7 +343,7 @@ def _cmd_sweep(args, registry) -> int:
             args.recipe,
             registry,
             decl,
-            overrides=args.overrides,
+            overrides=list(base.overrides),  # the draft's, then --set
             cache=cache,
             pool=pool,
             plugins=args.plugin,
@@ -280,25 +363,50 @@ def _cmd_inspect(args, registry) -> int:
 
     if not args.rrd.is_file():
         raise NodegraphError(f"{args.rrd}: no such file (give a .rrd written by nodegraph run or sweep)")
+    with open(args.rrd, "rb") as file:
+        head = file.read(4)
+    if head != RRD_MAGIC:
+        kind = (
+            "empty"
+            if not head
+            else next((n for magic, n in FILE_KINDS.items() if head.startswith(magic)), "another file")
+        )
+        raise NodegraphError(
+            f"{args.rrd} is {kind}, not a Rerun recording: inspect reads the .rrd that nodegraph run or sweep writes "
+            "(outputs/<recipe>/<recipe>.rrd)"
+        )
     print(describe_rrd(args.rrd, depth=args.depth))
     return 0
 
 
 def _cmd_check(args, registry) -> int:
-    recipe = load_recipe(args.recipe, registry, args.overrides)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    if recipe.draft and not args.draft:  # the draft's values are checked too, where they would apply
+        load_recipe(args.recipe, registry, args.overrides, draft=True)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())
     sweeps = "".join(f", sweep {d.name} ({len(d.points())} points)" for d in recipe.sweeps.values())
     print(
         f"{args.recipe}: OK — {len(recipe.nodes)} nodes ({instances} instances), "
         f"outputs {', '.join(map(str, recipe.outputs))}, effects: {', '.join(sorted(recipe.effects)) or 'none'}"
         + sweeps
+        + (f", draft: {len(recipe.draft)} settings" if recipe.draft else "")
     )
     return 0
 
 
+def doc_summary(doc: str | None) -> str:
+    """A docstring's first sentence, whole: its first paragraph joined into one line, cut at the first full
+    stop followed by a capital (not inside "e.g. a node"; the full text is in `nodegraph describe`)."""
+    import re
+
+    paragraph = " ".join((doc or "").strip().split("\n\n")[0].split())
+    end = re.search(r"\.\s+(?=[A-Z])", paragraph)
+    return paragraph[: end.start() + 1] if end else paragraph
+
+
 def _cmd_nodes(args, registry) -> int:
     for spec in registry.specs():
-        summary = spec.doc.splitlines()[0] if spec.doc else ""
+        summary = doc_summary(spec.doc)
         effects = f"  [effects: {', '.join(sorted(spec.effects))}]" if spec.effects else ""
         print(f"{spec.type_name:<18} v{spec.version:<3} {summary}{effects}")
     if not registry.names():
@@ -421,7 +529,7 @@ def format_graph(recipe: Recipe, dot: bool = False) -> str:
 
 
 def _cmd_graph(args, registry) -> int:
-    recipe = load_recipe(args.recipe, registry, args.overrides)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     print(format_graph(recipe, dot=args.dot))
     return 0
 
@@ -455,6 +563,7 @@ def _interrupt(signum, frame):
 
 COMMANDS = {
     "run": _cmd_run,
+    "watch": _cmd_watch,
     "sweep": _cmd_sweep,
     "check": _cmd_check,
     "nodes": _cmd_nodes,

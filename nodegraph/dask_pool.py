@@ -18,7 +18,8 @@ import os
 from pathlib import Path
 
 from .errors import NodegraphError
-from .pool import Job, JobResult, run_job
+from .plan import Job
+from .pool import JobResult, run_job
 
 
 def _import_distributed():

@@ -1,15 +1,11 @@
 """Pull-based execution: compute only what the requested outputs need, reuse what the cache holds.
 
-Each node instance (a node, or one variant of a variant family) has a cache key that covers the
-node type and version, the engine version, the canonical parameters, the keys of the upstream
-values, the derived seed (random nodes only) and the requested effects the node implements. Keys
-depend on upstream *keys*, not values, so the whole run is planned before anything loads.
+What runs and under which cache key is planned first (``plan``); then each instance is loaded from the
+cache or computed, pulling its inputs, and logged to the run's recording.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import tempfile
 from dataclasses import dataclass, field, replace
@@ -24,45 +20,10 @@ from .checkpoint import Checkpoint
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
 from .output_files import MANIFEST, write_manifest, write_output
-from .params import canonical
-from .recipe import NodeEntry, Recipe, Wire
+from .plan import Instance, Plan, RecipeRef, plan_jobs
+from .recipe import Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
 from .rerun_log import NodeCapture, RunRecording, log_value
-
-CACHE_FORMAT = 2  # 2: the domain value types moved from nodegraph.values to nodes.values (stored type names)
-
-
-@dataclass(frozen=True, order=True)
-class Instance:
-    """A node, or one variant of a node that is a variant family."""
-
-    node: str
-    variant: int | None = None
-
-    @property
-    def label(self) -> str:
-        return self.node if self.variant is None else f"{self.node}[{self.variant}]"
-
-    @property
-    def entity(self) -> str:
-        return f"/{self.node}" if self.variant is None else f"/{self.node}/{self.variant}"
-
-
-def file_digests(entry: NodeEntry) -> dict[str, str]:
-    """sha256 of the file each ``Param(file=True)`` of the node names (validation saw it exist)."""
-    out = {}
-    for name, param in entry.spec.params.items():
-        value = entry.params.get(name)
-        if param.file and value:
-            path = Path(value)
-            out[name] = hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else "missing"
-    return out
-
-
-def derive_seed(base: int, node_id: str, variant: int | None) -> int:
-    """A 63-bit seed per node instance, so variants and sibling nodes draw independent streams."""
-    digest = hashlib.sha256(f"{base}/{node_id}/{variant}".encode()).digest()
-    return int.from_bytes(digest[:8], "little") >> 1
 
 
 @dataclass
@@ -105,7 +66,8 @@ class Executor:
         self.cache = cache
         self.reporter = reporter or Reporter(quiet=True)
         self.recording = recording
-        self.keys: dict[Instance, str] = {}
+        self.planned = Plan(recipe)
+        self.keys: dict[Instance, str] = self.planned.keys  # filled by ``plan``
         self.values: dict[Instance, dict[str, Any]] = {}
         self.status: dict[Instance, NodeRecord] = {}
         self.hits: set[str] = set()
@@ -113,62 +75,16 @@ class Executor:
         self.logged: set[Instance] = set()  # instances whose logs are in the recording
 
     # planning ---------------------------------------------------------------------------------
-    def instances(self, node_id: str) -> list[Instance]:
-        family = self.recipe.nodes[node_id].family
-        return [Instance(node_id)] if family is None else [Instance(node_id, v) for v in range(family)]
-
-    def _sources(self, entry: NodeEntry, variant: int | None) -> dict[str, list[tuple[Instance, str]]]:
-        """Upstream (instance, port) pairs per input port: gathered for many-ports, mapped otherwise."""
-        sources = {}
-        for port_name, wires in entry.inputs.items():
-            pairs = []
-            for wire in wires:
-                if entry.spec.inputs[port_name].many or self.recipe.nodes[wire.node].family is None:
-                    pairs.extend((inst, wire.port) for inst in self.instances(wire.node))
-                else:
-                    pairs.append((Instance(wire.node, variant), wire.port))
-            sources[port_name] = pairs
-        return sources
-
-    def _seed(self, entry: NodeEntry, variant: int | None) -> int | None:
-        if not entry.spec.random:
-            return None
-        base = self.recipe.seed if entry.seed is None else entry.seed
-        return derive_seed(base, entry.id, variant)
-
-    def plan(self, node_ids: list[str]) -> list[Instance]:
-        """Cache keys for every instance of the given nodes (in topological order)."""
-        order = []
-        for node_id in self.recipe.order(node_ids):
-            entry = self.recipe.nodes[node_id]
-            for inst in self.instances(node_id):
-                payload = {
-                    "format": CACHE_FORMAT,
-                    "engine": __version__,
-                    "type": entry.spec.type_name,
-                    "version": entry.spec.version,
-                    "params": canonical(entry.params),
-                    "inputs": {
-                        port: [[self.keys[src], out] for src, out in pairs]
-                        for port, pairs in sorted(self._sources(entry, inst.variant).items())
-                    },
-                    "seed": self._seed(entry, inst.variant),
-                    "effects": sorted(entry.spec.effects & self.recipe.effects),
-                }
-                files = file_digests(entry)
-                if files:  # only then: keys of nodes without file parameters stay as they were
-                    payload["files"] = files
-                blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
-                self.keys[inst] = hashlib.sha256(blob).hexdigest()
-                order.append(inst)
-        return order
+    def plan(self, node_ids) -> list[Instance]:
+        """Cache keys (in ``keys``) for every instance of the given nodes and the nodes they need, in
+        topological order."""
+        return self.planned.add(node_ids)
 
     # running ----------------------------------------------------------------------------------
     def run(self, outputs: list[Wire] | None = None) -> RunResult:
         """Materialise the requested outputs (default: the recipe's) and everything they need."""
         outputs = list(outputs or self.recipe.outputs)
-        needed_nodes = self.recipe.upstream({w.node for w in outputs})
-        order = self.plan(sorted(needed_nodes))
+        order = self.plan({w.node for w in outputs})
         if self.cache is not None:
             self.hits = {key for key in set(self.keys.values()) if self.cache.has(key)}
         output_nodes = {w.node for w in outputs}
@@ -214,7 +130,7 @@ class Executor:
                 self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
                 return outputs
 
-        sources = self._sources(entry, inst.variant)
+        sources = self.planned.sources(inst)
         kwargs: dict[str, Any] = {}
         for port_name, port in spec.inputs.items():
             pairs = sources.get(port_name, [])
@@ -227,7 +143,7 @@ class Executor:
         ctx = Context(
             node_id=inst.node,
             node_type=spec.type_name,
-            seed=self._seed(entry, inst.variant),
+            seed=self.planned.seed(inst),
             effects=frozenset(spec.effects & self.recipe.effects),
             variant=inst.variant,
             # the node's own logging under /<node>/log: never at an output's path, where the static output
@@ -369,7 +285,7 @@ class Executor:
         for wire in outputs:
             entry = self.recipe.nodes[wire.node]
             stem = wire.node if len(entry.spec.outputs) == 1 else f"{wire.node}.{wire.port}"
-            for inst in self.instances(wire.node):
+            for inst in self.planned.instances(wire.node):
                 value = self.materialise(inst)[wire.port]
                 if inst.variant is None:
                     written += write_output(value, directory, stem)
@@ -451,14 +367,18 @@ def run_recipe(
             if ok:
                 result.rrd = written
             elif warn is not None:
-                warn(f"the run did not complete: its recording is {written}; {recording.path} was left as it was")
+                kept = (
+                    f"the last complete recording {recording.path} was left as it was"
+                    if Path(recording.path).exists()
+                    else f"no complete recording {recording.path} exists yet"
+                )
+                warn(f"the run did not complete: what it recorded is in {written}; {kept}")
     return result
 
 
 def compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds=None) -> dict[str, NodeRecord]:
-    """Have ``pool`` compute every instance the outputs need that the cache lacks; their records by key."""
-    from .pool import RecipeRef, plan_jobs
-
+    """Have ``pool`` (an ``pool.InstancePool``) compute every instance the outputs need that the cache
+    lacks; their records by key."""
     if cache is None:
         raise NodegraphError("workers hand results over through the cache: a pool needs it (no --no-cache)")
     jobs = plan_jobs(recipe, wires, cache, RecipeRef.of(recipe, plugins), max_seconds)
@@ -497,4 +417,12 @@ def resolve_outputs(recipe: Recipe, refs: list[str]) -> list[Wire]:
     return wires
 
 
-__all__ = ["Executor", "Instance", "RunResult", "derive_seed", "resolve_outputs", "run_recipe"]
+__all__ = [
+    "Executor",
+    "RunResult",
+    "compute_in_pool",
+    "recording_id",
+    "recording_name",
+    "resolve_outputs",
+    "run_recipe",
+]

@@ -2,14 +2,17 @@
 
 A node module declares a node with the ``@node`` decorator around a plain function::
 
-    @node("decimate", version=1,
+    @node("decimate",
           inputs={"mesh": In(Mesh, "the mesh to simplify")},
           outputs={"mesh": Out(Mesh, "the simplified mesh")},
           params={"faces": Param(int, 1000, "target face count", range=(4, 10_000_000))})
     def decimate(ctx, mesh, *, faces): ...
 
 The decorator returns a ``NodeSpec``; the registry finds specs by scanning module attributes,
-so declaring a node has no side effect and there is no global registry.
+so declaring a node has no side effect and there is no global registry. A node's cached results are
+keyed on the code it runs (``code_digest``), so editing it or a helper it imports re-runs it;
+``version`` is an explicit extra, bumped only for what that code digest cannot see (a data file the
+code reads, a library upgrade that changes results).
 """
 
 from __future__ import annotations
@@ -56,6 +59,22 @@ class Out:
 
 
 @dataclass(frozen=True)
+class Moved:
+    """Where a parameter the node no longer has now lives: parameter ``param`` of the node wired into this
+    node's input ``input`` (a node of type ``node_type``). Validation says so where a recipe still sets it."""
+
+    input: str
+    param: str
+    node_type: str
+
+    def advice(self, old: str) -> str:
+        return (
+            f"parameter '{old}' moved to parameter '{self.param}' of the {self.node_type} node wired into input "
+            f"'{self.input}'"
+        )
+
+
+@dataclass(frozen=True)
 class NodeSpec:
     """Everything the engine knows about a node type; ``run`` is the implementation."""
 
@@ -70,6 +89,8 @@ class NodeSpec:
     random: bool = False
     check: Callable[[dict[str, Any]], list[tuple[str, str]]] | None = None
     module: str = ""
+    moved: Mapping[str, Moved] = field(default_factory=dict)
+    check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
         """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
@@ -86,6 +107,9 @@ class NodeSpec:
         """
         where = f"node type '{self.type_name}'"
         unknown = sorted(set(given) - set(self.inputs) - set(self.params))
+        moved = [self.moved[name].advice(name) for name in unknown if name in self.moved]
+        if moved:
+            raise TypeError(f"{where}: " + "; ".join(moved))
         if unknown:
             raise TypeError(
                 f"{where} has no input or parameter {unknown}; inputs: {sorted(self.inputs)}, "
@@ -128,7 +152,7 @@ class NodeSpec:
 def node(
     type_name: str,
     *,
-    version: int | str,
+    version: int | str = 1,
     outputs: Mapping[str, Out],
     inputs: Mapping[str, In] | None = None,
     params: Mapping[str, Param] | None = None,
@@ -136,13 +160,20 @@ def node(
     random: bool = False,
     check: Callable[[dict[str, Any]], list[tuple[str, str]]] | None = None,
     doc: str | None = None,
+    moved: Mapping[str, Moved] | None = None,
+    check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None,
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
     """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
 
-    ``effects`` are the physical effects the node implements; at run time ``ctx.effects`` holds
-    only those the recipe asked for. ``random`` nodes get ``ctx.rng`` and the seed enters their
-    cache key; others cannot draw random numbers. ``check(params)`` returns
-    ``[(param, message), ...]`` for constraints between parameters.
+    ``version`` enters the cache key beside the digest of the node's code: bump it to recompute cached
+    results when something outside the project's modules changed them. ``effects`` are the physical
+    effects the node implements; at run time ``ctx.effects`` holds only those the recipe asked for.
+    ``random`` nodes get ``ctx.rng`` and the seed enters their cache key; others cannot draw random
+    numbers. ``check(params)`` returns ``[(param, message), ...]`` for constraints between parameters.
+    ``moved`` names parameters the node no longer has and where each now lives (``Moved``), so a recipe
+    that still sets one is told where. ``check_recipe(node_id, nodes)`` checks the node against the rest of
+    a valid recipe (``nodes``: every node's ``NodeEntry`` by id) and returns ``[(param, message), ...]``
+    for contradictions between nodes.
     """
     inputs = dict(inputs or {})
     params = dict(params or {})
@@ -181,6 +212,8 @@ def node(
             random=random,
             check=check,
             module=fn.__module__,
+            moved=MappingProxyType(dict(moved or {})),
+            check_recipe=check_recipe,
         )
 
     return wrap

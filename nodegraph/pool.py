@@ -1,7 +1,7 @@
 """The executor interface for independent work: node instances handed to a pool of workers.
 
-A run (or a sweep of runs) is planned here as *jobs*, one per node instance that is not in the cache
-yet, each naming the cache keys of the jobs it waits for. A pool computes them (``InstancePool``);
+A run (or a sweep of runs) is planned as *jobs* (``plan.plan_jobs``), one per node instance that is not
+in the cache yet, each naming the cache keys of the jobs it waits for. A pool computes them (``InstancePool``);
 every job stores its outputs in the shared content-addressed cache, so when the pool is done the
 ordinary in-process run finds everything there and only loads it: outputs, recording and files are
 those of an in-process run, bit for bit. Jobs are identified by their cache key, so instances that
@@ -21,44 +21,11 @@ from typing import Protocol
 
 from .cache import Cache
 from .errors import NodeFailure, NodegraphError
-from .recipe import Recipe, Wire
-from .report import NodeRecord
-
-
-@dataclass(frozen=True)
-class RecipeRef:
-    """How a worker loads the same validated recipe: file, ``--set`` texts, plugin files, expected digest."""
-
-    path: str
-    overrides: tuple[str, ...]
-    plugins: tuple[str, ...]
-    digest: str
-
-    @classmethod
-    def of(cls, recipe: Recipe, plugins=()) -> RecipeRef:
-        if not Path(recipe.path).is_file():
-            raise NodegraphError(
-                f"recipe {recipe.path} is not a file: a worker loads the recipe from its file, so a pool needs one"
-            )
-        return cls(
-            str(Path(recipe.path).resolve()),
-            tuple(recipe.overrides),
-            tuple(str(Path(p).resolve()) for p in plugins),
-            recipe.digest(),
-        )
-
-
-@dataclass(frozen=True)
-class Job:
-    """One node instance to compute: its cache key, where it is in which recipe, the keys it waits for."""
-
-    key: str
-    label: str
-    recipe: RecipeRef
-    node: str
-    variant: int | None
-    needs: tuple[str, ...]
-    max_seconds: float | None = None
+from .executor import Executor
+from .plan import Instance, Job, RecipeRef
+from .recipe import Recipe, load_recipe
+from .registry import default_registry
+from .report import NodeRecord, Reporter
 
 
 @dataclass
@@ -95,23 +62,6 @@ class InstancePool(Protocol):
     def close(self) -> None: ...
 
 
-def plan_jobs(recipe: Recipe, wires: list[Wire], cache: Cache, ref: RecipeRef, max_seconds=None) -> list[Job]:
-    """Jobs for every instance the outputs need that the cache does not hold yet, in topological order."""
-    from .executor import Executor
-
-    executor = Executor(recipe, cache)
-    order = executor.plan(sorted(recipe.upstream({w.node for w in wires})))
-    missing = {inst for inst in order if not cache.has(executor.keys[inst])}
-    jobs = []
-    for inst in order:
-        if inst not in missing:
-            continue
-        sources = executor._sources(recipe.nodes[inst.node], inst.variant)
-        needs = sorted({executor.keys[src] for pairs in sources.values() for src, _ in pairs if src in missing})
-        jobs.append(Job(executor.keys[inst], inst.label, ref, inst.node, inst.variant, tuple(needs), max_seconds))
-    return jobs
-
-
 _RECIPES: dict[RecipeRef, Recipe] = {}
 
 
@@ -120,9 +70,6 @@ def load_for_job(ref: RecipeRef) -> Recipe:
     code changed under the run) is refused rather than computed under the wrong key."""
     recipe = _RECIPES.get(ref)
     if recipe is None:
-        from .recipe import load_recipe
-        from .registry import default_registry
-
         recipe = load_recipe(ref.path, default_registry(plugins=ref.plugins), list(ref.overrides))
         if recipe.digest() != ref.digest:
             raise NodegraphError(f"{ref.path} changed since the run was planned (recipe digest differs); run it again")
@@ -134,15 +81,12 @@ def run_job(job: Job, cache_dir: str, *_upstream) -> JobResult:
     """What a worker does with a job: load the recipe, check the key, compute the instance into the cache.
     The upstream results are passed only so that a scheduler runs this after them. An instance another
     worker finished meanwhile (a retried job) is loaded, not recomputed."""
-    from .executor import Executor, Instance
-    from .report import Reporter
-
     inst = Instance(job.node, job.variant)
     try:
         recipe = load_for_job(job.recipe)
         cache = Cache(cache_dir)
         executor = Executor(recipe, cache, Reporter(quiet=True), max_seconds=job.max_seconds)
-        executor.plan(sorted(recipe.upstream({job.node})))
+        executor.plan({job.node})
         if executor.keys.get(inst) != job.key:
             raise NodegraphError(
                 f"node '{job.label}' has another cache key on this worker than where the run was planned "
@@ -174,14 +118,4 @@ class SerialPool:
         pass
 
 
-__all__ = [
-    "InstancePool",
-    "Job",
-    "JobResult",
-    "RecipeRef",
-    "RemoteNodeFailure",
-    "SerialPool",
-    "load_for_job",
-    "plan_jobs",
-    "run_job",
-]
+__all__ = ["InstancePool", "JobResult", "RemoteNodeFailure", "SerialPool", "load_for_job", "run_job"]

@@ -13,6 +13,7 @@ import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import networkx as nx
@@ -54,6 +55,7 @@ class RecipeModel(BaseModel):
     outputs: list[str] = Field(min_length=1)
     nodes: dict[str, Any] = Field(min_length=1)
     sweeps: dict[str, Any] = Field(default_factory=dict)  # checked by sweep_decl.check_sweeps
+    draft: dict[str, Any] = Field(default_factory=dict)  # node.param → value that --draft applies
 
 
 @dataclass(frozen=True)
@@ -94,6 +96,7 @@ class Recipe:
     graph: nx.DiGraph = field(repr=False)
     overrides: tuple[str, ...] = ()  # the --set texts applied on top of the file
     sweeps: dict[str, SweepDecl] = field(default_factory=dict)  # the recipe's own sweeps (``nodegraph sweep``)
+    draft: tuple[str, ...] = ()  # the draft: block as node.param=value texts (what --draft applies)
 
     def digest(self) -> str:
         """sha256 of what the recipe computes (name, seed, effects, outputs, every node's type, parameters,
@@ -151,10 +154,13 @@ def _parse_override(text: str) -> tuple[list[str], Any]:
 class _Validator:
     """Collects issues while building a Recipe."""
 
-    def __init__(self, raw: dict, source: SourceMap, registry: Registry, overrides: list[str], name: str | None):
+    def __init__(
+        self, raw: dict, source: SourceMap, registry: Registry, overrides: list[str], name: str | None, draft=False
+    ):
         self.raw = raw
         self.source = source
         self.registry = registry
+        self.draft = draft
         self.overrides = overrides
         self.name = name
         recipe_file = Path(source.file)
@@ -166,7 +172,7 @@ class _Validator:
         location = self.override_at.get(tuple(path[:4])) or self.source.at(path, key=key)
         self.issues.append(Issue(location, message, **extra))
 
-    def _pydantic_issues(self, exc: ValidationError, base: tuple, node: str | None, model: type[BaseModel]) -> None:
+    def pydantic_issues(self, exc: ValidationError, base: tuple, node: str | None, model: type[BaseModel]) -> None:
         """pydantic errors as issues at their line; a value failing every member of a union is one issue."""
         by_path: dict[tuple, list[dict]] = {}
         for err in exc.errors():
@@ -215,10 +221,26 @@ class _Validator:
                 break
         return tuple(path)
 
+    def draft_overrides(self) -> list[tuple[str, Location]]:
+        """The ``draft:`` block as ``node.param=value`` texts, each located at its line in the recipe."""
+        block = self.raw.get("draft")
+        if not isinstance(block, dict) or not block:
+            self.issue(
+                ("draft",) if "draft" in self.raw else (),
+                "--draft: this recipe has no draft: block",
+                allowed="a top-level mapping of reduced sizes, e.g. draft: {rice_place.r: 3.0, preview.width: 320}",
+            )
+            return []
+        return [
+            (f"{key}={json.dumps(value)}", self.source.at(("draft", key), key=True)) for key, value in block.items()
+        ]
+
     def apply_overrides(self) -> None:
         nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
-        for i, text in enumerate(self.overrides, 1):
-            where = Location("--set", i)
+        given = [(text, Location("--set", i)) for i, text in enumerate(self.overrides, 1)]
+        drafted = self.draft_overrides() if self.draft else []
+        self.overrides = [text for text, _ in drafted] + list(self.overrides)  # --set wins over the draft
+        for text, where in drafted + given:
             try:
                 target, value = _parse_override(text)
             except ValueError as exc:
@@ -257,7 +279,7 @@ class _Validator:
         try:
             model = RecipeModel.model_validate(self.raw)
         except ValidationError as exc:
-            self._pydantic_issues(exc, (), None, RecipeModel)
+            self.pydantic_issues(exc, (), None, RecipeModel)
             model = None
         raw_nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
 
@@ -273,7 +295,24 @@ class _Validator:
                     allowed="letters, digits and _ (not starting with a digit)",
                 )
                 continue
-            if body is not None and not isinstance(body, dict):
+            if node_id in NodeModel.model_fields and not isinstance(body, dict):  # a node key, indented too little
+                self.issue(
+                    path,
+                    f"'{node_id}' is a key of a node, not a node: indent it under its node, 2 spaces further in "
+                    "than the node's name",
+                    key=True,
+                )
+                continue
+            if body is None:
+                self.issue(
+                    path,
+                    "nothing under it: put its type (and params, inputs) on the lines below, "
+                    f"2 spaces further in than '{node_id}:'",
+                    key=True,
+                    node=node_id,
+                )
+                continue
+            if not isinstance(body, dict):
                 hint = f" (for a node type, write '{node_id}: {{type: {body}}}')" if isinstance(body, str) else ""
                 self.issue(
                     path,
@@ -286,7 +325,7 @@ class _Validator:
             try:
                 node_model = NodeModel.model_validate(body if body is not None else {})
             except ValidationError as exc:
-                self._pydantic_issues(exc, path, node_id, NodeModel)
+                self.pydantic_issues(exc, path, node_id, NodeModel)
                 continue
             entry = self._node(node_id, node_model, path, wire_sources)
             if entry is not None:
@@ -300,6 +339,9 @@ class _Validator:
             self._check_families(entries, graph)
         outputs = self._check_outputs(model.outputs if model else [], entries, raw_nodes)
         effects = self._check_effects(model.effects if model else [], entries)
+        if not self.issues:  # the nodes' checks across the recipe read valid parameters and wires only
+            self._check_recipe_rules(entries)
+        self._check_draft(entries)
         raw_sweeps = self.raw.get("sweeps")
         sweeps = check_sweeps(self, raw_sweeps, entries, raw_nodes) if isinstance(raw_sweeps, dict) else {}
         if model is not None and model.name is not None and not RECIPE_NAME.match(model.name):
@@ -324,7 +366,57 @@ class _Validator:
             graph=graph,
             overrides=tuple(self.overrides),
             sweeps=sweeps,
+            draft=tuple(f"{key}={json.dumps(value)}" for key, value in model.draft.items()),
         )
+
+    def _check_recipe_rules(self, entries: dict[str, NodeEntry]) -> None:
+        """Each node type's ``check_recipe``: contradictions between the nodes of a valid recipe."""
+        view = MappingProxyType(entries)
+        for node_id, entry in entries.items():
+            if entry.spec.check_recipe is None:
+                continue
+            for param, message in entry.spec.check_recipe(node_id, view):
+                self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+
+    def _moved(self, node_id: str, model: NodeModel, path: tuple, moved, key: str) -> None:
+        """A parameter the node type no longer has: say where it lives now (the node wired into the input
+        ``moved`` names, at its file:line, or how to wire one)."""
+        wired = model.inputs.get(moved.input) or ""
+        target = (wired[0] if isinstance(wired, list) else wired).partition(".")[0]
+        nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
+        if target in nodes:
+            where = self.source.at(("nodes", target, "params", moved.param))
+            given = model.params[key]
+            advice = f"that node is '{target}' at {where}: set '{moved.param}' there"
+            advice += f", or --set {target}.{moved.param}={given}"
+        else:
+            advice = f"wire a {moved.node_type} node into input '{moved.input}' and set its '{moved.param}' there"
+        self.issue(path, f"{moved.advice(key)}; {advice}", key=True, node=node_id)
+
+    def _check_draft(self, entries: dict) -> None:
+        """Every key of the draft: block names a node's parameter (or its variants or seed), or the seed."""
+        block = self.raw.get("draft")
+        raw_nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
+        for key in block if isinstance(block, dict) and not self.draft else ():  # --draft reports as it applies
+            node_id, _, param = str(key).partition(".")
+            if key == "seed" or node_id in raw_nodes and node_id not in entries:  # a broken node is reported
+                continue
+            if node_id not in entries:
+                self.issue(
+                    ("draft", key),
+                    f"draft: no node '{node_id}' in the recipe",
+                    key=True,
+                    suggestion=_nearest(node_id, entries),
+                )
+            elif param not in (*entries[node_id].spec.params, "variants", "seed"):
+                self.issue(
+                    ("draft", key),
+                    f"draft: node '{node_id}' has no parameter '{param}'",
+                    key=True,
+                    node=node_id,
+                    allowed=", ".join(entries[node_id].spec.params),
+                    suggestion=_nearest(param, entries[node_id].spec.params),
+                )
 
     def _node(self, node_id: str, model: NodeModel, path: tuple, wire_sources) -> NodeEntry | None:
         spec = self.registry.get(model.type)
@@ -341,6 +433,10 @@ class _Validator:
         ok = True
         for key, value in model.params.items():
             param = spec.params.get(key)
+            if param is None and key in spec.moved:
+                self._moved(node_id, model, path + ("params", key), spec.moved[key], key)
+                ok = False
+                continue
             if param is None:
                 self.issue(
                     path + ("params", key),
@@ -574,14 +670,17 @@ def parse_recipe(text: str, registry: Registry, file: str = "<recipe>", override
     return _finish(raw, source, registry, list(overrides), None)
 
 
-def load_recipe(path: str | Path, registry: Registry, overrides: list[str] = ()) -> Recipe:
-    """Load and validate a recipe file; raise RecipeError listing every problem with file:line:column."""
+def load_recipe(path: str | Path, registry: Registry, overrides: list[str] = (), draft: bool = False) -> Recipe:
+    """Load and validate a recipe file; raise RecipeError listing every problem with file:line:column.
+
+    ``draft``: apply the recipe's ``draft:`` block (reduced counts to iterate on a look) before ``overrides``;
+    the recipe's ``overrides`` then start with the draft's, so a worker that reloads it gets the same recipe."""
     raw, source = load_yaml_file(path)
-    return _finish(raw, source, registry, list(overrides), Path(path).stem)
+    return _finish(raw, source, registry, list(overrides), Path(path).stem, draft)
 
 
-def _finish(raw, source, registry, overrides, name) -> Recipe:
-    validator = _Validator(raw, source, registry, overrides, name)
+def _finish(raw, source, registry, overrides, name, draft=False) -> Recipe:
+    validator = _Validator(raw, source, registry, overrides, name, draft)
     recipe = validator.build()
     if validator.issues or recipe is None:
         issues = sorted(

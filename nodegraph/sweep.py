@@ -37,7 +37,8 @@ import numpy as np
 from . import codec
 from .cache import Cache, atomic_write
 from .errors import Issue, Location, NodegraphError, RecipeError
-from .executor import Executor, Instance, resolve_outputs, run_recipe
+from .executor import resolve_outputs, run_recipe
+from .plan import Instance, Plan, RecipeRef, plan_jobs
 from .recipe import Recipe, load_recipe
 from .report import Reporter
 from .rerun_log import merge_recordings
@@ -253,15 +254,13 @@ def run_sweep(
 
     plans: list[dict[Instance, str]] = []
     for _, _, recipe in points:
-        executor = Executor(recipe)
-        executor.plan(sorted(recipe.upstream({w.node for w in wires})))
-        plans.append(dict(executor.keys))
+        plan = Plan(recipe)
+        plan.add({w.node for w in wires})
+        plans.append(dict(plan.keys))
     common = set.intersection(*(set(p.values()) for p in plans)) if len(plans) > 1 else set()
 
     times: dict[str, float] = {}  # instances computed during this sweep: key → seconds
     if pool is not None:  # every point's missing instances as one task graph; shared ones are one job
-        from .pool import RecipeRef, plan_jobs
-
         if cache is None:
             raise NodegraphError("workers hand results over through the cache: a pool needs it (no --no-cache)")
         jobs = {}

@@ -118,7 +118,7 @@ def check_sweeps(validator, raw_sweeps: dict, entries: dict, raw_nodes: dict) ->
             model = SweepModel.model_validate(body if body is not None else {})
             ok = True
         except ValidationError as exc:
-            validator._pydantic_issues(exc, base, None, SweepModel)
+            validator.pydantic_issues(exc, base, None, SweepModel)
             known = {k: v for k, v in body.items() if k in SweepModel.model_fields} if isinstance(body, dict) else {}
             try:  # an unknown key alone: the rest is still checked, so every problem is reported at once
                 model = SweepModel.model_validate(known)

@@ -101,6 +101,40 @@ class _ScalarLoader(yaml.SafeLoader):
 _SCALAR_LOADER = _ScalarLoader()
 
 
+INDENTATION_PROBLEMS = (
+    "expected <block end>",
+    "mapping values are not allowed here",
+    "did not find expected key",
+    "found character '\\t'",
+    "found a tab character",
+)
+
+
+def indentation_hint(text: str, problem: str, mark) -> str:
+    """What a parser's words about block structure usually mean in a recipe: a key indented too much or too
+    little, or a tab. Names the line and the column its neighbours start at."""
+    if not mark or not any(p in problem for p in INDENTATION_PROBLEMS):
+        return ""
+    lines = text.splitlines()
+    row = min(mark.line, len(lines) - 1)
+    if "\t" in lines[row][: len(lines[row]) - len(lines[row].lstrip())]:
+        return f"; line {row + 1} is indented with a tab: indent with spaces only"
+    indent = len(lines[row]) - len(lines[row].lstrip(" "))
+    above = next(
+        (
+            len(line) - len(line.lstrip(" "))
+            for line in reversed(lines[:row])
+            if line.strip() and not line.lstrip().startswith("#")
+        ),
+        None,
+    )
+    context = f" (the line above starts at column {above + 1})" if above is not None else ""
+    return (
+        f"; check the indentation of line {row + 1}: it starts at column {indent + 1}{context}, and keys of "
+        "one mapping must start in the same column (a value under a key: 2 spaces further in)"
+    )
+
+
 def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     """Parse ``text`` (named ``file`` in messages) into plain values and their source map."""
     source = SourceMap(file)
@@ -109,7 +143,8 @@ def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         loc = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
-        raise RecipeError([Issue(loc, f"YAML syntax error: {exc.problem or exc}")]) from None
+        hint = indentation_hint(text, exc.problem or "", mark)
+        raise RecipeError([Issue(loc, f"YAML syntax error: {exc.problem or exc}{hint}")]) from None
     except yaml.reader.ReaderError as exc:  # a character YAML does not allow (e.g. a NUL byte)
         line = text.count("\n", 0, exc.position) + 1
         column = exc.position - (text.rfind("\n", 0, exc.position) + 1) + 1
@@ -146,12 +181,33 @@ def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     return value, source
 
 
+def nearest_recipe(path: Path) -> str | None:
+    """The recipe a missing path most likely meant: ``NAME`` or ``NAME.yaml`` in its folder or in ``graphs/``,
+    else the closest name among the .yaml files there."""
+    import difflib
+
+    stem = path.name[: -len(".yaml")] if path.name.endswith(".yaml") else path.name
+    folders = [path.parent, Path("graphs")] if path.parent != Path("graphs") else [path.parent]
+    for folder in folders:
+        if (folder / f"{stem}.yaml").is_file():
+            return str(folder / f"{stem}.yaml")
+    for folder in folders:
+        names = sorted(p.stem for p in folder.glob("*.yaml")) if folder.is_dir() else []
+        match = difflib.get_close_matches(stem, names, n=1, cutoff=0.6)
+        if match:
+            return str(folder / f"{match[0]}.yaml")
+    return None
+
+
 def load_yaml_file(path: str | Path) -> tuple[Any, SourceMap]:
     path = Path(path)
     try:
         data = path.read_bytes()
     except OSError as exc:
-        raise RecipeError([Issue(Location(str(path)), f"cannot read recipe: {exc.strerror or exc}")]) from None
+        near = nearest_recipe(path) if isinstance(exc, FileNotFoundError) else None
+        raise RecipeError(
+            [Issue(Location(str(path)), f"cannot read recipe: {exc.strerror or exc}", suggestion=near)]
+        ) from None
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:

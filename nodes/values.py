@@ -1,5 +1,6 @@
 """The domain vocabulary of the built-in nodes: sphere sets, volumes, distance fields, element
-libraries, placements, aggregates, particles, materials and shaded scenes (SPEC §1–4).
+libraries, placements, aggregates, particles, vessels, rice varieties, cooked materials, materials and
+shaded scenes (SPEC §1–4).
 
 Frozen dataclasses of numpy arrays plus plain fields, like the engine's generic values
 (``nodegraph.values``: Mesh, Image, FileSet, Table), so the engine stores, hashes and freezes them
@@ -270,6 +271,63 @@ class Material:
     transmission_roughness: float = 0.0
     emission: tuple[float, float, float] = (0.0, 0.0, 0.0)
     emission_strength: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class RiceVariety:
+    """A rice variety preset of SPEC §1.1 (G §3.1.1): its name (the element kind of its library), the length
+    factor on the base grain and the expansion P."""
+
+    name: str
+    length_factor: float
+    expansion: float
+
+
+@dataclass(frozen=True, eq=False)
+class CookedMaterial:
+    """One cooked rice: its variety and water content and the constants both the simulation and the shading
+    derive from them — SPEC §3 (moisture: stiffness, friction and adhesion factors, G §2.2) and §4 (CDRF σ₀
+    from a log–log line in the water content; the principled material ``optics``)."""
+
+    variety: str
+    water_content: float  # % of grain mass
+    stiffness_scale: float
+    friction_scale: float
+    adhesion_scale: float
+    sigma0: float  # rad·mm: CDRF blur per unit curvature
+    optics: Material
+
+
+@dataclass(frozen=True, eq=False)
+class Vessel:
+    """A bowl's cavity as numbers, so regions can be derived from it (``vessel_region``) and elements tested
+    against it (``measure``): rim radius, cavity depth below the rim, wall thickness, fill height (share of the
+    depth) and mound above the fill plane (mm), the translation, and the mesh resolution level of its shape.
+    ``kind`` is 'bowl', or the shape's kind when it is no vessel (then the numbers are 0)."""
+
+    kind: str
+    radius: float = 0.0
+    depth: float = 0.0
+    wall: float = 0.0
+    fill: float = 0.0
+    mound: float = 0.0
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    resolution: int = 4
+
+    @property
+    def fill_z(self) -> float:
+        """Height of the fill plane (the rim is at z = offset z)."""
+        return self.offset[2] - self.depth + self.fill * self.depth
+
+    def outside(self, points: np.ndarray, margin: float = 0.0) -> np.ndarray:
+        """Which points lie outside the vessel: below the rim, outside the cavity's half-ellipsoid (through the
+        wall or under the bowl); above it, further from the axis than the rim. ``margin`` (mm) widens the
+        cavity by that much on every side."""
+        p = np.asarray(points, float) - np.asarray(self.offset, float)
+        r = np.hypot(p[:, 0], p[:, 1])
+        a, b = self.radius + margin, self.depth + margin
+        below = (r / a) ** 2 + (np.minimum(p[:, 2], 0.0) / b) ** 2 > 1.0
+        return np.where(p[:, 2] < 0.0, below, r > a)
 
 
 @dataclass(frozen=True, eq=False)

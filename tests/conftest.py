@@ -6,13 +6,14 @@ import pytest
 
 @pytest.fixture(scope="session")
 def scene_inputs():
-    from xpbd_scenes import small_food_scene
+    from nodes.simulation.scenes import small_food_scene
 
     return small_food_scene()
 
 
 @pytest.fixture(scope="session")
 def shaded(scene_inputs):
+    from nodes.material.cooked import cooked_material
     from nodes.shading import shade
 
-    return shade.call(**scene_inputs)
+    return shade.call(**scene_inputs, material=cooked_material())

@@ -4,8 +4,8 @@ from pathlib import Path
 
 
 def quick_sizes() -> dict[str, list[str]]:
-    """``benchmarks/bench_scenes.py``'s reduced sizes, one list of ``--set`` overrides per recipe, shared
-    by the benchmark and the tests that run recipes small."""
+    """``benchmarks/bench_scenes.py``'s reduced sizes (each recipe's ``draft:`` block with a smaller preview), one
+    list of ``--set`` overrides per recipe, shared by the benchmark and the tests that run recipes small."""
     import importlib.util
 
     path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_scenes.py"

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from nodegraph import Out, Param, node
+from nodegraph import In, Moved, Out, Param, node
 from nodegraph.values import Mesh
 
+from ..values import RiceVariety
+
 SHAPES = ("rice", "ikura", "ice_flake", "file")
-VARIETIES = ("indica", "japonica", "aromatic")
 DEFAULT_SIZE = {"rice": (5.0, 3.0, 2.0), "ice_flake": (4.0, 3.0, 0.4)}
 
 
@@ -23,17 +24,18 @@ def _check(p: dict) -> list[tuple[str, str]]:
 
 @node(
     "base_mesh",
-    version=1,
+    # 2: the variety is an input (a rice_variety node), no longer a parameter
+    version=2,
+    inputs={
+        "variety": In(
+            RiceVariety,
+            "rice: the variety whose length factor multiplies size[0] (SPEC §1.1); unwired: factor 1",
+            optional=True,
+        )
+    },
     outputs={"mesh": Out(Mesh, "closed outward element mesh, centred, long axis x, mm")},
     params={
         "shape": Param(str, "rice", "which base model", choices=SHAPES),
-        "variety": Param(
-            str,
-            "japonica",
-            "rice variety preset: length factor (indica 1.8, japonica 1.0, "
-            "aromatic 0.7) applied to size[0] (SPEC §1.1)",
-            choices=VARIETIES,
-        ),
         "size": Param(
             tuple[float, float, float],
             None,
@@ -67,12 +69,13 @@ def _check(p: dict) -> list[tuple[str, str]]:
         "subdivisions": Param(int, 2, "icosphere subdivisions of rice/ikura (2 → 320 faces per shell)", range=(0, 5)),
     },
     check=_check,
+    moved={"variety": Moved("variety", "variety", "rice_variety")},
 )
 def base_mesh(
     ctx,
+    variety=None,
     *,
     shape,
-    variety,
     size,
     bluntness,
     bend,
@@ -87,17 +90,20 @@ def base_mesh(
 ):
     """Low-resolution element model: rice grain preset, ikura egg (membrane + yolk parts), ice flake, or a file.
 
-    Rice: a blunted, slightly bent ellipsoid; the variety multiplies the length (SPEC §1.1), its
+    Rice: a blunted, slightly bent ellipsoid; the variety (input) multiplies the length (SPEC §1.1), its
     expansion P is applied later by ``expand``. Ikura: parts 0 = outer membrane, 1 = yolk, both
     outward shells. Files are repaired (merge, drop degenerate faces, un-invert, recentre) or refused.
     """
     from . import grain_shapes, mesh_files
 
+    if variety is not None and shape != "rice":
+        raise ValueError(f"input 'variety' ({variety.name}) is only read by shape 'rice' (shape is '{shape}')")
     if shape == "rice":
         length, width, thickness = size or DEFAULT_SIZE["rice"]
-        length *= grain_shapes.RICE_VARIETIES[variety].length_factor
+        if variety is not None:
+            length *= variety.length_factor
         vertices, faces = grain_shapes.rice_grain(length, width, thickness, bluntness, bend, subdivisions)
-        return Mesh(vertices, faces, name=variety)
+        return Mesh(vertices, faces, name="rice" if variety is None else variety.name)
     if shape == "ikura":
         vertices, faces, parts = grain_shapes.ikura_egg(diameter, lipid_fraction, subdivisions + 1)
         return Mesh(vertices, faces, parts=parts, name="ikura")

@@ -5,16 +5,25 @@ from __future__ import annotations
 from nodegraph import In, Out, Param, node
 from nodegraph.values import Mesh
 
-from ..values import ElementLibrary
+from ..values import ElementLibrary, RiceVariety
 
 
 @node(
     "element_library",
-    version=1,
-    inputs={"meshes": In(Mesh, "element meshes (every variant of a family, or a list of wires)", many=True)},
+    # 2: the kind can come from a rice variety (input 'variety')
+    version=2,
+    inputs={
+        "meshes": In(Mesh, "element meshes (every variant of a family, or a list of wires)", many=True),
+        "variety": In(RiceVariety, "rice: the variety, whose name is the element kind", optional=True),
+    },
     outputs={"library": Out(ElementLibrary, "meshes plus per-element props")},
     params={
-        "kind": Param(str, "grain", "name of the element kind (e.g. japonica)"),
+        "kind": Param(
+            str,
+            None,
+            "name of the element kind (e.g. ikura); unset: the wired variety's name, else 'grain'",
+            nullable=True,
+        ),
         "refine_range": Param(
             float,
             1.0,
@@ -23,7 +32,7 @@ from ..values import ElementLibrary
         ),
     },
 )
-def element_library(ctx, meshes, *, kind, refine_range):
+def element_library(ctx, meshes, variety=None, *, kind, refine_range):
     """Gather element meshes, checking each is closed and outward, with props per element.
 
     props: expansion (P), volume (mm³), circumradius and inradius (mm, about the centroid),
@@ -33,5 +42,11 @@ def element_library(ctx, meshes, *, kind, refine_range):
 
     if not meshes:
         raise ValueError("element_library needs at least one mesh")
+    if variety is not None and kind is not None:
+        raise ValueError(
+            f"kind '{kind}' is given and so is the variety '{variety.name}', which names the kind: "
+            "leave the parameter kind unset"
+        )
+    kind = variety.name if variety is not None else kind or "grain"
     props = element_props(list(meshes))
     return ElementLibrary(kind, tuple(meshes), props, refine_range)

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from nodegraph import In, Out, Param, node
+from nodegraph import In, Moved, Out, Param, node
 
-from ..values import DistanceField
-from .base_mesh import VARIETIES
+from ..values import DistanceField, RiceVariety
 from .element_values import ExpandedField
 
 
@@ -16,8 +15,17 @@ def _check(p: dict) -> list[tuple[str, str]]:
 
 @node(
     "expand",
-    version=1,
-    inputs={"field": In(DistanceField, "signed distance field of the grain")},
+    # 2: the variety is an input (a rice_variety node), no longer a parameter
+    version=2,
+    inputs={
+        "field": In(DistanceField, "signed distance field of the grain"),
+        "variety": In(
+            RiceVariety,
+            "when wired, P is the variety's (indica 1.2, japonica 1.5, aromatic 1.5; SPEC §1.1) "
+            "instead of the range 'expansion'",
+            optional=True,
+        ),
+    },
     outputs={"field": Out(DistanceField, "the field scaled by P about the grain centroid (ExpandedField)")},
     params={
         "expansion": Param(
@@ -26,27 +34,20 @@ def _check(p: dict) -> list[tuple[str, str]]:
             "P drawn uniformly per element in [low, high] (G: 1–1.5); low = high fixes P",
             range=(0.1, 10.0),
         ),
-        "variety": Param(
-            str,
-            None,
-            "use the variety's P instead (indica 1.2, japonica 1.5, aromatic 1.5; SPEC §1.1)",
-            choices=VARIETIES,
-            nullable=True,
-        ),
     },
     random=True,
     check=_check,
+    moved={"variety": Moved("variety", "variety", "rice_variety")},
 )
-def expand(ctx, field, *, expansion, variety):
+def expand(ctx, field, variety=None, *, expansion):
     """Scale the grain by P about its centroid (G eq. 6); P per element from ``expansion`` or the variety.
 
     The grid and the distances are scaled together, exactly: no resampling.
     """
-    from .grain_shapes import RICE_VARIETIES
     from .level_set_mesh import expand_field
 
     if variety is not None:
-        p = RICE_VARIETIES[variety].expansion
+        p = variety.expansion
     else:
         lo, hi = expansion
         p = float(ctx.rng.uniform(lo, hi)) if hi > lo else float(lo)

@@ -7,24 +7,15 @@ Only numpy here; the meshes come from an icosphere built by subdivision, so no l
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from ..values import RiceVariety
 
-@dataclass(frozen=True)
-class RiceVariety:
-    """A variety preset of SPEC §1.1: length factor on the base grain and expansion P."""
-
-    length_factor: float
-    expansion: float
-
-
-#: SPEC §1.1 table (G §3.1.1): indica 1.8 / 1.2, japonica 1.0 / 1.5, aromatic 0.7 / 1.5.
+#: SPEC §1.1 table (G §3.1.1): indica 1.8 / 1.2, japonica 1.0 / 1.5, aromatic 0.7 / 1.5 (length factor / P).
 RICE_VARIETIES = {
-    "indica": RiceVariety(1.8, 1.2),
-    "japonica": RiceVariety(1.0, 1.5),
-    "aromatic": RiceVariety(0.7, 1.5),
+    "indica": RiceVariety("indica", 1.8, 1.2),
+    "japonica": RiceVariety("japonica", 1.0, 1.5),
+    "aromatic": RiceVariety("aromatic", 0.7, 1.5),
 }
 
 

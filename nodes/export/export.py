@@ -31,7 +31,9 @@ def _check(params):
 
 @node(
     "export",
-    version=2,  # 2: KHR sheen, diffuse transmission, volume; _CDRF_SIGMA instead of COLOR_0; USD principled attributes
+    # 3: clean USD prim names, USD opacity 1 − transmission, the whole look in glTF extras; 2: KHR sheen,
+    # diffuse transmission, volume; _CDRF_SIGMA instead of COLOR_0; USD principled attributes
+    version=3,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={

@@ -7,7 +7,9 @@ glTF's Y-up metres. The materials carry what the preview renders (``mitsuba_scen
 ice and syrup as transmission + volume (IOR, attenuation), rice and yolk as diffuse transmission (the CDRF's
 translucency at the material's median curvature) with sheen and clearcoat, the bowl's glaze as clearcoat.
 No ``COLOR_0``: the CDRF vertex colours hold lighting, which a viewer multiplying them into the base colour
-would light again; the CDRF's per-vertex σ travels as the custom attribute ``_CDRF_SIGMA`` (rad).
+would light again; the CDRF's per-vertex σ travels as the custom attribute ``_CDRF_SIGMA`` (rad). Each material's
+``extras`` carry its whole principled look (``look.principled_attributes``), which Blender keeps as custom
+properties for the add-on in ``blender/nodegraph_import``.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import struct
 import numpy as np
 
 from ..values import Material, ShadedScene
+from .look import PREFIX, principled_attributes
 
 FLOAT, UINT = 5126, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
@@ -74,6 +77,11 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
             ext["KHR_materials_emissive_strength"] = {"emissiveStrength": material.emission_strength}
     if ext:
         out["extensions"] = ext
+    # the whole look under the names the USD file uses, for the Blender add-on (blender/nodegraph_import)
+    out["extras"] = {
+        PREFIX + k: list(v) if isinstance(v, tuple) else v
+        for k, v in principled_attributes(material, translucency).items()
+    }
     return out, set(ext)
 
 

@@ -2,9 +2,15 @@
 
 Z-up, millimetres (``metersPerUnit`` 0.001). Per-vertex CDRF colours go to ``primvars:displayColor`` (the
 fallback colour of viewers without materials) and the CDRF's per-vertex σ to ``primvars:cdrf_sigma``;
-each material's principled parameters map onto UsdPreviewSurface (transmission has no input there,
-so it lowers ``opacity``), and the full principled set the preview renders (sheen, transmission, diffuse
-transmission, attenuation) is kept on the Material prim as ``nodegraph:principled:*`` attributes.
+each material's principled parameters map onto UsdPreviewSurface. Transmission has no input there: a
+transmissive material (egg, ice, syrup) gets ``opacity`` = 1 − transmission with its ``ior``, which the
+UsdPreviewSurface specification reads as a translucent surface that still reflects (clear glass at 0), and which
+renderers that translate it to transmission render as refraction. Blender's importer reads ``opacity`` as
+alpha instead; the add-on in ``blender/nodegraph_import`` turns it back into transmission. The full principled
+set the preview renders (subsurface weight and radius, sheen, transmission, diffuse transmission) is kept on the
+Material prim as ``nodegraph:principled:*`` attributes (Blender's importer keeps them as the material's custom
+properties, which the add-on reads). Prim names are the meshes' and materials' own names made valid for USD
+(``ikura/0003/yolk`` → ``ikura_0003_yolk``), so importers show them as the recipe names them.
 ``.usda`` comes from the in-memory layer; ``.usdc`` (crate) can only be
 written to a path, so it goes through a private temporary directory and is read back as bytes.
 """
@@ -18,11 +24,25 @@ from pathlib import Path
 import numpy as np
 
 from ..values import Material, ShadedScene
+from .look import PREFIX, principled_attributes
 
 
-def prim_name(text: str, k: int) -> str:
-    """A valid, unique USD prim name from a mesh or material name."""
-    return f"m{k:05d}_" + (re.sub(r"[^A-Za-z0-9_]", "_", text) or "mesh")
+def prim_names(texts, fallback: str) -> list[str]:
+    """Valid, unique USD prim names from mesh or material names, in order: characters USD does not allow
+    become ``_``, a leading digit gets a ``_`` before it, an empty name is ``fallback``; a repeated name gets
+    ``_2``, ``_3``, ... (the first keeps its name)."""
+    names, taken = [], set()
+    for text in texts:
+        base = re.sub(r"[^A-Za-z0-9_]", "_", text) or fallback
+        if base[0].isdigit():
+            base = "_" + base
+        name, k = base, 1
+        while name in taken:
+            k += 1
+            name = f"{base}_{k}"
+        taken.add(name)
+        names.append(name)
+    return names
 
 
 def _material(stage, path: str, material: Material, translucency: float):
@@ -42,33 +62,18 @@ def _material(stage, path: str, material: Material, translucency: float):
         "clearcoat": (Sdf.ValueTypeNames.Float, material.clearcoat),
         "clearcoatRoughness": (Sdf.ValueTypeNames.Float, material.clearcoat_roughness),
         "ior": (Sdf.ValueTypeNames.Float, material.ior),
-        "opacity": (Sdf.ValueTypeNames.Float, 1.0 - 0.5 * material.transmission),
+        "opacity": (Sdf.ValueTypeNames.Float, 1.0 - material.transmission),
     }
     for name, (kind, value) in inputs.items():
         shader.CreateInput(name, kind).Set(value)
     look.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
     prim = look.GetPrim()
-    for name, value in _principled(material, translucency).items():
+    for name, value in principled_attributes(material, translucency).items():
         kind = Sdf.ValueTypeNames.Color3f if isinstance(value, tuple) else Sdf.ValueTypeNames.Float
-        prim.CreateAttribute(f"nodegraph:principled:{name}", kind, custom=True).Set(
+        prim.CreateAttribute(PREFIX + name, kind, custom=True).Set(
             Gf.Vec3f(*value) if isinstance(value, tuple) else float(value)
         )
     return look
-
-
-def _principled(material: Material, translucency: float) -> dict:
-    """What UsdPreviewSurface cannot say: the rest of the principled set (colours as tuples)."""
-    return {
-        "subsurface": material.subsurface,
-        "subsurfaceColor": tuple(float(c) for c in material.subsurface_color),
-        "subsurfaceRadius": tuple(float(c) for c in material.subsurface_radius),
-        "diffuseTransmission": translucency,
-        "transmission": material.transmission,
-        "transmissionRoughness": material.transmission_roughness,
-        "sheen": material.sheen,
-        "sheenTint": material.sheen_tint,
-        "specular": material.specular,
-    }
 
 
 def build_stage(scene: ShadedScene):
@@ -85,13 +90,15 @@ def build_stage(scene: ShadedScene):
 
     weights = material_translucency(scene)
     looks = [
-        _material(stage, f"/Scene/Looks/{prim_name(m.name, k)}", m, weights[k]) for k, m in enumerate(scene.materials)
+        _material(stage, f"/Scene/Looks/{name}", m, weights[k])
+        for k, (m, name) in enumerate(zip(scene.materials, prim_names([m.name for m in scene.materials], "material")))
     ]
+    names = prim_names([mesh.name for mesh in scene.meshes], "mesh")
     UsdGeom.Scope.Define(stage, "/Scene/Elements")
     for k, mesh in enumerate(scene.meshes):
         if len(mesh.faces) == 0:
             continue
-        geom = UsdGeom.Mesh.Define(stage, f"/Scene/Elements/{prim_name(mesh.name, k)}")
+        geom = UsdGeom.Mesh.Define(stage, f"/Scene/Elements/{names[k]}")
         points = np.asarray(mesh.vertices, np.float32)
         geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
         geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(mesh.faces), 3, np.int32)))

@@ -12,6 +12,39 @@ from nodegraph.values import Mesh, Table
 from ..values import ElementLibrary, Placement
 
 
+def _has_candidates(mode, vertices, faces, r, candidate_spacing, inset) -> bool:
+    """Whether ``r`` leaves at least one candidate point (a fixed probe seed: only the count matters)."""
+    from .candidates import volume_candidates
+
+    if mode == "surface":
+        return True
+    points, _ = volume_candidates(vertices, faces, candidate_spacing * r, np.random.default_rng(0))
+    if inset > 0 and len(points):
+        import igl
+
+        depth = -igl.signed_distance(points, vertices, faces, sign_type=igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER)[0]
+        points = points[depth >= inset]
+    return len(points) > 0
+
+
+def _fitting_r_hint(mode, vertices, faces, r_fails, candidate_spacing, inset) -> str:
+    """A hint that is true: the largest r (within 5 %) below ``r_fails`` that finds candidate points in this
+    shape, found by halving and then bisecting (a thin shape in volume mode fits a far smaller r than its
+    extent suggests)."""
+    lo, hi = None, r_fails
+    for _ in range(16):
+        if _has_candidates(mode, vertices, faces, hi / 2, candidate_spacing, inset):
+            lo, hi = hi / 2, hi
+            break
+        hi /= 2
+    if lo is None:
+        return "lower r, or use mode: surface (the shape may be too thin to hold a candidate grid)"
+    while hi - lo > 0.05 * lo:
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if _has_candidates(mode, vertices, faces, mid, candidate_spacing, inset) else (lo, mid)
+    return f"r ≤ {lo:.3g} finds candidate points in this shape (or lower candidate_spacing)"
+
+
 @node(
     "poisson_place",
     version=4,
@@ -85,10 +118,11 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
     if r is None:
         r = r_scale * _radius_from_elements(elements)
     extent = float(np.ptp(solid.vertices, axis=0).max())
+    vertices, faces = np.asarray(solid.vertices), np.asarray(solid.faces)
     if 2.0 * r > extent:
         raise ValueError(
             f"r: {r:g} is larger than the shape (points must be 2r = {2 * r:g} apart, the shape spans "
-            f"{extent:g}); use r < {extent / 2:g}"
+            f"{extent:g}); " + _fitting_r_hint(mode, vertices, faces, extent / 2, candidate_spacing, inset)
         )
     spacing = candidate_spacing * r
     estimate = estimate_candidates(mode, solid.area, solid.volume, spacing)
@@ -98,7 +132,6 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
             f"(~{estimate * BYTES_PER_CANDIDATE / 2**20:,.0f} MiB), over max_candidates {max_candidates:,}; "
             "raise r or candidate_spacing, or max_candidates if the memory is there"
         )
-    vertices, faces = np.asarray(solid.vertices), np.asarray(solid.faces)
     if mode == "surface":
         points, normals = surface_candidates(vertices, faces, spacing, candidates, ctx.rng)
     else:
@@ -111,7 +144,10 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
             )[0]
             points, normals = points[depth >= inset], normals[depth >= inset]
     if len(points) == 0:
-        raise ValueError(f"r: no candidate point fits inside the shape at spacing {spacing:g}; lower r")
+        raise ValueError(
+            f"r: no candidate point fits inside the shape at spacing {spacing:g} (candidate_spacing × r); "
+            + _fitting_r_hint(mode, vertices, faces, r, candidate_spacing, inset)
+        )
     placed = dart_throw(points, ctx.rng.permutation(len(points)), 2.0 * r)
     placement = Placement(points[placed], normals[placed])
     ratio = min_distance_ratio(placement.positions, 2.0 * r)

@@ -1,6 +1,7 @@
 """The ``measure`` node: a result's quality as a Table, from the element meshes a renderer receives —
 mesh interpenetration over touching pairs (p50 / p95 / max in element lengths), contacts per element,
-packing fraction and fill height (issue 17's targets: p95 ≤ 3 %, max ≤ 10 % after relaxation).
+packing fraction and fill height (issue 17's targets: p95 ≤ 3 %, max ≤ 10 % after relaxation), and how many
+elements ended outside their vessel (a warning names them: a region that does not fit its bowl).
 """
 
 from __future__ import annotations
@@ -9,19 +10,30 @@ from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
 
-from ..values import Aggregate
+from ..values import Aggregate, Vessel
 
 
 @node(
     "measure",
-    version=2,
+    # 3: outside_vessel
+    version=3,
     random=True,
-    inputs={"aggregates": In(Aggregate, "the final aggregates (their element meshes are measured)", many=True)},
+    inputs={
+        "aggregates": In(Aggregate, "the final aggregates (their element meshes are measured)", many=True),
+        "vessels": In(
+            Vessel,
+            "the bowls the elements belong in (a shape node's vessel output): elements whose centre ends past "
+            "the outer surface of every one are counted and warned about",
+            optional=True,
+            many=True,
+        ),
+    },
     outputs={
         "table": Out(
             Table,
             "one row: elements, overlap p50/p95/max over touching pairs (element lengths), share deeper than 1 %, "
-            "contacts per element, packing fraction (element volume / hull), fill height",
+            "contacts per element, packing fraction (element volume / hull), fill height, elements outside the "
+            "vessels (0 without vessels)",
         )
     },
     params={
@@ -33,8 +45,9 @@ from ..values import Aggregate
         ),
     },
 )
-def measure(ctx, aggregates, *, sample, contact):
-    """Mesh-level quality of the aggregates together (elements of one may touch another's)."""
+def measure(ctx, aggregates, vessels=None, *, sample, contact):
+    """Mesh-level quality of the aggregates together (elements of one may touch another's); a warning when
+    elements end outside their vessels."""
     import numpy as np
     import trimesh
 
@@ -75,5 +88,32 @@ def measure(ctx, aggregates, *, sample, contact):
         "contacts_per_element": np.array([stats.contacts.mean()]),
         "packing_fraction": np.array([sum(volumes) / hull]),
         "fill_height": np.array([np.percentile(tops, 95) - min(lows)]),
+        "outside_vessel": np.array([_outside_vessels(ctx, np.array(centres), vessels or [])]),
     }
     return Table(columns)
+
+
+def _outside_vessels(ctx, centres, vessels) -> int:
+    """How many element centres lie outside every bowl in ``vessels``: past its wall's outer surface (a grain on
+    the rim's lip is in the bowl; ``Vessel.outside``); warns when any do."""
+    import warnings
+
+    import numpy as np
+
+    bowls = [v for v in vessels if v.kind == "bowl"]
+    if not bowls:
+        return 0
+    outside = np.logical_and.reduce([v.outside(centres, margin=v.wall) for v in bowls])  # past the wall's outside
+    count = int(outside.sum())
+    if count:
+        v = bowls[0]
+        message = (
+            f"{ctx.node_id or 'measure'}: {count} of {len(centres)} elements ended outside their vessel (rim radius "
+            f"{v.radius:g} mm, depth {v.depth:g} mm): a region they were placed in does not fit the bowl; derive it "
+            "from the vessel (vessel_region)"
+        )
+        if ctx.reporter is not None:
+            ctx.reporter.warn(message)
+        else:
+            warnings.warn(message, stacklevel=2)
+    return count

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 WATER_MAX = 24.0  # % — the range G rendered (water absorbed at 5 °C), SPEC §4
+SIGMA0_DRY = 0.15  # rad·mm at 0 % water (the cooked_rice node's default)
+SIGMA0_WET = 1.2  # rad·mm at 24 % water
 SIGMA_MAX = 3.0  # rad — beyond this the kernel is flat over the lit half-circle (f_r ≈ 1/π·…); clamped
 
 

@@ -23,7 +23,7 @@ from .vertex_shading import Light, cdrf_colors
 
 @dataclass(frozen=True)
 class ShadeSettings:
-    water_content: float
+    rice: Material | None  # the cooked material's optics; None: no material wired (then no rice may be shaded)
     sigma0: float
     lights: list[Light]
     ambient: float
@@ -46,7 +46,7 @@ def _materials(settings: ShadeSettings) -> dict[str, tuple[Material, ...]]:
     """Each preset's materials: one for a plain solid, one per part (``materials.PARTS``), one per syrup grade."""
     ice, syrup = mat.ice_materials(settings.syrup_color)
     return {
-        "rice": (mat.rice_material(settings.water_content),),
+        "rice": (settings.rice,),
         "chestnut": (mat.chestnut_material(),),
         "ikura": mat.ikura_materials(),
         "salmon": mat.fish_materials("salmon"),
@@ -72,6 +72,13 @@ def _element_pieces(
         cell = float(np.median([np.ptp(v, axis=0).max() for v in ice_vertices]))  # one element length
         depths = mat.soak_depths(ice_vertices, cell, settings.syrup_spread)
         grade[is_ice] = mat.syrup_levels(depths, settings.syrup_depth, settings.syrup_levels)
+    rice = [k for k in np.unique(p.kinds) if presets[k] == "rice"]
+    if settings.rice is None and rice:
+        kind = kinds[rice[0]]
+        raise ValueError(
+            f"element kind '{kind}' is shaded as rice, whose water content and optics are the cooked material's: "
+            "wire a cooked_rice node into input 'material' (the one the xpbd node reads)"
+        )
     pieces = []
     splits: dict[tuple[int, int], list[tuple[int, np.ndarray, np.ndarray]]] = {}  # per (kind, variant): see _parts
     for i in range(len(p)):

@@ -5,11 +5,11 @@ Thin: checks parameters, builds the lights and the CDRF table, calls ``scene_sha
 
 from __future__ import annotations
 
-from nodegraph.node import In, Out, node
+from nodegraph.node import In, Moved, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
 
-from ..values import Aggregate, ShadedScene
+from ..values import Aggregate, CookedMaterial, ShadedScene
 
 RGB = tuple[float, float, float]
 
@@ -29,9 +29,16 @@ def _check(params):
     # 3: per-vertex CDRF σ in the scene (renderers evaluate the CDRF), sheen; ikura membrane a clear dielectric
     # 4: syrup graded by depth below the mound's top (syrup_depth, _spread, _levels); chestnut, salmon, tuna presets
     # 5: plain ice keeps ≈ 99 % of the light per flake crossing (was 90–95 %: 5 mm of ice per 0.4 mm flake)
-    version=5,
+    # 6: water content and σ₀ come from the cooked material (input 'material')
+    version=6,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
+        "material": In(
+            CookedMaterial,
+            "the cooked rice (a cooked_rice node, the one the xpbd node reads): σ₀ and the rice material; "
+            "needed when rice is shaded (a scene without rice uses the cooked_rice defaults' σ₀)",
+            optional=True,
+        ),
         "scenery": In(Mesh, "other meshes to show, e.g. the bowl (glazed ceramic)", optional=True, many=True),
     },
     outputs={
@@ -42,23 +49,6 @@ def _check(params):
         )
     },
     params={
-        "water_content": Param(
-            float,
-            15.0,
-            "water absorbed by the rice (G rendered 0–24 %, water at 5 °C): sets σ₀ and the rice material",
-            range=(0.0, 24.0),
-            units="%",
-        ),
-        "sigma0_dry": Param(
-            float,
-            0.15,
-            "σ₀ at 0 % water: CDRF blur per unit curvature (σ = σ₀·|κ|)",
-            range=(1e-4, 10.0),
-            units="rad·mm",
-        ),
-        "sigma0_wet": Param(
-            float, 1.2, "σ₀ at 24 % water (log–log line between the two)", range=(1e-4, 10.0), units="rad·mm"
-        ),
         "light_directions": Param(
             list[RGB], [(-0.45, -0.6, 0.75)], "directions towards each distant light (normalised)", range=(-1.0, 1.0)
         ),
@@ -104,15 +94,14 @@ def _check(params):
         ),
     },
     check=_check,
+    moved={name: Moved("material", name, "cooked_rice") for name in ("water_content", "sigma0_dry", "sigma0_wet")},
 )
 def shade(
     ctx,
     aggregates,
+    material=None,
     scenery=None,
     *,
-    water_content,
-    sigma0_dry,
-    sigma0_wet,
     light_directions,
     light_colors,
     light_intensities,
@@ -125,8 +114,10 @@ def shade(
     scenery_color,
     table_size,
 ):
-    """Curvature from libigl, CDRF eq. 7–9 with σ₀(water), lights, and a material per element kind/part."""
-    from .cdrf import CdrfTable, sigma0_from_water
+    """Curvature from libigl, CDRF eq. 7–9 with the cooked material's σ₀(water), lights, and a material per
+    element kind/part (rice: the cooked material's)."""
+    from ..simulation.moisture import WATER_CONTENT
+    from .cdrf import SIGMA0_DRY, SIGMA0_WET, CdrfTable, sigma0_from_water
     from .materials import parse_overrides
     from .scene_shading import ShadeSettings, shade_scene
     from .vertex_shading import check_color, make_lights
@@ -134,8 +125,8 @@ def shade(
     check_color(syrup_color, "syrup_color")
     check_color(scenery_color, "scenery_color")
     settings = ShadeSettings(
-        water_content=water_content,
-        sigma0=sigma0_from_water(water_content, sigma0_dry, sigma0_wet),
+        rice=None if material is None else material.optics,
+        sigma0=sigma0_from_water(WATER_CONTENT, SIGMA0_DRY, SIGMA0_WET) if material is None else material.sigma0,
         lights=make_lights(light_directions, light_colors, light_intensities),
         ambient=ambient,
         presets=parse_overrides(presets),

@@ -8,6 +8,8 @@ from nodegraph.node import Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
 
+from ..values import Vessel
+
 KINDS = ("bowl", "onigiri", "sphere", "box", "cylinder", "block")
 
 
@@ -18,9 +20,46 @@ def _check(params: dict) -> list[tuple[str, str]]:
     return issues
 
 
+def _read_ports(nodes) -> set[tuple[str, str]]:
+    """Every (node, port) some node's input reads."""
+    return {(wire.node, wire.port) for entry in nodes.values() for wires in entry.inputs.values() for wire in wires}
+
+
+def _region_fits_vessels(node_id: str, nodes) -> list[tuple[str, str]]:
+    """A bowl-shaped region stated apart from the recipe's vessel must fit in it (SPEC §2): a region whose rim
+    reaches past the vessel's outer surface, or whose bottom lies under it, puts elements outside the bowl. A
+    bowl is a vessel when its container or vessel output is read, a region when only its mesh is."""
+    read = _read_ports(nodes)
+    me = nodes[node_id].params
+    if me["kind"] != "bowl" or (node_id, "container") in read or (node_id, "vessel") in read:
+        return []
+    vessels = {
+        other: entry.params
+        for other, entry in nodes.items()
+        if entry.spec.type_name == "shape"
+        and entry.params["kind"] == "bowl"
+        and ((other, "container") in read or (other, "vessel") in read)
+    }
+    problems = []
+    for other, v in vessels.items():
+        reach, bottom = v["size"] + v["wall"], v["offset"][2] - v["depth"] - v["wall"]
+        apart = float(np.hypot(me["offset"][0] - v["offset"][0], me["offset"][1] - v["offset"][1]))
+        tolerance = 1e-6 * reach
+        if apart + me["size"] <= reach + tolerance and me["offset"][2] - me["depth"] >= bottom - tolerance:
+            return []
+        problems.append(
+            f"the bowl region '{node_id}' (rim radius {me['size']:g} mm, depth {me['depth']:g} mm) does not fit in "
+            f"the vessel '{other}' (rim radius {v['size']:g} + wall {v['wall']:g} mm, depth {v['depth']:g} + "
+            f"{v['wall']:g} mm): elements placed in it would end outside the bowl; derive the region from the "
+            f"vessel instead (type vessel_region, inputs: {{vessel: {other}.vessel}})"
+        )
+    return [("size", problems[0])] if problems else []
+
+
 @node(
     "shape",
-    version=2,
+    # 3: the vessel output (a bowl's numbers, for vessel_region and measure)
+    version=3,
     outputs={
         "mesh": Out(
             Mesh, "the closed region the elements fill (for a bowl: the cavity to the fill height plus the mound)"
@@ -28,6 +67,11 @@ def _check(params: dict) -> list[tuple[str, str]]:
         "container": Out(
             Mesh,
             "the vessel as a closed solid for a bowl, an open-top tray for a block (collider); empty for other kinds",
+        ),
+        "vessel": Out(
+            Vessel,
+            "a bowl's cavity as numbers (rim radius, depth, wall, fill, mound, offset): regions derived from it "
+            "(vessel_region) follow it, measure tests elements against it; kind only for other shapes",
         ),
     },
     params={
@@ -72,6 +116,7 @@ def _check(params: dict) -> list[tuple[str, str]]:
         ),
     },
     check=_check,
+    check_recipe=_region_fits_vessels,
 )
 def shape(
     ctx,
@@ -119,4 +164,9 @@ def shape(
         if container is None
         else Mesh.from_trimesh(container, name=f"{kind}_container")
     )
-    return {"mesh": Mesh.from_trimesh(mesh, name=kind), "container": out_container}
+    vessel = (
+        Vessel("bowl", size, depth, wall, fill, mound, tuple(float(v) for v in offset), resolution)
+        if kind == "bowl"
+        else Vessel(kind)
+    )
+    return {"mesh": Mesh.from_trimesh(mesh, name=kind), "container": out_container, "vessel": vessel}

@@ -83,6 +83,8 @@ class PairBuffers:
     moved: np.ndarray  # (n,)
     allowance: np.ndarray  # per list entry, the tolerated overlap (``contact_constraints``); empty without 'contact'
     scratch: np.ndarray | None  # (n, 3) the Jacobi adhesion's output ('adhesion'), swapped with the positions
+    # per list entry, where the pair began sticking (``friction``), NaN = not; carried over rebuilds
+    anchor: np.ndarray
     displacement: float = np.inf
 
     @classmethod
@@ -103,6 +105,7 @@ class PairBuffers:
             np.zeros(len(x)),
             np.empty(0),
             np.zeros_like(x) if "adhesion" in effects else None,
+            np.empty((0, 3)),
         )
 
     def stale(self) -> bool:

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..triangle_distance import point_triangle_offset
-from .friction import friction_wall
+from .friction import RELEASE, friction_wall
 
 
 @njit(cache=True)
@@ -210,10 +210,11 @@ def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
 
 
 @njit(cache=True, inline="always")
-def _wall_one(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k, i):
+def _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i):
     """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
     if w[i] <= 0.0:
         return 0.0
+    mu_s, _, anchored = rule
     fx = (x[i, 0] - origin[0]) / pitch
     fy = (x[i, 1] - origin[1]) / pitch
     fz = (x[i, 2] - origin[2]) / pitch
@@ -226,6 +227,9 @@ def _wall_one(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k, i):
     val, gx, gy, gz = sample_phi(phi, origin, pitch, x[i, 0], x[i, 1], x[i, 2])
     pen = r[i] - val
     if pen <= 0.0:
+        if anchored and mu_s > 0.0 and val > (1.0 + 2.0 * RELEASE) * r[i]:
+            anchor[i, 0] = np.nan  # clear of the wall: let go (a particle skipped above keeps a stale anchor,
+            # which its next touch finds too far, slides once and re-anchors)
         return 0.0
     if val < 0.0 and x_prev is not x:
         val, gx, gy, gz = _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i)
@@ -238,20 +242,21 @@ def _wall_one(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k, i):
     x[i, 1] += pen * ny
     x[i, 2] += pen * nz
     if mu_s > 0.0:
-        friction_wall(x, x_prev, i, nx, ny, nz, pen, mu_s, mu_k)
+        friction_wall(x, x_prev, anchor, i, nx, ny, nz, pen, rule)
     return pen / r[i]
 
 
 @njit(cache=True, parallel=True)
-def collider_project(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k):
+def collider_project(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
-    (``friction.friction_wall``, normal load = the penetration; μs = μk = 0 skips friction). In
-    place; particles are independent. ``blocks``: the ``block_minimum`` of φ (particles far from
-    every wall are skipped). Returns max (r − φ)/r."""
+    (``friction.friction_wall``, normal load = the penetration; ``rule`` = (μs, μk, anchored),
+    ``anchor`` (n, 3) per particle; μs = 0 skips friction and leaves the anchors). In place; particles
+    are independent. ``blocks``: the ``block_minimum`` of φ (particles far from every wall are skipped).
+    Returns max (r − φ)/r."""
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):
-        worst[i] = _wall_one(x, x_prev, w, r, phi, origin, pitch, blocks, mu_s, mu_k, i)
+        worst[i] = _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i)
     return worst.max() if n > 0 else 0.0
 
 

@@ -27,10 +27,19 @@ never decays ratchets, since each impact adds overlap that is then tolerated for
 columns ended with coincident particles.
 """
 
+from collections import namedtuple
+
 import numpy as np
 from numba import njit, prange
 
-from .friction import friction_pair
+from .friction import RELEASE, friction_pair
+
+# the sweep's arguments in bundles (a kernel takes at most 12): the neighbour lists' rows, the grid
+# that colours them, the per-entry arrays, and the scalars of one sweep
+PairRows = namedtuple("PairRows", "nbr_start nbr half")
+Colouring = namedtuple("Colouring", "cell_start order dims")
+PairEntries = namedtuple("PairEntries", "allowance anchor")  # per list entry: tolerated overlap, friction anchor
+ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal")
 
 
 @njit(cache=True, inline="always")
@@ -99,36 +108,21 @@ def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
 
 
 @njit(cache=True, inline="always")
-def _project_slab(
-    x,
-    x_prev,
-    awake,
-    pushed,
-    w,
-    r,
-    nbr_start,
-    nbr,
-    half,
-    allowance,
-    wake_step,
-    lift,
-    upright,
-    mu_s,
-    mu_k,
-    normal,
-    order,
-    p0,
-    p1,
-):
+def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0, p1):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
     rows, ``half`` false: each pair from its lower index) but pairs of two asleep particles
     (``awake``, ``integrate.wake_flags``: at rest, nothing to do; with one asleep, ``sleeper_share``):
-    friction when μs > 0 (normal load: the pair's overlap as the sweep meets it, the d of Macklin et
-    al. 2014 §6.1), then the normal correction (``normal``). Friction after the correction let the
-    tangential moves re-open overlaps: the tall-pile test's max penetration rose from 0.14 r to
-    0.20 r; before it, 0.15 r. The load was once the overlap the correction would leave (the
-    tolerated ``allowance``), ≈ 0 at a resting contact once pre-stabilisation removes old overlap:
-    pair friction held nothing and a bar resting on another crept at 0.13 mm/s for ever (issue 11)."""
+    friction when μs > 0 (``friction.friction_pair``; normal load: the pair's overlap as the sweep
+    meets it, the d of Macklin et al. 2014 §6.1), then the normal correction (``rule.normal``).
+    Friction after the correction let the tangential moves re-open overlaps: the tall-pile test's max
+    penetration rose from 0.14 r to 0.20 r; before it, 0.15 r. The load was once the overlap the
+    correction would leave (the tolerated ``allowance``), ≈ 0 at a resting contact once
+    pre-stabilisation removes old overlap: pair friction held nothing and a bar resting on another
+    crept at 0.13 mm/s for ever (issue 11). A pair whose gap opens past ``friction.RELEASE`` of the
+    radii sum lets go of its anchor."""
+    nbr_start, nbr, half = rows
+    allowance, anchor = entries
+    wake_step, lift, upright, mu_s, mu_k, anchored, normal = rule
     for p in range(p0, p1):
         i = order[p]
         for a in range(nbr_start[i], nbr_start[i + 1]):
@@ -140,6 +134,8 @@ def _project_slab(
             nx, ny, nz, d = pair_normal(x, i, j)
             depth = r[i] + r[j] - d
             if depth <= 0.0:
+                if anchored and mu_s > 0.0 and depth < -RELEASE * (r[i] + r[j]):
+                    anchor[a, 0] = np.nan
                 continue
             if awake[i] and awake[j]:
                 share = lifted_share(w, x, i, j, nz, lift, upright)
@@ -149,7 +145,7 @@ def _project_slab(
                 continue
             pen = depth - allowance[a] if normal else 0.0
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
-                friction_pair(x, x_prev, i, j, nx, ny, nz, depth, share, mu_s, mu_k)
+                friction_pair(x, x_prev, anchor, a, i, j, (nx, ny, nz), depth, share, (mu_s, mu_k, anchored))
             if pen > 0.0:
                 si = pen * share
                 sj = pen - si
@@ -187,38 +183,20 @@ def _colour_chunks(cell_start, dims, colour, chunks, out):
 
 
 @njit(cache=True, parallel=True)
-def contact_sweep(
-    x,
-    x_prev,
-    awake,
-    pushed,
-    w,
-    r,
-    nbr_start,
-    nbr,
-    half,
-    cell_start,
-    order,
-    dims,
-    allowance,
-    wake_step,
-    lift,
-    upright,
-    mu_s,
-    mu_k,
-    normal,
-    chunks,
-):
+def contact_sweep(x, x_prev, awake, pushed, w, r, rows, colouring, entries, rule, chunks):
     """One Gauss–Seidel sweep over the touching pairs, in place: the non-penetration constraint
-    C = |x_i − x_j| − r_i − r_j + allowance ≥ 0 (allowance per list entry; ``normal``) with shock
-    propagation ``lift`` (1/length, 0 = off), and in the same pass friction (μs > 0) on each pair
-    just before its normal correction — one sweep instead of a contact sweep plus a Jacobi friction
-    sweep (which cost ≈ 0.5× the contacts again, issue-6 profile). ``cell_start, order, dims``: the
-    grid the lists were built on (``spatial_hash.neighbour_lists``); slabs of cells with the same x
-    index modulo 3 share no particle, so each colour runs as ``chunks`` parallel runs of slabs
-    balanced by particle count. The result does not depend on ``chunks``. Sleeping: pairs of two
-    asleep particles are skipped, an asleep one is held still and marked ``pushed`` by a fast awake
-    partner (``sleeper_share``; ``wake_step`` = inf marks none)."""
+    C = |x_i − x_j| − r_i − r_j + allowance ≥ 0 (``entries.allowance`` per list entry;
+    ``rule.normal``) with shock propagation ``rule.lift`` (1/length, 0 = off), and in the same pass
+    anchored friction (``rule.mu_s`` > 0; ``entries.anchor`` per list entry, ``friction``) on each
+    pair just before its normal correction — one sweep instead of a contact sweep plus a Jacobi
+    friction sweep (which cost ≈ 0.5× the contacts again, issue-6 profile). ``rows``: the
+    ``PairRows`` of the neighbour lists; ``colouring``: the grid they were built on
+    (``spatial_hash.neighbour_lists``); slabs of cells with the same x index modulo 3 share no
+    particle, so each colour runs as ``chunks`` parallel runs of slabs balanced by particle count.
+    The result does not depend on ``chunks``. Sleeping: pairs of two asleep particles are skipped, an
+    asleep one is held still and marked ``pushed`` by a fast awake partner (``sleeper_share``;
+    ``rule.wake_step`` = inf marks none)."""
+    cell_start, order, dims = colouring
     slab = dims[1] * dims[2]
     bounds = np.empty(chunks + 1, np.int64)
     for colour in range(3):
@@ -226,27 +204,9 @@ def contact_sweep(
         for t in prange(chunks):
             for k in range(bounds[t], bounds[t + 1]):
                 ix = colour + 3 * k
-                _project_slab(
-                    x,
-                    x_prev,
-                    awake,
-                    pushed,
-                    w,
-                    r,
-                    nbr_start,
-                    nbr,
-                    half,
-                    allowance,
-                    wake_step,
-                    lift,
-                    upright,
-                    mu_s,
-                    mu_k,
-                    normal,
-                    order,
-                    cell_start[ix * slab],
-                    cell_start[(ix + 1) * slab],
-                )
+                p0 = cell_start[ix * slab]
+                p1 = cell_start[(ix + 1) * slab]
+                _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0, p1)
 
 
 @njit(cache=True, inline="always")

@@ -14,7 +14,7 @@ from ..values import Aggregate
 
 @node(
     "flatten_contacts",
-    version=10,
+    version=11,  # 11: wall_cells (was fixed at 256)
     inputs={
         "aggregate": In(Aggregate, "the relaxed elements whose meshes are flattened (xpbd.aggregate)"),
         "neighbours": In(
@@ -55,10 +55,16 @@ from ..values import Aggregate
         ),
         # ½ thickness: a vertex never passes its grain's middle, whatever the overlap the simulation left
         "cap": Param(float, 0.5, "longest move of a vertex", range=(0.0, 2.0), units="element thicknesses"),
+        # 256: the walls to ≈ 0.35 mm in the main job's 84 mm bowl; the field costs ∝ cells³ (a draft uses fewer)
+        "wall_cells": Param(
+            int, 256, "cells along the longest side of the walls' distance field (effect 'collider')", range=(16, 1024)
+        ),
     },
     effects=("contact", "collider"),
 )
-def flatten_contacts(ctx, aggregate, neighbours=None, colliders=None, moulds=None, *, share, clearance, cap):
+def flatten_contacts(
+    ctx, aggregate, neighbours=None, colliders=None, moulds=None, *, share, clearance, cap, wall_cells
+):
     """Dents by ``contact_flattening.flatten`` (effect 'contact': between elements; 'collider': against walls
     and moulds); without either the aggregate passes through unchanged."""
     import dataclasses
@@ -78,7 +84,7 @@ def flatten_contacts(ctx, aggregate, neighbours=None, colliders=None, moulds=Non
         lo = np.min([s.bounds[0] for s in shapes] + [points.min(axis=0)], axis=0)
         hi = np.max([s.bounds[1] for s in shapes] + [points.max(axis=0)], axis=0)
         pad = 0.05 * float((hi - lo).max())
-        walls = free_space_field(colliders, moulds, lo - pad, hi + pad, float((hi - lo).max()) / 256)
+        walls = free_space_field(colliders, moulds, lo - pad, hi + pad, float((hi - lo).max()) / wall_cells)
     if "contact" not in ctx.effects and walls is None:
         dents, figures = None, {"elements": len(aggregate.placement)}
     else:

@@ -134,6 +134,7 @@ class Model:
             asleep=np.zeros(self.elements, np.bool_),
             awake=awake,
             pushed=np.zeros(n, np.bool_),
+            wall_anchor=np.full((n, 3), np.nan),
             yolks=yolks,
         )
 

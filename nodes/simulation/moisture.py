@@ -6,6 +6,8 @@ from 0 to 120 min), viscosity falls. Our reading, with water content w in % of g
 −40 % at 24 %), adhesion × w/(w + 8) (no capillary bridges when dry, saturating when wet).
 """
 
+WATER_CONTENT = 15.0  # % — the default cooked rice (G's renders span 0–24 %; 15 % is the rice of G ch.5's bowls)
+
 
 def moisture_scales(water_content: float) -> dict[str, float]:
     """Multipliers for stiffness, friction and adhesion at ``water_content`` percent."""

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .moisture import moisture_scales
+from .moisture import WATER_CONTENT, moisture_scales
 
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 PAIR_EFFECTS = frozenset({"contact", "friction", "adhesion"})  # the effects that need neighbour lists
@@ -36,6 +36,10 @@ class SolverSettings:
     bend_compliance: float = np.inf  # s²/g of the long-axis bend constraints (``bending``); inf = none
     mu_s: float = 0.6
     mu_k: float = 0.4
+    # friction measured from where each contact began sticking (``friction``), not per substep: sphere heaps
+    # hold 34° and stop creeping (issue 24, docs/validation.md); off by default until its side effects are
+    # settled (a tall pile's resting overlap 0.37 r against 0.2 r, tests/simulation)
+    anchored_friction: bool = False
     capture: float = 0.2  # mm
     adhesion_compliance: float = 1e-3  # s²/g
     damping: float = 0.0  # fraction of velocity removed per 1/60 s
@@ -87,9 +91,9 @@ class XpbdParams:
     friction: float
     static_threshold: float
     dynamic_scale: float
+    friction_model: str  # substep | anchored
     capture_radius: float  # particle radii
     clumping: float
-    water_content: float  # %
     sleep_speed: float  # mm/s
     shock_propagation: float
     speed_clamp: float  # radii per substep
@@ -100,13 +104,13 @@ class XpbdParams:
     log_meshes_every: int
 
 
-def solver_settings(params: XpbdParams, effects, radius: float) -> SolverSettings:
+def solver_settings(params: XpbdParams, effects, radius: float, water_content: float = WATER_CONTENT) -> SolverSettings:
     """Table-3 style parameters → solver settings (SPEC §3); 'moisture' rescales stiffness, friction
-    and adhesion (``moisture_scales``). ``radius``: the particles' median radius (mm), the unit of
-    the capture radius."""
+    and adhesion (``moisture_scales``) at ``water_content`` % (the cooked material's: the node's input
+    'material'). ``radius``: the particles' median radius (mm), the unit of the capture radius."""
     p = params
     scale = (
-        moisture_scales(p.water_content)
+        moisture_scales(water_content)
         if "moisture" in effects
         else {"stiffness": 1.0, "friction": 1.0, "adhesion": 1.0}
     )
@@ -125,6 +129,7 @@ def solver_settings(params: XpbdParams, effects, radius: float) -> SolverSetting
         bend_compliance=1.0 / (1000.0 * stiffness * p.bend_stiffness) if stiffness * p.bend_stiffness > 0 else np.inf,
         mu_s=mu_s,
         mu_k=mu_s * p.dynamic_scale,
+        anchored_friction=p.friction_model == "anchored",
         capture=p.capture_radius * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
         damping=p.damping,

@@ -110,11 +110,19 @@ def static_obstacles(obstacles, effects):
 
 
 def build_simulation(
-    aggregate: Aggregate, colliders, effects, params: XpbdParams, obstacles=None, moulds=(), threads: int | None = None
+    aggregate: Aggregate,
+    colliders,
+    effects,
+    params: XpbdParams,
+    obstacles=None,
+    moulds=(),
+    threads: int | None = None,
+    material=None,
 ) -> Simulation:
     """Clusters per element (``element_cluster``), the free-space field of the colliders and moulds
     with effect 'collider', yolks with 'buoyancy', static obstacles with a pair effect; the model,
-    its initial state and a solver with the settings of ``params`` (``solver_settings``)."""
+    its initial state and a solver with the settings of ``params`` and the cooked ``material``'s water
+    content (``solver_settings``; None: the cooked_rice defaults)."""
     if len(aggregate.placement) == 0:
         raise ValueError("aggregate: the placement is empty; nothing to simulate")
     moulds = list(moulds or [])
@@ -148,7 +156,8 @@ def build_simulation(
         yolk_local.append(cl.yolk_centre if cl.yolk_centre is not None else np.full(3, np.nan))
     x, r, w, q = (np.concatenate(a) for a in (xs, rs, ws, qs))
     start = np.concatenate([[0], np.cumsum(sizes)])
-    settings = solver_settings(params, effects, float(np.median(r)))
+    water = {} if material is None else {"water_content": material.water_content}
+    settings = solver_settings(params, effects, float(np.median(r)), **water)
     sdf = None
     if "collider" in effects:
         shapes = colliders + moulds

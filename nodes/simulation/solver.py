@@ -18,7 +18,17 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
-from . import adhesion, bending, buoyancy, collider, contact_constraints, integrate, shape_matching, spatial_hash
+from . import (
+    adhesion,
+    bending,
+    buoyancy,
+    collider,
+    contact_constraints,
+    friction,
+    integrate,
+    shape_matching,
+    spatial_hash,
+)
 from .buffers import ClusterBuffers, NeighbourLists, PairBuffers
 from .model import Model
 from .settings import SolverSettings
@@ -346,7 +356,17 @@ class XpbdSolver:
                     ),
                 )
             if m.collider is not None:
-                d("collider", collider.collider_project, st.x, st.x_prev, m.w, m.r, *m.collider.args(), k.mu_s, k.mu_k)
+                d(
+                    "collider",
+                    collider.collider_project,
+                    st.x,
+                    st.x_prev,
+                    st.wall_anchor,
+                    m.w,
+                    m.r,
+                    *m.collider.args(),
+                    (k.mu_s, k.mu_k, s.anchored_friction),
+                )
         moved = d(
             "integrate",
             integrate.update_velocity,
@@ -393,7 +413,12 @@ class XpbdSolver:
             m.n_moving,
             pairs.lists.half,
         )
-        pairs.lists = NeighbourLists(nbr_start, nbr, pairs.lists.half, *grid)
+        old = pairs.lists
+        pairs.lists = NeighbourLists(nbr_start, nbr, old.half, *grid)
+        if "friction" in self.settings.effects and self.settings.anchored_friction:
+            anchor = np.empty((len(nbr), 3))
+            self.dispatch("friction", friction.carry_anchors, *old.csr(), pairs.anchor, nbr_start, nbr, anchor)
+            pairs.anchor = anchor
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
         if "contact" in self.settings.effects:
@@ -413,10 +438,20 @@ class XpbdSolver:
         if "contact" in self.settings.effects:
             allowance = contact_constraints.overlap_allowance
             pairs.allowance[:] = 0.0
-            self._contacts(st, wake_step=np.inf)
+            self._contacts(st, friction=self.settings.anchored_friction, wake_step=np.inf)
             d("contact", allowance, st.x, st.awake, m.r, *pairs.lists.rows(), 0.0, pairs.allowance)
         if m.collider is not None:
-            d("collider", collider.collider_project, st.x, st.x, m.w, m.r, *m.collider.args(), 0.0, 0.0)
+            d(
+                "collider",
+                collider.collider_project,
+                st.x,
+                st.x,
+                st.wall_anchor,
+                m.w,
+                m.r,
+                *m.collider.args(),
+                (0.0, 0.0, False),
+            )
 
     def _contacts(self, st: State, friction=False, wake_step=None) -> None:
         """One Gauss–Seidel sweep of the contacts (if asked) and, with ``friction`` and the effect,
@@ -429,24 +464,22 @@ class XpbdSolver:
         rub = friction and "friction" in s.effects
         family = ("contact",) * normal + ("friction",) * rub
         wake_step = k.wake_step if wake_step is None else wake_step
+        cc = contact_constraints
         self.dispatch(
             family,
-            contact_constraints.contact_sweep,
+            cc.contact_sweep,
             st.x,
             st.x_prev,
             st.awake,
             st.pushed,
             m.w,
             m.r,
-            *lists.rows(),
-            *lists.grid(),
-            pairs.allowance,
-            wake_step,
-            k.lift,
-            k.upright,
-            k.mu_s if rub else 0.0,
-            k.mu_k,
-            normal,
+            cc.PairRows(*lists.rows()),
+            cc.Colouring(*lists.grid()),
+            cc.PairEntries(pairs.allowance, pairs.anchor),
+            cc.ContactRule(
+                float(wake_step), k.lift, k.upright, k.mu_s if rub else 0.0, k.mu_k, s.anchored_friction, normal
+            ),
             self.threads,
         )
 

@@ -26,7 +26,9 @@ class State:
     Sleeping (``integrate.wake_flags``, ``integrate.sleep_clusters``): ``asleep`` per element,
     ``awake`` per particle (solved this substep), ``pushed`` per particle (an asleep one a fast awake
     partner ran into), ``x_start`` the positions at the substep start, or for an asleep particle
-    when it fell asleep: the sleep test's reference (untouched without sleeping)."""
+    when it fell asleep: the sleep test's reference (untouched without sleeping). Friction against
+    the walls is anchored (``wall_anchor``); the pairs' anchors follow the neighbour lists
+    (``buffers.PairBuffers``)."""
 
     x: np.ndarray  # (n, 3)
     v: np.ndarray  # (n, 3)
@@ -36,6 +38,7 @@ class State:
     asleep: np.ndarray  # (m,) bool
     awake: np.ndarray  # (n,) bool
     pushed: np.ndarray  # (n,) bool
+    wall_anchor: np.ndarray  # (n, 3) where each particle began sticking to a wall, NaN = not (``friction``)
     yolks: YolkState | None = None
     time: float = 0.0
     substeps_done: int = 0

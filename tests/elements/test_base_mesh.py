@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.elements import base_mesh
+from nodes.elements import base_mesh, element_library
 from nodes.elements.grain_shapes import RICE_VARIETIES, volume_centroid
 from nodes.elements.mesh_files import MeshFileError, load_element_mesh
 
@@ -14,7 +14,7 @@ from .conftest import as_trimesh
 
 @pytest.mark.parametrize("variety", sorted(RICE_VARIETIES))
 def test_rice_presets_are_closed_centred_and_scaled(variety):
-    mesh = base_mesh.call(variety=variety)
+    mesh = base_mesh.call(variety=RICE_VARIETIES[variety])
     tm = as_trimesh(mesh)
     assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
     _, centroid = volume_centroid(mesh.vertices, mesh.faces)
@@ -23,6 +23,23 @@ def test_rice_presets_are_closed_centred_and_scaled(variety):
     assert extent[0] == pytest.approx(5.0 * RICE_VARIETIES[variety].length_factor, rel=1e-6)
     assert extent[0] > extent[1] > extent[2]  # long axis x, thickness z
     assert extent[2] == pytest.approx(2.0, rel=1e-6)
+
+
+def test_the_variety_is_an_input_a_recipe_states_once():
+    """The variety lives on a rice_variety node whose output base_mesh reads (so does the library: its kind)."""
+    from nodes.elements import rice_variety
+
+    aromatic = rice_variety.call(variety="aromatic")
+    assert aromatic is RICE_VARIETIES["aromatic"] and aromatic.name == "aromatic"
+    assert base_mesh.call(variety=aromatic).name == "aromatic"
+    assert np.ptp(base_mesh.call().vertices, axis=0)[0] == pytest.approx(5.0, rel=1e-6)  # unwired: factor 1
+    with pytest.raises(ValueError, match="only read by shape 'rice'"):
+        base_mesh.call(shape="ikura", variety=aromatic)
+    library = element_library.call(meshes=[base_mesh.call(variety=aromatic)], variety=aromatic)
+    assert library.kind == "aromatic"
+    with pytest.raises(ValueError, match="leave the parameter kind unset"):
+        element_library.call(meshes=[base_mesh.call(variety=aromatic)], variety=aromatic, kind="japonica")
+    assert element_library.call(meshes=[base_mesh.call()]).kind == "grain"
 
 
 def test_ikura_parts_and_yolk_radius():

@@ -7,7 +7,7 @@ import pytest
 
 from nodes.elements import distance_field, element_library, expand, remesh, sphere_scatter, voxelise
 from nodes.elements.distance_fields import binary_field
-from nodes.elements.grain_shapes import volume_centroid
+from nodes.elements.grain_shapes import RICE_VARIETIES, volume_centroid
 from nodes.elements.library_props import surface_distance
 from nodes.elements.sphere_sampling import INSIDE, SURFACE
 from nodes.elements.voxel_grid import grid_for, mesh_occupancy
@@ -124,8 +124,8 @@ def test_variety_expansion(japonica):
     spheres = sphere_scatter.call(mesh=japonica, count=0)
     volume = voxelise.call(mesh=japonica, spheres=spheres, resolution=24)
     field = distance_field.call(volume=volume, method="euclidean")
-    assert expand.call(field=field, variety="indica").expansion == 1.2
-    assert expand.call(field=field, variety="japonica").expansion == 1.5
+    assert expand.call(field=field, variety=RICE_VARIETIES["indica"]).expansion == 1.2
+    assert expand.call(field=field, variety=RICE_VARIETIES["japonica"]).expansion == 1.5
     drawn = {expand.call(seed=s, field=field).expansion for s in range(5)}
     assert len(drawn) == 5 and all(1.0 <= p <= 1.5 for p in drawn)
 

@@ -1,3 +1,4 @@
+import time
 from pathlib import Path
 
 import pytest
@@ -28,3 +29,23 @@ def recipe_file(tmp_path):
         return path
 
     return write
+
+
+@pytest.fixture
+def node_started():
+    """``wait(folder, proc)``: block until a ``toy_slow`` node has written its file in ``folder`` (from then on
+    it is running: a signal sent now lands inside the node, however loaded the machine) and return the id of
+    the process running it; fails at once if ``proc`` ends first."""
+
+    def wait(folder: Path, proc=None, timeout: float = 120.0) -> int:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            found = sorted(folder.glob("*")) if folder.is_dir() else []
+            if found:
+                return int(found[0].name)
+            if proc is not None and proc.poll() is not None:
+                pytest.fail(f"the run ended (exit status {proc.returncode}) before its slow node started")
+            time.sleep(0.02)
+        pytest.fail(f"no slow node started within {timeout} s")
+
+    return wait

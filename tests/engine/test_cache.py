@@ -5,7 +5,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -110,13 +109,13 @@ SLOW = """\
 outputs: [slow]
 nodes:
   pts: {type: toy_points, params: {count: 5}}
-  slow: {type: toy_slow, inputs: {spheres: pts.spheres}, params: {seconds: 30}}
+  slow: {type: toy_slow, inputs: {spheres: pts.spheres}, params: {seconds: 30, started: STARTED}}
 """
 
 
-def test_killed_run_keeps_finished_nodes_and_no_torn_entries(tmp_path, registry):
+def test_killed_run_keeps_finished_nodes_and_no_torn_entries(tmp_path, registry, node_started):
     recipe = tmp_path / "slow.yaml"
-    recipe.write_text(SLOW)
+    recipe.write_text(SLOW.replace("STARTED", str(tmp_path / "started")))
     cache_dir = tmp_path / "cache"
     cmd = [
         sys.executable,
@@ -134,10 +133,7 @@ def test_killed_run_keeps_finished_nodes_and_no_torn_entries(tmp_path, registry)
         "-q",
     ]
     proc = subprocess.Popen(cmd, cwd=tmp_path)
-    deadline = time.time() + 60
-    while time.time() < deadline and not list(cache_dir.glob("entries/*/*.json")):
-        time.sleep(0.05)
-    time.sleep(0.3)
+    node_started(tmp_path / "started", proc)  # pts is stored, slow is running
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     cache = Cache(cache_dir)

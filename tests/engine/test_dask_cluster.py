@@ -38,7 +38,7 @@ nodes:
   slow:
     type: toy_slow
     inputs: {spheres: shift.spheres}
-    params: {seconds: 0.3}
+    params: {seconds: 0.3, started: STARTED}
   merge:
     type: toy_merge
     inputs: {parts: [slow.spheres, pts.spheres]}
@@ -109,7 +109,7 @@ def cluster(tmp_path_factory):
 @pytest.fixture
 def setup(tmp_path):
     path = tmp_path / "toy_cluster.yaml"
-    path.write_text(RECIPE)
+    path.write_text(RECIPE.replace("STARTED", str(tmp_path / "started")))  # each slow instance's process id
     registry = Registry()
     registry.add_plugin_file(TOY)
     decl = sweep_from_args(load_recipe(path, registry), None, [], [], [])
@@ -164,18 +164,20 @@ def test_a_worker_killed_mid_node_loses_nothing(cluster, setup, tmp_path):
     killed = []
 
     def kill_a_busy_worker():
-        """SIGKILL the worker process that is running a toy_slow instance (mid-node)."""
+        """SIGKILL the first worker process that writes a toy_slow instance's start file: mid-node (the node
+        writes it as it starts, then sleeps 0.3 s), not merely assigned the task."""
         with distributed.Client(address, timeout="20s") as client:
-            pids = client.run(os.getpid)
-            deadline = time.time() + 30
-            while time.time() < deadline and not killed:
-                for worker, keys in client.processing().items():
-                    if any(str(k).startswith("slow[") for k in keys):
-                        time.sleep(0.1)  # inside the node's sleep by now
-                        os.kill(pids[worker], signal.SIGKILL)
-                        killed.append(worker)
-                        break
-                time.sleep(0.02)
+            pids = {pid: worker for worker, pid in client.run(os.getpid).items()}
+        started = tmp_path / "started"
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not killed:
+            running = [int(p.name) for p in started.glob("*")] if started.is_dir() else []
+            for pid in running:
+                if pid in pids:  # not this process's (the in-process reference run wrote one too)
+                    os.kill(pid, signal.SIGKILL)
+                    killed.append(pids[pid])
+                    break
+            time.sleep(0.005)
 
     killer = threading.Thread(target=kill_a_busy_worker)
     killer.start()

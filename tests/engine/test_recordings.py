@@ -5,7 +5,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import datafusion
@@ -22,14 +21,14 @@ effects: []
 outputs: [slow, surf]
 nodes:
   pts: {type: toy_points, params: {count: 6}}
-  slow: {type: toy_slow, inputs: {spheres: pts.spheres}, params: {seconds: SECONDS}}
+  slow: {type: toy_slow, inputs: {spheres: pts.spheres}, params: {seconds: SECONDS, started: "STARTED"}}
   surf: {type: toy_sphere_mesh, inputs: {spheres: slow.spheres}}
 """
 
 
-def write(tmp_path, seconds=0.0) -> Path:
+def write(tmp_path, seconds=0.0, started="") -> Path:
     path = tmp_path / "slowrun.yaml"
-    path.write_text(RECIPE.replace("SECONDS", str(seconds)))
+    path.write_text(RECIPE.replace("SECONDS", str(seconds)).replace("STARTED", str(started)))
     return path
 
 
@@ -106,18 +105,15 @@ def test_recording_ids_differ_between_settings_and_repeat_for_one(tmp_path, monk
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL], ids=["INT", "TERM", "KILL"])
-def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_temp_files(tmp_path, sig):
+def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_temp_files(tmp_path, sig, node_started):
     write(tmp_path)
     rrd = tmp_path / "outputs" / "slowrun" / "slowrun.rrd"
     subprocess.run(command(tmp_path), check=True, cwd=tmp_path)
     complete = rrd.read_bytes()
-    write(tmp_path, seconds=20.0)
+    write(tmp_path, seconds=20.0, started=tmp_path / "started")
     proc = subprocess.Popen(command(tmp_path, quiet=False), cwd=tmp_path, stderr=subprocess.PIPE, text=True)
     partial = rrd.with_name("slowrun.partial.rrd")
-    deadline = time.time() + 60
-    while time.time() < deadline and not (partial.exists() and list((tmp_path / "cache").glob("entries/*/*"))):
-        time.sleep(0.05)
-    time.sleep(0.5)
+    node_started(tmp_path / "started", proc)  # the slow node is running (20 s to go): the signal lands inside it
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode != 0

@@ -3,6 +3,7 @@
 import pytest
 
 from nodegraph.errors import RecipeError
+from nodegraph.params import Param
 from nodegraph.recipe import load_recipe, parse_recipe
 
 VALID = """\
@@ -182,3 +183,45 @@ def test_value_failing_every_union_member_is_one_issue(registry):
     issues = issues_of(text, registry)
     assert [(i.location.line, i.location.column, i.param) for i in issues] == [(3, 42, "spheres"), (3, 56, "variants")]
     assert issues[0].allowed == "str or list[str]" and issues[0].given == 3
+
+
+def test_a_moved_parameter_names_where_it_lives_now_and_recipe_checks_see_every_node(registry):
+    """``Moved``: a recipe still setting a parameter the node type gave up is told which node holds it now (at its
+    line); ``check_recipe``: a node's check across the recipe reports at the offending parameter's line."""
+    from nodegraph.node import In, Moved, Out, node
+    from nodegraph.registry import Registry
+
+    spheres = registry.get("toy_points").outputs["spheres"].type
+
+    @node("toy_step", version=1, outputs={"spheres": Out(spheres, "")}, params={"dx": Param(float, 1.0, "")})
+    def toy_step(ctx, *, dx):
+        return None
+
+    def wider_than_every_step(node_id, nodes):
+        steps = [e.params["dx"] for e in nodes.values() if e.spec.type_name == "toy_step"]
+        return [("dx", f"{nodes[node_id].params['dx']} exceeds a step")] if any(s < 1.0 for s in steps) else []
+
+    @node(
+        "toy_mover",
+        version=1,
+        inputs={"step": In(spheres, "", optional=True)},
+        outputs={"spheres": Out(spheres, "")},
+        params={"dx": Param(float, 1.0, "")},
+        moved={"speed": Moved("step", "dx", "toy_step")},
+        check_recipe=wider_than_every_step,
+    )
+    def toy_mover(ctx, step=None, *, dx):
+        return None
+
+    reg = Registry([toy_step, toy_mover])
+    text = "outputs: [m.spheres]\nnodes:\n  s:\n    type: toy_step\n    params: {dx: 2.0}\n  m:\n    type: toy_mover\n"
+    wired = text + "    inputs: {step: s.spheres}\n    params: {speed: 3.0}\n"
+    (issue,) = issues_of(wired, reg)
+    assert str(issue.location) == "r.yaml:9:14" and issue.node == "m"
+    assert "moved to parameter 'dx' of the toy_step node wired into input 'step'" in issue.message
+    assert "that node is 's' at r.yaml:5:18" in issue.message and "--set s.dx=3.0" in issue.message
+    (issue,) = issues_of(text + "    params: {speed: 3.0}\n", reg)
+    assert "wire a toy_step node into input 'step'" in issue.message
+    parse_recipe(text, reg, file="r.yaml")
+    (issue,) = issues_of(text, reg, ["s.dx=0.5"])
+    assert (issue.node, issue.param, str(issue.location)) == ("m", "dx", "r.yaml:7:5")  # m itself: dx unset

@@ -1,8 +1,10 @@
 """Small node types for engine tests (the engine must not depend on the real nodes): a plugin file
 with its own value type, as a user's would be."""
 
+import os
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -134,12 +136,19 @@ def toy_fail(ctx, spheres):
     version=1,
     inputs={"spheres": In(SphereSet, "passed through")},
     outputs={"spheres": Out(SphereSet, "same")},
-    params={"seconds": Param(float, 0.0, "sleep", range=(0.0, 60.0), units="s")},
+    params={
+        "seconds": Param(float, 0.0, "sleep", range=(0.0, 60.0), units="s"),
+        "started": Param(str, "", "a folder: the node writes a file named by its process id there as it starts"),
+    },
 )
-def toy_slow(ctx, spheres, *, seconds):
-    """Sleeps, with progress and a per-step scalar on the sim_step timeline, then passes the spheres on."""
+def toy_slow(ctx, spheres, *, seconds, started):
+    """Sleeps, with progress and a per-step scalar on the sim_step timeline, then passes the spheres on. A
+    test that interrupts a run waits for the file in ``started``: from then on the node is running."""
     import rerun as rr
 
+    if started:
+        Path(started).mkdir(parents=True, exist_ok=True)
+        (Path(started) / str(os.getpid())).touch()
     with ctx.progress(10, "sleeping") as bar:
         for step in range(10):
             time.sleep(seconds / 10)

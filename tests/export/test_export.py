@@ -10,6 +10,7 @@ import pytest
 
 from nodegraph.context import Context
 from nodes.export import export
+from nodes.export.usd_writer import prim_names
 
 
 def _files(scene, formats):
@@ -44,6 +45,7 @@ def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
     assert membrane["KHR_materials_transmission"]["transmissionFactor"] == 1.0  # the yolk shows through
     red, green, blue = membrane["KHR_materials_volume"]["attenuationColor"]
     assert red > green > blue  # an orange egg
+    assert doc["materials"][0]["extras"]["nodegraph:principled:subsurface"] > 0  # the whole look, for Blender
     rice = materials["rice"]
     assert 0.05 < rice["KHR_materials_diffuse_transmission"]["diffuseTransmissionFactor"] < 1.0
     assert rice["KHR_materials_sheen"]["sheenColorFactor"][0] > 0 and "KHR_materials_clearcoat" in rice
@@ -81,10 +83,49 @@ def test_usd_passes_usd_validation(shaded, tmp_path, fmt):
     meshes = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
     assert len(meshes) == len(shaded.meshes)
     bound = UsdShade.MaterialBindingAPI(meshes[0]).ComputeBoundMaterial()[0]
-    assert bound.GetPrim().GetName().endswith("rice")
+    assert bound.GetPrim().GetName() == "rice"  # the material's own name: importers show it as it is
+    looks = [p.GetName() for p in stage.GetPrimAtPath("/Scene/Looks").GetChildren()]
+    assert looks == [m.name for m in shaded.materials]
+    assert [p.GetName() for p in meshes] == prim_names([m.name for m in shaded.meshes], "mesh")
     assert 0.05 < bound.GetPrim().GetAttribute("nodegraph:principled:diffuseTransmission").Get() < 1.0
     sigma = UsdGeom.PrimvarsAPI(meshes[0]).GetPrimvar("cdrf_sigma").Get()
     assert len(sigma) == len(shaded.meshes[0].vertices)
+
+
+def test_prim_names_are_valid_unique_and_keep_the_names():
+    assert prim_names(["rice", "ikura/0003/yolk", "", "3d", "rice", "rice_2"], "mesh") == [
+        "rice",
+        "ikura_0003_yolk",
+        "mesh",
+        "_3d",
+        "rice_2",
+        "rice_2_2",
+    ]
+
+
+def test_transmissive_materials_are_translucent_with_their_ior_in_usd(shaded):
+    """UsdPreviewSurface: opacity 1 − transmission with the ior (what renderers translate to refraction)."""
+    from pxr import UsdShade
+
+    path = "/Scene/Looks/ikura_membrane/PreviewSurface"
+    stage = _stage(shaded)
+    shader = UsdShade.Shader(stage.GetPrimAtPath(path))
+    assert shader.GetInput("opacity").Get() == pytest.approx(0.0)
+    assert shader.GetInput("ior").Get() == pytest.approx(1.36)
+    look = stage.GetPrimAtPath("/Scene/Looks/rice")
+    rice = next(m for m in shaded.materials if m.name == "rice")
+    assert look.GetAttribute("nodegraph:principled:subsurface").Get() == pytest.approx(rice.subsurface)
+    assert tuple(look.GetAttribute("nodegraph:principled:subsurfaceRadius").Get()) == pytest.approx(
+        rice.subsurface_radius
+    )
+
+
+def _stage(scene):
+    from pxr import Sdf, Usd
+
+    layer = Sdf.Layer.CreateAnonymous(".usda")
+    layer.ImportFromString(_files(scene, ["usda"])["don.usda"].decode())
+    return Usd.Stage.Open(layer)
 
 
 def test_usd_validation_is_not_vacuous():
@@ -142,3 +183,18 @@ def test_unwritable_destination_leaves_nothing_half_written(shaded, tmp_path):
         write_output(fileset, blocker / "ikura_don", "export")
     assert [p.name for p in tmp_path.rglob("*")] == ["outputs"]
     assert blocker.read_text().startswith("a file")
+
+
+def test_the_blender_addon_reads_the_keys_the_exporter_writes(shaded):
+    """blender/nodegraph_import runs inside Blender only; its keys are checked here against nodes/export/look.py."""
+    import ast
+    import re
+    from pathlib import Path
+
+    from nodes.export.look import PREFIX, principled_attributes
+
+    source = (Path(__file__).resolve().parents[2] / "blender" / "nodegraph_import" / "__init__.py").read_text()
+    ast.parse(source)
+    assert f'PREFIX = "{PREFIX}"' in source
+    read = set(re.findall(r'look(?:\.get\(|\[)"(\w+)"', source))
+    assert read and read <= set(principled_attributes(shaded.materials[0], 0.0)), read

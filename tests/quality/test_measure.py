@@ -47,3 +47,30 @@ def test_a_sample_is_drawn_from_the_seed():
     assert column(a, "sampled") == 5
     assert column(a, "overlap_max") == column(measure.call(seed=1, aggregates=[row], sample=5), "overlap_max")
     assert np.isclose(column(measure.call(aggregates=[row]), "overlap_p50"), 0.05, atol=0.003)
+
+
+def test_elements_outside_their_vessel_are_counted_and_warned_about():
+    """A ball in a bowl (rim radius 10 mm, 8 deep, 4 mm wall), one above its mound, one on its rim's lip (in), one
+    past its wall, one under it: the two outside are counted in the table and a warning names them; without
+    vessels nothing is tested."""
+    import pytest
+
+    from nodes.shapes import shape
+
+    vessel = shape.call(kind="bowl", size=10.0, depth=8.0, resolution=2)["vessel"]
+    inside = balls(0.0)  # at the rim's height, on the axis
+    above = Aggregate(
+        Placement(
+            [[3.0, 0.0, 6.0], [12.0, 0.0, 1.0], [16.0, 0.0, 1.0], [0.0, 0.0, -12.5]], np.tile([0.0, 0.0, 1.0], (4, 1))
+        ),
+        inside.libraries,
+    )
+    assert column(measure.call(aggregates=[inside, above]), "outside_vessel") == 0  # no vessel given
+    with pytest.warns(UserWarning, match="2 of 5 elements ended outside their vessel"):
+        table = measure.call(aggregates=[inside, above], vessels=[vessel])
+    assert column(table, "outside_vessel") == 2
+    assert vessel.outside(np.array([[9.9, 0.0, 0.5], [0.0, 0.0, -7.9], [7.5, 0.0, -6.0]])).tolist() == [
+        False,
+        False,
+        True,  # through the wall: (7.5/10)² + (6/8)² > 1
+    ]

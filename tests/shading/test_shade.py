@@ -7,6 +7,8 @@ import pytest
 
 from nodegraph.context import Context
 from nodegraph.params import ParamValueError
+from nodes.material import cooked_rice
+from nodes.material.cooked import cooked_material
 from nodes.shading import shade
 
 
@@ -25,8 +27,8 @@ def test_materials_per_kind_and_ikura_parts(shaded):
 
 def test_wetter_rice_is_whiter_and_glows_past_the_terminator(scene_inputs):
     light = {"light_directions": [(1.0, 0.0, 0.0)], "ambient": 0.0}
-    dry = shade.call(**scene_inputs, water_content=0.0, **light)
-    wet = shade.call(**scene_inputs, water_content=24.0, **light)
+    dry = shade.call(**scene_inputs, material=cooked_material(water_content=0.0), **light)
+    wet = shade.call(**scene_inputs, material=cooked_material(water_content=24.0), **light)
     grain_dry, grain_wet = dry.meshes[0], wet.meshes[0]
     shadow = grain_dry.normals[:, 0] < -0.1  # facing away from the light: Lambert gives 0
     assert shadow.any()
@@ -36,7 +38,7 @@ def test_wetter_rice_is_whiter_and_glows_past_the_terminator(scene_inputs):
 
 def test_same_input_gives_bit_identical_colours(scene_inputs):
     def digest():
-        scene = shade.call(**scene_inputs)
+        scene = shade.call(**scene_inputs, material=cooked_material())
         h = hashlib.sha256()
         for mesh in scene.meshes:
             h.update(np.ascontiguousarray(mesh.colors).tobytes())
@@ -94,7 +96,7 @@ def test_chestnut_is_its_own_matte_yellow_material(scene_inputs):
         placement=replace(rice.placement, kinds=half, kind_names=("japonica", "chestnut")),
         libraries=(rice.libraries[0], replace(rice.libraries[0], kind="chestnut")),
     )
-    scene = shade.call(aggregates=[mixed], water_content=18.0)
+    scene = shade.call(aggregates=[mixed], material=cooked_material(water_content=18.0))
     materials = {m.name: m for m in scene.materials}
     assert set(materials) == {"rice", "chestnut"}
     kuri, grain = materials["chestnut"], materials["rice"]
@@ -126,10 +128,23 @@ def test_fish_topping_parts_get_flesh_and_fat(scene_inputs, kind):
         shade.call(aggregates=[bad])
 
 
+def test_water_content_is_the_cooked_materials():
+    """Shade has no water content of its own: the cooked material's (a recipe cannot state it twice)."""
+    assert "water_content" not in shade.params and "material" in shade.inputs
+    with pytest.raises(TypeError, match="moved to parameter 'water_content' of the cooked_rice node"):
+        shade.call(aggregates=[], water_content=22.0)
+    with pytest.raises(ParamValueError):
+        cooked_rice.params["water_content"].validate(30.0)
+
+
+def test_rice_without_a_cooked_material_is_refused(scene_inputs):
+    with pytest.raises(ValueError, match="wire a cooked_rice node into input 'material'"):
+        shade.call(**scene_inputs)
+
+
 @pytest.mark.parametrize(
     "name, value",
     [
-        ("water_content", 30.0),
         ("syrup_color", (1.2, 0.0, 0.0)),
         ("scenery_color", (-0.1, 0.2, 0.2)),
         ("light_colors", [(0.5, 2.0, 0.5)]),
@@ -150,7 +165,7 @@ def test_bad_input_at_run_time_gives_clear_errors(scene_inputs):
     with pytest.raises(ValueError, match="linear RGB"):
         shade(Context.standalone(), **{**unchecked, "syrup_color": (1.5, 0.0, 0.0)})
     with pytest.raises(ValueError, match="water_content"):
-        shade(Context.standalone(), **{**unchecked, "water_content": 25.0})
+        cooked_material(water_content=25.0)
     with pytest.raises(ValueError, match="presets"):
         shade.call(**scene_inputs, presets=["japonica=marble"])
     assert shade.check(
@@ -165,7 +180,8 @@ def test_unknown_kind_and_empty_aggregates_are_refused(scene_inputs):
     pebbles = replace(rice, libraries=(replace(rice.libraries[0], kind="pebble"),))
     with pytest.raises(ValueError, match="pebble"):
         shade.call(aggregates=[pebbles])
-    assert shade.call(aggregates=[pebbles], presets=["pebble=rice"]).materials[0].name == "rice"
+    scene = shade.call(aggregates=[pebbles], presets=["pebble=rice"], material=cooked_material())
+    assert scene.materials[0].name == "rice"
     empty = replace(rice, placement=rice.placement.subset(np.zeros(len(rice.placement), bool)))
     with pytest.raises(ValueError, match="no elements"):
         shade.call(aggregates=[empty])
@@ -173,8 +189,8 @@ def test_unknown_kind_and_empty_aggregates_are_refused(scene_inputs):
 
 def test_scene_carries_the_cdrf_sigma_per_vertex(scene_inputs):
     """σ = σ₀|κ| per vertex for renderers (the preview's translucency); wetter rice, wider kernels."""
-    dry = shade.call(**scene_inputs, water_content=0.0)
-    wet = shade.call(**scene_inputs, water_content=24.0)
+    dry = shade.call(**scene_inputs, material=cooked_material(water_content=0.0))
+    wet = shade.call(**scene_inputs, material=cooked_material(water_content=24.0))
     assert [len(s) for s in wet.cdrf_sigma] == [len(m.vertices) for m in wet.meshes]
     assert wet.cdrf_sigma[0].mean() > dry.cdrf_sigma[0].mean() > 0
     rice_wet, rice_dry = wet.materials[0], dry.materials[0]

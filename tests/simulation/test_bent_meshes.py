@@ -11,22 +11,16 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from nodegraph import codec
-from nodegraph.values import Mesh
 from nodes.simulation.aggregate import DeformedAggregate
+from nodes.simulation.scenes import long_grain
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation, snapshot_aggregate
 from nodes.simulation.xpbd import xpbd
 from nodes.values import Aggregate, ElementLibrary, Placement
 
-LENGTH = 12.0  # mm, a long grain: several particles along its axis
 BEND_RADIUS = 10.0  # mm, arc the particles are laid on (sag ≈ 1.6 mm over the grain)
 ROTATION = Rotation.from_euler("zyx", [30.0, 10.0, -20.0], degrees=True).as_matrix()
 ORIGIN = np.array([3.0, -2.0, 5.0])
-
-
-def long_grain() -> Mesh:
-    sphere = trimesh.creation.icosphere(subdivisions=3)
-    return Mesh.from_trimesh(trimesh.Trimesh(sphere.vertices * [LENGTH / 2, 2.5, 2.5], sphere.faces), name="long")
 
 
 def aggregate(mesh=None) -> Aggregate:
@@ -156,7 +150,7 @@ def test_codec_round_trips_bends_and_old_entries_without_the_field():
 
 def test_yolk_offsets_still_move_the_part_faces_of_a_bent_element():
     """DeformedAggregate (ikura yolk) adds its part offsets on top of the bent map."""
-    from xpbd_scenes import ikura_mesh
+    from nodes.simulation.scenes import ikura_mesh
 
     egg = ikura_mesh()
     placement = Placement(ORIGIN[None], np.array([[0.0, 0.0, 1.0]]), ROTATION[None], kind_names=("ikura",))

@@ -7,11 +7,12 @@ import sys
 from pathlib import Path
 
 import pytest
-import xpbd_scenes
+
+ROOT = Path(__file__).resolve().parents[2]
 
 SCRIPT = """
 import hashlib
-from xpbd_scenes import rice_bowl
+from nodes.simulation.scenes import rice_bowl
 from nodes.simulation.xpbd import xpbd
 aggregate, colliders = rice_bowl(30, seed=1)
 effects = ("gravity", "contact", "friction", "adhesion", "collider", "moisture", "damping")
@@ -23,11 +24,10 @@ print(hashlib.sha256(out["particles"].positions.tobytes()).hexdigest())
 
 @pytest.mark.slow  # compiles every simulation kernel once more (≈ 30 s)
 def test_fresh_and_cached_kernels_give_the_same_bits(tmp_path):
-    scenes = str(Path(xpbd_scenes.__file__).parent)  # the scene builders import by name there, too
     env = {
         **os.environ,
         "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
-        "PYTHONPATH": os.pathsep.join(filter(None, [scenes, os.environ.get("PYTHONPATH")])),
+        "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),  # this tree's nodes
     }
     runs = [
         subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True, check=True).stdout

@@ -8,8 +8,8 @@ import time
 
 import numba
 import pytest
-from xpbd_scenes import rice_bowl
 
+from nodes.simulation.scenes import rice_bowl
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.threads import WINDOW_S, FreeCores
@@ -35,9 +35,11 @@ def test_results_do_not_depend_on_the_thread_count():
 def test_free_cores_drop_to_one_thread_while_other_processes_fill_the_machine():
     cores = len(os.sched_getaffinity(0))
     free = FreeCores(cores)
-    busy = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(cores)]
+    spin = "print('spinning', flush=True)\nwhile True: pass"
+    busy = [subprocess.Popen([sys.executable, "-c", spin], stdout=subprocess.PIPE, text=True) for _ in range(cores)]
     try:
-        time.sleep(0.3)  # the busy loops start
+        for proc in busy:  # each busy loop has started (not a guess at how long starting takes)
+            assert proc.stdout.readline() == "spinning\n"
         free.threads()  # opens a window while they run
         time.sleep(2 * WINDOW_S)
         assert free.threads() == 1
@@ -45,3 +47,4 @@ def test_free_cores_drop_to_one_thread_while_other_processes_fill_the_machine():
         for proc in busy:
             proc.kill()
             proc.wait()
+            proc.stdout.close()

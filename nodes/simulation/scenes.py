@@ -1,6 +1,7 @@
-"""Scenes for the xpbd tests and benchmarks, built directly in Python (no placement nodes needed):
-ellipsoid rice grains, ikura eggs with a yolk, a bowl and a ground slab as watertight solids, and
-grains on a jittered grid inside the bowl."""
+"""Scenes for the solver's tests, benchmarks and scripts, built directly in Python (no placement nodes
+needed): ellipsoid rice grains, ikura eggs with a yolk, a bowl and a ground slab as watertight solids,
+grains on a jittered grid inside the bowl, and a small shaded-food scene. Not a node module: nothing
+here is imported to list or run nodes."""
 
 from __future__ import annotations
 
@@ -20,6 +21,13 @@ def grain_mesh(length=5.0, width=3.0, height=2.5, name="grain") -> Mesh:
     return Mesh.from_trimesh(
         trimesh.Trimesh(sphere.vertices * [length / 2, width / 2, height / 2], sphere.faces), name=name
     )
+
+
+def long_grain(length=12.0, thickness=5.0) -> Mesh:
+    """A long ellipsoid grain, mm: several particles along its axis, so its cluster can bend (SPEC §5)."""
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    scale = [length / 2, thickness / 2, thickness / 2]
+    return Mesh.from_trimesh(trimesh.Trimesh(sphere.vertices * scale, sphere.faces), name="long")
 
 
 def ikura_mesh(radius=3.5, lipid=0.145) -> Mesh:

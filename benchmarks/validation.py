@@ -1,0 +1,501 @@
+"""Validation against published granular figures — issue 24: does the XPBD aggregate behave like granular
+matter, and what does matching reality cost in time? Each case sets up an experiment, compares our figure
+with a published one and writes the set-up, the reference and its source, our figure and the error, the
+knobs the case needed, the seconds it took and a plot into docs/validation.md (plots: docs/images/validation/).
+
+    python benchmarks/validation.py            # full sizes (minutes on 2 cores)
+    python benchmarks/validation.py --quick    # reduced sizes (≈ 1–2 min), what tests/simulation pins
+
+Friction models (``SolverSettings.anchored_friction``): 'substep' is Macklin et al. 2014's position-level rule
+applied to each substep's displacement (the default); 'anchored' measures the drift since a contact began
+sticking (``nodes/simulation/friction.py``).
+"""
+
+import argparse
+import dataclasses
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+
+DOC = REPO / "docs" / "validation.md"
+IMAGES = REPO / "docs" / "images" / "validation"
+EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
+SPHERE_MASS = 0.025e-3 * 1000  # g: 25 mg per sphere, as a grain (rest positions do not depend on it)
+
+
+# -- measuring a heap ---------------------------------------------------------------------------
+def heap_angle(centres: np.ndarray) -> float:
+    """Angle of repose of a heap on flat ground (degrees): the slope of its upper surface. The heap's
+    radius R is the 95th percentile of the centres' distance ρ from its axis; the surface height in each
+    of 8 rings over [0, R] is the highest centre there (a percentile scales the heights of a filled cone:
+    the 90th read 27.3° for 30°); a line fitted to rings 2–7 (the apex ring and the skirt left out) gives
+    the slope."""
+    c = np.asarray(centres)
+    rho = np.hypot(c[:, 0] - np.median(c[:, 0]), c[:, 1] - np.median(c[:, 1]))
+    edges = np.linspace(0.0, np.percentile(rho, 95), 9)
+    mid, top = [], []
+    for lo, hi in zip(edges[1:-2], edges[2:-1]):
+        ring = (rho >= lo) & (rho < hi)
+        if ring.sum() >= 3:
+            mid.append(0.5 * (lo + hi))
+            top.append(c[ring, 2].max())
+    if len(mid) < 2:
+        return 0.0
+    return float(np.degrees(np.arctan(max(0.0, -np.polyfit(mid, top, 1)[0]))))
+
+
+def mound_angle(centres: np.ndarray) -> float:
+    """atan(H/R) of a heap (degrees): H the 99th percentile of the centres' height, R the 95th percentile of
+    their distance from the axis — the issue's reading, which also answers for a mound that is no cone."""
+    c = np.asarray(centres)
+    rho = np.hypot(c[:, 0] - np.median(c[:, 0]), c[:, 1] - np.median(c[:, 1]))
+    return float(np.degrees(np.arctan(np.percentile(c[:, 2], 99) / np.percentile(rho, 95))))
+
+
+def ball(n: int, spacing, seed: int = 0) -> np.ndarray:
+    """n points of a jittered lattice (spacing per axis) in a ball resting 2 mm above z = 0, nearest the
+    centre first: what is dropped to form a heap."""
+    rng = np.random.default_rng(seed)
+    sp = np.asarray(spacing, float)
+    reach = (3 * n * sp.prod() / (4 * np.pi)) ** (1 / 3) * 1.4
+    axes = [np.arange(-reach, reach + s, s) for s in sp]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    grid = grid[np.argsort(np.linalg.norm(grid / sp * sp.mean(), axis=1), kind="stable")][:n]
+    grid = grid + rng.uniform(-0.05, 0.05, grid.shape) * sp
+    grid[:, 2] += 2.0 - grid[:, 2].min()
+    return grid
+
+
+def ground(half: float, top: float, pitch: float):
+    """φ of a ground slab (top face z = 0) over [−half, half]² × [−3, top]."""
+    from nodes.simulation.collider import signed_distance_grid
+    from nodes.simulation.scenes import box_mesh
+
+    slab = box_mesh([-half - 5, -half - 5, -6], [half + 5, half + 5, 0], "ground")
+    return signed_distance_grid([slab], np.array([-half, -half, -3.0]), np.array([half, half, top]), pitch)
+
+
+# -- sphere heaps ----------------------------------------------------------------------------------
+def sphere_heap(n, mu, anchored, frames=(150,), substeps=10, radius=1.0, seed=0):
+    """Drop a ball of n spheres (radius 1 mm, 25 mg, lattice spacing 2.2 r) on flat ground with the effects
+    gravity, contact, friction, collider, damping (0.1) at μs = mu, μk = 0.7·mu; returns the heap angle
+    after each count of ``frames`` (1/60 s each) and the seconds taken."""
+    from nodes.simulation.scenes import solver_run
+    from nodes.simulation.settings import SolverSettings
+
+    x = ball(n, (2.2 * radius,) * 3, seed)
+    half = 2.0 * float(np.abs(x[:, :2]).max()) + 30.0
+    settings = SolverSettings(
+        EFFECTS,
+        substeps=substeps,
+        mu_s=mu,
+        mu_k=0.7 * mu,
+        compliance=np.inf,
+        damping=0.1,
+        shock_propagation=4.0,
+        anchored_friction=anchored,
+    )
+    run = solver_run(
+        x,
+        np.full(n, radius),
+        np.full(n, 1.0 / SPHERE_MASS),
+        np.arange(n + 1),
+        np.zeros((n, 3)),
+        np.tile([1.0, 0, 0, 0], (n, 1)),
+        settings,
+        sdf=ground(half, float(x[:, 2].max()) + 5.0, 0.8 * radius),
+    )
+    start = time.perf_counter()
+    angles = []
+    for f in range(1, max(frames) + 1):
+        run.frame()
+        if f in frames:
+            angles.append(heap_angle(run.state.x))
+    return angles, time.perf_counter() - start
+
+
+def rice_heap(n, anchored, frames=(150,), substeps=10, friction=1.0, seed=0):
+    """Pour n rice-like grains (ellipsoids 5 × 3 × 2.5 mm ±10 %, 8 particles each) on flat ground: a column
+    2 × 2 grains wide, one layer per 3.2 mm, random yaw, falls as a stream onto the heap's apex (at most the
+    speed clamp, ≈ 0.5 m/s), at the xpbd node's defaults (effects gravity, contact, friction, collider,
+    damping; no adhesion: dry rice). Returns (``heap_angle``, ``mound_angle``) after each of ``frames`` and
+    the seconds."""
+    from scipy.spatial.transform import Rotation
+
+    from nodes.simulation.scenes import box_mesh, rice_library
+    from nodes.simulation.settings import XpbdParams
+    from nodes.simulation.setup import build_simulation
+    from nodes.simulation.xpbd import xpbd
+    from nodes.values import Aggregate, Placement
+
+    rng = np.random.default_rng(seed)
+    k = np.arange(n)
+    x = np.stack([(k % 2 - 0.5) * 5.8 + (k // 4) % 2, ((k // 2) % 2 - 0.5) * 3.6, 3.0 + (k // 4) * 3.2], axis=1)
+    yaw = np.c_[rng.uniform(-np.pi, np.pi, n), rng.uniform(-0.1, 0.1, (n, 2))]
+    placement = Placement(
+        x,
+        np.tile([0, 0, 1.0], (n, 1)),
+        Rotation.from_euler("zyx", yaw).as_matrix(),
+        variants=rng.integers(0, 4, n).astype(np.int32),
+        kind_names=("japonica",),
+    )
+    params = XpbdParams(
+        **xpbd.resolve_params(
+            {
+                "frames": max(frames),
+                "substeps": substeps,
+                "friction": friction,
+                "friction_model": "anchored" if anchored else "substep",
+                "log_every": 0,
+                "log_meshes_every": 0,
+            }
+        )
+    )
+    half = 3.0 * n ** (1 / 3) * 6.0
+    slab = box_mesh([-half, -half, -6], [half, half, 0], "ground")
+    sim = build_simulation(Aggregate(placement, (rice_library(seed=seed),)), [slab], EFFECTS, params)
+    start = time.perf_counter()
+    angles = []
+    for f in range(1, max(frames) + 1):
+        sim.frame()
+        if f in frames:
+            centres = sim.model.centres(sim.state.x)
+            angles.append((heap_angle(centres), mound_angle(centres)))
+    return angles, time.perf_counter() - start
+
+
+# -- packing ----------------------------------------------------------------------------------------
+def packing_fraction(n, mu, anchored, frames=150, radius=1.0, seed=0):
+    """Pour n spheres (a loose lattice, spacing 2.3 r) into an open box and let them settle; the packing
+    fraction is the spheres' volume inside the box's core (two diameters from the walls and floor, below
+    the top two diameters of the bed), counted on a 0.1 r sample grid. Returns (φ, seconds)."""
+    from nodes.simulation.collider import signed_distance_grid
+    from nodes.simulation.scenes import open_box, solver_run
+    from nodes.simulation.settings import SolverSettings
+
+    side = 16.0 * radius
+    rng = np.random.default_rng(seed)
+    per = int(side // (2.3 * radius))
+    k = np.arange(n)
+    x = (
+        np.stack([k % per, (k // per) % per, k // (per * per)], axis=1) * 2.3 * radius
+        + 1.2 * radius
+        + rng.uniform(-0.1, 0.1, (n, 3)) * radius
+    )
+    top = float(x[:, 2].max()) + 4 * radius
+    sdf = signed_distance_grid(
+        open_box(side, wall=2.0, height=top), np.array([-3.0, -3, -3]), np.array([side + 3, side + 3, top]), 0.4
+    )
+    settings = SolverSettings(
+        EFFECTS,
+        mu_s=mu,
+        mu_k=0.7 * mu,
+        compliance=np.inf,
+        damping=0.1,
+        shock_propagation=4.0,
+        anchored_friction=anchored,
+    )
+    run = solver_run(
+        x,
+        np.full(n, radius),
+        np.full(n, 1.0 / SPHERE_MASS),
+        np.arange(n + 1),
+        np.zeros((n, 3)),
+        np.tile([1.0, 0, 0, 0], (n, 1)),
+        settings,
+        sdf=sdf,
+    )
+    start = time.perf_counter()
+    for _ in range(frames):
+        run.frame()
+    seconds = time.perf_counter() - start
+    p = run.state.x
+    bed = np.percentile(p[:, 2], 98)
+    lo = np.array([4 * radius, 4 * radius, 4 * radius])
+    hi = np.array([side - 4 * radius, side - 4 * radius, bed - 4 * radius])
+    if np.any(hi <= lo):
+        raise ValueError("packing: the bed is too shallow for a core two diameters from every boundary")
+    axes = [np.arange(a, b, 0.1 * radius) for a, b in zip(lo, hi)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    from scipy.spatial import cKDTree
+
+    d, _ = cKDTree(p).query(grid)
+    return float(np.mean(d < radius)), seconds
+
+
+# -- grain geometry -------------------------------------------------------------------------------------
+def grain_geometry():
+    """The base_mesh node's rice presets: length × width × thickness (bounding box, mm) and volume."""
+    from nodes.elements.base_mesh import base_mesh
+
+    rows = []
+    for variety in ("japonica", "indica", "aromatic"):
+        mesh = base_mesh.call(shape="rice", variety=variety)
+        import trimesh
+
+        tm = trimesh.Trimesh(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+        ext = np.sort(tm.bounds[1] - tm.bounds[0])[::-1]
+        rows.append((variety, *ext, float(tm.volume)))
+    return rows
+
+
+# -- the report ----------------------------------------------------------------------------------------
+@dataclasses.dataclass
+class Case:
+    name: str
+    setup: str
+    reference: str
+    ours: str
+    error: str
+    knobs: str
+    seconds: float
+    plot: str | None = None
+
+
+def run_cases(quick: bool) -> tuple[list[Case], dict]:
+    """Every case at quick or full size; returns the cases and the raw figures (what the tests pin)."""
+    figures: dict = {}
+    cases: list[Case] = []
+    n_sph = 600 if quick else 2000
+    mus = (0.0, 0.3, 0.6) if quick else (0.0, 0.15, 0.3, 0.45, 0.6, 0.8, 1.0)
+
+    # 1. angle of repose of spheres against μ, both friction models, at 2.5 s
+    t = time.perf_counter()
+    curve = {}
+    for anchored in (False, True):
+        curve[anchored] = [sphere_heap(n_sph, mu, anchored)[0][0] for mu in mus]
+    figures["sphere_repose"] = {"mu": mus, "substep": curve[False], "anchored": curve[True]}
+    plot = _plot_curve(
+        "sphere_repose",
+        mus,
+        {"substep friction (default)": curve[False], "anchored friction": curve[True]},
+        "sliding friction μs",
+        "heap angle (°)",
+    )
+    cases.append(
+        Case(
+            "Angle of repose of spheres vs μ",
+            f"{n_sph} spheres (r = 1 mm) dropped as a ball on flat ground, 2.5 s; μk = 0.7 μs",
+            "rises with μ and saturates; insensitive to stiffness and density (Zhou et al. 2001, PRE 64:021301); "
+            "frictionless: flat",
+            "substep: "
+            + ", ".join(f"{a:.1f}°" for a in curve[False])
+            + "; anchored: "
+            + ", ".join(f"{a:.1f}°" for a in curve[True])
+            + f" at μ = {', '.join(f'{m:g}' for m in mus)}",
+            "trend only (no rolling DOF: our particles do not rotate, so rolling resistance is effectively infinite)",
+            "10 substeps × 2 iterations, shock propagation 4, damping 0.1",
+            time.perf_counter() - t,
+            plot,
+        )
+    )
+
+    # 2. stability: 2.5 s against 7 s (quick: 5 s), 10 against 40 substeps
+    late = 300 if quick else 420
+    t = time.perf_counter()
+    stab = {}
+    for anchored in (False, True):
+        (a25, a_late), _ = sphere_heap(n_sph, 0.6, anchored, frames=(150, late))
+        (a40,), _ = sphere_heap(n_sph, 0.6, anchored, frames=(150,), substeps=40)
+        stab[anchored] = (a25, a_late, a40)
+    figures["sphere_stability"] = {"substep": stab[False], "anchored": stab[True], "late_s": late / 60}
+    cases.append(
+        Case(
+            "Heap at rest (spheres, μ = 0.6)",
+            f"as above; angle at 2.5 s and {late / 60:g} s, and at 2.5 s with 40 substeps",
+            "a pile comes to rest: ≤ 3° change over time and from 10 to 40 substeps (issue 24)",
+            "; ".join(
+                f"{k}: {v[0]:.1f}° → {v[1]:.1f}° ({late / 60:g} s), {v[2]:.1f}° (40 substeps)"
+                for k, v in (("substep", stab[False]), ("anchored", stab[True]))
+            ),
+            "; ".join(
+                f"{k}: Δt {v[1] - v[0]:+.1f}°, Δsubsteps {v[2] - v[0]:+.1f}°"
+                for k, v in (("substep", stab[False]), ("anchored", stab[True]))
+            ),
+            "10 or 40 substeps × 2 iterations",
+            time.perf_counter() - t,
+        )
+    )
+
+    # 3. rice-like grains at the node's defaults
+    n_rice = 300 if quick else 900
+    t = time.perf_counter()
+    rice = {}
+    frames = (150, 300) if quick else (150, 420)
+    for anchored in (False, True):
+        rice[anchored] = rice_heap(n_rice, anchored, frames=frames)[0]
+    dry = rice_heap(n_rice, True, frames=(150,), friction=0.0)[0][0][1]
+    figures["rice_repose"] = {"substep": rice[False], "anchored": rice[True], "frictionless": dry}
+    cases.append(
+        Case(
+            "Angle of repose of rice-like grains",
+            f"{n_rice} ellipsoid grains 5 × 3 × 2.5 mm (8 particles each) poured as a stream on flat ground, xpbd "
+            "defaults (μs 0.6, μk 0.42, damping 0.1, sleeping 2 mm/s), no adhesion",
+            "35.7–44.4° (paddy, Zareiforoush et al. 2009); milled rice static friction 0.37 glass, 0.48 wood "
+            "(Jouki & Khazaei 2012)",
+            "; ".join(
+                f"{k}: " + " → ".join(f"surface {a:.1f}°, H/R {b:.1f}°" for a, b in v)
+                for k, v in (("substep", rice[False]), ("anchored", rice[True]))
+            )
+            + f" ({' and '.join(f'{f / 60:g} s' for f in frames)}); frictionless H/R {dry:.1f}°",
+            f"anchored at 2.5 s {rice[True][0][0] - 35.7:+.1f}° (surface) below the low end, and still creeping: "
+            "MISSES; the substep rule spreads flat",
+            "node defaults: 10 substeps × 2 iterations, 8 particles per grain",
+            time.perf_counter() - t,
+        )
+    )
+
+    # 4. packing of settled spheres
+    t = time.perf_counter()
+    n_pack = 1500 if quick else 4000
+    pack = {mu: packing_fraction(n_pack, mu, True)[0] for mu in (0.0, 0.3)}
+    pack_sub = packing_fraction(n_pack, 0.3, False)[0]
+    figures["packing"] = {"frictionless": pack[0.0], "mu0.3_anchored": pack[0.3], "mu0.3_substep": pack_sub}
+    cases.append(
+        Case(
+            "Random packing of settled spheres",
+            f"{n_pack} spheres poured into a 16 r box, 2.5 s; φ in the core (2 d from walls and top)",
+            "frictionless ≈ 0.639, μ = 0.3 ≈ 0.593 (Agnolin & Roux 2007)",
+            f"frictionless {pack[0.0]:.3f}; μ 0.3: anchored {pack[0.3]:.3f}, substep {pack_sub:.3f}",
+            f"{pack[0.0] - 0.639:+.3f}, {pack[0.3] - 0.593:+.3f} (anchored)",
+            "10 substeps × 2 iterations, shock propagation 4",
+            time.perf_counter() - t,
+        )
+    )
+
+    # 5. grain geometry
+    t = time.perf_counter()
+    geo = grain_geometry()
+    figures["geometry"] = geo
+    japonica = geo[0]
+    cases.append(
+        Case(
+            "Rice-grain geometry",
+            "base_mesh shape rice, each variety preset (SPEC §1.1: length factors 1.8 / 1.0 / 0.7 on 5 × 3 × 2 mm)",
+            "7.43 × 2.75 × 2.53 mm, 26.91 g per 1,000 grains, one milled variety (Jouki & Khazaei 2012); cooked "
+            "grains are larger (expansion P, G eq. 6)",
+            "; ".join(f"{v}: {a:.2f} × {b:.2f} × {c:.2f} mm, {vol:.1f} mm³" for v, a, b, c, vol in geo)
+            + "; xpbd mass default 25 mg",
+            f"japonica length {japonica[1] - 7.43:+.2f} mm, width {japonica[2] - 2.75:+.2f}, thickness "
+            f"{japonica[3] - 2.53:+.2f}; mass {25.0 - 26.91:+.2f} mg",
+            "none (the presets are G's factors on a raw short grain, not a measured variety)",
+            time.perf_counter() - t,
+        )
+    )
+    for name, what in (
+        ("Janssen effect", "apparent mass at a silo's base vs filled mass, fit of λ = D/(4 μ_wall K)"),
+        ("Squeezed grain", "strain of one cooked grain vs load (25 % at 0.2 N, fracture near 50 %, SPEC §3)"),
+    ):
+        cases.append(Case(name, what, "see issue 24", "NOT DONE", "—", "—", 0.0))
+    return cases, figures
+
+
+def _plot_curve(name, xs, series, xlabel, ylabel):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    IMAGES.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(5, 3.2))
+    for label, ys in series.items():
+        ax.plot(xs, ys, "o-", label=label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    path = IMAGES / f"{name}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path.relative_to(DOC.parent))
+
+
+DIAGNOSIS = [
+    "## Why heaps crept flat, and what the anchored model changes",
+    "",
+    "Measured on 900 rice-like grains dropped as a loose ball (the issue's set-up) with the substep rule: "
+    "H/R 14.5° at 0.5 s, 12.2° at 2.5 s, 10.1° at 7 s; 8 iterations or 40 substeps 15–16°; μs 1.0 no better than "
+    "0.6 (12.3°); damping 0 or 0.6, sleeping off, shape matching off: no cure. A lone sphere or grain on a "
+    "tilted wall holds as it should (sphere, μs 0.6: still at 28°, slides at 35°), so the rule is right for one "
+    "contact and wrong for a heap:",
+    "",
+    "1. **No memory.** Macklin's rule removes at most the substep's own tangential displacement. What the later "
+    "corrections of the same substep add (other contacts, shape matching, walls) is never undone, so a heap "
+    "creeps for ever (spheres, μ 0.6: 13.7° at 2.5 s, 6.2° at 5 s). Anchors (static friction restores the drift "
+    "since the contact began sticking; sliding re-anchors) stop the creep: 30.1° at 2.5 s and at 5 s.",
+    "2. **Frictionless pre-stabilisation.** Each substep starts with a contact sweep that pushes overlapping "
+    "pairs apart along their normals without friction (Macklin et al. 2014 §4.2). Its push is ∝ h² per "
+    "substep, so its spreading per second depends on the substep count: with anchors but a frictionless "
+    "pre-stabilisation the heap read 23.3° at 10 substeps and 30.6° at 40. With friction in that sweep too: "
+    "30.1° and 28.3°.",
+    "3. **Rice-like grains** (clusters of 8 particles) still miss. Dropped as a loose ball (300 grains, "
+    "2.5 s) they spread (substep rule: H/R 12.4°) or stick where they land (anchored: H/R 24.4°, a mound that "
+    "keeps the ball's rim, no cone). Poured as a stream (the table's case) the anchored heap starts near the "
+    "target and creeps: 35.5° at 0.8 s, 29.8° at 2.5 s, 20.4° at 6.7 s (surface fit, 300 grains; substep rule "
+    "20.3° → 8.6° by 2.5 s). Spheres do not creep with anchors, clusters do: shape matching runs after the "
+    "contacts in every iteration and moves the contact particles with the grain's mean motion, which the "
+    "anchors only win back up to μs·d per iteration. Next: friction at the contact points of the clusters "
+    "(the grain's rotation included) or contacts after shape matching, and rolling resistance.",
+    "",
+    "The anchored model is **off by default** (`SolverSettings.anchored_friction`; not yet a node parameter): "
+    "with it on, four existing tests move (tall pile's resting overlap 0.37 r against a bound of 0.2 r; the "
+    "sleeping pile's 0.12 r against 0.05 r, because its upper layer no longer slides off; the long-rest and "
+    "dropped-element tests). Those bounds need re-measuring before the default can change.",
+    "",
+    "## Cost",
+    "",
+    "The reduced rice bowl (benchmarks/bench_scenes.py QUICK sizes, `rice_sim.frames=30`, node time of "
+    "`rice_sim`, three runs each, load 1.2–1.3): before this change 2.47–2.58 s; now with friction_model "
+    "substep 2.41–2.46 s (the bundled kernel arguments cost nothing); anchored 2.58–2.73 s (+5–10 %: the "
+    "anchors' reads and writes, their carry over list rebuilds, friction in pre-stabilisation).",
+    "",
+    "## Not done",
+    "",
+    "- Poured-pile angle of repose of rice-like grains; rolling resistance for clusters; the onigiri under "
+    "gravity on its plate (graphs/onigiri*.yaml still run without gravity).",
+    "- Janssen effect, squeezed grain, ellipsoid packing against aspect ratio.",
+    "- Every case at the accuracy report's recommended setting (only 10 vs 40 substeps is compared).",
+    "",
+]
+
+
+def write_doc(cases: list[Case], quick: bool, total: float) -> None:
+    lines = [
+        "# Validation against published granular figures (issue 24)",
+        "",
+        f"Written by `python benchmarks/validation.py{' --quick' if quick else ''}` "
+        f"({'quick sizes' if quick else 'full sizes'}; {total:.0f} s on this machine). Friction models: "
+        "**substep** = Macklin et al. 2014's rule on each substep's displacement (the default); **anchored** = "
+        "static friction restores the drift since the contact began sticking (`SolverSettings.anchored_friction`).",
+        "",
+        "| case | set-up | reference (source) | ours | error | knobs | s |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for c in cases:
+        lines.append(f"| {c.name} | {c.setup} | {c.reference} | {c.ours} | {c.error} | {c.knobs} | {c.seconds:.0f} |")
+    lines.append("")
+    for c in cases:
+        if c.plot:
+            lines += [f"![{c.name}]({c.plot})", ""]
+    lines += DIAGNOSIS
+    DOC.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="reduced sizes (CI)")
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    cases, figures = run_cases(args.quick)
+    for c in cases:
+        print(f"{c.name}: {c.ours}  [{c.error}]  {c.seconds:.1f} s")
+    write_doc(cases, args.quick, time.perf_counter() - start)
+    print(f"wrote {DOC.relative_to(REPO)}")
+
+
+if __name__ == "__main__":
+    main()

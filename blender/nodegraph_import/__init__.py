@@ -1,0 +1,165 @@
+"""nodegraph import: the whole nodegraph look in Blender, from the .glb and the .usdc.
+
+Blender's own importers carry most of a nodegraph material (colour, roughness, coat; the glTF importer also
+transmission, IOR, volume and sheen) but not all of it: the USD importer reads UsdPreviewSurface's ``opacity``
+as alpha, so eggs and ice come back as see-through ghosts that do not refract, and neither importer knows
+subsurface scattering, so rice renders as plaster. nodegraph writes each material's whole principled set beside
+what the importers read: as ``nodegraph:principled:*`` attributes on the USD Material prim and under the same
+keys in the glTF material's ``extras``. Both importers keep those as the material's custom properties; this
+add-on sets the Principled BSDF from them:
+
+- transmission and IOR (alpha back to 1), with a volume absorption node in the egg's or ice's colour where the
+  importer made none;
+- subsurface weight and radius (radius in mm, the files' unit: Subsurface Scale 0.001, Blender's metres after
+  both importers' default unit conversion);
+- sheen and specular level where the importer did not map them.
+
+It runs by itself after File > Import > glTF 2.0 (a glTF importer user extension) and after File > Import >
+Universal Scene Description (a ``bpy.types.USDHook``). For files imported before the add-on was enabled, or from
+a script, run "Apply nodegraph Looks" (F3 search) or call ``apply_looks()``.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+bl_info = {
+    "name": "nodegraph import",
+    "author": "nodegraph",
+    "version": (1, 0, 0),
+    "blender": (4, 2, 0),
+    "location": "File > Import > glTF 2.0 / Universal Scene Description",
+    "description": "Transmission, IOR and subsurface scattering of nodegraph's .glb and .usd files",
+    "category": "Import-Export",
+}
+
+PREFIX = "nodegraph:principled:"
+MM = 1e-3  # metres per millimetre: the files' unit after the importers' unit conversion
+SHEEN_ROUGHNESS = 0.5  # the exporter's glTF sheen roughness (nodes/export/gltf_writer.py)
+
+
+def look_of(material) -> dict:
+    """The ``nodegraph:principled:*`` custom properties of a material, by short name (arrays as tuples)."""
+    out = {}
+    for key in material.keys():
+        if key.startswith(PREFIX):
+            value = material[key]
+            out[key[len(PREFIX) :]] = tuple(value) if hasattr(value, "__len__") else float(value)
+    return out
+
+
+def _principled(material):
+    """The Principled BSDF that feeds the material output's surface (None if there is none)."""
+    if not material.use_nodes or material.node_tree is None:
+        return None
+    for node in material.node_tree.nodes:
+        if node.type == "OUTPUT_MATERIAL" and node.inputs["Surface"].is_linked:
+            source = node.inputs["Surface"].links[0].from_node
+            if source.type == "BSDF_PRINCIPLED":
+                return source
+    return next((n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
+
+
+def _ensure_volume(material, look: dict) -> None:
+    """A volume absorption in the attenuation colour over the mean subsurface radius, as the glTF importer makes
+    from KHR_materials_volume, where the material output has no volume yet (the USD importer makes none)."""
+    tree = material.node_tree
+    output = next((n for n in tree.nodes if n.type == "OUTPUT_MATERIAL"), None)
+    if output is None or output.inputs["Volume"].is_linked:
+        return
+    radius = look.get("subsurfaceRadius", (1.0, 1.0, 1.0))
+    absorption = tree.nodes.new("ShaderNodeVolumeAbsorption")
+    absorption.location = (output.location.x - 250, output.location.y - 250)
+    absorption.inputs["Color"].default_value = (*look.get("subsurfaceColor", (1.0, 1.0, 1.0)), 1.0)
+    absorption.inputs["Density"].default_value = 1.0 / max(sum(radius) / 3 * MM, 1e-6)
+    tree.links.new(absorption.outputs["Volume"], output.inputs["Volume"])
+
+
+def apply_look(material) -> bool:
+    """Set the material's Principled BSDF from its nodegraph look; False when it carries none."""
+    look = look_of(material)
+    bsdf = _principled(material)
+    if not look or bsdf is None:
+        return False
+    inputs = bsdf.inputs
+    if "ior" in look:
+        inputs["IOR"].default_value = look["ior"]
+    transmission = look.get("transmission", 0.0)
+    if transmission > 0:
+        inputs["Transmission Weight"].default_value = transmission
+        inputs["Alpha"].default_value = 1.0  # the USD importer's reading of opacity = 1 − transmission
+        material.surface_render_method = "DITHERED"
+        _ensure_volume(material, look)
+    elif look.get("subsurface", 0.0) > 0:
+        inputs["Subsurface Weight"].default_value = look["subsurface"]
+        inputs["Subsurface Radius"].default_value = look["subsurfaceRadius"]
+        inputs["Subsurface Scale"].default_value = MM
+    if look.get("sheen", 0.0) > 0 and not inputs["Sheen Weight"].is_linked:
+        tint, base = look.get("sheenTint", 0.5), inputs["Base Color"].default_value
+        inputs["Sheen Weight"].default_value = look["sheen"]
+        inputs["Sheen Tint"].default_value = (*((1 - tint) + tint * base[c] for c in range(3)), 1.0)
+        inputs["Sheen Roughness"].default_value = SHEEN_ROUGHNESS
+    if "specular" in look:
+        inputs["Specular IOR Level"].default_value = look["specular"]
+    return True
+
+
+def apply_looks(materials=None) -> int:
+    """Apply every nodegraph look (all materials by default); how many materials carried one."""
+    return sum(apply_look(m) for m in (bpy.data.materials if materials is None else materials))
+
+
+class glTF2ImportUserExtension:
+    """Blender's glTF importer calls this for each material it makes (the add-on must be enabled)."""
+
+    def gather_import_material_after_hook(self, gltf_material, vertex_color, blender_material, gltf):
+        apply_look(blender_material)
+
+
+class NODEGRAPH_USDHook(bpy.types.USDHook):
+    """After a USD import: apply the looks the imported materials carry as custom properties."""
+
+    bl_idname = "nodegraph_usd_hook"
+    bl_label = "nodegraph looks"
+    bl_description = "Transmission, IOR and subsurface scattering from nodegraph:principled:* attributes"
+
+    @staticmethod
+    def on_import(import_context):
+        apply_looks()
+        return True
+
+
+class NODEGRAPH_OT_apply_looks(bpy.types.Operator):
+    """Set every material that carries a nodegraph look (transmission, IOR, subsurface) from it"""
+
+    bl_idname = "nodegraph.apply_looks"
+    bl_label = "Apply nodegraph Looks"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        count = apply_looks()
+        self.report({"INFO"}, f"nodegraph looks applied to {count} material(s)")
+        return {"FINISHED"}
+
+
+def _usd_hooks_can_run() -> bool:
+    """Blender calls USD hooks through its bundled USD Python bindings (``pxr``); the ``bpy`` module from the
+    package registry has none and aborts on the first hook call, so there the hook is not registered and
+    ``apply_looks()`` is called after the import instead."""
+    import importlib.util
+
+    return importlib.util.find_spec("pxr") is not None
+
+
+def _classes():
+    return (NODEGRAPH_USDHook, NODEGRAPH_OT_apply_looks) if _usd_hooks_can_run() else (NODEGRAPH_OT_apply_looks,)
+
+
+def register():
+    for cls in _classes():
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(_classes()):
+        bpy.utils.unregister_class(cls)

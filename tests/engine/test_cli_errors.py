@@ -1,0 +1,95 @@
+"""Errors that used to mislead a new user: each says what is wrong and what to do, never a traceback."""
+
+from pathlib import Path
+
+import pytest
+
+from nodegraph.cli import doc_summary, main
+from nodegraph.errors import RecipeError
+from nodegraph.recipe import load_recipe, parse_recipe
+
+from .conftest import TOY
+from .test_validation import VALID
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_nodes_prints_whole_first_sentences(capsys):
+    assert main(["nodes"]) == 0
+    out = capsys.readouterr().out
+    assert "static obstacle particles (e.g. eggs on settled rice)" in out  # used to stop at "(e.g."
+    from nodegraph.registry import default_registry
+
+    for spec in default_registry().specs():
+        paragraph = " ".join((spec.doc or "").strip().split("\n\n")[0].split())
+        summary = doc_summary(spec.doc)
+        assert summary == paragraph or (paragraph.startswith(summary) and summary.endswith("."))
+        assert summary in out
+
+
+def test_doc_summary_cuts_at_a_sentence_end_only():
+    assert (
+        doc_summary("One thing (e.g. a grain)\nspans lines. Second sentence.")
+        == "One thing (e.g. a grain) spans lines."
+    )
+    assert doc_summary("No full stop, but\ntwo lines\n\nsecond paragraph") == "No full stop, but two lines"
+
+
+@pytest.mark.parametrize(
+    "head, kind", [(b"\x89PNG\r\n\x1a\n", "a PNG image"), (b"glTF\x02\x00", "a glTF binary (.glb)"), (b"", "empty")]
+)
+def test_inspect_refuses_a_file_that_is_not_a_recording(tmp_path, capsys, head, kind):
+    path = tmp_path / "preview.png"
+    path.write_bytes(head + b"\0" * 8 if head else b"")
+    assert main(["inspect", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert f"is {kind}, not a Rerun recording" in err and "Traceback" not in err
+
+
+def test_a_missing_recipe_suggests_the_one_in_graphs(monkeypatch):
+    monkeypatch.chdir(REPO)
+    for given in ("ikura_don", "ikura_don.yaml", "graphs/ikura_do.yaml"):
+        with pytest.raises(RecipeError) as info:
+            load_recipe(given, registry=None)
+        assert info.value.issues[0].suggestion == "graphs/ikura_don.yaml", given
+
+
+@pytest.mark.parametrize(
+    "old, new, line, words",
+    [
+        ("    params: {count", "   params: {count", 8, "check the indentation of line 8: it starts at column 4"),
+        ("    params:\n      dx", "      params:\n      dx", 12, "check the indentation of line 12"),
+        ("    params: {count", "\tparams: {count", 8, "line 8 is indented with a tab"),
+    ],
+)
+def test_yaml_indentation_mistakes_get_a_hint(registry, old, new, line, words):
+    assert old in VALID
+    with pytest.raises(RecipeError) as info:
+        parse_recipe(VALID.replace(old, new, 1), registry, file="r.yaml")
+    (issue,) = info.value.issues
+    assert issue.location.line == line and words in issue.message
+
+
+def test_node_keys_indented_too_little_are_named(registry):
+    text = VALID.replace("  merge:\n    type: toy_merge\n    inputs", "  merge:\n  type: toy_merge\n  inputs")
+    with pytest.raises(RecipeError) as info:
+        parse_recipe(text, registry, file="r.yaml")
+    messages = [str(i) for i in info.value.issues]
+    assert any("node 'merge': nothing under it" in m for m in messages)
+    assert any("'type' is a key of a node, not a node: indent it under its node" in m for m in messages)
+
+
+def test_a_failed_first_run_does_not_claim_an_older_recording(tmp_path, capsys):
+    recipe = tmp_path / "my_don.yaml"
+    recipe.write_text(
+        "outputs: [boom.spheres]\nnodes:\n  pts: {type: toy_points}\n"
+        "  boom: {type: toy_fail, inputs: {spheres: pts.spheres}}\n"
+    )
+    rrd = tmp_path / "my_don.rrd"
+    args = ["run", str(recipe), "--plugin", str(TOY), "--cache-dir", str(tmp_path / "c"), "--rrd", str(rrd)]
+    assert main([*args, "--out-dir", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err
+    assert "no complete recording" in err and "left as it was" not in err
+    rrd.write_bytes(b"an older complete recording")
+    assert main([*args, "--out-dir", str(tmp_path / "out")]) == 1
+    assert "left as it was" in capsys.readouterr().err

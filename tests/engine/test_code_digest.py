@@ -1,0 +1,190 @@
+"""A node's cache key covers the code it runs: editing a helper module it imports (inside its function,
+relative or absolute, at any depth) re-runs it; editing a module it does not import does not."""
+
+import ast
+import os
+import subprocess
+import sys
+import textwrap
+from importlib.metadata import EntryPoint
+from pathlib import Path
+
+import pytest
+
+from nodegraph import registry as registry_module
+from nodegraph.cache import Cache
+from nodegraph.code_digest import import_statements, project_modules
+from nodegraph.executor import run_recipe
+from nodegraph.recipe import parse_recipe
+
+PACKAGE = "kitchen_nodes"
+FILES = {
+    "__init__.py": "from .boil import boil  # noqa: F401\n",
+    "boil.py": '''
+        from nodegraph import Out, Param, node
+        from nodegraph.values import Table
+
+
+        @node("boil", outputs={"table": Out(Table, "the water's temperature")},
+              params={"minutes": Param(float, 1.0, "how long")})
+        def boil(ctx, *, minutes):
+            """Heat water (the helper is imported inside the function, as the built-in nodes do)."""
+            import numpy as np
+
+            from . import heat
+
+            return Table({"celsius": np.array([heat.temperature(minutes)])})
+        ''',
+    "heat.py": """
+        import kitchen_nodes.stove as stove
+
+
+        def temperature(minutes):
+            return min(100.0, 20.0 + stove.POWER * minutes)
+        """,
+    "stove.py": "POWER = 10.0\n",
+    "unrelated.py": "SALT = 1.0\n",
+}
+RECIPE = "outputs: [water]\nnodes:\n  water: {type: boil, params: {minutes: 2.0}}\n"
+
+
+@pytest.fixture
+def kitchen(tmp_path, monkeypatch):
+    """A node package on sys.path, registered through a (fake) entry point like an installed plugin;
+    ``load()`` imports it afresh, as a new process would after an edit."""
+    package = tmp_path / PACKAGE
+    package.mkdir()
+    for name, text in FILES.items():
+        (package / name).write_text(textwrap.dedent(text))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    fake = [EntryPoint("kitchen", PACKAGE, registry_module.ENTRY_POINT_GROUP)]
+    monkeypatch.setattr(
+        registry_module, "entry_points", lambda group: fake if group == registry_module.ENTRY_POINT_GROUP else []
+    )
+
+    def forget():
+        for name in [n for n in sys.modules if n == PACKAGE or n.startswith(PACKAGE + ".")]:
+            del sys.modules[name]
+
+    def load():
+        forget()
+        return registry_module.default_registry()
+
+    yield package, load
+    forget()
+
+
+def run(registry, cache):
+    result = run_recipe(parse_recipe(RECIPE, registry, file="kitchen.yaml"), cache=cache)
+    return result.status()["water"], float(result.output("water.table").columns["celsius"][0])
+
+
+@pytest.mark.parametrize(
+    "edited, reruns",
+    [("heat.py", True), ("stove.py", True), ("boil.py", True), ("unrelated.py", False), ("__init__.py", False)],
+)
+def test_an_edit_to_the_code_a_node_runs_reruns_it(kitchen, tmp_path, edited, reruns):
+    package, load = kitchen
+    cache = Cache(tmp_path / "cache")
+    assert run(load(), cache) == ("ran", 40.0)
+    assert run(load(), cache) == ("cached", 40.0)
+    (package / edited).write_text((package / edited).read_text() + "# edited\n")
+    assert run(load(), cache)[0] == ("ran" if reruns else "cached")
+
+
+def test_a_changed_helper_gives_the_new_result_not_the_cached_one(kitchen, tmp_path):
+    package, load = kitchen
+    cache = Cache(tmp_path / "cache")
+    assert run(load(), cache) == ("ran", 40.0)
+    (package / "stove.py").write_text("POWER = 30.0\n")  # no version bumped anywhere
+    assert run(load(), cache) == ("ran", 80.0)
+
+
+def test_imports_are_followed_inside_functions_relative_and_absolute_within_the_project(kitchen):
+    _, load = kitchen
+    load()
+    found = project_modules(f"{PACKAGE}.boil", packages=set())
+    assert sorted(found) == [f"{PACKAGE}.boil", f"{PACKAGE}.heat", f"{PACKAGE}.stove"]  # not nodegraph, numpy
+
+
+def test_the_declared_version_still_enters_the_key(kitchen, tmp_path):
+    package, load = kitchen
+    cache = Cache(tmp_path / "cache")
+    run(load(), cache)
+    boil = package / "boil.py"
+    boil.write_text(boil.read_text().replace('@node("boil", ', '@node("boil", version=2, '))
+    assert run(load(), cache)[0] == "ran"
+
+
+TRICKY = b'''
+import a.b as c, d
+from . import e
+from .f import (g,  # a comment with ) in it
+    h)
+from..i import j
+if x: import k
+try: import l
+except ImportError: pass
+x = 1; import m
+def f():
+    from n import \\
+        o
+    class C:
+        import p
+match v:
+    case 1: import q
+text = """
+from r import s
+"""
+'''
+
+
+def every_import(source: bytes) -> set:
+    """The reference: every import node of the whole syntax tree."""
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            found.update((alias.name, ()) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            found.add(("." * node.level + (node.module or ""), tuple(alias.name for alias in node.names)))
+    return found
+
+
+@pytest.mark.parametrize("where", ["tricky", "repository"])
+def test_the_import_scan_finds_every_import_of_the_syntax_tree(where):
+    root = Path(__file__).resolve().parents[2]
+    files = [
+        p for folder in ("nodegraph", "nodes", "tests", "benchmarks", "tools") for p in (root / folder).rglob("*.py")
+    ]
+    sources = [TRICKY] if where == "tricky" else [p.read_bytes() for p in sorted(files)]
+    for source in sources:
+        missed = every_import(source) - import_statements(source)
+        assert not missed  # an import in a string may add a module; a real one is never dropped
+    assert ("r", ("s",)) in import_statements(TRICKY) and len(every_import(TRICKY)) == 11
+
+
+def test_an_installed_plugin_package_reruns_after_its_helper_is_edited(tmp_path):
+    """End to end, as a user meets it: a package installed with an entry point (its dist-info on the path),
+    run by the command line in a new process each time."""
+    site = tmp_path / "site"
+    (site / PACKAGE).mkdir(parents=True)
+    for name, text in FILES.items():
+        (site / PACKAGE / name).write_text(textwrap.dedent(text))
+    info = site / f"{PACKAGE}-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {PACKAGE}\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(f"[{registry_module.ENTRY_POINT_GROUP}]\nkitchen = {PACKAGE}\n")
+    (tmp_path / "kitchen.yaml").write_text(RECIPE)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")]))}
+    cache = tmp_path / "cache"
+
+    def entries_after_a_run() -> int:
+        command = [sys.executable, "-m", "nodegraph.cli", "run", "kitchen.yaml", "--cache-dir", str(cache), "-q"]
+        subprocess.run([*command, "--no-rrd"], cwd=tmp_path, env=env, check=True)
+        return len(list(cache.glob("entries/*/*.json")))
+
+    assert entries_after_a_run() == 1
+    (site / PACKAGE / "unrelated.py").write_text("SALT = 2.0\n")
+    assert entries_after_a_run() == 1  # cached: the node does not import it
+    (site / PACKAGE / "stove.py").write_text("POWER = 30.0\n")
+    assert entries_after_a_run() == 2  # ran again: a module its helper imports changed

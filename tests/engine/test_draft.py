@@ -1,0 +1,74 @@
+"""``--draft``: a recipe's ``draft:`` block applied as overrides (``--set`` wins), located at its own lines;
+its keys are checked whenever the recipe loads."""
+
+import pytest
+
+from nodegraph.cli import main
+from nodegraph.errors import RecipeError
+from nodegraph.recipe import load_recipe
+
+from .test_validation import VALID
+
+DRAFT = VALID.replace("nodes:\n", "draft:\n  pts.count: 4\n  shifted.dx: 0.5\nnodes:\n", 1)
+
+
+def test_draft_applies_its_block_and_set_wins(registry, recipe_file):
+    path = recipe_file(DRAFT)
+    full = load_recipe(path, registry)
+    assert full.nodes["pts"].params["count"] == 20 and full.draft == ("pts.count=4", "shifted.dx=0.5")
+    draft = load_recipe(path, registry, draft=True)
+    assert draft.nodes["pts"].params["count"] == 4 and draft.nodes["shifted"].params["dx"] == 0.5
+    assert draft.overrides == ("pts.count=4", "shifted.dx=0.5")  # a worker reloading it gets the same recipe
+    both = load_recipe(path, registry, ["pts.count=7"], draft=True)
+    assert both.nodes["pts"].params["count"] == 7 and both.overrides[-1] == "pts.count=7"
+    assert load_recipe(path, registry, list(draft.overrides)).digest() == draft.digest()
+
+
+def test_a_bad_draft_key_is_reported_at_its_line_without_draft(registry, recipe_file):
+    path = recipe_file(DRAFT.replace("shifted.dx", "shifted.dz").replace("pts.count", "ptz.count"))
+    with pytest.raises(RecipeError) as info:
+        load_recipe(path, registry)
+    issues = {i.location.line: i for i in info.value.issues}
+    assert set(issues) == {6, 7}
+    assert "no node 'ptz'" in issues[6].message and issues[6].suggestion == "pts"
+    assert "no parameter 'dz'" in issues[7].message and issues[7].suggestion == "dx"
+
+
+def test_a_bad_draft_value_is_reported_at_its_line(registry, recipe_file):
+    path = recipe_file(DRAFT.replace("pts.count: 4", "pts.count: -4"))
+    load_recipe(path, registry)  # the value applies only in draft mode
+    with pytest.raises(RecipeError) as info:
+        load_recipe(path, registry, draft=True)
+    (issue,) = info.value.issues
+    assert (issue.location.file, issue.location.line) == (str(path), 6) and issue.param == "count"
+
+
+def test_draft_without_a_block_says_what_to_add(registry, recipe_file, capsys):
+    path = recipe_file(VALID)
+    with pytest.raises(RecipeError, match="no draft: block"):
+        load_recipe(path, registry, draft=True)
+    from tests.engine.conftest import TOY
+
+    assert main(["check", str(path), "--draft", "--plugin", str(TOY)]) == 2
+    assert "draft: {" in capsys.readouterr().err
+
+
+def test_check_reports_the_draft(recipe_file, capsys):
+    from tests.engine.conftest import TOY
+
+    assert main(["check", str(recipe_file(DRAFT)), "--plugin", str(TOY)]) == 0
+    assert "draft: 2 settings" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_chestnut", "rice_bunny"],
+)
+def test_scene_recipes_have_a_valid_draft(name):
+    from pathlib import Path
+
+    from nodegraph.registry import default_registry
+
+    path = Path(__file__).resolve().parents[2] / "graphs" / f"{name}.yaml"
+    recipe = load_recipe(path, default_registry(), draft=True)
+    assert recipe.draft and recipe.nodes["preview"].params["width"] <= 320

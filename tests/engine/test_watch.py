@@ -1,0 +1,63 @@
+"""``nodegraph watch``: a real process, a real file edited under it: each save re-runs only what the edit
+changed, a bad edit shows its error at its line and leaves the last good outputs as they were."""
+
+import queue
+import subprocess
+import sys
+import threading
+import time
+
+from .conftest import TOY
+from .test_validation import VALID
+
+
+def _lines(proc) -> queue.Queue:
+    lines: queue.Queue = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(line) for line in proc.stdout], daemon=True).start()
+    return lines
+
+
+def _until(lines: queue.Queue, text: str, seen: list, timeout: float = 120.0) -> float:
+    """Read lines until one contains ``text``; when it came."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        try:
+            line = lines.get(timeout=1.0)
+        except queue.Empty:
+            continue
+        seen.append(line)
+        if text in line:
+            return time.perf_counter()
+    raise AssertionError(f"no line with {text!r} in:\n{''.join(seen)}")
+
+
+def test_watch_reruns_what_an_edit_changed_and_keeps_the_last_good_result(tmp_path):
+    recipe = tmp_path / "r.yaml"
+    recipe.write_text(VALID.replace("outputs: [merge.spheres]", "outputs: [shifted.spheres]"))
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "nodegraph.cli", "watch", str(recipe), "--plugin", str(TOY), "--runs", "3"]
+    command += ["--cache-dir", str(tmp_path / "cache"), "--out-dir", str(out), "--no-rrd"]
+    proc = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lines, seen = _lines(proc), []
+    try:
+        _until(lines, "watching", seen)
+        first = (out / "shifted.npz").read_bytes()
+
+        seen.clear()
+        saved = time.perf_counter()
+        recipe.write_text(recipe.read_text().replace("dx: 1.5", "dx: 2.5"))  # an edit of one node's parameter
+        done = _until(lines, "run 2 done", seen)
+        rows = {line.split("│")[1].strip(): line for line in seen if line.count("│") > 3}
+        assert "cached" in rows["pts"] and "ran" in rows["shifted"]  # only the edited node ran again
+        second = (out / "shifted.npz").read_bytes()
+        assert second != first
+        assert done - saved < 10.0, f"{done - saved:.1f} s from the save to the new outputs"
+
+        seen.clear()
+        recipe.write_text(recipe.read_text().replace("dx: 2.5", "dx: oops"))  # a bad edit
+        _until(lines, "run 3: not run; the last good outputs stay", seen)
+        assert any("r.yaml:13" in line and "dx" in line for line in seen), "".join(seen)  # file, line, parameter
+        assert (out / "shifted.npz").read_bytes() == second
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()
