@@ -11,16 +11,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 LIMIT = 12
 
-# The solver's contact and integration kernels are being rewritten on their own branch, which keeps them
-# under the limit; these four are excepted until it lands. Remove each one as it goes (the second test
-# says when): the list only shrinks.
-SOLVER_EXCEPTIONS = {
-    ("nodes/simulation/contact_constraints.py", "_project_slab"),
-    ("nodes/simulation/contact_constraints.py", "contact_sweep"),
-    ("nodes/simulation/integrate.py", "_predict_one"),
-    ("nodes/simulation/integrate.py", "sleep_clusters"),
-}
-
 
 def _is_node_function(fn: ast.FunctionDef | ast.AsyncFunctionDef) -> bool:
     """Decorated with ``@node(...)`` (nodegraph.node.node): its parameters are the node's declared ports."""
@@ -46,20 +36,11 @@ def wide_functions(root: Path = ROOT) -> dict[tuple[str, str], tuple[int, int]]:
 
 
 def test_no_function_takes_more_than_12_parameters():
-    offenders = sorted(
-        f"{path}:{line} {name} ({count})"
-        for (path, name), (line, count) in wide_functions().items()
-        if (path, name) not in SOLVER_EXCEPTIONS
-    )
+    offenders = sorted(f"{path}:{line} {name} ({count})" for (path, name), (line, count) in wide_functions().items())
     assert not offenders, (
         f"functions with more than {LIMIT} parameters: {offenders}; pass named bundles "
         "(typing.NamedTuple of arrays: numba takes them as one argument)"
     )
-
-
-def test_the_solver_exceptions_are_still_needed():
-    stale = sorted(SOLVER_EXCEPTIONS - set(wide_functions()))
-    assert not stale, f"{stale} take at most {LIMIT} parameters now: remove them from SOLVER_EXCEPTIONS"
 
 
 def test_node_functions_are_recognised_and_nothing_else(tmp_path):
