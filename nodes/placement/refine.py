@@ -50,34 +50,32 @@ def _search_ranges(
 
 def neighbours(positions: np.ndarray, templates: ElementTemplates, tmpl: np.ndarray, travel: np.ndarray):
     """Pairs that can touch: centre distance < bound_i + travel_i + bound_j + travel_j (grid search)."""
-    from .refine_kernels import neighbour_lists
+    from .refine_kernels import Neighbours, neighbour_lists
 
     if len(positions) == 0:
-        return np.zeros(1, np.int64), np.zeros(0, np.int64)
+        return Neighbours(np.zeros(1, np.int64), np.zeros(0, np.int64))
     reach = np.maximum(templates.bound[tmpl], templates.circumradius[tmpl]) + travel
-    return neighbour_lists(np.ascontiguousarray(positions), np.ascontiguousarray(reach))
+    return Neighbours(*neighbour_lists(np.ascontiguousarray(positions), np.ascontiguousarray(reach)))
 
 
-def _depths(positions, rotations, tmpl, nb_start, nb, alive, templates: ElementTemplates, offset: float):
-    """Per live element the deepest overlap with its live neighbours (refine_kernels.overlap_depths)."""
-    from .refine_kernels import overlap_depths
+def _frames(positions, placement: Placement, tmpl: np.ndarray):
+    """The kernels' ``ElementFrames`` of the placement's elements at ``positions`` (moved in place by the refine)."""
+    from .refine_kernels import ElementFrames
 
-    return overlap_depths(
+    return ElementFrames(
         positions,
-        rotations,
-        tmpl,
-        nb_start,
-        nb,
-        alive,
-        templates.pts_start,
-        templates.pts,
-        templates.sph_start,
-        templates.centers,
-        templates.radii,
-        templates.bound,
-        templates.circumradius,
-        offset,
+        np.ascontiguousarray(placement.rotations),
+        np.ascontiguousarray(placement.normals),
+        np.ascontiguousarray(tmpl, np.int64),
     )
+
+
+def _shapes(templates: ElementTemplates):
+    """The kernels' ``TemplateShapes``: the arrays of ``templates`` they read."""
+    from .refine_kernels import TemplateShapes
+
+    t = templates
+    return TemplateShapes(t.pts_start, t.cost_end, t.pts, t.sph_start, t.centers, t.radii, t.bound, t.circumradius)
 
 
 def refine_placement(
@@ -90,7 +88,7 @@ def refine_placement(
     """
     import numba
 
-    from .refine_kernels import GAN, SAKURAI, colour_in_order, refine_offsets
+    from .refine_kernels import GAN, SAKURAI, RefineCost, SearchRange, colour_in_order, overlap_depths, refine_offsets
 
     n = len(placement)
     if n == 0:
@@ -98,48 +96,31 @@ def refine_placement(
     tmpl = templates.index(placement.kinds, placement.variants)
     lo, hi = _search_ranges(placement, templates, tmpl, refine_ranges, settings)
     travel = np.maximum(np.abs(lo), np.abs(hi))
-    positions = placement.positions.copy()
-    rotations = np.ascontiguousarray(placement.rotations)
-    normals = np.ascontiguousarray(placement.normals)
-    cost_kind = SAKURAI if settings.cost == "sakurai" else GAN
+    frames = _frames(placement.positions.copy(), placement, tmpl)
+    shapes = _shapes(templates)
+    cost = RefineCost(
+        SAKURAI if settings.cost == "sakurai" else GAN,
+        float(settings.slope),
+        float(settings.spacing * settings.c_refine),
+        float(settings.offset),
+        golden_iterations(settings.tolerance),
+    )
     travelled = np.zeros(n)
     for order in orders:
         # Neighbours within reach of any move left in this pass, from the current positions.
-        nb_start, nb = neighbours(positions, templates, tmpl, travel + np.abs(travelled))
+        near = neighbours(frames.positions, templates, tmpl, travel + np.abs(travelled))
         order = np.asarray(order, np.int64)
-        colour = colour_in_order(order, nb_start, nb)
-        moved = refine_offsets(
-            positions,
-            rotations,
-            normals,
-            tmpl,
-            lo - travelled,
-            hi - travelled,
-            nb_start,
-            nb,
-            colour,
-            order,
-            templates.pts_start,
-            templates.cost_end,
-            templates.pts,
-            templates.sph_start,
-            templates.centers,
-            templates.radii,
-            templates.bound,
-            templates.circumradius,
-            settings.offset,
-            cost_kind,
-            settings.slope,
-            settings.spacing * settings.c_refine,
-            golden_iterations(settings.tolerance),
-            travelled,
-            4 * numba.get_num_threads(),
-        )
-        travelled += moved
-    nb_start, nb = neighbours(positions, templates, tmpl, np.zeros(n))
-    depth = _depths(positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates, settings.offset)
+        colour = colour_in_order(order, near.start, near.index)
+        search = SearchRange(lo - travelled, hi - travelled, travelled)
+        travelled += refine_offsets(frames, search, near, colour, order, shapes, cost, 4 * numba.get_num_threads())
+    near = neighbours(frames.positions, templates, tmpl, np.zeros(n))
+    depth = overlap_depths(frames, near, np.ones(n, np.bool_), shapes, cost.offset)
     return dataclasses.replace(
-        placement, positions=positions, rotations=rotations, offsets=placement.offsets + travelled, overlap=depth
+        placement,
+        positions=frames.positions,
+        rotations=frames.rotations,
+        offsets=placement.offsets + travelled,
+        overlap=depth,
     )
 
 
@@ -151,31 +132,17 @@ def cull_placement(
     ``depth`` is, for kept elements, the depth against the kept neighbours; for culled ones the
     depth they had before culling.
     """
-    from .refine_kernels import cull_deepest
+    from .refine_kernels import cull_deepest, overlap_depths
 
     n = len(placement)
     if n == 0:
         return np.zeros(0, bool), np.zeros(0)
     tmpl = templates.index(placement.kinds, placement.variants)
-    nb_start, nb = neighbours(placement.positions, templates, tmpl, np.zeros(n))
-    rotations = np.ascontiguousarray(placement.rotations)
-    depth = _depths(placement.positions, rotations, tmpl, nb_start, nb, np.ones(n, np.bool_), templates, offset)
-    keep = cull_deepest(
-        depth,
-        threshold,
-        placement.positions,
-        rotations,
-        tmpl,
-        nb_start,
-        nb,
-        templates.pts_start,
-        templates.pts,
-        templates.sph_start,
-        templates.centers,
-        templates.radii,
-        templates.bound,
-        templates.circumradius,
-        offset,
-    )
-    after = _depths(placement.positions, rotations, tmpl, nb_start, nb, keep, templates, offset)
+    frames = _frames(np.ascontiguousarray(placement.positions), placement, tmpl)
+    shapes = _shapes(templates)
+    near = neighbours(frames.positions, templates, tmpl, np.zeros(n))
+    offset = float(offset)
+    depth = overlap_depths(frames, near, np.ones(n, np.bool_), shapes, offset)
+    keep = cull_deepest(depth, float(threshold), frames, near, shapes, offset)
+    after = overlap_depths(frames, near, keep, shapes, offset)
     return keep, np.where(keep, after, depth)

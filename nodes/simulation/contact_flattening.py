@@ -16,6 +16,7 @@ across another is not folded through itself: what that leaves is measured, not h
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -23,8 +24,51 @@ from numba import njit
 from .collider import sample_phi
 
 
-@dataclass(frozen=True, eq=False)
-class ShapeFields:
+class ElementMaps(NamedTuple):
+    """Per element: its mesh's shape index, the map of its local frame (SPEC §5 x = D·R·u + R·B·m(u) + t:
+    L⁻¹ = (D·R)⁻¹, R, B, t) and its world bounding box, padded by the clearance."""
+
+    shape: np.ndarray  # (e,) int64, row of the ShapeFields and VertexRings
+    lin_inv: np.ndarray  # (e, 3, 3)
+    rot: np.ndarray  # (e, 3, 3)
+    bend: np.ndarray  # (e, 3, 6)
+    t: np.ndarray  # (e, 3)
+    lo: np.ndarray  # (e, 3)
+    hi: np.ndarray  # (e, 3)
+
+
+class ElementVertices(NamedTuple):
+    """All elements' world vertices, CSR by element: element i's are ``world[start[i]:start[i + 1]]``."""
+
+    world: np.ndarray  # (v, 3)
+    start: np.ndarray  # (e + 1,) int64
+    shell: np.ndarray  # (v,) True for the vertices of the element's outer shell
+
+
+class ContactPairs(NamedTuple):
+    """CSR neighbour lists of the elements that are flattened: element i's are ``index[start[i]:start[i + 1]]``."""
+
+    start: np.ndarray  # (own + 1,) int64
+    index: np.ndarray  # int64
+
+
+class VertexRings(NamedTuple):
+    """Each shape's vertex neighbours as one CSR (``vertex_rings``)."""
+
+    row: np.ndarray  # (s,) int64: shape s's vertex v has its ring at start[row[s] + v]
+    start: np.ndarray  # int64
+    ring: np.ndarray  # int64, the shape's own vertex indices
+
+
+class InsideVertices(NamedTuple):
+    """Scratch of ``_inside``: the rows of the vertices found, their depth and the other element's normal there."""
+
+    rows: np.ndarray  # (most,) int64
+    depth: np.ndarray  # (most,)
+    normal: np.ndarray  # (most, 3)
+
+
+class ShapeFields(NamedTuple):
     """Per distinct element mesh: φ of its outer shell on its local grid (padded to one shape, φ > 0 out)."""
 
     phi: np.ndarray  # (s, nx, ny, nz)
@@ -76,23 +120,26 @@ def _local(x, lin_inv, rot, bend, t, u):
 
 
 @njit(cache=True)
-def _inside(
-    world, v0, v1, shell, j, lin_inv, rot, bend, t, lo, hi, phi, origin, pitch, dims, clearance, rows, depth, normal
-):
-    """Shell vertices of rows v0…v1 of ``world`` closer to element j than ``clearance`` (inside: depth > 0):
+def _inside(vertices, i, j, maps, fields, clearance, found):
+    """Shell vertices of element i closer to element j than ``clearance`` (inside: depth > 0), into ``found``:
     their rows, world depth and j's outward unit normal there (j's φ on its local grid, scaled by
     |∇ₓφ| = |(D·R)⁻ᵀ∇ᵤφ|). Returns how many."""
+    world, shell = vertices.world, vertices.shell
+    rows, depth, normal = found.rows, found.depth, found.normal
+    lin_inv, rot, bend, t, lo, hi = maps.lin_inv[j], maps.rot[j], maps.bend[j], maps.t[j], maps.lo[j], maps.hi[j]
+    sj = maps.shape[j]
+    dims = fields.dims
     count = 0
     u = np.empty(3)
-    grid = phi[j, : dims[j, 0], : dims[j, 1], : dims[j, 2]]
-    for k in range(v0, v1):
+    grid = fields.phi[sj, : dims[sj, 0], : dims[sj, 1], : dims[sj, 2]]
+    for k in range(vertices.start[i], vertices.start[i + 1]):
         if not shell[k]:
             continue
         x = world[k]
         if x[0] < lo[0] or x[1] < lo[1] or x[2] < lo[2] or x[0] > hi[0] or x[1] > hi[1] or x[2] > hi[2]:
             continue
         _local(x, lin_inv, rot, bend, t, u)
-        val, gx, gy, gz = sample_phi(grid, origin[j], pitch[j], u[0], u[1], u[2])
+        val, gx, gy, gz = sample_phi(grid, fields.origin[sj], fields.pitch[sj], u[0], u[1], u[2])
         if not val < np.inf:
             continue
         g = np.sqrt(gx * gx + gy * gy + gz * gz)
@@ -115,31 +162,9 @@ def _inside(
 
 
 @njit(cache=True)
-def neighbour_pushes(
-    world,
-    vstart,
-    shell,
-    nstart,
-    neighbours,
-    shape,
-    lin_inv,
-    rot,
-    bend,
-    t,
-    lo,
-    hi,
-    phi,
-    origin,
-    pitch,
-    dims,
-    clearance,
-    share,
-    adjacency,
-    ring_start,
-    ring,
-):
-    """Per shell vertex of each of the first elements (rows of ``nstart``): its move onto the contact plane
-    of each neighbour j it is inside (CSR ``nstart``/``neighbours``, in order). The plane of a pair: normal
+def neighbour_pushes(vertices, pairs, maps, fields, rings, clearance, share):
+    """Per shell vertex of each of the first elements (rows of ``pairs``): its move onto the contact plane
+    of each neighbour j it is inside (CSR ``pairs``, in order). The plane of a pair: normal
     n, the lens' axis, the depth-weighted sum of j's outward normals at its vertices inside i less i's at
     its vertices inside j (one vertex's nearest-surface normal points sideways in a thin grain); at
     a − ``share``·(a − b) along n, [b, a] the overlap's extent along n (how far each side's vertices
@@ -147,31 +172,23 @@ def neighbour_pushes(
     ``clearance``, and the cap they form is relaxed in the plane (``relax_cap``). The pair's other element
     computes the same plane from its side. Each element writes only its own vertices, in a fixed order:
     deterministic. Serial: a parallel kernel took ≈ 70 s to compile here, for ≈ 2× on 2 cores."""
-    push = np.zeros((vstart[nstart.shape[0] - 1], 3))
+    world, vstart = vertices.world, vertices.start
+    push = np.zeros((vstart[pairs.start.shape[0] - 1], 3))
     most = 0
     for e in range(vstart.shape[0] - 1):
         most = max(most, vstart[e + 1] - vstart[e])
-    for i in range(nstart.shape[0] - 1):
-        rows_x = np.empty(most, np.int64)
-        rows_y = np.empty(most, np.int64)
-        depth_x = np.empty(most)
-        depth_y = np.empty(most)
-        normal_x = np.empty((most, 3))
-        normal_y = np.empty((most, 3))
+    for i in range(pairs.start.shape[0] - 1):
+        found_x = InsideVertices(np.empty(most, np.int64), np.empty(most), np.empty((most, 3)))
+        found_y = InsideVertices(np.empty(most, np.int64), np.empty(most), np.empty((most, 3)))
+        rows_x, depth_x, normal_x = found_x.rows, found_x.depth, found_x.normal
+        rows_y, depth_y, normal_y = found_y.rows, found_y.depth, found_y.normal
         n = np.empty(3)
-        for q in range(nstart[i], nstart[i + 1]):
-            j = neighbours[q]
-            si, sj = shape[i], shape[j]
-            cx = _inside(
-                world, vstart[i], vstart[i + 1], shell, sj, lin_inv[j], rot[j], bend[j], t[j], lo[j], hi[j],
-                phi, origin, pitch, dims, clearance, rows_x, depth_x, normal_x,
-            )  # fmt: skip
+        for q in range(pairs.start[i], pairs.start[i + 1]):
+            j = pairs.index[q]
+            cx = _inside(vertices, i, j, maps, fields, clearance, found_x)
             if cx == 0:
                 continue
-            cy = _inside(
-                world, vstart[j], vstart[j + 1], shell, si, lin_inv[i], rot[i], bend[i], t[i], lo[i], hi[i],
-                phi, origin, pitch, dims, clearance, rows_y, depth_y, normal_y,
-            )  # fmt: skip
+            cy = _inside(vertices, j, i, maps, fields, clearance, found_y)
             for a in range(3):  # the lens' axis: depth-weighted outward normals of both sides
                 n[a] = 0.0
                 for k in range(cy):
@@ -208,7 +225,9 @@ def neighbour_pushes(
                     rows_x[capped] = r  # the cap: i's vertices now on the plane
                     capped += 1
             if capped > 1:
-                relax_cap(world, push, rows_x, capped, vstart[i], adjacency[shape[i]], ring_start, ring, n, plane)
+                relax_cap(
+                    world, push, rows_x, capped, vstart[i], rings.row[maps.shape[i]], rings.start, rings.ring, n, plane
+                )
     return push
 
 
@@ -349,7 +368,7 @@ def _gather(aggregates, fields_of) -> _Elements:
     )
 
 
-def vertex_rings(meshes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def vertex_rings(meshes) -> VertexRings:
     """Each (vertex count, faces) mesh's vertex neighbours as one CSR: shape s's vertex v has neighbours
     ``ring[ring_start[row[s] + v] : ring_start[row[s] + v + 1]]`` (its own vertex indices)."""
     rows, starts, rings, offset = [], [], [], 0
@@ -361,7 +380,7 @@ def vertex_rings(meshes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         starts.append(start + offset)
         rings.append(edges[:, 1])
         offset += len(edges)
-    return (
+    return VertexRings(
         np.array(rows, np.int64),
         np.concatenate(starts).astype(np.int64),
         np.concatenate(rings).astype(np.int64),
@@ -427,12 +446,11 @@ def flatten(
     if not contacts:  # no pair is tested: every element's row is empty
         nstart = np.zeros(own + 1, np.int64)
     pad = np.full(3, gap)
-    adjacency, ring_start, ring = vertex_rings(faces_of)
-    push = neighbour_pushes(
-        world, vstart, shell, nstart, near, elements.shape, elements.lin_inv, elements.rot, elements.bend,
-        elements.t, elements.lo - pad, elements.hi + pad, grids.phi, grids.origin, grids.pitch, grids.dims,
-        gap, share, adjacency, ring_start, ring,
-    )  # fmt: skip
+    maps = ElementMaps(
+        elements.shape, elements.lin_inv, elements.rot, elements.bend, elements.t, elements.lo - pad, elements.hi + pad
+    )
+    vertices = ElementVertices(world, vstart, shell)
+    push = neighbour_pushes(vertices, ContactPairs(nstart, near), maps, grids, vertex_rings(faces_of), gap, share)
     if free_space is not None:
         cphi, corigin, cpitch = free_space
         reach = 0.5 * float(np.min(elements.thickness[:own])) if own else 0.0

@@ -35,7 +35,10 @@ def _moved(x, x_built, i, moved):
 
 
 @njit(cache=True, inline="always")
-def _predict_one(x, v, w, r, accel, row, h, clamp, x_prev, x_built, moved, track, awake, i):
+def _predict_one(x, v, w, r, accel, h, clamp, x_prev, x_built, moved, awake, i):
+    """``predict`` for particle i: its row of ``accel`` (one row for all, or one per particle), and the
+    Verlet-list tracking when ``x_built`` holds a row per particle."""
+    row = i if accel.shape[0] == x.shape[0] else 0
     for k in range(3):
         x_prev[i, k] = x[i, k]
     if w[i] > 0.0 and awake[i]:
@@ -44,7 +47,7 @@ def _predict_one(x, v, w, r, accel, row, h, clamp, x_prev, x_built, moved, track
         _clamp(v, i, clamp * r[i] / h)
         for k in range(3):
             x[i, k] += h * v[i, k]
-    if track:
+    if x_built.shape[0] == x.shape[0]:
         _moved(x, x_built, i, moved)
 
 
@@ -56,10 +59,9 @@ def predict(x, v, x_prev, awake, w, r, x_built, moved, accel, h, clamp):
     Returns max_i |x_i − x_built_i| (the Verlet-list check, folded in to save a launch; 0 when
     ``x_built`` is empty, i.e. no neighbour lists). ``moved`` (n,) is scratch."""
     n = x.shape[0]
-    stride = 1 if accel.shape[0] == n else 0
     track = x_built.shape[0] == n
     for i in prange(n):
-        _predict_one(x, v, w, r, accel, i * stride, h, clamp, x_prev, x_built, moved, track, awake, i)
+        _predict_one(x, v, w, r, accel, h, clamp, x_prev, x_built, moved, awake, i)
     return np.sqrt(moved.max()) if track and n > 0 else 0.0
 
 
@@ -131,9 +133,10 @@ def _touching(x, r, i, j):
 
 
 @njit(cache=True, parallel=True)
-def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, nbr_start, nbr, h, sleep_speed):
+def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, nbr_start, nbr, still):
     """Put to sleep (and zero the velocities of) every element whose particles all lie within
-    sleep_speed·h of x_start, measured from before pre-stabilisation, none of which was ``pushed``
+    ``still`` (sleep_speed·h: the drift a resting particle may make in one substep) of x_start, measured
+    from before pre-stabilisation, none of which was ``pushed``
     (``contact_constraints.sleeper_share``) and none of which touches a particle of another awake
     element that moved farther (``nbr_start, nbr``: the contact lists, half or full; none without
     them). An element pinned in an overlap that pre-stabilisation and the solve undo in turn has a
@@ -149,7 +152,7 @@ def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, nbr_sta
     asleep particles in the contacts (``solver.XpbdSolver.substep``).
     """
     m = start.shape[0] - 1
-    limit = (sleep_speed * h) ** 2
+    limit = still * still
     slow = np.empty(m, np.bool_)
     falling = 0  # awake elements that would fall asleep now: without any, the touching rule has nothing to do
     for c in prange(m):

@@ -28,7 +28,8 @@ class RestMoments:
     null_proj: np.ndarray  # (m, 3, 3)
 
     def args(self):
-        return self.aqq_pinv, self.null_proj
+        """The kernels' argument: one ``shape_matching.LinearMoments``."""
+        return (shape_matching.LinearMoments(self.aqq_pinv, self.null_proj),)
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,7 +42,8 @@ class QuadraticFit:
     flags: np.ndarray  # (m,) bool
 
     def args(self):
-        return self.qt, self.qpinv, self.flags
+        """The kernels' argument: one ``shape_matching.QuadraticMoments``."""
+        return (shape_matching.QuadraticMoments(self.qt, self.qpinv, self.flags),)
 
 
 @dataclass(frozen=True, eq=False)

@@ -9,10 +9,37 @@ planar — where Jacobi-on-AᵀA / SVD polar decompositions flip or blow up. 3×
 out on scratch arrays: temporaries allocated per cluster per iteration cost more than the maths.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
 BLOCK = 64  # clusters per parallel task (one scratch allocation per block)
+
+
+class LinearMoments(NamedTuple):
+    """The linear goal's rest data per cluster (``rest_moments``)."""
+
+    aqq_pinv: np.ndarray  # (m, 3, 3) A_qq⁺
+    null_proj: np.ndarray  # (m, 3, 3) projector on A_qq's null space
+
+
+class QuadraticMoments(NamedTuple):
+    """The quadratic goal's rest data (``quadratic_moments``); clusters whose flag is unset keep the linear goal."""
+
+    qt: np.ndarray  # (n, 9) q̃ per particle
+    qpinv: np.ndarray  # (m, 9, 9) Ã_qq⁻¹ per cluster
+    flags: np.ndarray  # (m,) bool
+
+
+class GoalScratch(NamedTuple):
+    """3×3 and 3×9 work matrices of one cluster's goal map: A_pq, R, the linear goal, Ã_pq, the quadratic goal."""
+
+    apq: np.ndarray
+    rot: np.ndarray
+    goal: np.ndarray
+    apq9: np.ndarray
+    goal9: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -69,6 +96,11 @@ def extract_rotation(a, q, max_iter, rot):
 @njit(cache=True, inline="always")
 def _mass(w):
     return 1.0 / w if w > 0.0 else 1e12
+
+
+@njit(cache=True)
+def _goal_scratch():
+    return GoalScratch(np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 9)), np.empty((3, 9)))
 
 
 def particle_masses(w: np.ndarray) -> np.ndarray:
@@ -128,39 +160,43 @@ def _moment_matrix(x, w, q, s, e, cx, cy, cz, out):
 
 
 @njit(cache=True)
-def linear_goal_matrix(x, w, q_rest, s, e, quat, pinv, null, beta, rot_iters, apq, rot, goal):
-    """Goal map of cluster s..e into ``goal`` (3×3): R, or β·A/∛det A + (1−β)·R (SPEC §5, U eq. 3.19);
+def linear_goal_matrix(x, w, q_rest, start, c, quats, moments, beta, rot_iters, scratch):
+    """Goal map of cluster c into ``scratch.goal`` (3×3): R, or β·A/∛det A + (1−β)·R (SPEC §5, U eq. 3.19);
     returns x_cm. Shared by the xpbd constraint and the tearing body's integration."""
+    s, e = start[c], start[c + 1]
+    apq, rot, goal = scratch.apq, scratch.rot, scratch.goal
+    pinv, null = moments.aqq_pinv[c], moments.null_proj[c]
     cx, cy, cz = centre_of_mass(x, w, s, e)
     _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
-    extract_rotation(apq, quat, rot_iters, rot)
+    extract_rotation(apq, quats[c], rot_iters, rot)
     goal[:, :] = rot
     if beta > 0.0:
         # A = A_pq·A_qq⁺ + R·P_null (unobservable axes follow R), volume-normalised (SPEC §5)
         for r_ in range(3):
-            for c in range(3):
+            for c_ in range(3):
                 v = 0.0
                 for k in range(3):
-                    v += apq[r_, k] * pinv[k, c] + rot[r_, k] * null[k, c]
-                goal[r_, c] = v
+                    v += apq[r_, k] * pinv[k, c_] + rot[r_, k] * null[k, c_]
+                goal[r_, c_] = v
         det = _det3(goal)
         if det > 1e-6:
             f = beta / np.cbrt(det)
             for r_ in range(3):
-                for c in range(3):
-                    goal[r_, c] = f * goal[r_, c] + (1.0 - beta) * rot[r_, c]
+                for c_ in range(3):
+                    goal[r_, c_] = f * goal[r_, c_] + (1.0 - beta) * rot[r_, c_]
         else:
             goal[:, :] = rot
     return cx, cy, cz
 
 
 @njit(cache=True)
-def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta, rot_iters, apq, rot, goal):
-    """Project one cluster; returns its max |C|."""
-    cx, cy, cz = linear_goal_matrix(x, w, q_rest, s, e, quat, pinv, null, beta, rot_iters, apq, rot, goal)
+def _match_cluster(x, w, q_rest, start, c, quats, moments, lam, alpha_tilde, beta, rot_iters, scratch):
+    """Project cluster c; returns its max |C|."""
+    cx, cy, cz = linear_goal_matrix(x, w, q_rest, start, c, quats, moments, beta, rot_iters, scratch)
+    goal = scratch.goal
     res = 0.0
     cm = (cx, cy, cz)
-    for i in range(s, e):
+    for i in range(start[c], start[c + 1]):
         for k in range(3):
             g = cm[k] + goal[k, 0] * q_rest[i, 0] + goal[k, 1] * q_rest[i, 1] + goal[k, 2] * q_rest[i, 2]
             res = max(res, _step_to_goal(x, w, lam, alpha_tilde, i, k, g))
@@ -168,81 +204,67 @@ def _match_cluster(x, w, q_rest, s, e, quat, pinv, null, lam, alpha_tilde, beta,
 
 
 @njit(cache=True)
-def quadratic_goal_matrix(x, w, q_rest, qt, s, e, quat, qpinv, beta, rot_iters, apq, rot, apq9, goal9):
-    """Quadratic goal map of cluster s..e into ``goal9`` (3×9): (β·Ã + (1−β)·[R 0 0]) (SPEC §5);
+def quadratic_goal_matrix(x, w, q_rest, start, c, quats, quadratic, beta, rot_iters, scratch):
+    """Quadratic goal map of cluster c into ``scratch.goal9`` (3×9): (β·Ã + (1−β)·[R 0 0]) (SPEC §5);
     returns x_cm. The linear 3×3 block of Ã is volume-normalised as in the linear mode; the quadratic
-    block is scaled by β only. ``qt`` holds centred quadratic columns, so the goal keeps x_cm."""
+    block is scaled by β only. ``quadratic.qt`` holds centred quadratic columns, so the goal keeps x_cm."""
+    s, e = start[c], start[c + 1]
+    apq, rot, apq9, goal9 = scratch.apq, scratch.rot, scratch.apq9, scratch.goal9
+    qpinv = quadratic.qpinv[c]
     cx, cy, cz = centre_of_mass(x, w, s, e)
     _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
-    _moment_matrix(x, w, qt, s, e, cx, cy, cz, apq9)
-    extract_rotation(apq, quat, rot_iters, rot)
+    _moment_matrix(x, w, quadratic.qt, s, e, cx, cy, cz, apq9)
+    extract_rotation(apq, quats[c], rot_iters, rot)
     goal9[:, :] = 0.0
     for r_ in range(3):
-        for c in range(3):
-            goal9[r_, c] = rot[r_, c]
+        for c_ in range(3):
+            goal9[r_, c_] = rot[r_, c_]
     if beta > 0.0:
         for r_ in range(3):
-            for c in range(9):
+            for c_ in range(9):
                 v = 0.0
                 for k in range(9):
-                    v += apq9[r_, k] * qpinv[k, c]
-                goal9[r_, c] = v
+                    v += apq9[r_, k] * qpinv[k, c_]
+                goal9[r_, c_] = v
         det = _det3(goal9[:, :3])
         if det > 1e-6:
             f = beta / np.cbrt(det)
             for r_ in range(3):
-                for c in range(3):
-                    goal9[r_, c] = f * goal9[r_, c] + (1.0 - beta) * rot[r_, c]
-                for c in range(3, 9):
-                    goal9[r_, c] *= beta
+                for c_ in range(3):
+                    goal9[r_, c_] = f * goal9[r_, c_] + (1.0 - beta) * rot[r_, c_]
+                for c_ in range(3, 9):
+                    goal9[r_, c_] *= beta
         else:
             goal9[:, :] = 0.0
             for r_ in range(3):
-                for c in range(3):
-                    goal9[r_, c] = rot[r_, c]
+                for c_ in range(3):
+                    goal9[r_, c_] = rot[r_, c_]
     return cx, cy, cz
 
 
 @njit(cache=True)
-def _match_cluster_quadratic(
-    x, w, q_rest, qt, s, e, quat, qpinv, lam, alpha_tilde, beta, rot_iters, apq, rot, apq9, goal9
-):
-    """Project one cluster with the quadratic goal (SPEC §5); returns its max |C|."""
-    cx, cy, cz = quadratic_goal_matrix(x, w, q_rest, qt, s, e, quat, qpinv, beta, rot_iters, apq, rot, apq9, goal9)
+def _match_cluster_quadratic(x, w, q_rest, start, c, quats, quadratic, lam, alpha_tilde, beta, rot_iters, scratch):
+    """Project cluster c with the quadratic goal (SPEC §5); returns its max |C|."""
+    cx, cy, cz = quadratic_goal_matrix(x, w, q_rest, start, c, quats, quadratic, beta, rot_iters, scratch)
+    goal9, qt = scratch.goal9, quadratic.qt
     res = 0.0
     cm = (cx, cy, cz)
-    for i in range(s, e):
+    for i in range(start[c], start[c + 1]):
         for k in range(3):
             g = cm[k]
-            for c in range(9):
-                g += goal9[k, c] * qt[i, c]
+            for j in range(9):
+                g += goal9[k, j] * qt[i, j]
             res = max(res, _step_to_goal(x, w, lam, alpha_tilde, i, k, g))
     return res
 
 
 @njit(cache=True, parallel=True)
-def shape_match_project(
-    x,
-    quats,
-    awake,
-    w,
-    q_rest,
-    start,
-    aqq_pinv,
-    null_proj,
-    lam,
-    alpha_tilde,
-    beta,
-    rot_iters,
-    qt=None,
-    qpinv=None,
-    quadratic=None,
-):
+def shape_match_project(x, quats, awake, w, q_rest, start, moments, lam, alpha_tilde, beta, rot_iters, quadratic=None):
     """One XPBD sweep of C_i = x_i − g_i per particle, g_i = (β·A + (1−β)·R)·q_i + x_cm (SPEC §5);
-    with ``qt, qpinv, quadratic`` (``quadratic_moments``), the quadratic goal for the clusters whose
-    flag is set (the others, too few or degenerate particles, keep the linear goal). Clusters whose
-    particles are asleep (``awake`` per particle, ``integrate.wake_flags``) are skipped: they keep
-    their shape.
+    with ``quadratic`` (``QuadraticMoments``), the quadratic goal for the clusters whose flag is set (the
+    others, too few or degenerate particles, keep the linear goal, from ``moments``: ``LinearMoments``).
+    Clusters whose particles are asleep (``awake`` per particle, ``integrate.wake_flags``) are skipped:
+    they keep their shape.
 
     Clusters are disjoint, so the loop over clusters is race-free and updates ``x`` in place.
     ``lam`` (n, 3) accumulates λ over the iterations of a substep; returns the max |C| seen.
@@ -251,73 +273,35 @@ def shape_match_project(
     worst = np.zeros(m)
     blocks = (m + BLOCK - 1) // BLOCK
     for b in prange(blocks):
-        apq = np.empty((3, 3))
-        rot = np.empty((3, 3))
-        goal = np.empty((3, 3))
-        apq9 = np.empty((3, 9))
-        goal9 = np.empty((3, 9))
+        scratch = _goal_scratch()
         for c in range(b * BLOCK, min(m, (b + 1) * BLOCK)):
             if start[c + 1] - start[c] < 2 or not awake[start[c]]:
                 continue
-            if quadratic is not None and quadratic[c]:
+            if quadratic is not None and quadratic.flags[c]:
                 worst[c] = _match_cluster_quadratic(
-                    x,
-                    w,
-                    q_rest,
-                    qt,
-                    start[c],
-                    start[c + 1],
-                    quats[c],
-                    qpinv[c],
-                    lam,
-                    alpha_tilde,
-                    beta,
-                    rot_iters,
-                    apq,
-                    rot,
-                    apq9,
-                    goal9,
+                    x, w, q_rest, start, c, quats, quadratic, lam, alpha_tilde, beta, rot_iters, scratch
                 )
             else:
                 worst[c] = _match_cluster(
-                    x,
-                    w,
-                    q_rest,
-                    start[c],
-                    start[c + 1],
-                    quats[c],
-                    aqq_pinv[c],
-                    null_proj[c],
-                    lam,
-                    alpha_tilde,
-                    beta,
-                    rot_iters,
-                    apq,
-                    rot,
-                    goal,
+                    x, w, q_rest, start, c, quats, moments, lam, alpha_tilde, beta, rot_iters, scratch
                 )
     return worst.max() if m > 0 else 0.0
 
 
 @njit(cache=True)
-def shape_match_goals(x, w, q_rest, start, quats, aqq_pinv, null_proj, beta, rot_iters, qt, qpinv, quadratic, goals):
+def shape_match_goals(x, w, q_rest, start, quats, moments, beta, rot_iters, quadratic, goals):
     """Goal positions g_i of every particle (SPEC §5: g_i = (β·A + (1−β)·R)·q_i + x_cm, quadratic where
-    ``quadratic[c]``) into ``goals``, for integrators that move towards them themselves (U eq. 3.16) —
+    ``quadratic.flags[c]``) into ``goals``, for integrators that move towards them themselves (U eq. 3.16) —
     the same goal maps as ``shape_match_project``. A cluster of one particle has no shape: g = x."""
-    apq = np.empty((3, 3))
-    rot = np.empty((3, 3))
-    goal = np.empty((3, 3))
-    apq9 = np.empty((3, 9))
-    goal9 = np.empty((3, 9))
+    scratch = _goal_scratch()
+    goal, goal9, qt = scratch.goal, scratch.goal9, quadratic.qt
     for c in range(start.shape[0] - 1):
         s, e = start[c], start[c + 1]
         if e - s < 2:
             for i in range(s, e):
                 goals[i, :] = x[i, :]
-        elif quadratic[c]:
-            cx, cy, cz = quadratic_goal_matrix(
-                x, w, q_rest, qt, s, e, quats[c], qpinv[c], beta, rot_iters, apq, rot, apq9, goal9
-            )
+        elif quadratic.flags[c]:
+            cx, cy, cz = quadratic_goal_matrix(x, w, q_rest, start, c, quats, quadratic, beta, rot_iters, scratch)
             for i in range(s, e):
                 for k in range(3):
                     g = (cx, cy, cz)[k]
@@ -325,9 +309,7 @@ def shape_match_goals(x, w, q_rest, start, quats, aqq_pinv, null_proj, beta, rot
                         g += goal9[k, j] * qt[i, j]
                     goals[i, k] = g
         else:
-            cx, cy, cz = linear_goal_matrix(
-                x, w, q_rest, s, e, quats[c], aqq_pinv[c], null_proj[c], beta, rot_iters, apq, rot, goal
-            )
+            cx, cy, cz = linear_goal_matrix(x, w, q_rest, start, c, quats, moments, beta, rot_iters, scratch)
             for i in range(s, e):
                 for k in range(3):
                     goals[i, k] = (

@@ -273,8 +273,7 @@ class XpbdSolver:
                 m.elem,
                 m.start,
                 *self._contact_rows(),
-                k.h,
-                s.sleep_speed,
+                s.sleep_speed * k.h,
             )
         st.time += k.h
         return residual

@@ -11,6 +11,8 @@ particle's neighbours lie in the 27 cells around its own at build time, so slabs
 indices agree modulo 3 share no particle and can be solved in parallel.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
@@ -18,9 +20,27 @@ MAX_CELLS_PER_PARTICLE = 64
 ROW_CAPACITY = 16  # list slots per particle in the single scan (a settled pile lists ≈ 5 half / 10 full)
 
 
+class Grid(NamedTuple):
+    """Particles counting-sorted by cell (``build_grid``): cell k holds sorted positions start[k]:start[k + 1]."""
+
+    start: np.ndarray  # (cells + 1,) int64
+    order: np.ndarray  # (n,) int64: the particle id at each sorted position
+    lo: np.ndarray  # (3,) the grid's corner
+    dims: np.ndarray  # (3,) int64 cells per axis, z fastest
+    cell: float  # cell size
+
+
+class SortedParticles(NamedTuple):
+    """Position, radius and element of each particle in the grid's sorted order (a cell's run is contiguous)."""
+
+    x: np.ndarray  # (n, 3)
+    r: np.ndarray  # (n,)
+    elem: np.ndarray  # (n,) int64
+
+
 @njit(cache=True)
 def build_grid(x, cell_size):
-    """Counting sort of particles by cell; returns (cell_start, order, lo, dims, cell_size)."""
+    """Counting sort of particles by cell; returns (cell_start, order, lo, dims, cell_size): a ``Grid``'s fields."""
     n = x.shape[0]
     lo = np.empty(3)
     hi = np.empty(3)
@@ -55,16 +75,18 @@ def build_grid(x, cell_size):
 
 
 @njit(cache=True, inline="always")
-def _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, half, n_active, out, write_at, cap):
+def _visit(particles, grid, p, reach, half, n_active, out, write_at, cap):
     """Count the neighbours of sorted particle p from other elements, writing the first ``cap``
     of them to out[write_at:] (cap = 0: count only).
 
     With ``half`` each moving pair is found once, from the partner that comes first in the
     cell-sorted order (q > p): the runs before p are skipped, so half the cells are scanned;
     static partners (ids ≥ ``n_active``, whose own rows stay empty) are kept from either side.
-    Works on the cell-sorted copies ``xs, rs, es`` (contiguous memory for a cell's run) and
+    Works on the cell-sorted copies ``particles`` (contiguous memory for a cell's run) and
     writes original particle ids.
     """
+    xs, rs, es = particles.x, particles.r, particles.elem
+    start, order, lo, dims, cell = grid.start, grid.order, grid.lo, grid.dims, grid.cell
     px, py, pz = xs[p, 0], xs[p, 1], xs[p, 2]
     ix = min(int((px - lo[0]) / cell), dims[0] - 1)
     iy = min(int((py - lo[1]) / cell), dims[1] - 1)
@@ -110,6 +132,7 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
     where the pair kernels take each pair from its lower index.
     """
     start, order, lo, dims, cell = build_grid(x, cell_size)
+    grid = Grid(start, order, lo, dims, cell)  # built here: a parallel loop finds a named tuple's class at its call
     n = x.shape[0]
     xs = np.empty((n, 3))
     rs = np.empty(n)
@@ -121,6 +144,7 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
         xs[p, 2] = x[i, 2]
         rs[p] = r[i]
         es[p] = elem[i]
+    particles = SortedParticles(xs, rs, es)
     # one scan into ROW_CAPACITY slots per particle, then a compacting copy; rows that overflow
     # (deep overlaps, dense adhesion rows) are scanned again straight into the lists
     counts = np.zeros(n + 1, np.int64)
@@ -128,21 +152,7 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
     for p in prange(n):
         if order[p] < n_active:
             counts[order[p] + 1] = _visit(
-                xs,
-                rs,
-                es,
-                order,
-                p,
-                start,
-                lo,
-                dims,
-                cell,
-                reach,
-                half,
-                n_active,
-                slots,
-                p * ROW_CAPACITY,
-                ROW_CAPACITY,
+                particles, grid, p, reach, half, n_active, slots, p * ROW_CAPACITY, ROW_CAPACITY
             )
     for i in range(n):
         counts[i + 1] += counts[i]
@@ -155,5 +165,5 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
                 for k in range(c):
                     nbr[counts[i] + k] = slots[p * ROW_CAPACITY + k]
             else:
-                _visit(xs, rs, es, order, p, start, lo, dims, cell, reach, half, n_active, nbr, counts[i], c)
+                _visit(particles, grid, p, reach, half, n_active, nbr, counts[i], c)
     return counts, nbr, start, order, dims

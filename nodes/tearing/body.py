@@ -16,7 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..simulation.shape_matching import quadratic_moments, rest_moments, shape_match_goals
+from ..simulation.shape_matching import (
+    LinearMoments,
+    QuadraticMoments,
+    quadratic_moments,
+    rest_moments,
+    shape_match_goals,
+)
 from . import tearing
 from .surface_mesh import SurfaceMesh, fan_caps
 
@@ -160,13 +166,10 @@ class ElasticBody:
             self.q_rest,
             self.start,
             self.quats,
-            self.aqq_pinv,
-            self.null_proj,
+            LinearMoments(self.aqq_pinv, self.null_proj),
             s.beta,
             s.rotation_iterations,
-            self.qt,
-            self.qpinv,
-            self.quadratic,
+            QuadraticMoments(self.qt, self.qpinv, self.quadratic),
             self.goals,
         )
 
@@ -247,13 +250,10 @@ class ElasticBody:
             self.q_rest,
             self.start,
             quats,
-            self.aqq_pinv,
-            self.null_proj,
+            LinearMoments(self.aqq_pinv, self.null_proj),
             s.beta,
             s.rotation_iterations,
-            self.qt,
-            self.qpinv,
-            self.quadratic,
+            QuadraticMoments(self.qt, self.qpinv, self.quadratic),
             goals,
         )
         u = self.x - goals

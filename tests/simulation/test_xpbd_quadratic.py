@@ -8,7 +8,13 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from nodes.simulation.scenes import rice_bowl
-from nodes.simulation.shape_matching import quadratic_moments, rest_moments, shape_match_project
+from nodes.simulation.shape_matching import (
+    LinearMoments,
+    QuadraticMoments,
+    quadratic_moments,
+    rest_moments,
+    shape_match_project,
+)
 from nodes.simulation.xpbd import xpbd
 
 ALL = ("gravity", "contact", "friction", "adhesion", "damping")  # no collider: its SDF grid costs seconds
@@ -40,10 +46,10 @@ def project(q, x, mode, beta=1.0, alpha=0.0, quats=None):
     w = np.ones(len(xx))
     quats = np.tile([1.0, 0, 0, 0], (len(q), 1)) if quats is None else quats.copy()
     lam = np.zeros_like(xx)
-    pinv, null = rest_moments(q_rest, w, start)
+    moments = LinearMoments(*rest_moments(q_rest, w, start))
     awake = np.ones(len(xx), np.bool_)
-    quadratic = quadratic_moments(q_rest, w, start) if mode == "quadratic" else ()
-    res = shape_match_project(xx, quats, awake, w, q_rest, start, pinv, null, lam, alpha, beta, 8, *quadratic)
+    quadratic = (QuadraticMoments(*quadratic_moments(q_rest, w, start)),) if mode == "quadratic" else ()
+    res = shape_match_project(xx, quats, awake, w, q_rest, start, moments, lam, alpha, beta, 8, *quadratic)
     return xx, res
 
 
