@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -66,6 +67,21 @@ def compile_probe(ctx):
 QUICK_RECIPE = "name: compile_probe\nseed: 1\noutputs: [probe.table]\nnodes:\n  probe:\n    type: compile_probe\n"
 
 
+ARRAY = re.compile(r"Array\((\w+), (\d+), '(\w)', (True|False), aligned=True\)")
+
+
+def compact(types: str) -> str:
+    """numba's argument types, short: ``f64[2d]``; ``ro`` marks a read-only array (a specialisation of its own)."""
+    short = {"float64": "f64", "int64": "i64", "bool": "bool"}
+
+    def one(match) -> str:
+        kind, ndim, layout, readonly = match.groups()
+        return f"{'ro ' if readonly == 'True' else ''}{short.get(kind, kind)}[{ndim}d{'' if layout == 'C' else layout}]"
+
+    text = ARRAY.sub(one, types).replace("omitted(default=None)", "-")
+    return (text[1:-1] if text.startswith("(") and text.endswith(")") else text).rstrip(",")
+
+
 def first_run(cli_args: list[str], work: Path) -> dict:
     """The CLI run in a fresh process with empty numba and node caches: its compilations and wall time."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(work / "numba"))
@@ -104,7 +120,9 @@ def main():
         "| kernel | argument types | compile s | share |",
         "|---|---|---|---|",
     ]
-    lines += [f"| `{name}` | `{types}` | {seconds:.2f} | {seconds / total:.0%} |" for name, types, seconds in rows]
+    lines += [
+        f"| `{name}` | {compact(types)} | {seconds:.2f} | {seconds / total:.0%} |" for name, types, seconds in rows
+    ]
     lines += ["", f"started {started}, load average {load:.2f} (1 min) on {os.cpu_count()} cores"]
     table = "\n".join(lines)
     print(table)
