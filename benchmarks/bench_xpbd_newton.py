@@ -13,7 +13,9 @@ Run: python benchmarks/bench_xpbd_newton.py [--quick] [--sizes 10000 50000]
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -155,11 +157,24 @@ def side_by_side(n, settle, timed, rounds):
     return {name: (rates[name], positions(), notes()) for name, (_, positions, notes) in scenes.items()}
 
 
+def require_peer() -> None:
+    """Stop with what to install, not a traceback, where the optional peer simulator is missing."""
+    missing = [name for name in REQUIRES if importlib.util.find_spec(name) is None]
+    if missing:
+        print(
+            f"bench_xpbd_newton: the peer simulator is not installed (missing: {', '.join(missing)}).\n"
+            'Install the optional extra from the repository root: pip install -e ".[peer]"',
+            file=sys.stderr,
+        )
+        sys.exit(2)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 50000])
     args = ap.parse_args()
+    require_peer()
     settle, timed, rounds = (3, 3, 2) if args.quick else (60, 10, 3)
     sizes = [2000] if args.quick else args.sizes
     rows = []

@@ -17,6 +17,7 @@ from . import __version__, codec
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
+from .compile_progress import CompileWatch
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
 from .output_files import MANIFEST, write_manifest, write_output
@@ -156,7 +157,7 @@ class Executor:
         start = now()
         memory = PeakMemory()
         try:
-            with memory:
+            with memory, CompileWatch(self.reporter, inst.label):
                 result = spec.run(ctx, **kwargs)
             outputs = self._check_outputs(spec, result)
         except BaseException as exc:

@@ -1,0 +1,134 @@
+"""Seconds numba spends compiling each kernel on a first run (empty numba cache), from numba's own
+``numba:compile`` events, so the kernels worth compiling less are named (issue 27: first run ≤ 90 s).
+
+The recipe runs in a fresh process with an empty NUMBA_CACHE_DIR and an empty node cache; each kernel's
+row is its outermost compilation (helpers it inlines or calls are compiled inside it and counted there).
+Run: python benchmarks/bench_compile.py [--quick] [--recipe graphs/ikura_don.yaml]
+(--quick: one tiny kernel in a throw-away plug-in, a smoke run of the machinery.)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
+
+# Runs inside the fresh process: records every outermost compilation, then runs the CLI.
+PROBE = """
+import json, sys, time
+from numba.core import event
+
+rows, depth, start = [], [0], [0.0]
+
+class Timer(event.Listener):
+    def on_start(self, ev):
+        if depth[0] == 0:
+            start[0] = time.perf_counter()
+        depth[0] += 1
+
+    def on_end(self, ev):
+        depth[0] -= 1
+        if depth[0] == 0:
+            func = ev.data["dispatcher"].py_func
+            name = f"{func.__module__}.{func.__qualname__}"
+            rows.append((name, str(ev.data["args"]), time.perf_counter() - start[0]))
+
+event.register("numba:compile", Timer())
+from nodegraph.cli import main
+wall = time.perf_counter()
+code = main(json.loads(sys.argv[1]))
+json.dump({"code": code, "wall": time.perf_counter() - wall, "rows": rows}, open(sys.argv[2], "w"))
+"""
+
+QUICK_PLUGIN = '''
+import numpy as np
+from numba import njit
+from nodegraph import Out, node
+from nodegraph.values import Table
+
+@njit(cache=True)
+def double(values):
+    return 2.0 * values
+
+@node("compile_probe", version=1, outputs={"table": Out(Table, "doubled")})
+def compile_probe(ctx):
+    """One numba kernel."""
+    return Table({"x": double(np.arange(4.0))})
+'''
+QUICK_RECIPE = "name: compile_probe\nseed: 1\noutputs: [probe.table]\nnodes:\n  probe:\n    type: compile_probe\n"
+
+
+ARRAY = re.compile(r"Array\((\w+), (\d+), '(\w)', (True|False), aligned=True\)")
+
+
+def compact(types: str) -> str:
+    """numba's argument types, short: ``f64[2d]``; ``ro`` marks a read-only array (a specialisation of its own)."""
+    short = {"float64": "f64", "int64": "i64", "bool": "bool"}
+
+    def one(match) -> str:
+        kind, ndim, layout, readonly = match.groups()
+        return f"{'ro ' if readonly == 'True' else ''}{short.get(kind, kind)}[{ndim}d{'' if layout == 'C' else layout}]"
+
+    text = ARRAY.sub(one, types).replace("omitted(default=None)", "-")
+    return (text[1:-1] if text.startswith("(") and text.endswith(")") else text).rstrip(",")
+
+
+def first_run(cli_args: list[str], work: Path) -> dict:
+    """The CLI run in a fresh process with empty numba and node caches: its compilations and wall time."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(work / "numba"))
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+    out = work / "compiles.json"
+    subprocess.run([sys.executable, "-c", PROBE, json.dumps(cli_args), str(out)], env=env, cwd=ROOT, check=True)
+    return json.loads(out.read_text())
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--recipe", default="graphs/ikura_don.yaml")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        if args.quick:
+            (work / "probe.py").write_text(QUICK_PLUGIN)
+            (work / "probe.yaml").write_text(QUICK_RECIPE)
+            recipe, extra = str(work / "probe.yaml"), ["--plugin", str(work / "probe.py")]
+        else:
+            recipe, extra = args.recipe, ["--draft"]
+        cli = ["run", recipe, *extra, "--cache-dir", str(work / "cache"), "--no-rrd", "--quiet"]
+        cli += ["--out-dir", str(work / "out")]
+        started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+        load = os.getloadavg()[0]
+        result = first_run(cli, work)
+    assert result["code"] == 0, f"the run failed (exit {result['code']})"
+    rows = sorted(result["rows"], key=lambda row: -row[2])
+    total = sum(row[2] for row in rows)
+    what = "a one-kernel plug-in" if args.quick else f"nodegraph run {recipe} --draft"
+    lines = [
+        f"first run of `{what}` with an empty numba cache: "
+        f"{result['wall']:.1f} s wall, {total:.1f} s compiling {len(rows)} kernel specialisations",
+        "",
+        "| kernel | argument types | compile s | share |",
+        "|---|---|---|---|",
+    ]
+    lines += [
+        f"| `{name}` | {compact(types)} | {seconds:.2f} | {seconds / total:.0%} |" for name, types, seconds in rows
+    ]
+    lines += ["", f"started {started}, load average {load:.2f} (1 min) on {os.cpu_count()} cores"]
+    table = "\n".join(lines)
+    print(table)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / f"bench_compile{'_quick' if args.quick else ''}.md").write_text(table + "\n")
+
+
+if __name__ == "__main__":
+    main()

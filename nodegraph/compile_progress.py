@@ -1,0 +1,69 @@
+"""Tells the user when a node's numba kernels compile (a first run after a code change can spend a minute
+there, silent otherwise) and how long it took; cached kernels load without a compile event, so a warm
+run prints nothing."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+from .report import Reporter
+
+
+class CompileWatch:
+    """Listens to numba's ``numba:compile`` events while one node runs.
+
+    A line goes out at the first compilation and, at the end, the seconds spent compiling (outermost
+    compilations only: a kernel compiles the helpers it calls inside its own event).
+    """
+
+    def __init__(self, reporter: Reporter, node: str):
+        self.reporter = reporter
+        self.node = node
+        self.kernels = 0
+        self.seconds = 0.0
+        self._depth = 0
+        self._started = 0.0
+        self._listener = None
+
+    def __enter__(self) -> CompileWatch:
+        if "numba" not in sys.modules:  # no kernel module loaded: nothing can compile, numba stays unimported
+            return self
+        from numba.core import event
+
+        watch = self
+
+        class _Listener(event.Listener):
+            def on_start(self, ev) -> None:
+                watch._on_start()
+
+            def on_end(self, ev) -> None:
+                watch._on_end()
+
+        self._listener = _Listener()
+        event.register("numba:compile", self._listener)
+        return self
+
+    def _on_start(self) -> None:
+        if self._depth == 0:
+            if self.kernels == 0:
+                self.reporter.info(
+                    f"compiling kernels for {self.node} (first run after a code change; cached afterwards)…"
+                )
+            self._started = time.perf_counter()
+            self.kernels += 1
+        self._depth += 1
+
+    def _on_end(self) -> None:
+        self._depth -= 1
+        if self._depth == 0:
+            self.seconds += time.perf_counter() - self._started
+
+    def __exit__(self, *exc) -> None:
+        if self._listener is None:
+            return
+        from numba.core import event
+
+        event.unregister("numba:compile", self._listener)
+        if self.kernels:
+            self.reporter.info(f"compiled {self.kernels} kernel(s) for {self.node} in {self.seconds:.1f} s")

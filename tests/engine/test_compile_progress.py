@@ -1,0 +1,57 @@
+"""A node whose numba kernel compiles says so (a first run can spend a minute compiling); with the
+kernel in numba's cache, the run prints nothing about compiling."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+PLUGIN = '''
+import numpy as np
+from numba import njit
+
+from nodegraph import Out, node
+from nodegraph.values import Table
+
+
+@njit(cache=True)
+def _double(values):
+    out = np.empty_like(values)
+    for i in range(values.size):
+        out[i] = 2.0 * values[i]
+    return out
+
+
+@node("kernel_toy", version=1, outputs={"table": Out(Table, "doubled")})
+def kernel_toy(ctx):
+    """Runs one numba kernel."""
+    return Table({"x": _double(np.arange(4.0))})
+'''
+
+RECIPE = """\
+name: kernel_toy
+seed: 1
+outputs: [doubling.table]
+nodes:
+  doubling:
+    type: kernel_toy
+"""
+
+
+def _run(tmp_path: Path) -> str:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "recipe.yaml"), "--plugin"]
+    command += [str(tmp_path / "kernel_toy.py"), "--no-cache", "--no-rrd", "--out-dir", str(tmp_path / "out")]
+    done = subprocess.run(command, capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    return done.stderr
+
+
+def test_compiling_is_announced_once_then_cached(tmp_path):
+    (tmp_path / "kernel_toy.py").write_text(PLUGIN)
+    (tmp_path / "recipe.yaml").write_text(RECIPE)
+    first = _run(tmp_path)
+    assert "compiling kernels for doubling (first run after a code change; cached afterwards)" in first
+    assert "compiled 1 kernel(s) for doubling in " in first
+    second = _run(tmp_path)
+    assert "compil" not in second
