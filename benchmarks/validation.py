@@ -79,26 +79,24 @@ def ground(half: float, top: float, pitch: float):
 
 
 # -- sphere heaps ----------------------------------------------------------------------------------
-def sphere_heap(n, mu, anchored, frames=(150,), substeps=10, radius=1.0, seed=0):
-    """Drop a ball of n spheres (radius 1 mm, 25 mg, lattice spacing 2.2 r) on flat ground with the effects
-    gravity, contact, friction, collider, damping (0.1) at μs = mu, μk = 0.7·mu; returns the heap angle
-    after each count of ``frames`` (1/60 s each) and the seconds taken."""
+def sphere_run(x, radius, mu, anchored, sdf, **solver):
+    """A solver run of loose spheres of one ``radius`` (one particle per element) at sliding friction μs = ``mu``
+    (μk = 0.7 μs), rigid contacts, against the collider field ``sdf``; ``solver``: further SolverSettings."""
     from nodes.simulation.scenes import solver_run
     from nodes.simulation.settings import SolverSettings
 
-    x = ball(n, (2.2 * radius,) * 3, seed)
-    half = 2.0 * float(np.abs(x[:, :2]).max()) + 30.0
+    n = len(x)
     settings = SolverSettings(
         EFFECTS,
-        substeps=substeps,
         mu_s=mu,
         mu_k=0.7 * mu,
         compliance=np.inf,
         damping=0.1,
         shock_propagation=4.0,
         anchored_friction=anchored,
+        **solver,
     )
-    run = solver_run(
+    return solver_run(
         x,
         np.full(n, radius),
         np.full(n, 1.0 / SPHERE_MASS),
@@ -106,8 +104,18 @@ def sphere_heap(n, mu, anchored, frames=(150,), substeps=10, radius=1.0, seed=0)
         np.zeros((n, 3)),
         np.tile([1.0, 0, 0, 0], (n, 1)),
         settings,
-        sdf=ground(half, float(x[:, 2].max()) + 5.0, 0.8 * radius),
+        sdf=sdf,
     )
+
+
+def sphere_heap(n, mu, anchored, frames=(150,), substeps=10, radius=1.0, seed=0):
+    """Drop a ball of n spheres (radius 1 mm, 25 mg, lattice spacing 2.2 r) on flat ground with the effects
+    gravity, contact, friction, collider, damping (0.1) at μs = mu, μk = 0.7·mu; returns the heap angle
+    after each count of ``frames`` (1/60 s each) and the seconds taken."""
+
+    x = ball(n, (2.2 * radius,) * 3, seed)
+    half = 2.0 * float(np.abs(x[:, :2]).max()) + 30.0
+    run = sphere_run(x, radius, mu, anchored, ground(half, float(x[:, 2].max()) + 5.0, 0.8 * radius), substeps=substeps)
     start = time.perf_counter()
     angles = []
     for f in range(1, max(frames) + 1):
@@ -173,8 +181,7 @@ def packing_fraction(n, mu, anchored, frames=150, radius=1.0, seed=0):
     fraction is the spheres' volume inside the box's core (two diameters from the walls and floor, below
     the top two diameters of the bed), counted on a 0.1 r sample grid. Returns (φ, seconds)."""
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.scenes import open_box, solver_run
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.scenes import open_box
 
     side = 16.0 * radius
     rng = np.random.default_rng(seed)
@@ -189,25 +196,7 @@ def packing_fraction(n, mu, anchored, frames=150, radius=1.0, seed=0):
     sdf = signed_distance_grid(
         open_box(side, wall=2.0, height=top), np.array([-3.0, -3, -3]), np.array([side + 3, side + 3, top]), 0.4
     )
-    settings = SolverSettings(
-        EFFECTS,
-        mu_s=mu,
-        mu_k=0.7 * mu,
-        compliance=np.inf,
-        damping=0.1,
-        shock_propagation=4.0,
-        anchored_friction=anchored,
-    )
-    run = solver_run(
-        x,
-        np.full(n, radius),
-        np.full(n, 1.0 / SPHERE_MASS),
-        np.arange(n + 1),
-        np.zeros((n, 3)),
-        np.tile([1.0, 0, 0, 0], (n, 1)),
-        settings,
-        sdf=sdf,
-    )
+    run = sphere_run(x, radius, mu, anchored, sdf)
     start = time.perf_counter()
     for _ in range(frames):
         run.frame()

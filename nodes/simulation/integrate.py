@@ -38,7 +38,8 @@ def _moved(x, x_built, i, moved):
 def _predict_one(x, v, w, r, accel, h, clamp, x_prev, x_built, moved, awake, i):
     """``predict`` for particle i: its row of ``accel`` (one row for all, or one per particle), and the
     Verlet-list tracking when ``x_built`` holds a row per particle."""
-    row = i if accel.shape[0] == x.shape[0] else 0
+    stride = 1 if accel.shape[0] == x.shape[0] else 0
+    row = i * stride  # not ``i if … else 0``: numba unifies prange's index with 0 as a float
     for k in range(3):
         x_prev[i, k] = x[i, k]
     if w[i] > 0.0 and awake[i]:
