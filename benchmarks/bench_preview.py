@@ -43,10 +43,11 @@ def quick_scene():
     """A few capsule grains and eggs in a bowl (``nodes.simulation.scenes.small_food_scene``, as the tests use)."""
     from nodes.export.mitsuba_scene import Camera
     from nodes.export.preview import preview
+    from nodes.material.cooked import cooked_material
     from nodes.shading import shade
     from nodes.simulation.scenes import small_food_scene
 
-    scene = shade.call(**small_food_scene())
+    scene = shade.call(**small_food_scene(), material=cooked_material())
     params = preview.resolve_params({})
     return scene, Camera(50.0, 20.0, 35.0, 0.9), params
 
