@@ -240,13 +240,17 @@ def checkout(ref: str, into: Path) -> Path:
     return into
 
 
+BEFORE_BUNDLES = "b3bf1f5"  # the last commit whose kernels took their arrays one by one (issue 23)
+QUICK_CASES = "flatten,grid"  # compiling every case in both trees is ≈ 190 CPU s, over the quick-mode budget
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--baseline", default="main", help="commit to compare with (default main)")
+    parser.add_argument("--baseline", default=BEFORE_BUNDLES, help=f"commit to compare with (default {BEFORE_BUNDLES})")
     parser.add_argument("--repeat", type=int, default=5, help="warm calls per case (median)")
     parser.add_argument("--rounds", type=int, default=1, help="processes per case and tree (taking turns)")
-    parser.add_argument("--cases", default=",".join(CASES))
-    parser.add_argument("--quick", action="store_true", help="smaller inputs")
+    parser.add_argument("--cases", help=f"comma-separated, of {', '.join(CASES)} (default all; --quick: {QUICK_CASES})")
+    parser.add_argument("--quick", action="store_true", help="smaller inputs, the two cheapest cases to compile")
     parser.add_argument("--child", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -264,7 +268,7 @@ def main() -> None:
         header = f"{'case':8} {'input':22} {'compile before':>15} {'after':>8} {'run before':>11} {'after':>8}  outputs"
         print(header)
         print("-" * len(header))
-        for case in args.cases.split(","):
+        for case in (args.cases or (QUICK_CASES if args.quick else ",".join(CASES))).split(","):
             results = {"before": [], "after": []}
             for _ in range(args.rounds):
                 for name, tree in trees.items():
