@@ -40,6 +40,7 @@ def dish(scene_inputs):
     import trimesh
 
     from nodegraph.values import Mesh
+    from nodes.material.cooked import cooked_material
     from nodes.shading import shade
     from nodes.values import Aggregate, ElementLibrary, Placement
 
@@ -48,7 +49,9 @@ def dish(scene_inputs):
         Placement([[-4.0, -4.0, 2.0], [4.0, 4.0, 2.0]], np.tile([0, 0, 1.0], (2, 1)), kind_names=("ice",)),
         (ElementLibrary("ice", (flake,)),),
     )
-    return shade.call(aggregates=[*scene_inputs["aggregates"], ice], scenery=scene_inputs["scenery"])
+    return shade.call(
+        aggregates=[*scene_inputs["aggregates"], ice], scenery=scene_inputs["scenery"], material=cooked_material()
+    )
 
 
 def _in_blender(path: Path, tmp_path: Path) -> dict:
