@@ -35,16 +35,16 @@ class CompileWatch:
 
         class _Listener(event.Listener):
             def on_start(self, ev) -> None:
-                watch._on_start()
+                watch.compile_started()
 
             def on_end(self, ev) -> None:
-                watch._on_end()
+                watch.compile_ended()
 
         self._listener = _Listener()
         event.register("numba:compile", self._listener)
         return self
 
-    def _on_start(self) -> None:
+    def compile_started(self) -> None:
         if self._depth == 0:
             if self.kernels == 0:
                 self.reporter.info(
@@ -54,7 +54,7 @@ class CompileWatch:
             self.kernels += 1
         self._depth += 1
 
-    def _on_end(self) -> None:
+    def compile_ended(self) -> None:
         self._depth -= 1
         if self._depth == 0:
             self.seconds += time.perf_counter() - self._started
