@@ -14,7 +14,6 @@ from .grain_shapes import RICE_VARIETIES
 
 @node(
     "rice_variety",
-    version=1,
     outputs={"variety": Out(RiceVariety, "the variety: name (the library's element kind), length factor, P")},
     params={
         "variety": Param(

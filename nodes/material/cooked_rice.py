@@ -10,7 +10,6 @@ from .cooked import SIGMA0_DRY, SIGMA0_WET, WATER_CONTENT
 
 @node(
     "cooked_rice",
-    version=1,
     inputs={"variety": In(RiceVariety, "the rice variety (a rice_variety node, the one the library reads)")},
     outputs={
         "material": Out(

@@ -20,7 +20,6 @@ SURFACES = ("cavity", "outer")
 
 @node(
     "vessel_region",
-    version=1,
     inputs={"vessel": In(Vessel, "the bowl the region belongs to (a shape node's vessel output)")},
     outputs={"mesh": Out(Mesh, "the closed region: the vessel's cavity to the fill plane plus a mound")},
     params={
