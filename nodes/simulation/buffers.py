@@ -85,6 +85,8 @@ class PairBuffers:
     scratch: np.ndarray | None  # (n, 3) the Jacobi adhesion's output ('adhesion'), swapped with the positions
     # per list entry, where the pair began sticking (``friction``), NaN = not; carried over rebuilds
     anchor: np.ndarray
+    # per list entry, the normal correction of this substep so far (anchored friction's load, ``friction``)
+    load: np.ndarray
     displacement: float = np.inf
 
     @classmethod
@@ -106,6 +108,7 @@ class PairBuffers:
             np.empty(0),
             np.zeros_like(x) if "adhesion" in effects else None,
             np.empty((0, 3)),
+            np.empty(0),
         )
 
     def stale(self) -> bool:

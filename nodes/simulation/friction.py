@@ -12,6 +12,14 @@ where it began sticking: static friction restores the tangential drift since the
 substep's, so slow slip cannot pile up; when the drift exceeds μs·d the contact slides by μk·d
 (dynamic) and is re-anchored where it now is — the per-substep rule again while it slides. Drift and
 load both scale with h² (gravity's step), so the sticking test does not depend on the substep count.
+
+The load d is the normal correction the pair has received this substep (pre-stabilisation included,
+``contact_constraints.PairEntries.load``) plus its overlap as the sweep meets it: the λ_n of Müller et
+al. 2020's static-friction test, in position units. The overlap alone reads nearly 0 at a resting
+contact once pre-stabilisation has removed it, while shape matching hands each contact particle back
+only part of a friction correction, so the drift of a grain (8 particles) outgrew μs·overlap and
+heaps of rice-like grains crept (30° → 21° from 2.5 s to 7 s); with the substep's load they rest
+(36° → 34°, docs/validation.md).
 G Table 3: μs = static threshold, μk = dynamic scale · μs.
 
 Anchors are NaN where no contact sticks. ``friction_pair`` runs per pair inside the contacts'

@@ -36,10 +36,10 @@ class SolverSettings:
     bend_compliance: float = np.inf  # s²/g of the long-axis bend constraints (``bending``); inf = none
     mu_s: float = 0.6
     mu_k: float = 0.4
-    # friction measured from where each contact began sticking (``friction``), not per substep: sphere heaps
-    # hold 34° and stop creeping (issue 24, docs/validation.md); off by default until its side effects are
-    # settled (a tall pile's resting overlap 0.37 r against 0.2 r, tests/simulation)
-    anchored_friction: bool = False
+    # friction measured from where each contact began sticking, against the normal load the contact carried
+    # this substep (``friction``); False: Macklin et al. 2014's per-substep rule, under which heaps creep flat
+    # (issue 24, docs/validation.md)
+    anchored_friction: bool = True
     capture: float = 0.2  # mm
     adhesion_compliance: float = 1e-3  # s²/g
     damping: float = 0.0  # fraction of velocity removed per 1/60 s

@@ -119,6 +119,9 @@ class Coefficients:
     bend_alpha: float
     adhesion_alpha: float
     yolk_accel: np.ndarray  # (3,) buoyant acceleration of the yolks
+    # adhesion's pull at the capture distance as a friction load per unit of the pair's inverse mass (mm·g): F·h²,
+    # F = capture / adhesion compliance; 0 without 'adhesion' or anchors (``contact_constraints._project_slab``)
+    cohesion: float
 
     @classmethod
     def of(cls, model: Model, settings: SolverSettings) -> Coefficients:
@@ -150,6 +153,11 @@ class Coefficients:
             bend_alpha=s.bend_compliance / (h * h),
             adhesion_alpha=s.adhesion_compliance / (h * h),
             yolk_accel=np.array([0.0, 0.0, s.yolk_accel]),
+            cohesion=(
+                s.capture * h * h / s.adhesion_compliance
+                if "adhesion" in effects and s.anchored_friction and s.adhesion_compliance > 0
+                else 0.0
+            ),
         )
 
 
@@ -418,6 +426,7 @@ class XpbdSolver:
             anchor = np.empty((len(nbr), 3))
             self.dispatch("friction", friction.carry_anchors, *old.csr(), pairs.anchor, nbr_start, nbr, anchor)
             pairs.anchor = anchor
+            pairs.load = np.zeros(len(nbr))
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
         if "contact" in self.settings.effects:
@@ -437,6 +446,7 @@ class XpbdSolver:
         if "contact" in self.settings.effects:
             allowance = contact_constraints.overlap_allowance
             pairs.allowance[:] = 0.0
+            pairs.load[:] = 0.0
             self._contacts(st, friction=self.settings.anchored_friction, wake_step=np.inf)
             d("contact", allowance, st.x, st.awake, m.r, *pairs.lists.rows(), 0.0, pairs.allowance)
         if m.collider is not None:
@@ -475,9 +485,16 @@ class XpbdSolver:
             m.r,
             cc.PairRows(*lists.rows()),
             cc.Colouring(*lists.grid()),
-            cc.PairEntries(pairs.allowance, pairs.anchor),
+            cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load),
             cc.ContactRule(
-                float(wake_step), k.lift, k.upright, k.mu_s if rub else 0.0, k.mu_k, s.anchored_friction, normal
+                float(wake_step),
+                k.lift,
+                k.upright,
+                k.mu_s if rub else 0.0,
+                k.mu_k,
+                s.anchored_friction,
+                normal,
+                k.cohesion,
             ),
             self.threads,
         )

@@ -131,10 +131,10 @@ def _check(params):
         # substep by default until the bounds of the tests it moves are re-measured (docs/validation.md)
         "friction_model": Param(
             str,
-            "substep",
-            "substep: static friction holds each substep's slip (Macklin et al. 2014; heaps creep flat); "
-            "anchored: it restores the slip since the contact began sticking (sphere heaps rest at 30°, "
-            "docs/validation.md)",
+            "anchored",
+            "anchored: static friction restores the slip since the contact began sticking, against the normal "
+            "load the contact carried this substep (rice heaps rest at 30–40°, docs/validation.md); substep: it "
+            "holds each substep's slip only (Macklin et al. 2014; heaps creep flat)",
             choices=("substep", "anchored"),
         ),
         "capture_radius": Param(

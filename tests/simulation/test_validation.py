@@ -1,6 +1,6 @@
-"""The validation suite's quick figures (issue 24, ``benchmarks/validation.py``): a heap of spheres under
-anchored friction holds its angle and rests; friction loosens random packing. Each fails on a solver that
-ignores friction (heap flat, packing unchanged)."""
+"""The validation suite's quick figures (issue 24, ``benchmarks/validation.py``): heaps of spheres and of
+rice-like grains under the default (anchored) friction hold their angle and rest; friction loosens random
+packing. Each fails on a solver that ignores friction (heap flat, packing unchanged)."""
 
 import importlib.util
 import sys
@@ -50,3 +50,14 @@ def test_friction_loosens_random_packing(validation):
     assert 0.645 < dense < 0.69
     assert 0.625 < loose < 0.665
     assert dense - loose > 0.01
+
+
+def test_rice_heap_rests_at_its_angle_of_repose(validation):
+    """300 rice-like grains poured at the xpbd node's defaults (quick case; measured H/R 36.2° at 2.5 s, 34.9° at
+    5 s, 33.9° at 7 s): issue 24 asks for 30–45° and ≤ 3° of change. The anchored rule without the substep's
+    normal load crept 28.7° → 27.1° → 25.1°, the substep rule spread to 12.6° by 5 s, frictionless 1.7°."""
+    (early, late), _ = validation.rice_heap(300, True, frames=(150, 300))
+    assert 30.0 <= early[1] <= 45.0
+    assert abs(late[1] - early[1]) <= 3.0
+    ((_, flat),), _ = validation.rice_heap(300, True, frames=(150,), friction=0.0)
+    assert flat < 5.0
