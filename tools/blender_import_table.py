@@ -1,6 +1,7 @@
 """The Blender import table: each .glb / .usdc given, imported into Blender 4.5 with the nodegraph add-on —
-objects, meshes drawn and the mesh data they share (fewer where instanced), vertices, material names, how many materials transmit (and their IOR), how many scatter under the
-surface, which alpha below 1 (see-through without refraction), import seconds and file size — as a Markdown table.
+objects, meshes drawn and the mesh data they share (fewer where instanced), vertices, material names, how many
+materials transmit (and their IOR), how many scatter under the surface, which alpha below 1 (see-through without
+refraction), import seconds and file size — as a Markdown table.
 
     python tools/blender_import_table.py outputs/ikura_don/ikura_don.glb outputs/ikura_don/ikura_don.usdc
 
@@ -49,7 +50,8 @@ def row(path: Path, got: dict) -> str:
     scatter = [f"{m['subsurface']:.2f}" for m in materials if m["subsurface"] > 0]
     see_through = sorted({round(m["alpha"], 2) for m in materials if m["alpha"] < 1})
     return (
-        f"| {path.name} | {got['objects']:,} | {got['meshes']:,} | {got['mesh_data']:,} | {got['vertices']:,} | {', '.join(sorted(got['materials']))} | "
+        f"| {path.name} | {got['objects']:,} | {got['meshes']:,} | {got['mesh_data']:,} | {got['vertices']:,} | "
+        f"{', '.join(sorted(got['materials']))} | "
         f"{sum(1 for m in materials if m['transmission'] > 0)} "
         f"({', '.join(f'{t} at IOR {i}' for t, i in transmit) or '—'}) | "
         f"{len(scatter)} ({', '.join(scatter) or '—'}) | {', '.join(map(str, see_through)) or '—'} | "
