@@ -96,21 +96,28 @@ def _instance_groups(value: Aggregate, mesh) -> list[tuple[str, np.ndarray, bool
 
 @log_value.register
 def _(value: Aggregate, log: EntityLogger) -> None:
-    """Elements drawn by instancing: each library mesh once, at ``elements/<kind>/<mesh>``, with a pose per
-    element that uses it (its linear map D·R and position t: SPEC §3's x = D·R·v + t; a displaced inner part
-    also moved by its offset), so the recording (and a cached re-run's replay) holds each mesh once, not
-    every element's vertices. An aggregate with bends (SPEC §5 quadratic), flattened contacts, or whose parts
-    cannot be split, is logged as one world-space mesh."""
+    """Elements drawn by instancing (``log_element_poses``), so the recording (and a cached re-run's replay)
+    holds each library mesh once, not every element's vertices. Flattened contacts are left out here: the
+    dented surfaces are logged once, with the shaded scene. An aggregate with bends (SPEC §5 quadratic), or
+    whose parts cannot be split, is logged as one world-space mesh."""
     from .simulation.aggregate import DeformedAggregate
 
-    p = value.placement
-    plans = [[_instance_groups(value, mesh) for mesh in library.meshes] for library in value.libraries]
-    dented = getattr(value, "dented", False)  # flattened contacts move vertices of each element its own way
-    if type(value) not in (Aggregate, DeformedAggregate) or value.bends is not None or dented or None in sum(plans, []):
+    exact = type(value) in (Aggregate, DeformedAggregate) and value.bends is None
+    if not (exact and log_element_poses(log, value, static=True)):
         archetype = elements_mesh3d(value)
         if archetype is not None:
             log.log("elements", archetype, static=True)
-        return
+
+
+def log_element_poses(log: EntityLogger, value: Aggregate, static: bool) -> bool:
+    """Each library mesh once (static) at ``elements/<kind>/<mesh>`` with a pose per element that uses it: its
+    linear map D·R and position t (SPEC §3's x = D·R·v + t; a displaced inner part also moved by its offset).
+    ``static`` False logs the poses at the logger's current time (a simulation step), the meshes only the
+    first time. Bends and dents are not drawn. False (nothing logged) when a mesh's parts cannot be split."""
+    p = value.placement
+    plans = [[_instance_groups(value, mesh) for mesh in library.meshes] for library in value.libraries]
+    if None in sum(plans, []):
+        return False
     rr = rerun_module()
     linear = (p.rotations if value.deformations is None else value.deformations @ p.rotations).astype(np.float32)
     names = ["_".join(_entity_parts(library.kind)) or "kind" for library in value.libraries]
@@ -120,14 +127,17 @@ def _(value: Aggregate, log: EntityLogger) -> None:
             use = np.flatnonzero((p.kinds == kind) & (p.variants % len(library) == m))
             for suffix, faces, moved in plans[kind][m] if len(use) else []:
                 child = log.child("/".join(x for x in ("elements", name, f"{m:03d}", suffix) if x))
-                kept, local = np.unique(faces, return_inverse=True)  # this group's vertices, re-indexed
-                mesh3d = rr.Mesh3D(
-                    vertex_positions=mesh.vertices[kept].astype(np.float32),
-                    triangle_indices=local.reshape(-1, 3).astype(np.uint32),
-                )
-                child.log("", mesh3d, static=True)
+                if static or log.index is None or "Mesh3D" not in log.index.archetypes.get(child.path(""), ()):
+                    kept, local = np.unique(faces, return_inverse=True)  # this group's vertices, re-indexed
+                    mesh3d = rr.Mesh3D(
+                        vertex_positions=mesh.vertices[kept].astype(np.float32),
+                        triangle_indices=local.reshape(-1, 3).astype(np.uint32),
+                    )
+                    child.log("", mesh3d, static=True)
                 at = p.positions[use] + (value.part_offsets[use] if moved else 0.0)
-                child.log("", rr.InstancePoses3D(translations=at.astype(np.float32), mat3x3=linear[use]), static=True)
+                poses = rr.InstancePoses3D(translations=at.astype(np.float32), mat3x3=linear[use])
+                child.log("", poses, static=static)
+    return True
 
 
 @log_value.register
