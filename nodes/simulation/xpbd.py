@@ -269,7 +269,7 @@ def _log_meshes(ctx, aggregate, step):
     library cannot be instanced, one world-space mesh."""
     import rerun as rr
 
-    from ..rerun_loggers import log_element_poses
+    from ..element_poses import log_element_poses
 
     ctx.rerun.set_time("sim_step", step)
     if not log_element_poses(ctx.rerun, aggregate, static=False):

@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 from nodegraph.context import EntityLogger, LogIndex
 from nodegraph.rerun_log import RunRecording, log_value
 from nodegraph.values import Mesh
-from nodes.rerun_loggers import log_element_poses
+from nodes.element_poses import log_element_poses
 from nodes.simulation.aggregate import DeformedAggregate
 from nodes.values import Aggregate, ElementLibrary, Placement
 
@@ -96,3 +96,18 @@ def test_a_dented_aggregate_is_logged_as_instances(tmp_path):
     recording.close()
     paths = set(_columns(tmp_path / "d.rrd"))
     assert "/flatten/aggregate/elements/grain/000" in paths and "/flatten/aggregate/elements" not in paths
+
+
+def test_the_logger_digest_covers_the_shared_drawing_helper(monkeypatch):
+    """A change to ``element_poses`` (not itself a registered logger) must stop cached fragments replaying."""
+    import inspect
+    from pathlib import Path
+
+    import nodes.element_poses
+    from nodegraph.rerun_log import logger_digest
+
+    before = logger_digest()
+    source = Path(inspect.getsourcefile(nodes.element_poses))
+    real = Path.read_bytes
+    monkeypatch.setattr(Path, "read_bytes", lambda self: real(self) + (b"#" if self == source else b""))
+    assert logger_digest() != before
