@@ -8,12 +8,19 @@ Layout under the cache directory::
     rerun/ab/<key>.rrd      what the node logged to Rerun (as it ran, then its outputs): replayed into
                             a cached re-run's recording instead of logging the values again
     checkpoints/<key>.npz   a long node's progress while it runs (``checkpoint``), removed when it completes
+    limit                   the size limit in bytes (``nodegraph cache limit SIZE``), if one was set
+
+An entry's modification time is when it was last stored or loaded. Above the size limit (``limit``: the
+``$NODEGRAPH_CACHE_LIMIT`` environment variable, else the ``limit`` file, else ``DEFAULT_LIMIT``) ``evict``
+removes the least recently used entries, their Rerun fragments and the blobs no remaining entry names; the CLI
+calls it when a run ends, sparing what that run used.
 
 Every file is written to a temporary name in its final directory and renamed into place, blobs and
 the Rerun fragment before the entry that names them, so a crash at any moment leaves either no entry or
-a whole one (a fragment is checked against the sha256 its entry records before it is replayed). A blob
-whose bytes no longer hash to its name is reported as corruption and recomputed. ``clear`` removes only
-what a cache holds, and only from a directory carrying the marker.
+a whole one; eviction removes an entry before its files, so a reader sees a whole entry or none, and an
+entry whose blob went missing is recomputed (a fragment is checked against the sha256 its entry records
+before it is replayed). A blob whose bytes no longer hash to its name is reported as corruption and
+recomputed. ``clear`` removes only what a cache holds, and only from a directory carrying the marker.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import shutil
 import tempfile
 from dataclasses import dataclass
@@ -32,6 +40,10 @@ from .errors import CacheCorruption, NodegraphError
 
 DEFAULT_DIR = ".nodegraph/cache"
 ENV_VAR = "NODEGRAPH_CACHE"
+LIMIT_ENV_VAR = "NODEGRAPH_CACHE_LIMIT"
+LIMIT_FILE = "limit"
+DEFAULT_LIMIT = 2 * 2**30  # 2 GiB: a few full-size runs of the main job (≈ 150 MiB of entries each) and many drafts
+_UNITS = {"": 1, "b": 1, "k": 2**10, "kib": 2**10, "m": 2**20, "mib": 2**20, "g": 2**30, "gib": 2**30}
 
 
 MARKER = "CACHEDIR.TAG"
@@ -91,12 +103,39 @@ class Fragment:
     loggers: str  # ``rerun_log.logger_digest`` when it was logged: a fragment of other loggers is not replayed
 
 
+def parse_size(text: str, what: str = "cache limit") -> int:
+    """Bytes from ``500MiB``, ``2 GiB``, ``1.5G``, ``800k`` or a plain number of bytes (binary units)."""
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*([A-Za-z]*)\s*", str(text))
+    unit = match.group(2).lower() if match else ""
+    if match is None or unit not in _UNITS:
+        raise NodegraphError(f"{what}: '{text}' is not a size; give bytes or a number with KiB, MiB or GiB (e.g. 2GiB)")
+    return int(float(match.group(1)) * _UNITS[unit])
+
+
+def format_size(n: int) -> str:
+    for unit, size in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n >= size:
+            return f"{n / size:.1f} {unit}"
+    return f"{n} B"
+
+
 @dataclass(frozen=True)
 class CacheInfo:
     directory: Path
     entries: int
     blobs: int
     bytes: int
+
+
+@dataclass(frozen=True)
+class Eviction:
+    """What ``evict`` did: entries removed, bytes freed, bytes left, and whether what was spared alone is
+    above the limit."""
+
+    entries: int
+    freed: int
+    left: int
+    over: bool
 
 
 class Cache:
@@ -225,7 +264,15 @@ class Cache:
                 outputs[port] = codec.decode(data, cls)
             except codec.DecodeError as exc:
                 raise CacheCorruption(f"blob {path} cannot be decoded: {exc}") from None
+        self._touch(key)
         return outputs
+
+    def _touch(self, key: str) -> None:
+        """Mark entry ``key`` used now (its modification time): the last to go when the cache is trimmed."""
+        try:
+            os.utime(self._entry_path(key))
+        except OSError:  # gone (evicted by another run) or read-only: the value in hand is still good
+            pass
 
     def store(
         self,
@@ -266,6 +313,74 @@ class Cache:
         """Forget entry ``key`` (its blobs may be shared, so they stay until ``clear``)."""
         self._entry_path(key).unlink(missing_ok=True)
 
+    def limit(self) -> int:
+        """The size limit in bytes: ``$NODEGRAPH_CACHE_LIMIT``, else the cache's ``limit`` file, else
+        ``DEFAULT_LIMIT``."""
+        if os.environ.get(LIMIT_ENV_VAR):
+            return parse_size(os.environ[LIMIT_ENV_VAR], f"${LIMIT_ENV_VAR}")
+        try:
+            return parse_size((self.directory / LIMIT_FILE).read_text(), str(self.directory / LIMIT_FILE))
+        except FileNotFoundError:
+            return DEFAULT_LIMIT
+
+    def set_limit(self, limit: int) -> None:
+        """Keep ``limit`` (bytes) in the cache's ``limit`` file (atomically)."""
+        if limit <= 0:
+            raise NodegraphError(f"cache limit: {limit} bytes; give a size above 0 (e.g. 2GiB)")
+        self._mark()
+        atomic_write(self.directory / LIMIT_FILE, f"{limit}\n".encode())
+
+    def evict(self, limit: int | None = None, spare_since: float | None = None) -> Eviction:
+        """Remove least recently used entries until the cache holds at most ``limit`` bytes (default
+        ``self.limit()``); entries used at or after ``spare_since`` (a ``time.time()``: the run that just
+        ended) stay even above it. An entry goes first (readers then miss it), then its Rerun fragment, then
+        each blob that no remaining entry names."""
+        limit = self.limit() if limit is None else limit
+        entries = []
+        for path in (self.directory / "entries").glob("*/*.json"):
+            try:
+                stat = path.stat()
+                manifest = json.loads(path.read_bytes())
+                blobs = {item["blob"] for item in manifest["outputs"].values()}
+            except (OSError, ValueError, KeyError, TypeError, AttributeError):
+                continue  # being written or corrupt: not ours to judge here
+            entries.append((stat.st_mtime, path, stat.st_size, blobs))
+        blob_sizes = {}
+        for blob in (self.directory / "blobs").glob("*/*.npz"):
+            try:
+                blob_sizes[blob.stem] = blob.stat().st_size
+            except OSError:
+                continue
+        users: dict[str, int] = {}
+        for _, _, _, blobs in entries:
+            for digest in blobs:
+                users[digest] = users.get(digest, 0) + 1
+
+        def fragment_size(entry: Path) -> int:
+            try:
+                return self.fragment_path(entry.stem).stat().st_size
+            except OSError:
+                return 0
+
+        total = self.info().bytes
+        freed = removed = 0
+        for mtime, path, size, blobs in sorted(entries, key=lambda e: e[0]):
+            if total - freed <= limit:
+                break
+            if spare_since is not None and mtime >= spare_since:
+                continue
+            gone = size + fragment_size(path)
+            path.unlink(missing_ok=True)
+            self.fragment_path(path.stem).unlink(missing_ok=True)
+            for digest in blobs:
+                users[digest] -= 1
+                if users[digest] == 0 and digest in blob_sizes:
+                    self._blob_path(digest).unlink(missing_ok=True)
+                    gone += blob_sizes[digest]
+            freed += gone
+            removed += 1
+        return Eviction(removed, freed, total - freed, total - freed > limit)
+
     def info(self) -> CacheInfo:
         entries = list((self.directory / "entries").glob("*/*.json"))
         blobs = list((self.directory / "blobs").glob("*/*.npz"))
@@ -284,7 +399,7 @@ class Cache:
         return bool(names) and names <= {"entries", "blobs", "checkpoints"}  # written before the marker existed
 
     def clear(self) -> None:
-        """Remove the entries, the blobs and the marker, then the directory if nothing else is left in it.
+        """Remove the entries, the blobs, the limit and the marker, then the directory if nothing else is left in it.
         Refuses (NodegraphError, nothing removed) a directory that is not a nodegraph cache."""
         if not self.directory.exists():
             return
@@ -296,7 +411,7 @@ class Cache:
                 "nothing removed. Give --cache-dir the cache directory itself"
             )
         failed = []
-        for part in ("entries", "blobs", "rerun", "checkpoints", MARKER):
+        for part in ("entries", "blobs", "rerun", "checkpoints", LIMIT_FILE, MARKER):
             target = self.directory / part
             try:
                 if target.is_dir():

@@ -7,13 +7,23 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
+import time
 from pathlib import Path
 
 from rich.console import Console
 
-from .cache import Cache, check_writable, default_cache_dir
+from .cache import (
+    LIMIT_ENV_VAR,
+    LIMIT_FILE,
+    Cache,
+    check_writable,
+    default_cache_dir,
+    format_size,
+    parse_size,
+)
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import run_recipe
 from .recipe import Recipe, load_recipe
@@ -208,8 +218,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _common(inspect)
 
-    cache = sub.add_parser("cache", help="inspect or clear the cache")
-    cache.add_argument("action", choices=["info", "clear"])
+    cache = sub.add_parser(
+        "cache",
+        help="inspect, clear or limit the cache",
+        description="info: size and limit; clear: remove everything; limit SIZE: keep at most SIZE (e.g. 2GiB), "
+        "removing the least recently used results when a run ends above it ($NODEGRAPH_CACHE_LIMIT overrides)",
+    )
+    cache.add_argument("action", choices=["info", "clear", "limit"])
+    cache.add_argument("size", nargs="?", help="limit: the new size limit (e.g. 500MiB, 2GiB)")
     cache.add_argument("--yes", action="store_true", help="clear without asking (asked only on a terminal)")
     _common(cache)
     return parser
@@ -239,6 +255,7 @@ def _cmd_run(args, registry) -> int:
             f"recording is written to {rrd} (open it later with: rerun {rrd})"
         )
         spawn = False
+    started = time.time() - 1.0  # file times may be rounded down to the second
     try:
         with _pool(args, cache, reporter) as pool:
             result = run_recipe(
@@ -256,6 +273,8 @@ def _cmd_run(args, registry) -> int:
     except (NodeFailure, KeyboardInterrupt):
         reporter.print_summary()
         raise
+    finally:
+        _trim(cache, started, reporter)
     reporter.print_summary()
     if not args.quiet:
         for path in result.files:
@@ -288,7 +307,6 @@ def _cmd_watch(args, registry) -> int:
     nodes an edit changed; a bad edit prints its error (file:line, node, parameter) and the last good outputs
     and recording stay as they were until the next save."""
     import hashlib
-    import time
 
     args.no_cache, args.rrd, args.scheduler, args.workers = False, None, None, None  # the cache is the point
 
@@ -338,6 +356,7 @@ def _cmd_sweep(args, registry) -> int:
     if rrd is not None:
         check_writable(rrd.parent, "Rerun recording", "choose another path with --rrd")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
+    started = time.time() - 1.0
     with _pool(args, cache, reporter) as pool:
         result = run_sweep(
             args.recipe,
@@ -351,6 +370,7 @@ def _cmd_sweep(args, registry) -> int:
             max_seconds=None if args.yes else 60 * args.max_minutes,
             rrd=rrd,
         )
+    _trim(cache, started, reporter)
     for path in write_sweep(result, out_dir):
         print(f"wrote {path}")
     if rrd is not None:
@@ -552,9 +572,43 @@ def _cmd_cache(args, registry) -> int:
         cache.clear()
         print(f"cleared {cache.directory}")
         return 0
+    if args.action == "limit" and args.size is not None:
+        cache.set_limit(parse_size(args.size))
+        _trim(cache, None, None)
+    elif args.size is not None:
+        raise NodegraphError(f"cache {args.action} takes no size (did you mean: nodegraph cache limit {args.size})")
     info = cache.info()
-    print(f"cache {info.directory}: {info.entries} entries, {info.blobs} blobs, {info.bytes / 2**20:.1f} MiB")
+    limit = cache.limit()
+    source = (
+        f"${LIMIT_ENV_VAR}"
+        if os.environ.get(LIMIT_ENV_VAR)
+        else ("set with nodegraph cache limit" if (cache.directory / LIMIT_FILE).exists() else "the default")
+    )
+    print(
+        f"cache {info.directory}: {info.entries} entries, {info.blobs} blobs, {format_size(info.bytes)} "
+        f"of {format_size(limit)} ({source}); the least recently used results go first when a run ends above it"
+    )
     return 0
+
+
+def _trim(cache: Cache | None, since: float | None, reporter: Reporter | None) -> None:
+    """Evict least recently used cache entries above the cache's size limit, sparing those used since
+    ``since`` (the run that just ended), and say so when it removed something or could not get under."""
+    if cache is None or not cache.directory.exists():
+        return
+    done = cache.evict(spare_since=since)
+    if reporter is None and done.entries:
+        print(f"removed {done.entries} least recently used entries ({format_size(done.freed)})")
+    elif reporter is not None and done.entries:
+        reporter.info(
+            f"cache: removed {done.entries} least recently used entries ({format_size(done.freed)}); "
+            f"{format_size(done.left)} of {format_size(cache.limit())} left"
+        )
+    if done.over and reporter is not None:
+        reporter.warn(
+            f"cache: this run's results alone take {format_size(done.left)}, above the limit "
+            f"{format_size(cache.limit())}; raise it with: nodegraph cache limit SIZE"
+        )
 
 
 def _interrupt(signum, frame):

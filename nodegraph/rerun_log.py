@@ -155,12 +155,21 @@ class RunRecording:
 
 def logger_digest() -> str:
     """A digest of what an output's logged form depends on besides the value: the rerun-sdk version and the
-    source of every registered ``log_value`` implementation (the engine's, the node packages', plugins')."""
+    source of every registered ``log_value`` implementation (the engine's, the node packages', plugins') and of
+    the functions their modules import from their own package (e.g. a shared drawing helper)."""
     import hashlib
     import inspect
+    import sys
 
     digest = hashlib.sha256(rerun_module().__version__.encode())
-    for source in sorted({inspect.getsourcefile(fn) or "" for fn in log_value.registry.values()}):
+    sources = {inspect.getsourcefile(fn) or "" for fn in log_value.registry.values()}
+    for fn in list(log_value.registry.values()):  # and the helpers those modules import from their own package
+        module = sys.modules.get(fn.__module__)
+        package = fn.__module__.partition(".")[0]
+        for helper in vars(module).values() if module is not None else ():
+            if inspect.isfunction(helper) and helper.__module__.partition(".")[0] == package:
+                sources.add(inspect.getsourcefile(helper) or "")
+    for source in sorted(sources):
         digest.update(Path(source).read_bytes() if source else b"?")
     return digest.hexdigest()[:16]
 

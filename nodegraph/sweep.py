@@ -13,7 +13,9 @@ what is upstream of the simulation). Per point:
   bit for bit.
 
 The table is written as Markdown and CSV, and a PNG plots each metric against the time with the Pareto
-front marked (both lower is better: metrics are errors); the recipe's own setting is marked too.
+front marked (lower time is better; a metric is better lower, an error, unless declared ``:higher``, e.g. a
+count of elements); the recipe's own setting is marked too. Every pulled Image output (a preview) is also
+laid out as a contact sheet, each tile labelled with its point's parameter values.
 With ``rrd`` every point is also logged as its own recording (id from recipe and overrides), all in
 one .rrd, so two settings can be scrubbed side by side in a viewer. With a pool (``pool.InstancePool``)
 the instances of every point are computed by its workers first, as one task graph in which shared
@@ -36,6 +38,7 @@ import numpy as np
 
 from . import codec
 from .cache import Cache, atomic_write
+from .contact_sheet import grid_pixels
 from .errors import Issue, Location, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
 from .plan import Instance, Plan, RecipeRef, plan_jobs
@@ -43,7 +46,7 @@ from .recipe import Recipe, load_recipe
 from .report import Reporter
 from .rerun_log import merge_recordings
 from .sweep_decl import MetricRef, SweepDecl, override_text
-from .values import Table
+from .values import Image, Table
 
 
 @dataclass
@@ -58,6 +61,7 @@ class PointResult:
     metrics: dict[str, float]
     hashes: dict[str, str]
     recipe_setting: bool = False
+    images: dict[str, np.ndarray] = field(default_factory=dict)  # pulled Image outputs' pixels, by output
 
     @property
     def digest(self) -> str:
@@ -75,9 +79,15 @@ class SweepResult:
     wall_seconds: float
     executor: str = "in-process"
     metric_names: list[str] = field(default_factory=list)
+    higher_better: set[str] = field(default_factory=set)  # metrics declared :higher
 
     def front(self, metric: str) -> list[bool]:
-        return pareto_front([p.seconds for p in self.points], [p.metrics.get(metric) for p in self.points])
+        sign = -1.0 if metric in self.higher_better else 1.0
+        values = [p.metrics.get(metric) for p in self.points]
+        return pareto_front([p.seconds for p in self.points], [None if v is None else sign * v for v in values])
+
+    def label(self, metric: str) -> str:
+        return f"{metric} (higher is better)" if metric in self.higher_better else metric
 
 
 def pareto_front(costs, errors) -> list[bool]:
@@ -153,6 +163,17 @@ def metric_values(ref: MetricRef, value) -> dict[str, float]:
             name = MetricRef(ref.node, ref.port, column, ref.aggregate).name
             out[name] = float(np.mean(numbers))
     return out
+
+
+def image_pixels(value) -> np.ndarray | None:
+    """An Image output's pixels; a variant family's images side by side (None: not images, or unequal)."""
+    if isinstance(value, Image):
+        return np.asarray(value.pixels)
+    if isinstance(value, list) and value and all(isinstance(v, Image) for v in value):
+        tiles = [np.asarray(v.pixels) for v in value]
+        if len({t.shape for t in tiles}) == 1:
+            return np.concatenate(tiles, axis=1)
+    return None
 
 
 def output_hash(value) -> str:
@@ -272,6 +293,7 @@ def run_sweep(
                 if result.record.status != "cached":
                     times[key] = result.record.seconds
     results = []
+    higher: set[str] = set()
     task = reporter.task(f"sweep {decl.name}: {len(points)} points", len(points))
     with tempfile.TemporaryDirectory(prefix="nodegraph-sweep-") as scratch, task as tick:
         parts = None if rrd is None else Path(scratch)  # each point's recording, merged into rrd at the end
@@ -294,7 +316,10 @@ def run_sweep(
             seconds = _seconds(own, times, cache)
             metrics = {}
             for ref in decl.metrics:
-                metrics.update(metric_values(ref, run.output(f"{ref.node}.{ref.port}")))
+                values_of_ref = metric_values(ref, run.output(f"{ref.node}.{ref.port}"))
+                metrics.update(values_of_ref)
+                higher |= set(values_of_ref) if ref.higher else set()
+            outputs = {str(w): run.output(str(w)) for w in wires}
             results.append(
                 PointResult(
                     values=values,
@@ -303,8 +328,9 @@ def run_sweep(
                     ran=len(own - cached_before),
                     cached=len(own & cached_before),
                     metrics=metrics,
-                    hashes={str(w): output_hash(run.output(str(w))) for w in wires},
+                    hashes={name: output_hash(value) for name, value in outputs.items()},
                     recipe_setting=all(_same(v, setting_of(base, t)) for t, v in values.items()),
+                    images={name: px for name, value in outputs.items() if (px := image_pixels(value)) is not None},
                 )
             )
             tick()
@@ -321,6 +347,7 @@ def run_sweep(
         wall_seconds=time.perf_counter() - started,
         executor=getattr(pool, "description", "in-process") if pool is not None else "in-process",
         metric_names=names,
+        higher_better=higher,
     )
 
 
@@ -356,7 +383,8 @@ def sweep_table(result: SweepResult) -> tuple[list[str], list[list[str]]]:
     axes = [t for t, _ in result.sweep.grid]
     names = result.metric_names
     fronts = {m: result.front(m) for m in names}
-    header = ["point", *axes, "seconds", "ran", "cached", *names, "pareto", "outputs sha256", "recipe setting"]
+    shown = [f"{m} ↑" if m in result.higher_better else m for m in names]
+    header = ["point", *axes, "seconds", "ran", "cached", *shown, "pareto", "outputs sha256", "recipe setting"]
     rows = []
     for i, p in enumerate(result.points):
         on = [m for m in names if fronts[m][i]]
@@ -376,7 +404,7 @@ def sweep_table(result: SweepResult) -> tuple[list[str], list[list[str]]]:
     return header, rows
 
 
-def sweep_markdown(result: SweepResult, image: str | None = None) -> str:
+def sweep_markdown(result: SweepResult, image: str | None = None, sheets: tuple[str, ...] = ()) -> str:
     header, rows = sweep_table(result)
     decl = result.sweep
     common = f"{result.common_instances} node instances common to every point" + (
@@ -389,7 +417,8 @@ def sweep_markdown(result: SweepResult, image: str | None = None) -> str:
         f"{len(result.points)} points on {result.executor}, {result.wall_seconds:.1f} s in all; {common}. "
         "*seconds*: wall time of the point's own node instances; *ran*: of those, computed during this sweep "
         "(for this point or an earlier one that shares them); *cached*: found in the cache before; "
-        "*pareto*: the metrics on whose time–metric Pareto front the point lies (lower is better); "
+        "*pareto*: the metrics on whose time–metric Pareto front the point lies (lower time is better, and a lower "
+        "metric, except one marked ↑: higher is better); "
         "*outputs sha256*: of the pulled outputs' stored bytes; *recipe setting*: the recipe's own values"
         + (f"; fixed: `{' '.join(decl.fixed)}`" if decl.fixed else "")
         + ".",
@@ -404,6 +433,8 @@ def sweep_markdown(result: SweepResult, image: str | None = None) -> str:
         lines.append("| " + " | ".join(cells) + " |")
     if image:
         lines += ["", f"![{decl.name}]({image})"]
+    for sheet in sheets:
+        lines += ["", f"![{sheet}]({sheet})"]
     return "\n".join(lines) + "\n"
 
 
@@ -459,7 +490,7 @@ def plot_sweep(result: SweepResult, path: Path) -> Path | None:
         if min(ys) > 0 and max(ys) / min(ys) > 8:
             ax.set_yscale("log")
         ax.set_xlabel("wall time of the point's own nodes (s)")
-        ax.set_ylabel(name)
+        ax.set_ylabel(result.label(name))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     axes_names = " × ".join(t for t, _ in result.sweep.grid)
@@ -472,16 +503,45 @@ def plot_sweep(result: SweepResult, path: Path) -> Path | None:
     return path
 
 
+def contact_sheets(result: SweepResult, directory: Path) -> list[Path]:
+    """``<sweep>_<output>.png`` for each pulled Image output (e.g. ``preview.image``): the points' images side
+    by side, a row per value of the first axes and a column per value of the last, each labelled with its
+    point's parameter values (and its recipe-setting mark)."""
+    names = list(dict.fromkeys(n for p in result.points for n in p.images))
+    columns = len(result.sweep.grid[-1][1]) if result.sweep.grid else len(result.points)
+    written = []
+    for name in names:
+        tiles = [p.images.get(name) for p in result.points]
+        if any(t is None for t in tiles) or len({t.shape[:2] for t in tiles}) != 1:
+            continue  # a point without it, or tiles of different sizes: no sheet rather than a misleading one
+        labels = [" ".join(p.overrides) + (" (recipe)" if p.recipe_setting else "") for p in result.points]
+        height = max(20, min(40, tiles[0].shape[0] // 8))
+        pixels = grid_pixels([np.asarray(t) for t in tiles], max(1, columns), labels, gap=8, label_height=height)
+        path = directory / f"{result.sweep.name}_{name.replace('.', '_')}.png"
+        atomic_write(path, _png(pixels))
+        written.append(path)
+    return written
+
+
+def _png(pixels: np.ndarray) -> bytes:
+    from PIL import Image as PILImage
+
+    buffer = io.BytesIO()
+    PILImage.fromarray(pixels).save(buffer, format="PNG")
+    return buffer.getvalue()
+
+
 def write_sweep(result: SweepResult, directory: Path) -> list[Path]:
-    """``<directory>/<sweep>.md``, ``.csv`` and ``.png`` (the plot only with matplotlib and metrics)."""
+    """``<directory>/<sweep>.md``, ``.csv`` and ``.png`` (the plot only with matplotlib and metrics), and a
+    contact sheet per pulled Image output."""
     directory.mkdir(parents=True, exist_ok=True)
     stem = result.sweep.name
-    written = []
     image = plot_sweep(result, directory / f"{stem}.png")
-    atomic_write(directory / f"{stem}.md", sweep_markdown(result, image.name if image else None).encode())
+    sheets = contact_sheets(result, directory)
+    markdown = sweep_markdown(result, image.name if image else None, tuple(p.name for p in sheets))
+    atomic_write(directory / f"{stem}.md", markdown.encode())
     atomic_write(directory / f"{stem}.csv", sweep_csv(result).encode())
-    written += [directory / f"{stem}.md", directory / f"{stem}.csv"] + ([image] if image else [])
-    return written
+    return [directory / f"{stem}.md", directory / f"{stem}.csv"] + ([image] if image else []) + sheets
 
 
 __all__ = [

@@ -11,7 +11,7 @@ the command line::
           sim.substeps: [2, 4, 8, 16]
           sim.iterations: [1, 2]
         set: {sim.frames: 10}                # overrides shared by every point
-        metrics: [measure.stats.penetration_max]   # node.port[.column][:last|first|min|max|mean|sum]
+        metrics: [measure.stats.penetration_max]   # node.port[.column][:last|first|min|max|mean|sum][:higher]
         outputs: [sim.state]                 # also pulled (default: the metrics' nodes, else the outputs)
 """
 
@@ -26,6 +26,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field
 
 AGGREGATES = ("last", "first", "min", "max", "mean", "sum")
+DIRECTIONS = ("lower", "higher")  # which way a metric is better: an error lower, a count of elements higher
 
 
 class SweepModel(BaseModel):
@@ -41,12 +42,14 @@ class SweepModel(BaseModel):
 
 @dataclass(frozen=True)
 class MetricRef:
-    """A number read from a Table output: ``node.port[.column][:aggregate]`` (default: the last row)."""
+    """A number read from a Table output: ``node.port[.column][:aggregate][:higher]`` (default: the last row;
+    lower is better unless ``:higher``, e.g. for a count of placed elements)."""
 
     node: str
     port: str
     column: str | None = None
     aggregate: str = "last"
+    higher: bool = False
 
     @property
     def name(self) -> str:
@@ -55,15 +58,25 @@ class MetricRef:
 
 
 def parse_metric(text: str) -> MetricRef:
-    """``node.port[.column][:aggregate]``; a ValueError says what is expected."""
-    ref, _, aggregate = str(text).partition(":")
+    """``node.port[.column][:aggregate][:higher|:lower]``; a ValueError says what is expected."""
+    ref, *options = str(text).split(":")
     parts = ref.split(".")
     if len(parts) not in (2, 3) or not all(parts):
         raise ValueError("expected node.port or node.port.column (a Table output), optionally :aggregate")
-    aggregate = aggregate or "last"
-    if aggregate not in AGGREGATES:
-        raise ValueError(f"unknown aggregate '{aggregate}' (allowed: {', '.join(AGGREGATES)})")
-    return MetricRef(parts[0], parts[1], parts[2] if len(parts) == 3 else None, aggregate)
+    aggregate, direction = "last", "lower"
+    for option in options:
+        if not option:
+            continue
+        if option in AGGREGATES:
+            aggregate = option
+        elif option in DIRECTIONS:
+            direction = option
+        else:
+            raise ValueError(
+                f"unknown aggregate '{option}' (aggregates: {', '.join(AGGREGATES)}; which way is better: "
+                f"{', '.join(DIRECTIONS)})"
+            )
+    return MetricRef(parts[0], parts[1], parts[2] if len(parts) == 3 else None, aggregate, direction == "higher")
 
 
 def parse_grid(text: str) -> tuple[str, list[Any]]:

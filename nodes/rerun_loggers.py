@@ -7,13 +7,13 @@ normals, aggregates as one mesh, particles as points, shaded scenes mesh by mesh
 from __future__ import annotations
 
 import dataclasses
-import re
 
 import numpy as np
 
 from nodegraph.context import EntityLogger
 from nodegraph.rerun_log import log_value, rerun_module
 
+from .element_poses import entity_parts, log_element_poses
 from .values import Aggregate, DistanceField, ElementLibrary, ParticleState, Placement, ShadedScene, SphereSet, Volume
 
 MAX_VOLUME_POINTS = 200_000
@@ -81,53 +81,19 @@ def elements_mesh3d(value: Aggregate):
     )
 
 
-def _instance_groups(value: Aggregate, mesh) -> list[tuple[str, np.ndarray, bool]] | None:
-    """How one library mesh is drawn by instancing: (entity suffix, its faces, moved by the part offset).
-    A part-offset aggregate (the yolk that rose inside its egg) splits the mesh into its part-1 faces and
-    the rest; None when it cannot be instanced exactly (the two share vertices)."""
-    offsets = getattr(value, "part_offsets", None)
-    if offsets is None or mesh.parts is None or not np.any(mesh.parts == 1):
-        return [("", mesh.faces, False)]
-    moved, rest = mesh.faces[mesh.parts == 1], mesh.faces[mesh.parts != 1]
-    if np.intersect1d(moved, rest).size:
-        return None
-    return [("rest", rest, False), ("part1", moved, True)]
-
-
 @log_value.register
 def _(value: Aggregate, log: EntityLogger) -> None:
-    """Elements drawn by instancing: each library mesh once, at ``elements/<kind>/<mesh>``, with a pose per
-    element that uses it (its linear map D·R and position t: SPEC §3's x = D·R·v + t; a displaced inner part
-    also moved by its offset), so the recording (and a cached re-run's replay) holds each mesh once, not
-    every element's vertices. An aggregate with bends (SPEC §5 quadratic), flattened contacts, or whose parts
-    cannot be split, is logged as one world-space mesh."""
+    """Elements drawn by instancing (``log_element_poses``), so the recording (and a cached re-run's replay)
+    holds each library mesh once, not every element's vertices. Flattened contacts are left out here: the
+    dented surfaces are logged once, with the shaded scene. An aggregate with bends (SPEC §5 quadratic), or
+    whose parts cannot be split, is logged as one world-space mesh."""
     from .simulation.aggregate import DeformedAggregate
 
-    p = value.placement
-    plans = [[_instance_groups(value, mesh) for mesh in library.meshes] for library in value.libraries]
-    dented = getattr(value, "dented", False)  # flattened contacts move vertices of each element its own way
-    if type(value) not in (Aggregate, DeformedAggregate) or value.bends is not None or dented or None in sum(plans, []):
+    exact = type(value) in (Aggregate, DeformedAggregate) and value.bends is None
+    if not (exact and log_element_poses(log, value, static=True)):
         archetype = elements_mesh3d(value)
         if archetype is not None:
             log.log("elements", archetype, static=True)
-        return
-    rr = rerun_module()
-    linear = (p.rotations if value.deformations is None else value.deformations @ p.rotations).astype(np.float32)
-    names = ["_".join(_entity_parts(library.kind)) or "kind" for library in value.libraries]
-    for kind, library in enumerate(value.libraries):
-        name = names[kind] if names.count(names[kind]) == 1 else f"{names[kind]}_{kind}"
-        for m, mesh in enumerate(library.meshes):
-            use = np.flatnonzero((p.kinds == kind) & (p.variants % len(library) == m))
-            for suffix, faces, moved in plans[kind][m] if len(use) else []:
-                child = log.child("/".join(x for x in ("elements", name, f"{m:03d}", suffix) if x))
-                kept, local = np.unique(faces, return_inverse=True)  # this group's vertices, re-indexed
-                mesh3d = rr.Mesh3D(
-                    vertex_positions=mesh.vertices[kept].astype(np.float32),
-                    triangle_indices=local.reshape(-1, 3).astype(np.uint32),
-                )
-                child.log("", mesh3d, static=True)
-                at = p.positions[use] + (value.part_offsets[use] if moved else 0.0)
-                child.log("", rr.InstancePoses3D(translations=at.astype(np.float32), mat3x3=linear[use]), static=True)
 
 
 @log_value.register
@@ -144,20 +110,13 @@ def _(value: ParticleState, log: EntityLogger) -> None:
     )
 
 
-def _entity_parts(name: str) -> list[str]:
-    """Entity path parts from a mesh name like ``japonica/0012`` or ``ikura/0003/yolk`` (unsafe characters
-    replaced)."""
-    parts = [re.sub(r"[^A-Za-z0-9_.-]", "_", part) for part in name.split("/") if part]
-    return parts
-
-
 @log_value.register
 def _(value: ShadedScene, log: EntityLogger) -> None:
     """Each mesh under its name (``/shade/scene/japonica/0012``, ``…/ikura/0003/yolk``, ``…/bowl_container``),
     with its element kind and material as properties."""
     rr = rerun_module()
     for i, mesh in enumerate(value.meshes):
-        parts = _entity_parts(mesh.name) or [f"mesh_{i:04d}"]
+        parts = entity_parts(mesh.name) or [f"mesh_{i:04d}"]
         child = log.child("/".join(parts))
         log_value(mesh, child)
         material = value.materials[value.material_of[i]]

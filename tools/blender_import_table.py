@@ -1,6 +1,7 @@
 """The Blender import table: each .glb / .usdc given, imported into Blender 4.5 with the nodegraph add-on —
-objects, vertices, material names, how many materials transmit (and their IOR), how many scatter under the
-surface, which alpha below 1 (see-through without refraction), import seconds and file size — as a Markdown table.
+objects, meshes drawn and the mesh data they share (fewer where instanced), vertices, material names, how many
+materials transmit (and their IOR), how many scatter under the surface, which alpha below 1 (see-through without
+refraction), import seconds and file size — as a Markdown table.
 
     python tools/blender_import_table.py outputs/ikura_don/ikura_don.glb outputs/ikura_don/ikura_don.usdc
 
@@ -49,7 +50,8 @@ def row(path: Path, got: dict) -> str:
     scatter = [f"{m['subsurface']:.2f}" for m in materials if m["subsurface"] > 0]
     see_through = sorted({round(m["alpha"], 2) for m in materials if m["alpha"] < 1})
     return (
-        f"| {path.name} | {got['objects']:,} | {got['vertices']:,} | {', '.join(sorted(got['materials']))} | "
+        f"| {path.name} | {got['objects']:,} | {got['meshes']:,} | {got['mesh_data']:,} | {got['vertices']:,} | "
+        f"{', '.join(sorted(got['materials']))} | "
         f"{sum(1 for m in materials if m['transmission'] > 0)} "
         f"({', '.join(f'{t} at IOR {i}' for t, i in transmit) or '—'}) | "
         f"{len(scatter)} ({', '.join(scatter) or '—'}) | {', '.join(map(str, see_through)) or '—'} | "
@@ -62,8 +64,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("files", nargs="+", type=Path, help=".glb or .usdc files")
     parser.add_argument("--no-addon", action="store_true", help="Blender's importers alone, without the add-on")
     args = parser.parse_args(argv)
-    print("| file | objects | vertices | materials | transmitting (weight at IOR) | subsurface | alpha < 1 | s | MiB |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(
+        "| file | objects | meshes | mesh data | vertices | materials | transmitting (weight at IOR) | subsurface "
+        "| alpha < 1 | s | MiB |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for path in args.files:
         print(row(path, import_report(path, not args.no_addon)), flush=True)
     return 0

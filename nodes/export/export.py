@@ -31,19 +31,27 @@ def _check(params):
 
 @node(
     "export",
+    # 4: meshes that are one mesh moved rigidly are instanced (USD PointInstancer, glTF EXT_mesh_gpu_instancing)
     # 3: clean USD prim names, USD opacity 1 − transmission, the whole look in glTF extras; 2: KHR sheen,
     # diffuse transmission, volume; _CDRF_SIGMA instead of COLOR_0; USD principled attributes
-    version=3,
+    version=4,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={
         "formats": Param(list[str], ["glb", "usdc", "ply", "obj"], f"file formats, any of {', '.join(FORMATS)}"),
         "basename": Param(str, "scene", "file name without extension (a plain name, no folders)"),
+        "instancing": Param(
+            bool,
+            True,
+            "write meshes that are one mesh moved rigidly (elements no contact, shape matching or bending changed) "
+            "once, as instances: a USD PointInstancer, glTF EXT_mesh_gpu_instancing; false: a mesh per element",
+        ),
     },
     check=_check,
 )
-def export(ctx, scene, *, formats, basename):
-    """glb: core PBR + KHR_materials_* (glTF-Validator clean); USD: UsdPreviewSurface; PLY/OBJ: sRGB colours."""
+def export(ctx, scene, *, formats, basename, instancing):
+    """glb: core PBR + KHR_materials_* (glTF-Validator clean); USD: UsdPreviewSurface; PLY/OBJ: sRGB colours;
+    glb and USD instance rigid copies of one mesh (``instancing.instance_groups``)."""
     problems = _check({"formats": formats, "basename": basename})
     if problems:
         raise ValueError("; ".join(f"{name}: {message}" for name, message in problems))
@@ -52,9 +60,9 @@ def export(ctx, scene, *, formats, basename):
     from .usd_writer import usd_bytes
 
     writers = {
-        "glb": glb_bytes,
-        "usda": lambda s: usd_bytes(s, binary=False),
-        "usdc": lambda s: usd_bytes(s, binary=True),
+        "glb": lambda s: glb_bytes(s, instancing),
+        "usda": lambda s: usd_bytes(s, binary=False, instancing=instancing),
+        "usdc": lambda s: usd_bytes(s, binary=True, instancing=instancing),
         "ply": ply_bytes,
         "obj": obj_bytes,
     }

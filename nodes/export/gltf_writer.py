@@ -25,6 +25,7 @@ from .look import PREFIX, principled_attributes
 FLOAT, UINT = 5126, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 Z_UP_TO_Y_UP = [-np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)]  # quaternion (x, y, z, w): −90° about x
+INSTANCING = "EXT_mesh_gpu_instancing"
 SHEEN_ROUGHNESS = 0.5  # a water film's soft rim (glTF's sheen roughness; Blender principled v1 has none)
 
 
@@ -109,9 +110,12 @@ class _Buffer:
         self.views: list[dict] = []
         self.accessors: list[dict] = []
 
-    def add(self, array: np.ndarray, component: int, kind: str, target: int, bounds: bool = False) -> int:
+    def add(self, array: np.ndarray, component: int, kind: str, target: int | None, bounds: bool = False) -> int:
+        """A view and an accessor for ``array``; ``target`` None for data no vertex shader reads directly
+        (instance transforms)."""
         data = np.ascontiguousarray(array).tobytes()
-        self.views.append({"buffer": 0, "byteOffset": self.size, "byteLength": len(data), "target": target})
+        view = {"buffer": 0, "byteOffset": self.size, "byteLength": len(data)}
+        self.views.append(view if target is None else {**view, "target": target})
         self.chunks.append(data)
         self.size += len(data)
         pad = (-self.size) % 4
@@ -134,36 +138,57 @@ def unit_normals(normals: np.ndarray) -> np.ndarray:
     return (n / np.linalg.norm(n, axis=1, keepdims=True)).astype(np.float32)
 
 
-def glb_bytes(scene: ShadedScene) -> bytes:
-    """The scene as a .glb (glTF 2.0 binary): JSON chunk + BIN chunk."""
+def _mesh_json(buffer: _Buffer, scene: ShadedScene, k: int, vertices: np.ndarray, name: str) -> dict:
+    """glTF mesh k of the scene with the given vertex positions (its own, or a prototype's centred ones)."""
+    mesh = scene.meshes[k]
+    positions = np.asarray(vertices, np.float32)
+    attributes = {"POSITION": buffer.add(positions, FLOAT, "VEC3", ARRAY_BUFFER, bounds=True)}
+    if mesh.normals is not None:
+        attributes["NORMAL"] = buffer.add(unit_normals(mesh.normals), FLOAT, "VEC3", ARRAY_BUFFER)
+    if scene.cdrf_sigma:
+        sigma = np.asarray(scene.cdrf_sigma[k], np.float32)
+        attributes["_CDRF_SIGMA"] = buffer.add(sigma, FLOAT, "SCALAR", ARRAY_BUFFER)
+    indices = buffer.add(np.asarray(mesh.faces, np.uint32).reshape(-1), UINT, "SCALAR", ELEMENT_ARRAY_BUFFER)
+    primitive = {"attributes": attributes, "indices": indices, "material": int(scene.material_of[k]), "mode": 4}
+    return {"name": name, "primitives": [primitive]}
+
+
+def glb_bytes(scene: ShadedScene, instancing: bool = True) -> bytes:
+    """The scene as a .glb (glTF 2.0 binary): JSON chunk + BIN chunk. With ``instancing``, each group of meshes
+    that are one mesh moved rigidly (``instancing.instance_groups``) is one mesh drawn by one node with
+    ``EXT_mesh_gpu_instancing`` (per-instance translation and rotation) instead of a copy per element."""
+    from .instancing import instance_groups
+
     buffer = _Buffer()
     materials, used = [], set()
     for material, weight in zip(scene.materials, material_translucency(scene)):
         entry, ext = material_json(material, weight)
         materials.append(entry)
         used |= ext
+    groups = {int(group.members[0]): group for group in (instance_groups(scene) if instancing else [])}
+    copies = {int(k) for group in groups.values() for k in group.members[1:]}
     meshes, nodes = [], []
     for k, mesh in enumerate(scene.meshes):
-        if len(mesh.faces) == 0:
+        if len(mesh.faces) == 0 or k in copies:
             continue
-        positions = np.asarray(mesh.vertices, np.float32)
-        attributes = {"POSITION": buffer.add(positions, FLOAT, "VEC3", ARRAY_BUFFER, bounds=True)}
-        if mesh.normals is not None:
-            attributes["NORMAL"] = buffer.add(unit_normals(mesh.normals), FLOAT, "VEC3", ARRAY_BUFFER)
-        if scene.cdrf_sigma:
-            sigma = np.asarray(scene.cdrf_sigma[k], np.float32)
-            attributes["_CDRF_SIGMA"] = buffer.add(sigma, FLOAT, "SCALAR", ARRAY_BUFFER)
-        indices = buffer.add(np.asarray(mesh.faces, np.uint32).reshape(-1), UINT, "SCALAR", ELEMENT_ARRAY_BUFFER)
         name = mesh.name or f"mesh_{k}"
-        meshes.append(
+        group = groups.get(k)
+        if group is None:
+            meshes.append(_mesh_json(buffer, scene, k, mesh.vertices, name))
+            nodes.append({"name": name, "mesh": len(meshes) - 1})
+            continue
+        meshes.append(_mesh_json(buffer, scene, k, mesh.vertices - group.centre, name))
+        instances = {
+            "TRANSLATION": buffer.add(group.positions.astype(np.float32), FLOAT, "VEC3", None),
+            "ROTATION": buffer.add(group.quaternions().astype(np.float32), FLOAT, "VEC4", None),
+        }
+        nodes.append(
             {
-                "name": name,
-                "primitives": [
-                    {"attributes": attributes, "indices": indices, "material": int(scene.material_of[k]), "mode": 4}
-                ],
+                "name": f"{name} ×{len(group.members)}",
+                "mesh": len(meshes) - 1,
+                "extensions": {INSTANCING: {"attributes": instances}},
             }
         )
-        nodes.append({"name": name, "mesh": len(meshes) - 1})
     if not meshes:
         raise ValueError("scene: no mesh with faces to export")
     root = {
@@ -183,6 +208,9 @@ def glb_bytes(scene: ShadedScene) -> bytes:
         "bufferViews": buffer.views,
         "buffers": [{"byteLength": buffer.size}],
     }
+    if groups:  # a viewer without it would draw each prototype once, at the origin
+        used.add(INSTANCING)
+        document["extensionsRequired"] = [INSTANCING]
     if used:
         document["extensionsUsed"] = sorted(used)
     text = json.dumps(document, separators=(",", ":")).encode()

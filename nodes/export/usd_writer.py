@@ -76,9 +76,13 @@ def _material(stage, path: str, material: Material, translucency: float):
     return look
 
 
-def build_stage(scene: ShadedScene):
-    """An in-memory stage holding the scene under ``/Scene`` (the default prim)."""
-    from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
+def build_stage(scene: ShadedScene, instancing: bool = True):
+    """An in-memory stage holding the scene under ``/Scene`` (the default prim). With ``instancing``, each group
+    of meshes that are one mesh moved rigidly (``instancing.instance_groups``) is a ``PointInstancer`` of one
+    prototype instead of a copy per element."""
+    from pxr import Gf, Usd, UsdGeom, Vt
+
+    from .instancing import instance_groups
 
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
@@ -94,36 +98,64 @@ def build_stage(scene: ShadedScene):
         for k, (m, name) in enumerate(zip(scene.materials, prim_names([m.name for m in scene.materials], "material")))
     ]
     names = prim_names([mesh.name for mesh in scene.meshes], "mesh")
+    groups = {int(group.members[0]): group for group in (instance_groups(scene) if instancing else [])}
+    copies = {int(k) for group in groups.values() for k in group.members[1:]}
     UsdGeom.Scope.Define(stage, "/Scene/Elements")
     for k, mesh in enumerate(scene.meshes):
-        if len(mesh.faces) == 0:
+        if len(mesh.faces) == 0 or k in copies:
             continue
-        geom = UsdGeom.Mesh.Define(stage, f"/Scene/Elements/{names[k]}")
-        points = np.asarray(mesh.vertices, np.float32)
-        geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
-        geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(mesh.faces), 3, np.int32)))
-        geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(mesh.faces, np.int32).reshape(-1)))
-        geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
-        geom.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(np.stack([points.min(0), points.max(0)])))
-        if mesh.normals is not None:
-            geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.normals, np.float32)))
-            geom.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
-        if mesh.colors is not None:
-            color = geom.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
-            color.Set(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.colors, np.float32)[:, :3]))
-        if scene.cdrf_sigma:
-            sigma = UsdGeom.PrimvarsAPI(geom).CreatePrimvar(
-                "cdrf_sigma", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex
-            )
-            sigma.Set(Vt.FloatArray.FromNumpy(np.asarray(scene.cdrf_sigma[k], np.float32)))
-        binding = UsdShade.MaterialBindingAPI.Apply(geom.GetPrim())
-        binding.Bind(looks[scene.material_of[k]])
+        group = groups.get(k)
+        if group is None:
+            _mesh_prim(stage, f"/Scene/Elements/{names[k]}", scene, k, mesh.vertices, looks)
+            continue
+        instancer = UsdGeom.PointInstancer.Define(stage, f"/Scene/Elements/{names[k]}_instances")
+        prototype = _mesh_prim(
+            stage, f"/Scene/Elements/{names[k]}_instances/{names[k]}", scene, k, mesh.vertices - group.centre, looks
+        )
+        instancer.CreatePrototypesRel().SetTargets([prototype.GetPath()])
+        instancer.CreateProtoIndicesAttr(Vt.IntArray.FromNumpy(np.zeros(len(group.members), np.int32)))
+        instancer.CreatePositionsAttr(Vt.Vec3fArray.FromNumpy(group.positions.astype(np.float32)))
+        quaternions = group.quaternions()  # (x, y, z, w); USD's quaternions are (w, x, y, z)
+        # orientations (half floats: ≈ 1e-3 rad, 1.5 µm at a grain's tip) is what Blender 4.5 reads; orientationsf
+        # (float, USD ≥ 24.11) takes precedence where it is known
+        halves = [Gf.Quath(float(q[3]), *map(float, q[:3])) for q in quaternions]
+        instancer.CreateOrientationsAttr(Vt.QuathArray(halves))
+        floats = [Gf.Quatf(float(q[3]), *map(float, q[:3])) for q in quaternions]
+        instancer.CreateOrientationsfAttr(Vt.QuatfArray(floats))
     return stage
 
 
-def usd_bytes(scene: ShadedScene, binary: bool) -> bytes:
+def _mesh_prim(stage, path: str, scene: ShadedScene, k: int, vertices: np.ndarray, looks):
+    """Scene mesh k as a UsdGeom.Mesh at ``path`` with the given vertex positions, bound to its material."""
+    from pxr import Sdf, UsdGeom, UsdShade, Vt
+
+    mesh = scene.meshes[k]
+    geom = UsdGeom.Mesh.Define(stage, path)
+    points = np.asarray(vertices, np.float32)
+    geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
+    geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(mesh.faces), 3, np.int32)))
+    geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(mesh.faces, np.int32).reshape(-1)))
+    geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    geom.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(np.stack([points.min(0), points.max(0)])))
+    if mesh.normals is not None:
+        geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.normals, np.float32)))
+        geom.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+    if mesh.colors is not None:
+        color = geom.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
+        color.Set(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.colors, np.float32)[:, :3]))
+    if scene.cdrf_sigma:
+        sigma = UsdGeom.PrimvarsAPI(geom).CreatePrimvar(
+            "cdrf_sigma", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex
+        )
+        sigma.Set(Vt.FloatArray.FromNumpy(np.asarray(scene.cdrf_sigma[k], np.float32)))
+    binding = UsdShade.MaterialBindingAPI.Apply(geom.GetPrim())
+    binding.Bind(looks[scene.material_of[k]])
+    return geom
+
+
+def usd_bytes(scene: ShadedScene, binary: bool, instancing: bool = True) -> bytes:
     """The scene as .usda text or .usdc crate bytes."""
-    stage = build_stage(scene)
+    stage = build_stage(scene, instancing)
     if not binary:
         return stage.GetRootLayer().ExportToString().encode()
     with tempfile.TemporaryDirectory(prefix="nodegraph_usd_") as folder:

@@ -265,12 +265,17 @@ def _log_particles(ctx, sim, step):
 
 
 def _log_meshes(ctx, aggregate, step):
+    """The elements at ``step`` as instanced library meshes (a pose each; the meshes once), or, where the
+    library cannot be instanced, one world-space mesh."""
     import rerun as rr
 
-    mesh = aggregate.combined_mesh()  # never empty: build_simulation refuses that
+    from ..element_poses import log_element_poses
+
     ctx.rerun.set_time("sim_step", step)
-    vertices, faces = mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32)
-    ctx.rerun.log("elements", rr.Mesh3D(vertex_positions=vertices, triangle_indices=faces))
+    if not log_element_poses(ctx.rerun, aggregate, static=False):
+        mesh = aggregate.combined_mesh()  # never empty: build_simulation refuses that
+        vertices, faces = mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32)
+        ctx.rerun.log("elements", rr.Mesh3D(vertex_positions=vertices, triangle_indices=faces))
 
 
 def _log_scalars(ctx, dg, substeps):

@@ -4,6 +4,7 @@ the rest of the recipe, the table, CSV and plot with the Pareto front, and the i
 import csv
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from nodegraph.cache import Cache
@@ -180,3 +181,37 @@ def test_cli_sweep_rrd_holds_one_recording_per_point_with_its_id(sweep_file, reg
     assert main(["sweep", str(sweep_file), "--plugin", TOY, "--out-dir", str(out), "-q", "--rrd", str(again)]) == 0
     assert {entry.recording_id for entry in RrdReader(str(again)).recordings()} == found
     assert not [p.name for p in out.iterdir() if "partial" in p.name or p.suffix == ".tmp"]
+
+
+def test_a_metric_can_be_better_higher():
+    from nodegraph.sweep import PointResult, SweepResult
+    from nodegraph.sweep_decl import SweepDecl, parse_metric
+
+    assert parse_metric("place.stats.elements:higher").higher and not parse_metric("m.t.error:max").higher
+    assert parse_metric("place.stats.elements:max:higher").aggregate == "max"
+    with pytest.raises(ValueError, match="higher"):
+        parse_metric("m.t.c:better")
+    points = [PointResult({}, (), s, 1, 0, {"n": n}, {}) for s, n in ((1.0, 100.0), (2.0, 200.0), (3.0, 150.0))]
+    result = SweepResult("r", SweepDecl("s", (), (), (), ()), points, None, 0, 0.0, metric_names=["n"])
+    assert result.front("n") == [True, False, False]  # read as an error, more elements look worse
+    result.higher_better = {"n"}
+    assert result.front("n") == [True, True, False]  # more elements are better: 200 for 2 s is on the front
+
+
+def test_cli_sweep_lays_the_previews_out_on_a_contact_sheet(sweep_file, tmp_path):
+    from PIL import Image as PILImage
+
+    recipe = SWEEP_RECIPE.replace(
+        "sweeps:", "  picture:\n    type: toy_picture\n    inputs: {spheres: shift.spheres}\nsweeps:"
+    )
+    sweep_file.write_text(recipe)
+    args = ["sweep", str(sweep_file), "--grid", "shift.dx=0,1,2", "--output", "picture.image", "-q"]
+    args += ["--metric", "merge.stats.count:sum:higher", "--cache-dir", str(tmp_path / "cache"), "--plugin", TOY]
+    assert main(args) == 0
+    out = tmp_path / "outputs" / "toy_sweep" / "sweeps"
+    sheet = np.asarray(PILImage.open(out / "grid_picture_image.png"))
+    assert sheet.shape[1] > 3 * 2 * 32 and sheet.shape[0] > 24  # three tiles (two variants each), captions
+    reds = sorted({int(v) for v in sheet[8 + 12, :, 0]} - {255})  # the tiles' middle row, white gaps left out
+    assert len(reds) == 6  # each point's own pictures (two variants each), not one repeated
+    text = (out / "grid.md").read_text()
+    assert "![grid_picture_image.png](grid_picture_image.png)" in text and "merge.stats.count:sum ↑" in text

@@ -10,7 +10,7 @@ import numpy as np
 
 from nodegraph import In, Out, Param, node
 from nodegraph.rerun_log import log_value
-from nodegraph.values import Mesh, Table
+from nodegraph.values import Image, Mesh, Table
 
 
 @dataclass(frozen=True, eq=False)
@@ -182,3 +182,15 @@ def toy_file_table(ctx, *, path):
     """The lengths of a text file's lines."""
     with open(path, encoding="utf-8") as handle:
         return Table({"length": np.array([len(line) for line in handle.read().splitlines()])})
+
+
+@node(
+    "toy_picture",
+    version=1,
+    inputs={"spheres": In(SphereSet, "to picture")},
+    outputs={"image": Out(Image, "a 24 × 32 tile whose red is the spheres' mean x")},
+)
+def toy_picture(ctx, spheres):
+    """A flat tile coloured by where the spheres are (a stand-in for a preview)."""
+    red = int(np.clip(128 + 60 * spheres.centers[:, 0].mean(), 0, 255))
+    return Image(np.tile(np.array([red, 40, 90], np.uint8), (24, 32, 1)))

@@ -74,6 +74,7 @@ def test_blender_sees_the_whole_look(dish, tmp_path, fmt):
     exported = [m for m in dish.meshes if len(m.faces)]
     assert got["meshes"] == len(exported)
     assert got["vertices"] == sum(len(m.vertices) for m in exported)
+    assert got["mesh_data"] == 5  # instanced: a grain, a membrane, a yolk, an ice flake, the bowl
     materials = got["materials"]
     assert set(materials) == {m.name for m in dish.materials}  # clean names, no m0000N_ prefix
     for material in dish.materials:

@@ -13,8 +13,8 @@ from nodes.export import export
 from nodes.export.usd_writer import prim_names
 
 
-def _files(scene, formats):
-    return export.call(scene=scene, formats=formats, basename="don").files
+def _files(scene, formats, **params):
+    return export.call(scene=scene, formats=formats, basename="don", **params).files
 
 
 def _gltf_json(data: bytes) -> dict:
@@ -36,7 +36,13 @@ def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
         "KHR_materials_sheen",
         "KHR_materials_diffuse_transmission",
     } <= set(doc["extensionsUsed"])
-    assert len(doc["meshes"]) == len(shaded.meshes)
+    drawn = [
+        doc["accessors"][n["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"]]["count"]
+        if "extensions" in n
+        else 1
+        for n in doc["nodes"][1:]
+    ]
+    assert sum(drawn) == len(shaded.meshes) and len(doc["meshes"]) < len(shaded.meshes)  # the grains are instanced
     attributes = [m["primitives"][0]["attributes"] for m in doc["meshes"]]
     assert all("_CDRF_SIGMA" in a and "COLOR_0" not in a for a in attributes)  # σ travels; baked light does not
     materials = {m["name"]: m["extensions"] for m in doc["materials"]}
@@ -75,8 +81,11 @@ def _usd_errors(stage):
 def test_usd_passes_usd_validation(shaded, tmp_path, fmt):
     from pxr import Usd, UsdGeom, UsdShade
 
+    instanced = tmp_path / f"instanced.{fmt}"
+    instanced.write_bytes(_files(shaded, [fmt])[f"don.{fmt}"])
+    assert _usd_errors(Usd.Stage.Open(str(instanced))) == []
     path = tmp_path / f"don.{fmt}"
-    path.write_bytes(_files(shaded, [fmt])[f"don.{fmt}"])
+    path.write_bytes(_files(shaded, [fmt], instancing=False)[f"don.{fmt}"])
     stage = Usd.Stage.Open(str(path))
     assert _usd_errors(stage) == []
     assert UsdGeom.GetStageUpAxis(stage) == "Z" and UsdGeom.GetStageMetersPerUnit(stage) == pytest.approx(1e-3)

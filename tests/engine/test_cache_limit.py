@@ -1,0 +1,88 @@
+"""The cache's size limit: least recently used entries go first (last stored or loaded), a blob goes with
+the last entry naming it, what a run just used stays, and ``nodegraph cache`` shows and sets the limit."""
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nodegraph.cache import DEFAULT_LIMIT, Cache, format_size, parse_size
+from nodegraph.cli import main
+from nodegraph.errors import NodegraphError
+from nodegraph.values import Table
+
+TOY = Path(__file__).with_name("toy_nodes.py")
+
+
+def _store(cache: Cache, name: str, value: float, when: float, n: int = 10_000) -> str:
+    key = name * 64
+    cache.store(key, {"t": Table({"x": np.full(n, value)})}, name, "toy")
+    os.utime(cache._entry_path(key), (when, when))
+    return key
+
+
+def test_least_recently_used_entries_go_first(tmp_path):
+    cache = Cache(tmp_path / "c")
+    a, b, c = (_store(cache, k, v, 1000.0 + i) for i, (k, v) in enumerate([("a", 1.0), ("b", 2.0), ("c", 3.0)]))
+    cache.load(a, {"t": Table})  # used now: the newest
+    entry = cache.info().bytes // 3
+    done = cache.evict(limit=2 * entry + entry // 2)
+    assert done.entries == 1 and not done.over
+    assert not cache.has(b) and cache.has(a) and cache.has(c)  # b was the least recently used
+    assert cache.info().bytes <= 2 * entry + entry // 2 and cache.info().blobs == 2
+
+
+def test_a_shared_blob_stays_while_an_entry_names_it(tmp_path):
+    cache = Cache(tmp_path / "c")
+    old = _store(cache, "a", 1.0, 1000.0)
+    new = _store(cache, "b", 1.0, 2000.0)  # the same value: one blob for both
+    assert cache.info().blobs == 1
+    cache.evict(limit=cache.info().bytes - 1)
+    assert not cache.has(old) and cache.has(new)
+    assert cache.load(new, {"t": Table})["t"].columns["x"][0] == 1.0
+
+
+def test_what_the_run_used_is_spared_even_above_the_limit(tmp_path):
+    cache = Cache(tmp_path / "c")
+    old = _store(cache, "a", 1.0, 1000.0)
+    recent = _store(cache, "b", 2.0, 5000.0)
+    done = cache.evict(limit=1, spare_since=4000.0)
+    assert not cache.has(old) and cache.has(recent) and done.over
+
+
+def test_limit_from_file_environment_and_default(tmp_path, monkeypatch):
+    monkeypatch.delenv("NODEGRAPH_CACHE_LIMIT", raising=False)
+    cache = Cache(tmp_path / "c")
+    assert cache.limit() == DEFAULT_LIMIT
+    cache.set_limit(parse_size("300 MiB"))
+    assert Cache(tmp_path / "c").limit() == 300 * 2**20
+    monkeypatch.setenv("NODEGRAPH_CACHE_LIMIT", "1.5GiB")
+    assert cache.limit() == int(1.5 * 2**30)
+    assert parse_size("800k") == 800 * 1024 and parse_size("12") == 12
+    with pytest.raises(NodegraphError, match="KiB, MiB or GiB"):
+        parse_size("2 TB")
+
+
+def test_cli_shows_sets_and_applies_the_limit(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("NODEGRAPH_CACHE_LIMIT", raising=False)
+    monkeypatch.setenv("NODEGRAPH_CACHE", str(tmp_path / "cache"))
+    recipe = tmp_path / "r.yaml"
+    recipe.write_text("outputs: [pts]\nnodes:\n  pts: {type: toy_points, params: {count: 50}}\n")
+    assert main(["run", str(recipe), "--no-rrd", "-q", "--plugin", str(TOY)]) == 0
+    cache = Cache(tmp_path / "cache")
+    first = cache.info()
+    assert first.entries >= 1
+    for k in range(3):  # older results of other settings
+        _store(cache, "abc"[k], float(k), 1000.0 + k)
+    assert main(["cache", "limit", f"{first.bytes + 100}"]) == 0
+    out = capsys.readouterr().out
+    assert "removed 3 least recently used entries" in out and "set with nodegraph cache limit" in out
+    assert cache.info().entries == first.entries  # the run's own results stayed
+    assert main(["cache", "info"]) == 0
+    assert f"of {format_size(first.bytes + 100)}" in capsys.readouterr().out
+    _store(cache, "d", 9.0, 1000.0)
+    assert main(["run", str(recipe), "--no-rrd", "-q", "--plugin", str(TOY)]) == 0  # a run ends above the limit
+    assert cache.info().entries == first.entries
+    assert main(["cache", "clear", "--yes"]) == 0 and not (tmp_path / "cache").exists()

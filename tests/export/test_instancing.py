@@ -1,0 +1,115 @@
+"""Instancing in the exported files: a mesh that is another mesh moved rigidly is written once and placed per
+element (USD PointInstancer, glTF EXT_mesh_gpu_instancing); a dented copy is written as its own mesh. Each file
+read back must give every element's vertices where the scene has them."""
+
+import json
+import struct
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from nodegraph.values import Mesh
+from nodes.export import export
+from nodes.export.instancing import TOLERANCE, instance_groups
+from nodes.values import Material, ShadedScene
+
+
+def _scene(dent: float = 0.0) -> ShadedScene:
+    """Ten grains turned and moved at random, grain 3 dented by ``dent`` mm at one vertex, and a bowl-like box."""
+    rng = np.random.default_rng(5)
+    grain = trimesh.creation.capsule(height=3.0, radius=1.0, count=[8, 8])
+    meshes = []
+    for k in range(10):
+        rotation = Rotation.random(random_state=k).as_matrix()
+        vertices = grain.vertices @ rotation.T + rng.uniform(-50.0, 50.0, 3)
+        if k == 3:
+            vertices[0] += dent * rotation[:, 2]
+        meshes.append(Mesh(vertices, grain.faces, normals=grain.vertex_normals @ rotation.T, name=f"japonica/{k:04d}"))
+    meshes.append(Mesh.from_trimesh(trimesh.creation.box(extents=[80, 80, 5]), name="bowl"))
+    sigma = tuple(np.full(len(m.vertices), 0.1, np.float32) for m in meshes)
+    return ShadedScene(meshes, [Material(name="rice"), Material(name="ceramic")], [0] * 10 + [1], sigma)
+
+
+def test_rigid_copies_group_and_a_dented_one_does_not():
+    assert [g.members.tolist() for g in instance_groups(_scene())] == [list(range(10))]
+    dented = instance_groups(_scene(dent=10 * TOLERANCE))  # a dent of a micrometre is a different mesh
+    assert [g.members.tolist() for g in dented] == [[0, 1, 2, 4, 5, 6, 7, 8, 9]]
+    assert [g.members.tolist() for g in instance_groups(_scene(dent=TOLERANCE / 10))] == [list(range(10))]
+
+
+def test_a_mirrored_copy_is_not_an_instance():
+    scene = _scene()
+    flip = np.array([-1.0, 1.0, 1.0])
+    mirrored = Mesh(scene.meshes[1].vertices * flip, scene.meshes[1].faces, normals=scene.meshes[1].normals * flip)
+    meshes = (scene.meshes[0], mirrored)
+    assert instance_groups(ShadedScene(meshes, scene.materials, [0, 0])) == []
+
+
+def _gltf(data: bytes) -> tuple[dict, bytes]:
+    length = struct.unpack_from("<I", data, 12)[0]
+    return json.loads(data[20 : 20 + length]), data[28 + length :]
+
+
+def _accessor(doc: dict, binary: bytes, index: int) -> np.ndarray:
+    accessor = doc["accessors"][index]
+    view = doc["bufferViews"][accessor["bufferView"]]
+    width = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[accessor["type"]]
+    data = np.frombuffer(binary, np.float32, accessor["count"] * width, view["byteOffset"])
+    return data.reshape(accessor["count"], width)
+
+
+def test_glb_instances_put_every_grain_where_it_was(gltf_validator):
+    scene = _scene(dent=1.0)
+    data = export.call(scene=scene, formats=["glb"], basename="s").files["s.glb"]
+    report = gltf_validator(data)
+    assert report["numErrors"] == 0 and report["numWarnings"] == 0, report["messages"][:5]
+    doc, binary = _gltf(data)
+    assert doc["extensionsRequired"] == ["EXT_mesh_gpu_instancing"]
+    placed = []
+    for node in doc["nodes"][1:]:
+        vertices = _accessor(doc, binary, doc["meshes"][node["mesh"]]["primitives"][0]["attributes"]["POSITION"])
+        if "extensions" not in node:
+            placed.append(vertices)
+            continue
+        attributes = node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]
+        rotations = Rotation.from_quat(_accessor(doc, binary, attributes["ROTATION"])).as_matrix()
+        for rotation, position in zip(rotations, _accessor(doc, binary, attributes["TRANSLATION"])):
+            placed.append(vertices @ rotation.T + position)
+    assert len(doc["meshes"]) == 3  # the grains' prototype, the dented grain, the bowl
+    expected = sorted(scene.meshes, key=lambda m: tuple(m.vertices.mean(0)))
+    got = sorted(placed, key=lambda v: tuple(v.mean(0)))
+    assert max(np.abs(g - m.vertices).max() for g, m in zip(got, expected)) < 1e-4  # float32 at 50 mm
+
+
+@pytest.mark.parametrize("fmt", ["usda", "usdc"])
+def test_usd_point_instancer_puts_every_grain_where_it_was(tmp_path, fmt):
+    from pxr import Usd, UsdGeom
+
+    scene = _scene(dent=1.0)
+    path = tmp_path / f"s.{fmt}"
+    path.write_bytes(export.call(scene=scene, formats=[fmt], basename="s").files[path.name])
+    stage = Usd.Stage.Open(str(path))
+    placed = []
+    for prim in stage.Traverse():
+        if prim.IsA(UsdGeom.PointInstancer):
+            instancer = UsdGeom.PointInstancer(prim)
+            prototype = stage.GetPrimAtPath(instancer.GetPrototypesRel().GetTargets()[0])
+            points = np.array(UsdGeom.Mesh(prototype).GetPointsAttr().Get())
+            now = Usd.TimeCode.Default()
+            for matrix in instancer.ComputeInstanceTransformsAtTime(now, now):
+                placed.append(points @ np.array(matrix)[:3, :3] + np.array(matrix)[3, :3])
+        elif prim.IsA(UsdGeom.Mesh) and not prim.GetParent().IsA(UsdGeom.PointInstancer):
+            placed.append(np.array(UsdGeom.Mesh(prim).GetPointsAttr().Get()))
+    expected = sorted(scene.meshes, key=lambda m: tuple(m.vertices.mean(0)))
+    got = sorted(placed, key=lambda v: tuple(v.mean(0)))
+    assert len(got) == len(expected)
+    assert max(np.abs(g - m.vertices).max() for g, m in zip(got, expected)) < 1e-4  # orientationsf: float
+
+
+def test_instancing_off_writes_a_mesh_per_element():
+    scene = _scene()
+    files = export.call(scene=scene, formats=["glb"], basename="s", instancing=False).files
+    doc, _ = _gltf(files["s.glb"])
+    assert len(doc["meshes"]) == len(scene.meshes) and "extensionsRequired" not in doc
