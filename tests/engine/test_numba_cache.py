@@ -7,7 +7,6 @@ import subprocess
 import sys
 import textwrap
 
-
 # Runs in a fresh process: compiles (or loads) the two kernels, counting compilations with the engine's
 # own compile watch, and prints [compilations of apply, compilations of other, apply's result].
 PROBE = """
