@@ -69,17 +69,22 @@ QUICK_RECIPE = "name: compile_probe\nseed: 1\noutputs: [probe.table]\nnodes:\n  
 
 
 ARRAY = re.compile(r"Array\((\w+), (\d+), '(\w)', (True|False), aligned=True\)")
+FIELD = re.compile(r"(readonly )?array\((\w+), (\d+)d, (\w)\)")  # an array inside a typed bundle (NamedTuple)
+SHORT = {"float64": "f64", "int64": "i64", "bool": "bool"}
 
 
 def compact(types: str) -> str:
     """numba's argument types, short: ``f64[2d]``; ``ro`` marks a read-only array (a specialisation of its own)."""
-    short = {"float64": "f64", "int64": "i64", "bool": "bool"}
 
     def one(match) -> str:
         kind, ndim, layout, readonly = match.groups()
-        return f"{'ro ' if readonly == 'True' else ''}{short.get(kind, kind)}[{ndim}d{'' if layout == 'C' else layout}]"
+        return f"{'ro ' if readonly == 'True' else ''}{SHORT.get(kind, kind)}[{ndim}d{'' if layout == 'C' else layout}]"
 
-    text = ARRAY.sub(one, types).replace("omitted(default=None)", "-")
+    def field(match) -> str:
+        readonly, kind, ndim, layout = match.groups()
+        return f"{'ro ' if readonly else ''}{SHORT.get(kind, kind)}[{ndim}d{'' if layout == 'C' else layout}]"
+
+    text = FIELD.sub(field, ARRAY.sub(one, types)).replace("omitted(default=None)", "-")
     return (text[1:-1] if text.startswith("(") and text.endswith(")") else text).rstrip(",")
 
 
