@@ -11,15 +11,20 @@ G's full method against the short one on the rice bowl is ``benchmarks/bench_ful
 
 Kernels are compiled by a first quick run of the same recipe (numba's cache then serves later runs), so
 the timed run's cold time is the recipe's, not the compiler's. The load average is printed beside: on a
-shared machine the times are only comparable under the same line.
+shared machine the times are only comparable under the same line; each row also gives the load average
+when its run started and the run's peak resident memory (each run is a process of its own, so the peak is
+that recipe's).
 """
 
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import os
+import resource
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -93,6 +98,21 @@ def run_cold(name: str, overrides: list[str], preview_to: Path | None = None) ->
     }
 
 
+def _measured(name: str, overrides: list[str], preview_to: Path | None) -> dict:
+    row = run_cold(name, overrides, preview_to)
+    row["peak_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
+    return row
+
+
+def run_isolated(name: str, overrides: list[str], preview_to: Path | None = None) -> dict:
+    """``run_cold`` in a fresh process (its peak memory is this run's alone), with the load average at its
+    start."""
+    load = os.getloadavg()[0]
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        row = pool.submit(_measured, name, overrides, preview_to).result()
+    return {**row, "load": load}
+
+
 def _final_aggregates(recipe) -> list[str]:
     """The aggregates the ``measure`` node reads (``node.port``)."""
     wires = recipe.nodes["measure"].inputs["aggregates"]
@@ -111,9 +131,9 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for name in names:
         quick = QUICK.get(name, PREVIEW)
-        run_cold(name, quick)  # compiles the kernels (numba cache) so the timed run is cold, not compiling
+        run_isolated(name, quick)  # compiles the kernels (numba cache) so the timed run is cold, not compiling
         preview = None if args.quick else REPO / "benchmarks" / "results" / f"{name}.png"  # for a look
-        rows.append((name, run_cold(name, quick if args.quick else [], preview_to=preview)))
+        rows.append((name, run_isolated(name, quick if args.quick else [], preview_to=preview)))
         _print_row(name, rows[-1][1], args.top)
     print()
     print(_table(rows))
@@ -128,14 +148,15 @@ def _print_row(name: str, row: dict, top: int) -> None:
 
 def _table(rows) -> str:
     head = (
-        "| recipe | elements | vertices | total s | p50 | p95 | max | >1 % | contacts | packing "
+        "| recipe | elements | vertices | total s | load | peak MiB | p50 | p95 | max | >1 % | contacts | packing "
         "| fill mm | ref | ref short s | ref full s | ref elements | ref vertices |"
     )
-    lines = [head, "|" + "---|" * 16]
+    lines = [head, "|" + "---|" * 18]
     for name, row in rows:
         src, full, short, count, verts = REFERENCE.get(name, ("", None, None, None, None))
         lines.append(
-            f"| {name} | {row['elements']:.0f} | {row['vertices']:,} | {row['total']:.1f} | "
+            f"| {name} | {row['elements']:.0f} | {row['vertices']:,} | {row['total']:.1f} | {row['load']:.1f} | "
+            f"{row['peak_mib']:,.0f} | "
             f"{row['overlap_p50']:.3f} | {row['overlap_p95']:.3f} | {row['overlap_max']:.3f} | "
             f"{row['deeper_than_1pct']:.2f} | {row['contacts_per_element']:.1f} | {row['packing_fraction']:.2f} | "
             f"{row['fill_height']:.1f} | {src} | {_num(short)} | {_num(full)} | {_num(count)} | {_num(verts)} |"

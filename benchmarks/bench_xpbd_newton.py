@@ -7,7 +7,8 @@ to land), then take turns, three rounds of 10 frames each, ours then Newton's (n
 machine falls on both): substeps per second, median and range. Also reported per side: the pile top,
 the packing fraction below 80 % of the 95th-percentile height (random packing ≈ 0.60–0.64) and,
 for ours, the max penetration / r.
-Run: python benchmarks/bench_xpbd_newton.py [--quick] [--sizes 10000 50000]
+Newton's CPU path runs on one thread; ``--threads 1`` compares at equal thread count.
+Run: python benchmarks/bench_xpbd_newton.py [--quick] [--sizes 10000 50000] [--threads N]
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ def initial_grid(n, seed=0):
     return grid + rng.uniform(-0.0004, 0.0004, grid.shape), side
 
 
-def box_solver(n, dispatch=None):
+def box_solver(n, dispatch=None, threads=None):
     """Our solver on the jittered grid in the open box (mm, g, s), ready to run: a ``SolverRun`` (``scenes``)."""
     from nodes.simulation.collider import signed_distance_grid
     from nodes.simulation.scenes import open_box, solver_run
@@ -74,13 +75,14 @@ def box_solver(n, dispatch=None):
         np.tile([1.0, 0, 0, 0], (n, 1)),
         settings,
         dispatch=dispatch,
+        threads=threads,
         sdf=sdf,
     )
 
 
-def ours_scene(n):
+def ours_scene(n, threads=None):
     """(frame, positions in m, notes) of our solver on the box scene."""
-    s = box_solver(n)
+    s = box_solver(n, threads=threads)
     return (
         s.frame,
         lambda: s.state.x / 1000,
@@ -137,12 +139,12 @@ def newton_scene(n):
     return frame, lambda: state_0.particle_q.numpy(), lambda: {}
 
 
-def side_by_side(n, settle, timed, rounds):
+def side_by_side(n, settle, timed, rounds, threads=None):
     """Both scenes settle ``settle`` frames, then take turns: ``rounds`` blocks of ``timed`` frames
     each, ours then Newton's, so machine noise falls on both; substeps/s per block."""
     import warp as wp
 
-    scenes = {"ours": ours_scene(n), "newton": newton_scene(n)}
+    scenes = {"ours": ours_scene(n, threads), "newton": newton_scene(n)}
     for frame, _, _ in scenes.values():
         for _ in range(settle):
             frame()
@@ -173,6 +175,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 50000])
+    ap.add_argument("--threads", type=int, help="our kernels' threads (default: the cores other processes leave free)")
     args = ap.parse_args()
     require_peer()
     settle, timed, rounds = (3, 3, 2) if args.quick else (60, 10, 3)
@@ -180,7 +183,7 @@ def main():
     rows = []
     start = conditions()
     for n in sizes:
-        result = side_by_side(n, settle, timed, rounds)
+        result = side_by_side(n, settle, timed, rounds, args.threads)
         (ours, x_ours, notes), (peer, x_peer, _) = result["ours"], result["newton"]
         a, b = float(np.median(ours)), float(np.median(peer))
         rows.append(

@@ -16,10 +16,10 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-import networkx as nx
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from .dag import Dag
 from .errors import Issue, Location, RecipeError
 from .node import NodeSpec
 from .params import ParamValueError, canonical
@@ -93,7 +93,7 @@ class Recipe:
     outputs: list[Wire]
     nodes: dict[str, NodeEntry]
     source: SourceMap
-    graph: nx.DiGraph = field(repr=False)
+    graph: Dag = field(repr=False)
     overrides: tuple[str, ...] = ()  # the --set texts applied on top of the file
     sweeps: dict[str, SweepDecl] = field(default_factory=dict)  # the recipe's own sweeps (``nodegraph sweep``)
     draft: tuple[str, ...] = ()  # the draft: block as node.param=value texts (what --draft applies)
@@ -126,13 +126,12 @@ class Recipe:
         """The given nodes and every node they depend on (what a pull-based run must consider)."""
         needed = set(node_ids)
         for node_id in node_ids:
-            needed |= nx.ancestors(self.graph, node_id)
+            needed |= self.graph.ancestors(node_id)
         return needed
 
     def order(self, node_ids=None) -> list[str]:
         """Nodes in a deterministic topological order (ties broken by id)."""
-        graph = self.graph if node_ids is None else self.graph.subgraph(node_ids)
-        return list(nx.lexicographical_topological_sort(graph))
+        return self.graph.topological_order(node_ids)
 
 
 def _nearest(word: str, options) -> str | None:
@@ -331,8 +330,7 @@ class _Validator:
             if entry is not None:
                 entries[node_id] = entry
 
-        graph = nx.DiGraph()
-        graph.add_nodes_from(entries)
+        graph = Dag(entries)
         self._check_wires(entries, wire_sources, graph, raw_nodes)
         cyclic = self._check_cycles(graph)
         if not cyclic:
@@ -577,18 +575,16 @@ class _Validator:
                 graph.add_edge(wire.node, node_id)
             entry.inputs[port_name] = resolved
 
-    def _check_cycles(self, graph: nx.DiGraph) -> bool:
-        try:
-            cycle = nx.find_cycle(graph)
-        except nx.NetworkXNoCycle:
+    def _check_cycles(self, graph: Dag) -> bool:
+        ids = graph.find_cycle()
+        if ids is None:
             return False
-        ids = [u for u, _ in cycle] + [cycle[0][0]]
-        self.issue(("nodes", cycle[0][0]), "cycle: " + " → ".join(ids), key=True, node=cycle[0][0])
+        self.issue(("nodes", ids[0]), "cycle: " + " → ".join(ids), key=True, node=ids[0])
         return True
 
-    def _check_families(self, entries: dict[str, NodeEntry], graph: nx.DiGraph) -> None:
+    def _check_families(self, entries: dict[str, NodeEntry], graph: Dag) -> None:
         """Variant families: a plain port fed by a family maps the node over it; a many-port gathers it."""
-        for node_id in nx.lexicographical_topological_sort(graph):
+        for node_id in graph.topological_order():
             entry = entries[node_id]
             sizes: dict[int, str] = {}
             for port_name, wires in entry.inputs.items():

@@ -16,6 +16,7 @@ import os
 
 import numpy as np
 
+from ..kernel_arrays import kernel_array
 from .voxel_grid import Grid, mesh_occupancy, sphere_field
 
 METRICS = ("euclidean", "manhattan")
@@ -66,9 +67,7 @@ def exact_field(
     limit = band * h
     near = None
     if vertices is not None:
-        unsigned = mesh_distance_band(
-            grid.local(vertices), np.ascontiguousarray(faces, np.int64), h, grid.shape, float(band)
-        )
+        unsigned = mesh_distance_band(grid.local(vertices), kernel_array(faces, np.int64), h, grid.shape, float(band))
         near = np.where(mesh_occupancy(grid, vertices, faces), unsigned, -unsigned)
     if centers is not None and len(centers):
         spheres = sphere_field(grid, centers, radii, float(band))  # already −band·h where no sphere reaches

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kernel_arrays import kernel_array
+
 
 def element_props(meshes: list) -> dict[str, np.ndarray]:
     """expansion, volume, circumradius, inradius, length, width, thickness per mesh (mm, mm³).
@@ -47,4 +49,4 @@ def surface_distance(point: np.ndarray, vertices: np.ndarray, faces: np.ndarray)
 
     reach = 2.0 * float(np.ptp(vertices, axis=0).max()) + float(np.abs(vertices - point).max()) + 1.0
     local = np.ascontiguousarray(vertices - point)
-    return float(mesh_distance_band(local, faces, reach, (1, 1, 1), 1.0)[0, 0, 0])
+    return float(mesh_distance_band(local, kernel_array(faces, np.int64), reach, (1, 1, 1), 1.0)[0, 0, 0])

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kernel_arrays import kernel_array
+
 SURFACE, INSIDE = 0, 1  # SphereSet.tags
 
 
@@ -26,8 +28,7 @@ def interior_points(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np
     """``count`` points uniformly distributed inside the closed mesh (rejection in its bounding box)."""
     from ..mesh_inside import inside_points
 
-    vertices = np.ascontiguousarray(vertices, np.float64)
-    faces = np.ascontiguousarray(faces, np.int64)
+    vertices, faces = kernel_array(vertices), kernel_array(faces, np.int64)
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
     found: list[np.ndarray] = []
     have = 0

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..kernel_arrays import kernel_array
+
 #: Largest grid accepted: 2²⁶ cells (e.g. 406³) keeps the distance-field chain under ~2 GiB.
 MAX_CELLS = 2**26
 MIN_RESOLUTION = 8
@@ -111,16 +113,14 @@ def mesh_occupancy(grid: Grid, vertices: np.ndarray, faces: np.ndarray) -> np.nd
     """Cells whose centre lies inside the closed mesh (column winding number > 0, ``nodes.mesh_inside``)."""
     from ..mesh_inside import inside_cells
 
-    return inside_cells(grid.local(vertices), np.ascontiguousarray(faces, np.int64), grid.voxel_size, grid.shape)
+    return inside_cells(grid.local(vertices), kernel_array(faces, np.int64), grid.voxel_size, grid.shape)
 
 
 def sphere_field(grid: Grid, centers: np.ndarray, radii: np.ndarray, band: float) -> np.ndarray:
     """Signed distance of the sphere union (positive inside), exact above −band cells."""
     from .grid_kernels import sphere_union_band
 
-    return sphere_union_band(
-        grid.local(centers), np.ascontiguousarray(radii, np.float64), grid.voxel_size, grid.shape, float(band)
-    )
+    return sphere_union_band(grid.local(centers), kernel_array(radii), grid.voxel_size, grid.shape, float(band))
 
 
 def occupancy(

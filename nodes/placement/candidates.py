@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kernel_arrays import kernel_array
+
 # Bytes held per candidate while sampling: position, normal, cell key, order, flag and sort scratch.
 BYTES_PER_CANDIDATE = 96
 
@@ -62,9 +64,7 @@ def volume_candidates(vertices: np.ndarray, faces: np.ndarray, spacing: float, r
     axes = [np.arange(lo[d] + (0.5 + shift[d]) * spacing, hi[d], spacing) for d in range(3)]
     if any(len(a) == 0 for a in axes):
         return np.zeros((0, 3)), np.zeros((0, 3))
-    inside = inside_columns(
-        np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64), axes[0], axes[1], axes[2]
-    )
+    inside = inside_columns(kernel_array(vertices), kernel_array(faces, np.int64), axes[0], axes[1], axes[2])
     ix, iy, iz = np.nonzero(inside)
     points = np.stack([axes[0][ix], axes[1][iy], axes[2][iz]], axis=1)
     points += rng.uniform(-0.25 * spacing, 0.25 * spacing, points.shape)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..kernel_arrays import kernel_array
 from ..triangle_distance import point_triangle_offset
 
 
@@ -85,8 +86,7 @@ def medial_spheres(vertices: np.ndarray, faces: np.ndarray, tolerance: float, ma
     """
     from ..mesh_inside import inside_points
 
-    vertices = np.ascontiguousarray(vertices, np.float64)
-    faces = np.ascontiguousarray(faces, np.int64)
+    vertices, faces = kernel_array(vertices), kernel_array(faces, np.int64)
     length = element_length(vertices)
     points, normals = surface_samples(vertices, faces, samples)
     centers, radii = inner_poles(points, normals)
@@ -146,7 +146,7 @@ def union_fit(
     gap = (np.linalg.norm(points[:, None, :] - centers[None, :, :], axis=2) - radii).min(axis=1)
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
     axes = [np.linspace(lo[d], hi[d], grid + 2)[1:-1] for d in range(3)]
-    inside = inside_columns(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64), *axes)
+    inside = inside_columns(kernel_array(vertices), kernel_array(faces, np.int64), *axes)
     ix, iy, iz = np.nonzero(inside)
     interior = np.stack([axes[0][ix], axes[1][iy], axes[2][iz]], axis=1)
     covered = (np.linalg.norm(interior[:, None, :] - centers[None, :, :], axis=2) <= radii).any(axis=1)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..kernel_arrays import kernel_array
 from ..values import Placement
 from .element_templates import ElementTemplates
 
@@ -55,7 +56,7 @@ def neighbours(positions: np.ndarray, templates: ElementTemplates, tmpl: np.ndar
     if len(positions) == 0:
         return Neighbours(np.zeros(1, np.int64), np.zeros(0, np.int64))
     reach = np.maximum(templates.bound[tmpl], templates.circumradius[tmpl]) + travel
-    return Neighbours(*neighbour_lists(np.ascontiguousarray(positions), np.ascontiguousarray(reach)))
+    return Neighbours(*neighbour_lists(kernel_array(positions), kernel_array(reach)))
 
 
 def _frames(positions, placement: Placement, tmpl: np.ndarray):
@@ -138,7 +139,7 @@ def cull_placement(
     if n == 0:
         return np.zeros(0, bool), np.zeros(0)
     tmpl = templates.index(placement.kinds, placement.variants)
-    frames = _frames(np.ascontiguousarray(placement.positions), placement, tmpl)
+    frames = _frames(placement.positions.copy(), placement, tmpl)  # writable, as in refine_placement: one kernel kind
     shapes = _shapes(templates)
     near = neighbours(frames.positions, templates, tmpl, np.zeros(n))
     offset = float(offset)

@@ -13,6 +13,7 @@ Three evaluations of the same integral, all pure functions of arrays:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -111,7 +112,13 @@ def _past_terminator_share(sigma: np.ndarray, nodes: int = 96) -> np.ndarray:
 
 
 _SHARE_SIGMA = np.linspace(0.0, SIGMA_MAX, 64)
-_SHARE = _past_terminator_share(_SHARE_SIGMA)
+
+
+@cache
+def _share_table() -> np.ndarray:
+    """``_past_terminator_share`` on ``_SHARE_SIGMA``, computed at the first use (not at import: it loads
+    scipy.special, about half a second of every run, a cached re-run included)."""
+    return _past_terminator_share(_SHARE_SIGMA)
 
 
 def translucency(sigma: np.ndarray) -> np.ndarray:
@@ -122,5 +129,5 @@ def translucency(sigma: np.ndarray) -> np.ndarray:
     all light directions, that comes from past the terminator, normalised so that 1 is an even split (a
     thin diffuser): σ → 0 (Lambert) gives 0, σ = 0.9 rad (a grain at 15 % water) 0.45, ``SIGMA_MAX`` 0.9.
     """
-    share = np.interp(np.asarray(sigma, np.float64), _SHARE_SIGMA, _SHARE)
+    share = np.interp(np.asarray(sigma, np.float64), _SHARE_SIGMA, _share_table())
     return np.clip(share / 0.5, 0.0, 1.0)
