@@ -49,7 +49,7 @@ def quick_scene():
 
     scene = shade.call(**small_food_scene(), material=cooked_material())
     params = preview.resolve_params({})
-    return scene, Camera(50.0, 20.0, 35.0, 0.9), params
+    return scene, Camera(50.0, 20.0, 35.0, 0.1), params
 
 
 KAKIGORI_QUICK = ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2"]

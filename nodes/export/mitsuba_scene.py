@@ -70,12 +70,12 @@ VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside sca
 
 @dataclass(frozen=True)
 class Camera:
-    """An orbit camera aimed at the scene's bounding-sphere centre, distance chosen to fit it."""
+    """An orbit camera aimed at the subject, distance chosen to fit its points with room around (``look_at``)."""
 
     elevation: float  # degrees above the horizon
     azimuth: float  # degrees, 0 = looking along +y, 90 = along −x
     fov: float  # degrees, horizontal
-    margin: float  # 1 = the bounding sphere touches the frame
+    margin: float  # share of the half-frame left free around the subject on its tightest side
 
 
 @dataclass(frozen=True)
@@ -229,25 +229,43 @@ def _principled(material: Material) -> dict:
     }
 
 
-def look_at(bounds: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """(origin, target) so that the bounding sphere fits the narrower field of view (``aspect`` = width / height:
-    a wide frame is fitted in height)."""
-    centre = bounds.mean(axis=0)
-    radius = 0.5 * np.linalg.norm(bounds[1] - bounds[0])
+def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(origin, target): seen from the camera's elevation and azimuth, the subject's ``points`` centred in the frame
+    and as large as leaves ``camera.margin`` of the half-frame free on its tightest side (``aspect`` = width /
+    height). Derived from the points, so the framing follows any change of the scene (a bigger bowl, a --set)."""
+    points = np.asarray(points, np.float64)
+    points = points[:: max(1, len(points) // 100_000)]
     el, az = np.radians(camera.elevation), np.radians(camera.azimuth)
-    view = np.array([np.sin(az) * np.cos(el), -np.cos(az) * np.cos(el), np.sin(el)])
-    half = np.arctan(np.tan(np.radians(camera.fov) / 2) / max(aspect, 1.0))
-    distance = camera.margin * radius / np.sin(half)
-    return centre + distance * view, centre
+    view = np.array([np.sin(az) * np.cos(el), -np.cos(az) * np.cos(el), np.sin(el)])  # towards the camera
+    right = np.cross(-view, [0.0, 0.0, 1.0])
+    right = right / np.linalg.norm(right) if np.linalg.norm(right) > 1e-9 else np.array([1.0, 0.0, 0.0])
+    up = np.cross(right, -view)
+    free = 1.0 - camera.margin
+    tan_x = np.tan(np.radians(camera.fov) / 2)
+    tan_y = tan_x / aspect
+    target = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    for _ in range(4):  # recentre on the projected extent, then fit again
+        rel = points - target
+        x, y, z = rel @ right, rel @ up, rel @ view
+        distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
+        distance = max(distance, float(z.max()) + 1e-6 * float(np.ptp(points, axis=0).max() + 1.0))
+        depth = distance - z
+        u, v = x / (depth * tan_x), y / (depth * tan_y)
+        shift = 0.5 * (u.max() + u.min()) * tan_x * right + 0.5 * (v.max() + v.min()) * tan_y * up
+        target = target + distance * shift
+    rel = points - target
+    x, y, z = rel @ right, rel @ up, rel @ view
+    distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
+    return target + distance * view, target
 
 
 def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
-    """One PLY shape per material (written into ``folder``) and the scene's bounds; with ``subsurface``, the
-    volumetric materials' shapes carry their medium inside a dielectric boundary."""
+    """One PLY shape per material (written into ``folder``) and the scene's vertices (every 8th: what the camera
+    frames); with ``subsurface``, the volumetric materials' shapes carry their medium inside a dielectric boundary."""
     from .mesh_files import stacked
 
     shapes = {}
-    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    seen = []
     for index, material in enumerate(scene.materials):
         members = [k for k, m in enumerate(scene.material_of) if m == index and len(scene.meshes[k].faces)]
         if not members:
@@ -276,10 +294,11 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
         }
         if volume:
             shapes[f"shape_{index}"]["interior"] = medium(material)
-        lo, hi = np.minimum(lo, vertices.min(0)), np.maximum(hi, vertices.max(0))
+        seen.append(vertices[::8])
+        seen.append(vertices[[int(np.argmin(c)) for c in vertices.T] + [int(np.argmax(c)) for c in vertices.T]])
     if not shapes:
         raise ValueError("scene: no mesh with faces to render")
-    return shapes, np.stack([lo, hi])
+    return shapes, np.concatenate(seen)
 
 
 def scene_dict(
@@ -299,10 +318,10 @@ def scene_dict(
     by ``volpath``."""
     import mitsuba as mi
 
-    shapes, bounds = _shapes(scene, folder, subsurface)
+    shapes, points = _shapes(scene, folder, subsurface)
     media = any("interior" in shape for shape in shapes.values())
-    lo, hi = bounds
-    origin, target = look_at(bounds, camera, width / height)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    origin, target = look_at(points, camera, width / height)
     radius = 0.5 * np.linalg.norm(hi - lo)
     key_distance = 50 * radius
     solid_angle = np.pi * np.tan(KEY_ANGLE) ** 2

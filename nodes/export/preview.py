@@ -42,7 +42,13 @@ from ..values import ShadedScene
         "elevation": Param(float, 40.0, "camera elevation above the horizon", range=(-89.0, 89.0), units="degrees"),
         "azimuth": Param(float, 20.0, "camera azimuth (0 looks along +y)", range=(-360.0, 360.0), units="degrees"),
         "fov": Param(float, 35.0, "horizontal field of view", range=(1.0, 150.0), units="degrees"),
-        "margin": Param(float, 1.0, "framing: 1 fits the scene's bounding sphere, smaller zooms in", range=(0.2, 5.0)),
+        "margin": Param(
+            float,
+            0.1,
+            "framing: share of the half-frame left free around the scene on its tightest side (fitted to the "
+            "scene's vertices as seen by the camera, so it follows any change of the scene)",
+            range=(0.0, 0.9),
+        ),
         "sun_direction": Param(
             tuple[float, float, float],
             (-0.45, -0.6, 0.75),
