@@ -439,9 +439,12 @@ def render(
     denoised: bool = True,
     seed: int = 0,
     subsurface: bool = False,
+    max_depth: int | None = None,
 ) -> np.ndarray:
-    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3)."""
+    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` as ``scene_dict``."""
     from .mesh_files import linear_to_srgb8
 
-    layers = render_layers(scene, camera, width, height, spp, light_direction, seed, subsurface=subsurface)
+    layers = render_layers(
+        scene, camera, width, height, spp, light_direction, seed, max_depth=max_depth, subsurface=subsurface
+    )
     return linear_to_srgb8(tone_map(denoise(layers) if denoised else layers.color))
