@@ -90,7 +90,7 @@ class ExactGrain:
 
     def surface_samples(self, count):
         """Points on the boundary of the union: mesh samples outside every sphere, sphere samples outside the rest."""
-        on_mesh = surface_points(self.vertices, self.faces, count, self.rng)
+        on_mesh = surface_points(self.vertices, self.faces, count, self.rng)[0]
         keep = (np.linalg.norm(on_mesh[:, None] - self.centers[None], axis=2) > self.radii).all(axis=1)
         samples = [on_mesh[keep]]
         area = self.radii**2

@@ -3,6 +3,8 @@ reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 previ
 
     python benchmarks/bench_preview.py [--quick] [--cache-dir DIR]
     python benchmarks/bench_preview.py --ice [--quick] [--cache-dir DIR]    # kakigori ice vs path length
+    python benchmarks/bench_preview.py --sss [--quick] [--cache-dir DIR]    # subsurface media × depth × spp
+    python benchmarks/bench_preview.py --highlights [--quick]   # default preview: time, determinism, highlights
 
 The scene is the main job's (``graphs/ikura_don.yaml`` up to ``shade``, from the cache; computed the first
 time), seen by its preview camera. Quality is measured in a window of the 1280 × 720 frame over the
@@ -49,7 +51,7 @@ def quick_scene():
 
     scene = shade.call(**small_food_scene(), material=cooked_material())
     params = preview.resolve_params({})
-    return scene, Camera(50.0, 20.0, 35.0, 0.9), params
+    return scene, Camera(50.0, 20.0, 35.0, 0.1), params
 
 
 KAKIGORI_QUICK = ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2"]
@@ -97,6 +99,97 @@ def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:
     return "\n".join(lines)
 
 
+def sss_cost(quick: bool, cache_dir: Path | None) -> str:
+    """Subsurface scattering on / off × path depth × spp (OIDN on) against a converged render with the media: PSNR
+    and SSIM over the whole frame, wall and CPU time of the whole preview (PLY files, load, render, guides, OIDN)."""
+    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+    from nodes.export.mesh_files import linear_to_srgb8
+    from nodes.export.mitsuba_scene import render, render_layers, tone_map
+
+    if quick:
+        scene, camera, params = quick_scene()
+        width, height, reference_spp, spps, depths = 320, 180, 256, (4, 12), (10, 32)
+    else:
+        scene, camera, params = main_job_scene(cache_dir)
+        width, height, reference_spp, spps, depths = 640, 360, 256, (4, 12, 32), (10, 32, 64)
+    sun = params["sun_direction"]
+    t = time.perf_counter()
+    truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, None, 128, subsurface=True)
+    reference = linear_to_srgb8(tone_map(truth.color))
+    reference_time = time.perf_counter() - t
+    print(f"reference: {reference_spp} spp, depth 128, media on, {reference_time:.0f} s", flush=True)
+    rows = []
+    for subsurface in (False, True):
+        for depth in depths if subsurface else depths[:1]:
+            for spp in spps:
+                t, c = time.perf_counter(), cpu_seconds()
+                image = render(scene, camera, width, height, spp, sun, True, 0, subsurface, depth)
+                wall, cpu = time.perf_counter() - t, cpu_seconds() - c
+                psnr = peak_signal_noise_ratio(reference, image, data_range=255)
+                ssim = structural_similarity(reference, image, channel_axis=2, data_range=255)
+                rows.append((subsurface, depth, spp, psnr, ssim, wall, cpu))
+                print(f"  media {subsurface}, depth {depth}, {spp} spp: {psnr:.1f} dB, SSIM {ssim:.3f}, {wall:.1f} s")
+    load = os.getloadavg()[0]
+    lines = [
+        f"Preview cost of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height}, OIDN on: "
+        f"PSNR/SSIM of the whole frame against {reference_spp} spp with media, depth 128 ({reference_time:.0f} s); "
+        f"time = the whole preview; CPU s / {os.cpu_count()} ≈ the time on {os.cpu_count()} free cores; load "
+        f"average {load:.2f} on {os.cpu_count()} cores",
+        "",
+        "| media (SSS) | path depth | spp | PSNR (dB) | SSIM | wall (s) | CPU (s) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {'on' if m else 'off'} | {d} | {spp} | {psnr:.1f} | {ssim:.3f} | {wall:.1f} | {cpu:.1f} |"
+        for m, d, spp, psnr, ssim, wall, cpu in rows
+    ]
+    return "\n".join(lines)
+
+
+def highlights(quick: bool, cache_dir: Path | None) -> str:
+    """The default preview (media on, OIDN): CPU and wall time of the whole preview and its determinism; and in the
+    eggs-over-rice window, the highlight energy (linear luminance above the converged render's 99th percentile,
+    summed) of the noisy and the denoised render against the converged one: does the denoiser keep the highlights?"""
+    from nodes.export.mitsuba_scene import Crop, denoise, render, render_layers
+
+    scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
+    width, height, spp, sun = params["width"], params["height"], params["samples"], params["sun_direction"]
+    media = params["subsurface"]
+    crop, reference_spp = Crop(544, 306, 192, 108), 256
+    if quick:
+        width, height, crop, reference_spp = 320, 180, Crop(112, 63, 96, 54), 64
+    t, c = time.perf_counter(), cpu_seconds()
+    first = render(scene, camera, width, height, spp, sun, True, 0, media)
+    wall, cpu = time.perf_counter() - t, cpu_seconds() - c
+    second = render(scene, camera, width, height, spp, sun, True, 0, media)
+    layers = render_layers(scene, camera, width, height, spp, sun, 0, crop, subsurface=media)
+    truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop, subsurface=media).color
+    weights = np.array([0.2126, 0.7152, 0.0722], np.float32)
+    threshold = float(np.percentile(truth @ weights, 99.0))
+
+    def energy(color):
+        luminance = color @ weights
+        return float(np.maximum(luminance - threshold, 0.0).sum()), int((luminance > threshold).sum())
+
+    rows = [("noisy", layers.color), ("denoised (OIDN)", denoise(layers)), (f"converged ({reference_spp} spp)", truth)]
+    load = os.getloadavg()[0]
+    lines = [
+        f"Default preview of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height}, "
+        f"{spp} spp, media {'on' if media else 'off'}, OIDN: wall {wall:.1f} s, CPU {cpu:.1f} s (CPU s / "
+        f"{os.cpu_count()} = {cpu / (os.cpu_count() or 1):.1f} s on {os.cpu_count()} free cores; load average "
+        f"{load:.2f}); identical bytes on a second render: {np.array_equal(first, second)}",
+        "",
+        f"Highlights in the {crop.width}×{crop.height} window at ({crop.x}, {crop.y}): luminance above the converged "
+        f"render's 99th percentile ({threshold:.3f})",
+        "",
+        "| render | highlight energy | highlight pixels |",
+        "|---|---|---|",
+    ]
+    lines += [f"| {name} | {energy(color)[0]:.2f} | {energy(color)[1]} |" for name, color in rows]
+    return "\n".join(lines)
+
+
 def cpu_seconds() -> float:
     """CPU time of this process (all threads): with other work on the machine, wall time alone misleads."""
     return time.process_time()
@@ -107,7 +200,19 @@ def main():
     parser.add_argument("--quick", action="store_true", help="small synthetic scene, 64-spp reference (seconds)")
     parser.add_argument("--cache-dir", type=Path, default=None, help="nodegraph cache holding the main job")
     parser.add_argument("--ice", action="store_true", help="kakigori ice brightness vs path length instead")
+    parser.add_argument("--sss", action="store_true", help="subsurface media on/off × path depth × spp instead")
+    parser.add_argument("--highlights", action="store_true", help="default preview: time and highlight energy")
     args = parser.parse_args()
+    if args.highlights:
+        print(highlights(args.quick, args.cache_dir))
+        return
+    if args.sss:
+        text = sss_cost(args.quick, args.cache_dir)
+        print(text)
+        out = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or Path(__file__).parent / "results")
+        out.mkdir(parents=True, exist_ok=True)
+        (out / f"bench_preview_sss{'_quick' if args.quick else ''}.md").write_text(text + "\n")
+        return
     if args.ice:
         text = ice_vs_depth(args.quick, args.cache_dir)
         print(text)

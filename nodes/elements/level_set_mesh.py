@@ -60,6 +60,24 @@ def field_surface(data: np.ndarray, origin: np.ndarray, voxel_size: float, level
     return vertices + origin, faces
 
 
+def blurred_field(data: np.ndarray, voxel_size: float, level: float, blur: float) -> tuple[np.ndarray, float]:
+    """The field smoothed by a Gaussian of σ = ``blur`` mm, and the level that keeps the grain's volume.
+
+    Blurring rounds the concave creases where porosity spheres meet the skin (and marching cubes' facets),
+    but it also pulls convex parts in; the returned level encloses as many cells as ``level`` did on the
+    unblurred field, so the grain stays as plump as before (issue 26: cooked rice is plump and smooth).
+    """
+    from scipy import ndimage
+
+    smooth = ndimage.gaussian_filter(data, blur / voxel_size, mode="nearest").astype(np.float32)
+    cells = int(np.count_nonzero(data > level))
+    if not 0 < cells < data.size:
+        return smooth, level
+    k = smooth.size - cells  # the cells-th largest value sits at index k once sorted
+    ranked = np.partition(smooth.ravel(), (k - 1, k))
+    return smooth, 0.5 * (float(ranked[k - 1]) + float(ranked[k]))
+
+
 def grain_surface(
     data: np.ndarray, origin: np.ndarray, voxel_size: float, level: float, smoothing: int, target_faces: int | None
 ):

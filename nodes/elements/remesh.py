@@ -22,6 +22,15 @@ from .element_values import GrainMesh
             range=(-100.0, 100.0),
             units="mm",
         ),
+        "blur": Param(
+            float,
+            0.0,
+            "Gaussian σ of the field before marching cubes, level moved to keep the volume: rounds the creases "
+            "where porosity spheres meet the skin and the facets of the cells (0.3 with sphere_scatter sink 0.6: "
+            "japonica library's skin score 0.31–0.34 → 0.04–0.05 mean, nodes/quality/skin.py)",
+            range=(0.0, 100.0),
+            units="mm",
+        ),
         "smoothing": Param(
             int,
             0,
@@ -33,17 +42,20 @@ from .element_values import GrainMesh
         ),
     },
 )
-def remesh(ctx, field, *, level, smoothing, target_faces):
-    """Marching cubes at ``level``, optional smoothing and triangle budget; checked watertight and outward.
+def remesh(ctx, field, *, level, blur, smoothing, target_faces):
+    """Marching cubes at ``level`` (of the blurred field when ``blur`` > 0), optional smoothing and triangle budget;
+    checked watertight and outward.
 
     Internal cavity shells are dropped (the outer shell is the element). The budget uses quadric
     decimation, or a coarser marching-cubes sampling where decimation would pinch the surface.
     """
     import numpy as np
 
-    from .level_set_mesh import centred, grain_surface
+    from .level_set_mesh import blurred_field, centred, grain_surface
 
     data = np.asarray(field.data)
+    if blur > 0.0:
+        data, level = blurred_field(data, field.voxel_size, level, blur)
     vertices, faces = grain_surface(data, field.origin, field.voxel_size, level, smoothing, target_faces)
     vertices, normals = centred(vertices, faces)
     name = ctx.node_id if ctx.variant is None else f"{ctx.node_id}[{ctx.variant}]"

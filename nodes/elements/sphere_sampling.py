@@ -13,15 +13,19 @@ from ..kernel_arrays import kernel_array
 SURFACE, INSIDE = 0, 1  # SphereSet.tags
 
 
-def surface_points(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
-    """``count`` points uniformly distributed by area on the mesh surface."""
+def surface_points(
+    vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` points uniformly distributed by area on the mesh surface, with their faces' unit normals."""
     a, b, c = (vertices[faces[:, i]] for i in range(3))
-    area = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    cross = np.cross(b - a, c - a)
+    area = np.linalg.norm(cross, axis=1)
     face = rng.choice(len(faces), size=count, p=area / area.sum())
     u, v = rng.random((2, count))
     flip = u + v > 1.0
     u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
-    return a[face] + u[:, None] * (b[face] - a[face]) + v[:, None] * (c[face] - a[face])
+    points = a[face] + u[:, None] * (b[face] - a[face]) + v[:, None] * (c[face] - a[face])
+    return points, cross[face] / area[face, None]
 
 
 def interior_points(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
@@ -52,22 +56,25 @@ def scatter_spheres(
     radius_range: tuple[float, float],
     surface_share: float,
     rng: np.random.Generator,
+    sink: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centres, radii and tags of ``count`` spheres: a ``surface_share`` of them on the surface.
+    """Centres, radii and tags of ``count`` spheres: a ``surface_share`` of them at the surface.
 
-    Radii are uniform in ``radius_range``; the rest of the spheres have centres uniform inside.
+    Radii are uniform in ``radius_range``; the rest of the spheres have centres uniform inside. A surface
+    sphere's centre lies ``sink`` of its radius under the skin, along the face normal (0: on the surface,
+    G's spheres; 1: tangent from inside), so it swells the skin by (1 − sink)·r instead of a half-ball bump.
     """
     lo, hi = radius_range
     if not 0.0 < lo <= hi:
         raise ValueError(f"radius_range must satisfy 0 < low ≤ high, got {radius_range}")
     n_surface = int(round(count * surface_share))
     n_inside = count - n_surface
+    on_skin, normals = surface_points(vertices, faces, n_surface, rng)
     centers = np.concatenate(
-        [
-            surface_points(vertices, faces, n_surface, rng),
-            interior_points(vertices, faces, n_inside, rng) if n_inside else np.empty((0, 3)),
-        ]
+        [on_skin, interior_points(vertices, faces, n_inside, rng) if n_inside else np.empty((0, 3))]
     )
     radii = rng.uniform(lo, hi, count)
+    if sink:
+        centers[:n_surface] -= (sink * radii[:n_surface])[:, None] * normals
     tags = np.repeat(np.array([SURFACE, INSIDE], np.int8), [n_surface, n_inside])
     return centers, radii, tags

@@ -17,7 +17,7 @@ def _check(p: dict) -> list[tuple[str, str]]:
     "sphere_scatter",
     version=1,
     inputs={"mesh": In(Mesh, "closed base mesh (mm)")},
-    outputs={"spheres": Out(SphereSet, "sphere centres and radii; tags 0 = surface, 1 = inside")},
+    outputs={"spheres": Out(SphereSet, "sphere centres and radii; tags 0 = surface (sunk by sink), 1 = inside")},
     params={
         "count": Param(int, 40, "number of spheres (0 keeps the base mesh as it is)", range=(0, 5000)),
         "radius_range": Param(
@@ -30,18 +30,26 @@ def _check(p: dict) -> list[tuple[str, str]]:
         "surface_share": Param(
             float, 0.7, "fraction of spheres centred on the surface; the rest inside", range=(0.0, 1.0)
         ),
+        "sink": Param(
+            float,
+            0.0,
+            "surface spheres' centres sunk this fraction of their radius under the skin along its normal: 0 = "
+            "G's spheres centred on the surface (half-ball bumps), 0.6 = gentle swellings (cooked rice, issue 26), "
+            "1 = tangent from inside (porosity wholly inside)",
+            range=(0.0, 1.0),
+        ),
     },
     random=True,
     check=_check,
 )
-def sphere_scatter(ctx, mesh, *, count, radius_range, surface_share):
-    """Scatter ``count`` spheres: a ``surface_share`` centred on the surface (by area), the rest inside.
+def sphere_scatter(ctx, mesh, *, count, radius_range, surface_share, sink):
+    """Scatter ``count`` spheres: a ``surface_share`` at the surface (by area, ``sink`` under it), the rest inside.
 
     These are the porosity parameters of G §3.1.1; each variant draws its own spheres from its seed.
     """
     from .sphere_sampling import scatter_spheres
 
     centers, radii, tags = scatter_spheres(
-        mesh.vertices, mesh.faces, count, tuple(radius_range), surface_share, ctx.rng
+        mesh.vertices, mesh.faces, count, tuple(radius_range), surface_share, ctx.rng, sink
     )
     return SphereSet(centers, radii, tags)

@@ -12,6 +12,17 @@ The path tracer does the lighting, so surfaces get their materials, not the bake
   shows through the orange egg, the rice through the ice;
 - the rest (the bowl's glaze) is ``principled`` with its clearcoat.
 
+With ``subsurface`` on (the default), light goes under the skin for real (Mitsuba's ``volpath``): each closed
+element of rice, each ikura yolk and each ice flake is a homogeneous scattering medium behind a (rough)
+dielectric boundary (``medium``). The medium's mean free path and single-scattering albedo come from the
+material's principled subsurface radius and colour (G Table 3) by the random-walk mapping of Chiang, Kutz and
+Burley 2016, the one Blender's Cycles uses for the same parameters, so both renderers read the same numbers.
+Rice's radius and colour follow its water content (``shading.materials.rice_material``; G fig. 3.1.2.1: wetter
+is whiter and more translucent); no measured values for cooked rice are published: at 24 % water its mean free
+path (≈ 1.2 mm in red) and albedo (≥ 0.99) match the starchy stand-in, potato (Jensen et al. 2001, table 2:
+σ′s = 0.68, 0.70, 0.55 mm⁻¹, σa = 0.0024, 0.0090, 0.12 mm⁻¹). The CDRF stays on the surface: in the baked
+vertex colours of the exported files and, with ``subsurface`` off, as the per-vertex diffuse transmission.
+
 Light: a soft key (a sphere emitter along the shade node's key light), a uniform sky and a matte table
 under the scene. Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass;
 Intel Open Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels
@@ -51,16 +62,20 @@ TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
 GUIDE_SPP = 4  # the guides need antialiased edges, not converged light: a cheap pass of its own (≈ ⅓ of a path)
+# path length with media: every scattering event inside a grain is a vertex of the path. A 3 mm grain at 15 %
+# water is 3–6 mean free paths thick with albedo ≈ 0.9–0.99; see docs/accuracy.md (preview cost table)
+MAX_DEPTH_MEDIA = 32
+VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (with the ice, ``is_ice``)
 
 
 @dataclass(frozen=True)
 class Camera:
-    """An orbit camera aimed at the scene's bounding-sphere centre, distance chosen to fit it."""
+    """An orbit camera aimed at the subject, distance chosen to fit its points with room around (``look_at``)."""
 
     elevation: float  # degrees above the horizon
     azimuth: float  # degrees, 0 = looking along +y, 90 = along −x
     fov: float  # degrees, horizontal
-    margin: float  # 1 = the bounding sphere touches the frame
+    margin: float  # share of the half-frame left free around the subject on its tightest side
 
 
 @dataclass(frozen=True)
@@ -87,13 +102,17 @@ def write_ply(path: Path, vertices, faces, normals, colors, translucency=None) -
     path.write_bytes(binary_ply([(names, rows)], faces))
 
 
-def path_depth(scene: ShadedScene) -> int:
+def path_depth(scene: ShadedScene, subsurface: bool = False) -> int:
     """The path tracer's longest path: ``MAX_DEPTH_FLAKES`` where the scene has ice (a heap of thin transmissive
-    flakes, many interfaces deep), else ``MAX_DEPTH`` (eggs and rice end paths sooner; the longer cap costs there
-    without changing much)."""
+    flakes, many interfaces deep), ``MAX_DEPTH_MEDIA`` where light scatters inside elements (``subsurface``), else
+    ``MAX_DEPTH`` (eggs and rice end paths sooner; the longer cap costs there without changing much)."""
     from ..shading.materials import is_ice
 
-    return MAX_DEPTH_FLAKES if any(is_ice(m) for m in scene.materials) else MAX_DEPTH
+    if any(is_ice(m) for m in scene.materials):
+        return MAX_DEPTH_FLAKES
+    if subsurface and any(is_volumetric(m) for m in scene.materials):
+        return MAX_DEPTH_MEDIA
+    return MAX_DEPTH
 
 
 def _rgb(value) -> dict:
@@ -139,6 +158,48 @@ def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
     return _principled(material)
 
 
+def random_walk_coefficients(albedo, radius) -> tuple[np.ndarray, np.ndarray]:
+    """(σt in mm⁻¹, single-scattering albedo) per channel from a principled subsurface colour (multiple-scattering
+    albedo A) and radius (mean free path d, mm): Chiang, Kutz, Burley 2016, eq. for α and s, as in Cycles."""
+    a = np.clip(np.asarray(albedo, np.float64), 0.0, 0.999)
+    d = np.maximum(np.asarray(radius, np.float64), 1e-6)
+    single = 1.0 - np.exp(a * (-5.09406 + a * (2.61188 - a * 4.31805)))
+    s = 1.9 - a + 3.5 * (a - 0.8) ** 2
+    return 1.0 / (d * s), single
+
+
+def is_volumetric(material: Material) -> bool:
+    """Whether the preview renders ``material``'s inside as a scattering medium (closed elements only: rice
+    grains, ikura yolks, ice flakes; fish flesh and fat are open parts of one slab)."""
+    from ..shading.materials import is_ice
+
+    return material.name in VOLUMETRIC_ELEMENTS or is_ice(material)
+
+
+def medium(material: Material) -> dict:
+    """Mitsuba homogeneous medium inside a volumetric element (``random_walk_coefficients``), isotropic phase."""
+    sigma_t, single = random_walk_coefficients(material.subsurface_color, material.subsurface_radius)
+    densest = float(sigma_t.max())  # Mitsuba reads an RGB as a reflectance in [0, 1]: the scale carries the unit
+    return {
+        "type": "homogeneous",
+        "albedo": _rgb(single),
+        "sigma_t": _rgb(sigma_t / densest),
+        "scale": densest,
+        "phase": {"type": "isotropic"},
+    }
+
+
+def boundary_bsdf(material: Material) -> dict:
+    """The dielectric skin of a volumetric element: rough at the material's roughness (transmission roughness for
+    the transmissive ones), clear, so the medium alone colours the light."""
+    rough = material.transmission_roughness if material.transmission >= TRANSMISSIVE else material.roughness
+    bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
+    a = alpha(rough)
+    if a > 1e-3:
+        bsdf = {**bsdf, "type": "roughdielectric", "alpha": a, "distribution": "ggx"}
+    return bsdf
+
+
 def diffuse_transmission(material: Material, sigma: np.ndarray) -> np.ndarray:
     """Per-vertex ``diff_trans`` of a translucent material: ``subsurface × cdrf.translucency(σ)`` (SPEC §4 eq. 7–9
     as light through the grain), raised on the uncoated share so the whole surface transmits that much."""
@@ -168,24 +229,43 @@ def _principled(material: Material) -> dict:
     }
 
 
-def look_at(bounds: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """(origin, target) so that the bounding sphere fits the narrower field of view (``aspect`` = width / height:
-    a wide frame is fitted in height)."""
-    centre = bounds.mean(axis=0)
-    radius = 0.5 * np.linalg.norm(bounds[1] - bounds[0])
+def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(origin, target): seen from the camera's elevation and azimuth, the subject's ``points`` centred in the frame
+    and as large as leaves ``camera.margin`` of the half-frame free on its tightest side (``aspect`` = width /
+    height). Derived from the points, so the framing follows any change of the scene (a bigger bowl, a --set)."""
+    points = np.asarray(points, np.float64)
+    points = points[:: max(1, len(points) // 100_000)]
     el, az = np.radians(camera.elevation), np.radians(camera.azimuth)
-    view = np.array([np.sin(az) * np.cos(el), -np.cos(az) * np.cos(el), np.sin(el)])
-    half = np.arctan(np.tan(np.radians(camera.fov) / 2) / max(aspect, 1.0))
-    distance = camera.margin * radius / np.sin(half)
-    return centre + distance * view, centre
+    view = np.array([np.sin(az) * np.cos(el), -np.cos(az) * np.cos(el), np.sin(el)])  # towards the camera
+    right = np.cross(-view, [0.0, 0.0, 1.0])
+    right = right / np.linalg.norm(right) if np.linalg.norm(right) > 1e-9 else np.array([1.0, 0.0, 0.0])
+    up = np.cross(right, -view)
+    free = 1.0 - camera.margin
+    tan_x = np.tan(np.radians(camera.fov) / 2)
+    tan_y = tan_x / aspect
+    target = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    for _ in range(4):  # recentre on the projected extent, then fit again
+        rel = points - target
+        x, y, z = rel @ right, rel @ up, rel @ view
+        distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
+        distance = max(distance, float(z.max()) + 1e-6 * float(np.ptp(points, axis=0).max() + 1.0))
+        depth = distance - z
+        u, v = x / (depth * tan_x), y / (depth * tan_y)
+        shift = 0.5 * (u.max() + u.min()) * tan_x * right + 0.5 * (v.max() + v.min()) * tan_y * up
+        target = target + distance * shift
+    rel = points - target
+    x, y, z = rel @ right, rel @ up, rel @ view
+    distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
+    return target + distance * view, target
 
 
-def _shapes(scene: ShadedScene, folder: Path) -> tuple[dict, np.ndarray]:
-    """One PLY shape per material (written into ``folder``) and the scene's bounds."""
+def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
+    """One PLY shape per material (written into ``folder``) and the scene's vertices (every 8th: what the camera
+    frames); with ``subsurface``, the volumetric materials' shapes carry their medium inside a dielectric boundary."""
     from .mesh_files import stacked
 
     shapes = {}
-    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    seen = []
     for index, material in enumerate(scene.materials):
         members = [k for k, m in enumerate(scene.material_of) if m == index and len(scene.meshes[k].faces)]
         if not members:
@@ -196,7 +276,10 @@ def _shapes(scene: ShadedScene, folder: Path) -> tuple[dict, np.ndarray]:
             [m.normals if m.normals is not None else np.zeros((len(m.vertices), 3)) for m in meshes]
         )
         colors = np.tile(material.base_color, (len(vertices), 1))
-        per_vertex = bool(scene.cdrf_sigma) and material.subsurface > 0 and material.transmission < TRANSMISSIVE
+        volume = subsurface and is_volumetric(material)
+        per_vertex = (
+            not volume and bool(scene.cdrf_sigma) and material.subsurface > 0 and material.transmission < TRANSMISSIVE
+        )
         trans = None
         if per_vertex:
             sigma = np.concatenate([scene.cdrf_sigma[k] for k in members])
@@ -206,13 +289,16 @@ def _shapes(scene: ShadedScene, folder: Path) -> tuple[dict, np.ndarray]:
         shapes[f"shape_{index}"] = {
             "type": "ply",
             "filename": str(path),
-            "bsdf": material_bsdf(material, per_vertex),
+            "bsdf": boundary_bsdf(material) if volume else material_bsdf(material, per_vertex),
             "face_normals": False,
         }
-        lo, hi = np.minimum(lo, vertices.min(0)), np.maximum(hi, vertices.max(0))
+        if volume:
+            shapes[f"shape_{index}"]["interior"] = medium(material)
+        seen.append(vertices[::8])
+        seen.append(vertices[[int(np.argmin(c)) for c in vertices.T] + [int(np.argmax(c)) for c in vertices.T]])
     if not shapes:
         raise ValueError("scene: no mesh with faces to render")
-    return shapes, np.stack([lo, hi])
+    return shapes, np.concatenate(seen)
 
 
 def scene_dict(
@@ -225,14 +311,17 @@ def scene_dict(
     light_direction,
     crop: Crop | None = None,
     max_depth: int | None = None,
+    subsurface: bool = False,
 ) -> dict:
     """The Mitsuba scene description; PLY files are written into ``folder``. ``max_depth``: the longest path
-    (default ``path_depth``: by the scene's materials)."""
+    (default ``path_depth``: by the scene's materials); ``subsurface``: media inside the volumetric elements, traced
+    by ``volpath``."""
     import mitsuba as mi
 
-    shapes, bounds = _shapes(scene, folder)
-    lo, hi = bounds
-    origin, target = look_at(bounds, camera, width / height)
+    shapes, points = _shapes(scene, folder, subsurface)
+    media = any("interior" in shape for shape in shapes.values())
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    origin, target = look_at(points, camera, width / height)
     radius = 0.5 * np.linalg.norm(hi - lo)
     key_distance = 50 * radius
     solid_angle = np.pi * np.tan(KEY_ANGLE) ** 2
@@ -251,7 +340,7 @@ def scene_dict(
     table = mi.ScalarTransform4f().translate([*target[:2].tolist(), float(lo[2]) - 1e-3 * radius])
     return {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": max_depth or path_depth(scene)},
+        "integrator": {"type": "volpath" if media else "path", "max_depth": max_depth or path_depth(scene, subsurface)},
         "sensor": {
             "type": "perspective",
             "fov": camera.fov,
@@ -295,6 +384,7 @@ def render_layers(
     seed: int = 0,
     crop: Crop | None = None,
     max_depth: int | None = None,
+    subsurface: bool = False,
 ) -> Layers:
     """Path-traced linear colour with albedo and normal AOVs; same inputs and seed ⇒ the same bits."""
     import tempfile
@@ -303,7 +393,9 @@ def render_layers(
 
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
-        description = scene_dict(scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth)
+        description = scene_dict(
+            scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface
+        )
         loaded = mi.load_dict(description)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV})
@@ -346,9 +438,13 @@ def render(
     light_direction,
     denoised: bool = True,
     seed: int = 0,
+    subsurface: bool = False,
+    max_depth: int | None = None,
 ) -> np.ndarray:
-    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3)."""
+    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` as ``scene_dict``."""
     from .mesh_files import linear_to_srgb8
 
-    layers = render_layers(scene, camera, width, height, spp, light_direction, seed)
+    layers = render_layers(
+        scene, camera, width, height, spp, light_direction, seed, max_depth=max_depth, subsurface=subsurface
+    )
     return linear_to_srgb8(tone_map(denoise(layers) if denoised else layers.color))

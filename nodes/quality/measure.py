@@ -15,8 +15,8 @@ from ..values import Aggregate, Vessel
 
 @node(
     "measure",
-    # 3: outside_vessel
-    version=3,
+    # 3: outside_vessel; 4: skin
+    version=4,
     random=True,
     inputs={
         "aggregates": In(Aggregate, "the final aggregates (their element meshes are measured)", many=True),
@@ -33,7 +33,8 @@ from ..values import Aggregate, Vessel
             Table,
             "one row: elements, overlap p50/p95/max over touching pairs (element lengths), share deeper than 1 %, "
             "contacts per element, packing fraction (element volume / hull), fill height, elements outside the "
-            "vessels (0 without vessels)",
+            "vessels (0 without vessels), skin: mean skin score of the sampled elements (concave share of edge "
+            "curvature, nodes/quality/skin.py: 0 convex, ≤ 0.10 cooked rice)",
         )
     },
     params={
@@ -52,6 +53,7 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
     import trimesh
 
     from .mesh_overlap import element_overlaps, outer_shell
+    from .skin import skin_score
 
     meshes, centres, radii, volumes, lows, tops = [], [], [], [], [], []
     for aggregate in aggregates:
@@ -89,6 +91,7 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
         "packing_fraction": np.array([sum(volumes) / hull]),
         "fill_height": np.array([np.percentile(tops, 95) - min(lows)]),
         "outside_vessel": np.array([_outside_vessels(ctx, np.array(centres), vessels or [])]),
+        "skin": np.array([np.mean([skin_score(meshes[i][0], meshes[i][1]) for i in picked])]),
     }
     return Table(columns)
 

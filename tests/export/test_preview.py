@@ -16,7 +16,7 @@ def _render(scene, **over):
 def test_preview_shows_the_shaded_scene(shaded):
     image = _render(shaded)
     assert image.shape == (48, 64, 3) and image.dtype == np.uint8
-    background = image[0, 0].astype(int)
+    background = np.median(image[0], axis=0).astype(int)  # the top row is table: its typical colour
     differs = np.abs(image.astype(int) - background).sum(axis=2) > 30
     assert 0.1 < differs.mean() < 0.95  # the scene fills part of the frame, not all of it
     orange = (image[..., 0].astype(int) - image[..., 2].astype(int)) > 80
@@ -126,7 +126,7 @@ def test_a_heap_of_ice_flakes_is_bright_like_shaved_ice():
 
     def luminance(material=None):
         materials = tuple(material if material and is_ice(m) else m for m in heap.materials)
-        camera = Camera(30.0, 20.0, 35.0, 0.8)
+        camera = Camera(30.0, 20.0, 35.0, 0.1)
         layers = render_layers(dataclasses.replace(heap, materials=materials), camera, 64, 48, 4, (-0.45, -0.6, 0.75))
         return layers.color @ np.array([0.2126, 0.7152, 0.0722])
 
@@ -136,3 +136,62 @@ def test_a_heap_of_ice_flakes_is_bright_like_shaved_ice():
     flakes = white - black > 0.2  # pixels that show the heap
     assert flakes.mean() > 0.1
     assert ice[flakes].mean() / white[flakes].mean() > 0.2
+
+
+def test_subsurface_puts_a_medium_inside_rice_and_yolks(shaded, tmp_path):
+    """With subsurface on, the rice and yolk shapes carry a homogeneous medium behind a dielectric skin and the
+    integrator is volpath; off, none does and the path tracer is the plain one."""
+    from nodes.export.mitsuba_scene import Camera, scene_dict
+
+    camera = Camera(40.0, 20.0, 35.0, 0.1)
+    names = {f"shape_{k}": m.name for k, m in enumerate(shaded.materials)}
+    on = scene_dict(shaded, tmp_path, camera, 64, 48, 2, (0, 0, 1), subsurface=True)
+    with_media = {names[key] for key, shape in on.items() if isinstance(shape, dict) and "interior" in shape}
+    assert with_media == {"rice", "ikura_yolk"} and on["integrator"]["type"] == "volpath"
+    rice = next(shape for key, shape in on.items() if names.get(key) == "rice")
+    assert rice["bsdf"]["type"] in ("dielectric", "roughdielectric") and rice["interior"]["type"] == "homogeneous"
+    off = scene_dict(shaded, tmp_path, camera, 64, 48, 2, (0, 0, 1), subsurface=False)
+    assert not any(isinstance(shape, dict) and "interior" in shape for shape in off.values())
+    assert off["integrator"]["type"] == "path"
+
+
+def test_wet_rice_scatters_whiter_and_farther():
+    """The medium follows the water content (G fig. 3.1.2.1): wetter rice has a longer mean free path and a higher
+    albedo; at 24 % its mean free path is of potato's order (Jensen et al. 2001: 1/σ′s ≈ 1.4–1.8 mm)."""
+    from nodes.export.mitsuba_scene import random_walk_coefficients
+    from nodes.shading.materials import rice_material
+
+    dry, wet = (rice_material(w) for w in (0.0, 24.0))
+    (t_dry, a_dry), (t_wet, a_wet) = (
+        random_walk_coefficients(m.subsurface_color, m.subsurface_radius) for m in (dry, wet)
+    )
+    assert (1 / t_wet > 1 / t_dry).all() and (a_wet > a_dry).all()
+    assert 0.5 < 1 / t_wet[0] < 2.0 and a_wet.min() > 0.99
+    # Chiang et al. 2016: a white surface (A → 1) needs albedo → 1 and σt = 1 / (d · 1.04)
+    t, a = random_walk_coefficients((0.999, 0.999, 0.999), (1.0, 1.0, 1.0))
+    assert a.min() > 0.998 and t[0] == pytest.approx(1 / (1.0 * (1.9 - 0.999 + 3.5 * 0.199**2)))
+
+
+@pytest.mark.parametrize("elevation, aspect", [(50.0, 16 / 9), (20.0, 16 / 9), (80.0, 4 / 3), (30.0, 0.75)])
+def test_framing_leaves_room_around_the_subject(elevation, aspect):
+    """Every point of the subject projects inside the frame with the margin free, and the tightest side touches
+    it: a wide bowl seen from above keeps its rim off the frame's top edge, whatever its size."""
+    from nodes.export.mitsuba_scene import Camera, look_at
+    from nodes.shapes import shape
+
+    for size in (20.0, 42.0):
+        bowl = shape.call(kind="bowl", size=size, depth=0.8 * size, wall=3.0, resolution=3)["mesh"]
+        camera = Camera(elevation, 20.0, 35.0, 0.1)
+        origin, target = look_at(bowl.vertices, camera, aspect)
+        forward = (target - origin) / np.linalg.norm(target - origin)
+        right = np.cross(forward, [0.0, 0.0, 1.0])
+        right /= np.linalg.norm(right)
+        up = np.cross(right, forward)
+        d = bowl.vertices - origin
+        depth = d @ forward
+        tan_x = np.tan(np.radians(camera.fov) / 2)
+        u, v = (d @ right) / (depth * tan_x), (d @ up) / (depth * tan_x / aspect)
+        assert (depth > 0).all()
+        extent = max(np.abs(u).max(), np.abs(v).max())
+        assert extent == pytest.approx(0.9, abs=1e-6)  # 10 % of the half-frame free on the tightest side
+        assert abs(u.max() + u.min()) < 1e-3 and abs(v.max() + v.min()) < 1e-3  # centred

@@ -40,8 +40,7 @@ def visible_elements(aggregate: Aggregate, camera: Camera, width: int = 40, heig
     meshes = [aggregate.element_mesh(i).vertices for i in range(len(aggregate.placement))]
     points = np.concatenate(meshes)
     owner = np.repeat(np.arange(len(meshes)), [len(m) for m in meshes])
-    bounds = np.stack([points.min(axis=0), points.max(axis=0)])
-    origin, target = look_at(bounds, camera, width / height)
+    origin, target = look_at(points, camera, width / height)
     forward = (target - origin) / np.linalg.norm(target - origin)
     right = np.cross(forward, [0.0, 0.0, 1.0])
     right /= np.linalg.norm(right)
@@ -59,7 +58,7 @@ def visible_elements(aggregate: Aggregate, camera: Camera, width: int = 40, heig
 
 
 def test_plane_cut_keeps_the_far_half_and_shows_the_inside(ball):
-    camera = Camera(elevation=20.0, azimuth=0.0, fov=35.0, margin=0.8)  # rice_bunny.yaml's cut_preview
+    camera = Camera(elevation=20.0, azimuth=0.0, fov=35.0, margin=0.1)  # rice_bunny.yaml's cut_preview
     half = cut.call(aggregate=ball, kind="plane", normal=(0.0, -1.0, 0.0), offset=0.0)
     centre = 0.5 * (ball.placement.positions.min(axis=0) + ball.placement.positions.max(axis=0))
     kept = half.placement.positions

@@ -74,3 +74,12 @@ def test_elements_outside_their_vessel_are_counted_and_warned_about():
         False,
         True,  # through the wall: (7.5/10)² + (6/8)² > 1
     ]
+
+
+def test_skin_column_reads_the_element_meshes():
+    assert column(measure.call(aggregates=[balls(0.0, 3.0)]), "skin") == 0.0  # convex spheres
+    dented = trimesh.creation.icosphere(4)
+    dented.vertices[dented.vertices[:, 2] > 0.8, 2] = 0.6  # a flat cap pushed in: concave rim edges
+    aggregate = balls(0.0)
+    library = ElementLibrary("box", (Mesh.from_trimesh(dented, name="box"),))
+    assert column(measure.call(aggregates=[Aggregate(aggregate.placement, (library,))]), "skin") > 0.0
