@@ -149,7 +149,7 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0
                 continue
             pen = depth - allowance[a] if normal else 0.0
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
-                held = depth + load[a] + cohesion * (w[i] + w[j]) if anchored else depth
+                held = load[a] + max(pen, 0.0) + cohesion * (w[i] + w[j]) if anchored else depth
                 friction_pair(x, x_prev, anchor, a, i, j, (nx, ny, nz), held, share, (mu_s, mu_k, anchored))
             if pen > 0.0:
                 if anchored and mu_s > 0.0:
