@@ -327,7 +327,8 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
             for q in range(rings.start[rings.row[s] + k], rings.start[rings.row[s] + k + 1]):
                 length += np.sqrt(np.sum((rest[rings.ring[q]] - rest[k]) ** 2))
                 edges += 1
-        decay = np.exp(-(length / max(edges, 1)) / settings.spread)
+        edge = length / max(edges, 1)
+        decay = np.exp(-edge / settings.spread)
         screen = (1.0 - decay) ** 2 / decay
         ring_of = (rings.start, rings.ring, rings.row[s], shell)
         count = primary
@@ -386,13 +387,14 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
                 spread_area += weight[k] * np.sqrt(np.sum(area[k] ** 2))
             if not spread_area > 0.0:
                 break
-            reach = 0.0
+            # the fold guard: a bulge moves no vertex more than a fifth of an edge per round (what is left is reported)
+            step = min(lost / spread_area, 0.2 * edge) if lost > 0.0 else max(lost / spread_area, -0.2 * edge)
             for k in range(nv):
                 a = np.sqrt(np.sum(area[k] ** 2))
                 if a > 0.0 and weight[k] > 0.0:
                     for d in range(3):
-                        position[k, d] += lost / spread_area * weight[k] * area[k, d] / a
-                    reach = max(reach, abs(lost / spread_area * weight[k]))
+                        position[k, d] += step * weight[k] * area[k, d] / a
+            reach = abs(step)
         move = position - rest
         for k in range(nv):
             length = np.sqrt(np.sum(move[k] ** 2))
@@ -411,7 +413,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     origin, pitch of the colliders' free space), against the walls. ``settings``: clearance (element lengths,
     the median), share, cap and spread (each element's thickness), sweeps, rounds. Returns the dents and the
     figures (dented elements, moved vertices, dent depth, volume error, folded faces)."""
-    given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "spread": 0.1, "sweeps": 20, "rounds": 3} | (settings or {})
+    given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "spread": 0.1, "sweeps": 20, "rounds": 5} | (settings or {})
     fields: dict[int, int] = {}
     shells: list = []
     rings_of: list = []
