@@ -198,7 +198,7 @@ def _wall_planes(points, shell, walls, clearance, out, count):
             continue
         out.row[count] = k
         out.normal[count, 0], out.normal[count, 1], out.normal[count, 2] = -gx / g, -gy / g, -gz / g
-        out.plane[count] = -(gx * points[k, 0] + gy * points[k, 1] + gz * points[k, 2]) / g - (clearance - val) / g
+        out.plane[count] = -(gx * points[k, 0] + gy * points[k, 1] + gz * points[k, 2]) / g - (clearance - val)
         out.pair[count] = -1
         count += 1
     return count
@@ -361,6 +361,7 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
                         count += 1
                     for c in range(primary):
                         mark[contact.row[c]] = -1
+                count = _wall_planes(position, shell, walls, settings.clearance, contact, count)
             _relax(field, position, rest, ring_of, contact, count, screen, settings.sweeps)
             _project(position, contact, count)
             if r == 0:
@@ -394,7 +395,7 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
                 if a > 0.0 and weight[k] > 0.0:
                     for d in range(3):
                         position[k, d] += step * weight[k] * area[k, d] / a
-            reach = abs(step)
+            reach += abs(step)
         move = position - rest
         for k in range(nv):
             length = np.sqrt(np.sum(move[k] ** 2))
