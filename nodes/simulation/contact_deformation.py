@@ -77,13 +77,15 @@ class Constraints(NamedTuple):
 
 
 class Figures(NamedTuple):
-    """Per element: rest volume, volume before the bulge (dented only) and after, folded faces, capped vertices."""
+    """Per element: rest volume, volume before the bulge (dented only) and after, folded faces, capped vertices,
+    how much the fold guard shortened its move (0: not at all, 1: to nothing)."""
 
     rest: np.ndarray
     dented: np.ndarray
     final: np.ndarray
     folded: np.ndarray
     capped: np.ndarray
+    shrunk: np.ndarray
 
 
 @njit(cache=True)
@@ -294,7 +296,9 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
     world, vstart = vertices.world, vertices.start
     own = pairs.start.shape[0] - 1
     push = np.zeros((vstart[own], 3))
-    figures = Figures(np.zeros(own), np.zeros(own), np.zeros(own), np.zeros(own, np.int64), np.zeros(own, np.int64))
+    figures = Figures(
+        np.zeros(own), np.zeros(own), np.zeros(own), np.zeros(own, np.int64), np.zeros(own, np.int64), np.zeros(own)
+    )
     most = 0
     for e in range(vstart.shape[0] - 1):
         most = max(most, vstart[e + 1] - vstart[e])
@@ -402,9 +406,19 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
             if length > cap[i]:
                 move[k] *= cap[i] / length
                 figures.capped[i] += 1
-            push[first + k] = move[k]
-        figures.final[i] = _volume(rest + move, faces)
-        figures.folded[i] = _folded(rest, rest + move, faces)
+        # the fold guard: a move that turns a face over (contacts that cannot all hold, a grain crossed deep
+        # by another) is shortened as a whole, halving, until none does: what it leaves is overlap, measured
+        scale = 1.0
+        while scale > 0.05 and _folded(rest, rest + scale * move, faces) > 0:
+            scale *= 0.5
+        if scale <= 0.05:
+            scale = 0.0
+        figures.folded[i] = _folded(rest, rest + scale * move, faces)
+        figures.shrunk[i] = 1.0 - scale
+        for k in range(nv):
+            for d in range(3):
+                push[first + k, d] = scale * move[k, d]
+        figures.final[i] = _volume(rest + scale * move, faces)
     return push, figures
 
 
@@ -488,5 +502,6 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
         "volume_error_max": float(error.max()) if own else 0.0,
         "folded_faces": int(figures.folded.sum()),
         "capped_vertices": int(figures.capped.sum()),
+        "guarded_elements": int(np.sum(figures.shrunk > 0.0)),
     }
     return dents, table
