@@ -40,10 +40,13 @@ from .contact_flattening import (
 
 
 class ShellFaces(NamedTuple):
-    """Each shape's outer-shell faces (indices into its own mesh's vertices) as one CSR by shape."""
+    """Each shape's outer-shell faces (indices into its own mesh's vertices) and its edge-adjacent face pairs, as
+    CSRs by shape."""
 
     start: np.ndarray  # (s + 1,) int64
     faces: np.ndarray  # (f, 3) int64
+    pair_start: np.ndarray  # (s + 1,) int64: shape s's edge-adjacent face pairs are pairs[pair_start[s]:...]
+    pairs: np.ndarray  # (p, 2) int64, rows of the shape's own faces
 
 
 class Walls(NamedTuple):
@@ -248,15 +251,25 @@ def _area_normals(points, faces, out):
 
 
 @njit(cache=True)
-def _folded(rest, points, faces):
-    """Faces the deformation turned more than 90° from their rest normal (a fold a renderer shows as a crease)."""
+def _folded(rest, points, faces, pairs):
+    """Edge-adjacent face pairs whose normals the deformation turned more than 150° apart (none at rest): a fold,
+    which a renderer shows as a crease and which fools a pseudonormal inside test (the checkers' criterion)."""
     count = 0
-    for f in range(faces.shape[0]):
-        a, b, c = rest[faces[f, 0]], rest[faces[f, 1]], rest[faces[f, 2]]
-        r = np.cross(b - a, c - a)
-        a, b, c = points[faces[f, 0]], points[faces[f, 1]], points[faces[f, 2]]
-        count += np.dot(r, np.cross(b - a, c - a)) < 0.0
+    limit = np.cos(np.radians(150.0))
+    for q in range(pairs.shape[0]):
+        cos_now = _cosine(points, faces[pairs[q, 0]], faces[pairs[q, 1]])
+        if cos_now < limit and not _cosine(rest, faces[pairs[q, 0]], faces[pairs[q, 1]]) < limit:
+            count += 1
     return count
+
+
+@njit(cache=True)
+def _cosine(points, f, g):
+    """Cosine of the angle between two faces' normals."""
+    a = np.cross(points[f[1]] - points[f[0]], points[f[2]] - points[f[0]])
+    b = np.cross(points[g[1]] - points[g[0]], points[g[2]] - points[g[0]])
+    norm = np.sqrt(np.dot(a, a) * np.dot(b, b))
+    return np.dot(a, b) / norm if norm > 0.0 else 1.0
 
 
 @njit(cache=True)
@@ -316,6 +329,7 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
         shell = vertices.shell[first:last]
         s = maps.shape[i]
         faces = shells.faces[shells.start[s] : shells.start[s + 1]]
+        adjacent = shells.pairs[shells.pair_start[s] : shells.pair_start[s + 1]]
         figures.rest[i] = _volume(rest, faces)
         primary = _pair_planes(vertices, i, pairs, maps, fields, settings, found, contact)
         primary = _wall_planes(rest, shell, walls, settings.clearance, contact, primary)
@@ -406,14 +420,14 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
             if length > cap[i]:
                 move[k] *= cap[i] / length
                 figures.capped[i] += 1
-        # the fold guard: a move that turns a face over (contacts that cannot all hold, a grain crossed deep
+        # the fold guard: a move that folds two faces (contacts that cannot all hold, a grain crossed deep
         # by another) is shortened as a whole, halving, until none does: what it leaves is overlap, measured
         scale = 1.0
-        while scale > 0.05 and _folded(rest, rest + scale * move, faces) > 0:
+        while scale > 0.05 and _folded(rest, rest + scale * move, faces, adjacent) > 0:
             scale *= 0.5
         if scale <= 0.05:
             scale = 0.0
-        figures.folded[i] = _folded(rest, rest + scale * move, faces)
+        figures.folded[i] = _folded(rest, rest + scale * move, faces, adjacent)
         figures.shrunk[i] = 1.0 - scale
         for k in range(nv):
             for d in range(3):
@@ -428,6 +442,8 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     origin, pitch of the colliders' free space), against the walls. ``settings``: clearance (element lengths,
     the median), share, cap and spread (each element's thickness), sweeps, rounds. Returns the dents and the
     figures (dented elements, moved vertices, dent depth, volume error, folded faces)."""
+    import trimesh
+
     given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "spread": 0.1, "sweeps": 20, "rounds": 5} | (settings or {})
     fields: dict[int, int] = {}
     shells: list = []
@@ -471,7 +487,16 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
         gap, float(given["share"]), given["spread"] * thickness, int(given["sweeps"]), int(given["rounds"])
     )
     face_start = np.concatenate([[0], np.cumsum([len(f) for f in faces_of])]).astype(np.int64)
-    shell_faces = ShellFaces(face_start, np.concatenate(faces_of) if faces_of else np.zeros((0, 3), np.int64))
+    adjacency = [
+        np.asarray(trimesh.Trimesh(np.zeros((f.max() + 1, 3)), f, process=False).face_adjacency) for f in faces_of
+    ]
+    pair_start = np.concatenate([[0], np.cumsum([len(a) for a in adjacency])]).astype(np.int64)
+    shell_faces = ShellFaces(
+        face_start,
+        np.concatenate(faces_of) if faces_of else np.zeros((0, 3), np.int64),
+        pair_start,
+        np.concatenate(adjacency).astype(np.int64) if adjacency else np.zeros((0, 2), np.int64),
+    )
     push, figures = deform_elements(
         ElementVertices(world, vstart, shell),
         ContactPairs(nstart, near),
