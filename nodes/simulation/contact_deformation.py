@@ -68,6 +68,7 @@ class DeformSettings(NamedTuple):
     spread: float
     sweeps: int
     rounds: int
+    guard: bool
 
 
 class Constraints(NamedTuple):
@@ -423,7 +424,7 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
         # the fold guard: a move that folds two faces (contacts that cannot all hold, a grain crossed deep
         # by another) is shortened as a whole, halving, until none does: what it leaves is overlap, measured
         scale = 1.0
-        while scale > 0.05 and _folded(rest, rest + scale * move, faces, adjacent) > 0:
+        while settings.guard and scale > 0.05 and _folded(rest, rest + scale * move, faces, adjacent) > 0:
             scale *= 0.5
         if scale <= 0.05:
             scale = 0.0
@@ -444,7 +445,8 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     figures (dented elements, moved vertices, dent depth, volume error, folded faces)."""
     import trimesh
 
-    given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "spread": 0.1, "sweeps": 20, "rounds": 5} | (settings or {})
+    given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "spread": 0.1, "sweeps": 20, "rounds": 5, "guard": False}
+    given |= settings or {}
     fields: dict[int, int] = {}
     shells: list = []
     rings_of: list = []
@@ -484,7 +486,12 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
         walls = Walls(np.ascontiguousarray(cphi, np.float64), np.asarray(corigin, np.float64), float(cpitch), reach)
     thickness = float(np.median(elements.thickness[:own])) if own else 1.0
     solve = DeformSettings(
-        gap, float(given["share"]), given["spread"] * thickness, int(given["sweeps"]), int(given["rounds"])
+        gap,
+        float(given["share"]),
+        given["spread"] * thickness,
+        int(given["sweeps"]),
+        int(given["rounds"]),
+        bool(given["guard"]),
     )
     face_start = np.concatenate([[0], np.cumsum([len(f) for f in faces_of])]).astype(np.int64)
     adjacency = [
