@@ -6,8 +6,8 @@ watertight share), each element's volume against its volume before the contact s
     python benchmarks/bench_contact.py CHECKERS_DIR ikura_don --full     # the main job at full size
 
 CHECKERS_DIR holds ``overlap_check.py`` and ``mesh_quality.py`` (they need trimesh, scipy and libigl). "before" runs
-the recipe with its ``deform_contacts`` steps swapped for ``flatten_contacts`` (the recipes set no setting the
-flattening lacks); both variants share one node cache, so the simulation runs once. Prints one JSON line per run.
+the recipe as it is (``flatten_contacts``), "after" with those steps swapped for ``deform_contacts`` (which takes
+every setting the flattening has); both share one node cache, so the simulation runs once. One JSON line per run.
 """
 
 from __future__ import annotations
@@ -40,12 +40,12 @@ def overrides(name: str, full: bool) -> list[str]:
 
 
 def recipe_file(name: str, variant: str) -> Path:
-    """The recipe, or for "before" a copy beside it (its assets are relative) with the flattening instead."""
+    """The recipe, or for "after" a copy beside it (its assets are relative) with the contact deformation instead."""
     path = REPO / "graphs" / f"{name}.yaml"
-    if variant == "after":
+    if variant == "before":
         return path
-    text = path.read_text().replace("type: deform_contacts", "type: flatten_contacts")
-    before = path.with_name(f".before_{name}.yaml")
+    text = path.read_text().replace("type: flatten_contacts", "type: deform_contacts")
+    before = path.with_name(f".after_{name}.yaml")
     before.write_text(text)
     return before
 
@@ -64,7 +64,7 @@ def measure(name: str, variant: str, full: bool, checkers: Path, work: Path) -> 
     try:
         recipe = load_recipe(path, default_registry(), overrides(name, full))
     finally:
-        if variant == "before":
+        if variant == "after":
             path.unlink()
     steps = [n for n, e in recipe.nodes.items() if e.spec.type_name in ("flatten_contacts", "deform_contacts")]
     inputs = {s: str(recipe.nodes[s].inputs["aggregate"][0]) for s in steps}
