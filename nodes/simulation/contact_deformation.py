@@ -13,7 +13,8 @@ The contacts are the half-spaces of ``contact_flattening``: between two elements
 overlap's lens, each element giving way its ``share``; against a wall or mould the wall's tangent plane.
 Then the volume the dent took comes back as a bulge of the free surface along its normals (cooked rice is
 nearly incompressible), new contacts the bulge makes are added (away from the neighbour's rest surface), and
-the two repeat. A smooth field with no jump between neighbouring vertices does not fold faces.
+the two repeat. On the full main job it still folds faces where a bumpy skin is held on a plane, and its bulge
+bound gives back too little volume: docs/accuracy.md measures it against the flattening, which the recipes keep.
 """
 
 from __future__ import annotations

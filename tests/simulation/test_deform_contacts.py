@@ -1,7 +1,7 @@
 """The deform_contacts node (issue 25): overlapping element meshes dented smoothly where they press, so they touch
 without cutting into each other by either inside test (winding number, pseudonormal), keep their volume (a
-pressed grain bulges), and no face turns over. Each of these fails on the flattening it replaces
-(``flatten_contacts``: volume lost 3–6 %, faces turned over, a pseudonormal depth of 0.027 mm)."""
+pressed grain bulges), and no face turns over. Each of these fails on the flattening it is meant to
+replace (``flatten_contacts``: volume lost 3–6 %, faces turned over, a pseudonormal depth of 0.027 mm)."""
 
 import dataclasses
 
