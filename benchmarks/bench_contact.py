@@ -93,7 +93,8 @@ def measure(name: str, variant: str, full: bool, checkers: Path, work: Path) -> 
     }
     for sign in ("winding", "pseudonormal"):
         run = [sys.executable, str(checkers / "overlap_check.py"), str(glb), "--sign", sign]
-        row[sign] = subprocess.run(run, capture_output=True, text=True).stdout.strip().splitlines()[-1].split(": ")[-1]
+        line = subprocess.run(run, capture_output=True, text=True).stdout.strip().splitlines()[-1]
+        row[sign] = line.split("overlap depth / length: ")[-1]
     run = [sys.executable, str(checkers / "mesh_quality.py"), str(glb)]
     row["quality"] = subprocess.run(run, capture_output=True, text=True).stdout.strip().split(": ", 1)[-1]
     return row
