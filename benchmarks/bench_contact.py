@@ -1,0 +1,120 @@
+"""Contact deformation against the flattening it replaces — issue 25: per food recipe, the exported .glb judged by
+the independent checkers (overlap depth by the winding-number and the pseudonormal inside tests, folded face pairs,
+watertight share), each element's volume against its volume before the contact step, and the contact steps' time.
+
+    python benchmarks/bench_contact.py CHECKERS_DIR                      # every food recipe, reduced sizes
+    python benchmarks/bench_contact.py CHECKERS_DIR ikura_don --full     # the main job at full size
+
+CHECKERS_DIR holds ``overlap_check.py`` and ``mesh_quality.py`` (they need trimesh, scipy and libigl). "before" runs
+the recipe as it is (``flatten_contacts``), "after" with those steps swapped for ``deform_contacts`` (which takes
+every setting the flattening has); both share one node cache, so the simulation runs once. One JSON line per run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import bench_scenes  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+RECIPES = ("ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_bunny")
+
+
+def overrides(name: str, full: bool) -> list[str]:
+    """The reduced sizes of ``benchmarks/bench_scenes.py`` (the bunny: its draft block, a small cut preview)."""
+    if full:
+        return ["export.formats=[glb]"]
+    if name == "rice_bunny":
+        keep = [o for o in bench_scenes.draft_overrides(name) if ".wall_cells" not in o and "preview" not in o]
+        small = ["cut_preview.width=320", "cut_preview.height=180", "cut_preview.samples=4"]
+        return keep + bench_scenes.PREVIEW[:3] + small + ["export.formats=[glb]"]
+    return [o for o in bench_scenes._quick(name) if not o.startswith("measure.")] + ["export.formats=[glb]"]
+
+
+def recipe_file(name: str, variant: str) -> Path:
+    """The recipe, or for "after" a copy beside it (its assets are relative) with the contact deformation instead."""
+    path = REPO / "graphs" / f"{name}.yaml"
+    if variant == "before":
+        return path
+    text = path.read_text().replace("type: flatten_contacts", "type: deform_contacts")
+    before = path.with_name(f".after_{name}.yaml")
+    before.write_text(text)
+    return before
+
+
+def volume(mesh) -> float:
+    import trimesh
+
+    faces = mesh.faces if mesh.parts is None else mesh.faces[mesh.parts == 0]
+    return trimesh.Trimesh(mesh.vertices, faces, process=False).volume
+
+
+def measure(name: str, variant: str, full: bool, checkers: Path, work: Path) -> dict:
+    from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
+
+    path = recipe_file(name, variant)
+    try:
+        recipe = load_recipe(path, default_registry(), overrides(name, full))
+    finally:
+        if variant == "after":
+            path.unlink()
+    steps = [n for n, e in recipe.nodes.items() if e.spec.type_name in ("flatten_contacts", "deform_contacts")]
+    inputs = {s: str(recipe.nodes[s].inputs["aggregate"][0]) for s in steps}
+    wanted = [str(w) for w in recipe.outputs] + [f"{s}.aggregate" for s in steps] + list(inputs.values())
+    out = work / f"{name}_{variant}"
+    start = time.perf_counter()
+    result = run_recipe(recipe, outputs=wanted, cache=Cache(work / f"cache_{name}"), out_dir=out)
+    total = time.perf_counter() - start
+    errors = []
+    for s in steps:
+        after, before = result.output(f"{s}.aggregate"), result.output(inputs[s])
+        errors += [
+            volume(after.element_mesh(i)) / volume(before.element_mesh(i)) - 1.0 for i in range(len(after.placement))
+        ]
+    errors = np.abs(np.array(errors))
+    glb = out / f"{recipe.nodes['export'].params['basename']}.glb"
+    row = {
+        "recipe": name,
+        "variant": variant,
+        "contact_s": round(sum(r.seconds for r in result.records if r.node in steps), 2),
+        "total_s": round(total, 1),
+        "vol_err_p95": round(float(np.percentile(errors, 95)), 4),
+        "vol_err_max": round(float(errors.max()), 4),
+        "over_2pct": int((errors > 0.02).sum()),
+        "elements": len(errors),
+    }
+    for sign in ("winding", "pseudonormal"):
+        run = [sys.executable, str(checkers / "overlap_check.py"), str(glb), "--sign", sign]
+        line = subprocess.run(run, capture_output=True, text=True).stdout.strip().splitlines()[-1]
+        row[sign] = line.split("overlap depth / length: ")[-1]
+    run = [sys.executable, str(checkers / "mesh_quality.py"), str(glb)]
+    row["quality"] = subprocess.run(run, capture_output=True, text=True).stdout.strip().split(": ", 1)[-1]
+    return row
+
+
+def main(argv: list[str] | None = None) -> int:
+    import tempfile
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("checkers", type=Path, help="folder of overlap_check.py and mesh_quality.py")
+    parser.add_argument("recipes", nargs="*", default=list(RECIPES))
+    parser.add_argument("--full", action="store_true", help="full sizes (minutes per recipe on 2 cores)")
+    parser.add_argument("--variants", default="before,after")
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory(prefix="bench-contact-") as tmp:
+        for name in args.recipes:
+            for variant in args.variants.split(","):
+                print(json.dumps(measure(name, variant, args.full, args.checkers, Path(tmp))), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,152 @@
+"""The deform_contacts node (issue 25): overlapping element meshes dented smoothly where they press, so they touch
+without cutting into each other by either inside test (winding number, pseudonormal), keep their volume (a
+pressed grain bulges), and no face turns over. Each of these fails on the flattening it is meant to
+replace (``flatten_contacts``: volume lost 3–6 %, faces turned over, a pseudonormal depth of 0.027 mm)."""
+
+import dataclasses
+
+import igl
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from nodegraph import codec
+from nodegraph.values import Mesh
+from nodes.simulation.deform_contacts import deform_contacts
+from nodes.values import Aggregate, ElementLibrary, Placement
+
+PRESS = deform_contacts  # the node under test (flatten_contacts here shows what each test catches)
+
+
+def elements(positions, shape="ball", rotations=None) -> Aggregate:
+    """Balls 2 mm across, or grains (ellipsoids 6 × 3 × 2 mm) turned by ``rotations`` (3 × 3 each)."""
+    mesh = trimesh.creation.icosphere(4)
+    if shape == "grain":
+        mesh.apply_scale([3.0, 1.5, 1.0])
+    positions = np.asarray(positions, float)
+    n = len(positions)
+    rotations = np.tile(np.eye(3), (n, 1, 1)) if rotations is None else np.asarray(rotations, float)
+    library = ElementLibrary("rice", (Mesh.from_trimesh(mesh, name=shape),))
+    placement = Placement(positions, np.tile([0.0, 0.0, 1.0], (n, 1)), kind_names=("rice",))
+    return Aggregate(dataclasses.replace(placement, rotations=rotations), (library,))
+
+
+def turned(degrees) -> np.ndarray:
+    """Rotations from x-y-z Euler angles in degrees, one row each."""
+    return Rotation.from_euler("xyz", degrees, degrees=True).as_matrix()
+
+
+def deepest(aggregate: Aggregate, sign: str) -> float:
+    """The deepest vertex of any element inside another (mm; libigl on the meshes, signed by ``sign``)."""
+    kind = {
+        "winding": igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER,
+        "pseudonormal": igl.SIGNED_DISTANCE_TYPE_PSEUDONORMAL,
+    }
+    meshes = [aggregate.element_mesh(i) for i in range(len(aggregate.placement))]
+    worst = 0.0
+    for i, a in enumerate(meshes):
+        for j, b in enumerate(meshes):
+            if i != j:
+                d = igl.signed_distance(a.vertices, b.vertices, b.faces, sign_type=kind[sign])[0]
+                worst = max(worst, -float(d.min()))
+    return worst
+
+
+def volume_errors(after: Aggregate, before: Aggregate) -> np.ndarray:
+    """Each element's |volume / rest volume − 1|."""
+    out = []
+    for i in range(len(before.placement)):
+        a, b = after.element_mesh(i), before.element_mesh(i)
+        out.append(trimesh.Trimesh(a.vertices, a.faces).volume / trimesh.Trimesh(b.vertices, b.faces).volume - 1.0)
+    return np.abs(np.array(out))
+
+
+def turned_faces(after: Aggregate, before: Aggregate) -> int:
+    """Faces whose normal the contact turned over (against their rest normal): folds a renderer shows as creases
+    and that fool a pseudonormal inside test."""
+    count = 0
+    for i in range(len(before.placement)):
+        a, b = after.element_mesh(i), before.element_mesh(i)
+        count += int(np.sum(np.einsum("ij,ij->i", normals(a), normals(b)) < 0.0))
+    return count
+
+
+def normals(mesh) -> np.ndarray:
+    x, f = mesh.vertices, mesh.faces
+    return np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]])
+
+
+def run(aggregate, effects=("contact",), **given):
+    return PRESS.call(aggregate=aggregate, effects=effects, **given)
+
+
+def test_two_balls_touch_and_keep_their_volume():
+    before = elements([[0.0, 0.0, 0.0], [1.6, 0.0, 0.0]])  # 0.4 mm deep
+    after = run(before)["aggregate"]
+    for sign in ("winding", "pseudonormal"):
+        assert deepest(after, sign) < 0.01, sign  # was 0.4: touching (clearance 0.005 element lengths = 0.01 mm)
+    assert volume_errors(after, before).max() < 0.005  # the flattening lost 2.9 %
+    assert turned_faces(after, before) == 0
+
+
+def test_a_ball_squeezed_from_both_sides_bulges_back_to_its_volume():
+    before = elements([[0.0, 0.0, 0.0], [1.6, 0.0, 0.0], [3.2, 0.0, 0.0]])
+    out = run(before)
+    after = out["aggregate"]
+    assert deepest(after, "winding") < 0.01
+    assert volume_errors(after, before).max() < 0.02  # the flattening lost 5.9 % of the middle ball
+    assert float(out["table"].columns["volume_error_max"][0]) < 0.02
+    middle = after.element_mesh(1).vertices
+    assert np.ptp(middle[:, 1]) > np.ptp(before.element_mesh(1).vertices[:, 1]) + 0.01  # it bulges sideways
+
+
+@pytest.mark.parametrize(
+    "offset, degrees",
+    [
+        ([0.4, 2.6, 0.3], [[0, 0, 0], [0, 0, 30]]),  # side by side at 30°: the flattening turned 3 faces over
+        ([0.0, 0.0, 1.5], [[0, 0, 0], [0, 0, 60]]),
+        ([5.6, 0.3, 0.2], [[0, 0, 0], [0, 0, 0]]),  # tip to tip
+    ],
+)
+def test_grains_pressed_at_angles_touch_without_turning_a_face(offset, degrees):
+    before = elements([[0.0, 0.0, 0.0], offset], shape="grain", rotations=turned(degrees))
+    assert deepest(before, "winding") > 0.3
+    out = run(before)
+    after = out["aggregate"]
+    assert deepest(after, "winding") < 0.01 and deepest(after, "pseudonormal") < 0.01
+    assert turned_faces(after, before) == 0 and int(out["table"].columns["folded_faces"][0]) == 0
+    assert volume_errors(after, before).max() < 0.01  # the flattening lost 4–5 %
+
+
+def test_a_tilted_contact_does_not_fool_the_pseudonormal_test():
+    """Two grains turned at odd angles, 0.5 mm into each other: the flattening's crease left a vertex 0.027 mm deep
+    by the pseudonormal test (0 by the winding number); a smooth dent leaves the two tests agreeing."""
+    direction = np.array([-0.5848856137381767, -0.06167398638015923, -0.8087676664197797])
+    rotations = turned([[-67.238173, 4.350987, 29.437077], [-107.303609, 62.05617, 94.65305]])
+    before = elements([[0.0, 0.0, 0.0], 3.646 * direction], shape="grain", rotations=rotations)
+    assert deepest(before, "winding") > 0.3
+    after = run(before)["aggregate"]
+    assert deepest(after, "pseudonormal") < 0.005 and deepest(after, "winding") < 0.005
+    assert volume_errors(after, before).max() < 0.01
+
+
+def test_apart_nothing_moves():
+    before = elements([[0.0, 0.0, 0.0], [2.5, 0.0, 0.0]])
+    out = run(before)
+    assert len(out["aggregate"].dent_element) == 0
+    for i in range(2):
+        assert np.array_equal(out["aggregate"].element_mesh(i).vertices, before.element_mesh(i).vertices)
+
+
+def test_a_wall_pushes_vertices_out_and_the_ball_keeps_its_volume():
+    ground = Mesh.from_trimesh(trimesh.creation.box([20.0, 20.0, 2.0]).apply_translation([0, 0, -1.8]))
+    before = elements([[0.0, 0.0, 0.0]])  # 0.2 mm into the ground's top at z = −0.8
+    after = run(before, effects=("collider",), colliders=[ground])["aggregate"]
+    assert after.element_mesh(0).vertices[:, 2].min() > -0.8 - 0.01
+    assert volume_errors(after, before).max() < 0.01
+
+
+def test_deterministic():
+    before = elements([[0.0, 0.0, 0.0], [1.6, 0.0, 0.0], [3.2, 0.0, 0.0]])
+    assert codec.encode(run(before)["aggregate"]) == codec.encode(run(before)["aggregate"])
