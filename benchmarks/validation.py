@@ -222,10 +222,11 @@ def packing_fraction(n, mu, anchored, frames=150, radius=1.0, seed=0):
 def grain_geometry():
     """The base_mesh node's rice presets: length × width × thickness (bounding box, mm) and volume."""
     from nodes.elements.base_mesh import base_mesh
+    from nodes.elements.rice_variety import rice_variety
 
     rows = []
     for variety in ("japonica", "indica", "aromatic"):
-        mesh = base_mesh.call(shape="rice", variety=variety)
+        mesh = base_mesh.call(shape="rice", variety=rice_variety.call(variety=variety))
         import trimesh
 
         tm = trimesh.Trimesh(np.asarray(mesh.vertices), np.asarray(mesh.faces))
@@ -464,8 +465,9 @@ DIAGNOSIS = [
     "λ_n in position units). Variants measured on a 16-core machine, one process each (300 poured grains, H/R "
     "at 2.5 s → 7 s; 600-grain ball): load + the whole overlap 36.2° → 33.9°, ball 20.4°, but 1,500 spheres "
     "poured in a box jammed at φ 0.34 (a resting overlap fed the friction that kept it); load + this "
-    "correction, the default, 32.1° → 31.5°, ball 17.8°, φ 0.654 (with the walls' load too: 34.7° at 2.5 s, "
-    "33.6° at 5 s, here); contacts after shape matching 35.3° → 31.9°; the load without pre-stabilisation "
+    "correction, the default, 32.1° → 31.5°, ball 17.8°, φ 0.654; the walls' pushes summed as their load too "
+    "34.7° at 2.5 s, but a sleeping pile of bars never came to rest (walls keep the penetration as load); "
+    "contacts after shape matching 35.3° → 31.9°; the load without pre-stabilisation "
     "30.1° → 25.8°; no friction in pre-stabilisation 22.1° → 19.8°; locking each grain's rotation per substep "
     "21.4° → 18.0° (2.5 → 5 s): the creep was sliding, not rolling.",
     "4. **Cohesion.** Moist rice (effect adhesion) adds the bonds' pull at the capture distance to the load, "

@@ -210,11 +210,10 @@ def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
 
 
 @njit(cache=True, inline="always")
-def _wall_one(x, x_prev, walls, w, r, phi, origin, pitch, blocks, rule, i):
+def _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i):
     """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
     if w[i] <= 0.0:
         return 0.0
-    anchor, load = walls
     mu_s, _, anchored = rule
     fx = (x[i, 0] - origin[0]) / pitch
     fy = (x[i, 1] - origin[1]) / pitch
@@ -242,24 +241,22 @@ def _wall_one(x, x_prev, walls, w, r, phi, origin, pitch, blocks, rule, i):
     x[i, 0] += pen * nx
     x[i, 1] += pen * ny
     x[i, 2] += pen * nz
-    load[i] += pen
     if mu_s > 0.0:
-        friction_wall(x, x_prev, anchor, i, nx, ny, nz, load[i] if anchored else pen, rule)
+        friction_wall(x, x_prev, anchor, i, nx, ny, nz, pen, rule)
     return pen / r[i]
 
 
 @njit(cache=True, parallel=True)
-def collider_project(x, x_prev, walls, w, r, phi, origin, pitch, blocks, rule):
+def collider_project(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
-    (``friction.friction_wall``; ``rule`` = (μs, μk, anchored); ``walls`` = (anchor (n, 3), load (n,)) per
-    particle: μs = 0 skips friction and leaves the anchors; the load adds up the wall's pushes of the substep,
-    the normal load of anchored friction as for pairs, the penetration alone without anchors). In place;
-    particles are independent. ``blocks``: the ``block_minimum`` of φ (particles far from every wall are
-    skipped). Returns max (r − φ)/r."""
+    (``friction.friction_wall``, normal load = the penetration; ``rule`` = (μs, μk, anchored),
+    ``anchor`` (n, 3) per particle; μs = 0 skips friction and leaves the anchors). In place; particles
+    are independent. ``blocks``: the ``block_minimum`` of φ (particles far from every wall are skipped).
+    Returns max (r − φ)/r."""
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):
-        worst[i] = _wall_one(x, x_prev, walls, w, r, phi, origin, pitch, blocks, rule, i)
+        worst[i] = _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i)
     return worst.max() if n > 0 else 0.0
 
 

@@ -13,14 +13,16 @@ substep's, so slow slip cannot pile up; when the drift exceeds μs·d the contac
 (dynamic) and is re-anchored where it now is — the per-substep rule again while it slides. Drift and
 load both scale with h² (gravity's step), so the sticking test does not depend on the substep count.
 
-With anchors the load d is the normal correction the pair has received this substep (pre-stabilisation
-included, ``contact_constraints.PairEntries.load``; walls: ``State.wall_load``) plus the correction it is
-about to get: the λ_n of Müller et al. 2020's static-friction test, in position units. The overlap alone
+With anchors the load d of a pair is the normal correction it has received this substep
+(pre-stabilisation included, ``contact_constraints.PairEntries.load``) plus the correction it is about to
+get: the λ_n of Müller et al. 2020's static-friction test, in position units. The overlap alone
 reads nearly 0 at a resting contact once pre-stabilisation has removed it, while shape matching hands
 each contact particle back only part of a friction correction, so the drift of a grain (8 particles)
 outgrew μs·overlap and heaps of rice-like grains crept (H/R 28.7° → 25.1° from 2.5 s to 7 s); with the
-substep's load they rest (34.7° → 33.6° from 2.5 s to 5 s, docs/validation.md). The tolerated old overlap
-is no load: counted in, resting overlaps fed friction that kept them, and poured spheres jammed at φ 0.34.
+substep's load they rest (docs/validation.md). The tolerated old overlap is no load: counted in, resting
+overlaps fed friction that kept them, and poured spheres jammed at φ 0.34. Walls keep the penetration as
+their load: summing a wall's pushes too raised the heap 2.6° but kept a sleeping pile of bars from resting
+(kinetic energy 0.3–3 g·mm²/s² for ever, against 0 without).
 G Table 3: μs = static threshold, μk = dynamic scale · μs.
 
 Anchors are NaN where no contact sticks. ``friction_pair`` runs per pair inside the contacts'

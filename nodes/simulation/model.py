@@ -135,7 +135,6 @@ class Model:
             awake=awake,
             pushed=np.zeros(n, np.bool_),
             wall_anchor=np.full((n, 3), np.nan),
-            wall_load=np.zeros(n),
             yolks=yolks,
         )
 

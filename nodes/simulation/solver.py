@@ -368,7 +368,7 @@ class XpbdSolver:
                     collider.collider_project,
                     st.x,
                     st.x_prev,
-                    (st.wall_anchor, st.wall_load),
+                    st.wall_anchor,
                     m.w,
                     m.r,
                     *m.collider.args(),
@@ -450,13 +450,12 @@ class XpbdSolver:
             self._contacts(st, friction=self.settings.anchored_friction, wake_step=np.inf)
             d("contact", allowance, st.x, st.awake, m.r, *pairs.lists.rows(), 0.0, pairs.allowance)
         if m.collider is not None:
-            st.wall_load[:] = 0.0  # the walls' pushes of this substep, from here on
             d(
                 "collider",
                 collider.collider_project,
                 st.x,
                 st.x,
-                (st.wall_anchor, st.wall_load),
+                st.wall_anchor,
                 m.w,
                 m.r,
                 *m.collider.args(),

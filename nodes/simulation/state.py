@@ -39,7 +39,6 @@ class State:
     awake: np.ndarray  # (n,) bool
     pushed: np.ndarray  # (n,) bool
     wall_anchor: np.ndarray  # (n, 3) where each particle began sticking to a wall, NaN = not (``friction``)
-    wall_load: np.ndarray  # (n,) the walls' pushes on each particle this substep: anchored friction's load
     yolks: YolkState | None = None
     time: float = 0.0
     substeps_done: int = 0
