@@ -800,6 +800,11 @@ def write_report(inputs: dict, results: Path) -> None:
         *particles_section(*particles_md_and_command, d, results),
         *sections["bench_shading"],
         *sections["bench_preview"],
+        "Measured elsewhere, by hand-run benchmarks: the grain meshes' contact (`deform_contacts` against "
+        "`flatten_contacts`, `benchmarks/bench_contact.py`) in [`contact.md`](contact.md); the grain skin and the "
+        "preview's light under the skin (`benchmarks/bench_skin.py`, `bench_preview.py --sss`) in "
+        "[`look.md`](look.md).",
+        "",
     ]
     DOC.write_text("\n".join(lines))
     print(f"wrote {DOC} and {IMAGES}/")

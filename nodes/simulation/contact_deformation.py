@@ -14,7 +14,7 @@ overlap's lens, each element giving way its ``share``; against a wall or mould t
 Then the volume the dent took comes back as a bulge of the free surface along its normals (cooked rice is
 nearly incompressible), new contacts the bulge makes are added (away from the neighbour's rest surface), and
 the two repeat. On the full main job it still folds faces where a bumpy skin is held on a plane, and its bulge
-bound gives back too little volume: docs/accuracy.md measures it against the flattening, which the recipes keep.
+bound gives back too little volume: docs/contact.md measures it against the flattening, which the recipes keep.
 """
 
 from __future__ import annotations

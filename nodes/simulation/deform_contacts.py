@@ -70,7 +70,7 @@ from ..values import Aggregate
         # on the reduced rice bowl (81 grains losing up to 25 % to their dents) volume error p95 2.2 % (3 rounds: 9 %)
         "rounds": Param(int, 5, "dent–bulge rounds (1: dents only, the volume is not given back)", range=(1, 10)),
         # off: on the full main job the guard shortened the moves of many grains (their bumpy skin folds a pit or
-        # two when pressed) and left overlap p95 0.068 L by both inside tests (docs/accuracy.md)
+        # two when pressed) and left overlap p95 0.068 L by both inside tests (docs/contact.md)
         "fold_guard": Param(
             bool, False, "shorten an element's whole move, halving, until no two adjacent faces fold past 150°"
         ),
