@@ -27,8 +27,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_scenes  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
-# --quick runs the reduced main job twice and the checkers: 226 CPU s measured with a cold numba cache (compiling
-# the whole pipeline), 40–60 s warm
+# --quick runs the reduced main job twice and the checkers: 226 CPU s measured (the numba cache partly cold:
+# compiling is ≈ 164 CPU s of the whole pipeline, docs/performance.md)
 QUICK_CPU_S = 360
 RECIPES = ("ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_bunny")
 
