@@ -32,8 +32,8 @@ from .contact_flattening import (
     ElementVertices,
     InsideVertices,
     _gather,
-    _local,
     _neighbour_lists,
+    near_surface,
     outer_vertices,
     shape_fields,
     vertex_rings,
@@ -94,47 +94,6 @@ class Figures(NamedTuple):
 
 
 @njit(cache=True)
-def _near(points, shell, j, maps, fields, margin, found):
-    """Shell vertices (rows of ``points``) closer to element j's rest surface than ``margin`` (inside: depth > 0),
-    into ``found``: their rows, depth and j's outward unit normal there (j's φ on its local grid, scaled by
-    |∇ₓφ| = |(D·R)⁻ᵀ∇ᵤφ|, as ``contact_flattening._inside``). Returns how many."""
-    rows, depth, normal = found.rows, found.depth, found.normal
-    lin_inv, rot, bend, t, lo, hi = maps.lin_inv[j], maps.rot[j], maps.bend[j], maps.t[j], maps.lo[j], maps.hi[j]
-    sj = maps.shape[j]
-    dims = fields.dims
-    grid = fields.phi[sj, : dims[sj, 0], : dims[sj, 1], : dims[sj, 2]]
-    count = 0
-    u = np.empty(3)
-    for k in range(points.shape[0]):
-        if not shell[k]:
-            continue
-        x = points[k]
-        if x[0] < lo[0] or x[1] < lo[1] or x[2] < lo[2] or x[0] > hi[0] or x[1] > hi[1] or x[2] > hi[2]:
-            continue
-        _local(x, lin_inv, rot, bend, t, u)
-        val, gx, gy, gz = sample_phi(grid, fields.origin[sj], fields.pitch[sj], u[0], u[1], u[2])
-        if not val < np.inf:
-            continue
-        g = np.sqrt(gx * gx + gy * gy + gz * gz)
-        if not g > 0.0:
-            continue
-        gx, gy, gz = gx / g, gy / g, gz / g
-        w0 = lin_inv[0, 0] * gx + lin_inv[1, 0] * gy + lin_inv[2, 0] * gz
-        w1 = lin_inv[0, 1] * gx + lin_inv[1, 1] * gy + lin_inv[2, 1] * gz
-        w2 = lin_inv[0, 2] * gx + lin_inv[1, 2] * gy + lin_inv[2, 2] * gz
-        norm = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-        if not norm > 0.0 or -val / norm + margin <= 0.0:
-            continue
-        rows[count] = k
-        depth[count] = -val / norm
-        normal[count, 0] = w0 / norm
-        normal[count, 1] = w1 / norm
-        normal[count, 2] = w2 / norm
-        count += 1
-    return count
-
-
-@njit(cache=True)
 def _pair_planes(vertices, i, pairs, maps, fields, settings, found, out):
     """Element i's contacts with each neighbour j of ``pairs``: its rest vertices inside j (within the clearance)
     below the plane across the overlap's lens at a − share·(a − b) along the lens' axis n, [b, a] how far the
@@ -151,11 +110,11 @@ def _pair_planes(vertices, i, pairs, maps, fields, settings, found, out):
     count = 0
     for q in range(pairs.start[i], pairs.start[i + 1]):
         j = pairs.index[q]
-        cx = _near(own, own_shell, j, maps, fields, clearance, found_x)
+        cx = near_surface(own, own_shell, j, maps, fields, clearance, found_x, 0)
         if cx == 0:
             continue
         other = world[vstart[j] : vstart[j + 1]]
-        cy = _near(other, vertices.shell[vstart[j] : vstart[j + 1]], i, maps, fields, clearance, found_y)
+        cy = near_surface(other, vertices.shell[vstart[j] : vstart[j + 1]], i, maps, fields, clearance, found_y, 0)
         for a in range(3):  # the lens' axis: depth-weighted outward normals of both sides
             n[a] = 0.0
             for k in range(cy):
@@ -364,7 +323,7 @@ def deform_elements(vertices, pairs, maps, fields, rings, shells, walls, setting
                             mark[contact.row[c]] = q
                     j = pairs.index[q]
                     margin = settings.clearance + reach
-                    found_count = _near(position, shell, j, maps, fields, margin, found[0])
+                    found_count = near_surface(position, shell, j, maps, fields, margin, found[0], 0)
                     for c in range(found_count):
                         k = found[0].rows[c]
                         if mark[k] == q or count == contact.row.shape[0]:

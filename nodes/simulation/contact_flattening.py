@@ -120,11 +120,10 @@ def _local(x, lin_inv, rot, bend, t, u):
 
 
 @njit(cache=True)
-def _inside(vertices, i, j, maps, fields, clearance, found):
-    """Shell vertices of element i closer to element j than ``clearance`` (inside: depth > 0), into ``found``:
-    their rows, world depth and j's outward unit normal there (j's φ on its local grid, scaled by
-    |∇ₓφ| = |(D·R)⁻ᵀ∇ᵤφ|). Returns how many."""
-    world, shell = vertices.world, vertices.shell
+def near_surface(points, shell, j, maps, fields, clearance, found, offset):
+    """Shell points (``shell`` marks them among ``points``) closer to element j's rest surface than ``clearance``
+    (inside: depth > 0), into ``found``: their rows plus ``offset``, world depth and j's outward unit normal there
+    (j's φ on its local grid, scaled by |∇ₓφ| = |(D·R)⁻ᵀ∇ᵤφ|). Returns how many."""
     rows, depth, normal = found.rows, found.depth, found.normal
     lin_inv, rot, bend, t, lo, hi = maps.lin_inv[j], maps.rot[j], maps.bend[j], maps.t[j], maps.lo[j], maps.hi[j]
     sj = maps.shape[j]
@@ -132,10 +131,10 @@ def _inside(vertices, i, j, maps, fields, clearance, found):
     count = 0
     u = np.empty(3)
     grid = fields.phi[sj, : dims[sj, 0], : dims[sj, 1], : dims[sj, 2]]
-    for k in range(vertices.start[i], vertices.start[i + 1]):
+    for k in range(points.shape[0]):
         if not shell[k]:
             continue
-        x = world[k]
+        x = points[k]
         if x[0] < lo[0] or x[1] < lo[1] or x[2] < lo[2] or x[0] > hi[0] or x[1] > hi[1] or x[2] > hi[2]:
             continue
         _local(x, lin_inv, rot, bend, t, u)
@@ -152,13 +151,20 @@ def _inside(vertices, i, j, maps, fields, clearance, found):
         norm = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         if not norm > 0.0 or -val / norm + clearance <= 0.0:
             continue
-        rows[count] = k
+        rows[count] = offset + k
         depth[count] = -val / norm
         normal[count, 0] = w0 / norm
         normal[count, 1] = w1 / norm
         normal[count, 2] = w2 / norm
         count += 1
     return count
+
+
+@njit(cache=True)
+def _inside(vertices, i, j, maps, fields, clearance, found):
+    """Shell vertices of element i closer to element j than ``clearance``: ``near_surface`` on i's rows."""
+    s, e = vertices.start[i], vertices.start[i + 1]
+    return near_surface(vertices.world[s:e], vertices.shell[s:e], j, maps, fields, clearance, found, s)
 
 
 @njit(cache=True)
