@@ -33,6 +33,7 @@ from .contact_flattening import (
     InsideVertices,
     _gather,
     _neighbour_lists,
+    lens_axis,
     near_surface,
     outer_vertices,
     shape_fields,
@@ -101,8 +102,8 @@ def _pair_planes(vertices, i, pairs, maps, fields, settings, found, out):
     the same plane from its side). Into ``out`` from row 0; returns how many."""
     world, vstart = vertices.world, vertices.start
     found_x, found_y = found
-    rows_x, depth_x, normal_x = found_x.rows, found_x.depth, found_x.normal
-    rows_y, depth_y, normal_y = found_y.rows, found_y.depth, found_y.normal
+    rows_x, depth_x = found_x.rows, found_x.depth
+    rows_y, depth_y = found_y.rows, found_y.depth
     own = world[vstart[i] : vstart[i + 1]]
     own_shell = vertices.shell[vstart[i] : vstart[i + 1]]
     clearance, share = settings.clearance, settings.share
@@ -115,17 +116,8 @@ def _pair_planes(vertices, i, pairs, maps, fields, settings, found, out):
             continue
         other = world[vstart[j] : vstart[j + 1]]
         cy = near_surface(other, vertices.shell[vstart[j] : vstart[j + 1]], i, maps, fields, clearance, found_y, 0)
-        for a in range(3):  # the lens' axis: depth-weighted outward normals of both sides
-            n[a] = 0.0
-            for k in range(cy):
-                n[a] += depth_y[k] * normal_y[k, a]
-            for k in range(cx):
-                n[a] -= depth_x[k] * normal_x[k, a]
-        norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
-        if not norm > 0.0:
+        if not lens_axis(found_x, cx, found_y, cy, n):
             continue
-        for a in range(3):
-            n[a] /= norm
         top, bottom = -np.inf, np.inf
         for k in range(cx):
             h = own[rows_x[k], 0] * n[0] + own[rows_x[k], 1] * n[1] + own[rows_x[k], 2] * n[2]

@@ -167,6 +167,25 @@ def _inside(vertices, i, j, maps, fields, clearance, found):
     return near_surface(vertices.world[s:e], vertices.shell[s:e], j, maps, fields, clearance, found, s)
 
 
+@njit(cache=True, inline="always")
+def lens_axis(found_x, cx, found_y, cy, n):
+    """The axis n (unit, into ``n``) of the lens two elements overlap in: the depth-weighted outward normals of
+    both sides' points inside the other (``near_surface``: ``cx`` of i's in j, ``cy`` of j's in i); False when
+    they cancel."""
+    for a in range(3):
+        n[a] = 0.0
+        for k in range(cy):
+            n[a] += found_y.depth[k] * found_y.normal[k, a]
+        for k in range(cx):
+            n[a] -= found_x.depth[k] * found_x.normal[k, a]
+    norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+    if not norm > 0.0:
+        return False
+    for a in range(3):
+        n[a] /= norm
+    return True
+
+
 @njit(cache=True)
 def neighbour_pushes(vertices, pairs, maps, fields, rings, clearance, share):
     """Per shell vertex of each of the first elements (rows of ``pairs``): its move onto the contact plane
@@ -186,8 +205,8 @@ def neighbour_pushes(vertices, pairs, maps, fields, rings, clearance, share):
     for i in range(pairs.start.shape[0] - 1):
         found_x = InsideVertices(np.empty(most, np.int64), np.empty(most), np.empty((most, 3)))
         found_y = InsideVertices(np.empty(most, np.int64), np.empty(most), np.empty((most, 3)))
-        rows_x, depth_x, normal_x = found_x.rows, found_x.depth, found_x.normal
-        rows_y, depth_y, normal_y = found_y.rows, found_y.depth, found_y.normal
+        rows_x, depth_x = found_x.rows, found_x.depth
+        rows_y, depth_y = found_y.rows, found_y.depth
         n = np.empty(3)
         for q in range(pairs.start[i], pairs.start[i + 1]):
             j = pairs.index[q]
@@ -195,17 +214,8 @@ def neighbour_pushes(vertices, pairs, maps, fields, rings, clearance, share):
             if cx == 0:
                 continue
             cy = _inside(vertices, j, i, maps, fields, clearance, found_y)
-            for a in range(3):  # the lens' axis: depth-weighted outward normals of both sides
-                n[a] = 0.0
-                for k in range(cy):
-                    n[a] += depth_y[k] * normal_y[k, a]
-                for k in range(cx):
-                    n[a] -= depth_x[k] * normal_x[k, a]
-            norm = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
-            if not norm > 0.0:
+            if not lens_axis(found_x, cx, found_y, cy, n):
                 continue
-            for a in range(3):
-                n[a] /= norm
             top = -np.inf  # a: how far i reaches along n (its vertices in j; without any, from j's in i and depths)
             bottom = np.inf  # b: how far j reaches back (its vertices in i; without any, from i's in j)
             for k in range(cx):
