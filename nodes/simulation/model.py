@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import bending, collider, shape_matching
+from . import bending, collider, glue, shape_matching
 from .settings import SolverSettings
 from .state import State, YolkState
 
@@ -83,6 +83,29 @@ class ColliderField:
 
 
 @dataclass(frozen=True, eq=False)
+class GlueRegions:
+    """The regions of the grains glued at the start of the run (``glue.glued_regions``)."""
+
+    region_start: np.ndarray  # (m + 1,) CSR of each region's links
+    link_grain: np.ndarray  # (L,)
+    link_own: np.ndarray  # (L,) bool: the region's own grain
+    link_start: np.ndarray  # (L + 1,) CSR of each link's memberships
+    member: np.ndarray  # (M,) particle of each membership
+    rest: np.ndarray  # (M, 3) its position at the start
+    pstart: np.ndarray  # (n + 1,) CSR of each particle's memberships
+    pslot: np.ndarray  # (M,)
+    floor_start: np.ndarray  # (n + 1,) CSR of each particle's pressed glued partners
+    floor_partner: np.ndarray
+    floor_depth: np.ndarray  # their overlap at the start (mm)
+
+    def match_args(self):
+        return self.region_start, self.link_own, self.link_start, self.member, self.rest
+
+    def floor_args(self):
+        return self.floor_start, self.floor_partner, self.floor_depth, self.region_start, self.link_grain
+
+
+@dataclass(frozen=True, eq=False)
 class Yolks:
     """Buoyant yolks (SPEC §1, ``buoyancy``): yolk k sits in element ``owner[k]``, free within ``room[k]``
     of the membrane centre ``centre[k]`` (element frame, relative to the cluster's centre of mass)."""
@@ -111,6 +134,7 @@ class Model:
     bend: BendTriples | None
     collider: ColliderField | None
     yolks: Yolks | None
+    glue: GlueRegions | None = None  # effect 'adhesion' with glue on (``SolverSettings.glue``)
 
     @property
     def elements(self) -> int:
@@ -136,6 +160,8 @@ class Model:
             pushed=np.zeros(n, np.bool_),
             wall_anchor=np.full((n, 3), np.nan),
             yolks=yolks,
+            glued=np.ones(len(self.glue.link_grain), np.bool_) if self.glue is not None else None,
+            glue_quats=np.tile([1.0, 0.0, 0.0, 0.0], (self.elements, 1)) if self.glue is not None else None,
         )
 
     def centres(self, x: np.ndarray) -> np.ndarray:
@@ -186,4 +212,8 @@ def build_model(
     field = ColliderField.from_grid(sdf) if sdf is not None and "collider" in s.effects else None
     if yolks is not None and not ("buoyancy" in s.effects and len(yolks.x0)):
         yolks = None
-    return Model(x, quats, r, w, elem, start, q_rest, n_moving, moments, quadratic, bend, field, yolks)
+    regions = None
+    if "adhesion" in s.effects and s.glue > 0:
+        found = glue.glued_regions(x, r, elem, start, n_moving, s.capture)
+        regions = GlueRegions(**found) if found is not None else None
+    return Model(x, quats, r, w, elem, start, q_rest, n_moving, moments, quadratic, bend, field, yolks, regions)

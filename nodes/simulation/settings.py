@@ -42,6 +42,10 @@ class SolverSettings:
     anchored_friction: bool = True
     capture: float = 0.2  # mm
     adhesion_compliance: float = 1e-3  # s²/g
+    glue: float = 0.0  # share of the way to the glued regions' goal per iteration (``glue``); 0 = no glue
+    # a glued grain further than this (mm) from its place in a neighbour's region tears off: one particle radius
+    # (0.2 r tore most of a glued onigiri's paste as it settled onto its plate, 1 r none; docs/validation.md)
+    glue_tear: float = 1.0
     damping: float = 0.0  # fraction of velocity removed per 1/60 s
     sleep_speed: float = 0.0  # mm/s
     # every this many frames one substep solves the asleep elements too (under gravity), so an
@@ -94,6 +98,7 @@ class XpbdParams:
     friction_model: str  # substep | anchored
     capture_radius: float  # particle radii
     clumping: float
+    glue: float
     sleep_speed: float  # mm/s
     shock_propagation: float
     speed_clamp: float  # radii per substep
@@ -132,6 +137,8 @@ def solver_settings(params: XpbdParams, effects, radius: float, water_content: f
         anchored_friction=p.friction_model == "anchored",
         capture=p.capture_radius * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
+        glue=p.glue,
+        glue_tear=radius,
         damping=p.damping,
         sleep_speed=p.sleep_speed,
         speed_clamp=p.speed_clamp,

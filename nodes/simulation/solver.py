@@ -25,6 +25,7 @@ from . import (
     collider,
     contact_constraints,
     friction,
+    glue,
     integrate,
     shape_matching,
     spatial_hash,
@@ -194,6 +195,8 @@ class XpbdSolver:
         self.clusters = ClusterBuffers.allocate(model)
         self.pairs = PairBuffers.allocate(model, settings)
         self.diagnostics = Diagnostics()
+        # the glued regions' goals per membership, NaN until matched (``glue``)
+        self.glue_goal = np.full((len(model.glue.member), 3), np.nan) if model.glue is not None else None
         self.x_mark = model.x0.copy()  # positions at the start of a frame's last solve (diagnostics)
         self.x_begin = model.x0.copy()  # positions at the start of the current solve
         self.solved = 0  # particles solved over the substeps of the current frame
@@ -316,6 +319,7 @@ class XpbdSolver:
                 0.0,
                 pairs.allowance,
             )
+            self._pressed(st)
         if clusters is not None:
             clusters.clear()
         quadratic = m.quadratic.args() if m.quadratic is not None else ()
@@ -325,10 +329,13 @@ class XpbdSolver:
             # iteration made them rigid as iterations grew, and at 32 × 8 they fought the contacts
             # and pumped energy into the pile (accuracy benchmark)
             self._adhesion(st)
+        first = True
         for _ in range(s.iterations):
             residual = 0.0
             if {"contact", "friction"} & s.effects:  # one sweep: friction on each pair after its contact
                 self._contacts(st, friction=True)
+            if m.glue is not None:  # glued grains keep their places, then each grain its shape
+                self._glue(st, tear=first)
             # the element's shape is restored after the contacts, the walls have the last word
             if m.moments is not None:
                 residual = d(
@@ -362,6 +369,7 @@ class XpbdSolver:
                         k.bend_alpha,
                     ),
                 )
+            first = False
             if m.collider is not None:
                 d(
                     "collider",
@@ -447,8 +455,10 @@ class XpbdSolver:
             allowance = contact_constraints.overlap_allowance
             pairs.allowance[:] = 0.0
             pairs.load[:] = 0.0
+            self._pressed(st)
             self._contacts(st, friction=self.settings.anchored_friction, wake_step=np.inf)
             d("contact", allowance, st.x, st.awake, m.r, *pairs.lists.rows(), 0.0, pairs.allowance)
+            self._pressed(st)
         if m.collider is not None:
             d(
                 "collider",
@@ -517,6 +527,39 @@ class XpbdSolver:
             out,
         )
         st.x, pairs.scratch = out, st.x
+
+    def _pressed(self, st: State) -> None:
+        """Glued grains' contacts tolerate the overlap the press left them (``glue.glued_allowance``)."""
+        m, lists = self.model, self.pairs.lists
+        if m.glue is not None:
+            self.dispatch(
+                "glue",
+                glue.glued_allowance,
+                m.elem,
+                *lists.rows(),
+                *m.glue.floor_args(),
+                st.glued,
+                self.pairs.allowance,
+            )
+
+    def _glue(self, st: State, tear: bool) -> None:
+        """Match the glued regions and pull each particle towards its regions' goals (``glue``); with
+        ``tear`` (once per substep) the links left further than ``glue_tear`` from their goals tear."""
+        m, g = self.model, self.model.glue
+        self.dispatch(
+            "glue",
+            glue.glue_match,
+            st.x,
+            m.w,
+            *g.match_args(),
+            st.glued,
+            st.glue_quats,
+            self.settings.rotation_iterations,
+            self.glue_goal,
+            tear,
+            self.settings.glue_tear,
+        )
+        self.dispatch("glue", glue.glue_pull, st.x, st.awake, g.pstart, g.pslot, self.glue_goal, self.settings.glue)
 
     # -- one frame --------------------------------------------------------------------------
     def frame(self, state: State) -> None:

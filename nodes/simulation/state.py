@@ -40,6 +40,8 @@ class State:
     pushed: np.ndarray  # (n,) bool
     wall_anchor: np.ndarray  # (n, 3) where each particle began sticking to a wall, NaN = not (``friction``)
     yolks: YolkState | None = None
+    glued: np.ndarray | None = None  # (L,) bool: which glue links still hold (``glue``); None without glue
+    glue_quats: np.ndarray | None = None  # (m, 4) warm-started rotations of the glued regions
     time: float = 0.0
     substeps_done: int = 0
 

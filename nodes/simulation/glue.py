@@ -1,0 +1,221 @@
+"""Glued grains: pressed sticky rice that holds its shape — SPEC §3 (clumping) and §5 (shape matching), issue 24.
+
+``adhesion`` pulls near-touching particles together along their normal only, so it holds no shear: a
+pressed onigiri set on its plate under gravity slid apart like a loose heap (63–78 % of its height kept).
+Cooked rice pressed by hand is glued by its starch paste at every contact. Glued grains here are
+lattice shape matching (Rivers & James 2007; Müller et al. 2005 §4.4 clusters): at the start of a run,
+grains with particles closer than the capture radius (gap ≤ capture) are glued, and every grain gets a
+region — its own particles and those of the grains glued to it — whose rest shape is where they stand
+then. Each iteration every region is matched rigidly (best rotation of its current against its rest
+shape, ``shape_matching.extract_rotation``) and each particle moves ``stiffness`` of the way to the mean
+of its regions' goals. A region spans a grain's neighbourhood, so the weight of the pile reaches the
+plate within the iterations a substep has (glued distance constraints, Jacobi-averaged over ≈ 13 bonds
+per particle, carried it one bond per iteration: the draft onigiri kept 86 % of its height at 2
+iterations and 99 % only at 8). A neighbour grain torn further than ``SolverSettings.glue_tear`` (one
+particle radius) from its place in the region (mean over its particles) leaves that region for good: the
+paste has torn. Contacts between glued grains tolerate the overlap the press left them
+(``glued_allowance``). Iterations still bound the stiffness: the full-size onigiri keeps 98 % of its
+height at 30 substeps and 94–96 % at 10–20 (docs/validation.md).
+"""
+
+import numpy as np
+from numba import njit, prange
+from scipy.spatial import cKDTree
+
+from .shape_matching import extract_rotation
+
+
+def glue_bonds(x, r, elem, n_moving: int, capture: float) -> np.ndarray:
+    """Pairs (b, 2), i < j, of particles of different moving elements with gap ≤ ``capture`` at ``x``,
+    in a deterministic order."""
+    if n_moving < 2:
+        return np.zeros((0, 2), np.int64)
+    xm, rm = x[:n_moving], r[:n_moving]
+    pairs = cKDTree(xm).query_pairs(2.0 * float(rm.max()) + capture, output_type="ndarray").astype(np.int64)
+    pairs = pairs[elem[pairs[:, 0]] != elem[pairs[:, 1]]]
+    gap = np.linalg.norm(xm[pairs[:, 0]] - xm[pairs[:, 1]], axis=1) - rm[pairs[:, 0]] - rm[pairs[:, 1]]
+    pairs = pairs[gap <= capture]
+    return np.ascontiguousarray(pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))])
+
+
+def glued_regions(x, r, elem, start, n_moving: int, capture: float):
+    """The regions of the grains glued at positions ``x`` (module docstring), or None when no two grains
+    touch. Arrays: ``region_start`` (m + 1) CSR of the links of each region; links (a grain within a
+    region) with ``link_grain``, ``link_own`` (the region's own grain: never torn) and ``link_start``, the
+    CSR of their memberships; memberships ``member`` (particle), ``rest`` (its position at the start);
+    ``pstart``, ``pslot``: the memberships of each particle, for the gather; ``floor_start``,
+    ``floor_partner``, ``floor_depth``: per particle, the glued partners it overlaps and by how much
+    (``glued_allowance``)."""
+    pairs = glue_bonds(x, r, elem, n_moving, capture)
+    if not len(pairs):
+        return None
+    m = len(start) - 1
+    grains = np.unique(np.sort(elem[pairs], axis=1), axis=0)
+    both = np.concatenate([grains, grains[:, ::-1]])
+    both = both[np.lexsort((both[:, 1], both[:, 0]))]
+    count = np.bincount(both[:, 0], minlength=m)
+    nb_start = np.concatenate([[0], np.cumsum(count)])
+    region_start = np.zeros(m + 1, np.int64)
+    link_grain, link_own = [], []
+    for g in range(m):
+        link_grain.append(g)
+        link_own.append(True)
+        link_grain.extend(both[nb_start[g] : nb_start[g + 1], 1])
+        link_own.extend([False] * int(count[g]))
+        region_start[g + 1] = len(link_grain)
+    link_grain = np.asarray(link_grain, np.int64)
+    sizes = np.diff(start)[link_grain]
+    link_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    member = np.concatenate([np.arange(start[g], start[g + 1]) for g in link_grain]).astype(np.int64)
+    pslot = np.argsort(member, kind="stable").astype(np.int64)
+    pstart = np.zeros(len(x) + 1, np.int64)
+    np.cumsum(np.bincount(member, minlength=len(x)), out=pstart[1:])
+    ends = np.concatenate([pairs, pairs[:, ::-1]])
+    depth = np.maximum(0.0, r[ends[:, 0]] + r[ends[:, 1]] - np.linalg.norm(x[ends[:, 0]] - x[ends[:, 1]], axis=1))
+    pressed = depth > 0.0
+    ends, depth = ends[pressed], depth[pressed]
+    order = np.lexsort((ends[:, 1], ends[:, 0]))
+    floor_start = np.zeros(len(x) + 1, np.int64)
+    np.cumsum(np.bincount(ends[:, 0], minlength=len(x)), out=floor_start[1:])
+    return {
+        "floor_start": floor_start,
+        "floor_partner": np.ascontiguousarray(ends[order, 1]),
+        "floor_depth": np.ascontiguousarray(depth[order]),
+        "region_start": region_start,
+        "link_grain": link_grain,
+        "link_own": np.asarray(link_own, np.bool_),
+        "link_start": link_start,
+        "member": member,
+        "rest": np.ascontiguousarray(x[member], np.float64),
+        "pstart": pstart,
+        "pslot": pslot,
+    }
+
+
+@njit(cache=True, parallel=True)
+def glue_match(x, w, region_start, link_own, link_start, member, rest, intact, quats, rot_iters, goal, torn_by, limit):
+    """Match every region with a grain still glued to it rigidly: ``goal`` (M, 3) of each membership
+    (NaN where its link is torn or its region has no glued neighbour left). With ``torn_by`` set, then
+    tear every link whose particles stand, on average, more than ``limit`` (mm) from their goals: the
+    region's shape, not its motion, decides (goals of the last iteration against predicted positions
+    tore a falling onigiri apart)."""
+    for reg in prange(len(region_start) - 1):
+        a0 = region_start[reg]
+        a1 = region_start[reg + 1]
+        glued = 0
+        for link in range(a0, a1):
+            if intact[link] and not link_own[link]:
+                glued += 1
+        if glued == 0:
+            for s in range(link_start[a0], link_start[a1]):
+                goal[s, 0] = np.nan
+            continue
+        mass = 0.0
+        c = np.zeros(3)
+        c0 = np.zeros(3)
+        for link in range(a0, a1):
+            if not intact[link]:
+                continue
+            for s in range(link_start[link], link_start[link + 1]):
+                i = member[s]
+                mi = 1.0 / w[i]
+                mass += mi
+                for k in range(3):
+                    c[k] += mi * x[i, k]
+                    c0[k] += mi * rest[s, k]
+        c /= mass
+        c0 /= mass
+        a = np.zeros((3, 3))
+        for link in range(a0, a1):
+            if not intact[link]:
+                continue
+            for s in range(link_start[link], link_start[link + 1]):
+                i = member[s]
+                mi = 1.0 / w[i]
+                for p in range(3):
+                    for q in range(3):
+                        a[p, q] += mi * (x[i, p] - c[p]) * (rest[s, q] - c0[q])
+        rot = np.empty((3, 3))
+        extract_rotation(a, quats[reg], rot_iters, rot)
+        for link in range(a0, a1):
+            for s in range(link_start[link], link_start[link + 1]):
+                if not intact[link]:
+                    goal[s, 0] = np.nan
+                    continue
+                for p in range(3):
+                    goal[s, p] = (
+                        c[p]
+                        + rot[p, 0] * (rest[s, 0] - c0[0])
+                        + rot[p, 1] * (rest[s, 1] - c0[1])
+                        + rot[p, 2] * (rest[s, 2] - c0[2])
+                    )
+        if torn_by:  # a neighbour further than the limit from its place in the fitted region tears off
+            for link in range(a0, a1):
+                if link_own[link] or not intact[link]:
+                    continue
+                dev = 0.0
+                for s in range(link_start[link], link_start[link + 1]):
+                    i = member[s]
+                    dx = goal[s, 0] - x[i, 0]
+                    dy = goal[s, 1] - x[i, 1]
+                    dz = goal[s, 2] - x[i, 2]
+                    dev += np.sqrt(dx * dx + dy * dy + dz * dz)
+                if dev > limit * (link_start[link + 1] - link_start[link]):
+                    intact[link] = False
+                    for s in range(link_start[link], link_start[link + 1]):
+                        goal[s, 0] = np.nan
+
+
+@njit(cache=True, parallel=True)
+def glue_pull(x, awake, pstart, pslot, goal, stiffness):
+    """Move each awake particle ``stiffness`` of the way to the mean of its regions' goals."""
+    for i in prange(len(pstart) - 1):
+        if not awake[i]:
+            continue
+        gx = 0.0
+        gy = 0.0
+        gz = 0.0
+        count = 0
+        for a in range(pstart[i], pstart[i + 1]):
+            s = pslot[a]
+            if goal[s, 0] == goal[s, 0]:
+                gx += goal[s, 0]
+                gy += goal[s, 1]
+                gz += goal[s, 2]
+                count += 1
+        if count > 0:
+            x[i, 0] += stiffness * (gx / count - x[i, 0])
+            x[i, 1] += stiffness * (gy / count - x[i, 1])
+            x[i, 2] += stiffness * (gz / count - x[i, 2])
+
+
+@njit(cache=True, inline="always")
+def _glued(a, b, region_start, link_grain, glued):
+    """Whether grain b is still glued to grain a (a's region holds b's link intact)."""
+    for link in range(region_start[a] + 1, region_start[a + 1]):  # the first link is a's own
+        if link_grain[link] == b:
+            return glued[link]
+    return False
+
+
+@njit(cache=True, parallel=True)
+def glued_allowance(
+    elem, nbr_start, nbr, half, floor_start, floor_partner, floor_depth, region_start, link_grain, glued, allowance
+):
+    """Raise each listed pair's tolerated overlap (``contact_constraints``' allowance) to the overlap the
+    press left it with while its grains stay glued: the glue keeps the pressed shape, so contacts that
+    pushed those overlaps apart only fought it (with the contacts' mass scaling by height that fight
+    lifted a glued onigiri off its plate at 17 mm/s); a deeper overlap is still resolved."""
+    m = len(region_start) - 1
+    for i in prange(len(nbr_start) - 1):
+        if floor_start[i] == floor_start[i + 1] or elem[i] >= m:
+            continue
+        for a in range(nbr_start[i], nbr_start[i + 1]):
+            j = nbr[a]
+            if (not half and j < i) or elem[j] >= m:
+                continue
+            for f in range(floor_start[i], floor_start[i + 1]):
+                if floor_partner[f] == j:
+                    if floor_depth[f] > allowance[a] and _glued(elem[i], elem[j], region_start, link_grain, glued):
+                        allowance[a] = floor_depth[f]
+                    break

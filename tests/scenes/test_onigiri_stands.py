@@ -1,0 +1,48 @@
+"""The onigiri recipe sets its pressed grains on the plate under gravity (issue 24): glued, it keeps its height
+and rests on the plate (issue 26: the lowest grain within 0.5 mm of it), measured on the element meshes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from recipe_sizes import quick_sizes
+
+from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def mesh_extent(aggregate) -> tuple[float, float]:
+    """Lowest and highest z of the element meshes."""
+    z = np.concatenate([aggregate.element_mesh(i).vertices[:, 2] for i in range(len(aggregate.placement))])
+    return float(z.min()), float(z.max())
+
+
+def rested(tmp_path, *overrides):
+    recipe = load_recipe(
+        REPO / "graphs" / "onigiri.yaml", default_registry(), quick_sizes()["onigiri"] + list(overrides)
+    )
+    result = run_recipe(
+        recipe, cache=Cache(tmp_path / "cache"), outputs=["press.aggregate", "rest.aggregate", "plate.mesh"]
+    )
+    pressed, rest = mesh_extent(result.output("press.aggregate")), mesh_extent(result.output("rest.aggregate"))
+    plate_top = float(result.output("plate.mesh").vertices[:, 2].max())
+    return (rest[1] - rest[0]) / (pressed[1] - pressed[0]), rest[0] - plate_top
+
+
+@pytest.fixture(scope="module")
+def glued(tmp_path_factory):
+    return rested(tmp_path_factory.mktemp("glued"))
+
+
+def test_the_glued_onigiri_keeps_its_height_on_its_plate(glued):
+    kept, gap = glued
+    assert kept >= 0.95, kept
+    assert abs(gap) <= 0.5, gap  # its lowest grain rests on the plate: neither floating nor sunk in
+
+
+def test_without_glue_the_same_onigiri_slumps(tmp_path):
+    kept, _ = rested(tmp_path, "rest.glue=0")
+    assert kept < 0.9, kept
