@@ -61,3 +61,21 @@ def test_rice_heap_rests_at_its_angle_of_repose(validation):
     assert abs(late[1] - early[1]) <= 3.0
     ((_, flat),), _ = validation.rice_heap(300, True, frames=(150,), friction=0.0)
     assert flat < 5.0
+
+
+def test_janssen_fit_recovers_the_saturation(validation):
+    """The fit: points on M_sat(1 − e^(−M/M_sat)) with M_sat = 12 g give back 12 g."""
+    m = np.array([4.0, 8.0, 16.0, 24.0])
+    assert abs(validation.janssen_fit(m, 12.0 * (1 - np.exp(-m / 12.0))) - 12.0) < 1e-3
+
+
+def test_silo_walls_carry_part_of_the_weight(validation):
+    """The Janssen effect (quick case): 600 spheres (15 g) in a 12 mm silo with walls at μ 0.6: the floor carries
+    9.96 g (measured 0.66 M) and the walls' friction the rest; frictionless, the floor carries it all (0.999 M).
+    Fails on a solver that ignores friction (ratio 1) or a gauge that misses forces (sum ≠ M)."""
+    deep = validation.silo_fill(600, 0.6)
+    assert 0.5 < deep["apparent"] / deep["M"] < 0.8
+    assert abs(deep["apparent"] + deep["walls"] - deep["M"]) < 0.03 * deep["M"]
+    smooth = validation.silo_fill(300, 0.0)
+    assert abs(smooth["apparent"] / smooth["M"] - 1.0) < 0.02
+    assert smooth["walls"] == 0.0
