@@ -379,6 +379,84 @@ def janssen_fit(filled, apparent) -> float:
     return float(sat)
 
 
+# -- packing of ellipsoids -------------------------------------------------------------------------------
+def ellipsoid_fraction(centres, turns, axes, lo, hi, pitch) -> float:
+    """Share of the box [lo, hi] inside ellipsoids of semi-axes ``axes`` centred at ``centres`` with rotations
+    ``turns`` (body to world), counted on a grid of ``pitch``: a point is inside when one of the ellipsoids of its
+    12 nearest centres holds it."""
+    from scipy.spatial import cKDTree
+
+    n = len(centres)
+    grid = np.stack(np.meshgrid(*[np.arange(a, b, pitch) for a, b in zip(lo, hi)], indexing="ij"), -1).reshape(-1, 3)
+    tree = cKDTree(centres)
+    inside = np.zeros(len(grid), bool)
+    for a in range(0, len(grid), 20000):
+        part = grid[a : a + 20000]
+        _, near = tree.query(part, k=min(12, n), distance_upper_bound=float(np.max(axes)))
+        near = near.reshape(len(part), -1)
+        found = near < n
+        near = np.where(found, near, 0)
+        local = np.einsum("gkj,gkji->gki", part[:, None, :] - centres[near], turns[near])
+        inside[a : a + 20000] = (found & (np.sum((local / axes) ** 2, axis=-1) <= 1.0)).any(axis=1)
+    return float(inside.mean())
+
+
+def ellipsoid_packing(alpha, n, size=1.5, particles=8, frames=150, seed=0):
+    """Pour n ellipsoids of semi-axes size·(α, 1, 1/α) (equal volumes; Donev et al. 2004's a:b:c family), each a
+    cluster of ``particles`` (``clusters.element_cluster``), from a loose lattice (spacing 2.2 a, random
+    orientations) into an open box 16·size wide, frictionless (as Donev's jammed packings), and let them settle
+    for ``frames``. φ = the share of the box's core (4·size from the walls, floor and the bed's top) inside the
+    ellipsoids themselves at the clusters' poses, on a 0.1·size sample grid. Returns (φ, seconds)."""
+    from scipy.spatial.transform import Rotation
+
+    from nodes.simulation.clusters import element_cluster, matrix_to_quat
+    from nodes.simulation.collider import signed_distance_grid
+    from nodes.simulation.scenes import grain_mesh, open_box, solver_run
+    from nodes.simulation.settings import SolverSettings
+
+    axes = size * np.array([alpha, 1.0, 1.0 / alpha])
+    cluster = element_cluster(grain_mesh(*(2 * axes)), particles, quadratic=False)
+    c0 = cluster.centres.mean(axis=0)
+    side = 16.0 * size
+    spacing = 2.2 * axes.max()
+    per = max(1, int((side - 0.2 * size) // spacing))
+    k = np.arange(n)
+    origins = np.stack([k % per, (k // per) % per, k // (per * per)], axis=1) * spacing + 0.5 * spacing
+    origins[:, :2] += 0.5 * (side - per * spacing)
+    turns = Rotation.random(n, random_state=seed).as_matrix()
+    m = len(cluster.radii)
+    x = np.concatenate([cluster.centres @ t.T + o for t, o in zip(turns, origins)])
+    top = float(x[:, 2].max()) + 2 * axes.max()
+    settings = SolverSettings(
+        EFFECTS, mu_s=0.0, mu_k=0.0, compliance=1 / (1000 * 2000.0), damping=0.1, shock_propagation=4.0
+    )
+    run = solver_run(
+        x,
+        np.tile(cluster.radii, n),
+        np.full(n * m, m / (GRAIN_MG * 1e-3)),
+        np.arange(n + 1) * m,
+        np.tile(cluster.centres - c0, (n, 1)),
+        matrix_to_quat(turns),
+        settings,
+        sdf=signed_distance_grid(
+            open_box(side, wall=2.0, height=top), np.array([-3.0, -3, -3]), np.array([side + 3, side + 3, top]), 0.4
+        ),
+    )
+    start = time.perf_counter()
+    for _ in range(frames):
+        run.frame()
+    seconds = time.perf_counter() - start
+    turns = run.state.rotations()
+    centres = run.model.centres(run.state.x) - np.einsum("nij,j->ni", turns, c0)  # each ellipsoid's own centre
+    bed = np.percentile(centres[:, 2], 98)
+    margin = 4 * size
+    lo = np.array([margin, margin, margin])
+    hi = np.array([side - margin, side - margin, bed - margin])
+    if np.any(hi <= lo):
+        raise ValueError("ellipsoid packing: the bed is too shallow for a core 4·size from every boundary")
+    return ellipsoid_fraction(centres, turns, axes, lo, hi, 0.1 * size), seconds
+
+
 # -- a squeezed grain ------------------------------------------------------------------------------------
 GRAIN_MG = 25.0  # mg, the xpbd node's element mass
 

@@ -104,3 +104,15 @@ def test_elastic_grain_strains_linearly_and_does_not_tear_in_compression(validat
     crushed = validation.squeeze_body(0.8)
     assert crushed["strain"] > 0.9
     assert crushed["tears"] == 0 and crushed["stretch"] < 3.0
+
+
+def test_ellipsoid_fraction_reads_a_lattice(validation):
+    """The packing metric: ellipsoids 1.25 × 1 × 0.8 turned so that body x, y, z lie along world y, z, x, on the
+    lattice their turned boxes tile (1.6 × 2.5 × 2), fill π/6 of any box, as spheres in a cubic lattice do."""
+    axes = np.array([1.25, 1.0, 0.8])
+    turn = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # columns: where body x, y, z point
+    k = np.stack(np.meshgrid(np.arange(10), np.arange(8), np.arange(8), indexing="ij"), -1).reshape(-1, 3)
+    centres = k * [1.6, 2.5, 2.0]
+    turns = np.tile(turn, (len(centres), 1, 1))
+    phi = validation.ellipsoid_fraction(centres, turns, axes, [1.6, 2.5, 2.0], [11.2, 12.5, 10.0], 0.1)
+    assert abs(phi - np.pi / 6) < 0.01
