@@ -242,50 +242,49 @@ def silo_field(diameter: float, top: float, pitch: float):
     )
 
 
-class WallGauge:
+def wall_gauge(particles: int, follow: bool = False):
     """A ``KernelDispatch`` that also sums each particle's position corrections by the collider (the wall and
     floor projections of pre-stabilisation and of every iteration) while ``on``: a correction Δx of a particle
     of mass m is an impulse m·Δx/h, so over k substeps the collider's force on it is m·ΣΔx/(k·h²) (SPEC §3:
-    XPBD forces are corrections over h²). Built on the solver's public dispatch hook, not a solver change."""
+    XPBD forces are corrections over h²). Built on the solver's public dispatch hook, not a solver change.
+    ``follow``: see ``_follow``."""
+    from nodes.simulation.solver import KernelDispatch
 
-    def __new__(cls, *args, **kwargs):
-        from nodes.simulation.solver import KernelDispatch
+    class WallGauge(KernelDispatch):
+        def __init__(self, particles: int, follow: bool = False):
+            super().__init__()
+            self.follow = follow
+            self.mark = None
+            self.on = False
+            self.sum = np.zeros((particles, 3))  # every collider correction
+            self.solve = np.zeros((particles, 3))  # those of the iterations (pre-stabilisation's: frictionless)
 
-        class _Gauge(KernelDispatch):
-            def __init__(self, particles: int, follow: bool = False):
-                super().__init__()
-                self.follow = follow
+        def __call__(self, family, kernel, *args):
+            if self.follow:
+                self._follow(family, args)
+            if family != "collider" or not self.on:
+                return super().__call__(family, kernel, *args)
+            x = args[0]
+            before = x.copy()
+            out = super().__call__(family, kernel, *args)
+            self.sum += x - before
+            if args[1] is not x:  # pre-stabilisation projects with x_prev = x and no friction
+                self.solve += x - before
+            return out
+
+        def _follow(self, family, args):
+            """Shift the wall anchors by pre-stabilisation's moves (its contact sweep, wake_step inf, to its
+            wall projection): what anchors would do if they followed those moves, a solver change tried
+            from outside."""
+            if isinstance(family, tuple) and np.isinf(args[9].wake_step):
+                self.mark = args[0].copy()
+            elif family == "collider" and args[1] is args[0] and self.mark is not None:
+                anchor = args[2]
+                held = ~np.isnan(anchor[:, 0])
+                anchor[held] += (args[0] - self.mark)[held]  # before the wall's push: the sweep's moves
                 self.mark = None
-                self.on = False
-                self.sum = np.zeros((particles, 3))  # every collider correction
-                self.solve = np.zeros((particles, 3))  # those of the iterations (pre-stabilisation's: frictionless)
 
-            def __call__(self, family, kernel, *args):
-                if self.follow:
-                    self._follow(family, args)
-                if family != "collider" or not self.on:
-                    return super().__call__(family, kernel, *args)
-                x = args[0]
-                before = x.copy()
-                out = super().__call__(family, kernel, *args)
-                self.sum += x - before
-                if args[1] is not x:  # pre-stabilisation projects with x_prev = x and no friction
-                    self.solve += x - before
-                return out
-
-            def _follow(self, family, args):
-                """Shift the wall anchors by pre-stabilisation's moves (its contact sweep, wake_step inf, to its
-                wall projection): what anchors would do if they followed those moves, a solver change tried
-                from outside."""
-                if isinstance(family, tuple) and np.isinf(args[9].wake_step):
-                    self.mark = args[0].copy()
-                elif family == "collider" and args[1] is args[0] and self.mark is not None:
-                    anchor = args[2]
-                    held = ~np.isnan(anchor[:, 0])
-                    anchor[held] += (args[0] - self.mark)[held]  # before the wall's push: the sweep's moves
-                    self.mark = None
-
-        return _Gauge(*args, **kwargs)
+    return WallGauge(particles, follow)
 
 
 def silo_fill(
@@ -303,11 +302,11 @@ def silo_fill(
 ):
     """Pour n spheres (r = 1 mm, 25 mg) into a silo of inner ``diameter`` from a loose lattice (spacing 2.2 r,
     alternate layers offset, ±0.2 r jitter) at μs = ``mu`` (walls and grains alike), μk = 0.7 μs, and let them
-    settle for ``frames``; over the last ``window`` frames the gauge (``WallGauge``) splits the collider's
+    settle for ``frames``; over the last ``window`` frames the gauge (``wall_gauge``) splits the collider's
     vertical force into the floor's (centres below 1.5 r) and the walls' (friction: the walls are vertical).
     Returns a dict: filled mass M, apparent mass at the base (floor force / g) and the walls' share (g), the
     walls' normal force (g-force), bed height H (mm, 98th percentile of the centres + r), seconds. ``follow``:
-    the wall anchors follow pre-stabilisation's moves (``WallGauge``), a solver change tried from outside."""
+    the wall anchors follow pre-stabilisation's moves (``wall_gauge``), a solver change tried from outside."""
     from nodes.simulation.scenes import solver_run
     from nodes.simulation.settings import SolverSettings
 
@@ -337,7 +336,7 @@ def silo_fill(
         shock_propagation=shock,
         anchored_friction=anchored,
     )
-    gauge = WallGauge(n, follow)
+    gauge = wall_gauge(n, follow)
     run = solver_run(
         x,
         np.full(n, radius),
@@ -1094,7 +1093,7 @@ DIAGNOSIS = [
     "",
     "## What the Janssen case says about the solver's forces",
     "",
-    "The gauge reads the collider's corrections through the solver's dispatch hook (`WallGauge`): a correction Δx of "
+    "The gauge reads the collider's corrections through the solver's dispatch hook (`wall_gauge`): a correction Δx of "
     "a particle of mass m over k substeps is a force m·ΣΔx/(k·h²). Momentum balance holds only where the pair "
     "corrections conserve momentum: with frictionless walls the floor carries 0.999 M without shock propagation and "
     "0.13 M with the default 4 (mass scaling moves the upper particle more, by design), so forces inside a bed are "
