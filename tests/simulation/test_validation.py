@@ -61,3 +61,70 @@ def test_rice_heap_rests_at_its_angle_of_repose(validation):
     assert abs(late[1] - early[1]) <= 3.0
     ((_, flat),), _ = validation.rice_heap(300, True, frames=(150,), friction=0.0)
     assert flat < 5.0
+
+
+def test_janssen_fit_recovers_the_saturation(validation):
+    """The fit: points on M_sat(1 − e^(−M/M_sat)) with M_sat = 12 g give back 12 g."""
+    m = np.array([4.0, 8.0, 16.0, 24.0])
+    assert abs(validation.janssen_fit(m, 12.0 * (1 - np.exp(-m / 12.0))) - 12.0) < 1e-3
+
+
+def test_silo_walls_carry_part_of_the_weight(validation):
+    """The Janssen effect (quick case): 600 spheres (15 g) in a 12 mm silo with walls at μ 0.6: the floor carries
+    9.96 g (measured 0.66 M) and the walls' friction the rest; frictionless, the floor carries it all (0.999 M).
+    Fails on a solver that ignores friction (ratio 1) or a gauge that misses forces (sum ≠ M)."""
+    deep = validation.silo_fill(600, 0.6)
+    assert 0.5 < deep["apparent"] / deep["M"] < 0.8
+    assert abs(deep["apparent"] + deep["walls"] - deep["M"]) < 0.03 * deep["M"]
+    smooth = validation.silo_fill(300, 0.0)
+    assert abs(smooth["apparent"] / smooth["M"] - 1.0) < 0.02
+    assert smooth["walls"] == 0.0
+
+
+def test_xpbd_grain_is_rigid_across_its_thickness(validation):
+    """The squeezed grain, (a) (quick case): three library grains under a plate; 0.2 N each strains them 1.5 % (the
+    contacts' overlap; Tomita: 25 %), 1 N 4.3 %: 8 rigid spheres in one plane cannot get thinner. Fails if the
+    load is lost (no strain at 1 N) or the grains give way like cooked rice."""
+    rest = validation.squeeze_xpbd(0.001)
+    assert 0.7 * rest["thickness"] < rest["gap"] <= rest["thickness"]  # the plate rests on the grains
+    light = 1 - validation.squeeze_xpbd(0.2)["gap"] / rest["gap"]
+    heavy = 1 - validation.squeeze_xpbd(1.0)["gap"] / rest["gap"]
+    assert -0.01 < light < 0.05
+    assert 0.02 < heavy < 0.08
+
+
+def test_elastic_grain_strains_linearly_and_does_not_tear_in_compression(validation):
+    """The squeezed grain, (b): the elastic body at the fitted stiffness strains 25 % at 0.2 N (measured 25.1 %) and
+    12.5 % at 0.1 N (linear), 50 % at 0.4 N, and never tears under compression (longest edge 2.08× at 0.8 N, the
+    vertex rule needs 3×)."""
+    full = validation.squeeze_body(0.2)
+    half = validation.squeeze_body(0.1)
+    assert 0.22 < full["strain"] < 0.28
+    assert 0.45 < half["strain"] / full["strain"] < 0.55
+    crushed = validation.squeeze_body(0.8)
+    assert crushed["strain"] > 0.9
+    assert crushed["tears"] == 0 and crushed["stretch"] < 3.0
+
+
+def test_ellipsoid_fraction_reads_a_lattice(validation):
+    """The packing metric: ellipsoids 1.25 × 1 × 0.8 turned so that body x, y, z lie along world y, z, x, on the
+    lattice their turned boxes tile (1.6 × 2.5 × 2), fill π/6 of any box, as spheres in a cubic lattice do."""
+    axes = np.array([1.25, 1.0, 0.8])
+    turn = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # columns: where body x, y, z point
+    k = np.stack(np.meshgrid(np.arange(10), np.arange(8), np.arange(8), indexing="ij"), -1).reshape(-1, 3)
+    centres = k * [1.6, 2.5, 2.0]
+    turns = np.tile(turn, (len(centres), 1, 1))
+    phi = validation.ellipsoid_fraction(centres, turns, axes, [1.6, 2.5, 2.0], [11.2, 12.5, 10.0], 0.1)
+    assert abs(phi - np.pi / 6) < 0.01
+
+
+@pytest.mark.slow
+def test_elongated_clusters_pack_denser_and_their_ellipsoids_overlap(validation):
+    """Ellipsoid packing (``--ellipsoids`` quick case, ≈ 35 s): the particles of 1.25:1:0.8 grains pack denser than
+    those of round ones (measured 0.791 against 0.715; Donev et al. 2004: 0.735 against 0.64), and the drawn
+    ellipsoids, which their 8 particles fill to 79 %, read a φ no hard packing reaches (0.919)."""
+    round_drawn, round_solid, _ = validation.ellipsoid_packing(1.0, 506)
+    long_drawn, long_solid, _ = validation.ellipsoid_packing(1.25, 608)
+    assert 0.69 < round_solid < 0.74 and 0.76 < long_solid < 0.82
+    assert long_solid - round_solid > 0.04
+    assert long_drawn > 0.88 and round_drawn > round_solid
