@@ -20,11 +20,11 @@ from .checkpoint import Checkpoint
 from .compile_progress import CompileWatch
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
-from .output_files import MANIFEST, write_manifest, write_output
+from .output_files import MANIFEST, current_outputs, write_manifest, write_output
 from .plan import Instance, Plan, RecipeRef, plan_jobs
 from .recipe import Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
-from .rerun_log import NodeCapture, RunRecording, log_value
+from .rerun_log import NodeCapture, RunRecording, dispatch_digest, log_value, logger_digest, partial_path
 
 
 @dataclass
@@ -37,6 +37,7 @@ class RunResult:
     records: list[NodeRecord]
     files: list[Path] = field(default_factory=list)
     rrd: Path | None = None
+    executor: Executor | None = field(default=None, repr=False)  # loads what a run with current outputs skipped
 
     def output(self, ref: str) -> Any:
         """The value of ``node.port`` (a list, one per variant, for a variant family)."""
@@ -44,8 +45,13 @@ class RunResult:
         entry = self.recipe.nodes[node_id]
         port = port or next(iter(entry.spec.outputs))
         if entry.family is None:
-            return self.values[Instance(node_id)][port]
-        return [self.values[Instance(node_id, v)][port] for v in range(entry.family)]
+            return self._value(Instance(node_id))[port]
+        return [self._value(Instance(node_id, v))[port] for v in range(entry.family)]
+
+    def _value(self, inst: Instance) -> dict[str, Any]:
+        if inst not in self.values and self.executor is not None:
+            return self.executor.materialise(inst)
+        return self.values[inst]
 
     def status(self) -> dict[str, str]:
         return {r.node: r.status for r in self.records}
@@ -108,6 +114,48 @@ class Executor:
                 if inst in self.status:
                     self.reporter.record(self.status[inst])
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
+
+    def reuse(self, outputs: list[Wire], directory: Path, rrd: Path | None, key: str) -> RunResult | None:
+        """The run's result without loading or writing anything, when every instance the outputs need is
+        cached and the files (and recording) a run with the same ``output_key`` wrote are still there as it
+        left them (``output_files.current_outputs``); None otherwise. Values load on demand (``output``)."""
+        order = self.plan({w.node for w in outputs})
+        keys = {self.keys[inst] for inst in order}
+        if self.cache is None or not all(self.cache.has(k) for k in keys):
+            return None
+        files = current_outputs(directory, key, rrd)
+        if files is None:
+            return None
+        for k in keys:
+            self.cache.touch(k)  # used by this run: the last to go when the cache is trimmed
+        if rrd is not None:  # what an interrupted run left beside the recording: this complete run ends it
+            partial_path(rrd).unlink(missing_ok=True)
+        records = [NodeRecord(i.label, self.recipe.nodes[i.node].spec.type_name, "cached") for i in order]
+        with self.reporter.task(self.recipe.name, len(order)) as tick:
+            for record in records:
+                tick()
+                self.reporter.record(record)
+        return RunResult(self.recipe, dict(self.keys), self.values, records, files, rrd, self)
+
+    def output_key(self, outputs: list[Wire], rrd: Path | None) -> str:
+        """What the files and recording of a run depend on: the recipe, the requested outputs, the cache
+        key of every instance they need, the engine's code, the output writers' and (with a recording)
+        the Rerun loggers' code. Equal keys: equal bytes, so current files need not be written again."""
+        import hashlib
+        import json
+
+        from .code_digest import module_digest
+
+        order = self.plan({w.node for w in outputs})
+        payload = {
+            "recipe": self.recipe.digest(),
+            "outputs": [str(w) for w in outputs],
+            "instances": [self.keys[inst] for inst in order],
+            "engine": module_digest(__name__, {__name__.partition(".")[0]}),
+            "writers": dispatch_digest(write_output),
+            "recording": None if rrd is None else logger_digest(),
+        }
+        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
     def materialise(self, inst: Instance) -> dict[str, Any]:
         """The outputs of ``inst``: from memory, from the cache, or by running the node (pulling inputs)."""
@@ -324,10 +372,18 @@ def run_recipe(
     recipe and what was logged (``blueprint``)."""
     wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
     warn = reporter.warn if reporter is not None else None
-    recording = None
+    executor = Executor(recipe, cache, reporter, None, max_seconds)
+    key = None if out_dir is None else executor.output_key(wires, rrd)
+    if key is not None and not spawn:  # a viewer to stream to needs the run itself
+        reused = executor.reuse(wires, out_dir, rrd, key)
+        if reused is not None:
+            _warn_others(out_dir, reused.files, warn)
+            return reused
     if rrd is not None:
-        recording = RunRecording(rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=recording_id(recipe))
-    executor = Executor(recipe, cache, reporter, recording, max_seconds)
+        executor.recording = RunRecording(
+            rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=recording_id(recipe)
+        )
+    recording = executor.recording
     ok = False
     try:
         if pool is not None:
@@ -335,31 +391,6 @@ def run_recipe(
         result = executor.run(wires)
         if out_dir is not None:
             executor.write_outputs(result, wires, out_dir)
-            others = sorted(
-                p.name
-                for p in out_dir.iterdir()
-                if p.is_file() and p not in result.files and p.name != MANIFEST and not p.name.endswith(".rrd")
-            )
-            write_manifest(
-                out_dir,
-                result.files,
-                {
-                    "recipe": recipe.name,
-                    "recipe_file": recipe.path,
-                    "digest": recipe.digest(),
-                    "seed": recipe.seed,
-                    "overrides": list(recipe.overrides),
-                    "outputs": [str(w) for w in wires],
-                    "engine": __version__,
-                    "written": datetime.now(UTC).isoformat(timespec="seconds"),
-                },
-            )
-            if others and warn is not None:
-                warn(
-                    f"{len(others)} other file(s) in {out_dir} are not from this run (see {MANIFEST}): "
-                    + ", ".join(others[:5])
-                    + (" …" if len(others) > 5 else "")
-                )
         ok = True
     finally:
         if recording is not None:
@@ -374,7 +405,40 @@ def run_recipe(
                     else f"no complete recording {recording.path} exists yet"
                 )
                 warn(f"the run did not complete: what it recorded is in {written}; {kept}")
+    if out_dir is not None:
+        write_manifest(
+            out_dir,
+            result.files,
+            {
+                "recipe": recipe.name,
+                "recipe_file": recipe.path,
+                "digest": recipe.digest(),
+                "output_key": key,
+                "seed": recipe.seed,
+                "overrides": list(recipe.overrides),
+                "outputs": [str(w) for w in wires],
+                "engine": __version__,
+                "written": datetime.now(UTC).isoformat(timespec="seconds"),
+            },
+            recording=result.rrd,
+        )
+        _warn_others(out_dir, result.files, warn)
     return result
+
+
+def _warn_others(out_dir: Path, files: list[Path], warn) -> None:
+    """Say which files in ``out_dir`` the run did not write (the manifest, recordings aside)."""
+    others = sorted(
+        p.name
+        for p in out_dir.iterdir()
+        if p.is_file() and p not in files and p.name != MANIFEST and not p.name.endswith(".rrd")
+    )
+    if others and warn is not None:
+        warn(
+            f"{len(others)} other file(s) in {out_dir} are not from this run (see {MANIFEST}): "
+            + ", ".join(others[:5])
+            + (" …" if len(others) > 5 else "")
+        )
 
 
 def compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds=None) -> dict[str, NodeRecord]:
