@@ -67,8 +67,15 @@ class Executor:
         reporter: Reporter | None = None,
         recording: RunRecording | None = None,
         max_seconds: float | None = None,
+        kept: dict[str, dict[str, Any]] | None = None,
+        on_ran=None,
     ):
+        """``kept``: values by cache key that a long-lived caller (``nodegraph watch``) holds between runs,
+        used before the cache and filled with this run's; ``on_ran(inst)``: called as soon as an instance
+        that ran is in the recording (or computed, without one)."""
         self.recipe = recipe
+        self.kept = kept
+        self.on_ran = on_ran
         self.max_seconds = max_seconds
         self.cache = cache
         self.reporter = reporter or Reporter(quiet=True)
@@ -165,6 +172,10 @@ class Executor:
         spec = entry.spec
         key = self.keys[inst]
         status = "ran"
+        if self.kept is not None and key in self.kept:  # held in memory by the caller since an earlier run
+            self.values[inst] = self.kept[key]
+            self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", 0.0))
+            return self.values[inst]
         if key in self.hits:
             start = now()
             try:
@@ -176,6 +187,8 @@ class Executor:
                 status = "recomputed (corrupt cache)"
             else:
                 self.values[inst] = outputs
+                if self.kept is not None:
+                    self.kept[key] = outputs
                 self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
                 return outputs
 
@@ -231,12 +244,16 @@ class Executor:
                 self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
                 ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
             self.values[inst] = outputs
+            if self.kept is not None:
+                self.kept[key] = outputs
             self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
             if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment
                 log_start = now()
                 kept = fragment if self.cache is None else replace(fragment, path=self.cache.fragment_path(key))
                 self._append(inst, kept, capture.live)
                 self.status[inst].log_seconds = log_seconds + now() - log_start
+            if self.on_ran is not None:
+                self.on_ran(inst)
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)
@@ -358,9 +375,12 @@ def run_recipe(
     max_seconds: float | None = None,
     pool=None,
     plugins=(),
+    kept: dict[str, dict[str, Any]] | None = None,
+    on_ran=None,
 ) -> RunResult:
     """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``; a node
     that expects to run longer than ``max_seconds`` refuses to start (``Context.expect_cost``).
+    ``kept`` and ``on_ran``: see ``Executor``.
 
     With a ``pool`` (``pool.InstancePool``, e.g. ``dask_pool.DaskPool``) the node instances missing from
     the cache are computed by its workers first (``plugins``: the plugin files they load); the run then
@@ -372,7 +392,7 @@ def run_recipe(
     recipe and what was logged (``blueprint``)."""
     wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
     warn = reporter.warn if reporter is not None else None
-    executor = Executor(recipe, cache, reporter, None, max_seconds)
+    executor = Executor(recipe, cache, reporter, None, max_seconds, kept, on_ran)
     key = None if out_dir is None else executor.output_key(wires, rrd)
     if key is not None and not spawn:  # a viewer to stream to needs the run itself
         reused = executor.reuse(wires, out_dir, rrd, key)

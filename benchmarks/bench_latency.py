@@ -1,0 +1,203 @@
+"""What an artist waits for (issues 27 and 28): a cached re-run, a watched edit, a draft from an empty cache.
+
+- ``cached``: ``nodegraph run RECIPE`` again with every node cached, outputs and recording in place (target
+  ≤ 1.5 s). The first run (computing what the cache lacks) is not timed.
+- ``watch``: ``nodegraph watch RECIPE`` on a copy of the recipe beside it; each edit rewrites a parameter of
+  one node in the file (default ``shade.ambient``); the time from the save to the watcher's "run N done" line
+  (outputs and recording written), with the CPU seconds the watcher spent meanwhile (target ≤ 2 s).
+- ``draft``: ``nodegraph run RECIPE --draft`` with an empty node cache (compiled kernels kept; target ≤ 15 s).
+
+Wall times carry the machine's load (printed); CPU seconds are the comparable figures.
+Run: python benchmarks/bench_latency.py [cached|watch|draft ...] [--recipe graphs/ikura_don.yaml ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import queue
+import random
+import re
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+CLI = [sys.executable, "-m", "nodegraph.cli"]
+
+
+def load() -> str:
+    return " ".join(f"{x:.1f}" for x in os.getloadavg())
+
+
+def timed_run(args: list[str]) -> tuple[float, float, str]:
+    """Wall and CPU seconds (the child's user + system) of one CLI command; its output."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run(CLI + args, cwd=ROOT, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(args)} failed:\n{done.stderr[-3000:]}")
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), done.stderr
+
+
+def bench_cached(recipe: str, repeat: int, cache: str | None) -> list[tuple]:
+    extra = ["--cache-dir", cache] if cache else []
+    timed_run(["run", recipe, "-q", *extra])  # whatever the cache lacks is computed here, not timed
+    rows = []
+    for i in range(repeat):
+        wall, cpu, _ = timed_run(["run", recipe, "-q", *extra])
+        rows.append((f"cached re-run {i + 1}", recipe, f"{wall:.2f}", f"{cpu:.2f}", "≤ 1.5", load()))
+    return rows
+
+
+def bench_draft(recipe: str) -> list[tuple]:
+    with tempfile.TemporaryDirectory(prefix="bench-draft-") as tmp:
+        wall, cpu, err = timed_run(
+            ["run", recipe, "--draft", "--cache-dir", f"{tmp}/cache", "--out-dir", f"{tmp}/out", "--no-rrd"]
+        )
+        wall_rrd, cpu_rrd, _ = timed_run(
+            ["run", recipe, "--draft", "--cache-dir", f"{tmp}/cache2", "--out-dir", f"{tmp}/out2"]
+        )
+    slowest = sorted(_node_times(err).items(), key=lambda kv: -kv[1])[:4]
+    note = ", ".join(f"{n} {s:.1f}" for n, s in slowest)
+    return [
+        ("draft, empty cache, no .rrd", recipe, f"{wall:.1f}", f"{cpu:.1f}", "≤ 15", load(), note),
+        ("draft, empty cache, with .rrd", recipe, f"{wall_rrd:.1f}", f"{cpu_rrd:.1f}", "≤ 15", load(), ""),
+    ]
+
+
+def _node_times(summary: str) -> dict[str, float]:
+    """Seconds per node from a run's summary table."""
+    out = {}
+    for line in summary.splitlines():
+        cells = [c.strip() for c in line.split("│")]
+        if len(cells) > 5 and cells[4].endswith(" ms"):
+            out[cells[1]] = float(cells[4][:-3]) / 1000
+    return out
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of a running process (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def set_param(text: str, node: str, param: str, value: str) -> str:
+    """The recipe text with ``param: value`` in node ``node``'s params (a ``params:`` line added or replaced)."""
+    block = re.search(rf"^  {re.escape(node)}:[^\n]*\n((?:    [^\n]*\n|\s*\n)*)", text, re.M)
+    if block is None:
+        raise SystemExit(f"no node '{node}' in the recipe")
+    body = block.group(1)
+    line = re.search(r"^    params: \{(.*)\}[^\n]*$", body, re.M)
+    if line is None:
+        new_body = body.rstrip("\n") + f"\n    params: {{{param}: {value}}}\n"
+    else:
+        items = [p.strip() for p in line.group(1).split(",") if p.strip() and not p.strip().startswith(f"{param}:")]
+        new_body = body.replace(line.group(0), f"    params: {{{', '.join(items + [f'{param}: {value}'])}}}")
+    return text[: block.start(1)] + new_body + text[block.end(1) :]
+
+
+def bench_watch(recipe: str, edits: int, draft: bool, target: str, values: list[str], extra: list[str]) -> list[tuple]:
+    node, param = target.split(".")
+    source = ROOT / recipe
+    copy = source.with_name(f".bench_watch_{source.name}")  # beside it: relative asset paths still resolve
+    shutil.copy(source, copy)
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench-watch-") as tmp:
+        command = CLI + ["watch", str(copy), "--out-dir", f"{tmp}/out", "--runs", str(edits + 1), *extra]
+        command += ["--draft"] if draft else []
+        proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        lines: queue.Queue = queue.Queue()
+        threading.Thread(target=lambda: [lines.put(x) for x in proc.stdout], daemon=True).start()
+
+        def until(text: str, seen: list) -> float:
+            deadline = time.time() + 900
+            while time.time() < deadline:
+                try:
+                    line = lines.get(timeout=1.0)
+                except queue.Empty:
+                    if proc.poll() is not None:
+                        break
+                    continue
+                seen.append(line)
+                if text in line:
+                    return time.perf_counter()
+            raise SystemExit(f"no {text!r}:\n{''.join(seen)[-3000:]}")
+
+        try:
+            until("watching", [])
+            for i in range(edits):
+                time.sleep(1.0)
+                cpu0 = _cpu_seconds(proc.pid)
+                saved = time.perf_counter()
+                copy.write_text(set_param(copy.read_text(), node, param, values[i % len(values)]))
+                seen: list = []
+                shown = until(f"run {i + 2}: {node} updated", seen)
+                shown_cpu = _cpu_seconds(proc.pid) - cpu0
+                done = until(f"run {i + 2} done", seen)
+                cpu = _cpu_seconds(proc.pid) - cpu0
+                ran = {n: s for n, s in _node_times("".join(seen)).items() if s > 0}
+                note = ", ".join(f"{n} {s:.2f}" for n, s in sorted(ran.items(), key=lambda kv: -kv[1])[:5])
+                case = f"watch edit {i + 1}: {target}"
+                rows.append(
+                    (
+                        f"{case}, {node} in the recording",
+                        recipe,
+                        f"{shown - saved:.2f}",
+                        f"{shown_cpu:.2f}",
+                        "≤ 2",
+                        load(),
+                    )
+                )
+                rows.append(
+                    (f"{case}, every output written", recipe, f"{done - saved:.2f}", f"{cpu:.2f}", "", load(), note)
+                )
+            proc.wait(timeout=120)
+        finally:
+            proc.kill()
+            copy.unlink(missing_ok=True)
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("what", nargs="*", default=["cached", "watch", "draft"], choices=["cached", "watch", "draft"])
+    parser.add_argument("--recipe", action="append", default=None, help="default graphs/ikura_don.yaml")
+    parser.add_argument("--repeat", type=int, default=3, help="cached re-runs timed")
+    parser.add_argument("--edits", type=int, default=3, help="saves timed in watch")
+    parser.add_argument("--full", action="store_true", help="watch the full recipe, not its draft")
+    parser.add_argument("--param", default="shade.ambient", help="NODE.PARAM that watch edits")
+    parser.add_argument("--values", default=None, help="values written in turn (default: new random ones in 0.2–0.7)")
+    parser.add_argument("--cache-dir", default=None, help="cache for cached and watch (default: the usual one)")
+    args = parser.parse_args()
+    recipes = args.recipe or ["graphs/ikura_don.yaml"]
+    extra = ["--cache-dir", args.cache_dir] if args.cache_dir else []
+    rows = []
+    for recipe in recipes:
+        if "cached" in args.what:
+            rows += bench_cached(recipe, args.repeat, args.cache_dir)
+        if "watch" in args.what:
+            values = (
+                args.values.split(",")
+                if args.values
+                else [f"{random.uniform(0.2, 0.7):.6f}" for _ in range(args.edits)]
+            )
+            rows += bench_watch(recipe, args.edits, not args.full, args.param, values, extra)
+        if "draft" in args.what:
+            rows += bench_draft(recipe)
+    header = ("case", "recipe", "wall s", "CPU s", "target s", "load 1/5/15", "slowest nodes (s)")
+    print("| " + " | ".join(header) + " |")
+    print("|" + "---|" * len(header))
+    for row in rows:
+        print("| " + " | ".join(row + ("",) * (len(header) - len(row))) + " |")
+
+
+if __name__ == "__main__":
+    main()
