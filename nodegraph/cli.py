@@ -301,10 +301,11 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         _trim(cache, started, reporter)
     reporter.print_summary()
     if not args.quiet:
+        done = "up to date:" if result.current else "wrote"  # current: the last run's files, nothing written
         for path in result.files:
-            print(f"wrote {path}")
+            print(f"{done} {path}")
         if result.rrd is not None:
-            print(f"wrote {result.rrd} (open with: rerun {result.rrd})")
+            print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
     return 0
 
 

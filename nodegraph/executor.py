@@ -38,6 +38,7 @@ class RunResult:
     files: list[Path] = field(default_factory=list)
     rrd: Path | None = None
     executor: Executor | None = field(default=None, repr=False)  # loads what a run with current outputs skipped
+    current: bool = False  # the files and recording were already as this run would write them: none written
 
     def output(self, ref: str) -> Any:
         """The value of ``node.port`` (a list, one per variant, for a variant family)."""
@@ -142,7 +143,7 @@ class Executor:
             for record in records:
                 tick()
                 self.reporter.record(record)
-        return RunResult(self.recipe, dict(self.keys), self.values, records, files, rrd, self)
+        return RunResult(self.recipe, dict(self.keys), self.values, records, files, rrd, self, current=True)
 
     def output_key(self, outputs: list[Wire], rrd: Path | None) -> str:
         """What the files and recording of a run depend on: the recipe, the requested outputs, the cache

@@ -37,7 +37,7 @@ def test_a_cached_rerun_with_current_outputs_writes_nothing(recipe, tmp_path, ca
     assert cli("run", str(recipe)) == 0
     assert stamps(out) == first  # outputs, recording and manifest untouched
     captured = capsys.readouterr()
-    assert "wrote " in captured.out and "toyrun.rrd" in captured.out  # still says where they are
+    assert "wrote" not in captured.out and "up to date:" in captured.out and "toyrun.rrd" in captured.out
     assert "cached" in captured.err and "ran" not in captured.err.replace("nodegraph run", "")
 
 
