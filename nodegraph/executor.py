@@ -103,17 +103,39 @@ class Executor:
         if self.cache is not None:
             self.hits = {key for key in set(self.keys.values()) if self.cache.has(key)}
         output_nodes = {w.node for w in outputs}
+        # cached instances go into the recording after every instance that runs: what an edit changed reaches
+        # the recording (and a viewer streaming it) first; the order of chunks in a recording carries no meaning
+        later: list[Instance] = []
         try:
             with self.reporter.task(self.recipe.name, len(order)) as tick:
                 for inst in order:
                     tick()
                     if inst in self.status:
                         continue
-                    if self.keys[inst] in self.hits and inst.node not in output_nodes and self._skip_load(inst):
-                        continue
+                    if self.keys[inst] in self.hits and inst.node not in output_nodes:
+                        if self.recording is not None:
+                            later.append(inst)
+                            continue
+                        if self._skip_load(inst):
+                            continue
                     self.materialise(inst)
                     if self.recording is not None and inst not in self.logged:
-                        self._log_cached(inst)
+                        later.append(inst)  # loaded, not run
+                for inst in later:
+                    if inst in self.logged:
+                        continue
+                    if inst not in self.status and self._skip_load(inst):
+                        continue
+                    self.materialise(inst)
+                    self._log_cached(inst)
+        except BaseException:
+            for inst in later:  # what the failed run had in hand still goes into its partial recording
+                if inst not in self.logged and inst not in self.status:
+                    try:
+                        self._skip_load(inst)
+                    except Exception:  # the node's own error is the one to report
+                        break
+            raise
         finally:
             for inst in order:
                 elsewhere = self.ran_elsewhere.get(self.keys[inst])
@@ -241,20 +263,19 @@ class Executor:
             log_start = now()
             fragment = None if capture is None else self._capture_outputs(inst, capture, outputs)
             log_seconds = now() - log_start
-            if self.cache is not None:
-                self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
-                ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
             self.values[inst] = outputs
             if self.kept is not None:
                 self.kept[key] = outputs
             self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
-            if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment
-                log_start = now()
-                kept = fragment if self.cache is None else replace(fragment, path=self.cache.fragment_path(key))
-                self._append(inst, kept, capture.live)
+            if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment,
+                log_start = now()  # read before the cache keeps it, so the recording and a viewer get it first
+                self._append(inst, fragment, capture.live)
                 self.status[inst].log_seconds = log_seconds + now() - log_start
             if self.on_ran is not None:
                 self.on_ran(inst)
+            if self.cache is not None:
+                self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
+                ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)

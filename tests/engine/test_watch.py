@@ -72,3 +72,25 @@ def test_watch_reruns_what_an_edit_changed_and_keeps_the_last_good_result(tmp_pa
         assert proc.wait(timeout=60) == 0
     finally:
         proc.kill()
+
+
+def test_what_an_edit_ran_reaches_the_recording_before_what_was_cached(tmp_path):
+    """The nodes an edit re-ran are sent first (a viewer shows the change without waiting for the cached rest)."""
+    from rerun.chunk import RrdReader
+
+    from nodegraph.cache import Cache
+    from nodegraph.executor import run_recipe
+    from nodegraph.recipe import parse_recipe
+    from nodegraph.registry import Registry
+
+    registry = Registry()
+    registry.add_plugin_file(TOY)
+    cache = Cache(tmp_path / "cache")
+    text = VALID
+    run_recipe(parse_recipe(text, registry, file="r.yaml"), cache=cache, rrd=tmp_path / "a.rrd")
+    edited = parse_recipe(text.replace("dx: 1.5", "dx: 2.5"), registry, file="r.yaml")
+    run_recipe(edited, cache=cache, rrd=tmp_path / "b.rrd")
+    nodes = [c.entity_path.split("/")[1] for c in RrdReader(str(tmp_path / "b.rrd")).stream().to_chunks()]
+    ran = [i for i, n in enumerate(nodes) if n in ("shifted", "phys", "merge")]
+    cached = [i for i, n in enumerate(nodes) if n == "pts"]
+    assert ran and cached and max(ran) < min(cached), nodes
