@@ -9,6 +9,7 @@
 
 Wall times carry the machine's load (printed); CPU seconds are the comparable figures.
 Run: python benchmarks/bench_latency.py [cached|watch|draft ...] [--recipe graphs/ikura_don.yaml ...]
+(``--quick``: the engine's toy recipe, one of each, in seconds: a smoke run)
 """
 
 from __future__ import annotations
@@ -29,6 +30,27 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 CLI = [sys.executable, "-m", "nodegraph.cli"]
+QUICK_RECIPE = """\
+name: toy
+seed: 3
+effects: [gravity]
+outputs: [merge.spheres]
+draft: {pts.count: 8}
+nodes:
+  pts:
+    type: toy_points
+    params: {count: 20, scale: 2.0}
+  shifted:
+    type: toy_shift
+    inputs: {spheres: pts.spheres}
+    params: {dx: 1.5}
+  phys:
+    type: toy_physics
+    inputs: {spheres: shifted.spheres}
+  merge:
+    type: toy_merge
+    inputs: {parts: [pts.spheres, phys.spheres]}
+"""
 
 
 def load() -> str:
@@ -47,8 +69,7 @@ def timed_run(args: list[str]) -> tuple[float, float, str]:
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), done.stderr
 
 
-def bench_cached(recipe: str, repeat: int, cache: str | None) -> list[tuple]:
-    extra = ["--cache-dir", cache] if cache else []
+def bench_cached(recipe: str, repeat: int, extra: list[str]) -> list[tuple]:
     timed_run(["run", recipe, "-q", *extra])  # whatever the cache lacks is computed here, not timed
     rows = []
     for i in range(repeat):
@@ -57,10 +78,10 @@ def bench_cached(recipe: str, repeat: int, cache: str | None) -> list[tuple]:
     return rows
 
 
-def bench_draft(recipe: str, overrides: list[str]) -> list[tuple]:
+def bench_draft(recipe: str, extra: list[str]) -> list[tuple]:
     """One draft from an empty node cache, recording and preview included (what ``--draft`` promises)."""
     with tempfile.TemporaryDirectory(prefix="bench-draft-") as tmp:
-        args = ["run", recipe, "--draft", "--cache-dir", f"{tmp}/cache", "--out-dir", f"{tmp}/out", *overrides]
+        args = ["run", recipe, "--draft", "--cache-dir", f"{tmp}/cache", "--out-dir", f"{tmp}/out", *extra]
         wall, cpu, err = timed_run(args)
     slowest = sorted(_node_times(err).items(), key=lambda kv: -kv[1])[:5]
     note = ", ".join(f"{n} {s:.1f}" for n, s in slowest)
@@ -162,7 +183,7 @@ def bench_watch(recipe: str, edits: int, draft: bool, target: str, values: list[
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("what", nargs="*", default=["cached", "watch", "draft"], choices=["cached", "watch", "draft"])
+    parser.add_argument("what", nargs="*", help="any of cached, watch, draft (default: all three)")
     parser.add_argument("--recipe", action="append", default=None, help="default graphs/ikura_don.yaml")
     parser.add_argument("--repeat", type=int, default=3, help="cached re-runs timed")
     parser.add_argument("--edits", type=int, default=3, help="saves timed in watch")
@@ -171,22 +192,37 @@ def main() -> None:
     parser.add_argument("--values", default=None, help="values written in turn (default: new random ones in 0.2–0.7)")
     parser.add_argument("--cache-dir", default=None, help="cache for cached and watch (default: the usual one)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    parser.add_argument("--quick", action="store_true", help="a toy recipe, one of each (a smoke run for CI)")
     args = parser.parse_args()
+    args.what = args.what or ["cached", "watch", "draft"]
+    if set(args.what) - {"cached", "watch", "draft"}:
+        parser.error(f"unknown case(s) {sorted(set(args.what) - {'cached', 'watch', 'draft'})}: cached, watch, draft")
     recipes = args.recipe or ["graphs/ikura_don.yaml"]
-    extra = (["--cache-dir", args.cache_dir] if args.cache_dir else []) + [f"--set={o}" for o in args.overrides]
+    common = [f"--set={o}" for o in args.overrides]  # every command
+    cached = ["--cache-dir", args.cache_dir] if args.cache_dir else []  # cached re-runs and watch
+    scratch = None
+    if args.quick:  # the toy node plugin of the engine's tests, in a scratch folder
+        scratch = tempfile.TemporaryDirectory(prefix="bench-latency-")
+        recipe = Path(scratch.name) / "toy.yaml"
+        recipe.write_text(QUICK_RECIPE)
+        recipes, args.repeat, args.edits, args.param, args.values = [str(recipe)], 2, 1, "shifted.dx", "2.5"
+        common += ["--plugin", str(ROOT / "tests" / "engine" / "toy_nodes.py")]
+        cached = ["--cache-dir", f"{scratch.name}/cache", "--out-dir", f"{scratch.name}/out"]
     rows = []
     for recipe in recipes:
         if "cached" in args.what:
-            rows += bench_cached(recipe, args.repeat, args.cache_dir)
+            rows += bench_cached(recipe, args.repeat, cached + common)
         if "watch" in args.what:
             values = (
                 args.values.split(",")
                 if args.values
                 else [f"{random.uniform(0.2, 0.7):.6f}" for _ in range(args.edits)]
             )
-            rows += bench_watch(recipe, args.edits, not args.full, args.param, values, extra)
+            rows += bench_watch(recipe, args.edits, not args.full, args.param, values, cached[:2] + common)
         if "draft" in args.what:
-            rows += bench_draft(recipe, [f"--set={o}" for o in args.overrides])
+            rows += bench_draft(recipe, common)
+    if scratch is not None:
+        scratch.cleanup()
     header = ("case", "recipe", "wall s", "CPU s", "target s", "load 1/5/15", "slowest nodes (s)")
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
