@@ -264,10 +264,10 @@ class Cache:
                 outputs[port] = codec.decode(data, cls)
             except codec.DecodeError as exc:
                 raise CacheCorruption(f"blob {path} cannot be decoded: {exc}") from None
-        self._touch(key)
+        self.touch(key)
         return outputs
 
-    def _touch(self, key: str) -> None:
+    def touch(self, key: str) -> None:
         """Mark entry ``key`` used now (its modification time): the last to go when the cache is trimmed."""
         try:
             os.utime(self._entry_path(key))

@@ -31,6 +31,7 @@ from .registry import default_registry
 from .report import Reporter
 from .rerun_log import has_display
 
+SETTLE_S = 0.05  # watch: how long a recipe file's bytes must stay the same before a run starts
 SWEEP_RRD = Path("<sweep>.rrd")  # --rrd given without a path
 RRD_MAGIC = b"RRF2"  # the first bytes of a Rerun recording
 FILE_KINDS = {
@@ -137,7 +138,7 @@ def build_parser() -> argparse.ArgumentParser:
     watch.add_argument("--no-rrd", action="store_true", help="do not record to Rerun")
     watch.add_argument("--out-dir", type=Path, default=None, help="where outputs go (as for run)")
     watch.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors and what each run wrote")
-    watch.add_argument("--poll", type=float, default=0.2, metavar="S", help="seconds between looks at the file")
+    watch.add_argument("--poll", type=float, default=0.1, metavar="S", help="seconds between looks at the file")
     watch.add_argument("--runs", type=int, default=None, metavar="N", help="stop after N runs (scripts, tests)")
     watch.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
     watch.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
@@ -231,7 +232,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _cmd_run(args, registry) -> int:
+class WatchSession:
+    """What ``nodegraph watch`` keeps between runs: the last run's values by cache key (an edit re-runs a
+    node from its inputs in memory, not from the cache), and when the current run began, to say when each
+    node that ran reached the recording (and a viewer streaming it)."""
+
+    def __init__(self):
+        self.kept: dict = {}
+        self.run = 0
+        self.seen = time.perf_counter()
+
+    def ran(self, inst) -> None:
+        seconds = time.perf_counter() - self.seen
+        print(f"run {self.run}: {inst.label} updated {seconds:.2f} s after the save was seen", flush=True)
+
+    def keep(self, keys) -> None:
+        """Hold only what the last run used."""
+        self.kept = {key: self.kept[key] for key in keys if key in self.kept}
+
+
+def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     if args.no_rrd and (args.spawn or args.rrd):
         given = " and ".join(f for f, on in (("--spawn", args.spawn), ("--rrd", args.rrd)) if on)
         raise NodegraphError(
@@ -269,7 +289,11 @@ def _cmd_run(args, registry) -> int:
                 max_seconds=None if args.yes else 60 * args.max_minutes,
                 pool=pool,
                 plugins=args.plugin,
+                kept=None if session is None else session.kept,
+                on_ran=None if session is None else session.ran,
             )
+        if session is not None:
+            session.keep(set(result.keys.values()))
     except (NodeFailure, KeyboardInterrupt):
         reporter.print_summary()
         raise
@@ -277,10 +301,11 @@ def _cmd_run(args, registry) -> int:
         _trim(cache, started, reporter)
     reporter.print_summary()
     if not args.quiet:
+        done = "up to date:" if result.current else "wrote"  # current: the last run's files, nothing written
         for path in result.files:
-            print(f"wrote {path}")
+            print(f"{done} {path}")
         if result.rrd is not None:
-            print(f"wrote {result.rrd} (open with: rerun {result.rrd})")
+            print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
     return 0
 
 
@@ -317,20 +342,21 @@ def _cmd_watch(args, registry) -> int:
             text = b""  # an editor replacing the file
         return hashlib.sha256(text).digest() if text.strip() else None  # None: being written, look again
 
-    seen, runs = None, 0
+    seen, runs, session = None, 0, WatchSession()
     while args.runs is None or runs < args.runs:
         now = digest()
         if now is None or now == seen:
             time.sleep(args.poll)
             continue
-        time.sleep(args.poll)  # a save in progress: run once the bytes have stayed the same for one poll
+        noticed = time.perf_counter()
+        time.sleep(SETTLE_S)  # a save in progress: run once the bytes have stayed the same a moment
         if digest() != now:
             continue
         seen, runs = now, runs + 1
-        started = time.perf_counter()
+        session.run, session.seen = runs, noticed
         try:
-            _cmd_run(args, registry)
-            print(f"run {runs} done in {time.perf_counter() - started:.1f} s", flush=True)
+            _cmd_run(args, registry, session)
+            print(f"run {runs} done in {time.perf_counter() - noticed:.1f} s", flush=True)
         except RecipeError as exc:
             print(str(exc), file=sys.stderr)
             print(f"run {runs}: not run; the last good outputs stay", flush=True)

@@ -20,11 +20,11 @@ from .checkpoint import Checkpoint
 from .compile_progress import CompileWatch
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
-from .output_files import MANIFEST, write_manifest, write_output
+from .output_files import MANIFEST, current_outputs, write_manifest, write_output
 from .plan import Instance, Plan, RecipeRef, plan_jobs
 from .recipe import Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
-from .rerun_log import NodeCapture, RunRecording, log_value
+from .rerun_log import NodeCapture, RunRecording, dispatch_digest, log_value, logger_digest, partial_path
 
 
 @dataclass
@@ -37,6 +37,8 @@ class RunResult:
     records: list[NodeRecord]
     files: list[Path] = field(default_factory=list)
     rrd: Path | None = None
+    executor: Executor | None = field(default=None, repr=False)  # loads what a run with current outputs skipped
+    current: bool = False  # the files and recording were already as this run would write them: none written
 
     def output(self, ref: str) -> Any:
         """The value of ``node.port`` (a list, one per variant, for a variant family)."""
@@ -44,8 +46,13 @@ class RunResult:
         entry = self.recipe.nodes[node_id]
         port = port or next(iter(entry.spec.outputs))
         if entry.family is None:
-            return self.values[Instance(node_id)][port]
-        return [self.values[Instance(node_id, v)][port] for v in range(entry.family)]
+            return self._value(Instance(node_id))[port]
+        return [self._value(Instance(node_id, v))[port] for v in range(entry.family)]
+
+    def _value(self, inst: Instance) -> dict[str, Any]:
+        if inst not in self.values and self.executor is not None:
+            return self.executor.materialise(inst)
+        return self.values[inst]
 
     def status(self) -> dict[str, str]:
         return {r.node: r.status for r in self.records}
@@ -61,8 +68,15 @@ class Executor:
         reporter: Reporter | None = None,
         recording: RunRecording | None = None,
         max_seconds: float | None = None,
+        kept: dict[str, dict[str, Any]] | None = None,
+        on_ran=None,
     ):
+        """``kept``: values by cache key that a long-lived caller (``nodegraph watch``) holds between runs,
+        used before the cache and filled with this run's; ``on_ran(inst)``: called as soon as an instance
+        that ran is in the recording (or computed, without one)."""
         self.recipe = recipe
+        self.kept = kept
+        self.on_ran = on_ran
         self.max_seconds = max_seconds
         self.cache = cache
         self.reporter = reporter or Reporter(quiet=True)
@@ -89,17 +103,39 @@ class Executor:
         if self.cache is not None:
             self.hits = {key for key in set(self.keys.values()) if self.cache.has(key)}
         output_nodes = {w.node for w in outputs}
+        # cached instances go into the recording after every instance that runs: what an edit changed reaches
+        # the recording (and a viewer streaming it) first; the order of chunks in a recording carries no meaning
+        later: list[Instance] = []
         try:
             with self.reporter.task(self.recipe.name, len(order)) as tick:
                 for inst in order:
                     tick()
                     if inst in self.status:
                         continue
-                    if self.keys[inst] in self.hits and inst.node not in output_nodes and self._skip_load(inst):
-                        continue
+                    if self.keys[inst] in self.hits and inst.node not in output_nodes:
+                        if self.recording is not None:
+                            later.append(inst)
+                            continue
+                        if self._skip_load(inst):
+                            continue
                     self.materialise(inst)
                     if self.recording is not None and inst not in self.logged:
-                        self._log_cached(inst)
+                        later.append(inst)  # loaded, not run
+                for inst in later:
+                    if inst in self.logged:
+                        continue
+                    if inst not in self.status and self._skip_load(inst):
+                        continue
+                    self.materialise(inst)
+                    self._log_cached(inst)
+        except BaseException:
+            for inst in later:  # what the failed run had in hand still goes into its partial recording
+                if inst not in self.logged and inst not in self.status:
+                    try:
+                        self._skip_load(inst)
+                    except Exception:  # the node's own error is the one to report
+                        break
+            raise
         finally:
             for inst in order:
                 elsewhere = self.ran_elsewhere.get(self.keys[inst])
@@ -109,6 +145,48 @@ class Executor:
                     self.reporter.record(self.status[inst])
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
 
+    def reuse(self, outputs: list[Wire], directory: Path, rrd: Path | None, key: str) -> RunResult | None:
+        """The run's result without loading or writing anything, when every instance the outputs need is
+        cached and the files (and recording) a run with the same ``output_key`` wrote are still there as it
+        left them (``output_files.current_outputs``); None otherwise. Values load on demand (``output``)."""
+        order = self.plan({w.node for w in outputs})
+        keys = {self.keys[inst] for inst in order}
+        if self.cache is None or not all(self.cache.has(k) for k in keys):
+            return None
+        files = current_outputs(directory, key, rrd)
+        if files is None:
+            return None
+        for k in keys:
+            self.cache.touch(k)  # used by this run: the last to go when the cache is trimmed
+        if rrd is not None:  # what an interrupted run left beside the recording: this complete run ends it
+            partial_path(rrd).unlink(missing_ok=True)
+        records = [NodeRecord(i.label, self.recipe.nodes[i.node].spec.type_name, "cached") for i in order]
+        with self.reporter.task(self.recipe.name, len(order)) as tick:
+            for record in records:
+                tick()
+                self.reporter.record(record)
+        return RunResult(self.recipe, dict(self.keys), self.values, records, files, rrd, self, current=True)
+
+    def output_key(self, outputs: list[Wire], rrd: Path | None) -> str:
+        """What the files and recording of a run depend on: the recipe, the requested outputs, the cache
+        key of every instance they need, the engine's code, the output writers' and (with a recording)
+        the Rerun loggers' code. Equal keys: equal bytes, so current files need not be written again."""
+        import hashlib
+        import json
+
+        from .code_digest import module_digest
+
+        order = self.plan({w.node for w in outputs})
+        payload = {
+            "recipe": self.recipe.digest(),
+            "outputs": [str(w) for w in outputs],
+            "instances": [self.keys[inst] for inst in order],
+            "engine": module_digest(__name__, {__name__.partition(".")[0]}),
+            "writers": dispatch_digest(write_output),
+            "recording": None if rrd is None else logger_digest(),
+        }
+        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+
     def materialise(self, inst: Instance) -> dict[str, Any]:
         """The outputs of ``inst``: from memory, from the cache, or by running the node (pulling inputs)."""
         if inst in self.values:
@@ -117,6 +195,10 @@ class Executor:
         spec = entry.spec
         key = self.keys[inst]
         status = "ran"
+        if self.kept is not None and key in self.kept:  # held in memory by the caller since an earlier run
+            self.values[inst] = self.kept[key]
+            self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", 0.0))
+            return self.values[inst]
         if key in self.hits:
             start = now()
             try:
@@ -128,6 +210,8 @@ class Executor:
                 status = "recomputed (corrupt cache)"
             else:
                 self.values[inst] = outputs
+                if self.kept is not None:
+                    self.kept[key] = outputs
                 self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
                 return outputs
 
@@ -179,16 +263,19 @@ class Executor:
             log_start = now()
             fragment = None if capture is None else self._capture_outputs(inst, capture, outputs)
             log_seconds = now() - log_start
+            self.values[inst] = outputs
+            if self.kept is not None:
+                self.kept[key] = outputs
+            self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
+            if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment,
+                log_start = now()  # read before the cache keeps it, so the recording and a viewer get it first
+                self._append(inst, fragment, capture.live)
+                self.status[inst].log_seconds = log_seconds + now() - log_start
+            if self.on_ran is not None:
+                self.on_ran(inst)
             if self.cache is not None:
                 self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
                 ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
-            self.values[inst] = outputs
-            self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
-            if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment
-                log_start = now()
-                kept = fragment if self.cache is None else replace(fragment, path=self.cache.fragment_path(key))
-                self._append(inst, kept, capture.live)
-                self.status[inst].log_seconds = log_seconds + now() - log_start
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)
@@ -310,9 +397,12 @@ def run_recipe(
     max_seconds: float | None = None,
     pool=None,
     plugins=(),
+    kept: dict[str, dict[str, Any]] | None = None,
+    on_ran=None,
 ) -> RunResult:
     """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``; a node
     that expects to run longer than ``max_seconds`` refuses to start (``Context.expect_cost``).
+    ``kept`` and ``on_ran``: see ``Executor``.
 
     With a ``pool`` (``pool.InstancePool``, e.g. ``dask_pool.DaskPool``) the node instances missing from
     the cache are computed by its workers first (``plugins``: the plugin files they load); the run then
@@ -324,10 +414,18 @@ def run_recipe(
     recipe and what was logged (``blueprint``)."""
     wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
     warn = reporter.warn if reporter is not None else None
-    recording = None
+    executor = Executor(recipe, cache, reporter, None, max_seconds, kept, on_ran)
+    key = None if out_dir is None else executor.output_key(wires, rrd)
+    if key is not None and not spawn:  # a viewer to stream to needs the run itself
+        reused = executor.reuse(wires, out_dir, rrd, key)
+        if reused is not None:
+            _warn_others(out_dir, reused.files, warn)
+            return reused
     if rrd is not None:
-        recording = RunRecording(rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=recording_id(recipe))
-    executor = Executor(recipe, cache, reporter, recording, max_seconds)
+        executor.recording = RunRecording(
+            rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=recording_id(recipe)
+        )
+    recording = executor.recording
     ok = False
     try:
         if pool is not None:
@@ -335,31 +433,6 @@ def run_recipe(
         result = executor.run(wires)
         if out_dir is not None:
             executor.write_outputs(result, wires, out_dir)
-            others = sorted(
-                p.name
-                for p in out_dir.iterdir()
-                if p.is_file() and p not in result.files and p.name != MANIFEST and not p.name.endswith(".rrd")
-            )
-            write_manifest(
-                out_dir,
-                result.files,
-                {
-                    "recipe": recipe.name,
-                    "recipe_file": recipe.path,
-                    "digest": recipe.digest(),
-                    "seed": recipe.seed,
-                    "overrides": list(recipe.overrides),
-                    "outputs": [str(w) for w in wires],
-                    "engine": __version__,
-                    "written": datetime.now(UTC).isoformat(timespec="seconds"),
-                },
-            )
-            if others and warn is not None:
-                warn(
-                    f"{len(others)} other file(s) in {out_dir} are not from this run (see {MANIFEST}): "
-                    + ", ".join(others[:5])
-                    + (" …" if len(others) > 5 else "")
-                )
         ok = True
     finally:
         if recording is not None:
@@ -374,7 +447,40 @@ def run_recipe(
                     else f"no complete recording {recording.path} exists yet"
                 )
                 warn(f"the run did not complete: what it recorded is in {written}; {kept}")
+    if out_dir is not None:
+        write_manifest(
+            out_dir,
+            result.files,
+            {
+                "recipe": recipe.name,
+                "recipe_file": recipe.path,
+                "digest": recipe.digest(),
+                "output_key": key,
+                "seed": recipe.seed,
+                "overrides": list(recipe.overrides),
+                "outputs": [str(w) for w in wires],
+                "engine": __version__,
+                "written": datetime.now(UTC).isoformat(timespec="seconds"),
+            },
+            recording=result.rrd,
+        )
+        _warn_others(out_dir, result.files, warn)
     return result
+
+
+def _warn_others(out_dir: Path, files: list[Path], warn) -> None:
+    """Say which files in ``out_dir`` the run did not write (the manifest, recordings aside)."""
+    others = sorted(
+        p.name
+        for p in out_dir.iterdir()
+        if p.is_file() and p not in files and p.name != MANIFEST and not p.name.endswith(".rrd")
+    )
+    if others and warn is not None:
+        warn(
+            f"{len(others)} other file(s) in {out_dir} are not from this run (see {MANIFEST}): "
+            + ", ".join(others[:5])
+            + (" …" if len(others) > 5 else "")
+        )
 
 
 def compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds=None) -> dict[str, NodeRecord]:

@@ -123,14 +123,52 @@ def _(value: FileSet, directory: Path, stem: str) -> list[Path]:
 MANIFEST = "manifest.json"
 
 
-def write_manifest(directory: Path, files: list[Path], run: dict[str, Any]) -> Path:
+def write_manifest(directory: Path, files: list[Path], run: dict[str, Any], recording: Path | None = None) -> Path:
     """``manifest.json`` beside the outputs: which run wrote them (``run``: recipe, digest, seed, overrides,
-    time, ...) and the sha256 and size of each file it wrote; files in the folder it does not list are
-    not from this run."""
+    time, the run's ``output_key``, ...) and the sha256, size and modification time of each file it wrote
+    (and of its ``recording``); files in the folder it does not list are not from this run."""
     listing = {}
     for path in files:
         data = path.read_bytes()
-        listing[str(path.relative_to(directory))] = {"sha256": hashlib.sha256(data).hexdigest(), "bytes": len(data)}
+        listing[str(path.relative_to(directory))] = {
+            "sha256": hashlib.sha256(data).hexdigest(),
+            "bytes": len(data),
+            "mtime_ns": path.stat().st_mtime_ns,
+        }
+    run = dict(run, files=listing)
+    if recording is not None:
+        run["recording"] = {"path": str(recording.resolve()), **_stamp(recording)}
     path = directory / MANIFEST
-    atomic_write(path, json.dumps({**run, "files": listing}, indent=1, sort_keys=True).encode())
+    atomic_write(path, json.dumps(run, indent=1, sort_keys=True).encode())
     return path
+
+
+def current_outputs(directory: Path, output_key: str, recording: Path | None) -> list[Path] | None:
+    """The files a run with ``output_key`` wrote into ``directory`` when they are all still there as it left
+    them (size and modification time, as ``make`` judges a file), and its ``recording`` too; else None.
+    A run whose outputs are current writes nothing: the same key means the same bytes."""
+    try:
+        manifest = json.loads((directory / MANIFEST).read_bytes())
+        if manifest.get("output_key") != output_key:
+            return None
+        files = []
+        for name, record in manifest["files"].items():
+            path = directory / name
+            if _stamp(path) != {"bytes": record["bytes"], "mtime_ns": record.get("mtime_ns")}:
+                return None
+            files.append(path)
+        if recording is not None:
+            kept = manifest.get("recording") or {}
+            if kept.get("path") != str(recording.resolve()) or _stamp(recording) != {
+                "bytes": kept.get("bytes"),
+                "mtime_ns": kept.get("mtime_ns"),
+            }:
+                return None
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+    return files
+
+
+def _stamp(path: Path) -> dict[str, int]:
+    stat = path.stat()
+    return {"bytes": stat.st_size, "mtime_ns": stat.st_mtime_ns}

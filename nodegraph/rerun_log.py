@@ -157,13 +157,20 @@ def logger_digest() -> str:
     """A digest of what an output's logged form depends on besides the value: the rerun-sdk version and the
     source of every registered ``log_value`` implementation (the engine's, the node packages', plugins') and of
     the functions their modules import from their own package (e.g. a shared drawing helper)."""
+    from importlib.metadata import version
+
+    return dispatch_digest(log_value, version("rerun-sdk"))  # the version without importing rerun (≈ 1 s)
+
+
+def dispatch_digest(dispatcher, salt: str = "") -> str:
+    """sha256 (16 hex digits) of ``salt`` and the source files of every implementation registered on the
+    singledispatch ``dispatcher`` and of the functions their modules import from their own package."""
     import hashlib
     import inspect
-    import sys
 
-    digest = hashlib.sha256(rerun_module().__version__.encode())
-    sources = {inspect.getsourcefile(fn) or "" for fn in log_value.registry.values()}
-    for fn in list(log_value.registry.values()):  # and the helpers those modules import from their own package
+    digest = hashlib.sha256(salt.encode())
+    sources = {inspect.getsourcefile(fn) or "" for fn in dispatcher.registry.values()}
+    for fn in list(dispatcher.registry.values()):  # and the helpers those modules import from their own package
         module = sys.modules.get(fn.__module__)
         package = fn.__module__.partition(".")[0]
         for helper in vars(module).values() if module is not None else ():

@@ -1,0 +1,234 @@
+"""What an artist waits for (issues 27 and 28): a cached re-run, a watched edit, a draft from an empty cache.
+
+- ``cached``: ``nodegraph run RECIPE`` again with every node cached, outputs and recording in place (target
+  ≤ 1.5 s). The first run (computing what the cache lacks) is not timed.
+- ``watch``: ``nodegraph watch RECIPE`` on a copy of the recipe beside it; each edit rewrites a parameter of
+  one node in the file (default ``shade.ambient``); the time from the save to the watcher's "run N done" line
+  (outputs and recording written), with the CPU seconds the watcher spent meanwhile (target ≤ 2 s).
+- ``draft``: ``nodegraph run RECIPE --draft`` with an empty node cache (compiled kernels kept; target ≤ 15 s).
+
+Wall times carry the machine's load (printed); CPU seconds are the comparable figures.
+Run: python benchmarks/bench_latency.py [cached|watch|draft ...] [--recipe graphs/ikura_don.yaml ...]
+(``--quick``: the engine's toy recipe, one of each, in seconds: a smoke run)
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import queue
+import random
+import re
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+CLI = [sys.executable, "-m", "nodegraph.cli"]
+QUICK_RECIPE = """\
+name: toy
+seed: 3
+effects: [gravity]
+outputs: [merge.spheres]
+draft: {pts.count: 8}
+nodes:
+  pts:
+    type: toy_points
+    params: {count: 20, scale: 2.0}
+  shifted:
+    type: toy_shift
+    inputs: {spheres: pts.spheres}
+    params: {dx: 1.5}
+  phys:
+    type: toy_physics
+    inputs: {spheres: shifted.spheres}
+  merge:
+    type: toy_merge
+    inputs: {parts: [pts.spheres, phys.spheres]}
+"""
+
+
+def load() -> str:
+    return " ".join(f"{x:.1f}" for x in os.getloadavg())
+
+
+def timed_run(args: list[str]) -> tuple[float, float, str]:
+    """Wall and CPU seconds (the child's user + system) of one CLI command; its output."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run(CLI + args, cwd=ROOT, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(args)} failed:\n{done.stderr[-3000:]}")
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), done.stderr
+
+
+def bench_cached(recipe: str, repeat: int, extra: list[str]) -> list[tuple]:
+    timed_run(["run", recipe, "-q", *extra])  # whatever the cache lacks is computed here, not timed
+    rows = []
+    for i in range(repeat):
+        wall, cpu, _ = timed_run(["run", recipe, "-q", *extra])
+        rows.append((f"cached re-run {i + 1}", recipe, f"{wall:.2f}", f"{cpu:.2f}", "≤ 1.5", load()))
+    return rows
+
+
+def bench_draft(recipe: str, extra: list[str]) -> list[tuple]:
+    """One draft from an empty node cache, recording and preview included (what ``--draft`` promises)."""
+    with tempfile.TemporaryDirectory(prefix="bench-draft-") as tmp:
+        args = ["run", recipe, "--draft", "--cache-dir", f"{tmp}/cache", "--out-dir", f"{tmp}/out", *extra]
+        wall, cpu, err = timed_run(args)
+    slowest = sorted(_node_times(err).items(), key=lambda kv: -kv[1])[:5]
+    note = ", ".join(f"{n} {s:.1f}" for n, s in slowest)
+    return [("draft, empty node cache", recipe, f"{wall:.1f}", f"{cpu:.1f}", "≤ 15", load(), note)]
+
+
+def _node_times(summary: str) -> dict[str, float]:
+    """Seconds per node from a run's summary table."""
+    out = {}
+    for line in summary.splitlines():
+        cells = [c.strip() for c in line.split("│")]
+        if len(cells) > 5 and cells[4].endswith(" ms"):
+            out[cells[1]] = float(cells[4][:-3]) / 1000
+    return out
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of a running process (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def set_param(text: str, node: str, param: str, value: str) -> str:
+    """The recipe text with ``param: value`` in node ``node``'s params (a ``params:`` line added or replaced)."""
+    block = re.search(rf"^  {re.escape(node)}:[^\n]*\n((?:    [^\n]*\n|\s*\n)*)", text, re.M)
+    if block is None:
+        raise SystemExit(f"no node '{node}' in the recipe")
+    body = block.group(1)
+    line = re.search(r"^    params: \{(.*)\}[^\n]*$", body, re.M)
+    if line is None:
+        new_body = body.rstrip("\n") + f"\n    params: {{{param}: {value}}}\n"
+    else:
+        items = [p.strip() for p in line.group(1).split(",") if p.strip() and not p.strip().startswith(f"{param}:")]
+        new_body = body.replace(line.group(0), f"    params: {{{', '.join(items + [f'{param}: {value}'])}}}")
+    return text[: block.start(1)] + new_body + text[block.end(1) :]
+
+
+def bench_watch(recipe: str, edits: int, draft: bool, target: str, values: list[str], extra: list[str]) -> list[tuple]:
+    node, param = target.split(".")
+    source = ROOT / recipe
+    copy = source.with_name(f".bench_watch_{source.name}")  # beside it: relative asset paths still resolve
+    shutil.copy(source, copy)
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench-watch-") as tmp:
+        command = CLI + ["watch", str(copy), "--out-dir", f"{tmp}/out", "--runs", str(edits + 1), *extra]
+        command += ["--draft"] if draft else []
+        proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        lines: queue.Queue = queue.Queue()
+        threading.Thread(target=lambda: [lines.put(x) for x in proc.stdout], daemon=True).start()
+
+        def until(text: str, seen: list, also: str | None = None) -> tuple[float, float | None, float | None]:
+            """Read lines until one contains ``text``; when it came, and when (with the watcher's CPU seconds
+            then) a line containing ``also`` came before it (None: none did, as with an engine that does not
+            say when a node reaches the recording)."""
+            deadline, found = time.time() + 900, (None, None)
+            while time.time() < deadline:
+                try:
+                    line = lines.get(timeout=1.0)
+                except queue.Empty:
+                    if proc.poll() is not None:
+                        break
+                    continue
+                seen.append(line)
+                if also is not None and also in line:
+                    found = (time.perf_counter(), _cpu_seconds(proc.pid))
+                if text in line:
+                    return time.perf_counter(), *found
+            raise SystemExit(f"no {text!r}:\n{''.join(seen)[-3000:]}")
+
+        try:
+            until("watching", [])
+            for i in range(edits):
+                time.sleep(1.0)
+                cpu0 = _cpu_seconds(proc.pid)
+                saved = time.perf_counter()
+                copy.write_text(set_param(copy.read_text(), node, param, values[i % len(values)]))
+                seen: list = []
+                done, shown, shown_cpu = until(f"run {i + 2} done", seen, also=f"run {i + 2}: {node} updated")
+                cpu = _cpu_seconds(proc.pid) - cpu0
+                ran = {n: s for n, s in _node_times("".join(seen)).items() if s > 0}
+                note = ", ".join(f"{n} {s:.2f}" for n, s in sorted(ran.items(), key=lambda kv: -kv[1])[:5])
+                case, now = f"watch edit {i + 1}: {target}", load()
+                if shown is not None:
+                    row = (
+                        f"{case}, {node} in the recording",
+                        recipe,
+                        f"{shown - saved:.2f}",
+                        f"{shown_cpu - cpu0:.2f}",
+                    )
+                    rows.append((*row, "≤ 2", now))
+                row = (f"{case}, all outputs written", recipe, f"{done - saved:.2f}", f"{cpu:.2f}", "", now, note)
+                rows.append(row)
+            proc.wait(timeout=120)
+        finally:
+            proc.kill()
+            copy.unlink(missing_ok=True)
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("what", nargs="*", help="any of cached, watch, draft (default: all three)")
+    parser.add_argument("--recipe", action="append", default=None, help="default graphs/ikura_don.yaml")
+    parser.add_argument("--repeat", type=int, default=3, help="cached re-runs timed")
+    parser.add_argument("--edits", type=int, default=3, help="saves timed in watch")
+    parser.add_argument("--full", action="store_true", help="watch the full recipe, not its draft")
+    parser.add_argument("--param", default="shade.ambient", help="NODE.PARAM that watch edits")
+    parser.add_argument("--values", default=None, help="values written in turn (default: new random ones in 0.2–0.7)")
+    parser.add_argument("--cache-dir", default=None, help="cache for cached and watch (default: the usual one)")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    parser.add_argument("--quick", action="store_true", help="a toy recipe, one of each (a smoke run for CI)")
+    args = parser.parse_args()
+    args.what = args.what or ["cached", "watch", "draft"]
+    if set(args.what) - {"cached", "watch", "draft"}:
+        parser.error(f"unknown case(s) {sorted(set(args.what) - {'cached', 'watch', 'draft'})}: cached, watch, draft")
+    recipes = args.recipe or ["graphs/ikura_don.yaml"]
+    common = [f"--set={o}" for o in args.overrides]  # every command
+    cached = ["--cache-dir", args.cache_dir] if args.cache_dir else []  # cached re-runs and watch
+    scratch = None
+    if args.quick:  # the toy node plugin of the engine's tests, in a scratch folder
+        scratch = tempfile.TemporaryDirectory(prefix="bench-latency-")
+        recipe = Path(scratch.name) / "toy.yaml"
+        recipe.write_text(QUICK_RECIPE)
+        recipes, args.repeat, args.edits, args.param, args.values = [str(recipe)], 2, 1, "shifted.dx", "2.5"
+        common += ["--plugin", str(ROOT / "tests" / "engine" / "toy_nodes.py")]
+        cached = ["--cache-dir", f"{scratch.name}/cache", "--out-dir", f"{scratch.name}/out"]
+    rows = []
+    for recipe in recipes:
+        if "cached" in args.what:
+            rows += bench_cached(recipe, args.repeat, cached + common)
+        if "watch" in args.what:
+            values = (
+                args.values.split(",")
+                if args.values
+                else [f"{random.uniform(0.2, 0.7):.6f}" for _ in range(args.edits)]
+            )
+            rows += bench_watch(recipe, args.edits, not args.full, args.param, values, cached[:2] + common)
+        if "draft" in args.what:
+            rows += bench_draft(recipe, common)
+    if scratch is not None:
+        scratch.cleanup()
+    header = ("case", "recipe", "wall s", "CPU s", "target s", "load 1/5/15", "slowest nodes (s)")
+    print("| " + " | ".join(header) + " |")
+    print("|" + "---|" * len(header))
+    for row in rows:
+        print("| " + " | ".join(row + ("",) * (len(header) - len(row))) + " |")
+
+
+if __name__ == "__main__":
+    main()

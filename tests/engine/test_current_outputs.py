@@ -1,0 +1,80 @@
+"""A cached re-run whose files are still as the last run left them writes nothing (issue 27: cached re-run
+≤ 1.5 s); anything that could change a byte of them (a setting, a touched file, the writers' code, the
+recording asked for or not) writes them again."""
+
+import os
+
+import pytest
+
+import nodegraph.executor
+from nodegraph.cache import Cache
+from nodegraph.executor import run_recipe
+from nodegraph.recipe import load_recipe
+
+from .test_cli_and_rerun import RECIPE, TOY, cli
+
+
+@pytest.fixture
+def recipe(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("NODEGRAPH_CACHE", str(tmp_path / "cache"))
+    path = tmp_path / "toyrun.yaml"
+    path.write_text(RECIPE)
+    return path
+
+
+def stamps(folder):
+    """Each file's (inode, modification time): a rewrite (atomic: a new file renamed in) changes both."""
+    return {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in sorted(folder.iterdir())}
+
+
+def test_a_cached_rerun_with_current_outputs_writes_nothing(recipe, tmp_path, capsys):
+    out = tmp_path / "outputs" / "toyrun"
+    assert cli("run", str(recipe)) == 0
+    first = stamps(out)
+    assert {"merge.spheres.npz", "surf.ply", "toyrun.rrd", "manifest.json"} <= set(first)
+    capsys.readouterr()
+    assert cli("run", str(recipe)) == 0
+    assert stamps(out) == first  # outputs, recording and manifest untouched
+    captured = capsys.readouterr()
+    assert "wrote" not in captured.out and "up to date:" in captured.out and "toyrun.rrd" in captured.out
+    assert "cached" in captured.err and "ran" not in captured.err.replace("nodegraph run", "")
+
+
+def test_a_setting_an_edited_file_or_other_writers_write_again(recipe, tmp_path, monkeypatch):
+    out = tmp_path / "outputs" / "toyrun"
+    assert cli("run", str(recipe)) == 0
+    surf = (out / "surf.ply").read_bytes()
+
+    (out / "surf.ply").write_bytes(b"edited by hand")  # a file changed since: written again
+    assert cli("run", str(recipe)) == 0
+    assert (out / "surf.ply").read_bytes() == surf
+
+    before = stamps(out)
+    os.utime(out / "toyrun.rrd", ns=(0, 0))  # the recording touched: the run writes files and recording again
+    assert cli("run", str(recipe)) == 0
+    assert stamps(out)["toyrun.rrd"] != before["toyrun.rrd"] and stamps(out)["surf.ply"] != before["surf.ply"]
+
+    before = stamps(out)
+    assert cli("run", str(recipe), "--set", "phys.dt=0.5", "--out-dir", str(out)) == 0  # another setting
+    assert stamps(out)["surf.ply"] != before["surf.ply"]
+
+    before = stamps(out)
+    monkeypatch.setattr(nodegraph.executor, "dispatch_digest", lambda *a: "other writers")
+    assert cli("run", str(recipe), "--set", "phys.dt=0.5", "--out-dir", str(out)) == 0
+    assert stamps(out)["surf.ply"] != before["surf.ply"]
+
+    before = stamps(out)
+    assert cli("run", str(recipe), "--set", "phys.dt=0.5", "--out-dir", str(out), "--no-rrd") == 0
+    assert stamps(out)["surf.ply"] != before["surf.ply"]  # the manifest no longer vouches for a recording
+
+
+def test_a_reused_result_still_gives_its_values(recipe, tmp_path):
+    from nodegraph.registry import default_registry
+
+    loaded = load_recipe(recipe, default_registry(plugins=[TOY]))
+    cache, out = Cache(tmp_path / "cache"), tmp_path / "out"
+    first = run_recipe(loaded, cache=cache, out_dir=out)
+    again = run_recipe(loaded, cache=cache, out_dir=out)
+    assert again.values == {} and again.files == first.files  # nothing loaded, nothing written
+    assert (again.output("surf").vertices == first.output("surf").vertices).all()  # loaded when asked
