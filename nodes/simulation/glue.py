@@ -18,11 +18,16 @@ paste has torn. Contacts between glued grains tolerate the overlap the press lef
 height at 30 substeps and 94–96 % at 10–20 (docs/validation.md).
 """
 
+from collections import namedtuple
+
 import numpy as np
 from numba import njit, prange
 from scipy.spatial import cKDTree
 
 from .shape_matching import extract_rotation
+
+# the regions as ``glue_match`` reads them (a named bundle: numba takes it as one argument)
+RegionRows = namedtuple("RegionRows", "region_start link_own link_start member rest")
 
 
 def glue_bonds(x, r, elem, n_moving: int, capture: float) -> np.ndarray:
@@ -93,12 +98,13 @@ def glued_regions(x, r, elem, start, n_moving: int, capture: float):
 
 
 @njit(cache=True, parallel=True)
-def glue_match(x, w, region_start, link_own, link_start, member, rest, intact, quats, rot_iters, goal, torn_by, limit):
+def glue_match(x, w, regions, intact, quats, rot_iters, goal, torn_by, limit):
     """Match every region with a grain still glued to it rigidly: ``goal`` (M, 3) of each membership
     (NaN where its link is torn or its region has no glued neighbour left). With ``torn_by`` set, then
     tear every link whose particles stand, on average, more than ``limit`` (mm) from their goals: the
     region's shape, not its motion, decides (goals of the last iteration against predicted positions
     tore a falling onigiri apart)."""
+    region_start, link_own, link_start, member, rest = regions
     for reg in prange(len(region_start) - 1):
         a0 = region_start[reg]
         a1 = region_start[reg + 1]

@@ -98,8 +98,9 @@ class GlueRegions:
     floor_partner: np.ndarray
     floor_depth: np.ndarray  # their overlap at the start (mm)
 
-    def match_args(self):
-        return self.region_start, self.link_own, self.link_start, self.member, self.rest
+    def rows(self):
+        """The regions as ``glue.glue_match`` takes them."""
+        return glue.RegionRows(self.region_start, self.link_own, self.link_start, self.member, self.rest)
 
     def floor_args(self):
         return self.floor_start, self.floor_partner, self.floor_depth, self.region_start, self.link_grain

@@ -551,7 +551,7 @@ class XpbdSolver:
             glue.glue_match,
             st.x,
             m.w,
-            *g.match_args(),
+            g.rows(),
             st.glued,
             st.glue_quats,
             self.settings.rotation_iterations,
