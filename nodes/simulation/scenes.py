@@ -239,3 +239,52 @@ def small_food_scene() -> dict:
         (ElementLibrary("ikura", (egg,)),),
     )
     return {"aggregates": [rice, eggs], "scenery": [bowl["container"]]}
+
+
+GLUE_EFFECTS = frozenset({"gravity", "contact", "friction", "adhesion", "collider", "damping"})
+
+
+def pressed_block(nx=3, ny=3, nz=10, squeeze=0.8, seed=2, press_frames=10):
+    """(aggregate, colliders): a tall block of randomly turned grains set on a grid a little tighter than the grains
+    (pressed: they overlap), relaxed for ``press_frames`` without gravity as the recipes' press relaxes them in
+    their mould, standing on a ground slab: sticky rice ready to be set down (``glue``; tests and validation)."""
+    from .settings import XpbdParams
+    from .setup import build_simulation, finish_simulation
+    from .xpbd import xpbd
+
+    size = np.full(3, 4.0 * squeeze)
+    ix, iy, iz = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    grid = np.stack([ix.ravel(), iy.ravel(), iz.ravel()], axis=1) * size
+    grid[:, :2] -= 0.5 * size[:2] * [nx - 1, ny - 1]
+    grid[:, 2] += 2.6
+    n = len(grid)
+    turns = Rotation.random(n, random_state=seed).as_matrix()
+    placement = Placement(
+        grid, np.tile([0.0, 0.0, 1.0], (n, 1)), turns, kinds=np.zeros(n, np.int32), variants=np.arange(n) % 4
+    )
+    colliders = [box_mesh([-40, -40, -4], [40, 40, 0], name="ground")]
+    params = XpbdParams(**xpbd.resolve_params({"frames": press_frames}))
+    press = build_simulation(
+        Aggregate(placement, (rice_library(seed=1),)), colliders, GLUE_EFFECTS - {"gravity"}, params
+    )
+    for _ in range(press_frames):
+        press.frame()
+    return finish_simulation(press)["aggregate"], colliders
+
+
+def block_heights(block, glue, frames=40, **given):
+    """Per frame, the particles' height over the height at the start of ``block`` (``pressed_block``) set down
+    under gravity with ``glue`` and the xpbd parameters ``given``; and the simulation."""
+    from .settings import XpbdParams
+    from .setup import build_simulation
+    from .xpbd import xpbd
+
+    aggregate, colliders = block
+    p = XpbdParams(**xpbd.resolve_params({"frames": frames, "glue": glue, "clumping": 0.5, **given}))
+    sim = build_simulation(aggregate, colliders, GLUE_EFFECTS, p)
+    start = np.ptp(sim.state.x[: sim.model.n_moving, 2])
+    kept = []
+    for _ in range(frames):
+        sim.frame()
+        kept.append(np.ptp(sim.state.x[: sim.model.n_moving, 2]) / start)
+    return np.array(kept), sim

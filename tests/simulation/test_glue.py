@@ -3,56 +3,22 @@ tears under a load it cannot carry; the glue runs only when asked for."""
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
-from nodes.simulation.scenes import box_mesh, rice_library
+from nodes.simulation.scenes import GLUE_EFFECTS, block_heights, pressed_block
 from nodes.simulation.settings import XpbdParams
-from nodes.simulation.setup import build_simulation, finish_simulation
+from nodes.simulation.setup import build_simulation
 from nodes.simulation.xpbd import xpbd
-from nodes.values import Aggregate, Placement
 
-EFFECTS = frozenset({"gravity", "contact", "friction", "adhesion", "collider", "damping"})
-
-
-def pressed_block(nx=3, ny=3, nz=10, squeeze=0.8, seed=2):
-    """A tall block of randomly turned grains on a grid a little tighter than the grains (pressed: they
-    touch and overlap), standing on a ground slab; (aggregate, colliders)."""
-    size = np.array([4.0, 4.0, 4.0]) * squeeze
-    ix, iy, iz = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
-    grid = np.stack([ix.ravel(), iy.ravel(), iz.ravel()], axis=1) * size
-    grid[:, :2] -= 0.5 * size[:2] * [nx - 1, ny - 1]
-    grid[:, 2] += 2.6
-    n = len(grid)
-    turns = Rotation.random(n, random_state=seed).as_matrix()
-    placement = Placement(
-        grid, np.tile([0.0, 0.0, 1.0], (n, 1)), turns, kinds=np.zeros(n, np.int32), variants=np.arange(n) % 4
-    )
-    return Aggregate(placement, (rice_library(seed=1),)), [box_mesh([-40, -40, -4], [40, 40, 0], name="ground")]
+EFFECTS = GLUE_EFFECTS
 
 
 @pytest.fixture(scope="module")
 def block():
-    """The pressed block after its overlaps have relaxed without gravity (the recipes' press)."""
-    aggregate, colliders = pressed_block()
-    p = XpbdParams(**xpbd.resolve_params({"frames": 10}))
-    press = build_simulation(aggregate, colliders, EFFECTS - {"gravity"}, p)
-    for _ in range(10):
-        press.frame()
-    return finish_simulation(press)["aggregate"], colliders
+    return pressed_block()
 
 
 def heights(block, glue, frames=40, **given):
-    """Per frame, the block's particle height over its height at the start; and the simulation."""
-    aggregate, colliders = block
-    p = XpbdParams(**xpbd.resolve_params({"frames": frames, "glue": glue, "clumping": 0.5, **given}))
-    sim = build_simulation(aggregate, colliders, EFFECTS, p)
-    z = sim.state.x[: sim.model.n_moving, 2]
-    start = np.ptp(z)
-    out = []
-    for _ in range(frames):
-        sim.frame()
-        out.append(np.ptp(sim.state.x[: sim.model.n_moving, 2]) / start)
-    return np.array(out), sim
+    return block_heights(block, glue, frames, **given)
 
 
 @pytest.fixture(scope="module")
