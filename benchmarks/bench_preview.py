@@ -78,7 +78,7 @@ def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:
         description = dataclasses.replace(scene, materials=materials)
         t, c = time.perf_counter(), cpu_seconds()
         layers = ms.render_layers(description, camera, width, height, spp, p["sun_direction"], max_depth=depth)
-        return layers.color @ np.array([0.2126, 0.7152, 0.0722]), time.perf_counter() - t, cpu_seconds() - c
+        return layers.noisy() @ np.array([0.2126, 0.7152, 0.0722]), time.perf_counter() - t, cpu_seconds() - c
 
     white, _, _ = luminance(Material("white", base_color=(0.9, 0.9, 0.9), roughness=1.0), ms.MAX_DEPTH)
     black, _, _ = luminance(Material("black", base_color=(0.0, 0.0, 0.0), roughness=1.0), ms.MAX_DEPTH)
@@ -116,7 +116,7 @@ def sss_cost(quick: bool, cache_dir: Path | None) -> str:
     sun = params["sun_direction"]
     t = time.perf_counter()
     truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, None, 128, subsurface=True)
-    reference = linear_to_srgb8(tone_map(truth.color))
+    reference = linear_to_srgb8(tone_map(truth.noisy()))
     reference_time = time.perf_counter() - t
     print(f"reference: {reference_spp} spp, depth 128, media on, {reference_time:.0f} s", flush=True)
     rows = []
@@ -151,7 +151,7 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
     """The default preview (media on, OIDN): CPU and wall time of the whole preview and its determinism; and in the
     eggs-over-rice window, the highlight energy (linear luminance above the converged render's 99th percentile,
     summed) of the noisy and the denoised render against the converged one: does the denoiser keep the highlights?"""
-    from nodes.export.mitsuba_scene import Crop, denoise, render, render_layers
+    from nodes.export.mitsuba_scene import Crop, render, render_layers
 
     scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
     width, height, spp, sun = params["width"], params["height"], params["samples"], params["sun_direction"]
@@ -164,7 +164,7 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
     wall, cpu = time.perf_counter() - t, cpu_seconds() - c
     second = render(scene, camera, width, height, spp, sun, True, 0, media)
     layers = render_layers(scene, camera, width, height, spp, sun, 0, crop, subsurface=media)
-    truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop, subsurface=media).color
+    truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop, subsurface=media).noisy()
     weights = np.array([0.2126, 0.7152, 0.0722], np.float32)
     threshold = float(np.percentile(truth @ weights, 99.0))
 
@@ -172,7 +172,11 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
         luminance = color @ weights
         return float(np.maximum(luminance - threshold, 0.0).sum()), int((luminance > threshold).sum())
 
-    rows = [("noisy", layers.color), ("denoised (OIDN)", denoise(layers)), (f"converged ({reference_spp} spp)", truth)]
+    rows = [
+        ("noisy", layers.noisy()),
+        ("denoised (OIDN)", layers.denoised()),
+        (f"converged ({reference_spp} spp)", truth),
+    ]
     load = os.getloadavg()[0]
     lines = [
         f"Default preview of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height}, "
@@ -223,7 +227,7 @@ def main():
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from nodes.export.mesh_files import linear_to_srgb8
-    from nodes.export.mitsuba_scene import Crop, denoise, render, render_layers, tone_map
+    from nodes.export.mitsuba_scene import Crop, render, render_layers, tone_map
 
     if args.quick:
         scene, camera, params = quick_scene()
@@ -237,7 +241,7 @@ def main():
 
     t = time.perf_counter()
     converged = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop)
-    reference = linear_to_srgb8(tone_map(converged.color))
+    reference = linear_to_srgb8(tone_map(converged.noisy()))
     reference_time = time.perf_counter() - t
     print(f"reference: {reference_spp} spp in {reference_time:.0f} s", flush=True)
 
@@ -245,7 +249,7 @@ def main():
     for spp in spps:
         layers = render_layers(scene, camera, width, height, spp, sun, 0, crop)
         for denoised in (False, True):
-            image = linear_to_srgb8(tone_map(denoise(layers) if denoised else layers.color))
+            image = linear_to_srgb8(tone_map(layers.denoised() if denoised else layers.noisy()))
             psnr = peak_signal_noise_ratio(reference, image, data_range=255)
             ssim = structural_similarity(reference, image, channel_axis=2, data_range=255)
             wall = cpu = float("nan")
