@@ -19,7 +19,8 @@ from ..values import ShadedScene
     #    key light + sky + table, OIDN denoising, 1280 × 720 and 12 spp by default
     # 3: paths through ice up to 128 bounces (mitsuba_scene.path_depth): a heap of flakes was cut off dark grey
     # 4: subsurface: media inside rice, ikura yolks and ice (volpath)
-    version=4,
+    # 5: the key's glints in a one-bounce pass added after denoising (the denoiser erased them)
+    version=5,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={

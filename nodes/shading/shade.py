@@ -30,7 +30,8 @@ def _check(params):
     # 4: syrup graded by depth below the mound's top (syrup_depth, _spread, _levels); chestnut, salmon, tuna presets
     # 5: plain ice keeps ≈ 99 % of the light per flake crossing (was 90–95 %: 5 mm of ice per 0.4 mm flake)
     # 6: water content and σ₀ come from the cooked material (input 'material')
-    version=6,
+    # 7: ikura deep orange-red (was amber), its yolk orange
+    version=7,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "material": In(
