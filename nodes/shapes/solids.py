@@ -163,7 +163,7 @@ def tray(extents: tuple[float, float, float], wall: float) -> trimesh.Trimesh:
     return trimesh.Trimesh(np.asarray(out.vert_properties)[:, :3], np.asarray(out.tri_verts), process=True)
 
 
-def _first_hits(origins: np.ndarray, directions: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def first_hits(origins: np.ndarray, directions: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(distance, face) of each ray's nearest crossing of a triangle (Möller–Trumbore); inf and −1 for a miss."""
     a, edge1, edge2 = triangles[:, 0], triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]
     distance = np.full(len(origins), np.inf)
@@ -211,7 +211,7 @@ def wrap_band(
     x, angle = (g.ravel() for g in np.meshgrid(xs, angles, indexing="ij"))  # column-major: rows vary fastest
     origins = np.stack([x, np.full_like(x, middle[1]), np.full_like(x, lo[2] + height)], axis=1)
     directions = np.stack([np.zeros_like(x), np.cos(angle), np.sin(angle)], axis=1)
-    distance, face = _first_hits(origins, directions, triangles)
+    distance, face = first_hits(origins, directions, triangles)
     if (face < 0).any() or (np.einsum("ij,ij->i", normals[face], directions) <= 0).any():
         raise ValueError(
             f"width: a band {width:g} mm wide and {height:g} mm high leaves the shape "
