@@ -1,7 +1,7 @@
 """Our preview beside Blender's Cycles render of the same exported .glb, under the same camera and light
 (issue 26: do the two renderers agree about the same materials?).
 
-    python tools/blender_side_by_side.py graphs/ikura_don.yaml [--draft] [--set NODE.PARAM=VALUE] [--samples N] [--out PNG]
+    python tools/blender_side_by_side.py graphs/ikura_don.yaml [--draft] [--set NODE.PARAM=VALUE] [--samples N]
 
 Runs the recipe (from the cache where it can) for its .glb and preview, then renders the .glb with Blender
 Cycles (the ``bpy`` venv ``tools/make_blender_venv.sh`` makes: ``$NODEGRAPH_BLENDER_PYTHON`` or
