@@ -5,6 +5,7 @@ reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 previ
     python benchmarks/bench_preview.py --ice [--quick] [--cache-dir DIR]    # kakigori ice vs path length
     python benchmarks/bench_preview.py --sss [--quick] [--cache-dir DIR]    # subsurface media × depth × spp
     python benchmarks/bench_preview.py --highlights [--quick]   # default preview: time, determinism, highlights
+    python benchmarks/bench_preview.py --budget 12:32,10:32 [--quick]   # spp:path depth, time against quality
 
 The scene is the main job's (``graphs/ikura_don.yaml`` up to ``shade``, from the cache; computed the first
 time), seen by its preview camera. Quality is measured in a window of the 1280 × 720 frame over the
@@ -194,6 +195,54 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
     return "\n".join(lines)
 
 
+def budget(configs: str, quick: bool, cache_dir: Path | None) -> str:
+    """The whole default preview (media on, OIDN, glints) at each ``spp:depth`` of ``configs``: CPU and wall time of
+    the full frame, PSNR/SSIM in the eggs-over-rice window against 256 spp (64 with ``--quick``) at depth 128."""
+    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+    from nodes.export.mesh_files import linear_to_srgb8
+    from nodes.export.mitsuba_scene import Crop, render, render_layers, tone_map
+
+    scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
+    width, height, sun, media = params["width"], params["height"], params["sun_direction"], params["subsurface"]
+    crop, reference_spp = Crop(544, 306, 192, 108), 256
+    if quick:
+        width, height, crop, reference_spp = 320, 180, Crop(112, 63, 96, 54), 64
+    t = time.perf_counter()
+    truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop, 128, subsurface=media)
+    reference = linear_to_srgb8(tone_map(truth.noisy()))
+    reference_time = time.perf_counter() - t
+    rows = []
+    for config in configs.split(","):
+        spp, depth = (int(v) for v in config.split(":"))
+        t, c = time.perf_counter(), cpu_seconds()
+        render(scene, camera, width, height, spp, sun, True, 0, media, depth)
+        wall, cpu = time.perf_counter() - t, cpu_seconds() - c
+        image = linear_to_srgb8(
+            tone_map(render_layers(scene, camera, width, height, spp, sun, 0, crop, depth, media).denoised())
+        )
+        psnr = peak_signal_noise_ratio(reference, image, data_range=255)
+        ssim = structural_similarity(reference, image, channel_axis=2, data_range=255)
+        rows.append(
+            f"| {spp} | {depth} | {psnr:.1f} | {ssim:.3f} | {wall:.1f} | {cpu:.1f} | {cpu / (os.cpu_count() or 1):.1f} "
+            "|"
+        )
+        print(rows[-1], flush=True)
+    n = os.cpu_count()
+    return "\n".join(
+        [
+            f"Default preview of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height} "
+            f"(media {'on' if media else 'off'}, OIDN, glints): PSNR/SSIM in the {crop.width}×{crop.height} window "
+            f"at ({crop.x}, {crop.y}) against {reference_spp} spp at depth 128 ({reference_time:.0f} s); load average "
+            f"{os.getloadavg()[0]:.2f} on {n} cores",
+            "",
+            f"| spp | path depth | PSNR (dB) | SSIM | wall (s) | CPU (s) | CPU s / {n} |",
+            "|---|---|---|---|---|---|---|",
+            *rows,
+        ]
+    )
+
+
 def cpu_seconds() -> float:
     """CPU time of this process (all threads): with other work on the machine, wall time alone misleads."""
     return time.process_time()
@@ -206,7 +255,11 @@ def main():
     parser.add_argument("--ice", action="store_true", help="kakigori ice brightness vs path length instead")
     parser.add_argument("--sss", action="store_true", help="subsurface media on/off × path depth × spp instead")
     parser.add_argument("--highlights", action="store_true", help="default preview: time and highlight energy")
+    parser.add_argument("--budget", default=None, help="spp:depth,...: the default preview's time against quality")
     args = parser.parse_args()
+    if args.budget:
+        print(budget(args.budget, args.quick, args.cache_dir))
+        return
     if args.highlights:
         print(highlights(args.quick, args.cache_dir))
         return
