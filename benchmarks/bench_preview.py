@@ -5,6 +5,7 @@ reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 previ
     python benchmarks/bench_preview.py --ice [--quick] [--cache-dir DIR]    # kakigori ice vs path length
     python benchmarks/bench_preview.py --sss [--quick] [--cache-dir DIR]    # subsurface media × depth × spp
     python benchmarks/bench_preview.py --highlights [--quick]   # default preview: time, determinism, highlights
+    python benchmarks/bench_preview.py --budget 12:32,10:32 [--quick]   # spp:path depth, time against quality
 
 The scene is the main job's (``graphs/ikura_don.yaml`` up to ``shade``, from the cache; computed the first
 time), seen by its preview camera. Quality is measured in a window of the 1280 × 720 frame over the
@@ -78,7 +79,7 @@ def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:
         description = dataclasses.replace(scene, materials=materials)
         t, c = time.perf_counter(), cpu_seconds()
         layers = ms.render_layers(description, camera, width, height, spp, p["sun_direction"], max_depth=depth)
-        return layers.color @ np.array([0.2126, 0.7152, 0.0722]), time.perf_counter() - t, cpu_seconds() - c
+        return layers.noisy() @ np.array([0.2126, 0.7152, 0.0722]), time.perf_counter() - t, cpu_seconds() - c
 
     white, _, _ = luminance(Material("white", base_color=(0.9, 0.9, 0.9), roughness=1.0), ms.MAX_DEPTH)
     black, _, _ = luminance(Material("black", base_color=(0.0, 0.0, 0.0), roughness=1.0), ms.MAX_DEPTH)
@@ -116,7 +117,7 @@ def sss_cost(quick: bool, cache_dir: Path | None) -> str:
     sun = params["sun_direction"]
     t = time.perf_counter()
     truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, None, 128, subsurface=True)
-    reference = linear_to_srgb8(tone_map(truth.color))
+    reference = linear_to_srgb8(tone_map(truth.noisy()))
     reference_time = time.perf_counter() - t
     print(f"reference: {reference_spp} spp, depth 128, media on, {reference_time:.0f} s", flush=True)
     rows = []
@@ -151,7 +152,7 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
     """The default preview (media on, OIDN): CPU and wall time of the whole preview and its determinism; and in the
     eggs-over-rice window, the highlight energy (linear luminance above the converged render's 99th percentile,
     summed) of the noisy and the denoised render against the converged one: does the denoiser keep the highlights?"""
-    from nodes.export.mitsuba_scene import Crop, denoise, render, render_layers
+    from nodes.export.mitsuba_scene import Crop, render, render_layers
 
     scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
     width, height, spp, sun = params["width"], params["height"], params["samples"], params["sun_direction"]
@@ -164,7 +165,7 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
     wall, cpu = time.perf_counter() - t, cpu_seconds() - c
     second = render(scene, camera, width, height, spp, sun, True, 0, media)
     layers = render_layers(scene, camera, width, height, spp, sun, 0, crop, subsurface=media)
-    truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop, subsurface=media).color
+    truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop, subsurface=media).noisy()
     weights = np.array([0.2126, 0.7152, 0.0722], np.float32)
     threshold = float(np.percentile(truth @ weights, 99.0))
 
@@ -172,7 +173,11 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
         luminance = color @ weights
         return float(np.maximum(luminance - threshold, 0.0).sum()), int((luminance > threshold).sum())
 
-    rows = [("noisy", layers.color), ("denoised (OIDN)", denoise(layers)), (f"converged ({reference_spp} spp)", truth)]
+    rows = [
+        ("noisy", layers.noisy()),
+        ("denoised (OIDN)", layers.denoised()),
+        (f"converged ({reference_spp} spp)", truth),
+    ]
     load = os.getloadavg()[0]
     lines = [
         f"Default preview of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height}, "
@@ -190,6 +195,54 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
     return "\n".join(lines)
 
 
+def budget(configs: str, quick: bool, cache_dir: Path | None) -> str:
+    """The whole default preview (media on, OIDN, glints) at each ``spp:depth`` of ``configs``: CPU and wall time of
+    the full frame, PSNR/SSIM in the eggs-over-rice window against 256 spp (64 with ``--quick``) at depth 128."""
+    from skimage.metrics import peak_signal_noise_ratio, structural_similarity
+
+    from nodes.export.mesh_files import linear_to_srgb8
+    from nodes.export.mitsuba_scene import Crop, render, render_layers, tone_map
+
+    scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
+    width, height, sun, media = params["width"], params["height"], params["sun_direction"], params["subsurface"]
+    crop, reference_spp = Crop(544, 306, 192, 108), 256
+    if quick:
+        width, height, crop, reference_spp = 320, 180, Crop(112, 63, 96, 54), 64
+    t = time.perf_counter()
+    truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop, 128, subsurface=media)
+    reference = linear_to_srgb8(tone_map(truth.noisy()))
+    reference_time = time.perf_counter() - t
+    rows = []
+    for config in configs.split(","):
+        spp, depth = (int(v) for v in config.split(":"))
+        t, c = time.perf_counter(), cpu_seconds()
+        render(scene, camera, width, height, spp, sun, True, 0, media, depth)
+        wall, cpu = time.perf_counter() - t, cpu_seconds() - c
+        image = linear_to_srgb8(
+            tone_map(render_layers(scene, camera, width, height, spp, sun, 0, crop, depth, media).denoised())
+        )
+        psnr = peak_signal_noise_ratio(reference, image, data_range=255)
+        ssim = structural_similarity(reference, image, channel_axis=2, data_range=255)
+        rows.append(
+            f"| {spp} | {depth} | {psnr:.1f} | {ssim:.3f} | {wall:.1f} | {cpu:.1f} | {cpu / (os.cpu_count() or 1):.1f} "
+            "|"
+        )
+        print(rows[-1], flush=True)
+    n = os.cpu_count()
+    return "\n".join(
+        [
+            f"Default preview of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height} "
+            f"(media {'on' if media else 'off'}, OIDN, glints): PSNR/SSIM in the {crop.width}×{crop.height} window "
+            f"at ({crop.x}, {crop.y}) against {reference_spp} spp at depth 128 ({reference_time:.0f} s); load average "
+            f"{os.getloadavg()[0]:.2f} on {n} cores",
+            "",
+            f"| spp | path depth | PSNR (dB) | SSIM | wall (s) | CPU (s) | CPU s / {n} |",
+            "|---|---|---|---|---|---|---|",
+            *rows,
+        ]
+    )
+
+
 def cpu_seconds() -> float:
     """CPU time of this process (all threads): with other work on the machine, wall time alone misleads."""
     return time.process_time()
@@ -202,7 +255,11 @@ def main():
     parser.add_argument("--ice", action="store_true", help="kakigori ice brightness vs path length instead")
     parser.add_argument("--sss", action="store_true", help="subsurface media on/off × path depth × spp instead")
     parser.add_argument("--highlights", action="store_true", help="default preview: time and highlight energy")
+    parser.add_argument("--budget", default=None, help="spp:depth,...: the default preview's time against quality")
     args = parser.parse_args()
+    if args.budget:
+        print(budget(args.budget, args.quick, args.cache_dir))
+        return
     if args.highlights:
         print(highlights(args.quick, args.cache_dir))
         return
@@ -223,7 +280,7 @@ def main():
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from nodes.export.mesh_files import linear_to_srgb8
-    from nodes.export.mitsuba_scene import Crop, denoise, render, render_layers, tone_map
+    from nodes.export.mitsuba_scene import Crop, render, render_layers, tone_map
 
     if args.quick:
         scene, camera, params = quick_scene()
@@ -237,7 +294,7 @@ def main():
 
     t = time.perf_counter()
     converged = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop)
-    reference = linear_to_srgb8(tone_map(converged.color))
+    reference = linear_to_srgb8(tone_map(converged.noisy()))
     reference_time = time.perf_counter() - t
     print(f"reference: {reference_spp} spp in {reference_time:.0f} s", flush=True)
 
@@ -245,7 +302,7 @@ def main():
     for spp in spps:
         layers = render_layers(scene, camera, width, height, spp, sun, 0, crop)
         for denoised in (False, True):
-            image = linear_to_srgb8(tone_map(denoise(layers) if denoised else layers.color))
+            image = linear_to_srgb8(tone_map(layers.denoised() if denoised else layers.noisy()))
             psnr = peak_signal_noise_ratio(reference, image, data_range=255)
             ssim = structural_similarity(reference, image, channel_axis=2, data_range=255)
             wall = cpu = float("nan")

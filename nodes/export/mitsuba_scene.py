@@ -24,7 +24,14 @@ path (≈ 1.2 mm in red) and albedo (≥ 0.99) match the starchy stand-in, potat
 vertex colours of the exported files and, with ``subsurface`` off, as the per-vertex diffuse transmission.
 
 Light: a soft key (a sphere emitter along the shade node's key light), a uniform sky and a matte table
-under the scene. Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass;
+under the scene. The key's small bright core (``HIGHLIGHT_ANGLE``) is a specular-only light, as a photographer
+sets a strip light for the glints: it is rendered in a pass of its own, one bounce, every surface reflecting only
+with its gloss (its clear coat, or the skin of a transmissive element: Fresnel at its IOR), and added after
+denoising. In the denoised path-traced pass a glint is a few bright samples among dark ones, which the
+denoiser reads as noise and erases (``benchmarks/bench_preview.py --highlights``: highlight energy 0 after
+OIDN); the one-bounce pass of a smooth or glossy reflection has no such noise and needs no denoising. Left
+out of the path-traced pass, the core does not add caustics through the eggs (found only by chance: fireflies).
+Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass;
 Intel Open Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels
 independent (what OIDN expects) and makes the render bit-reproducible: image blocks do not overlap, so
 the order threads finish in cannot change a sum. Meshes go to Mitsuba as binary PLY files in a temporary
@@ -57,6 +64,12 @@ MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) 
 # mound in white diffuse (benchmarks/bench_preview.py --ice, 240 × 180, 8 spp): 0.10 at depth 10, 0.34 at 32, 0.45 at
 # 64, 0.47 at 128 and 256 (converged); Russian roulette ends the paths that carry little.
 MAX_DEPTH_FLAKES = 128
+# the key's bright core (a specular-only light, ``highlight_dict``): angular radius (rad) and radiance. 0.12 rad
+# makes a glint ≈ 1–2 px across on a 4.5 mm egg in the main job's 1280 × 720 frame; the radiance puts it above
+# the tone curve's knee on a clear skin (Fresnel ≈ 0.023 at normal incidence for IOR 1.36: 0.023 × 60 × 1.5 ≈ 2)
+HIGHLIGHT_ANGLE = 0.12
+HIGHLIGHT_RADIANCE = 60.0
+HIGHLIGHT_SPP = 8  # the glints' pass is one bounce: samples for antialiased edges, not for converging light
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
@@ -260,8 +273,9 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
 
 
 def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
-    """One PLY shape per material (written into ``folder``) and the scene's vertices (every 8th: what the camera
-    frames); with ``subsurface``, the volumetric materials' shapes carry their medium inside a dielectric boundary."""
+    """One PLY shape per material (written into ``folder``; key ``shape_<material index>``) and the scene's
+    vertices (every 8th: what the camera frames); with ``subsurface``, the volumetric materials' shapes carry their
+    medium inside a dielectric boundary."""
     from .mesh_files import stacked
 
     shapes = {}
@@ -299,6 +313,61 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
     if not shapes:
         raise ValueError("scene: no mesh with faces to render")
     return shapes, np.concatenate(seen)
+
+
+def gloss(material: Material) -> tuple[float, float]:
+    """(weight, roughness) of a surface's glossy reflection, which the glints' pass renders: its clear coat, else
+    the skin of a transmissive element (weight 1 at its transmission roughness), else none (weight 0)."""
+    if material.clearcoat > 0:
+        return float(material.clearcoat), float(material.clearcoat_roughness)
+    if material.transmission >= TRANSMISSIVE:
+        return 1.0, float(material.transmission_roughness)
+    return 0.0, 1.0
+
+
+def specular_bsdf(material: Material) -> dict:
+    """Reflection only, as the glints' pass sees a surface: Fresnel at the material's IOR times its gloss weight,
+    a microfacet lobe at the gloss roughness (Mitsuba's (rough)plastic with no diffuse part); black when matte."""
+    weight, rough = gloss(material)
+    if weight <= 0:
+        return {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
+    bsdf = {
+        "type": "plastic",
+        "diffuse_reflectance": _rgb((0.0, 0.0, 0.0)),
+        "specular_reflectance": _rgb((weight, weight, weight)),
+        "int_ior": float(material.ior),
+        "ext_ior": float(material.exterior_ior),
+    }
+    a = alpha(rough)
+    return {**bsdf, "type": "roughplastic", "alpha": a, "distribution": "ggx"} if a > 1e-3 else bsdf
+
+
+def highlight_dict(scene: ShadedScene, description: dict) -> dict:
+    """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
+    surface reflecting only its gloss (``specular_bsdf``), the table and sky black, lit by the key's bright core
+    alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce."""
+    shapes = {}
+    for key, shape in description.items():
+        if key.startswith("shape_"):
+            bsdf = specular_bsdf(scene.materials[int(key.removeprefix("shape_"))])
+            shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
+    key_light = description["key"]  # the core sits at the key's centre, as far away
+    distance = float(key_light["radius"]) / np.tan(KEY_ANGLE)
+    sensor = dict(description["sensor"])
+    sensor["sampler"] = {"type": SAMPLER, "sample_count": min(sensor["sampler"]["sample_count"], HIGHLIGHT_SPP)}
+    return {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": 2},
+        "sensor": sensor,
+        "key": {
+            "type": "sphere",
+            "center": key_light["center"],
+            "radius": float(distance * np.tan(HIGHLIGHT_ANGLE)),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": HIGHLIGHT_RADIANCE}},
+        },
+        "table": {**description["table"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
+        **shapes,
+    }
 
 
 def scene_dict(
@@ -367,11 +436,21 @@ def scene_dict(
 
 @dataclass(frozen=True)
 class Layers:
-    """A render's linear colour and the denoiser's guides, float32 (height, width, 3) each."""
+    """A render's linear colour, the denoiser's guides and the glints (``highlight_dict``, added after denoising),
+    float32 (height, width, 3) each."""
 
     color: np.ndarray
     albedo: np.ndarray
     normal: np.ndarray
+    highlights: np.ndarray
+
+    def noisy(self) -> np.ndarray:
+        """The linear picture without denoising: path-traced colour plus glints."""
+        return self.color + self.highlights
+
+    def denoised(self) -> np.ndarray:
+        """The linear picture: denoised path-traced colour plus glints (``denoise``)."""
+        return denoise(self) + self.highlights
 
 
 def render_layers(
@@ -386,7 +465,8 @@ def render_layers(
     max_depth: int | None = None,
     subsurface: bool = False,
 ) -> Layers:
-    """Path-traced linear colour with albedo and normal AOVs; same inputs and seed ⇒ the same bits."""
+    """Path-traced linear colour with albedo and normal AOVs and the glints' pass; same inputs and seed ⇒ the same
+    bits."""
     import tempfile
 
     import mitsuba as mi
@@ -400,8 +480,10 @@ def render_layers(
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV})
         aov = np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=min(spp, GUIDE_SPP)), np.float32)
-    color = np.nan_to_num(image[..., 0:3], nan=0.0, posinf=0.0) * np.float32(EXPOSURE)
-    return Layers(np.maximum(color, 0.0), np.clip(aov[..., 0:3], 0.0, 1.0), np.clip(aov[..., 3:6], -1.0, 1.0))
+        glints = np.asarray(mi.render(mi.load_dict(highlight_dict(scene, description)), seed=seed), np.float32)
+    color, glints = (np.nan_to_num(x[..., 0:3], nan=0.0, posinf=0.0) * np.float32(EXPOSURE) for x in (image, glints))
+    albedo, normal = np.clip(aov[..., 0:3], 0.0, 1.0), np.clip(aov[..., 3:6], -1.0, 1.0)
+    return Layers(np.maximum(color, 0.0), albedo, normal, np.maximum(glints, 0.0))
 
 
 def denoise(layers: Layers) -> np.ndarray:
@@ -447,4 +529,4 @@ def render(
     layers = render_layers(
         scene, camera, width, height, spp, light_direction, seed, max_depth=max_depth, subsurface=subsurface
     )
-    return linear_to_srgb8(tone_map(denoise(layers) if denoised else layers.color))
+    return linear_to_srgb8(tone_map(layers.denoised() if denoised else layers.noisy()))

@@ -81,19 +81,26 @@ def rice_material(water: float, name: str = "rice") -> Material:
 
 
 def ikura_materials() -> tuple[Material, Material]:
-    """(membrane, yolk): a clear dielectric skin (IOR 1.36) holding an orange fluid, around an oil yolk.
+    """(membrane, yolk): a clear dielectric skin (IOR 1.36) holding a deep orange-red fluid, around an oil yolk.
 
     Both are transmissive: ``subsurface_color`` is the colour light keeps after crossing the part (absorption
-    over ``subsurface_radius`` mm), so the yolk shows through the membrane as a deeper, frosted orange core
+    over ``subsurface_radius`` mm), so the yolk shows through the membrane as a brighter, frosted orange core
     (oil, IOR 1.47, in the egg fluid). All-specular eggs also keep the preview's caustic noise low: no diffuse
     surface inside an egg is lit only through its skin.
+
+    Colour: the roe's pigment is astaxanthin, absorbing blue and green (maximum ≈ 470–480 nm) and passing red, so
+    light through an egg keeps its red, a little of its green and almost no blue. No measured spectrum of ikura is
+    at hand: the fluid's colour is chosen to read as ikura's deep orange-red, linear (0.80, 0.07, 0.01) = sRGB
+    (231, 75, 25), CIELAB hue 45° and chroma 83 (it was (0.90, 0.20, 0.02) = sRGB (243, 124, 39), hue 57° and
+    chroma 75: amber), and light through the whole egg (two crossings of the fluid) keeps (0.85, 0.10, 0.012);
+    the yolk's oil is orange.
     """
     membrane = Material(
         name="ikura_membrane",
-        base_color=(0.90, 0.20, 0.02),
+        base_color=(0.80, 0.07, 0.01),
         subsurface=0.0,
         subsurface_radius=(4.0, 1.2, 0.5),
-        subsurface_color=(0.97, 0.30, 0.045),
+        subsurface_color=(0.85, 0.10, 0.012),
         specular=0.5,
         roughness=0.2,
         clearcoat=1.0,
@@ -104,10 +111,10 @@ def ikura_materials() -> tuple[Material, Material]:
     )
     yolk = Material(
         name="ikura_yolk",
-        base_color=(1.0, 0.55, 0.10),
+        base_color=(1.0, 0.40, 0.05),
         subsurface=0.0,
         subsurface_radius=(1.0, 0.4, 0.1),
-        subsurface_color=(1.0, 0.70, 0.30),
+        subsurface_color=(1.0, 0.50, 0.10),
         roughness=0.3,
         ior=1.47,
         exterior_ior=1.36,
@@ -240,6 +247,24 @@ def fish_materials(kind: str) -> tuple[Material, Material]:
         ior=1.47,
     )
     return flesh, fat
+
+
+NORI = "nori"  # a scenery mesh of this name (the ``nori`` node's band) gets ``nori_material``
+
+
+def nori_material() -> Material:
+    """Nori (dried, toasted laver sheet): near-black dark green, a faint sheen from its fibres and a slightly glossy
+    face. Linear (0.010, 0.018, 0.008) = sRGB (25, 36, 23); no measured values at hand, chosen to read as nori."""
+    return Material(
+        name=NORI,
+        base_color=(0.010, 0.018, 0.008),
+        roughness=0.45,
+        sheen=0.6,
+        sheen_tint=0.5,
+        clearcoat=0.25,
+        clearcoat_roughness=0.3,
+        ior=1.5,
+    )
 
 
 def ceramic_material(color) -> Material:

@@ -123,9 +123,9 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
     pieces = [piece for a in aggregates for piece in _element_pieces(a, settings, materials, numbers)]
     if not pieces:
         raise ValueError("aggregates: no elements to shade (every aggregate is empty)")
-    ceramic = mat.ceramic_material(settings.scenery_color)
+    ceramic, nori = mat.ceramic_material(settings.scenery_color), mat.nori_material()
     pieces += [
-        _Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), ceramic)
+        _Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), nori if m.name == mat.NORI else ceramic)
         for k, m in enumerate(scenery)
         if len(m.faces)
     ]

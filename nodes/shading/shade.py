@@ -30,7 +30,8 @@ def _check(params):
     # 4: syrup graded by depth below the mound's top (syrup_depth, _spread, _levels); chestnut, salmon, tuna presets
     # 5: plain ice keeps ≈ 99 % of the light per flake crossing (was 90–95 %: 5 mm of ice per 0.4 mm flake)
     # 6: water content and σ₀ come from the cooked material (input 'material')
-    version=6,
+    # 7: ikura deep orange-red (was amber), its yolk orange; a scenery mesh named 'nori' gets the nori material
+    version=7,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "material": In(
@@ -39,7 +40,12 @@ def _check(params):
             "needed when rice is shaded (a scene without rice uses the cooked_rice defaults' σ₀)",
             optional=True,
         ),
-        "scenery": In(Mesh, "other meshes to show, e.g. the bowl (glazed ceramic)", optional=True, many=True),
+        "scenery": In(
+            Mesh,
+            "other meshes to show, e.g. the bowl (glazed ceramic; one named 'nori': nori)",
+            optional=True,
+            many=True,
+        ),
     },
     outputs={
         "scene": Out(

@@ -10,7 +10,7 @@ from nodegraph.values import Mesh
 
 from ..values import Vessel
 
-KINDS = ("bowl", "onigiri", "sphere", "box", "cylinder", "block")
+KINDS = ("bowl", "onigiri", "sphere", "box", "cylinder", "block", "plate")
 
 
 def _check(params: dict) -> list[tuple[str, str]]:
@@ -59,7 +59,8 @@ def _region_fits_vessels(node_id: str, nodes) -> list[tuple[str, str]]:
 @node(
     "shape",
     # 3: the vessel output (a bowl's numbers, for vessel_region and measure)
-    version=3,
+    # 4: kind 'plate': a round plate with a flat well and a rim (was a box under the onigiri)
+    version=4,
     outputs={
         "mesh": Out(
             Mesh, "the closed region the elements fill (for a bowl: the cavity to the fill height plus the mound)"
@@ -79,7 +80,7 @@ def _region_fits_vessels(node_id: str, nodes) -> list[tuple[str, str]]:
         "size": Param(
             float,
             20.0,
-            "sphere/cylinder radius, onigiri circumscribed radius, bowl rim radius",
+            "sphere/cylinder radius, onigiri circumscribed radius, bowl / plate rim radius",
             range=(1e-3, 1e4),
             units="mm",
         ),
@@ -94,8 +95,15 @@ def _region_fits_vessels(node_id: str, nodes) -> list[tuple[str, str]]:
         "thickness": Param(float, 0.9, "onigiri thickness as a share of its circumscribed radius", range=(0.05, 2.0)),
         "roundness": Param(float, 0.35, "onigiri corner rounding (0 sharp triangle, 1 disc)", range=(0.01, 1.0)),
         "bulge": Param(float, 0.8, "onigiri face bulge: 1 ellipsoidal, towards 0 flat faces", range=(0.1, 1.0)),
-        "depth": Param(float, 45.0, "bowl cavity depth below the rim", range=(1e-3, 1e4), units="mm"),
-        "wall": Param(float, 4.0, "bowl wall / block tray wall thickness", range=(1e-3, 1e3), units="mm"),
+        "depth": Param(
+            float,
+            45.0,
+            "bowl cavity depth below the rim; plate: rim height above its well",
+            range=(1e-3, 1e4),
+            units="mm",
+        ),
+        "wall": Param(float, 4.0, "bowl wall / block tray wall / plate thickness", range=(1e-3, 1e3), units="mm"),
+        "well": Param(float, 0.65, "plate: radius of its flat well as a share of the rim radius", range=(0.05, 0.95)),
         "exponent": Param(
             float, 4.0, "block: superellipsoid exponent (2 an ellipsoid, larger towards a box)", range=(2.0, 20.0)
         ),
@@ -130,13 +138,15 @@ def shape(
     bulge,
     depth,
     wall,
+    well,
     exponent,
     fill,
     mound,
     offset,
     resolution,
 ):
-    """A closed target shape (outward normals), in millimetres, centred at ``offset`` (bowl: rim at z = offset z)."""
+    """A closed target shape (outward normals), in millimetres, centred at ``offset`` (bowl: rim at z = offset z;
+    plate: the top of its flat well at z = offset z)."""
     from . import solids
 
     container = None
@@ -151,6 +161,8 @@ def shape(
         container = solids.tray(extents, wall)
     elif kind == "onigiri":
         mesh = solids.onigiri(size, thickness * size, roundness, bulge, subdivisions=resolution)
+    elif kind == "plate":
+        mesh = solids.plate(size, depth, wall, well, segments=12 * 2 ** (resolution - 1), rings=max(4, 2**resolution))
     else:
         mesh, container = solids.bowl(
             size, depth, wall, fill, mound, segments=12 * 2 ** (resolution - 1), rings=4 * 2 ** (resolution - 1)

@@ -115,6 +115,22 @@ def bowl(
     return region, container
 
 
+def plate(
+    radius: float, rim: float, thickness: float, well: float, segments: int = 96, rings: int = 16
+) -> trimesh.Trimesh:
+    """A round plate: a flat well (radius ``well``·``radius``, its top at z = 0, where food rests) whose rim
+    rises to ``rim`` above the well at the outer ``radius`` along z = rim·t² (t from the well's edge to the rim:
+    tangent to the well, steepest at the lip), ``thickness`` thick (measured along z). A solid of revolution,
+    closed by construction."""
+    inner = well * radius
+    t = np.linspace(0.0, 1.0, rings)
+    r = inner + (radius - inner) * t
+    top = np.stack([r, rim * t**2], axis=1)
+    under = top - [0.0, thickness]
+    profile = np.vstack([[[0.0, -thickness]], under, top[::-1], [[0.0, 0.0]]])  # counter-clockwise in (r, z)
+    return _revolve(_dedupe(profile), segments)
+
+
 def _dedupe(profile: np.ndarray) -> np.ndarray:
     keep = np.ones(len(profile), bool)
     keep[1:] = np.linalg.norm(np.diff(profile, axis=0), axis=1) > 1e-9
@@ -145,3 +161,72 @@ def tray(extents: tuple[float, float, float], wall: float) -> trimesh.Trimesh:
     inner = manifold3d.Manifold.cube([a, b, c + wall], center=True).translate([0, 0, wall / 2])
     out = (outer - inner).to_mesh()
     return trimesh.Trimesh(np.asarray(out.vert_properties)[:, :3], np.asarray(out.tri_verts), process=True)
+
+
+def first_hits(origins: np.ndarray, directions: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(distance, face) of each ray's nearest crossing of a triangle (Möller–Trumbore); inf and −1 for a miss."""
+    a, edge1, edge2 = triangles[:, 0], triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]
+    distance = np.full(len(origins), np.inf)
+    face = np.full(len(origins), -1)
+    for start in range(0, len(origins), 64):
+        o, d = origins[start : start + 64, None, :], directions[start : start + 64, None, :]
+        p = np.cross(d, edge2)
+        det = np.einsum("rfk,fk->rf", p, edge1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / det
+            s = o - a
+            u = np.einsum("rfk,rfk->rf", s, p) * inv
+            q = np.cross(s, edge1)
+            v = np.einsum("rfk,rfk->rf", d, q) * inv
+            t = np.einsum("rfk,fk->rf", q, edge2) * inv
+            hit = (np.abs(det) > 1e-12) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-9)
+        t = np.where(hit, t, np.inf)
+        nearest = np.argmin(t, axis=1)
+        distance[start : start + 64] = t[np.arange(len(t)), nearest]
+        face[start : start + 64] = np.where(np.isfinite(distance[start : start + 64]), nearest, -1)
+    return distance, face
+
+
+def wrap_band(
+    vertices: np.ndarray, faces: np.ndarray, width: float, height: float, gap: float, columns: int, rows: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """A sheet folded round the bottom of a closed shape (faces along ±y): for each of ``columns + 1`` cuts across
+    x (``width`` wide, centred), rays in the y–z plane from the point at ``height`` above the shape's lowest point
+    sweep the half-turn below it (horizontal towards −y, down, horizontal towards +y); their first hits, moved
+    ``gap`` out along the hit face's normal, are the sheet's vertices. Its edges: the cuts at ±width/2 and the
+    plane at ``height``. Raises when the band would leave the shape (a ray from outside it, or a miss)."""
+    vertices, faces = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
+    triangles = vertices[faces]
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    middle = 0.5 * (lo + hi)
+    if not height < hi[2] - lo[2]:
+        raise ValueError(f"height: {height:g} mm reaches over the shape ({hi[2] - lo[2]:g} mm tall)")
+    xs = middle[0] + np.linspace(-0.5 * width, 0.5 * width, columns + 1)
+    angles = np.linspace(-np.pi, 0.0, rows + 1)  # from −y round under the shape to +y
+    near = (triangles[:, :, 0].max(axis=1) >= xs[0]) & (triangles[:, :, 0].min(axis=1) <= xs[-1])
+    near &= triangles[:, :, 2].min(axis=1) <= lo[2] + height  # only faces the band can meet
+    triangles, normals = triangles[near], normals[near]
+    x, angle = (g.ravel() for g in np.meshgrid(xs, angles, indexing="ij"))  # column-major: rows vary fastest
+    origins = np.stack([x, np.full_like(x, middle[1]), np.full_like(x, lo[2] + height)], axis=1)
+    directions = np.stack([np.zeros_like(x), np.cos(angle), np.sin(angle)], axis=1)
+    distance, face = first_hits(origins, directions, triangles)
+    if (face < 0).any() or (np.einsum("ij,ij->i", normals[face], directions) <= 0).any():
+        raise ValueError(
+            f"width: a band {width:g} mm wide and {height:g} mm high leaves the shape "
+            f"({hi[0] - lo[0]:g} mm wide): make it narrower or lower"
+        )
+    points = origins + distance[:, None] * directions + gap * normals[face]
+    k = np.arange((columns + 1) * (rows + 1)).reshape(columns + 1, rows + 1)
+    a, b, c, d = k[:-1, :-1], k[1:, :-1], k[1:, 1:], k[:-1, 1:]
+    quads = np.stack([a, b, c, d], axis=-1).reshape(-1, 4)
+    triangles_out = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    outward = np.cross(
+        points[triangles_out[:, 1]] - points[triangles_out[:, 0]],
+        points[triangles_out[:, 2]] - points[triangles_out[:, 0]],
+    )
+    centre_normal = normals[face][triangles_out].sum(axis=1)
+    if np.einsum("ij,ij->", outward, centre_normal) < 0:
+        triangles_out = triangles_out[:, ::-1]
+    return points, triangles_out

@@ -9,7 +9,7 @@ import trimesh
 from nodes.shapes import boolean, mesh_file, shape
 
 
-@pytest.mark.parametrize("kind", ["bowl", "onigiri", "sphere", "box", "cylinder"])
+@pytest.mark.parametrize("kind", ["bowl", "onigiri", "sphere", "box", "cylinder", "plate"])
 def test_every_kind_is_a_closed_outward_solid(kind):
     out = shape.call(kind=kind, resolution=3)
     mesh = trimesh.Trimesh(out["mesh"].vertices, out["mesh"].faces, process=False)

@@ -1,0 +1,107 @@
+"""Our preview beside Blender's Cycles render of the same exported .glb, under the same camera and light
+(issue 26: do the two renderers agree about the same materials?).
+
+    python tools/blender_side_by_side.py graphs/ikura_don.yaml [--draft] [--set NODE.PARAM=VALUE] [--samples N]
+
+Runs the recipe (from the cache where it can) for its .glb and preview, then renders the .glb with Blender
+Cycles (the ``bpy`` venv ``tools/make_blender_venv.sh`` makes: ``$NODEGRAPH_BLENDER_PYTHON`` or
+``.venv-blender/bin/python``; tools/blender_render_glb.py) at the preview's size, camera (elevation, azimuth,
+field of view, margin) and light (sky, key, glints, table, exposure: ``nodes.export.mitsuba_scene``'s numbers),
+and writes the two side by side, captioned with their render times. Without the Blender venv it says so and stops.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+SCRIPT = REPO / "tools" / "blender_render_glb.py"
+
+
+def blender_python() -> Path:
+    path = Path(os.environ.get("NODEGRAPH_BLENDER_PYTHON", REPO / ".venv-blender" / "bin" / "python"))
+    if not path.exists():
+        sys.exit(f"no Blender venv at {path}: make it with tools/make_blender_venv.sh")
+    return path
+
+
+def settings(preview_params: dict, samples: int) -> dict:
+    """The Blender render's camera and light: the preview node's parameters and the Mitsuba scene's light."""
+    from nodes.export import mitsuba_scene as ms
+
+    p = preview_params
+    return {
+        **{k: p[k] for k in ("width", "height", "elevation", "azimuth", "fov", "margin")},
+        "sun_direction": list(p["sun_direction"]),
+        "samples": samples,
+        "sky": ms.SKY,
+        "key_irradiance": ms.KEY_SHARE * ms.SKY * np.pi,  # the sphere key's irradiance (``scene_dict``)
+        "key_angle": ms.KEY_ANGLE,
+        "glint_irradiance": ms.HIGHLIGHT_RADIANCE * np.pi * np.tan(ms.HIGHLIGHT_ANGLE) ** 2,
+        "glint_angle": ms.HIGHLIGHT_ANGLE,
+        "table_color": list(ms.TABLE_COLOR),
+        "exposure": ms.EXPOSURE,
+        "max_depth": ms.MAX_DEPTH_MEDIA,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("recipe", type=Path)
+    parser.add_argument("--draft", action="store_true", help="the recipe's draft (small scene and preview)")
+    parser.add_argument("--set", action="append", default=[], metavar="NODE.PARAM=VALUE", help="as nodegraph run")
+    parser.add_argument("--samples", type=int, default=64, help="Cycles samples (denoised with OIDN)")
+    parser.add_argument(
+        "--out", type=Path, default=None, help="the PNG (default outputs/<recipe>/blender_side_by_side.png)"
+    )
+    args = parser.parse_args()
+    python = blender_python()
+
+    from nodegraph.api import Cache, default_cache_dir, default_registry, load_recipe, run_recipe
+    from nodegraph.contact_sheet import grid_pixels
+    from nodegraph.output_files import write_output
+    from nodegraph.values import Image
+
+    recipe = load_recipe(args.recipe, default_registry(), args.set, draft=args.draft)
+    out_dir = REPO / "outputs" / f"{recipe.name}{'_draft' if args.draft else ''}"
+    start = time.perf_counter()
+    result = run_recipe(
+        recipe, outputs=["export.files", "preview.image"], cache=Cache(default_cache_dir()), out_dir=out_dir
+    )
+    ours_seconds = time.perf_counter() - start
+    glb = next(out_dir.glob("*.glb"))
+    ours = result.output("preview.image").pixels
+    with tempfile.TemporaryDirectory(prefix="blender-side-") as tmp:
+        settings_path, render = Path(tmp) / "settings.json", Path(tmp) / "cycles.png"
+        settings_path.write_text(json.dumps(settings(recipe.nodes["preview"].params, args.samples)))
+        start = time.perf_counter()
+        done = subprocess.run(
+            [str(python), str(SCRIPT), str(glb), str(settings_path), str(render)], capture_output=True, text=True
+        )
+        blender_seconds = time.perf_counter() - start
+        if done.returncode or not render.exists():
+            sys.exit(f"{glb}: Blender failed:\n{done.stderr[-3000:]}")
+        from PIL import Image as PILImage
+
+        theirs = np.asarray(PILImage.open(render).convert("RGB"))
+    labels = [
+        f"nodegraph preview (Mitsuba, {recipe.nodes['preview'].params['samples']} spp + OIDN)",
+        f"Blender 4.5 Cycles, {args.samples} spp + OIDN ({blender_seconds:.0f} s with import)",
+    ]
+    pixels = grid_pixels([ours, theirs], 2, labels, 8, max(16, ours.shape[0] // 12))
+    out = args.out or out_dir / "blender_side_by_side.png"
+    write_output(Image(pixels), out.parent, out.stem)
+    print(f"wrote {out} (ours {ours_seconds:.0f} s incl. the recipe, Blender {blender_seconds:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
