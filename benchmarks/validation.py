@@ -943,7 +943,8 @@ def squeeze_case(quick: bool, figures: dict) -> Case:
     )
 
 
-def _plot_squeeze(loads, xpbd_strain, body_loads, body):
+def _axes():
+    """pyplot (headless), a new figure and its axes, the plot folder made: the cases' plots all start so."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -951,6 +952,11 @@ def _plot_squeeze(loads, xpbd_strain, body_loads, body):
 
     IMAGES.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(figsize=(5, 3.2))
+    return plt, fig, ax
+
+
+def _plot_squeeze(loads, xpbd_strain, body_loads, body):
+    plt, fig, ax = _axes()
     ax.plot(loads, np.array(xpbd_strain) * 100, "o-", label="xpbd grain (8 particles) under a plate")
     ax.plot(body_loads, [r["strain"] * 100 for r in body], "s-", label="elastic body (tearing on), k fitted")
     torn = [(f, r["strain"] * 100) for f, r in zip(body_loads, body) if r["tears"]]
@@ -1041,13 +1047,7 @@ def janssen_case(quick: bool, figures: dict) -> Case:
 
 
 def _plot_janssen(filled, apparent, sat, smooth):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    IMAGES.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(5, 3.2))
+    plt, fig, ax = _axes()
     m = np.linspace(0, filled.max() * 1.05, 100)
     ax.plot(m, m, ":", color="gray", label="M_app = M (no wall friction)")
     ax.plot(m, sat * (1 - np.exp(-m / sat)), "-", label=f"Janssen fit, M_sat = {sat:.1f} g")
@@ -1065,13 +1065,7 @@ def _plot_janssen(filled, apparent, sat, smooth):
 
 
 def _plot_curve(name, xs, series, xlabel, ylabel):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    IMAGES.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(5, 3.2))
+    plt, fig, ax = _axes()
     for label, ys in series.items():
         ax.plot(xs, ys, "o-", label=label)
     ax.set_xlabel(xlabel)
