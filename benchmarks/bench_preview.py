@@ -285,11 +285,11 @@ def main():
     if args.quick:
         scene, camera, params = quick_scene()
         width, height, crop = 320, 180, Crop(112, 63, 96, 54)
-        reference_spp, spps, timed_spps = 64, (1, 4, 12), (1, 4, 12)
+        reference_spp, spps, timed_spps = 64, (1, 4, 10), (1, 4, 10)
     else:
         scene, camera, params = main_job_scene(args.cache_dir)
         width, height, crop = 1280, 720, Crop(544, 306, 192, 108)
-        reference_spp, spps, timed_spps = 1024, (1, 2, 4, 8, 12, 16, 32), (2, 4, 8, 12, 16)
+        reference_spp, spps, timed_spps = 1024, (1, 2, 4, 8, 10, 12, 16, 32), (2, 4, 8, 10, 12, 16)
     sun = params["sun_direction"]
 
     t = time.perf_counter()
