@@ -111,7 +111,15 @@ def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_temp_file
     subprocess.run(command(tmp_path), check=True, cwd=tmp_path)
     complete = rrd.read_bytes()
     write(tmp_path, seconds=20.0, started=tmp_path / "started")
-    proc = subprocess.Popen(command(tmp_path, quiet=False), cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    # a run started in the background of a non-interactive shell (as CI may start the suite) inherits SIGINT
+    # ignored; the user at a terminal, whom this test stands for, has it at its default
+    proc = subprocess.Popen(
+        command(tmp_path, quiet=False),
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     partial = rrd.with_name("slowrun.partial.rrd")
     node_started(tmp_path / "started", proc)  # the slow node is running (20 s to go): the signal lands inside it
     proc.send_signal(sig)
