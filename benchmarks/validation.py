@@ -955,6 +955,16 @@ def _axes():
     return plt, fig, ax
 
 
+def _saved(plt, fig, ax, path, legend: int | None = 8) -> str:
+    """Grid and legend on, the figure written to ``path`` and closed; its path as the doc links it."""
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=legend)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path.relative_to(DOC.parent))
+
+
 def _plot_squeeze(loads, xpbd_strain, body_loads, body):
     plt, fig, ax = _axes()
     ax.plot(loads, np.array(xpbd_strain) * 100, "o-", label="xpbd grain (8 particles) under a plate")
@@ -966,13 +976,7 @@ def _plot_squeeze(loads, xpbd_strain, body_loads, body):
     ax.axhline(50, color="gray", ls=":", label="fracture near 50 %")
     ax.set_xlabel("load (N)")
     ax.set_ylabel("strain (%)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    path = IMAGES / "squeezed_grain.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return str(path.relative_to(DOC.parent))
+    return _saved(plt, fig, ax, IMAGES / "squeezed_grain.png", legend=7)
 
 
 SILO_D = 12.0  # mm, six sphere diameters
@@ -1055,13 +1059,7 @@ def _plot_janssen(filled, apparent, sat, smooth):
     ax.plot([smooth["M"]], [smooth["apparent"]], "s", label="frictionless")
     ax.set_xlabel("filled mass M (g)")
     ax.set_ylabel("apparent mass at the base (g)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = IMAGES / "janssen.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return str(path.relative_to(DOC.parent))
+    return _saved(plt, fig, ax, IMAGES / "janssen.png")
 
 
 def _plot_curve(name, xs, series, xlabel, ylabel):
@@ -1070,13 +1068,7 @@ def _plot_curve(name, xs, series, xlabel, ylabel):
         ax.plot(xs, ys, "o-", label=label)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    path = IMAGES / f"{name}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return str(path.relative_to(DOC.parent))
+    return _saved(plt, fig, ax, IMAGES / f"{name}.png", legend=None)
 
 
 DIAGNOSIS = [
