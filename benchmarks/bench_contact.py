@@ -8,8 +8,8 @@ watertight share), each element's volume against its volume before the contact s
 
 CHECKERS_DIR holds ``overlap_check.py`` and ``mesh_quality.py`` (they need trimesh, scipy and libigl); by default
 the project's ``../shared/tools`` beside the checkout. "before" runs
-the recipe as it is (``flatten_contacts``), "after" with those steps swapped for ``deform_contacts`` (which takes
-every setting the flattening has); both share one node cache, so the simulation runs once. One JSON line per run.
+the recipe with its contact steps as ``flatten_contacts``, "after" as ``deform_contacts`` (the recipes' own; both
+take the settings the recipes give); both share one node cache, so the simulation runs once. One JSON line per run.
 """
 
 from __future__ import annotations
@@ -33,26 +33,31 @@ QUICK_CPU_S = 360
 RECIPES = ("ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_bunny")
 
 
+# every element its own mesh: the checkers read no EXT_mesh_gpu_instancing (an undented grain would be judged at
+# its prototype's place)
+EXPORT = ["export.formats=[glb]", "export.instancing=false"]
+
+
 def overrides(name: str, full: bool) -> list[str]:
     """The reduced sizes of ``benchmarks/bench_scenes.py`` (the bunny: its draft block, a small cut preview)."""
     if full:
-        return ["export.formats=[glb]"]
+        return EXPORT
     if name == "rice_bunny":
         keep = [o for o in bench_scenes.draft_overrides(name) if ".wall_cells" not in o and "preview" not in o]
         small = ["cut_preview.width=320", "cut_preview.height=180", "cut_preview.samples=4"]
-        return keep + bench_scenes.PREVIEW[:3] + small + ["export.formats=[glb]"]
-    return [o for o in bench_scenes._quick(name) if not o.startswith("measure.")] + ["export.formats=[glb]"]
+        return keep + bench_scenes.PREVIEW[:3] + small + EXPORT
+    return [o for o in bench_scenes._quick(name) if not o.startswith("measure.")] + EXPORT
 
 
 def recipe_file(name: str, variant: str) -> Path:
-    """The recipe, or for "after" a copy beside it (its assets are relative) with the contact deformation instead."""
+    """A copy of the recipe beside it (its assets are relative) with its contact steps of one type: "before"
+    ``flatten_contacts``, "after" ``deform_contacts``."""
     path = REPO / "graphs" / f"{name}.yaml"
-    if variant == "before":
-        return path
-    text = path.read_text().replace("type: flatten_contacts", "type: deform_contacts")
-    before = path.with_name(f".after_{name}.yaml")
-    before.write_text(text)
-    return before
+    types = ("deform_contacts", "flatten_contacts") if variant == "before" else ("flatten_contacts", "deform_contacts")
+    text = path.read_text().replace(f"type: {types[0]}", f"type: {types[1]}")
+    copy = path.with_name(f".{variant}_{name}.yaml")
+    copy.write_text(text)
+    return copy
 
 
 def volume(mesh) -> float:
@@ -69,8 +74,7 @@ def measure(name: str, variant: str, full: bool, checkers: Path, work: Path) -> 
     try:
         recipe = load_recipe(path, default_registry(), overrides(name, full))
     finally:
-        if variant == "after":
-            path.unlink()
+        path.unlink()
     steps = [n for n, e in recipe.nodes.items() if e.spec.type_name in ("flatten_contacts", "deform_contacts")]
     inputs = {s: str(recipe.nodes[s].inputs["aggregate"][0]) for s in steps}
     wanted = [str(w) for w in recipe.outputs] + [f"{s}.aggregate" for s in steps] + list(inputs.values())
@@ -120,15 +124,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--full", action="store_true", help="full sizes (minutes per recipe on 2 cores)")
     parser.add_argument("--quick", action="store_true", help="the reduced main job only (a smoke run)")
     parser.add_argument("--variants", default="before,after")
+    parser.add_argument("--work", type=Path, help="keep the node caches and scenes here (re-runs reuse the simulation)")
     args = parser.parse_args(argv)
     if args.quick:
         args.recipes = ["ikura_don"]
     if not (args.checkers / "overlap_check.py").is_file():
         parser.error(f"checkers: no overlap_check.py in {args.checkers}; give the folder that holds the checkers")
     with tempfile.TemporaryDirectory(prefix="bench-contact-") as tmp:
+        work = args.work or Path(tmp)
         for name in args.recipes:
             for variant in args.variants.split(","):
-                print(json.dumps(measure(name, variant, args.full, args.checkers, Path(tmp))), flush=True)
+                print(json.dumps(measure(name, variant, args.full, args.checkers, work)), flush=True)
     return 0
 
 

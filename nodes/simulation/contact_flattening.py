@@ -344,6 +344,7 @@ def _gather(aggregates, fields_of) -> _Elements:
     """Flatten ``aggregates`` into one list of elements; ``fields_of(mesh)`` gives a mesh's shape index."""
     rows = {k: [] for k in ("lin_inv", "rot", "bend", "t", "shape", "lo", "hi", "thickness")}
     world, shell = [], []
+    outer_of: dict[int, tuple] = {}  # per library mesh: its outer shell's vertices and thickness, found once
     for aggregate in aggregates:
         p = aggregate.placement
         rot = np.asarray(p.rotations, np.float64)
@@ -354,11 +355,14 @@ def _gather(aggregates, fields_of) -> _Elements:
             library = aggregate.libraries[p.kinds[i]]
             base = library.meshes[p.variants[i] % len(library)]
             mesh = aggregate.element_mesh(i)
-            outer = outer_vertices(base)
+            if id(base) not in outer_of:
+                used = outer_vertices(base)
+                outer_of[id(base)] = (used, float(np.ptp(base.vertices[used], axis=0).min()))
+            outer, thickness = outer_of[id(base)]
             points = mesh.vertices[outer]
             rows["lo"].append(points.min(axis=0))
             rows["hi"].append(points.max(axis=0))
-            rows["thickness"].append(float(np.ptp(base.vertices[outer], axis=0).min()))
+            rows["thickness"].append(thickness)
             rows["shape"].append(fields_of(base))
             world.append(np.asarray(mesh.vertices, np.float64))
             shell.append(outer)

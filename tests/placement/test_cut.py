@@ -97,7 +97,7 @@ def test_rice_bunny_recipe_has_the_cut_view():
     }
     assert nodes["cut"].spec.type_name == "cut" and nodes["cut_preview"].spec.type_name == "preview"
     assert wires == {
-        ("cut", "aggregate"): ["flatten.aggregate"],
+        ("cut", "aggregate"): ["contact.aggregate"],
         ("shade_cut", "aggregates"): ["cut.aggregate"],
         ("cut_preview", "scene"): ["shade_cut.scene"],
     }
