@@ -189,14 +189,15 @@ class Cache:
         manifest["rerun"] = self._keep_fragment(key, fragment)
         atomic_write(self._entry_path(key), json.dumps(manifest, sort_keys=True, indent=1).encode())
 
-    def fragment(self, key: str, loggers: str) -> Fragment | None:
+    def fragment(self, key: str, loggers: str | None) -> Fragment | None:
         """Entry ``key``'s Rerun fragment (None: the entry or its fragment is missing, or it was logged by other
-        loggers than ``loggers``); CacheCorruption (and the fragment removed) when its bytes do not match."""
+        loggers than ``loggers``; ``loggers`` None: by any); CacheCorruption (and the fragment removed) when its
+        bytes do not match."""
         try:
             record = self._manifest(key).get("rerun")
         except FileNotFoundError:
             return None
-        if not isinstance(record, dict) or record.get("loggers") != loggers:
+        if not isinstance(record, dict) or (loggers is not None and record.get("loggers") != loggers):
             return None
         path = self.fragment_path(key)
         try:
@@ -208,7 +209,7 @@ class Cache:
         if len(data) != record.get("size") or hashlib.sha256(data).hexdigest() != record.get("sha256"):
             path.unlink(missing_ok=True)  # the entry's values are still good: only the fragment is logged again
             raise CacheCorruption(f"Rerun fragment {path} does not match its entry (truncated or edited)")
-        return Fragment(path, record["entity"], record["logged"], loggers)
+        return Fragment(path, record["entity"], record["logged"], record.get("loggers"))
 
     def has(self, key: str) -> bool:
         """True when a complete entry for ``key`` exists (blobs present with the recorded sizes)."""

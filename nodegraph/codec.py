@@ -13,6 +13,7 @@ import hashlib
 import importlib
 import io
 import json
+import weakref
 import zipfile
 from typing import Any
 
@@ -147,6 +148,38 @@ def freeze(value: Any) -> Any:
         for v in value.values():
             freeze(v)
     return value
+
+
+def is_frozen(value: Any) -> bool:
+    """True when every array reachable from ``value`` is read-only (as ``freeze`` leaves a node's output)."""
+    if isinstance(value, np.ndarray):
+        return not value.flags.writeable
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return all(is_frozen(getattr(value, f.name)) for f in dataclasses.fields(value))
+    if isinstance(value, (list, tuple)):
+        return all(is_frozen(v) for v in value)
+    if isinstance(value, dict):
+        return all(is_frozen(v) for v in value.values())
+    return True
+
+
+_DERIVED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def derived(value: Any, name: str, compute) -> Any:
+    """``compute(value)``, frozen, and kept with ``value`` while it lives when ``value`` is frozen: a node run
+    again in one process on an input that did not change (``nodegraph watch`` after an edit of another
+    parameter) reuses what it derives from that input alone instead of rebuilding it. ``name`` tells apart
+    what different code derives from one value; an unfrozen value (which could still change) is not kept."""
+    if not is_frozen(value):
+        return compute(value)
+    try:
+        kept = _DERIVED.setdefault(value, {})
+    except TypeError:  # a value that cannot be referred to weakly (a tuple, a number): nothing to keep it with
+        return freeze(compute(value))
+    if name not in kept:
+        kept[name] = freeze(compute(value))
+    return kept[name]
 
 
 def thaw(value: Any) -> Any:

@@ -340,6 +340,7 @@ class Executor:
         if fragment is None:
             capture = self.recording.capture(self.cache.capture_path(key))
             try:
+                self._carry_run_logs(inst, capture)
                 made = self._capture_outputs(inst, capture, self.values[inst])
                 self.cache.add_fragment(key, made)
             finally:
@@ -347,6 +348,27 @@ class Executor:
             fragment = replace(made, path=self.cache.fragment_path(key))
         self._append(inst, fragment, live=False)
         self.status[inst].log_seconds = now() - start
+
+    def _carry_run_logs(self, inst: Instance, capture: NodeCapture) -> None:
+        """Into a new fragment of a cached instance, what the node logged as it ran (``/<node>/log/…``, e.g. a
+        simulation step by step) from the fragment the entry kept, when only the loggers of its outputs changed:
+        that part is the node's own code, which the entry's key covers, and cannot be logged again without
+        running the node."""
+        try:
+            old = self.cache.fragment(self.keys[inst], None)
+        except CacheCorruption:
+            return
+        if old is None:
+            return
+        from rerun.chunk import RrdReader
+
+        chunks = RrdReader(str(old.path)).stream().filter(content=f"{old.entity}/{LOG}/**")
+        if old.entity != inst.entity:  # an identical node elsewhere in the recipe logged it
+            cut = len(old.entity)
+            chunks = chunks.map(lambda chunk: chunk.with_entity_path(inst.entity + chunk.entity_path[cut:]))
+        capture.stream.send_chunks(chunks)
+        ran = {sub: kinds for sub, kinds in old.logged.items() if sub == f"/{LOG}" or sub.startswith(f"/{LOG}/")}
+        capture.index.add_relative(inst.entity, ran)
 
     def _where(self, inst: Instance):
         return self.recipe.source.at(("nodes", inst.node), key=True)

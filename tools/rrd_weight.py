@@ -1,7 +1,8 @@
 """How heavy a Rerun recording is and how long it takes to open: its size by entity (the chunk sizes
 ``rerun rrd print`` reports, summed per path prefix) and the seconds Rerun's own reader takes to decode and
 index every chunk into a chunk store (what a viewer does on opening the file, without drawing it; the machine
-has no display for the viewer itself), best of N, and ``rerun rrd verify``'s seconds.
+has no display for the viewer itself), best of N; the seconds the viewer program itself takes to ingest the file
+into its entity database and quit (``rerun --test-receive``, no window), best of N; and ``rerun rrd verify``'s.
 
     python tools/rrd_weight.py outputs/ikura_don/ikura_don.rrd [--depth 2] [--repeat 3]
 """
@@ -42,6 +43,18 @@ def open_seconds(path: Path, repeat: int) -> tuple[float, int]:
     return best, chunks
 
 
+def viewer_seconds(path: Path, repeat: int) -> float:
+    """Best-of-``repeat`` wall seconds of ``rerun --test-receive FILE``: the viewer program started, the file
+    ingested into its entity database, then quit (no window drawn; its gRPC port is an unusual one)."""
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.perf_counter()
+        command = ["rerun", "--test-receive", "--port", "19871", str(path)]
+        subprocess.run(command, capture_output=True, check=True, timeout=300)
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("rrd", type=Path)
@@ -51,12 +64,14 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     sizes = sizes_by_entity(args.rrd, args.depth)
     seconds, chunks = open_seconds(args.rrd, args.repeat)
+    viewer = viewer_seconds(args.rrd, args.repeat)
     start = time.perf_counter()
     verify = subprocess.run(["rerun", "rrd", "verify", str(args.rrd)], capture_output=True, text=True)
     verified = time.perf_counter() - start
     print(
         f"{args.rrd}: {args.rrd.stat().st_size / 1e6:.1f} MB on disk, {sum(sizes.values()) / 2**20:.1f} MiB of chunks, "
-        f"{chunks} chunks; read into a chunk store in {seconds:.2f} s (best of {args.repeat}); rerun rrd verify "
+        f"{chunks} chunks; read into a chunk store in {seconds:.2f} s, ingested by the viewer (rerun --test-receive) "
+        f"in {viewer:.2f} s (best of {args.repeat}); rerun rrd verify "
         f"{verified:.2f} s ({'ok' if verify.returncode == 0 else 'FAILED'})"
     )
     for entity, size in sizes.most_common(args.top):

@@ -1,4 +1,4 @@
-"""A shaded scene as USD (usd-core): UsdGeom meshes, UsdPreviewSurface materials — SPEC §4 output.
+"""A shaded scene as USD (usd-core): UsdGeom meshes, UsdPreviewSurface and MaterialX materials — SPEC §4 output.
 
 Z-up, millimetres (``metersPerUnit`` 0.001). Per-vertex CDRF colours go to ``primvars:displayColor`` (the
 fallback colour of viewers without materials) and the CDRF's per-vertex σ to ``primvars:cdrf_sigma``;
@@ -11,6 +11,11 @@ set the preview renders (subsurface weight and radius, sheen, transmission, diff
 Material prim as ``nodegraph:principled:*`` attributes (Blender's importer keeps them as the material's custom
 properties, which the add-on reads). Prim names are the meshes' and materials' own names made valid for USD
 (``ikura/0003/yolk`` → ``ikura_0003_yolk``), so importers show them as the recipe names them.
+Beside the UsdPreviewSurface (the material's universal ``outputs:surface``) each material has a MaterialX
+``standard_surface`` shader on ``outputs:mtlx:surface``, the convention of USD's MaterialX plug-in: renderers that
+read MaterialX (Houdini's Karma, usdview's Storm, Omniverse) take it and get transmission with absorption,
+subsurface and sheen; the others keep the UsdPreviewSurface. ``standard_surface`` rather than OpenPBR because
+MaterialX 1.38, which many of them still ship, has only the former.
 ``.usda`` comes from the in-memory layer; ``.usdc`` (crate) can only be
 written to a path, so it goes through a private temporary directory and is read back as bytes.
 """
@@ -24,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..values import Material, ShadedScene
+from .gltf_writer import SHEEN_ROUGHNESS
 from .look import PREFIX, principled_attributes
 
 
@@ -43,6 +49,48 @@ def prim_names(texts, fallback: str) -> list[str]:
         taken.add(name)
         names.append(name)
     return names
+
+
+STANDARD_SURFACE = "ND_standard_surface_surfaceshader"  # MaterialX's node definition (stdlib, 1.38 and 1.39)
+
+
+def standard_surface_inputs(material: Material) -> dict[str, float | tuple[float, float, float]]:
+    """The material's principled parameters as MaterialX ``standard_surface`` inputs (name → float or linear RGB).
+
+    Lengths are in the scene's unit (mm): ``subsurface_radius`` is the principled radius with ``subsurface_scale``
+    1, and the absorption inside eggs and ice is ``transmission_color`` reached at ``transmission_depth`` = the
+    mean radius, as the glTF file's ``KHR_materials_volume``. Specular follows Blender's convention as there:
+    0.5 is the dielectric default (weight 1)."""
+    tint = (1.0 - material.sheen_tint) + material.sheen_tint * np.asarray(material.base_color)
+
+    def rgb(values) -> tuple[float, float, float]:
+        return tuple(float(c) for c in values)
+
+    return {
+        "base": 1.0,
+        "base_color": rgb(material.base_color),
+        "metalness": float(material.metallic),
+        "specular": float(min(1.0, 2.0 * material.specular)),
+        "specular_roughness": float(material.roughness),
+        "specular_IOR": float(material.ior),
+        "specular_anisotropy": float(material.anisotropic),
+        "specular_rotation": float(material.anisotropic_rotation),
+        "transmission": float(material.transmission),
+        "transmission_color": rgb(material.subsurface_color),
+        "transmission_depth": float(np.mean(material.subsurface_radius)),
+        "transmission_extra_roughness": float(material.transmission_roughness),
+        "subsurface": float(material.subsurface),
+        "subsurface_color": rgb(material.subsurface_color),
+        "subsurface_radius": rgb(material.subsurface_radius),
+        "subsurface_scale": 1.0,
+        "sheen": float(material.sheen),
+        "sheen_color": rgb(np.clip(tint, 0.0, 1.0)),
+        "sheen_roughness": SHEEN_ROUGHNESS,
+        "coat": float(material.clearcoat),
+        "coat_roughness": float(material.clearcoat_roughness),
+        "emission": float(material.emission_strength if max(material.emission) > 0 else 0.0),
+        "emission_color": rgb(material.emission),
+    }
 
 
 def _material(stage, path: str, material: Material, translucency: float):
@@ -67,6 +115,12 @@ def _material(stage, path: str, material: Material, translucency: float):
     for name, (kind, value) in inputs.items():
         shader.CreateInput(name, kind).Set(value)
     look.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    mtlx = UsdShade.Shader.Define(stage, f"{path}/StandardSurface")
+    mtlx.CreateIdAttr(STANDARD_SURFACE)
+    for name, value in standard_surface_inputs(material).items():
+        kind = Sdf.ValueTypeNames.Color3f if isinstance(value, tuple) else Sdf.ValueTypeNames.Float
+        mtlx.CreateInput(name, kind).Set(Gf.Vec3f(*value) if isinstance(value, tuple) else value)
+    look.CreateSurfaceOutput("mtlx").ConnectToSource(mtlx.CreateOutput("out", Sdf.ValueTypeNames.Token))
     prim = look.GetPrim()
     for name, value in principled_attributes(material, translucency).items():
         kind = Sdf.ValueTypeNames.Color3f if isinstance(value, tuple) else Sdf.ValueTypeNames.Float

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nodegraph.codec import derived
 from nodegraph.values import Mesh
 
 from ..values import Aggregate, Material, ShadedScene
@@ -64,7 +65,7 @@ def _element_pieces(
     p = aggregate.placement
     kinds = [lib.kind for lib in aggregate.libraries]
     presets = [mat.preset_for_kind(kind, settings.presets) for kind in kinds]
-    meshes = [aggregate.element_mesh(i) for i in range(len(p))]
+    meshes = derived(aggregate, "element_meshes", lambda a: [a.element_mesh(i) for i in range(len(a.placement))])
     is_ice = np.array([presets[k] == "ice" for k in p.kinds], bool)
     grade = np.zeros(len(p), np.int64)
     if is_ice.any():

@@ -111,3 +111,52 @@ def test_the_logger_digest_covers_the_shared_drawing_helper(monkeypatch):
     real = Path.read_bytes
     monkeypatch.setattr(Path, "read_bytes", lambda self: real(self) + (b"#" if self == source else b""))
     assert logger_digest() != before
+
+
+def _shaded_scene():
+    """Grains, eggs of two parts, two ice flakes of two syrup grades and a bowl, as ``shade`` names them."""
+    from nodes.values import Material, ShadedScene
+
+    vertices, faces = _icosahedron()
+    rng = np.random.default_rng(1)
+    names = [f"japonica/{k:04d}" for k in range(5)] + ["ikura/0000/membrane", "ikura/0000/yolk"]
+    names += ["ikura/0001/membrane", "ikura/0001/yolk", "ice/0000", "ice/0001", "bowl_container"]
+    materials = [Material(name=n) for n in ("rice", "ikura_membrane", "ikura_yolk", "syrup 1", "syrup 2", "ceramic")]
+    material_of = [0] * 5 + [1, 2, 1, 2, 3, 4, 5]
+    meshes = [
+        Mesh(vertices + rng.normal(size=3) * 4, faces, name=n, normals=vertices, colors=rng.random((len(vertices), 3)))
+        for n in names
+    ]
+    return ShadedScene(meshes, materials, material_of)
+
+
+def _meshes(path):
+    """Entity path → (vertex positions, triangle indices) of each Mesh3D logged."""
+    out = {}
+    for chunk in RrdReader(str(path)).stream().collect().stream():
+        batch = chunk.to_record_batch()
+        if "Mesh3D:vertex_positions" in batch.schema.names:
+            positions = np.array(batch.column("Mesh3D:vertex_positions").to_pylist()[0])
+            triangles = np.array(batch.column("Mesh3D:triangle_indices").to_pylist()[0])
+            out[chunk.entity_path] = positions, triangles
+    return out
+
+
+def test_a_shaded_scene_is_one_mesh_per_part_and_material(tmp_path):
+    """The final meshes once, merged per element part and material: the grains one mesh, the eggs' membranes and
+    yolks one each, the ice one per syrup grade; the same triangles in the same places."""
+    from nodes.rerun_loggers import scene_groups
+
+    scene = _shaded_scene()
+    recording = RunRecording(tmp_path / "s.rrd", "shade")
+    log_value(scene, recording.logger("/shade/scene"))
+    recording.close()
+    meshes = _meshes(tmp_path / "s.rrd")
+    parts = ["japonica", "ikura/membrane", "ikura/yolk", "ice/syrup_1", "ice/syrup_2", "bowl_container"]
+    assert sorted(meshes) == sorted(f"/shade/scene/{p}" for p in parts)
+    groups = scene_groups(scene)
+    assert groups["japonica"] == [0, 1, 2, 3, 4] and groups["ikura/yolk"] == [6, 8]
+    for path, members in groups.items():
+        positions, triangles = meshes[f"/shade/scene/{path}"]
+        expected = np.concatenate([scene.meshes[i].vertices[scene.meshes[i].faces] for i in members])
+        assert np.allclose(positions[triangles], expected, atol=1e-5)

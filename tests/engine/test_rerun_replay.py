@@ -238,3 +238,9 @@ def test_a_fragment_logged_by_other_loggers_is_not_replayed(tmp_path, monkeypatc
     after = {node: record["loggers"] for node, record in fragments(tmp_path).items()}
     assert set(before.values()) != {"a-changed-logger"} and set(after.values()) == {"a-changed-logger"}
     assert {"/surf/mesh", "/pts/0/spheres"} <= entities(tmp_path / "new.rrd")
+    # what the nodes logged as they ran is their code's, not the loggers': carried over, not lost
+    steps = energy_steps(tmp_path / "old.rrd", "/slow/log/energy")
+    assert steps and energy_steps(tmp_path / "new.rrd", "/slow/log/energy") == steps
+    assert energy_steps(tmp_path / "new.rrd", "/slow_twin/log/energy") == steps  # the twin's, moved to its path
+    assert run(tmp_path, "--rrd", "again.rrd") == 0  # and kept in the new fragments
+    assert energy_steps(tmp_path / "again.rrd", "/slow/log/energy") == steps
