@@ -52,6 +52,8 @@ BUMP_SLOPE = 8.0 / (3.0 * np.sqrt(3.0))
 BUMP_WIDTHS = (1.42, 1.7, 2.0, 2.5, 3.0, 4.0)
 # dent passes per round at most: each pass meets every contact in turn; later dents rarely undo earlier ones
 DENT_PASSES = 8
+# a volume this close to the rest volume needs no bulge (a fiftieth of the 2 % bar)
+VOLUME_TOLERANCE = 4e-4
 
 
 class ShellFaces(NamedTuple):
@@ -95,10 +97,12 @@ class Lenses(NamedTuple):
 
 
 class Cap(NamedTuple):
-    """Scratch of one dent: the rows of the cut-in vertices and how far each must go along −n."""
+    """Scratch of one dent: the rows of the cut-in vertices, how far each must go along −n, and which shell
+    vertices are past a lens' plane (only those are looked up in the neighbour's field)."""
 
     rows: np.ndarray  # (most,) int64
     need: np.ndarray  # (most,)
+    past: np.ndarray  # (element's vertices,) bool
 
 
 class Figures(NamedTuple):
@@ -234,16 +238,20 @@ def dent(position, shell, cap, count, n, slope, edge, most):
 def _plane_cap(position, shell, j, maps, fields, margin, normal, plane, found, cap):
     """The cut-in vertices of a lens contact: near j's rest surface (within ``margin``, the clearance) and above its
     plane."""
-    cx = near_surface(position, shell, j, maps, fields, margin, found, 0)
-    count = 0
+    past = cap.past
+    above = 0
+    for k in range(position.shape[0]):
+        h = normal[0] * position[k, 0] + normal[1] * position[k, 1] + normal[2] * position[k, 2]
+        past[k] = shell[k] and h > plane + 1e-3 * margin  # past it by more than rounding: no push is exact
+        above += past[k]
+    if above == 0:
+        return 0
+    cx = near_surface(position, past, j, maps, fields, margin, found, 0)
     for c in range(cx):
         k = found.rows[c]
-        h = normal[0] * position[k, 0] + normal[1] * position[k, 1] + normal[2] * position[k, 2]
-        if h > plane + 1e-3 * margin:  # past it by more than rounding: a dent's push is never exact
-            cap.rows[count] = k
-            cap.need[count] = h - plane
-            count += 1
-    return count
+        cap.rows[c] = k
+        cap.need[c] = normal[0] * position[k, 0] + normal[1] * position[k, 1] + normal[2] * position[k, 2] - plane
+    return cx
 
 
 @njit(cache=True)
@@ -473,14 +481,17 @@ def _dent_pass(position, rest, shell, i, pairs, maps, fields, walls, lenses, cou
 def _dent_all(position, rest, shell, i, pairs, maps, fields, walls, lenses, count, settings, edge, most, found, cap,
               spent):  # fmt: skip
     """Dent passes until none is needed (a dent along one contact's axis can push a vertex past another's plane)
-    or every needed one's budget is spent, at most ``DENT_PASSES``. Returns the contacts whose budget ran out."""
+    or every needed one's budget is spent, at most ``DENT_PASSES``. Returns the contacts whose budget ran out and
+    how many dents were made."""
     capped = 0
+    dents = 0
     for _ in range(DENT_PASSES):
         made, capped = _dent_pass(position, rest, shell, i, pairs, maps, fields, walls, lenses, count, settings,
                                   edge, most, found, cap, spent)  # fmt: skip
+        dents += made - capped
         if made == capped:
             break
-    return capped
+    return capped, dents
 
 
 @njit(cache=True)
@@ -500,7 +511,7 @@ def _deform_one(i, vertices, pairs, maps, fields, shells, walls, settings, cap_o
     most = max(most, nv)
     found = InsideVertices(np.empty(most, np.int64), np.empty(most), np.empty((most, 3)))
     other = InsideVertices(np.empty(most, np.int64), np.empty(most), np.empty((most, 3)))
-    cap = Cap(np.empty(most, np.int64), np.empty(most))
+    cap = Cap(np.empty(most, np.int64), np.empty(most), np.empty(nv, np.bool_))
     rows = pairs.start[i + 1] - pairs.start[i] + 1
     lenses = Lenses(np.empty(rows, np.int64), np.empty((rows, 3)), np.empty(rows))
     figures.rest[i] = _volume(rest, faces)
@@ -511,14 +522,15 @@ def _deform_one(i, vertices, pairs, maps, fields, shells, walls, settings, cap_o
     reach = 2.0 * settings.bulge + settings.clearance
     spent = np.zeros(count + rows)
     for r in range(settings.rounds):
-        figures.capped[i] = _dent_all(position, rest, shell, i, pairs, maps, fields, walls, lenses, count, settings,
-                                      edges[i], cap_of[i], found, cap, spent)  # fmt: skip
+        figures.capped[i], dents = _dent_all(position, rest, shell, i, pairs, maps, fields, walls, lenses, count,
+                                             settings, edges[i], cap_of[i], found, cap, spent)  # fmt: skip
+        volume = _volume(position, faces)
         if r == 0:
-            figures.dented[i] = _volume(position, faces)
-            if figures.dented[i] == figures.rest[i]:
-                break  # untouched: no dent, nothing to give back
-        if r == settings.rounds - 1:
-            break
+            figures.dented[i] = volume
+        if r == settings.rounds - 1 or (dents == 0 and volume >= figures.rest[i] * (1.0 - VOLUME_TOLERANCE)):
+            break  # the last round, or nothing left to dent or to give back
+        if volume >= figures.rest[i] * (1.0 - VOLUME_TOLERANCE):
+            continue
         _outward(position, maps.lin_inv[i], maps.t[i], shell, outward)
         _room(position, shell, i, pairs, maps, fields, walls, reach, found, room)
         figures.bulge[i] = bulge(
