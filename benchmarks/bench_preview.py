@@ -39,7 +39,8 @@ def main_job_scene(cache_dir: Path | None):
     recipe = load_recipe(ROOT / "graphs" / "ikura_don.yaml", default_registry(), [])
     result = run_recipe(recipe, outputs=["shade.scene"], cache=Cache(cache_dir or default_cache_dir()))
     p = recipe.nodes["preview"].params
-    return result.output("shade.scene"), Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"]), p
+    camera = Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
+    return result.output("shade.scene"), camera, p
 
 
 def quick_scene():
@@ -52,7 +53,7 @@ def quick_scene():
 
     scene = shade.call(**small_food_scene(), material=cooked_material())
     params = preview.resolve_params({})
-    return scene, Camera(50.0, 20.0, 35.0, 0.1), params
+    return scene, Camera(50.0, 20.0, 35.0, 0.1, params["f_stop"], params["focus"]), params
 
 
 KAKIGORI_QUICK = ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2"]
