@@ -6,6 +6,7 @@ reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 previ
     python benchmarks/bench_preview.py --sss [--quick] [--cache-dir DIR]    # subsurface media × depth × spp
     python benchmarks/bench_preview.py --highlights [--quick]   # default preview: time, determinism, highlights
     python benchmarks/bench_preview.py --budget 12:32,10:32 [--quick]   # spp:path depth, time against quality
+    python benchmarks/bench_preview.py --time 2 [--save PNG] [--quick]  # the default preview alone: time, same bytes
 
 The scene is the main job's (``graphs/ikura_don.yaml`` up to ``shade``, from the cache; computed the first
 time), seen by its preview camera. Quality is measured in a window of the 1280 × 720 frame over the
@@ -39,7 +40,8 @@ def main_job_scene(cache_dir: Path | None):
     recipe = load_recipe(ROOT / "graphs" / "ikura_don.yaml", default_registry(), [])
     result = run_recipe(recipe, outputs=["shade.scene"], cache=Cache(cache_dir or default_cache_dir()))
     p = recipe.nodes["preview"].params
-    return result.output("shade.scene"), Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"]), p
+    camera = Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
+    return result.output("shade.scene"), camera, p
 
 
 def quick_scene():
@@ -52,7 +54,7 @@ def quick_scene():
 
     scene = shade.call(**small_food_scene(), material=cooked_material())
     params = preview.resolve_params({})
-    return scene, Camera(50.0, 20.0, 35.0, 0.1), params
+    return scene, Camera(50.0, 20.0, 35.0, 0.1, params["f_stop"], params["focus"]), params
 
 
 KAKIGORI_QUICK = ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2"]
@@ -195,6 +197,33 @@ def highlights(quick: bool, cache_dir: Path | None) -> str:
     return "\n".join(lines)
 
 
+def timed(quick: bool, cache_dir: Path | None, repeat: int, save: Path | None) -> str:
+    """The default preview alone (the preview node's parameters, studio and lens included): wall and CPU time of each
+    of ``repeat`` renders, whether they gave the same bytes; the first picture written to ``save``."""
+    from nodes.export.mitsuba_scene import render
+
+    scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
+    width, height, spp, sun = params["width"], params["height"], params["samples"], params["sun_direction"]
+    if quick:
+        width, height = 320, 180
+    runs, images = [], []
+    for _ in range(repeat):
+        t, c = time.perf_counter(), cpu_seconds()
+        images.append(render(scene, camera, width, height, spp, sun, True, 0, params["subsurface"]))
+        runs.append((time.perf_counter() - t, cpu_seconds() - c, os.getloadavg()[0]))
+    if save is not None:
+        from PIL import Image
+
+        Image.fromarray(images[0]).save(save)
+    n = os.cpu_count() or 1
+    times = "; ".join(f"wall {w:.1f} s, CPU {c:.1f} s (CPU s / {n} = {c / n:.1f} s), load {a:.2f}" for w, c, a in runs)
+    same = all(np.array_equal(images[0], image) for image in images[1:])
+    return (
+        f"Default preview of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height}, "
+        f"{spp} spp, f/{camera.f_stop:g}: {times}; identical bytes across the {repeat} renders: {same}"
+    )
+
+
 def budget(configs: str, quick: bool, cache_dir: Path | None) -> str:
     """The whole default preview (media on, OIDN, glints) at each ``spp:depth`` of ``configs``: CPU and wall time of
     the full frame, PSNR/SSIM in the eggs-over-rice window against 256 spp (64 with ``--quick``) at depth 128."""
@@ -256,7 +285,12 @@ def main():
     parser.add_argument("--sss", action="store_true", help="subsurface media on/off × path depth × spp instead")
     parser.add_argument("--highlights", action="store_true", help="default preview: time and highlight energy")
     parser.add_argument("--budget", default=None, help="spp:depth,...: the default preview's time against quality")
+    parser.add_argument("--time", type=int, default=0, metavar="N", help="the default preview alone, N renders: time")
+    parser.add_argument("--save", type=Path, default=None, help="with --time: write the first render here (PNG)")
     args = parser.parse_args()
+    if args.time:
+        print(timed(args.quick, args.cache_dir, args.time, args.save))
+        return
     if args.budget:
         print(budget(args.budget, args.quick, args.cache_dir))
         return

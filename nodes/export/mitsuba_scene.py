@@ -23,9 +23,11 @@ path (≈ 1.2 mm in red) and albedo (≥ 0.99) match the starchy stand-in, potat
 σ′s = 0.68, 0.70, 0.55 mm⁻¹, σa = 0.0024, 0.0090, 0.12 mm⁻¹). The CDRF stays on the surface: in the baked
 vertex colours of the exported files and, with ``subsurface`` off, as the per-vertex diffuse transmission.
 
-Light: a soft key (a sphere emitter along the shade node's key light), a uniform sky and a matte table
-under the scene. The key's small bright core (``HIGHLIGHT_ANGLE``) is a specular-only light, as a photographer
-sets a strip light for the glints: it is rendered in a pass of its own, one bounce, every surface reflecting only
+Light: a procedural studio (``studio``): a softbox key along the shade node's key light, a fill two stops under it
+on the camera's side, a rim light behind the subject, a dim ambient and a matte seamless backdrop; the camera is a
+thin lens focused on the front of the subject. The key's small bright core (``HIGHLIGHT_ANGLE``) is a
+specular-only light, as a photographer sets a strip light
+for the glints: it is rendered in a pass of its own, one bounce, every surface reflecting only
 with its gloss (its clear coat, or the skin of a transmissive element: Fresnel at its IOR), and added after
 denoising. In the denoised path-traced pass a glint is a few bright samples among dark ones, which the
 denoiser reads as noise and erases (``benchmarks/bench_preview.py --highlights``: highlight energy 0 after
@@ -46,15 +48,13 @@ from pathlib import Path
 import numpy as np
 
 from ..values import Material, ShadedScene
+from . import studio
 
-SKY = 0.4  # radiance of the uniform sky (fill light)
-# key irradiance / sky irradiance: 2 models the rice more but cost 2.6 dB at 8 spp (the noisiest paths are the
-# key's light through the eggs), measured with benchmarks/bench_preview.py's scene
-KEY_SHARE = 1.0
-# rad, angular radius of the key (a large softbox): soft shadows, and a low radiance, so light focused through
-# the eggs onto the rice (caustics, found only by chance) makes faint speckles, not fireflies
-KEY_ANGLE = 0.35
-TABLE_COLOR = (0.42, 0.36, 0.30)  # linear RGB of the matte table under the scene (a warm light wood)
+# the light is a studio (``studio``: softbox key, fill, rim, seamless backdrop, thin lens); these two name its
+# ambient and key for the Blender side-by-side script (``tools/blender_side_by_side.py``)
+SKY = studio.AMBIENT
+KEY_ANGLE = studio.KEY_ANGLE
+KEY_SHARE = studio.KEY_IRRADIANCE / (np.pi * SKY)  # key irradiance / ambient irradiance
 EXPOSURE = 1.5  # linear scale before the tone curve: lit white rice (key + sky) near the knee
 KNEE = 0.75  # the tone curve is linear below this and rolls off above it (white rice keeps its gloss, not clipped)
 MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) and a few grains of rice
@@ -89,6 +89,8 @@ class Camera:
     azimuth: float  # degrees, 0 = looking along +y, 90 = along −x
     fov: float  # degrees, horizontal
     margin: float  # share of the half-frame left free around the subject on its tightest side
+    f_stop: float = 0.0  # the thin lens's f-number (full-frame equivalent, ``studio.aperture_radius``); 0: pinhole
+    focus: float = 0.25  # the plane in focus: this quantile of the subject's depths (``studio.focus_distance``)
 
 
 @dataclass(frozen=True)
@@ -242,12 +244,23 @@ def _principled(material: Material) -> dict:
     }
 
 
+def hull_vertices(points: np.ndarray) -> np.ndarray:
+    """The points on their convex hull (all of them when they are too few or flat for one)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return points[ConvexHull(points).vertices]
+    except (QhullError, ValueError):
+        return points
+
+
 def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """(origin, target): seen from the camera's elevation and azimuth, the subject's ``points`` centred in the frame
     and as large as leaves ``camera.margin`` of the half-frame free on its tightest side (``aspect`` = width /
-    height). Derived from the points, so the framing follows any change of the scene (a bigger bowl, a --set)."""
-    points = np.asarray(points, np.float64)
-    points = points[:: max(1, len(points) // 100_000)]
+    height). Derived from the points, so the framing follows any change of the scene (a bigger bowl, a --set). Only
+    the convex hull's vertices matter (a projected coordinate x / depth is linear-fractional, so its extremes over
+    the points are hull vertices): a subsample could miss the rim's outermost vertex and put it past the margin."""
+    points = hull_vertices(np.asarray(points, np.float64))
     el, az = np.radians(camera.elevation), np.radians(camera.azimuth)
     view = np.array([np.sin(az) * np.cos(el), -np.cos(az) * np.cos(el), np.sin(el)])  # towards the camera
     right = np.cross(-view, [0.0, 0.0, 1.0])
@@ -274,7 +287,7 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
 
 def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
     """One PLY shape per material (written into ``folder``; key ``shape_<material index>``) and the scene's
-    vertices (every 8th: what the camera frames); with ``subsurface``, the volumetric materials' shapes carry their
+    vertices (what the camera frames and focuses on); with ``subsurface``, the volumetric materials' shapes carry their
     medium inside a dielectric boundary."""
     from .mesh_files import stacked
 
@@ -308,8 +321,7 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
         }
         if volume:
             shapes[f"shape_{index}"]["interior"] = medium(material)
-        seen.append(vertices[::8])
-        seen.append(vertices[[int(np.argmin(c)) for c in vertices.T] + [int(np.argmax(c)) for c in vertices.T]])
+        seen.append(vertices)
     if not shapes:
         raise ValueError("scene: no mesh with faces to render")
     return shapes, np.concatenate(seen)
@@ -344,15 +356,15 @@ def specular_bsdf(material: Material) -> dict:
 
 def highlight_dict(scene: ShadedScene, description: dict) -> dict:
     """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
-    surface reflecting only its gloss (``specular_bsdf``), the table and sky black, lit by the key's bright core
+    surface reflecting only its gloss (``specular_bsdf``), the backdrop black, lit by the key's bright core
     alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce."""
     shapes = {}
     for key, shape in description.items():
         if key.startswith("shape_"):
             bsdf = specular_bsdf(scene.materials[int(key.removeprefix("shape_"))])
             shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
-    key_light = description["key"]  # the core sits at the key's centre, as far away
-    distance = float(key_light["radius"]) / np.tan(KEY_ANGLE)
+    frame = np.array(description["key"]["to_world"].matrix, np.float64)  # the core sits at the softbox's centre
+    distance = float(np.linalg.norm(frame[:3, 0])) / np.tan(studio.KEY_ANGLE)
     sensor = dict(description["sensor"])
     sensor["sampler"] = {"type": SAMPLER, "sample_count": min(sensor["sampler"]["sample_count"], HIGHLIGHT_SPP)}
     return {
@@ -361,11 +373,11 @@ def highlight_dict(scene: ShadedScene, description: dict) -> dict:
         "sensor": sensor,
         "key": {
             "type": "sphere",
-            "center": key_light["center"],
+            "center": frame[:3, 3].tolist(),
             "radius": float(distance * np.tan(HIGHLIGHT_ANGLE)),
             "emitter": {"type": "area", "radiance": {"type": "rgb", "value": HIGHLIGHT_RADIANCE}},
         },
-        "table": {**description["table"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
+        "backdrop": {**description["backdrop"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
         **shapes,
     }
 
@@ -391,11 +403,8 @@ def scene_dict(
     media = any("interior" in shape for shape in shapes.values())
     lo, hi = points.min(axis=0), points.max(axis=0)
     origin, target = look_at(points, camera, width / height)
-    radius = 0.5 * np.linalg.norm(hi - lo)
-    key_distance = 50 * radius
-    solid_angle = np.pi * np.tan(KEY_ANGLE) ** 2
-    key_radiance = KEY_SHARE * SKY * np.pi / solid_angle
-    d = np.asarray(light_direction, np.float64) / np.linalg.norm(light_direction)
+    radius = 0.5 * float(np.linalg.norm(hi - lo))
+    view = (origin - target) / np.linalg.norm(origin - target)
     film = {
         "type": "hdrfilm",
         "width": width,
@@ -405,31 +414,33 @@ def scene_dict(
     }
     if crop is not None:
         film |= {"crop_offset_x": crop.x, "crop_offset_y": crop.y, "crop_width": crop.width, "crop_height": crop.height}
-    table_size = 40 * radius
-    table = mi.ScalarTransform4f().translate([*target[:2].tolist(), float(lo[2]) - 1e-3 * radius])
+    sensor = {
+        "type": "perspective",
+        "fov": camera.fov,
+        "fov_axis": "x",
+        "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=target.tolist(), up=[0, 0, 1]),
+        "film": film,
+        "sampler": {"type": SAMPLER, "sample_count": spp},
+    }
+    if camera.f_stop > 0:
+        sensor |= {
+            "type": "thinlens",
+            "aperture_radius": studio.aperture_radius(camera.fov, camera.f_stop),
+            "focus_distance": studio.focus_distance(points, origin, target, camera.focus),
+        }
+    lights = studio.lights(target, radius, view, light_direction)
+    floor = float(lo[2]) - 1e-3 * radius
     return {
         "type": "scene",
         "integrator": {"type": "volpath" if media else "path", "max_depth": max_depth or path_depth(scene, subsurface)},
-        "sensor": {
-            "type": "perspective",
-            "fov": camera.fov,
-            "fov_axis": "x",
-            "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=target.tolist(), up=[0, 0, 1]),
-            "film": film,
-            "sampler": {"type": SAMPLER, "sample_count": spp},
+        "sensor": sensor,
+        "sky": {
+            "type": "constant",
+            "radiance": {"type": "rgb", "value": studio.AMBIENT},
+            "sampling_weight": float(np.pi * studio.AMBIENT),
         },
-        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": SKY}},
-        "key": {
-            "type": "sphere",
-            "center": (target + key_distance * d).tolist(),
-            "radius": float(key_distance * np.tan(KEY_ANGLE)),
-            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": float(key_radiance)}},
-        },
-        "table": {
-            "type": "rectangle",
-            "to_world": table @ mi.ScalarTransform4f().scale([table_size, table_size, 1.0]),
-            "bsdf": {"type": "diffuse", "reflectance": _rgb(TABLE_COLOR)},
-        },
+        **{name: studio.light_dict(light, target) for name, light in lights.items()},
+        "backdrop": studio.backdrop_dict(folder / "backdrop.ply", target, radius, floor, view),
         **shapes,
     }
 

@@ -20,7 +20,8 @@ from ..values import ShadedScene
     # 3: paths through ice up to 128 bounces (mitsuba_scene.path_depth): a heap of flakes was cut off dark grey
     # 4: subsurface: media inside rice, ikura yolks and ice (volpath)
     # 5: the key's glints in a one-bounce pass added after denoising (the denoiser erased them); 10 spp (was 12)
-    version=5,
+    # 6: a procedural studio (softbox key, fill, rim light, seamless backdrop) and a thin lens (``studio``)
+    version=6,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={
@@ -51,22 +52,52 @@ from ..values import ShadedScene
             "scene's vertices as seen by the camera, so it follows any change of the scene)",
             range=(0.0, 0.9),
         ),
+        "f_stop": Param(
+            float,
+            5.6,
+            "depth of field: the lens's f-number as on a full-frame camera with this field of view, in the scene's "
+            "millimetres (5.6: the back of a bowl softens, its front stays sharp); 0: a pinhole, all sharp",
+            range=(0.0, 64.0),
+        ),
+        "focus": Param(
+            float,
+            0.25,
+            "the plane in focus: this quantile of the subject's depths from the camera (0 its nearest point, 1 its "
+            "farthest; a food photographer focuses on the front of the dish)",
+            range=(0.0, 1.0),
+        ),
         "sun_direction": Param(
             tuple[float, float, float],
             (-0.45, -0.6, 0.75),
-            "direction towards the key light (match shade's key light)",
+            "direction towards the studio's key softbox (match shade's key light)",
             range=(-1.0, 1.0),
         ),
     },
 )
-def preview(ctx, scene, *, width, height, samples, denoise, subsurface, elevation, azimuth, fov, margin, sun_direction):
-    """Mitsuba path tracing of the materials (CDRF translucency per vertex) under a key light, sky and table,
-    denoised; the same scene and parameters give the same bytes."""
+def preview(
+    ctx,
+    scene,
+    *,
+    width,
+    height,
+    samples,
+    denoise,
+    subsurface,
+    elevation,
+    azimuth,
+    fov,
+    margin,
+    f_stop,
+    focus,
+    sun_direction,
+):
+    """Mitsuba path tracing of the materials in a procedural studio (key, fill, rim, backdrop; ``studio``) through a
+    thin lens, denoised; the same scene and parameters give the same bytes."""
     import numpy as np
 
     from .mitsuba_scene import Camera, render
 
     if not np.linalg.norm(sun_direction) > 0:
         raise ValueError("sun_direction: a zero vector has no direction")
-    camera = Camera(elevation, azimuth, fov, margin)
+    camera = Camera(elevation, azimuth, fov, margin, f_stop, focus)
     return Image(render(scene, camera, width, height, samples, sun_direction, denoised=denoise, subsurface=subsurface))

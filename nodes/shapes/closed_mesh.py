@@ -22,10 +22,13 @@ def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str) -> trimesh.Tr
     With ``repair``: consistent winding, inverted orientation flipped, small holes filled
     (trimesh.repair). A mesh still open afterwards is refused: the aggregate needs an inside.
     """
+    given = mesh
     mesh = mesh.copy()
     mesh.merge_vertices()
     mesh.update_faces(mesh.nondegenerate_faces())
     mesh.remove_unreferenced_vertices()
+    if not mesh.is_watertight and given.is_watertight:  # merging near-coincident vertices at slivers opened it
+        mesh = given.copy()
     if repair:
         trimesh.repair.fix_winding(mesh)
         trimesh.repair.fill_holes(mesh)

@@ -1,0 +1,148 @@
+"""The preview's procedural studio (``nodes.export.studio``): key, fill and rim lights, the seamless backdrop, the
+thin lens, and the framing measured on the rendered picture."""
+
+import numpy as np
+import pytest
+
+
+def _description(shaded, tmp_path, camera=None, light=(-0.45, -0.6, 0.75), width=64, height=48):
+    import mitsuba as mi
+
+    from nodes.export.mitsuba_scene import Camera, scene_dict
+
+    mi.set_variant("scalar_rgb")
+    camera = camera or Camera(50.0, 20.0, 35.0, 0.1, 5.6, 0.35)
+    return scene_dict(shaded, tmp_path, camera, width, height, 2, light)
+
+
+def _frame(description):
+    """(origin, forward) of the sensor."""
+    m = np.array(description["sensor"]["to_world"].matrix, np.float64)
+    return m[:3, 3], m[:3, 2]
+
+
+def _light(description, name):
+    """(centre, emitting direction, radiance, half sizes) of a rectangle light."""
+    m = np.array(description[name]["to_world"].matrix, np.float64)
+    return m[:3, 3], m[:3, 2], description[name]["emitter"]["radiance"]["value"], np.linalg.norm(m[:3, :2], axis=0)
+
+
+def test_projected_solid_angle_matches_a_numerical_integral():
+    """∫cos θ cos θ′ / r² over a face-on rectangle = ∬ d² / (x² + y² + d²)² dx dy, by the midpoint rule."""
+    from nodes.export.studio import projected_solid_angle
+
+    for a, b, d in [(1.0, 0.5, 2.0), (3.0, 3.0, 1.0), (0.1, 0.2, 5.0)]:
+        n = 800
+        x = (np.arange(n) + 0.5) / n * 2 * a - a
+        y = (np.arange(n) + 0.5) / n * 2 * b - b
+        xx, yy = np.meshgrid(x, y)
+        numeric = (d * d / (xx**2 + yy**2 + d * d) ** 2).sum() * (2 * a / n) * (2 * b / n)
+        assert projected_solid_angle(a, b, d) == pytest.approx(numeric, rel=1e-4)
+
+
+def test_the_studio_has_a_key_a_fill_a_rim_light_and_a_backdrop(shaded, tmp_path):
+    """A food photographer's set: the key along the key-light direction, the fill on the camera's side two stops
+    under it, the rim behind the subject (away from the camera) and above it, each aimed at the subject and
+    giving its irradiance there; a dim ambient; the old uniform sky and flat table are gone."""
+    from nodes.export import studio
+
+    light = np.array([-0.45, -0.6, 0.75])
+    d = _description(shaded, tmp_path, light=light)
+    assert {"key", "fill", "rim", "backdrop", "sky"} <= set(d) and "table" not in d
+    origin, forward = _frame(d)
+    key_centre, key_aim, *_ = _light(d, "key")
+    assert -key_aim @ (light / np.linalg.norm(light)) == pytest.approx(1.0, abs=1e-6)
+    # the subject's centre, where the camera aims: the key's axis crosses the camera's axis there
+    w = key_centre - origin
+    b = key_aim @ forward
+    s, t = np.linalg.solve([[1.0, -b], [b, -1.0]], [-(w @ key_aim), -(w @ forward)])
+    target = key_centre + s * key_aim
+    assert np.linalg.norm(target - (origin + t * forward)) < 1e-6 * np.linalg.norm(w)
+    camera_side = (origin - target) / np.linalg.norm(origin - target)
+    irradiance = {}
+    for name in ("key", "fill", "rim"):
+        centre, aim, radiance, half = _light(d, name)
+        distance = np.linalg.norm(target - centre)
+        assert aim @ (target - centre) / distance == pytest.approx(1.0, abs=1e-6), name  # aimed at the subject
+        irradiance[name] = radiance * studio.projected_solid_angle(*half, distance)
+        assert d[name]["emitter"]["sampling_weight"] == pytest.approx(irradiance[name], rel=1e-5)
+    assert irradiance["key"] == pytest.approx(studio.KEY_IRRADIANCE, rel=1e-5)
+    assert 3.0 < irradiance["key"] / irradiance["fill"] < 5.0  # two stops
+    fill = _light(d, "fill")[0] - target
+    rim = _light(d, "rim")[0] - target
+    horizontal = np.array([camera_side[0], camera_side[1], 0.0])
+    assert fill @ horizontal > 0 and rim @ horizontal < 0 and rim[2] > 0  # fill in front, rim behind and above
+    assert d["sky"]["radiance"]["value"] * np.pi < 0.1 * irradiance["key"]  # a dim studio, not a bright sky
+
+
+def test_the_backdrop_sweeps_up_behind_the_subject():
+    """The sweep is flat under and in front of the subject, curves up only behind it (seen from the camera),
+    with no step (seamless), and every face turns its lit side to the subject."""
+    from nodes.export.studio import BACKDROP_BEHIND, backdrop_mesh
+
+    target, radius, floor = np.array([1.0, 2.0, 3.0]), 10.0, -5.0
+    view = np.array([0.3, -0.8, 0.6])  # towards the camera
+    vertices, faces, normals = backdrop_mesh(target, radius, floor, view)
+    front = np.array([view[0], view[1], 0.0]) / np.linalg.norm(view[:2])
+    behind = (vertices - target) @ -front
+    height = vertices[:, 2] - floor
+    assert height.min() == pytest.approx(0.0) and (height[behind <= BACKDROP_BEHIND * radius + 1e-9] < 1e-9).all()
+    assert height.max() > 10 * radius and behind[height > 1e-6].min() > BACKDROP_BEHIND * radius
+    tri = vertices[faces]
+    geometric = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    assert (np.einsum("ij,ij->i", geometric, target - tri.mean(axis=1)) > 0).all()
+    # seamless: consecutive faces along the profile turn by a few degrees at most
+    unit = geometric / np.linalg.norm(geometric, axis=1, keepdims=True)
+    half = len(faces) // 2
+    turns = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", unit[: half - 1], unit[1:half]), -1, 1)))
+    assert turns.max() < 10.0 and np.allclose(np.linalg.norm(normals, axis=1), 1.0)
+
+
+def test_the_lens_focuses_on_the_front_of_the_subject(shaded, tmp_path):
+    """A thin lens at the f-number's aperture (focal length of a full-frame camera at the field of view / 2N),
+    focused between the subject's nearest point and its middle; f-number 0 is a pinhole."""
+    from nodes.export import studio
+    from nodes.export.mitsuba_scene import Camera
+
+    d = _description(shaded, tmp_path, Camera(50.0, 20.0, 35.0, 0.1, 4.0, 0.3))
+    sensor = d["sensor"]
+    assert sensor["type"] == "thinlens"
+    assert sensor["aperture_radius"] == pytest.approx(18.0 / np.tan(np.radians(17.5)) / 8.0)
+    origin, forward = _frame(d)
+    depths = np.concatenate([m.vertices for m in shaded.meshes]) @ forward - origin @ forward
+    assert depths.min() < sensor["focus_distance"] < np.median(depths)
+    assert studio.focal_length(35.0) == pytest.approx(57.1, abs=0.1)
+    pinhole = _description(shaded, tmp_path, Camera(50.0, 20.0, 35.0, 0.1, 0.0, 0.3))
+    assert pinhole["sensor"]["type"] == "perspective" and "aperture_radius" not in pinhole["sensor"]
+
+
+@pytest.mark.parametrize("elevation", [50.0, 20.0])
+@pytest.mark.parametrize("bowl_size", [12.0, 30.0])
+def test_the_rendered_subject_keeps_room_around_it(tmp_path, elevation, bowl_size):
+    """On the rendered picture (a mask of the subject: its depth seen through the preview's own camera, without the
+    backdrop), the bowl's rim stays off the frame's edges: about ``margin`` (10 %) of the half-frame is free on the
+    tightest side, at any bowl size (as after ``--set bowl.size=…``) and elevation."""
+    import mitsuba as mi
+
+    from nodes.export.mitsuba_scene import Camera, scene_dict
+    from nodes.material.cooked import cooked_material
+    from nodes.shading import shade
+    from nodes.shapes import shape
+    from nodes.simulation.scenes import small_food_scene
+
+    mi.set_variant("scalar_rgb")
+    inputs = small_food_scene()
+    inputs["scenery"] = [shape.call(kind="bowl", size=bowl_size, depth=0.7 * bowl_size, resolution=2)["container"]]
+    scene = shade.call(**inputs, material=cooked_material())
+    width, height = 160, 90
+    d = scene_dict(scene, tmp_path, Camera(elevation, 20.0, 35.0, 0.1), width, height, 1, (-0.45, -0.6, 0.75))
+    subject = {k: v for k, v in d.items() if k.startswith("shape_")}
+    mask_scene = mi.load_dict({"type": "scene", "sensor": d["sensor"], **subject})
+    depth = np.asarray(mi.render(mask_scene, integrator=mi.load_dict({"type": "aov", "aovs": "z:depth"})))[..., 0]
+    rows, cols = np.nonzero(depth > 0)
+    free = (
+        min(rows.min(), height - 1 - rows.max()) / (height / 2),
+        min(cols.min(), width - 1 - cols.max()) / (width / 2),
+    )
+    assert min(free) == pytest.approx(0.1, abs=0.03)  # the tightest side: the margin, within a pixel or so
+    assert max(free) >= 0.1 - 0.03
