@@ -40,11 +40,11 @@ EXPORT = ["export.formats=[glb]", "export.instancing=false"]
 
 def overrides(name: str, full: bool) -> list[str]:
     """The reduced sizes of ``benchmarks/bench_scenes.py`` (the bunny: its draft block, a small cut preview)."""
-    if full:
-        return EXPORT
+    small = ["cut_preview.width=64", "cut_preview.height=48", "cut_preview.samples=1"] if name == "rice_bunny" else []
+    if full:  # the element counts in full; the pictures tiny (the checkers read the .glb)
+        return bench_scenes.PREVIEW + small + EXPORT
     if name == "rice_bunny":
         keep = [o for o in bench_scenes.draft_overrides(name) if ".wall_cells" not in o and "preview" not in o]
-        small = ["cut_preview.width=320", "cut_preview.height=180", "cut_preview.samples=4"]
         return keep + bench_scenes.PREVIEW[:3] + small + EXPORT
     return [o for o in bench_scenes._quick(name) if not o.startswith("measure.")] + EXPORT
 
