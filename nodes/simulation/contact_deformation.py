@@ -574,7 +574,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     figures (dented elements, moved vertices, dent depth, volume error, folded faces)."""
     import trimesh
 
-    given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "slope": 0.35, "bulge": 0.15, "rounds": 3}
+    given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "slope": 0.35, "bulge": 0.15, "rounds": 8}
     given |= settings or {}
     fields: dict[int, int] = {}
     shells: list = []

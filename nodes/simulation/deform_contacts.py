@@ -38,9 +38,11 @@ from .flatten_contacts import CONTACT_INPUTS, CONTACT_PARAMS, dented_outputs, wa
             range=(0.0, 0.5),
             units="element thicknesses",
         ),  # fmt: skip
-        # 3: dent, bulge, dent, bulge, dent (the last round dents only). On the full main job 2 left one grain
-        # 3.2 % short of its volume (its bulge at the bound), 3 none; each round costs ≈ 0.6 s there
-        "rounds": Param(int, 3, "dent–bulge rounds (1: dents only, the volume is not given back)", range=(1, 10)),
+        # 8 at most: an element stops as soon as nothing is left to dent or give back (most after one or two); each
+        # bulge is bounded, so a grain that lost half its volume (the onigiri draft's deepest) needs six
+        "rounds": Param(
+            int, 8, "dent–bulge rounds at most (1: dents only, the volume is not given back)", range=(1, 20)
+        ),
     },
     effects=("contact", "collider"),
 )
