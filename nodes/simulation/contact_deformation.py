@@ -13,9 +13,10 @@ smoothly relaxed afterwards, folds a bumpy skin wherever some vertices are held 
   A·max|g'|/b ≤ ``slope``; ℓ ≥ 2A keeps det(∇map) = 1 − A·g·|T'| ≥ ¼. A map with a positive Jacobian turns
   no face over, so the dented mesh stays fold-free and closed whatever its skin's bumps;
 - **bulge** (per element, between dents): the volume the dents took back as a move u_k along the outward
-  normal of the element's ellipsoid (a smooth field), u_k = min(β, (room_k − clearance) / 2), room_k the
-  distance to the nearest neighbour's surface or wall: each side takes at most half a gap, so two bulges never
-  meet, and the move is ½-Lipschitz in x, so it folds nothing either. β is the one that gives the element its
+  normal of the element's ellipsoid (a smooth field), u_k = min(β, (room_k − clearance) / 3), room_k the
+  distance to the nearest neighbour's surface or wall: each side takes at most a third of a gap, so two bulges
+  never meet, and the move's slope stays under 1 even where the sampled room's slope reaches 2, so it folds
+  nothing either. β is the one that gives the element its
   rest volume back (bisection: volume grows with β). Cooked rice is nearly incompressible: a pressed grain bulges.
 
 The contacts: between two elements the plane across their overlap's lens, each element giving way its
@@ -44,6 +45,7 @@ from .contact_flattening import (
     near_surface,
     outer_vertices,
     shape_fields,
+    vertex_rings,
 )
 
 # max |g'(t)| of the bump g(t) = (1 − t²)², at t = 1/√3
@@ -52,6 +54,8 @@ BUMP_SLOPE = 8.0 / (3.0 * np.sqrt(3.0))
 BUMP_WIDTHS = (1.42, 1.7, 2.0, 2.5, 3.0, 4.0)
 # dent passes per round at most: each pass meets every contact in turn; later dents rarely undo earlier ones
 DENT_PASSES = 8
+# sweeps of ``_unfold`` at most: each averages a fold's corners with their rings
+UNFOLD_SWEEPS = 8
 # a volume this close to the rest volume needs no bulge (a fiftieth of the 2 % bar)
 VOLUME_TOLERANCE = 4e-4
 
@@ -364,11 +368,13 @@ def _outward(position, lin_inv, t, shell, out):
 
 @njit(cache=True)
 def _bulged(position, shell, outward, room, beta, clearance, out):
-    """``position`` with each shell vertex moved min(β, (room − clearance) / 2) along ``outward`` (never inward)."""
+    """``position`` with each shell vertex moved min(β, (room − clearance) / 3) along ``outward`` (never inward):
+    two bulges never meet, and the move's slope stays under 1 where the sampled room's own slope reaches 2 (with ½
+    a face of the full sushi's turned over)."""
     for k in range(position.shape[0]):
         move = 0.0
         if shell[k]:
-            move = max(0.0, min(beta, 0.5 * (room[k] - clearance)))
+            move = max(0.0, min(beta, (room[k] - clearance) / 3.0))
         for a in range(3):
             out[k, a] = position[k, a] + move * outward[k, a]
 
@@ -406,6 +412,33 @@ def _folded(rest, points, faces, pairs):
         if cos_now < limit and not _cosine(rest, faces[pairs[q, 0]], faces[pairs[q, 1]]) < limit:
             count += 1
     return count
+
+
+@njit(cache=True)
+def _unfold(rest, position, faces, pairs, rings, row):
+    """Where the moves sharpened two faces past 150° (a sliver of the library mesh, whose normal turns with any
+    move that is not affine across it): the moves of their four corners averaged with their rings' (the move
+    made locally affine), until none is left or ``UNFOLD_SWEEPS`` sweeps. Returns the folds left."""
+    limit = np.cos(np.radians(150.0))
+    for _ in range(UNFOLD_SWEEPS):
+        left = 0
+        for q in range(pairs.shape[0]):
+            f, g = faces[pairs[q, 0]], faces[pairs[q, 1]]
+            if not _cosine(position, f, g) < limit or _cosine(rest, f, g) < limit:
+                continue
+            left += 1
+            for corner in range(6):
+                v = f[corner] if corner < 3 else g[corner - 3]
+                lo, hi = rings.start[row + v], rings.start[row + v + 1]
+                for a in range(3):
+                    total = 0.0
+                    for e in range(lo, hi):
+                        u = rings.ring[e]
+                        total += position[u, a] - rest[u, a]
+                    position[v, a] = rest[v, a] + total / max(hi - lo, 1)
+        if left == 0:
+            return 0
+    return _folded(rest, position, faces, pairs)
 
 
 @njit(cache=True)
@@ -495,7 +528,7 @@ def _dent_all(position, rest, shell, i, pairs, maps, fields, walls, lenses, coun
 
 
 @njit(cache=True)
-def _deform_one(i, vertices, pairs, maps, fields, shells, walls, settings, cap_of, edges, push, figures):
+def _deform_one(i, vertices, pairs, maps, fields, shells, rings, walls, settings, cap_of, edges, push, figures):
     """Element i's dents and bulges (module docstring) into its rows of ``push`` and ``figures``."""
     world, vstart = vertices.world, vertices.start
     first, last = vstart[i], vstart[i + 1]
@@ -537,7 +570,7 @@ def _deform_one(i, vertices, pairs, maps, fields, shells, walls, settings, cap_o
             position, shell, faces, outward, room, figures.rest[i], settings.clearance, settings.bulge
         )
     adjacent = shells.pairs[shells.pair_start[s] : shells.pair_start[s + 1]]
-    figures.folded[i] = _folded(rest, position, faces, adjacent)
+    figures.folded[i] = _unfold(rest, position, faces, adjacent, rings, rings.row[s])
     figures.final[i] = _volume(position, faces)
     for k in range(nv):
         for d in range(3):
@@ -545,7 +578,7 @@ def _deform_one(i, vertices, pairs, maps, fields, shells, walls, settings, cap_o
 
 
 @njit(cache=True)
-def deform_elements(vertices, pairs, maps, fields, shells, walls, settings, cap_of, edges):
+def deform_elements(vertices, pairs, maps, fields, shells, rings, walls, settings, cap_of, edges):
     """Per vertex of each of the first elements (rows of ``pairs``): its move, the dents and bulges of the module
     docstring. Each element reads the others' rest meshes and writes only its own rows, in a fixed order:
     deterministic. Serial: a parallel loop here took 79 CPU s to compile for 3 % less time on 2 cores.
@@ -556,7 +589,7 @@ def deform_elements(vertices, pairs, maps, fields, shells, walls, settings, cap_
         np.zeros(own), np.zeros(own), np.zeros(own), np.zeros(own, np.int64), np.zeros(own, np.int64), np.zeros(own)
     )
     for i in range(own):
-        _deform_one(i, vertices, pairs, maps, fields, shells, walls, settings, cap_of, edges, push, figures)
+        _deform_one(i, vertices, pairs, maps, fields, shells, rings, walls, settings, cap_of, edges, push, figures)
     return push, figures
 
 
@@ -579,6 +612,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     fields: dict[int, int] = {}
     shells: list = []
     faces_of: list = []
+    rings_of: list = []
 
     def fields_of(mesh) -> int:
         key = id(mesh)
@@ -589,6 +623,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
             remap = np.cumsum(used) - 1
             shells.append((mesh.vertices[used], remap[faces]))
             faces_of.append(faces)
+            rings_of.append((len(mesh.vertices), faces))
         return fields[key]
 
     elements = _gather([aggregate, *neighbours], fields_of)
@@ -636,6 +671,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
         maps,
         shape_fields(shells),
         shell_faces,
+        vertex_rings(rings_of),
         walls,
         solve,
         given["cap"] * elements.thickness[:own],
