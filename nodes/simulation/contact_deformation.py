@@ -39,6 +39,7 @@ from .contact_flattening import (
     ElementMaps,
     ElementVertices,
     InsideVertices,
+    ShapeFields,
     _gather,
     _neighbour_lists,
     lens_axis,
@@ -107,6 +108,24 @@ class Cap(NamedTuple):
     rows: np.ndarray  # (most,) int64
     need: np.ndarray  # (most,)
     past: np.ndarray  # (element's vertices,) bool
+
+
+class Surroundings(NamedTuple):
+    """What an element is dented against: the neighbour lists, every element's map and shape field, the walls."""
+
+    pairs: ContactPairs
+    maps: ElementMaps
+    fields: ShapeFields
+    walls: Walls
+
+
+class Scratch(NamedTuple):
+    """One element's working arrays: vertices found near a neighbour, a dent's cap, each contact's dent so far
+    (lenses first, then the neighbour pairs, the walls last)."""
+
+    found: InsideVertices
+    cap: Cap
+    spent: np.ndarray
 
 
 class Figures(NamedTuple):
@@ -474,11 +493,11 @@ def _dent_spent(position, rest, shell, cap, m, n, settings, edge, most, spent, s
 
 
 @njit(cache=True)
-def _dent_pass(position, rest, shell, i, pairs, maps, fields, walls, lenses, count, settings, edge, most, found, cap,
-               spent):  # fmt: skip
+def _dent_pass(position, rest, shell, i, around, lenses, count, settings, edge, most, scratch):
     """One pass of dents over element i's contacts, in order: its lenses, the other neighbours' rest surfaces
-    it came near, the walls (``spent``: each contact's dent so far, lenses first, then the pairs, the walls
-    last). Returns how many dents it made and how many contacts' budgets are spent."""
+    it came near, the walls. Returns how many dents it made and how many contacts' budgets are spent."""
+    pairs, maps, fields = around.pairs, around.maps, around.fields
+    found, cap, spent = scratch.found, scratch.cap, scratch.spent
     made = 0
     capped = 0
     n = np.empty(3)
@@ -501,7 +520,7 @@ def _dent_pass(position, rest, shell, i, pairs, maps, fields, walls, lenses, cou
             made += 1
             slot = count + q - pairs.start[i]
             capped += _dent_spent(position, rest, shell, cap, m, n, settings, edge, most, spent, slot)
-    cx = _wall_found(position, shell, walls, margin, found)
+    cx = _wall_found(position, shell, around.walls, margin, found)
     m = _surface_cap(found, cx, margin, n, cap) if cx > 0 else 0
     if m > 0:
         made += 1
@@ -511,16 +530,14 @@ def _dent_pass(position, rest, shell, i, pairs, maps, fields, walls, lenses, cou
 
 
 @njit(cache=True)
-def _dent_all(position, rest, shell, i, pairs, maps, fields, walls, lenses, count, settings, edge, most, found, cap,
-              spent):  # fmt: skip
+def _dent_all(position, rest, shell, i, around, lenses, count, settings, edge, most, scratch):
     """Dent passes until none is needed (a dent along one contact's axis can push a vertex past another's plane)
     or every needed one's budget is spent, at most ``DENT_PASSES``. Returns the contacts whose budget ran out and
     how many dents were made."""
     capped = 0
     dents = 0
     for _ in range(DENT_PASSES):
-        made, capped = _dent_pass(position, rest, shell, i, pairs, maps, fields, walls, lenses, count, settings,
-                                  edge, most, found, cap, spent)  # fmt: skip
+        made, capped = _dent_pass(position, rest, shell, i, around, lenses, count, settings, edge, most, scratch)
         dents += made - capped
         if made == capped:
             break
@@ -528,8 +545,9 @@ def _dent_all(position, rest, shell, i, pairs, maps, fields, walls, lenses, coun
 
 
 @njit(cache=True)
-def _deform_one(i, vertices, pairs, maps, fields, shells, rings, walls, settings, cap_of, edges, push, figures):
+def _deform_one(i, vertices, around, shells, rings, settings, cap_of, edges, push, figures):
     """Element i's dents and bulges (module docstring) into its rows of ``push`` and ``figures``."""
+    pairs, maps, fields, walls = around.pairs, around.maps, around.fields, around.walls
     world, vstart = vertices.world, vertices.start
     first, last = vstart[i], vstart[i + 1]
     nv = last - first
@@ -553,10 +571,11 @@ def _deform_one(i, vertices, pairs, maps, fields, shells, rings, walls, settings
     outward = np.empty((nv, 3))
     room = np.empty(nv)
     reach = 2.0 * settings.bulge + settings.clearance
-    spent = np.zeros(count + rows)
+    scratch = Scratch(found, cap, np.zeros(count + rows))
     for r in range(settings.rounds):
-        figures.capped[i], dents = _dent_all(position, rest, shell, i, pairs, maps, fields, walls, lenses, count,
-                                             settings, edges[i], cap_of[i], found, cap, spent)  # fmt: skip
+        figures.capped[i], dents = _dent_all(
+            position, rest, shell, i, around, lenses, count, settings, edges[i], cap_of[i], scratch
+        )
         volume = _volume(position, faces)
         if r == 0:
             figures.dented[i] = volume
@@ -578,18 +597,18 @@ def _deform_one(i, vertices, pairs, maps, fields, shells, rings, walls, settings
 
 
 @njit(cache=True)
-def deform_elements(vertices, pairs, maps, fields, shells, rings, walls, settings, cap_of, edges):
-    """Per vertex of each of the first elements (rows of ``pairs``): its move, the dents and bulges of the module
-    docstring. Each element reads the others' rest meshes and writes only its own rows, in a fixed order:
+def deform_elements(vertices, around, shells, rings, settings, cap_of, edges):
+    """Per vertex of each of the first elements (rows of ``around.pairs``): its move, the dents and bulges of the
+    module docstring. Each element reads the others' rest meshes and writes only its own rows, in a fixed order:
     deterministic. Serial: a parallel loop here took 79 CPU s to compile for 3 % less time on 2 cores.
     Returns the moves and the ``Figures``."""
-    own = pairs.start.shape[0] - 1
+    own = around.pairs.start.shape[0] - 1
     push = np.zeros((vertices.start[own], 3))
     figures = Figures(
         np.zeros(own), np.zeros(own), np.zeros(own), np.zeros(own, np.int64), np.zeros(own, np.int64), np.zeros(own)
     )
     for i in range(own):
-        _deform_one(i, vertices, pairs, maps, fields, shells, rings, walls, settings, cap_of, edges, push, figures)
+        _deform_one(i, vertices, around, shells, rings, settings, cap_of, edges, push, figures)
     return push, figures
 
 
@@ -667,12 +686,9 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     edges = np.array([edge_of[s] for s in elements.shape[:own]], np.float64)
     push, figures = deform_elements(
         ElementVertices(world, vstart, shell),
-        ContactPairs(nstart, near),
-        maps,
-        shape_fields(shells),
+        Surroundings(ContactPairs(nstart, near), maps, shape_fields(shells), walls),
         shell_faces,
         vertex_rings(rings_of),
-        walls,
         solve,
         given["cap"] * elements.thickness[:own],
         edges,
