@@ -809,7 +809,7 @@ def write_report(inputs: dict, results: Path) -> None:
     print(f"wrote {DOC} and {IMAGES}/")
 
 
-CONTACT_RESULTS = ROOT / "benchmarks" / "results" / "bench_contact_full.jsonl"
+CONTACT_RESULTS = ROOT / "benchmarks" / "measured" / "bench_contact_full.jsonl"  # tracked, unlike results/
 
 
 def contact_section() -> list[str]:
