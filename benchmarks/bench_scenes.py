@@ -86,9 +86,10 @@ def run_cold(name: str, overrides: list[str], preview_to: Path | None = None) ->
             preview_to.parent.mkdir(parents=True, exist_ok=True)
             preview_to.write_bytes((Path(tmp) / "out" / "preview.png").read_bytes())
     table = result.output("measure.table").columns
-    nodes = {}
+    nodes, cpu = {}, {}
     for record in result.records:
         nodes[record.node] = nodes.get(record.node, 0.0) + record.seconds
+        cpu[record.node] = cpu.get(record.node, 0.0) + (record.cpu_seconds or 0.0)
     vertices = 0
     for ref in _final_aggregates(recipe):
         aggregate = result.output(ref)
@@ -96,6 +97,7 @@ def run_cold(name: str, overrides: list[str], preview_to: Path | None = None) ->
     return {
         "total": total,
         "nodes": nodes,
+        "cpu": cpu,
         "vertices": vertices,
         **{k: float(v[0]) for k, v in table.items()},
     }
@@ -146,7 +148,11 @@ def main(argv: list[str] | None = None) -> int:
 
 def _print_row(name: str, row: dict, top: int) -> None:
     slow = sorted(row["nodes"].items(), key=lambda kv: -kv[1])[:top]
-    print(f"{name}: {row['total']:.1f} s — " + ", ".join(f"{n} {s:.1f} s" for n, s in slow), flush=True)
+    print(
+        f"{name}: {row['total']:.1f} s, {sum(row['cpu'].values()):.1f} CPU s — "
+        + ", ".join(f"{n} {s:.1f} s ({row['cpu'][n]:.1f} CPU s)" for n, s in slow),
+        flush=True,
+    )
 
 
 def _table(rows) -> str:

@@ -4,6 +4,8 @@ run prints nothing."""
 
 from __future__ import annotations
 
+import importlib.abc
+import importlib.util
 import sys
 import time
 
@@ -25,10 +27,17 @@ class CompileWatch:
         self._depth = 0
         self._started = 0.0
         self._listener = None
+        self._hook = None
 
     def __enter__(self) -> CompileWatch:
-        if "numba" not in sys.modules:  # no kernel module loaded: nothing can compile, numba stays unimported
+        if "numba" not in sys.modules:  # numba loads lazily, with the node's kernels: listen once it has loaded
+            self._hook = _AfterImport("numba", self._listen)
+            sys.meta_path.insert(0, self._hook)
             return self
+        self._listen()
+        return self
+
+    def _listen(self) -> None:
         from numba.core import event
 
         watch = self
@@ -42,7 +51,6 @@ class CompileWatch:
 
         self._listener = _Listener()
         event.register("numba:compile", self._listener)
-        return self
 
     def compile_started(self) -> None:
         if self._depth == 0:
@@ -60,6 +68,8 @@ class CompileWatch:
             self.seconds += time.perf_counter() - self._started
 
     def __exit__(self, *exc) -> None:
+        if self._hook in sys.meta_path:
+            sys.meta_path.remove(self._hook)
         if self._listener is None:
             return
         from numba.core import event
@@ -67,3 +77,30 @@ class CompileWatch:
         event.unregister("numba:compile", self._listener)
         if self.kernels:
             self.reporter.info(f"compiled {self.kernels} kernel(s) for {self.node} in {self.seconds:.1f} s")
+
+
+class _AfterImport(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """A one-shot import hook: lets module ``name`` load as usual, then calls ``then`` (numba's event registry
+    exists only once numba has loaded, and loading it for every node would cost a second of each run)."""
+
+    def __init__(self, name: str, then):
+        self.name = name
+        self.then = then
+        self._loader = None
+
+    def find_spec(self, fullname, path, target=None):
+        if fullname != self.name:
+            return None
+        sys.meta_path.remove(self)  # one shot; also lets the lookup below find the real module
+        spec = importlib.util.find_spec(fullname)
+        if spec is None or spec.loader is None:
+            return spec
+        self._loader, spec.loader = spec.loader, self
+        return spec
+
+    def create_module(self, spec):
+        return self._loader.create_module(spec)
+
+    def exec_module(self, module) -> None:
+        self._loader.exec_module(module)
+        self.then()

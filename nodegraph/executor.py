@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+import time
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -238,7 +239,7 @@ class Executor:
             max_seconds=self.max_seconds,
             checkpoint=None if self.cache is None else Checkpoint(self.cache.directory / "checkpoints" / f"{key}.npz"),
         )
-        start = now()
+        start, cpu_start = now(), time.process_time()
         memory = PeakMemory()
         try:
             with memory, CompileWatch(self.reporter, inst.label):
@@ -256,7 +257,7 @@ class Executor:
         finally:
             if ctx.rerun.enabled:
                 ctx.rerun.reset_time()
-        elapsed = now() - start
+        elapsed, cpu = now() - start, time.process_time() - cpu_start
         for value in outputs.values():
             codec.freeze(value)
         try:
@@ -266,7 +267,9 @@ class Executor:
             self.values[inst] = outputs
             if self.kept is not None:
                 self.kept[key] = outputs
-            self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, memory.peak_bytes)
+            self.status[inst] = NodeRecord(
+                inst.label, spec.type_name, status, elapsed, memory.peak_bytes, cpu_seconds=cpu
+            )
             if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment,
                 log_start = now()  # read before the cache keeps it, so the recording and a viewer get it first
                 self._append(inst, fragment, capture.live)

@@ -72,6 +72,7 @@ class NodeRecord:
     seconds: float = 0.0
     peak_bytes: int | None = None
     log_seconds: float | None = None  # logging its outputs to Rerun (None: no recording)
+    cpu_seconds: float | None = None  # the process's CPU time while it ran, all threads (None: not run here)
 
 
 class Reporter:
@@ -136,6 +137,7 @@ class Reporter:
             ("type", "left"),
             ("status", "left"),
             ("wall time", "right"),
+            ("CPU time", "right"),
             ("peak mem", "right"),
         ) + ((("rerun log", "right"),) if logged else ()):
             table.add_column(column, justify=justify)
@@ -153,7 +155,8 @@ class Reporter:
             peaks = [r.peak_bytes for r in records if r.peak_bytes is not None]
             mem = f"{max(peaks) / 2**20:.1f} MiB" if peaks else ""
             seconds = sum(r.seconds for r in records)
-            row = [node, records[0].type, status, f"{seconds * 1000:.1f} ms", mem]
+            cpu = [r.cpu_seconds for r in records if r.cpu_seconds is not None]
+            row = [node, records[0].type, status, f"{seconds * 1000:.1f} ms", f"{sum(cpu):.1f} s" if cpu else "", mem]
             if logged:
                 row.append(f"{sum(r.log_seconds or 0.0 for r in records) * 1000:.1f} ms")
             table.add_row(*row)

@@ -58,17 +58,20 @@ def inner_poles(points: np.ndarray, normals: np.ndarray):
         raise ValueError(
             f"element mesh has no interior (Voronoi of its surface failed: {str(exc).splitlines()[0]})"
         ) from None
+    # every (sample, Voronoi vertex of its cell) pair at once; per sample the first deepest inward vertex
+    regions = [vor.regions[k] for k in vor.point_region]
+    lengths = np.fromiter((len(r) for r in regions), np.int64, len(regions))
+    owner = np.repeat(np.arange(len(points)), lengths)
+    vertex = np.fromiter((v for r in regions for v in r), np.int64, int(lengths.sum()))
+    owner, vertex = owner[vertex >= 0], vertex[vertex >= 0]  # −1: the vertex at infinity
+    offsets = vor.vertices[vertex] - points[owner]
+    inward = np.einsum("ij,ij->i", offsets, -normals[owner])
+    depth = np.where(inward > 0, np.linalg.norm(offsets, axis=1), -1.0)
+    order = np.lexsort((-depth, owner))  # by sample, deepest first, ties in the cell's own order (stable)
+    first = order[np.r_[True, owner[order][1:] != owner[order][:-1]]] if len(order) else order
     centers = np.full((len(points), 3), np.nan)
-    for i, region_index in enumerate(vor.point_region):
-        region = [v for v in vor.regions[region_index] if v >= 0]
-        if not region:
-            continue
-        offsets = vor.vertices[region] - points[i]
-        inward = offsets @ -normals[i]
-        depth = np.where(inward > 0, np.linalg.norm(offsets, axis=1), -1.0)
-        best = int(np.argmax(depth))
-        if depth[best] > 0:
-            centers[i] = vor.vertices[region[best]]
+    best = first[depth[first] > 0]
+    centers[owner[best]] = vor.vertices[vertex[best]]
     ok = np.isfinite(centers[:, 0])
     radii = np.linalg.norm(centers[ok] - points[ok], axis=1)
     return centers[ok], radii
@@ -102,17 +105,19 @@ def medial_spheres(vertices: np.ndarray, faces: np.ndarray, tolerance: float, ma
 
 def _greedy_cover(points, centers, radii, epsilon, max_spheres):
     """Set cover: repeatedly keep the sphere touching (within epsilon) most still-uncovered samples."""
-    distance = np.linalg.norm(points[None, :, :] - centers[:, None, :], axis=2)
+    squares = [np.subtract.outer(centers[:, k], points[:, k]) ** 2 for k in range(3)]
+    distance = np.sqrt(squares[0] + squares[1] + squares[2])  # as np.linalg.norm sums: the same bits
     touches = distance <= (radii + epsilon)[:, None]
-    uncovered = np.ones(len(points), bool)
+    gain = touches.sum(axis=1)  # uncovered samples each sphere touches, kept up to date as samples get covered
     chosen = []
-    while uncovered.any() and len(chosen) < max_spheres:
-        gain = touches[:, uncovered].sum(axis=1)
+    while len(chosen) < max_spheres:
         best = int(np.argmax(gain))
         if gain[best] == 0:
             break
         chosen.append(best)
-        uncovered &= ~touches[best]
+        newly = touches[best].copy()
+        gain -= touches[:, newly].sum(axis=1)
+        touches[:, newly] = False
     return np.array(chosen, np.int64)
 
 

@@ -55,3 +55,44 @@ def test_compiling_is_announced_once_then_cached(tmp_path):
     assert "compiled 1 kernel(s) for doubling in " in first
     second = _run(tmp_path)
     assert "compil" not in second
+
+
+LAZY_PLUGIN = '''
+import numpy as np
+
+from nodegraph import Out, node
+from nodegraph.values import Table
+
+
+@node("kernel_toy", version=1, outputs={"table": Out(Table, "doubled")})
+def kernel_toy(ctx):
+    """Loads its kernel module (and with it numba) only when it runs, as the project's nodes do."""
+    from toy_kernels import double
+
+    return Table({"x": double(np.arange(4.0))})
+'''
+
+KERNELS = '''
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def double(values):
+    out = np.empty_like(values)
+    for i in range(values.size):
+        out[i] = 2.0 * values[i]
+    return out
+'''
+
+
+def test_a_node_that_loads_numba_itself_is_announced(tmp_path):
+    """The first node of a run that needs a kernel imports numba inside the node: its compile is announced
+    too (it was silent while the watch listened only when numba had loaded before the node started)."""
+    (tmp_path / "kernel_toy.py").write_text(LAZY_PLUGIN)
+    (tmp_path / "toy_kernels.py").write_text(KERNELS)
+    (tmp_path / "recipe.yaml").write_text(RECIPE)
+    first = _run(tmp_path)
+    assert "compiling kernels for doubling (first run after a code change; cached afterwards)" in first
+    assert "compiled 1 kernel(s) for doubling in " in first
+    assert "compil" not in _run(tmp_path)
