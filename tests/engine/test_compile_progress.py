@@ -72,7 +72,7 @@ def kernel_toy(ctx):
     return Table({"x": double(np.arange(4.0))})
 '''
 
-KERNELS = '''
+KERNELS = """
 import numpy as np
 from numba import njit
 
@@ -83,7 +83,7 @@ def double(values):
     for i in range(values.size):
         out[i] = 2.0 * values[i]
     return out
-'''
+"""
 
 
 def test_a_node_that_loads_numba_itself_is_announced(tmp_path):
