@@ -7,6 +7,7 @@ reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 previ
     python benchmarks/bench_preview.py --highlights [--quick]   # default preview: time, determinism, highlights
     python benchmarks/bench_preview.py --budget 12:32,10:32 [--quick]   # spp:path depth, time against quality
     python benchmarks/bench_preview.py --time 2 [--save PNG] [--quick]  # the default preview alone: time, same bytes
+    python benchmarks/bench_preview.py --passes [--quick]       # CPU seconds of each pass of the default preview
 
 The scene is the main job's (``graphs/ikura_don.yaml`` up to ``shade``, from the cache; computed the first
 time), seen by its preview camera. Quality is measured in a window of the 1280 × 720 frame over the
@@ -28,6 +29,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from machine import conditions
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -272,6 +274,63 @@ def budget(configs: str, quick: bool, cache_dir: Path | None) -> str:
     )
 
 
+def passes(quick: bool, cache_dir: Path | None) -> str:
+    """CPU and wall seconds of each pass of the default preview (scene load, path-traced image, the denoiser's
+    guides, the glints), the same calls ``mitsuba_scene.render_layers`` makes, timed one by one."""
+    import tempfile
+
+    import mitsuba as mi
+
+    from nodes.export import mitsuba_scene as ms
+
+    scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
+    width, height, spp = (
+        (320, 180, params["samples"]) if quick else (params["width"], params["height"], params["samples"])
+    )
+    mi.set_variant("scalar_rgb")
+    rows = []
+
+    def clock(name, work):
+        cpu, wall = cpu_seconds(), time.perf_counter()
+        out = work()
+        rows.append(f"| {name} | {cpu_seconds() - cpu:.1f} | {time.perf_counter() - wall:.1f} |")
+        return out
+
+    with tempfile.TemporaryDirectory(prefix="bench_preview_") as folder:
+        description = clock(
+            "scene description (PLY files)",
+            lambda: ms.scene_dict(
+                scene,
+                Path(folder),
+                camera,
+                width,
+                height,
+                spp,
+                params["sun_direction"],
+                None,
+                None,
+                params["subsurface"],
+            ),
+        )
+        loaded = clock("scene load", lambda: mi.load_dict(description))
+        integrator = description["integrator"]
+        clock(
+            f"image: {spp} spp, {integrator['type']} depth {integrator['max_depth']}", lambda: mi.render(loaded, seed=0)
+        )
+        guides = mi.load_dict({"type": "aov", "aovs": ms.ALBEDO_AOV})
+        clock(
+            f"denoiser guides: {min(spp, ms.GUIDE_SPP)} spp",
+            lambda: mi.render(loaded, integrator=guides, seed=0, spp=min(spp, ms.GUIDE_SPP)),
+        )
+        clock(
+            f"glints: {ms.HIGHLIGHT_SPP} spp, one bounce",
+            lambda: mi.render(mi.load_dict(ms.highlight_dict(scene, description)), seed=0),
+        )
+    subject = "synthetic scene" if quick else "main job"
+    head = f"Passes of the default preview, {width} × {height}, {subject}; {conditions()}"
+    return "\n".join([head, "", "| pass | CPU s | wall s |", "|---|---|---|", *rows])
+
+
 def cpu_seconds() -> float:
     """CPU time of this process (all threads): with other work on the machine, wall time alone misleads."""
     return time.process_time()
@@ -286,8 +345,12 @@ def main():
     parser.add_argument("--highlights", action="store_true", help="default preview: time and highlight energy")
     parser.add_argument("--budget", default=None, help="spp:depth,...: the default preview's time against quality")
     parser.add_argument("--time", type=int, default=0, metavar="N", help="the default preview alone, N renders: time")
+    parser.add_argument("--passes", action="store_true", help="CPU seconds of each pass of the default preview")
     parser.add_argument("--save", type=Path, default=None, help="with --time: write the first render here (PNG)")
     args = parser.parse_args()
+    if args.passes:
+        print(passes(args.quick, args.cache_dir))
+        return
     if args.time:
         print(timed(args.quick, args.cache_dir, args.time, args.save))
         return
