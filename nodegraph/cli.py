@@ -280,7 +280,13 @@ class WatchSession:
             self.needed = needed
             if needed is not None and self.running is not None and self.running[1] not in needed:
                 self.stopping = self.running[1]
-                signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+                # to the main thread, which runs the step: Mitsuba's own SIGINT handler cancels the render it runs
+                if hasattr(signal, "pthread_kill"):
+                    signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+                else:  # no POSIX threads' signals (Windows): Python code stops, a render runs to its end
+                    import _thread
+
+                    _thread.interrupt_main()
 
     def interrupted(self, signum, frame) -> None:
         """SIGINT: Ctrl-C, or ``supersede`` stopping a step (then raised only while that step still runs;
