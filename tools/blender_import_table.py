@@ -1,7 +1,7 @@
 """The Blender import table: each .glb / .usdc given, imported into Blender 4.5 with the nodegraph add-on —
 objects, meshes drawn and the mesh data they share (fewer where instanced), vertices, material names, how many
-materials transmit (and their IOR), how many scatter under the surface (weight, radius in mm), which alpha below 1 (see-through without
-refraction), import seconds and file size — as a Markdown table.
+materials transmit (and their IOR), how many scatter under the surface (weight, radius in mm), which alpha below 1
+(see-through without refraction), import seconds and file size — as a Markdown table.
 
     python tools/blender_import_table.py outputs/ikura_don/ikura_don.glb outputs/ikura_don/ikura_don.usdc
 
