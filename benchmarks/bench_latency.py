@@ -5,10 +5,12 @@
 - ``watch``: ``nodegraph watch RECIPE`` on a copy of the recipe beside it; each edit rewrites a parameter of
   one node in the file (default ``shade.ambient``); the time from the save to the watcher's "run N done" line
   (outputs and recording written), with the CPU seconds the watcher spent meanwhile (target ≤ 2 s).
+- ``resave``: a save while the preview of the save before it renders (``--delay`` seconds into it): the time
+  from that save to its change in the recording (target ≤ 2 s, as for any save: the watch stops the preview).
 - ``draft``: ``nodegraph run RECIPE --draft`` with an empty node cache (compiled kernels kept; target ≤ 15 s).
 
 Wall times carry the machine's load (printed); CPU seconds are the comparable figures.
-Run: python benchmarks/bench_latency.py [cached|watch|draft ...] [--recipe graphs/ikura_don.yaml ...]
+Run: python benchmarks/bench_latency.py [cached|watch|resave|draft ...] [--recipe graphs/ikura_don.yaml ...]
 (``--quick``: the engine's toy recipe, one of each, in seconds: a smoke run)
 """
 
@@ -119,48 +121,64 @@ def set_param(text: str, node: str, param: str, value: str) -> str:
     return text[: block.start(1)] + new_body + text[block.end(1) :]
 
 
+class Watcher:
+    """``nodegraph watch`` on a copy of the recipe beside it (relative asset paths still resolve), its output
+    lines read as they come."""
+
+    def __init__(self, recipe: str, runs: int, draft: bool, extra: list[str], out: str):
+        source = ROOT / recipe
+        self.copy = source.with_name(f".bench_watch_{source.name}")
+        shutil.copy(source, self.copy)
+        command = CLI + ["watch", str(self.copy), "--out-dir", out, "--runs", str(runs), *extra]
+        command += ["--draft"] if draft else []
+        self.proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.lines: queue.Queue = queue.Queue()
+        threading.Thread(target=lambda: [self.lines.put(x) for x in self.proc.stdout], daemon=True).start()
+
+    def save(self, node: str, param: str, value: str) -> tuple[float, float]:
+        """Rewrite one parameter in the file; when, and the watcher's CPU seconds then."""
+        cpu = _cpu_seconds(self.proc.pid)
+        saved = time.perf_counter()
+        self.copy.write_text(set_param(self.copy.read_text(), node, param, value))
+        return saved, cpu
+
+    def until(self, text: str, seen: list, also: str | None = None) -> tuple[float, float | None, float | None]:
+        """Read lines until one contains ``text``; when it came, and when (with the watcher's CPU seconds
+        then) a line containing ``also`` came before it (None: none did, as with an engine that does not
+        say when a node reaches the recording)."""
+        deadline, found = time.time() + 900, (None, None)
+        while time.time() < deadline:
+            try:
+                line = self.lines.get(timeout=1.0)
+            except queue.Empty:
+                if self.proc.poll() is not None:
+                    break
+                continue
+            seen.append(line)
+            if also is not None and also in line:
+                found = (time.perf_counter(), _cpu_seconds(self.proc.pid))
+            if text in line:
+                return time.perf_counter(), *found
+        raise SystemExit(f"no {text!r}:\n{''.join(seen)[-3000:]}")
+
+    def close(self) -> None:
+        self.proc.kill()
+        self.copy.unlink(missing_ok=True)
+
+
 def bench_watch(recipe: str, edits: int, draft: bool, target: str, values: list[str], extra: list[str]) -> list[tuple]:
     node, param = target.split(".")
-    source = ROOT / recipe
-    copy = source.with_name(f".bench_watch_{source.name}")  # beside it: relative asset paths still resolve
-    shutil.copy(source, copy)
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-watch-") as tmp:
-        command = CLI + ["watch", str(copy), "--out-dir", f"{tmp}/out", "--runs", str(edits + 1), *extra]
-        command += ["--draft"] if draft else []
-        proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        lines: queue.Queue = queue.Queue()
-        threading.Thread(target=lambda: [lines.put(x) for x in proc.stdout], daemon=True).start()
-
-        def until(text: str, seen: list, also: str | None = None) -> tuple[float, float | None, float | None]:
-            """Read lines until one contains ``text``; when it came, and when (with the watcher's CPU seconds
-            then) a line containing ``also`` came before it (None: none did, as with an engine that does not
-            say when a node reaches the recording)."""
-            deadline, found = time.time() + 900, (None, None)
-            while time.time() < deadline:
-                try:
-                    line = lines.get(timeout=1.0)
-                except queue.Empty:
-                    if proc.poll() is not None:
-                        break
-                    continue
-                seen.append(line)
-                if also is not None and also in line:
-                    found = (time.perf_counter(), _cpu_seconds(proc.pid))
-                if text in line:
-                    return time.perf_counter(), *found
-            raise SystemExit(f"no {text!r}:\n{''.join(seen)[-3000:]}")
-
+        watcher = Watcher(recipe, edits + 1, draft, extra, f"{tmp}/out")
         try:
-            until("watching", [])
+            watcher.until("watching", [])
             for i in range(edits):
                 time.sleep(1.0)
-                cpu0 = _cpu_seconds(proc.pid)
-                saved = time.perf_counter()
-                copy.write_text(set_param(copy.read_text(), node, param, values[i % len(values)]))
+                saved, cpu0 = watcher.save(node, param, values[i % len(values)])
                 seen: list = []
-                done, shown, shown_cpu = until(f"run {i + 2} done", seen, also=f"run {i + 2}: {node} updated")
-                cpu = _cpu_seconds(proc.pid) - cpu0
+                done, shown, shown_cpu = watcher.until(f"run {i + 2} done", seen, also=f"run {i + 2}: {node} updated")
+                cpu = _cpu_seconds(watcher.proc.pid) - cpu0
                 ran = {n: s for n, s in _node_times("".join(seen)).items() if s > 0}
                 note = ", ".join(f"{n} {s:.2f}" for n, s in sorted(ran.items(), key=lambda kv: -kv[1])[:5])
                 case, now = f"watch edit {i + 1}: {target}", load()
@@ -174,29 +192,52 @@ def bench_watch(recipe: str, edits: int, draft: bool, target: str, values: list[
                     rows.append((*row, "≤ 2", now))
                 row = (f"{case}, all outputs written", recipe, f"{done - saved:.2f}", f"{cpu:.2f}", "", now, note)
                 rows.append(row)
-            proc.wait(timeout=120)
+            watcher.proc.wait(timeout=120)
         finally:
-            proc.kill()
-            copy.unlink(missing_ok=True)
+            watcher.close()
     return rows
+
+
+def bench_resave(recipe: str, draft: bool, target: str, values: list[str], delay: float, extra: list[str]) -> list:
+    """A save while the preview of the previous save renders: from that save to its change in the recording.
+    An engine that finishes the preview first adds what was left of it."""
+    node, param = target.split(".")
+    with tempfile.TemporaryDirectory(prefix="bench-watch-") as tmp:
+        watcher = Watcher(recipe, 3, draft, extra, f"{tmp}/out")
+        try:
+            watcher.until("watching", [])
+            watcher.save(node, param, values[0])
+            watcher.until(f"run 2: {node} updated", [])
+            time.sleep(delay)  # the preview is rendering now
+            saved, cpu0 = watcher.save(node, param, values[1 % len(values)])
+            seen: list = []
+            shown, _, _ = watcher.until(f"run 3: {node} updated", seen)
+            cpu = _cpu_seconds(watcher.proc.pid) - cpu0
+            stopped = next((line.strip() for line in seen if line.startswith("run 2: stopped")), "run 2 finished first")
+        finally:
+            watcher.close()
+    case = f"watch: a save {delay:g} s into the preview, {node} in the recording"
+    return [(case, recipe, f"{shown - saved:.2f}", f"{cpu:.2f}", "≤ 2", load(), stopped)]
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("what", nargs="*", help="any of cached, watch, draft (default: all three)")
+    parser.add_argument("what", nargs="*", help="any of cached, watch, resave, draft (default: cached, watch, draft)")
     parser.add_argument("--recipe", action="append", default=None, help="default graphs/ikura_don.yaml")
     parser.add_argument("--repeat", type=int, default=3, help="cached re-runs timed")
     parser.add_argument("--edits", type=int, default=3, help="saves timed in watch")
     parser.add_argument("--full", action="store_true", help="watch the full recipe, not its draft")
     parser.add_argument("--param", default="shade.ambient", help="NODE.PARAM that watch edits")
+    parser.add_argument("--delay", type=float, default=2.0, help="resave: seconds into the preview of the first save")
     parser.add_argument("--values", default=None, help="values written in turn (default: new random ones in 0.2–0.7)")
     parser.add_argument("--cache-dir", default=None, help="cache for cached and watch (default: the usual one)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
     parser.add_argument("--quick", action="store_true", help="a toy recipe, one of each (a smoke run for CI)")
     args = parser.parse_args()
     args.what = args.what or ["cached", "watch", "draft"]
-    if set(args.what) - {"cached", "watch", "draft"}:
-        parser.error(f"unknown case(s) {sorted(set(args.what) - {'cached', 'watch', 'draft'})}: cached, watch, draft")
+    cases = {"cached", "watch", "resave", "draft"}
+    if set(args.what) - cases:
+        parser.error(f"unknown case(s) {sorted(set(args.what) - cases)}: {', '.join(sorted(cases))}")
     recipes = args.recipe or ["graphs/ikura_don.yaml"]
     common = [f"--set={o}" for o in args.overrides]  # every command
     cached = ["--cache-dir", args.cache_dir] if args.cache_dir else []  # cached re-runs and watch
@@ -219,6 +260,9 @@ def main() -> None:
                 else [f"{random.uniform(0.2, 0.7):.6f}" for _ in range(args.edits)]
             )
             rows += bench_watch(recipe, args.edits, not args.full, args.param, values, cached[:2] + common)
+        if "resave" in args.what:
+            values = args.values.split(",") if args.values else [f"{random.uniform(0.2, 0.7):.6f}" for _ in range(2)]
+            rows += bench_resave(recipe, not args.full, args.param, values, args.delay, cached[:2] + common)
         if "draft" in args.what:
             rows += bench_draft(recipe, common)
     if scratch is not None:

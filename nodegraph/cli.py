@@ -10,6 +10,7 @@ import contextlib
 import os
 import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -25,7 +26,7 @@ from .cache import (
     parse_size,
 )
 from .errors import NodeFailure, NodegraphError, RecipeError
-from .executor import run_recipe
+from .executor import resolve_outputs, run_recipe
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
@@ -232,19 +233,70 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Superseded(KeyboardInterrupt):
+    """A watched run stopped because the recipe was saved again and the step it was at is no longer needed."""
+
+
 class WatchSession:
     """What ``nodegraph watch`` keeps between runs: the last run's values by cache key (an edit re-runs a
     node from its inputs in memory, not from the cache), and when the current run began, to say when each
-    node that ran reached the recording (and a viewer streaming it)."""
+    node that ran reached the recording (and a viewer streaming it).
+
+    A save during a run does not wait for it: ``supersede`` gets the cache keys the saved recipe needs, and
+    a step that is not among them stops at once (a signal: a path-traced preview stops within its render, a
+    Python loop at its next line) or before it starts; a step the new recipe still needs (a long
+    simulation under a shading edit) runs on, and the next run takes its result from memory."""
 
     def __init__(self):
         self.kept: dict = {}
         self.run = 0
         self.seen = time.perf_counter()
+        self.lock = threading.Lock()
+        self.running = None  # (instance, key) of the step computing now
+        self.needed: set[str] | None = None  # the keys the file's last save needs; None: unchanged, or a bad edit
+        self.stopping: str | None = None  # the key of the step a signal was sent to stop
+
+    def begin(self, run: int, seen: float) -> None:
+        self.run, self.seen = run, seen
+        self.running, self.needed, self.stopping = None, None, None
+
+    def started(self, inst, key) -> None:
+        """Before a step runs: stop the run here if the last save no longer needs this step."""
+        with self.lock:
+            if self.needed is not None and key not in self.needed:
+                raise Superseded(inst.label)
+            self.running = (inst, key)
 
     def ran(self, inst) -> None:
+        with self.lock:
+            self.running = None
         seconds = time.perf_counter() - self.seen
         print(f"run {self.run}: {inst.label} updated {seconds:.2f} s after the save was seen", flush=True)
+
+    def supersede(self, needed: set[str] | None) -> None:
+        """The file was saved (again) during the run; ``needed``: the keys it now needs (None: a bad edit,
+        the run goes on and the error shows after it). Stop the step computing now if it is not needed."""
+        with self.lock:
+            self.needed = needed
+            if needed is not None and self.running is not None and self.running[1] not in needed:
+                self.stopping = self.running[1]
+                # to the main thread, which runs the step: Mitsuba's own SIGINT handler cancels the render it runs
+                if hasattr(signal, "pthread_kill"):
+                    signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+                else:  # no POSIX threads' signals (Windows): Python code stops, a render runs to its end
+                    import _thread
+
+                    _thread.interrupt_main()
+
+    def interrupted(self, signum, frame) -> None:
+        """SIGINT: Ctrl-C, or ``supersede`` stopping a step (then raised only while that step still runs;
+        once it has finished, the next step's start stops the run)."""
+        stopping, running = self.stopping, self.running
+        if stopping is None:
+            raise KeyboardInterrupt
+        self.stopping = None
+        if running is not None and running[1] == stopping:
+            raise Superseded(running[0].label)
 
     def keep(self, keys) -> None:
         """Hold only what the last run used."""
@@ -291,6 +343,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
                 plugins=args.plugin,
                 kept=None if session is None else session.kept,
                 on_ran=None if session is None else session.ran,
+                on_start=None if session is None else session.started,
             )
         if session is not None:
             session.keep(set(result.keys.values()))
@@ -330,8 +383,11 @@ def _pool(args, cache, reporter):
 def _cmd_watch(args, registry) -> int:
     """Run, then run again whenever the recipe file's bytes change. The cache makes a re-run compute only the
     nodes an edit changed; a bad edit prints its error (file:line, node, parameter) and the last good outputs
-    and recording stay as they were until the next save."""
+    and recording stay as they were until the next save. A save during a run stops what it no longer needs
+    (``WatchSession``) and runs the new version."""
     import hashlib
+
+    from .plan import Plan
 
     args.no_cache, args.rrd, args.scheduler, args.workers = False, None, None, None  # the cache is the point
 
@@ -342,29 +398,72 @@ def _cmd_watch(args, registry) -> int:
             text = b""  # an editor replacing the file
         return hashlib.sha256(text).digest() if text.strip() else None  # None: being written, look again
 
-    seen, runs, session = None, 0, WatchSession()
-    while args.runs is None or runs < args.runs:
+    def settled(last):
+        """The file's digest once a save has settled, if it differs from ``last``; else None."""
         now = digest()
-        if now is None or now == seen:
-            time.sleep(args.poll)
-            continue
-        noticed = time.perf_counter()
-        time.sleep(SETTLE_S)  # a save in progress: run once the bytes have stayed the same a moment
-        if digest() != now:
-            continue
-        seen, runs = now, runs + 1
-        session.run, session.seen = runs, noticed
+        if now is None or now == last:
+            return None
+        time.sleep(SETTLE_S)  # a save in progress: take it once the bytes have stayed the same a moment
+        return now if digest() == now else None
+
+    def needed_keys() -> set[str] | None:
+        """The cache keys the file as saved now needs; None when it does not load (a bad edit)."""
         try:
-            _cmd_run(args, registry, session)
-            print(f"run {runs} done in {time.perf_counter() - noticed:.1f} s", flush=True)
-        except RecipeError as exc:
-            print(str(exc), file=sys.stderr)
-            print(f"run {runs}: not run; the last good outputs stay", flush=True)
-        except (NodeFailure, NodegraphError) as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            print(f"run {runs}: failed; the last good outputs stay", flush=True)
-        if args.runs is None or runs < args.runs:
-            print(f"watching {args.recipe} (Ctrl-C to stop)", flush=True)
+            recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+            wires = resolve_outputs(recipe, args.outputs) if args.outputs else list(recipe.outputs)
+            plan = Plan(recipe)
+            plan.add({w.node for w in wires})
+        except (RecipeError, NodegraphError):
+            return None
+        return set(plan.keys.values())
+
+    saved: dict[bytes, float] = {}  # when a save made during a run was seen, by the file's digest
+
+    def supervise(run_digest, done: threading.Event) -> None:
+        """During a run: tell the session about every save, so that it stops what the save made unneeded."""
+        last = run_digest
+        while not done.wait(args.poll):
+            noticed = time.perf_counter()
+            now = settled(last)
+            if now is not None:
+                last, saved[now] = now, noticed
+                session.supersede(needed_keys())
+
+    seen, runs, session = None, 0, WatchSession()
+    previous = signal.signal(signal.SIGINT, session.interrupted)
+    try:
+        while args.runs is None or runs < args.runs:
+            noticed = time.perf_counter()
+            now = settled(seen)
+            if now is None:
+                time.sleep(args.poll)
+                continue
+            seen, runs = now, runs + 1
+            noticed = saved.pop(now, noticed)
+            saved.clear()
+            session.begin(runs, noticed)
+            done = threading.Event()
+            supervisor = threading.Thread(target=supervise, args=(now, done), daemon=True)
+            supervisor.start()
+            try:
+                _cmd_run(args, registry, session)
+                print(f"run {runs} done in {time.perf_counter() - noticed:.1f} s", flush=True)
+            except Superseded as exc:
+                print(f"run {runs}: stopped at {exc}: the file was saved again", flush=True)
+            except RecipeError as exc:
+                print(str(exc), file=sys.stderr)
+                print(f"run {runs}: not run; the last good outputs stay", flush=True)
+            except (NodeFailure, NodegraphError) as exc:
+                print(f"error: {exc}", file=sys.stderr)
+                print(f"run {runs}: failed; the last good outputs stay", flush=True)
+            finally:
+                done.set()
+                supervisor.join()
+                session.begin(runs, noticed)  # a stop signalled as the run ended is dropped
+            if args.runs is None or runs < args.runs:
+                print(f"watching {args.recipe} (Ctrl-C to stop)", flush=True)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     return 0
 
 

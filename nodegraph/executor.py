@@ -71,13 +71,17 @@ class Executor:
         max_seconds: float | None = None,
         kept: dict[str, dict[str, Any]] | None = None,
         on_ran=None,
+        on_start=None,
     ):
         """``kept``: values by cache key that a long-lived caller (``nodegraph watch``) holds between runs,
         used before the cache and filled with this run's; ``on_ran(inst)``: called as soon as an instance
-        that ran is in the recording (or computed, without one)."""
+        that ran is in the recording (or computed, without one); ``on_start(inst, key)``: called as an
+        instance is about to run, its inputs in hand (the watch stops a run there once an edit has made
+        that instance unneeded)."""
         self.recipe = recipe
         self.kept = kept
         self.on_ran = on_ran
+        self.on_start = on_start
         self.max_seconds = max_seconds
         self.cache = cache
         self.reporter = reporter or Reporter(quiet=True)
@@ -223,6 +227,8 @@ class Executor:
             values = [self.materialise(src)[out] for src, out in pairs]
             kwargs[port_name] = values if port.many else (values[0] if values else None)
         kwargs.update(entry.params)
+        if self.on_start is not None:
+            self.on_start(inst, key)
         capture = None
         if self.recording is not None:  # the node's logs and outputs go to a fragment, kept with its entry
             capture = self.recording.capture(self._capture_path(key))
@@ -424,10 +430,11 @@ def run_recipe(
     plugins=(),
     kept: dict[str, dict[str, Any]] | None = None,
     on_ran=None,
+    on_start=None,
 ) -> RunResult:
     """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``; a node
     that expects to run longer than ``max_seconds`` refuses to start (``Context.expect_cost``).
-    ``kept`` and ``on_ran``: see ``Executor``.
+    ``kept``, ``on_ran`` and ``on_start``: see ``Executor``.
 
     With a ``pool`` (``pool.InstancePool``, e.g. ``dask_pool.DaskPool``) the node instances missing from
     the cache are computed by its workers first (``plugins``: the plugin files they load); the run then
@@ -439,7 +446,7 @@ def run_recipe(
     recipe and what was logged (``blueprint``)."""
     wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
     warn = reporter.warn if reporter is not None else None
-    executor = Executor(recipe, cache, reporter, None, max_seconds, kept, on_ran)
+    executor = Executor(recipe, cache, reporter, None, max_seconds, kept, on_ran, on_start)
     key = None if out_dir is None else executor.output_key(wires, rrd)
     if key is not None and not spawn:  # a viewer to stream to needs the run itself
         reused = executor.reuse(wires, out_dir, rrd, key)

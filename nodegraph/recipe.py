@@ -284,8 +284,10 @@ class _Validator:
 
         entries: dict[str, NodeEntry] = {}
         wire_sources: dict[tuple[str, str], list[tuple[Wire, tuple]]] = {}
+        above = None  # the node before this one in the file
         for node_id, body in raw_nodes.items():
             path = ("nodes", node_id)
+            above, node_above = node_id, above
             if not isinstance(node_id, str) or not NODE_ID.match(node_id):
                 self.issue(
                     path,
@@ -294,11 +296,13 @@ class _Validator:
                     allowed="letters, digits and _ (not starting with a digit)",
                 )
                 continue
-            if node_id in NodeModel.model_fields and not isinstance(body, dict):  # a node key, indented too little
+            if node_id in NodeModel.model_fields and not (isinstance(body, dict) and "type" in body):
+                # a node's key indented too little (a node of that name would have a type)
+                under = f"node '{node_above}' above" if node_above else "its node"
                 self.issue(
                     path,
-                    f"'{node_id}' is a key of a node, not a node: indent it under its node, 2 spaces further in "
-                    "than the node's name",
+                    f"'{node_id}' is a key of a node, not a node: check the indentation; indent it under "
+                    f"{under}, 2 spaces further in than the node's name",
                     key=True,
                 )
                 continue

@@ -1,7 +1,7 @@
 """The Blender import table: each .glb / .usdc given, imported into Blender 4.5 with the nodegraph add-on —
 objects, meshes drawn and the mesh data they share (fewer where instanced), vertices, material names, how many
-materials transmit (and their IOR), how many scatter under the surface, which alpha below 1 (see-through without
-refraction), import seconds and file size — as a Markdown table.
+materials transmit (and their IOR), how many scatter under the surface (weight, radius in mm), which alpha below 1
+(see-through without refraction), import seconds and file size — as a Markdown table.
 
     python tools/blender_import_table.py outputs/ikura_don/ikura_don.glb outputs/ikura_don/ikura_don.usdc
 
@@ -44,10 +44,15 @@ def import_report(path: Path, addon: bool) -> dict:
         return json.loads(report.read_text())
 
 
+def _radius_mm(material: dict) -> str:
+    """Subsurface Radius × Subsurface Scale (Blender's metres) in millimetres, red / green / blue."""
+    return " / ".join(f"{r * material['subsurface_scale'] * 1000:.2f}" for r in material["subsurface_radius"])
+
+
 def row(path: Path, got: dict) -> str:
     materials = got["materials"].values()
     transmit = sorted({(round(m["transmission"], 2), round(m["ior"], 2)) for m in materials if m["transmission"] > 0})
-    scatter = [f"{m['subsurface']:.2f}" for m in materials if m["subsurface"] > 0]
+    scatter = [f"{m['subsurface']:.2f}, radius {_radius_mm(m)} mm" for m in materials if m["subsurface"] > 0]
     see_through = sorted({round(m["alpha"], 2) for m in materials if m["alpha"] < 1})
     return (
         f"| {path.name} | {got['objects']:,} | {got['meshes']:,} | {got['mesh_data']:,} | {got['vertices']:,} | "

@@ -76,7 +76,22 @@ def test_node_keys_indented_too_little_are_named(registry):
         parse_recipe(text, registry, file="r.yaml")
     messages = [str(i) for i in info.value.issues]
     assert any("node 'merge': nothing under it" in m for m in messages)
-    assert any("'type' is a key of a node, not a node: indent it under its node" in m for m in messages)
+    assert any(
+        "'type' is a key of a node, not a node: check the indentation; indent it under node 'merge'" in m
+        for m in messages
+    )
+
+
+def test_params_indented_as_a_node_get_one_indentation_hint(registry):
+    """``params:`` two spaces too far out reads as a node named 'params' holding the parameters: one issue
+    that names the indentation and the node it belongs to, not one per parameter ("unknown key 'count'")."""
+    old = "    params: {count: 20, scale: 2.0}"
+    assert old in VALID
+    with pytest.raises(RecipeError) as info:
+        parse_recipe(VALID.replace(old, old[2:]), registry, file="r.yaml")
+    (issue,) = info.value.issues
+    assert issue.location.line == 8
+    assert "'params' is a key of a node, not a node: check the indentation; indent it under node 'pts'" in str(issue)
 
 
 def test_a_failed_first_run_does_not_claim_an_older_recording(tmp_path, capsys):

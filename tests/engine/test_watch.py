@@ -94,3 +94,90 @@ def test_what_an_edit_ran_reaches_the_recording_before_what_was_cached(tmp_path)
     ran = [i for i, n in enumerate(nodes) if n in ("shifted", "phys", "merge")]
     cached = [i for i, n in enumerate(nodes) if n == "pts"]
     assert ran and cached and max(ran) < min(cached), nodes
+
+
+SLOW = """\
+name: toy
+seed: 3
+outputs: [{output}]
+nodes:
+  pts:
+    type: toy_points
+    params: {{count: 20, scale: 2.0}}
+{middle}"""
+
+
+def _watch(tmp_path, text: str, runs: int):
+    recipe = tmp_path / "r.yaml"
+    recipe.write_text(text)
+    command = [sys.executable, "-m", "nodegraph.cli", "watch", str(recipe), "--plugin", str(TOY), "--runs", str(runs)]
+    command += ["--cache-dir", str(tmp_path / "cache"), "--out-dir", str(tmp_path / "out")]
+    proc = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    return recipe, proc
+
+
+def _wait_for_start(folder, proc, lines, seen, timeout: float = 120.0) -> None:
+    deadline = time.time() + timeout
+    while not (folder.is_dir() and any(folder.iterdir())):
+        assert time.time() < deadline and proc.poll() is None, "".join(seen) + "".join(list(lines.queue))
+        time.sleep(0.05)
+
+
+def test_a_save_during_a_long_step_it_no_longer_needs_stops_that_step(tmp_path):
+    """The artist saves while a slow step computes what the edit changes: the watch stops that step at once
+    and runs the new version, instead of finishing the old one first (30 s here)."""
+    started = tmp_path / "started"
+    middle = f"""\
+  shifted:
+    type: toy_shift
+    inputs: {{spheres: pts.spheres}}
+    params: {{dx: 1.5}}
+  slow:
+    type: toy_slow
+    inputs: {{spheres: shifted.spheres}}
+    params: {{seconds: 30.0, started: {started}}}
+"""
+    recipe, proc = _watch(tmp_path, SLOW.format(output="slow.spheres", middle=middle), runs=2)
+    lines, seen = _lines(proc), []
+    try:
+        _wait_for_start(started, proc, lines, seen)
+        saved = time.perf_counter()
+        recipe.write_text(recipe.read_text().replace("dx: 1.5", "dx: 2.5").replace("seconds: 30.0", "seconds: 0.5"))
+        done = _until(lines, "run 2 done", seen, timeout=60)
+        assert any(line.startswith("run 1: stopped at slow") for line in seen), "".join(seen)
+        assert done - saved < 10.0, f"{done - saved:.1f} s from the save to the new outputs"
+        rows = {line.split("│")[1].strip(): line for line in seen if line.count("│") > 3}
+        assert "cached" in rows["pts"] and "ran" in rows["shifted"] and "ran" in rows["slow"], "".join(seen)
+        assert (tmp_path / "out" / "slow.npz").is_file()
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()
+
+
+def test_a_save_that_still_needs_the_running_step_lets_it_finish(tmp_path):
+    """A long step the edit does not touch (a simulation under a shading edit) is not thrown away: it runs on,
+    the old run stops before the step the edit changed, and the new run takes the slow result from memory."""
+    started = tmp_path / "started"
+    middle = f"""\
+  slow:
+    type: toy_slow
+    inputs: {{spheres: pts.spheres}}
+    params: {{seconds: 3.0, started: {started}}}
+  shifted:
+    type: toy_shift
+    inputs: {{spheres: slow.spheres}}
+    params: {{dx: 1.5}}
+"""
+    recipe, proc = _watch(tmp_path, SLOW.format(output="shifted.spheres", middle=middle), runs=2)
+    lines, seen = _lines(proc), []
+    try:
+        _wait_for_start(started, proc, lines, seen)
+        recipe.write_text(recipe.read_text().replace("dx: 1.5", "dx: 2.5"))
+        _until(lines, "run 2 done", seen, timeout=60)
+        assert not any(line.startswith("run 1: stopped at slow") for line in seen), "".join(seen)
+        second = "".join(seen).split("watching")[-1]  # the second run's lines
+        rows = {line.split("│")[1].strip(): line for line in second.splitlines() if line.count("│") > 3}
+        assert "cached" in rows["slow"] and "ran" in rows["shifted"], second
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()
