@@ -487,11 +487,15 @@ def render_layers(
         description = scene_dict(
             scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface
         )
-        loaded = mi.load_dict(description)
+        # optimize=False: Mitsuba's merging of identical objects made about one render in six differ from the
+        # others in the same process (tests/export/test_preview.py); our scenes share no objects to merge
+        loaded = mi.load_dict(description, optimize=False)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV})
         aov = np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=min(spp, GUIDE_SPP)), np.float32)
-        glints = np.asarray(mi.render(mi.load_dict(highlight_dict(scene, description)), seed=seed), np.float32)
+        glints = np.asarray(
+            mi.render(mi.load_dict(highlight_dict(scene, description), optimize=False), seed=seed), np.float32
+        )
     color, glints = (np.nan_to_num(x[..., 0:3], nan=0.0, posinf=0.0) * np.float32(EXPOSURE) for x in (image, glints))
     albedo, normal = np.clip(aov[..., 0:3], 0.0, 1.0), np.clip(aov[..., 3:6], -1.0, 1.0)
     return Layers(np.maximum(color, 0.0), albedo, normal, np.maximum(glints, 0.0))
