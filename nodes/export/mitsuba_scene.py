@@ -488,7 +488,7 @@ def render_layers(
             scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface
         )
         # optimize=False: Mitsuba's merging of identical objects made about one render in six differ from the
-        # others in the same process (tests/export/test_preview.py); our scenes share no objects to merge
+        # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
         loaded = mi.load_dict(description, optimize=False)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV})
