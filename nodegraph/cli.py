@@ -341,9 +341,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
                 max_seconds=None if args.yes else 60 * args.max_minutes,
                 pool=pool,
                 plugins=args.plugin,
-                kept=None if session is None else session.kept,
-                on_ran=None if session is None else session.ran,
-                on_start=None if session is None else session.started,
+                session=session,
             )
         if session is not None:
             session.keep(set(result.keys.values()))

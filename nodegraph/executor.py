@@ -12,7 +12,7 @@ import time
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from . import __version__, codec
 from .blueprint import LOG, build_blueprint
@@ -59,6 +59,19 @@ class RunResult:
         return {r.node: r.status for r in self.records}
 
 
+class LiveSession(Protocol):
+    """What a long-lived caller (``nodegraph watch``) lends each run: ``kept``, values by cache key held between
+    runs (used before the cache, filled with this run's); ``started(inst, key)``, called as an instance is about
+    to run, its inputs in hand (the watch stops a run there once an edit has made that instance unneeded);
+    ``ran(inst)``, called as soon as an instance that ran is in the recording (or computed, without one)."""
+
+    kept: dict[str, dict[str, Any]]
+
+    def started(self, inst: Instance, key: str) -> None: ...
+
+    def ran(self, inst: Instance) -> None: ...
+
+
 class Executor:
     """Runs one recipe against one cache, logging to one recording."""
 
@@ -69,19 +82,13 @@ class Executor:
         reporter: Reporter | None = None,
         recording: RunRecording | None = None,
         max_seconds: float | None = None,
-        kept: dict[str, dict[str, Any]] | None = None,
-        on_ran=None,
-        on_start=None,
+        session: LiveSession | None = None,
     ):
-        """``kept``: values by cache key that a long-lived caller (``nodegraph watch``) holds between runs,
-        used before the cache and filled with this run's; ``on_ran(inst)``: called as soon as an instance
-        that ran is in the recording (or computed, without one); ``on_start(inst, key)``: called as an
-        instance is about to run, its inputs in hand (the watch stops a run there once an edit has made
-        that instance unneeded)."""
+        """``session``: what a long-lived caller (``nodegraph watch``) lends each run (``LiveSession``)."""
         self.recipe = recipe
-        self.kept = kept
-        self.on_ran = on_ran
-        self.on_start = on_start
+        self.kept = None if session is None else session.kept
+        self.on_ran = None if session is None else session.ran
+        self.on_start = None if session is None else session.started
         self.max_seconds = max_seconds
         self.cache = cache
         self.reporter = reporter or Reporter(quiet=True)
@@ -428,13 +435,11 @@ def run_recipe(
     max_seconds: float | None = None,
     pool=None,
     plugins=(),
-    kept: dict[str, dict[str, Any]] | None = None,
-    on_ran=None,
-    on_start=None,
+    session: LiveSession | None = None,
 ) -> RunResult:
     """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``; a node
     that expects to run longer than ``max_seconds`` refuses to start (``Context.expect_cost``).
-    ``kept``, ``on_ran`` and ``on_start``: see ``Executor``.
+    ``session``: see ``LiveSession``.
 
     With a ``pool`` (``pool.InstancePool``, e.g. ``dask_pool.DaskPool``) the node instances missing from
     the cache are computed by its workers first (``plugins``: the plugin files they load); the run then
@@ -446,7 +451,7 @@ def run_recipe(
     recipe and what was logged (``blueprint``)."""
     wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
     warn = reporter.warn if reporter is not None else None
-    executor = Executor(recipe, cache, reporter, None, max_seconds, kept, on_ran, on_start)
+    executor = Executor(recipe, cache, reporter, None, max_seconds, session)
     key = None if out_dir is None else executor.output_key(wires, rrd)
     if key is not None and not spawn:  # a viewer to stream to needs the run itself
         reused = executor.reuse(wires, out_dir, rrd, key)
