@@ -59,6 +59,9 @@ DENT_PASSES = 8
 UNFOLD_SWEEPS = 8
 # a volume this close to the rest volume needs no bulge (a fiftieth of the 2 % bar)
 VOLUME_TOLERANCE = 4e-4
+# a bulge takes at most this share of the room (less the clearance) before a neighbour's surface or a wall: two
+# bulges never meet, and the room is looked for up to this many bulges (plus the clearance) away
+ROOM_SHARE = 1.0 / 3.0
 
 
 class ShellFaces(NamedTuple):
@@ -393,7 +396,7 @@ def _bulged(position, shell, outward, room, beta, clearance, out):
     for k in range(position.shape[0]):
         move = 0.0
         if shell[k]:
-            move = max(0.0, min(beta, (room[k] - clearance) / 3.0))
+            move = max(0.0, min(beta, ROOM_SHARE * (room[k] - clearance)))
         for a in range(3):
             out[k, a] = position[k, a] + move * outward[k, a]
 
@@ -570,7 +573,7 @@ def _deform_one(i, vertices, around, shells, rings, settings, cap_of, edges, pus
     position = rest.copy()
     outward = np.empty((nv, 3))
     room = np.empty(nv)
-    reach = 2.0 * settings.bulge + settings.clearance
+    reach = settings.bulge / ROOM_SHARE + settings.clearance
     scratch = Scratch(found, cap, np.zeros(count + rows))
     for r in range(settings.rounds):
         figures.capped[i], dents = _dent_all(
@@ -654,7 +657,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     thickness = float(np.median(elements.thickness[:own])) if own else 1.0
     gap = given["clearance"] * length
     most_bulge = given["bulge"] * thickness
-    reach = 2.0 * most_bulge + gap  # how far a bulge looks for its room
+    reach = most_bulge / ROOM_SHARE + gap  # how far a bulge looks for its room
     nstart, near = _neighbour_lists(elements, own if contacts else 0, reach)
     if not contacts:
         nstart = np.zeros(own + 1, np.int64)

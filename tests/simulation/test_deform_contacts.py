@@ -187,3 +187,15 @@ def test_bumpy_grains_squeezed_from_three_sides_keep_a_sound_mesh():
     assert folded_pairs(after) == 0
     assert deepest(after, "winding") < 0.01 and deepest(after, "pseudonormal") < 0.01
     assert volume_errors(after, before).max() < 0.02
+
+
+def test_a_free_vertex_bulges_the_full_bulge():
+    """One bulge (``rounds`` 2: dent, bulge, dent) too small to give the squeezed middle ball its volume back: its
+    free side moves out the whole ``bulge`` (0.02 × 2 mm), which needs room looked for up to three bulges away
+    (each side takes a third of a gap; looking two away capped it at ⅔ of the bulge)."""
+    before = elements([[0.0, 0.0, 0.0], [1.6, 0.0, 0.0], [3.2, 0.0, 0.0]])
+    after = run(before, bulge=0.02, rounds=2)["aggregate"]
+    rest, moved = before.element_mesh(1).vertices, after.element_mesh(1).vertices
+    side = np.abs(rest[:, 0] - 1.6) < 0.3  # the free belt, far from both dents
+    outward = np.einsum("ij,ij->i", moved[side] - rest[side], rest[side] - [1.6, 0.0, 0.0])
+    assert outward.max() == pytest.approx(0.04, rel=0.02)
