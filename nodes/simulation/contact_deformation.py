@@ -52,7 +52,7 @@ from .contact_flattening import (
 # max |g'(t)| of the bump g(t) = (1 − t²)², at t = 1/√3
 BUMP_SLOPE = 8.0 / (3.0 * np.sqrt(3.0))
 # widths tried for a dent's bump, in units of its cut-in patch's radius a: √2 covers a paraboloid cap exactly
-BUMP_WIDTHS = (1.42, 1.7, 2.0, 2.5, 3.0, 4.0)
+BUMP_WIDTHS = (2.5, 3.0, 4.0, 5.0)
 # dent passes per round at most: each pass meets every contact in turn; later dents rarely undo earlier ones
 DENT_PASSES = 8
 # sweeps of ``_unfold`` at most: each averages a fold's corners with their rings
