@@ -439,9 +439,12 @@ def _folded(rest, points, faces, pairs):
 @njit(cache=True)
 def _unfold(rest, position, faces, pairs, rings, row):
     """Where the moves sharpened two faces past 150° (a sliver of the library mesh, whose normal turns with any
-    move that is not affine across it): the moves of their four corners averaged with their rings' (the move
-    made locally affine), until none is left or ``UNFOLD_SWEEPS`` sweeps. Returns the folds left."""
+    move that is not affine across it): the two faces' corners all given one move, the mean of their rings' moves,
+    so that the pair is carried as it is (a translation keeps its rest angle) and its neighbours, far wider than
+    the sliver, bend by the small difference. Repeated until none is left or ``UNFOLD_SWEEPS`` sweeps. Returns the
+    folds left."""
     limit = np.cos(np.radians(150.0))
+    common = np.empty(3)
     for _ in range(UNFOLD_SWEEPS):
         left = 0
         for q in range(pairs.shape[0]):
@@ -449,15 +452,19 @@ def _unfold(rest, position, faces, pairs, rings, row):
             if not _cosine(position, f, g) < limit or _cosine(rest, f, g) < limit:
                 continue
             left += 1
+            common[:] = 0.0
+            count = 0
             for corner in range(6):
                 v = f[corner] if corner < 3 else g[corner - 3]
-                lo, hi = rings.start[row + v], rings.start[row + v + 1]
+                for e in range(rings.start[row + v], rings.start[row + v + 1]):
+                    u = rings.ring[e]
+                    for a in range(3):
+                        common[a] += position[u, a] - rest[u, a]
+                    count += 1
+            for corner in range(6):
+                v = f[corner] if corner < 3 else g[corner - 3]
                 for a in range(3):
-                    total = 0.0
-                    for e in range(lo, hi):
-                        u = rings.ring[e]
-                        total += position[u, a] - rest[u, a]
-                    position[v, a] = rest[v, a] + total / max(hi - lo, 1)
+                    position[v, a] = rest[v, a] + common[a] / max(count, 1)
         if left == 0:
             return 0
     return _folded(rest, position, faces, pairs)
