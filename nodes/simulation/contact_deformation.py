@@ -9,7 +9,8 @@ smoothly relaxed afterwards, folds a bumpy skin wherever some vertices are held 
 
 - **dent** (per contact): x ↦ x − n · A · g(r⊥/b) · T((top − n·x)/ℓ), with g(t) = (1 − t²)² a bump of radius b
   across the contact's axis n and T a smoothstep fading over depth ℓ into the element. A and b are the
-  smallest that push every cut-in vertex k its required distance s_k (A·g(r_k/b) ≥ s_k), with the map's shear
+  smallest that push every cut-in vertex k its required distance s_k (A·g(r_k/b) ≥ s_k), b at least 2.5 × the
+  cut-in patch's radius (the patch stays convex), with the map's shear
   A·max|g'|/b ≤ ``slope``; ℓ ≥ 2A keeps det(∇map) = 1 − A·g·|T'| ≥ ¼. A map with a positive Jacobian turns
   no face over, so the dented mesh stays fold-free and closed whatever its skin's bumps;
 - **bulge** (per element, between dents): the volume the dents took back as a move u_k along the outward
@@ -51,7 +52,9 @@ from .contact_flattening import (
 
 # max |g'(t)| of the bump g(t) = (1 − t²)², at t = 1/√3
 BUMP_SLOPE = 8.0 / (3.0 * np.sqrt(3.0))
-# widths tried for a dent's bump, in units of its cut-in patch's radius a: √2 covers a paraboloid cap exactly
+# widths tried for a dent's bump, in units of its cut-in patch's radius a: √2 would press a paraboloid cap exactly
+# flat; from 2.5 a dent takes at most 2/2.5² = 32 % of the cap's curvature, so the patch stays convex (a flat patch
+# turns half the skin's small bumps concave)
 BUMP_WIDTHS = (2.5, 3.0, 4.0, 5.0)
 # dent passes per round at most: each pass meets every contact in turn; later dents rarely undo earlier ones
 DENT_PASSES = 8
