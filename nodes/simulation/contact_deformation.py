@@ -16,9 +16,9 @@ smoothly relaxed afterwards, folds a bumpy skin wherever some vertices are held 
 - **bulge** (per element, between dents): the volume the dents took back as a move u_k along the outward
   normal of the element's ellipsoid (a smooth field), u_k = min(β, (room_k − clearance) / 3), room_k the
   distance to the nearest neighbour's surface or wall: each side takes at most a third of a gap, so two bulges
-  never meet, and the move's slope stays under 1 even where the sampled room's slope reaches 2, so it folds
-  nothing either. β is the one that gives the element its
-  rest volume back (bisection: volume grows with β). Cooked rice is nearly incompressible: a pressed grain bulges.
+  of one round never meet (the rounds' bulges add up: docs/contact.md, the onigiri), and the move's slope
+  stays under 1 even where the sampled room's slope reaches 2, so it folds nothing either. β is the one that
+  gives the element its rest volume back (bisection: volume grows with β). Cooked rice is nearly incompressible: a pressed grain bulges.
 
 The contacts: between two elements the plane across their overlap's lens, each element giving way its
 ``share`` (``contact_flattening.neighbour_pushes`` flattens onto the same plane); between elements whose rest
