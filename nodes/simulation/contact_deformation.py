@@ -18,7 +18,8 @@ smoothly relaxed afterwards, folds a bumpy skin wherever some vertices are held 
   distance to the nearest neighbour's surface or wall: each side takes at most a third of a gap, so two bulges
   of one round never meet (the rounds' bulges add up: docs/contact.md, the onigiri), and the move's slope
   stays under 1 even where the sampled room's slope reaches 2, so it folds nothing either. β is the one that
-  gives the element its rest volume back (bisection: volume grows with β). Cooked rice is nearly incompressible: a pressed grain bulges.
+  gives the element its rest volume back (bisection: volume grows with β). Cooked rice is nearly
+  incompressible: a pressed grain bulges.
 
 The contacts: between two elements the plane across their overlap's lens, each element giving way its
 ``share`` (``contact_flattening.neighbour_pushes`` flattens onto the same plane); between elements whose rest
