@@ -9,15 +9,17 @@ smoothly relaxed afterwards, folds a bumpy skin wherever some vertices are held 
 
 - **dent** (per contact): x ↦ x − n · A · g(r⊥/b) · T((top − n·x)/ℓ), with g(t) = (1 − t²)² a bump of radius b
   across the contact's axis n and T a smoothstep fading over depth ℓ into the element. A and b are the
-  smallest that push every cut-in vertex k its required distance s_k (A·g(r_k/b) ≥ s_k), with the map's shear
+  smallest that push every cut-in vertex k its required distance s_k (A·g(r_k/b) ≥ s_k), b at least 2.5 × the
+  cut-in patch's radius (the patch stays convex), with the map's shear
   A·max|g'|/b ≤ ``slope``; ℓ ≥ 2A keeps det(∇map) = 1 − A·g·|T'| ≥ ¼. A map with a positive Jacobian turns
   no face over, so the dented mesh stays fold-free and closed whatever its skin's bumps;
 - **bulge** (per element, between dents): the volume the dents took back as a move u_k along the outward
   normal of the element's ellipsoid (a smooth field), u_k = min(β, (room_k − clearance) / 3), room_k the
   distance to the nearest neighbour's surface or wall: each side takes at most a third of a gap, so two bulges
-  never meet, and the move's slope stays under 1 even where the sampled room's slope reaches 2, so it folds
-  nothing either. β is the one that gives the element its
-  rest volume back (bisection: volume grows with β). Cooked rice is nearly incompressible: a pressed grain bulges.
+  of one round never meet (the rounds' bulges add up: docs/contact.md, the onigiri), and the move's slope
+  stays under 1 even where the sampled room's slope reaches 2, so it folds nothing either. β is the one that
+  gives the element its rest volume back (bisection: volume grows with β). Cooked rice is nearly
+  incompressible: a pressed grain bulges.
 
 The contacts: between two elements the plane across their overlap's lens, each element giving way its
 ``share`` (``contact_flattening.neighbour_pushes`` flattens onto the same plane); between elements whose rest
@@ -51,14 +53,19 @@ from .contact_flattening import (
 
 # max |g'(t)| of the bump g(t) = (1 − t²)², at t = 1/√3
 BUMP_SLOPE = 8.0 / (3.0 * np.sqrt(3.0))
-# widths tried for a dent's bump, in units of its cut-in patch's radius a: √2 covers a paraboloid cap exactly
-BUMP_WIDTHS = (1.42, 1.7, 2.0, 2.5, 3.0, 4.0)
+# widths tried for a dent's bump, in units of its cut-in patch's radius a: √2 would press a paraboloid cap exactly
+# flat; from 2.5 a dent takes at most 2/2.5² = 32 % of the cap's curvature, so the patch stays convex (a flat patch
+# turns half the skin's small bumps concave)
+BUMP_WIDTHS = (2.5, 3.0, 4.0, 5.0)
 # dent passes per round at most: each pass meets every contact in turn; later dents rarely undo earlier ones
 DENT_PASSES = 8
 # sweeps of ``_unfold`` at most: each averages a fold's corners with their rings
 UNFOLD_SWEEPS = 8
 # a volume this close to the rest volume needs no bulge (a fiftieth of the 2 % bar)
 VOLUME_TOLERANCE = 4e-4
+# a bulge takes at most this share of the room (less the clearance) before a neighbour's surface or a wall: two
+# bulges never meet, and the room is looked for up to this many bulges (plus the clearance) away
+ROOM_SHARE = 1.0 / 3.0
 
 
 class ShellFaces(NamedTuple):
@@ -393,7 +400,7 @@ def _bulged(position, shell, outward, room, beta, clearance, out):
     for k in range(position.shape[0]):
         move = 0.0
         if shell[k]:
-            move = max(0.0, min(beta, (room[k] - clearance) / 3.0))
+            move = max(0.0, min(beta, ROOM_SHARE * (room[k] - clearance)))
         for a in range(3):
             out[k, a] = position[k, a] + move * outward[k, a]
 
@@ -436,9 +443,12 @@ def _folded(rest, points, faces, pairs):
 @njit(cache=True)
 def _unfold(rest, position, faces, pairs, rings, row):
     """Where the moves sharpened two faces past 150° (a sliver of the library mesh, whose normal turns with any
-    move that is not affine across it): the moves of their four corners averaged with their rings' (the move
-    made locally affine), until none is left or ``UNFOLD_SWEEPS`` sweeps. Returns the folds left."""
+    move that is not affine across it): the two faces' corners all given one move, the mean of their rings' moves,
+    so that the pair is carried as it is (a translation keeps its rest angle) and its neighbours, far wider than
+    the sliver, bend by the small difference. Repeated until none is left or ``UNFOLD_SWEEPS`` sweeps. Returns the
+    folds left."""
     limit = np.cos(np.radians(150.0))
+    common = np.empty(3)
     for _ in range(UNFOLD_SWEEPS):
         left = 0
         for q in range(pairs.shape[0]):
@@ -446,15 +456,19 @@ def _unfold(rest, position, faces, pairs, rings, row):
             if not _cosine(position, f, g) < limit or _cosine(rest, f, g) < limit:
                 continue
             left += 1
+            common[:] = 0.0
+            count = 0
             for corner in range(6):
                 v = f[corner] if corner < 3 else g[corner - 3]
-                lo, hi = rings.start[row + v], rings.start[row + v + 1]
+                for e in range(rings.start[row + v], rings.start[row + v + 1]):
+                    u = rings.ring[e]
+                    for a in range(3):
+                        common[a] += position[u, a] - rest[u, a]
+                    count += 1
+            for corner in range(6):
+                v = f[corner] if corner < 3 else g[corner - 3]
                 for a in range(3):
-                    total = 0.0
-                    for e in range(lo, hi):
-                        u = rings.ring[e]
-                        total += position[u, a] - rest[u, a]
-                    position[v, a] = rest[v, a] + total / max(hi - lo, 1)
+                    position[v, a] = rest[v, a] + common[a] / max(count, 1)
         if left == 0:
             return 0
     return _folded(rest, position, faces, pairs)
@@ -570,7 +584,7 @@ def _deform_one(i, vertices, around, shells, rings, settings, cap_of, edges, pus
     position = rest.copy()
     outward = np.empty((nv, 3))
     room = np.empty(nv)
-    reach = 2.0 * settings.bulge + settings.clearance
+    reach = settings.bulge / ROOM_SHARE + settings.clearance
     scratch = Scratch(found, cap, np.zeros(count + rows))
     for r in range(settings.rounds):
         figures.capped[i], dents = _dent_all(
@@ -654,7 +668,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     thickness = float(np.median(elements.thickness[:own])) if own else 1.0
     gap = given["clearance"] * length
     most_bulge = given["bulge"] * thickness
-    reach = 2.0 * most_bulge + gap  # how far a bulge looks for its room
+    reach = most_bulge / ROOM_SHARE + gap  # how far a bulge looks for its room
     nstart, near = _neighbour_lists(elements, own if contacts else 0, reach)
     if not contacts:
         nstart = np.zeros(own + 1, np.int64)

@@ -187,3 +187,38 @@ def test_bumpy_grains_squeezed_from_three_sides_keep_a_sound_mesh():
     assert folded_pairs(after) == 0
     assert deepest(after, "winding") < 0.01 and deepest(after, "pseudonormal") < 0.01
     assert volume_errors(after, before).max() < 0.02
+
+
+def test_a_free_vertex_bulges_the_full_bulge():
+    """One bulge (``rounds`` 2: dent, bulge, dent) too small to give the squeezed middle ball its volume back: its
+    free side moves out the whole ``bulge`` (0.02 × 2 mm), which needs room looked for up to three bulges away
+    (each side takes a third of a gap; looking two away capped it at ⅔ of the bulge)."""
+    before = elements([[0.0, 0.0, 0.0], [1.6, 0.0, 0.0], [3.2, 0.0, 0.0]])
+    after = run(before, bulge=0.02, rounds=2)["aggregate"]
+    rest, moved = before.element_mesh(1).vertices, after.element_mesh(1).vertices
+    side = np.abs(rest[:, 0] - 1.6) < 0.3  # the free belt, far from both dents
+    outward = np.einsum("ij,ij->i", moved[side] - rest[side], rest[side] - [1.6, 0.0, 0.0])
+    assert outward.max() == pytest.approx(0.04, rel=0.02)
+
+
+def test_a_sliver_turned_by_an_uneven_move_is_unfolded():
+    """A needle pair of faces (an edge a fiftieth of its neighbours', as in the library's meshes) turned past 150° by
+    a move that is not affine across it (its short edge turned 120° on top of an affine move): ``_unfold`` leaves no
+    fold (each folded pair is carried by one move, which keeps its rest angle)."""
+    from nodes.simulation.contact_deformation import _folded, _unfold
+    from nodes.simulation.contact_flattening import vertex_rings
+
+    sphere = trimesh.creation.icosphere(3)
+    rest = np.array(sphere.vertices)
+    faces = np.asarray(sphere.faces, np.int64)
+    a, b = sphere.edges_unique[0]
+    rest[b] = rest[a] + 0.02 * (rest[b] - rest[a])
+    mesh = trimesh.Trimesh(rest, faces, process=False)
+    pairs = np.asarray(mesh.face_adjacency, np.int64)
+    moved = rest + rest @ np.array([[0.3, 0.4, 0.0], [-0.2, 0.1, 0.5], [0.1, -0.3, 0.2]]).T
+    axis = rest[a] / np.linalg.norm(rest[a])
+    moved[b] = moved[a] + Rotation.from_rotvec(np.radians(120.0) * axis).apply(moved[b] - moved[a])
+    assert _folded(rest, moved, faces, pairs) > 0
+    rings = vertex_rings([(len(rest), faces)])
+    assert _unfold(rest, moved, faces, pairs, rings, rings.row[0]) == 0
+    assert _folded(rest, moved, faces, pairs) == 0
