@@ -59,8 +59,7 @@ def rectangle_light(name, light, target):
     obj = bpy.data.objects.new(name, mesh)
     centre = Vector(light["center"]) * MM
     forward = Vector(target) * MM - centre
-    up = "Y" if abs(forward.normalized().z) > 0.99 else "Z"
-    obj.matrix_world = Matrix.Translation(centre) @ forward.to_track_quat("Z", up).to_matrix().to_4x4()
+    obj.matrix_world = Matrix.Translation(centre) @ forward.to_track_quat("Z", "Y").to_matrix().to_4x4()
     return link(obj)
 
 
