@@ -1,14 +1,14 @@
-"""Run by the Blender venv's Python (bpy 4.5): render an exported .glb with Cycles under the preview's camera
-and light, for a side-by-side with our Mitsuba preview (tools/blender_side_by_side.py writes SETTINGS.json).
+"""Run by the Blender venv's Python (bpy 4.5): render an exported .glb with Cycles in the preview's studio, for a
+side-by-side with our Mitsuba preview (tools/blender_side_by_side.py writes SETTINGS.json).
 
     python blender_render_glb.py SCENE.glb SETTINGS.json RENDER.png
 
-The repository's add-on reads the look the exporter wrote (``blender/nodegraph_import``). The camera is fitted
-to the drawn meshes by the preview's rule (``fit_camera``: the same numbers as
-``nodes.export.mitsuba_scene.look_at``, repeated here since bpy's venv cannot import the project: it pins numpy
-1.26); the light is the preview's: a uniform sky, the key as a sun of the same angular size and irradiance, its
-glints' core as a small sun seen only in glossy reflections, a matte table under the scene; the same exposure;
-Blender's 'Standard' view transform (sRGB, no filmic curve).
+The repository's add-on reads the look the exporter wrote (``blender/nodegraph_import``). SETTINGS.json is the
+preview's own studio as numbers (``nodes.export.mitsuba_scene.studio_description``; bpy's venv cannot import the
+project: it pins numpy 1.26), in the scene's millimetres, built here in the .glb's metres: the camera and thin lens,
+the softbox key, fill and rim light as emitting rectangles of the same radiance facing the subject, the dim ambient
+as the world, the matte seamless backdrop, the glints' core as a small emitting sphere seen only in glossy
+reflections, the same exposure; Blender's 'Standard' view transform (sRGB, no filmic curve).
 """
 
 import json
@@ -20,63 +20,47 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 REPO = Path(__file__).resolve().parents[1]
+MM = 1e-3  # the .glb's root node scales our millimetres to metres
 
 
-def drawn_points() -> np.ndarray:
-    """World-space vertices of every drawn mesh (objects and glTF instances), at most ≈ 100,000."""
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    chunks = []
-    for instance in depsgraph.object_instances:
-        if instance.object.type != "MESH":
-            continue
-        mesh = instance.object.data
-        local = np.empty(len(mesh.vertices) * 3)
-        mesh.vertices.foreach_get("co", local)
-        local = local.reshape(-1, 3)[::8]
-        matrix = np.array(instance.matrix_world)
-        chunks.append(local @ matrix[:3, :3].T + matrix[:3, 3])
-    points = np.concatenate(chunks)
-    return points[:: max(1, len(points) // 100_000)]
+def emission_material(name: str, radiance: float, glossy_only: bool = False):
+    """An emission of ``radiance`` (Cycles: strength 1 seen directly is pixel value 1, as the preview's radiance)
+    from the front faces only, as the preview's one-sided area lights (the back faces: no shader, black)."""
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    nodes.clear()
+    emission = nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = radiance
+    mix = nodes.new("ShaderNodeMixShader")
+    geometry = nodes.new("ShaderNodeNewGeometry")
+    links.new(geometry.outputs["Backfacing"], mix.inputs["Fac"])
+    links.new(emission.outputs["Emission"], mix.inputs[1])
+    output = nodes.new("ShaderNodeOutputMaterial")
+    links.new(mix.outputs["Shader"], output.inputs["Surface"])
+    return material
 
 
-def fit_camera(points: np.ndarray, elevation, azimuth, fov, margin, aspect):
-    """(origin, target): the subject centred and as large as leaves ``margin`` of the half-frame free on its
-    tightest side (``nodes.export.mitsuba_scene.look_at``)."""
-    el, az = np.radians(elevation), np.radians(azimuth)
-    view = np.array([np.sin(az) * np.cos(el), -np.cos(az) * np.cos(el), np.sin(el)])
-    right = np.cross(-view, [0.0, 0.0, 1.0])
-    right = right / np.linalg.norm(right) if np.linalg.norm(right) > 1e-9 else np.array([1.0, 0.0, 0.0])
-    up = np.cross(right, -view)
-    free, tan_x = 1.0 - margin, np.tan(np.radians(fov) / 2)
-    tan_y = tan_x / aspect
-    target = 0.5 * (points.min(axis=0) + points.max(axis=0))
-
-    def distance_to(target):
-        rel = points - target
-        x, y, z = rel @ right, rel @ up, rel @ view
-        distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
-        return max(distance, float(z.max()) + 1e-6 * float(np.ptp(points, axis=0).max() + 1.0)), x, y, z
-
-    for _ in range(4):
-        distance, x, y, z = distance_to(target)
-        u, v = x / ((distance - z) * tan_x), y / ((distance - z) * tan_y)
-        target = target + distance * (
-            0.5 * (u.max() + u.min()) * tan_x * right + 0.5 * (v.max() + v.min()) * tan_y * up
-        )
-    distance = distance_to(target)[0]
-    return target + distance * view, target
-
-
-def sun(name, direction, strength, angle, diffuse=True):
-    light = bpy.data.lights.new(name, type="SUN")
-    light.energy, light.angle = strength, angle
-    obj = bpy.data.objects.new(name, light)
-    obj.rotation_euler = Vector(direction).to_track_quat("Z", "Y").to_euler()  # a sun shines along its −Z
+def link(obj, camera=True, diffuse=True):
+    obj.visible_camera = camera
     obj.visible_diffuse = diffuse
     obj.visible_transmission = diffuse
     obj.visible_volume_scatter = diffuse
     bpy.context.scene.collection.objects.link(obj)
     return obj
+
+
+def rectangle_light(name, light, target):
+    """An emitting rectangle of the light's half sizes at its centre, its front (+z) turned to ``target``."""
+    hx, hy = (h * MM for h in light["half_sizes"])
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([(-hx, -hy, 0), (hx, -hy, 0), (hx, hy, 0), (-hx, hy, 0)], [], [(0, 1, 2, 3)])
+    mesh.materials.append(emission_material(name, light["radiance"]))
+    obj = bpy.data.objects.new(name, mesh)
+    centre = Vector(light["center"]) * MM
+    forward = Vector(target) * MM - centre
+    obj.matrix_world = Matrix.Translation(centre) @ forward.to_track_quat("Z", "Y").to_matrix().to_4x4()
+    return link(obj)
 
 
 def main() -> None:
@@ -90,35 +74,48 @@ def main() -> None:
     bpy.ops.import_scene.gltf(filepath=str(source))
     scene = bpy.context.scene
     scene.unit_settings.scale_length = 1.0
-    points = drawn_points()
-    origin, target = fit_camera(points, s["elevation"], s["azimuth"], s["fov"], s["margin"], s["width"] / s["height"])
+
+    c = s["camera"]
+    origin, target = Vector(c["origin"]) * MM, Vector(c["target"]) * MM
     camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-    size = float(np.ptp(points, axis=0).max())
     camera.data.sensor_fit = "HORIZONTAL"
-    camera.data.angle = np.radians(s["fov"])
+    camera.data.sensor_width = 36.0
+    camera.data.angle = np.radians(c["fov"])
+    size = (origin - target).length
     camera.data.clip_start, camera.data.clip_end = size * 1e-3, size * 1e3
-    camera.matrix_world = Matrix.Translation(Vector(origin)) @ (
-        Vector(target - origin).to_track_quat("-Z", "Z").to_matrix().to_4x4()
-    )
+    camera.matrix_world = Matrix.Translation(origin) @ (target - origin).to_track_quat("-Z", "Y").to_matrix().to_4x4()
+    if c["f_stop"] > 0:  # a full-frame thin lens: aperture radius = focal length / (2 f), as the preview's
+        camera.data.dof.use_dof = True
+        camera.data.dof.aperture_fstop = c["f_stop"]
+        camera.data.dof.focus_distance = c["focus_distance"] * MM
     scene.collection.objects.link(camera)
     scene.camera = camera
 
-    world = bpy.data.worlds.new("sky")
+    world = bpy.data.worlds.new("ambient")
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    world.node_tree.nodes["Background"].inputs["Strength"].default_value = s["sky"]
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = s["ambient"]
     scene.world = world
-    direction = np.asarray(s["sun_direction"], float) / np.linalg.norm(s["sun_direction"])
-    sun("key", direction, s["key_irradiance"], 2 * s["key_angle"])
-    sun("glints", direction, s["glint_irradiance"], 2 * s["glint_angle"], diffuse=False)
-    bpy.ops.mesh.primitive_plane_add(size=40 * size, location=(target[0], target[1], points[:, 2].min() - 1e-3 * size))
-    table = bpy.context.active_object
-    material = bpy.data.materials.new("table")
+    for name, light in s["lights"].items():
+        rectangle_light(name, light, s["target"])
+    glints = s["glints"]
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=glints["radius"] * MM, location=Vector(glints["center"]) * MM)
+    core = bpy.context.active_object
+    core.data.materials.append(emission_material("glints", glints["radiance"]))
+    core.visible_camera = core.visible_diffuse = core.visible_transmission = core.visible_volume_scatter = False
+    core.visible_shadow = False
+
+    b = s["backdrop"]
+    mesh = bpy.data.meshes.new("backdrop")
+    mesh.from_pydata([tuple(v * MM for v in p) for p in b["vertices"]], [], [tuple(f) for f in b["faces"]])
+    material = bpy.data.materials.new("backdrop")
     material.use_nodes = True
-    material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (*s["table_color"], 1.0)
-    material.node_tree.nodes["Principled BSDF"].inputs["Roughness"].default_value = 1.0
-    material.node_tree.nodes["Principled BSDF"].inputs["Specular IOR Level"].default_value = 0.0
-    table.data.materials.append(material)
+    principled = material.node_tree.nodes["Principled BSDF"]
+    principled.inputs["Base Color"].default_value = (*b["color"], 1.0)
+    principled.inputs["Roughness"].default_value = 1.0
+    principled.inputs["Specular IOR Level"].default_value = 0.0
+    mesh.materials.append(material)
+    scene.collection.objects.link(bpy.data.objects.new("backdrop", mesh))
 
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"

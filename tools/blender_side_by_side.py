@@ -5,9 +5,10 @@
 
 Runs the recipe (from the cache where it can) for its .glb and preview, then renders the .glb with Blender
 Cycles (the ``bpy`` venv ``tools/make_blender_venv.sh`` makes: ``$NODEGRAPH_BLENDER_PYTHON`` or
-``.venv-blender/bin/python``; tools/blender_render_glb.py) at the preview's size, camera (elevation, azimuth,
-field of view, margin) and light (sky, key, glints, table, exposure: ``nodes.export.mitsuba_scene``'s numbers),
-and writes the two side by side, captioned with their render times. Without the Blender venv it says so and stops.
+``.venv-blender/bin/python``; tools/blender_render_glb.py) at the preview's size in the preview's studio: its
+camera and lens, softbox key, fill, rim light, ambient, seamless backdrop, glints' core and exposure, as numbers
+from ``nodes.export.mitsuba_scene.studio_description`` (one description, not a copy), and writes the two side by
+side, captioned with their render times. Without the Blender venv it says so and stops.
 """
 
 from __future__ import annotations
@@ -34,23 +35,16 @@ def blender_python() -> Path:
     return path
 
 
-def settings(preview_params: dict, samples: int) -> dict:
-    """The Blender render's camera and light: the preview node's parameters and the Mitsuba scene's light."""
+def settings(scene, preview_params: dict, samples: int) -> dict:
+    """The Blender render's camera, lens, studio and exposure: the preview's own (``mitsuba_scene.studio_description``
+    of the shaded scene, fitted and lit as the preview fits and lights it), and the Cycles samples."""
     from nodes.export import mitsuba_scene as ms
 
     p = preview_params
+    camera = ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
     return {
-        **{k: p[k] for k in ("width", "height", "elevation", "azimuth", "fov", "margin")},
-        "sun_direction": list(p["sun_direction"]),
+        **ms.studio_description(scene, camera, p["width"], p["height"], p["sun_direction"]),
         "samples": samples,
-        "sky": ms.SKY,
-        "key_irradiance": ms.KEY_SHARE * ms.SKY * np.pi,  # the sphere key's irradiance (``scene_dict``)
-        "key_angle": ms.KEY_ANGLE,
-        "glint_irradiance": ms.HIGHLIGHT_RADIANCE * np.pi * np.tan(ms.HIGHLIGHT_ANGLE) ** 2,
-        "glint_angle": ms.HIGHLIGHT_ANGLE,
-        "table_color": list(ms.TABLE_COLOR),
-        "exposure": ms.EXPOSURE,
-        "max_depth": ms.MAX_DEPTH_MEDIA,
     }
 
 
@@ -75,14 +69,18 @@ def main() -> None:
     out_dir = REPO / "outputs" / f"{recipe.name}{'_draft' if args.draft else ''}"
     start = time.perf_counter()
     result = run_recipe(
-        recipe, outputs=["export.files", "preview.image"], cache=Cache(default_cache_dir()), out_dir=out_dir
+        recipe,
+        outputs=["export.files", "preview.image", "shade.scene"],
+        cache=Cache(default_cache_dir()),
+        out_dir=out_dir,
     )
     ours_seconds = time.perf_counter() - start
     glb = next(out_dir.glob("*.glb"))
     ours = result.output("preview.image").pixels
     with tempfile.TemporaryDirectory(prefix="blender-side-") as tmp:
         settings_path, render = Path(tmp) / "settings.json", Path(tmp) / "cycles.png"
-        settings_path.write_text(json.dumps(settings(recipe.nodes["preview"].params, args.samples)))
+        description = settings(result.output("shade.scene"), recipe.nodes["preview"].params, args.samples)
+        settings_path.write_text(json.dumps(description))
         start = time.perf_counter()
         done = subprocess.run(
             [str(python), str(SCRIPT), str(glb), str(settings_path), str(render)], capture_output=True, text=True

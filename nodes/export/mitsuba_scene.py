@@ -50,11 +50,8 @@ import numpy as np
 from ..values import Material, ShadedScene
 from . import studio
 
-# the light is a studio (``studio``: softbox key, fill, rim, seamless backdrop, thin lens); these two name its
-# ambient and key for the Blender side-by-side script (``tools/blender_side_by_side.py``)
-SKY = studio.AMBIENT
-KEY_ANGLE = studio.KEY_ANGLE
-KEY_SHARE = studio.KEY_IRRADIANCE / (np.pi * SKY)  # key irradiance / ambient irradiance
+# the light is a studio (``studio``: softbox key, fill, rim, seamless backdrop, thin lens); ``studio_description``
+# gives it as numbers to the Blender side-by-side script (``tools/blender_side_by_side.py``)
 EXPOSURE = 1.5  # linear scale before the tone curve: lit white rice (key + sky) near the knee
 KNEE = 0.75  # the tone curve is linear below this and rolls off above it (white rice keeps its gloss, not clipped)
 MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) and a few grains of rice
@@ -75,9 +72,11 @@ TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
 GUIDE_SPP = 4  # the guides need antialiased edges, not converged light: a cheap pass of its own (≈ ⅓ of a path)
-# path length with media: every scattering event inside a grain is a vertex of the path. A 3 mm grain at 15 %
-# water is 3–6 mean free paths thick with albedo ≈ 0.9–0.99; see docs/accuracy.md (preview cost table)
-MAX_DEPTH_MEDIA = 32
+# path length with media: every scattering event inside a grain is a vertex of the path, and light that lights a
+# heap of grains crosses many of them (and reflects inside them). A 3 mm grain at 15 % water is 3–6 mean free
+# paths thick with albedo ≈ 0.99; at 32 the walks through the heap were cut off and the rice darkened (rice bowl
+# draft, CIELAB L* of the rice's pixels: 73.7 at 32, 80.4 at 64; docs/look.md, "Warm white rice")
+MAX_DEPTH_MEDIA = 64
 VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (with the ice, ``is_ice``)
 
 
@@ -192,8 +191,16 @@ def is_volumetric(material: Material) -> bool:
 
 
 def medium(material: Material) -> dict:
-    """Mitsuba homogeneous medium inside a volumetric element (``random_walk_coefficients``), isotropic phase."""
+    """Mitsuba homogeneous medium inside a volumetric element (``random_walk_coefficients``), isotropic phase.
+
+    A translucent material (rice: principled subsurface, not transmissive) scatters the same in every channel, at
+    the mean of the channels' σt; its colour is in the albedo alone. Scattering in starch is nearly grey (potato,
+    Jensen et al. 2001: σ′s = 0.68, 0.70, 0.55 mm⁻¹; the colour is in σa); a σt per channel made volpath sample
+    the distance in one channel and weight the others, colour noise that the denoiser left as opal patches of
+    green, pink and blue on every grain (docs/look.md, "Warm white rice")."""
     sigma_t, single = random_walk_coefficients(material.subsurface_color, material.subsurface_radius)
+    if material.transmission < TRANSMISSIVE:
+        sigma_t = np.full(3, sigma_t.mean())
     densest = float(sigma_t.max())  # Mitsuba reads an RGB as a reflectance in [0, 1]: the scale carries the unit
     return {
         "type": "homogeneous",
@@ -205,9 +212,15 @@ def medium(material: Material) -> dict:
 
 
 def boundary_bsdf(material: Material) -> dict:
-    """The dielectric skin of a volumetric element: rough at the material's roughness (transmission roughness for
-    the transmissive ones), clear, so the medium alone colours the light."""
-    rough = material.transmission_roughness if material.transmission >= TRANSMISSIVE else material.roughness
+    """The dielectric skin of a volumetric element, clear, so the medium alone colours the light. Its roughness:
+    a transmissive element's transmission roughness; a translucent one's water film (its clear coat's roughness,
+    else its roughness). Mitsuba's rough dielectric loses the energy of the microfacets' multiple scattering at
+    every crossing, and light crosses a heap of grains many times: at the grain's own roughness (α ≈ 0.23 at 15 %
+    water) the rice heap rendered grey, L* 68 against 80 at the film's (α ≈ 0.02; docs/look.md)."""
+    if material.transmission >= TRANSMISSIVE:
+        rough = material.transmission_roughness
+    else:
+        rough = material.clearcoat_roughness if material.clearcoat > 0 else material.roughness
     bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
     a = alpha(rough)
     if a > 1e-3:
@@ -401,10 +414,7 @@ def scene_dict(
 
     shapes, points = _shapes(scene, folder, subsurface)
     media = any("interior" in shape for shape in shapes.values())
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    origin, target = look_at(points, camera, width / height)
-    radius = 0.5 * float(np.linalg.norm(hi - lo))
-    view = (origin - target) / np.linalg.norm(origin - target)
+    set_up = stage(points, camera, width / height, light_direction)
     film = {
         "type": "hdrfilm",
         "width": width,
@@ -418,7 +428,9 @@ def scene_dict(
         "type": "perspective",
         "fov": camera.fov,
         "fov_axis": "x",
-        "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=target.tolist(), up=[0, 0, 1]),
+        "to_world": mi.ScalarTransform4f().look_at(
+            origin=set_up.origin.tolist(), target=set_up.target.tolist(), up=[0, 0, 1]
+        ),
         "film": film,
         "sampler": {"type": SAMPLER, "sample_count": spp},
     }
@@ -426,10 +438,8 @@ def scene_dict(
         sensor |= {
             "type": "thinlens",
             "aperture_radius": studio.aperture_radius(camera.fov, camera.f_stop),
-            "focus_distance": studio.focus_distance(points, origin, target, camera.focus),
+            "focus_distance": set_up.focus_distance,
         }
-    lights = studio.lights(target, radius, view, light_direction)
-    floor = float(lo[2]) - 1e-3 * radius
     return {
         "type": "scene",
         "integrator": {"type": "volpath" if media else "path", "max_depth": max_depth or path_depth(scene, subsurface)},
@@ -439,9 +449,79 @@ def scene_dict(
             "radiance": {"type": "rgb", "value": studio.AMBIENT},
             "sampling_weight": float(np.pi * studio.AMBIENT),
         },
-        **{name: studio.light_dict(light, target) for name, light in lights.items()},
-        "backdrop": studio.backdrop_dict(folder / "backdrop.ply", target, radius, floor, view),
+        **{name: studio.light_dict(light, set_up.target) for name, light in set_up.lights.items()},
+        "backdrop": studio.backdrop_dict(
+            folder / "backdrop.ply", set_up.target, set_up.radius, set_up.floor, set_up.view
+        ),
         **shapes,
+    }
+
+
+@dataclass(frozen=True)
+class Stage:
+    """Where the camera stands and the studio around a subject (``stage``): what the preview renders and what the
+    Blender side-by-side builds (``studio_description``)."""
+
+    origin: np.ndarray  # the camera
+    target: np.ndarray  # where it aims: the subject's centre as framed
+    radius: float  # the subject's radius: half its bounding box's diagonal
+    view: np.ndarray  # unit vector from the target towards the camera
+    floor: float  # height of the backdrop's floor: just under the subject's lowest point
+    focus_distance: float  # along the optical axis, to the plane in focus
+    lights: dict  # name → studio.Light (key, fill, rim)
+
+
+def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) -> Stage:
+    """The camera fitted to the subject's ``points`` (``look_at``) and the studio's lights and backdrop around it."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    origin, target = look_at(points, camera, aspect)
+    radius = 0.5 * float(np.linalg.norm(hi - lo))
+    view = (origin - target) / np.linalg.norm(origin - target)
+    return Stage(
+        origin,
+        target,
+        radius,
+        view,
+        float(lo[2]) - 1e-3 * radius,
+        studio.focus_distance(points, origin, target, camera.focus),
+        studio.lights(target, radius, view, light_direction),
+    )
+
+
+def studio_description(scene: ShadedScene, camera: Camera, width: int, height: int, light_direction) -> dict:
+    """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
+    renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
+    points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
+    set_up = stage(points, camera, width / height, light_direction)
+    vertices, faces, _ = studio.backdrop_mesh(set_up.target, set_up.radius, set_up.floor, set_up.view)
+    key = set_up.lights["key"]
+    key_distance = float(np.linalg.norm(key.center - set_up.target))
+    return {
+        "width": width,
+        "height": height,
+        "camera": {
+            "origin": set_up.origin.tolist(),
+            "target": set_up.target.tolist(),
+            "fov": camera.fov,
+            "f_stop": camera.f_stop,
+            "aperture_radius": studio.aperture_radius(camera.fov, camera.f_stop),
+            "focus_distance": set_up.focus_distance,
+        },
+        "ambient": studio.AMBIENT,
+        "lights": {
+            name: {"center": light.center.tolist(), "half_sizes": list(light.half_sizes), "radiance": light.radiance}
+            for name, light in set_up.lights.items()
+        },
+        "target": set_up.target.tolist(),
+        "glints": {
+            "center": key.center.tolist(),
+            "radius": key_distance * float(np.tan(HIGHLIGHT_ANGLE)),
+            "radiance": HIGHLIGHT_RADIANCE,
+        },
+        "backdrop": {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)},
+        "exposure": EXPOSURE,
+        "knee": KNEE,
+        "max_depth": MAX_DEPTH_MEDIA,
     }
 
 

@@ -21,7 +21,9 @@ from ..values import ShadedScene
     # 4: subsurface: media inside rice, ikura yolks and ice (volpath)
     # 5: the key's glints in a one-bounce pass added after denoising (the denoiser erased them); 10 spp (was 12)
     # 6: a procedural studio (softbox key, fill, rim light, seamless backdrop) and a thin lens (``studio``)
-    version=6,
+    # 7: warm white rice: its medium scatters the same in every channel, its skin is the water film's, path depth
+    #    64 with media (docs/look.md, "Warm white rice")
+    version=7,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={

@@ -60,6 +60,10 @@ def rice_material(water: float, name: str = "rice") -> Material:
 
     ``subsurface`` scales the CDRF's diffuse transmission (``cdrf.translucency``, per vertex from σ₀|κ|);
     the water film adds a clearcoat and a sheen at grazing angles (G fig. 3.1.2.1: dull at 0 %, glossy at 24 %).
+    The subsurface colour is a cream white, chosen (no measured values): thin grains let most light through, so a
+    heap shows their colour weaker than a thick piece would; at (0.90, 0.86, 0.76) (15 %) the studio rendered the
+    rice neutral grey (CIELAB b* 3.8), at (0.90, 0.82, 0.69) warm white (b* 7.3, as a Lambertian of the colour;
+    docs/look.md, "Warm white rice").
     """
     if not 0.0 <= water <= WATER_MAX:
         raise ValueError(f"water_content {water} % is outside 0–{WATER_MAX:g} %")
@@ -69,7 +73,7 @@ def rice_material(water: float, name: str = "rice") -> Material:
         base_color=_mix((0.66, 0.60, 0.47), (0.90, 0.89, 0.84), t),
         subsurface=0.3 + 0.6 * t,
         subsurface_radius=_mix((0.3, 0.2, 0.1), (1.2, 0.9, 0.6), t),
-        subsurface_color=_mix((0.80, 0.72, 0.55), (0.96, 0.94, 0.88), t),
+        subsurface_color=_mix((0.80, 0.65, 0.44), (0.96, 0.92, 0.835), t),
         specular=0.5,
         roughness=0.7 - 0.35 * t,
         sheen=0.6 * t,

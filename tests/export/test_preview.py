@@ -210,14 +210,24 @@ def test_the_denoiser_keeps_the_key_lights_glints(shaded):
     """Glints of the key light on the wet eggs and the glaze survive denoising: the denoised preview's highlight
     energy (sRGB luminance above the 99.5th percentile of a 64-spp render without denoising, summed) keeps at
     least a third of the reference's. The denoiser erased every glint when they were a few bright samples of the
-    path-traced pass (energy 0); the glints' pass is added after denoising."""
+    path-traced pass (energy 0); the glints' pass is added after denoising. Counted on the eggs and the glaze:
+    the white rice reaches the threshold too, and there what the 64-spp reference has over it is mostly its
+    sampling noise, which the denoiser is right to remove (rice 523 in the reference, 33 denoised; the rest 266
+    and 214)."""
+    from nodes.export.mitsuba_scene import Camera
+
+    from .test_studio import shows
+
     weights = np.array([0.2126, 0.7152, 0.0722])
     reference = _render(shaded, width=160, height=90, samples=64, denoise=False) @ weights
     denoised = _render(shaded, width=160, height=90, samples=12) @ weights
     threshold = np.percentile(reference, 99.5)
+    p = preview.resolve_params({})
+    camera = Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
+    not_rice = ~shows(shaded, camera, 160, 90, p["sun_direction"], "rice")
 
     def energy(luminance):
-        return np.maximum(luminance - threshold, 0.0).sum()
+        return np.maximum(luminance - threshold, 0.0)[not_rice].sum()
 
     assert energy(reference) > 0
     assert energy(denoised) > energy(reference) / 3

@@ -1,6 +1,9 @@
 """The preview's procedural studio (``nodes.export.studio``): key, fill and rim lights, the seamless backdrop, the
 thin lens, and the framing measured on the rendered picture."""
 
+import tempfile
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -146,3 +149,103 @@ def test_the_rendered_subject_keeps_room_around_it(tmp_path, elevation, bowl_siz
     )
     assert min(free) == pytest.approx(0.1, abs=0.03)  # the tightest side: the margin, within a pixel or so
     assert max(free) >= 0.1 - 0.03
+
+
+def _rice_heap(water=15.0):
+    """Three layers of cooked grains (capsules 5 × 2 mm lying in a brick pattern, 0.2 mm apart), shaded at
+    ``water`` %: a patch of a rice heap on the studio's backdrop."""
+    import trimesh
+
+    from nodegraph.values import Mesh
+    from nodes.material.cooked import cooked_material
+    from nodes.shading import shade
+    from nodes.values import Aggregate, ElementLibrary, Placement
+
+    grain = Mesh.from_trimesh(trimesh.creation.capsule(height=3.0, radius=1.0, count=[8, 8]))
+    turn = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # the capsule's axis (z) along x
+    ix, iy, iz = np.meshgrid(np.arange(4), np.arange(7), np.arange(3), indexing="ij")
+    positions = np.stack([5.2 * ix + 2.6 * ((iy + iz) % 2), 2.2 * iy, 1.0 + 2.2 * iz], axis=-1).reshape(-1, 3)
+    positions -= [positions[:, 0].mean(), positions[:, 1].mean(), 0.0]
+    count = len(positions)
+    placement = Placement(
+        positions, np.tile([0, 0, 1.0], (count, 1)), rotations=np.tile(turn, (count, 1, 1)), kind_names=("japonica",)
+    )
+    rice = Aggregate(placement, (ElementLibrary("japonica", (grain,)),))
+    return shade.call(aggregates=[rice], material=cooked_material(water_content=water))
+
+
+def shows(scene, camera, width, height, light, name):
+    """Which pixels of the preview's frame show material ``name``: the same scene with that material green and the
+    rest red, read from the albedo pass."""
+    import mitsuba as mi
+
+    from nodes.export.mitsuba_scene import scene_dict
+
+    mi.set_variant("scalar_rgb")
+    with tempfile.TemporaryDirectory() as folder:
+        d = scene_dict(scene, Path(folder), camera, width, height, 2, light)
+        for key, shape in d.items():
+            if isinstance(shape, dict) and "bsdf" in shape:
+                wanted = key.startswith("shape_") and scene.materials[int(key.removeprefix("shape_"))].name == name
+                colour = [0.0, 1.0, 0.0] if wanted else [1.0, 0.0, 0.0]
+                shape["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": colour}}
+        d["integrator"] = {"type": "aov", "aovs": "albedo:albedo"}
+        albedo = np.asarray(mi.render(mi.load_dict(d), spp=4))
+    return albedo[..., 1] > 0.5
+
+
+def _rice_lab(shaded, width=128, height=72, spp=8):
+    """Median CIELAB (L*, a*, b*) of the pixels that show rice in the denoised studio preview (media on), and the
+    spread (standard deviation) of their a* and b*: the grains' colour noise."""
+    from skimage.color import rgb2lab
+
+    from nodes.export.mitsuba_scene import Camera, render
+
+    camera = Camera(50.0, 20.0, 35.0, 0.1, 5.6, 0.25)
+    light = (-0.45, -0.6, 0.75)
+    image = render(shaded, camera, width, height, spp, light, subsurface=True)
+    rice = shows(shaded, camera, width, height, light, "rice")
+    lab = rgb2lab(image[rice][None].astype(np.float64) / 255.0)[0]
+    return np.median(lab, axis=0), lab[:, 1:].std(axis=0)
+
+
+def test_cooked_rice_reads_warm_white_in_the_studio():
+    """Cooked rice in a food photograph is a warm white: bright (CIELAB L* ≥ 75), cream (b* 4–12, a* near 0), of
+    one colour from grain to grain. Before: grey (L* 69), neutral (b* 2) and mottled with the opal patches of
+    the media's colour noise."""
+    (lightness, a, b), spread = _rice_lab(_rice_heap())
+    print(f"rice L* {lightness:.1f} a* {a:.1f} b* {b:.1f}, spread a* {spread[0]:.1f} b* {spread[1]:.1f}")
+    assert lightness >= 75.0
+    assert 4.0 <= b <= 12.0 and abs(a) <= 3.0
+    assert spread.max() <= 4.0
+
+
+def test_the_blender_side_by_side_builds_the_previews_own_studio(shaded, tmp_path):
+    """The side-by-side script hands Blender the preview's studio as numbers (one description, not a copy): the
+    same camera, lens, key, fill and rim (centre, size, radiance), ambient, backdrop and exposure as the Mitsuba
+    scene, JSON-serialisable. Before, it handed a sun, a sky and a table from names the studio had removed."""
+    import importlib.util
+    import json
+
+    from nodes.export import mitsuba_scene as ms
+    from nodes.export import studio
+    from nodes.export.preview import preview
+
+    spec = importlib.util.spec_from_file_location("side", Path(__file__).parents[2] / "tools/blender_side_by_side.py")
+    side = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(side)
+    params = preview.resolve_params({"width": 64, "height": 48})
+    described = json.loads(json.dumps(side.settings(shaded, params, 8)))
+    camera = ms.Camera(params["elevation"], params["azimuth"], params["fov"], params["margin"], params["f_stop"])
+    d = _description(shaded, tmp_path, camera=camera, light=params["sun_direction"])
+    origin, _ = _frame(d)
+    assert np.allclose(described["camera"]["origin"], origin, rtol=1e-6)
+    assert described["camera"]["focus_distance"] == pytest.approx(d["sensor"]["focus_distance"])
+    assert described["camera"]["aperture_radius"] == pytest.approx(d["sensor"]["aperture_radius"])
+    assert set(described["lights"]) == {"key", "fill", "rim"}
+    for name, light in described["lights"].items():
+        centre, _, radiance, half = _light(d, name)
+        assert np.allclose(light["center"], centre, rtol=1e-6) and np.allclose(light["half_sizes"], half, rtol=1e-6)
+        assert light["radiance"] == pytest.approx(radiance)
+    assert described["ambient"] == studio.AMBIENT and described["backdrop"]["color"] == list(studio.BACKDROP_COLOR)
+    assert described["exposure"] == ms.EXPOSURE and described["samples"] == 8
