@@ -6,27 +6,36 @@ import subprocess
 import sys
 from pathlib import Path
 
-PLUGIN = '''
+import pytest
+
+KERNELS = """
 import numpy as np
 from numba import njit
 
-from nodegraph import Out, node
-from nodegraph.values import Table
-
 
 @njit(cache=True)
-def _double(values):
+def double(values):
     out = np.empty_like(values)
     for i in range(values.size):
         out[i] = 2.0 * values[i]
     return out
+"""
 
+PLUGIN = '''
+import numpy as np
 
-@node("kernel_toy", version=1, outputs={"table": Out(Table, "doubled")})
+from nodegraph import Out, node
+from nodegraph.values import Table
+{eager}
+
+@node("kernel_toy", version=1, outputs={{"table": Out(Table, "doubled")}})
 def kernel_toy(ctx):
     """Runs one numba kernel."""
-    return Table({"x": _double(np.arange(4.0))})
+    {lazy}
+    return Table({{"x": double(np.arange(4.0))}})
 '''
+
+IMPORT = "from toy_kernels import double"
 
 RECIPE = """\
 name: kernel_toy
@@ -47,49 +56,12 @@ def _run(tmp_path: Path) -> str:
     return done.stderr
 
 
-def test_compiling_is_announced_once_then_cached(tmp_path):
-    (tmp_path / "kernel_toy.py").write_text(PLUGIN)
-    (tmp_path / "recipe.yaml").write_text(RECIPE)
-    first = _run(tmp_path)
-    assert "compiling kernels for doubling (first run after a code change; cached afterwards)" in first
-    assert "compiled 1 kernel(s) for doubling in " in first
-    second = _run(tmp_path)
-    assert "compil" not in second
-
-
-LAZY_PLUGIN = '''
-import numpy as np
-
-from nodegraph import Out, node
-from nodegraph.values import Table
-
-
-@node("kernel_toy", version=1, outputs={"table": Out(Table, "doubled")})
-def kernel_toy(ctx):
-    """Loads its kernel module (and with it numba) only when it runs, as the project's nodes do."""
-    from toy_kernels import double
-
-    return Table({"x": double(np.arange(4.0))})
-'''
-
-KERNELS = """
-import numpy as np
-from numba import njit
-
-
-@njit(cache=True)
-def double(values):
-    out = np.empty_like(values)
-    for i in range(values.size):
-        out[i] = 2.0 * values[i]
-    return out
-"""
-
-
-def test_a_node_that_loads_numba_itself_is_announced(tmp_path):
-    """The first node of a run that needs a kernel imports numba inside the node: its compile is announced
-    too (it was silent while the watch listened only when numba had loaded before the node started)."""
-    (tmp_path / "kernel_toy.py").write_text(LAZY_PLUGIN)
+@pytest.mark.parametrize("lazy", [False, True], ids=["numba-loaded-before-the-node", "numba-loaded-by-the-node"])
+def test_compiling_is_announced_once_then_cached(tmp_path, lazy):
+    """Also when the node imports its kernel module (and with it numba) only as it runs, as the project's nodes
+    do: that compile was silent while the watch listened only when numba had loaded before the node started."""
+    plugin = PLUGIN.format(eager="" if lazy else IMPORT, lazy=IMPORT if lazy else "")
+    (tmp_path / "kernel_toy.py").write_text(plugin)
     (tmp_path / "toy_kernels.py").write_text(KERNELS)
     (tmp_path / "recipe.yaml").write_text(RECIPE)
     first = _run(tmp_path)
