@@ -202,3 +202,20 @@ def test_progress_bars_nest_on_a_terminal(registry, cache):
     result = run(registry, cache, text=text, reporter=reporter)
     assert result.status()["shifted"] == "ran"
     assert "shifted sleeping" in buffer.getvalue()  # the node's own bar was drawn inside the run's
+
+
+def test_the_closing_table_gives_each_node_its_cpu_seconds(registry, cache):
+    """A node's CPU seconds (all the process's threads while it ran) stand beside its wall time: on a shared
+    machine they are the figure to compare. Cached nodes have none."""
+    from nodegraph.report import Reporter
+
+    first = run(registry, cache)
+    ran = [r for r in first.records if r.status == "ran"]
+    assert ran and all(r.cpu_seconds is not None and r.cpu_seconds >= 0.0 for r in ran)
+    assert all(r.cpu_seconds is None for r in run(registry, cache).records)
+    reporter = Reporter(quiet=True)
+    for record in first.records:
+        reporter.record(record)
+    table = reporter.summary()
+    assert [c.header for c in table.columns][3:5] == ["wall time", "CPU time"]
+    assert all(cell.endswith(" s") for cell in table.columns[4].cells)
