@@ -5,7 +5,9 @@ contact, friction, box walls), warm JIT.
 Every kernel call goes through the solver's ``KernelDispatch``; this benchmark swaps in a timing
 dispatch, so the table shows ms per substep and calls per substep per kernel, and "python" is the
 rest of the substep (solver code between kernels). Also reports how often the neighbour lists were
-rebuilt. Run: python benchmarks/bench_xpbd_profile.py [--quick] [--sizes 10000 50000]
+rebuilt. ``--clock cpu`` times by the process's CPU seconds instead of the wall clock: with
+``--threads 1`` that is the work itself, which a shared, loaded machine does not inflate.
+Run: python benchmarks/bench_xpbd_profile.py [--quick] [--sizes 10000 50000] [--threads N] [--clock cpu]
 """
 
 from __future__ import annotations
@@ -28,31 +30,32 @@ RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" 
 class TimedDispatch(KernelDispatch):
     """Counts calls and sums wall time per kernel (by function name)."""
 
-    def __init__(self):
+    def __init__(self, clock=time.perf_counter):
         super().__init__()
+        self.clock = clock
         self.seconds: Counter[str] = Counter()
         self.kernel_calls: Counter[str] = Counter()
 
     def __call__(self, family, kernel, *args):
-        t = time.perf_counter()
+        t = self.clock()
         out = super().__call__(family, kernel, *args)
         name = getattr(kernel, "__name__", family)
-        self.seconds[name] += time.perf_counter() - t
+        self.seconds[name] += self.clock() - t
         self.kernel_calls[name] += 1
         return out
 
 
-def profile(n, settle, timed):
-    d = TimedDispatch()
-    s = box_solver(n, d)
+def profile(n, settle, timed, threads=None, clock=time.perf_counter):
+    d = TimedDispatch(clock)
+    s = box_solver(n, d, threads=threads)
     for _ in range(settle):
         s.frame()
     d.seconds.clear()
     d.kernel_calls.clear()
-    t = time.perf_counter()
+    t = clock()
     for _ in range(timed * SUBSTEPS):
         s.solver.substep(s.state)
-    wall = time.perf_counter() - t
+    wall = clock() - t
     steps = timed * SUBSTEPS
     rows = [(name, 1e3 * sec / steps, d.kernel_calls[name] / steps) for name, sec in d.seconds.most_common()]
     rows.append(("python (rest of the substep)", 1e3 * (wall - sum(d.seconds.values())) / steps, float("nan")))
@@ -63,17 +66,20 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 50000])
+    ap.add_argument("--threads", type=int, default=None, help="a fixed thread count (default: the free cores)")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall", help="cpu: the process's CPU seconds")
     args = ap.parse_args()
+    clock = time.process_time if args.clock == "cpu" else time.perf_counter
     settle, timed = (3, 2) if args.quick else (60, 10)
     sizes = [2000] if args.quick else args.sizes
     out = []
     for n in sizes:
-        rate, rows = profile(n, settle, timed)
+        rate, rows = profile(n, settle, timed, args.threads, clock)
         out += [
             "",
-            f"N = {n}: {rate:.1f} substeps/s ({1e3 / rate:.2f} ms per substep)",
+            f"N = {n}: {rate:.1f} substeps/s ({1e3 / rate:.2f} ms per substep, {args.clock} clock)",
             "",
-            "| kernel | ms / substep | calls / substep |",
+            f"| kernel | {args.clock} ms / substep | calls / substep |",
             "|---|---|---|",
         ]
         out += [f"| {name} | {ms:.3f} | {calls:.2f} |" for name, ms, calls in rows]
