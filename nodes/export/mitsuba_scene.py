@@ -406,10 +406,11 @@ def scene_dict(
     crop: Crop | None = None,
     max_depth: int | None = None,
     subsurface: bool = False,
+    ambient: float = studio.AMBIENT,
 ) -> dict:
     """The Mitsuba scene description; PLY files are written into ``folder``. ``max_depth``: the longest path
     (default ``path_depth``: by the scene's materials); ``subsurface``: media inside the volumetric elements, traced
-    by ``volpath``."""
+    by ``volpath``; ``ambient``: radiance of the studio's uniform ambient."""
     import mitsuba as mi
 
     shapes, points = _shapes(scene, folder, subsurface)
@@ -446,8 +447,8 @@ def scene_dict(
         "sensor": sensor,
         "sky": {
             "type": "constant",
-            "radiance": {"type": "rgb", "value": studio.AMBIENT},
-            "sampling_weight": float(np.pi * studio.AMBIENT),
+            "radiance": {"type": "rgb", "value": float(ambient)},
+            "sampling_weight": float(np.pi * max(ambient, 1e-6)),
         },
         **{name: studio.light_dict(light, set_up.target) for name, light in set_up.lights.items()},
         "backdrop": studio.backdrop_dict(
@@ -488,7 +489,9 @@ def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) ->
     )
 
 
-def studio_description(scene: ShadedScene, camera: Camera, width: int, height: int, light_direction) -> dict:
+def studio_description(
+    scene: ShadedScene, camera: Camera, width: int, height: int, light_direction, ambient: float = studio.AMBIENT
+) -> dict:
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
     points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
@@ -507,7 +510,7 @@ def studio_description(scene: ShadedScene, camera: Camera, width: int, height: i
             "aperture_radius": studio.aperture_radius(camera.fov, camera.f_stop),
             "focus_distance": set_up.focus_distance,
         },
-        "ambient": studio.AMBIENT,
+        "ambient": float(ambient),
         "lights": {
             name: {"center": light.center.tolist(), "half_sizes": list(light.half_sizes), "radiance": light.radiance}
             for name, light in set_up.lights.items()
@@ -555,6 +558,7 @@ def render_layers(
     crop: Crop | None = None,
     max_depth: int | None = None,
     subsurface: bool = False,
+    ambient: float = studio.AMBIENT,
 ) -> Layers:
     """Path-traced linear colour with albedo and normal AOVs and the glints' pass; same inputs and seed ⇒ the same
     bits."""
@@ -565,7 +569,7 @@ def render_layers(
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
         description = scene_dict(
-            scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface
+            scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient
         )
         # optimize=False: Mitsuba's merging of identical objects made about one render in six differ from the
         # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
@@ -617,11 +621,22 @@ def render(
     seed: int = 0,
     subsurface: bool = False,
     max_depth: int | None = None,
+    ambient: float = studio.AMBIENT,
 ) -> np.ndarray:
-    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` as ``scene_dict``."""
+    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` and ``ambient`` as
+    ``scene_dict``."""
     from .mesh_files import linear_to_srgb8
 
     layers = render_layers(
-        scene, camera, width, height, spp, light_direction, seed, max_depth=max_depth, subsurface=subsurface
+        scene,
+        camera,
+        width,
+        height,
+        spp,
+        light_direction,
+        seed,
+        max_depth=max_depth,
+        subsurface=subsurface,
+        ambient=ambient,
     )
     return linear_to_srgb8(tone_map(layers.denoised() if denoised else layers.noisy()))

@@ -11,6 +11,7 @@ from nodegraph.params import Param
 from nodegraph.values import Image
 
 from ..values import ShadedScene
+from .studio import AMBIENT
 
 
 @node(
@@ -23,7 +24,8 @@ from ..values import ShadedScene
     # 6: a procedural studio (softbox key, fill, rim light, seamless backdrop) and a thin lens (``studio``)
     # 7: warm white rice: its medium scatters the same in every channel, its skin is the water film's, path depth
     #    64 with media (docs/look.md, "Warm white rice")
-    version=7,
+    # 8: 'ambient': the studio's ambient radiance, a parameter (shade's ambient never reached the preview)
+    version=8,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={
@@ -68,6 +70,13 @@ from ..values import ShadedScene
             "farthest; a food photographer focuses on the front of the dish)",
             range=(0.0, 1.0),
         ),
+        "ambient": Param(
+            float,
+            AMBIENT,
+            "radiance of the studio's uniform ambient (its walls): lights what the softboxes miss; the shade node's "
+            "baked_ambient lights only the exported vertex colours",
+            range=(0.0, 10.0),
+        ),
         "sun_direction": Param(
             tuple[float, float, float],
             (-0.45, -0.6, 0.75),
@@ -91,6 +100,7 @@ def preview(
     margin,
     f_stop,
     focus,
+    ambient,
     sun_direction,
 ):
     """Mitsuba path tracing of the materials in a procedural studio (key, fill, rim, backdrop; ``studio``) through a
@@ -102,4 +112,16 @@ def preview(
     if not np.linalg.norm(sun_direction) > 0:
         raise ValueError("sun_direction: a zero vector has no direction")
     camera = Camera(elevation, azimuth, fov, margin, f_stop, focus)
-    return Image(render(scene, camera, width, height, samples, sun_direction, denoised=denoise, subsurface=subsurface))
+    return Image(
+        render(
+            scene,
+            camera,
+            width,
+            height,
+            samples,
+            sun_direction,
+            denoised=denoise,
+            subsurface=subsurface,
+            ambient=ambient,
+        )
+    )
