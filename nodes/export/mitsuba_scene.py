@@ -66,12 +66,14 @@ MAX_DEPTH_FLAKES = 128
 # the tone curve's knee on a clear skin (Fresnel ≈ 0.023 at normal incidence for IOR 1.36: 0.023 × 60 × 1.5 ≈ 2)
 HIGHLIGHT_ANGLE = 0.12
 HIGHLIGHT_RADIANCE = 60.0
-HIGHLIGHT_SPP = 8  # the glints' pass is one bounce: samples for antialiased edges, not for converging light
+# the glints' pass is one bounce: samples for antialiased edges, not for converging light. 4 (was 8): 15.8 → ≈ 8 CPU s
+# of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost")
+HIGHLIGHT_SPP = 4
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
-GUIDE_SPP = 4  # the guides need antialiased edges, not converged light: a cheap pass of its own (≈ ⅓ of a path)
+GUIDE_SPP = 2  # the guides need antialiased edges, not converged light: a cheap pass of its own (was 4: 5.9 CPU s)
 # path length with media: every scattering event inside a grain is a vertex of the path, and light that lights a
 # heap of grains crosses many of them (and reflects inside them). A 3 mm grain at 15 % water is 3–6 mean free
 # paths thick with albedo ≈ 0.99; at 32 the walks through the heap were cut off and the rice darkened (rice bowl
