@@ -3,7 +3,7 @@
 - ``cached``: ``nodegraph run RECIPE`` again with every node cached, outputs and recording in place (target
   ≤ 1.5 s). The first run (computing what the cache lacks) is not timed.
 - ``watch``: ``nodegraph watch RECIPE`` on a copy of the recipe beside it; each edit rewrites a parameter of
-  one node in the file (default ``shade.ambient``); the time from the save to the watcher's "run N done" line
+  one node in the file (default ``shade.baked_ambient``); the time from the save to the watcher's "run N done" line
   (outputs and recording written), with the CPU seconds the watcher spent meanwhile (target ≤ 2 s).
 - ``resave``: a save while the preview of the save before it renders (``--delay`` seconds into it): the time
   from that save to its change in the recording (target ≤ 2 s, as for any save: the watch stops the preview).
@@ -227,7 +227,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="cached re-runs timed")
     parser.add_argument("--edits", type=int, default=3, help="saves timed in watch")
     parser.add_argument("--full", action="store_true", help="watch the full recipe, not its draft")
-    parser.add_argument("--param", default="shade.ambient", help="NODE.PARAM that watch edits")
+    parser.add_argument("--param", default="shade.baked_ambient", help="NODE.PARAM that watch edits")
     parser.add_argument("--delay", type=float, default=2.0, help="resave: seconds into the preview of the first save")
     parser.add_argument("--values", default=None, help="values written in turn (default: new random ones in 0.2–0.7)")
     parser.add_argument("--cache-dir", default=None, help="cache for cached and watch (default: the usual one)")

@@ -1,5 +1,5 @@
 """A shade-only change on the main job — issue 17 (≤ 5 s): per node, the cold run's seconds beside a re-run after
-changing one shade parameter (``shade.ambient``), everything upstream served by the node cache. (The water content
+changing one shade parameter (``shade.baked_ambient``), everything upstream served by the node cache. (The water content
 is the cooked material's: changing it re-runs the simulation too, as it should.)
 
     python benchmarks/bench_shade_rerun.py            # graphs/ikura_don.yaml at full size (minutes on 2 cores)
@@ -44,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the reduced main job (seconds)")
     parser.add_argument(
-        "--ambient", type=float, default=0.5, help="the changed shade.ambient (share of the base colour)"
+        "--ambient", type=float, default=0.5, help="the changed shade.baked_ambient (share of the base colour)"
     )
     args = parser.parse_args(argv)
     from bench_scenes import QUICK as SIZES
@@ -57,14 +57,14 @@ def main(argv: list[str] | None = None) -> int:
         cold_total, cold = timed_run(base, Path(tmp) / "cache", Path(tmp) / "out")
         load_cold = os.getloadavg()[0]
         rerun_total, rerun = timed_run(
-            base + [f"shade.ambient={args.ambient:g}"], Path(tmp) / "cache", Path(tmp) / "out"
+            base + [f"shade.baked_ambient={args.ambient:g}"], Path(tmp) / "cache", Path(tmp) / "out"
         )
     load_rerun = os.getloadavg()[0]
     if set(rerun) != set(RERUN_NODES):
         raise SystemExit(f"the shade-only re-run ran {sorted(rerun)}, expected {list(RERUN_NODES)}")
 
     lines = [
-        f"ikura_don ({'reduced' if args.quick else 'full size'}): cold run vs re-run after shade.ambient → "
+        f"ikura_don ({'reduced' if args.quick else 'full size'}): cold run vs re-run after shade.baked_ambient → "
         f"{args.ambient:g} (s; load average {load_cold:.1f} after the cold run, {load_rerun:.1f} after the re-run)",
         "",
         "| node | cold (s) | shade-only re-run (s) |",

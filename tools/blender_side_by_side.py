@@ -43,7 +43,7 @@ def settings(scene, preview_params: dict, samples: int) -> dict:
     p = preview_params
     camera = ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
     return {
-        **ms.studio_description(scene, camera, p["width"], p["height"], p["sun_direction"]),
+        **ms.studio_description(scene, camera, p["width"], p["height"], p["sun_direction"], p["ambient"]),
         "samples": samples,
     }
 

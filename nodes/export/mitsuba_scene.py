@@ -66,12 +66,14 @@ MAX_DEPTH_FLAKES = 128
 # the tone curve's knee on a clear skin (Fresnel ≈ 0.023 at normal incidence for IOR 1.36: 0.023 × 60 × 1.5 ≈ 2)
 HIGHLIGHT_ANGLE = 0.12
 HIGHLIGHT_RADIANCE = 60.0
-HIGHLIGHT_SPP = 8  # the glints' pass is one bounce: samples for antialiased edges, not for converging light
+# the glints' pass is one bounce: samples for antialiased edges, not for converging light. 4 (was 8): 15.8 → ≈ 8 CPU s
+# of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost")
+HIGHLIGHT_SPP = 4
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
-GUIDE_SPP = 4  # the guides need antialiased edges, not converged light: a cheap pass of its own (≈ ⅓ of a path)
+GUIDE_SPP = 2  # the guides need antialiased edges, not converged light: a cheap pass of its own (was 4: 5.9 CPU s)
 # path length with media: every scattering event inside a grain is a vertex of the path, and light that lights a
 # heap of grains crosses many of them (and reflects inside them). A 3 mm grain at 15 % water is 3–6 mean free
 # paths thick with albedo ≈ 0.99; at 32 the walks through the heap were cut off and the rice darkened (rice bowl
@@ -406,10 +408,11 @@ def scene_dict(
     crop: Crop | None = None,
     max_depth: int | None = None,
     subsurface: bool = False,
+    ambient: float = studio.AMBIENT,
 ) -> dict:
     """The Mitsuba scene description; PLY files are written into ``folder``. ``max_depth``: the longest path
     (default ``path_depth``: by the scene's materials); ``subsurface``: media inside the volumetric elements, traced
-    by ``volpath``."""
+    by ``volpath``; ``ambient``: radiance of the studio's uniform ambient."""
     import mitsuba as mi
 
     shapes, points = _shapes(scene, folder, subsurface)
@@ -446,8 +449,8 @@ def scene_dict(
         "sensor": sensor,
         "sky": {
             "type": "constant",
-            "radiance": {"type": "rgb", "value": studio.AMBIENT},
-            "sampling_weight": float(np.pi * studio.AMBIENT),
+            "radiance": {"type": "rgb", "value": float(ambient)},
+            "sampling_weight": float(np.pi * max(ambient, 1e-6)),
         },
         **{name: studio.light_dict(light, set_up.target) for name, light in set_up.lights.items()},
         "backdrop": studio.backdrop_dict(
@@ -488,7 +491,9 @@ def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) ->
     )
 
 
-def studio_description(scene: ShadedScene, camera: Camera, width: int, height: int, light_direction) -> dict:
+def studio_description(
+    scene: ShadedScene, camera: Camera, width: int, height: int, light_direction, ambient: float = studio.AMBIENT
+) -> dict:
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
     points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
@@ -507,7 +512,7 @@ def studio_description(scene: ShadedScene, camera: Camera, width: int, height: i
             "aperture_radius": studio.aperture_radius(camera.fov, camera.f_stop),
             "focus_distance": set_up.focus_distance,
         },
-        "ambient": studio.AMBIENT,
+        "ambient": float(ambient),
         "lights": {
             name: {"center": light.center.tolist(), "half_sizes": list(light.half_sizes), "radiance": light.radiance}
             for name, light in set_up.lights.items()
@@ -555,6 +560,7 @@ def render_layers(
     crop: Crop | None = None,
     max_depth: int | None = None,
     subsurface: bool = False,
+    ambient: float = studio.AMBIENT,
 ) -> Layers:
     """Path-traced linear colour with albedo and normal AOVs and the glints' pass; same inputs and seed ⇒ the same
     bits."""
@@ -565,7 +571,7 @@ def render_layers(
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
         description = scene_dict(
-            scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface
+            scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient
         )
         # optimize=False: Mitsuba's merging of identical objects made about one render in six differ from the
         # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
@@ -617,11 +623,22 @@ def render(
     seed: int = 0,
     subsurface: bool = False,
     max_depth: int | None = None,
+    ambient: float = studio.AMBIENT,
 ) -> np.ndarray:
-    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` as ``scene_dict``."""
+    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` and ``ambient`` as
+    ``scene_dict``."""
     from .mesh_files import linear_to_srgb8
 
     layers = render_layers(
-        scene, camera, width, height, spp, light_direction, seed, max_depth=max_depth, subsurface=subsurface
+        scene,
+        camera,
+        width,
+        height,
+        spp,
+        light_direction,
+        seed,
+        max_depth=max_depth,
+        subsurface=subsurface,
+        ambient=ambient,
     )
     return linear_to_srgb8(tone_map(layers.denoised() if denoised else layers.noisy()))

@@ -11,6 +11,7 @@ from nodegraph.params import Param
 from nodegraph.values import Image
 
 from ..values import ShadedScene
+from .studio import AMBIENT
 
 
 @node(
@@ -23,19 +24,19 @@ from ..values import ShadedScene
     # 6: a procedural studio (softbox key, fill, rim light, seamless backdrop) and a thin lens (``studio``)
     # 7: warm white rice: its medium scatters the same in every channel, its skin is the water film's, path depth
     #    64 with media (docs/look.md, "Warm white rice")
-    version=7,
+    # 8: 'ambient': the studio's ambient radiance, a parameter (shade's ambient never reached the preview); 8 spp
+    #    (was 10), the glints' pass 4 spp (was 8), the guides 2 (was 4): 136 → 105 CPU s on the main job
+    version=8,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={
         "width": Param(int, 1280, "image width", range=(16, 4096), units="px"),
         "height": Param(int, 720, "image height", range=(16, 4096), units="px"),
-        # 10, denoised, media on: benchmarks/bench_preview.py --budget 12:32,10:32,12:12 on the main job (eggs over
-        # rice, against 256 spp at depth 128): 12 spp 22.0 dB / SSIM 0.520 / 119.1 CPU s, 10 spp 21.8 dB / 0.511 /
-        # 107.9 CPU s (54 s on 2 cores: the issue's 60 s), path depth 12 at 12 spp 18.3 dB (walks in the grains cut
-        # short). Before the media: 12 spp, the fewest that reached 30 dB against 1,024 spp with the thin surfaces.
-        "samples": Param(
-            int, 10, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)
-        ),
+        # 8, denoised, media on, depth 64: benchmarks/bench_preview.py --budget on the main job (eggs over rice,
+        # against 256 spp at depth 128; docs/accuracy.md, "Preview cost"): 10 spp (glints 8, guides 4) 18.3 dB /
+        # SSIM 0.415 / 135.7 CPU s; 8 spp (glints 4, guides 2) 18.2 dB / 0.401 / 104.7 CPU s (52 s on 2 free
+        # cores: the issue's 60 s); 6 spp 18.0 dB / 0.387 / 76.1 CPU s.
+        "samples": Param(int, 8, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)),
         "denoise": Param(bool, True, "Intel Open Image Denoise with albedo + normal guides (pyoidn)"),
         "subsurface": Param(
             bool,
@@ -68,6 +69,13 @@ from ..values import ShadedScene
             "farthest; a food photographer focuses on the front of the dish)",
             range=(0.0, 1.0),
         ),
+        "ambient": Param(
+            float,
+            AMBIENT,
+            "radiance of the studio's uniform ambient (its walls): lights what the softboxes miss; the shade node's "
+            "baked_ambient lights only the exported vertex colours",
+            range=(0.0, 10.0),
+        ),
         "sun_direction": Param(
             tuple[float, float, float],
             (-0.45, -0.6, 0.75),
@@ -91,6 +99,7 @@ def preview(
     margin,
     f_stop,
     focus,
+    ambient,
     sun_direction,
 ):
     """Mitsuba path tracing of the materials in a procedural studio (key, fill, rim, backdrop; ``studio``) through a
@@ -102,4 +111,16 @@ def preview(
     if not np.linalg.norm(sun_direction) > 0:
         raise ValueError("sun_direction: a zero vector has no direction")
     camera = Camera(elevation, azimuth, fov, margin, f_stop, focus)
-    return Image(render(scene, camera, width, height, samples, sun_direction, denoised=denoise, subsurface=subsurface))
+    return Image(
+        render(
+            scene,
+            camera,
+            width,
+            height,
+            samples,
+            sun_direction,
+            denoised=denoise,
+            subsurface=subsurface,
+            ambient=ambient,
+        )
+    )

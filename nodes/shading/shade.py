@@ -31,7 +31,9 @@ def _check(params):
     # 5: plain ice keeps ≈ 99 % of the light per flake crossing (was 90–95 %: 5 mm of ice per 0.4 mm flake)
     # 6: water content and σ₀ come from the cooked material (input 'material')
     # 7: ikura deep orange-red (was amber), its yolk orange; a scenery mesh named 'nori' gets the nori material
-    version=7,
+    # 8: 'ambient' renamed 'baked_ambient': it lights only the baked vertex colours, never the preview (whose
+    #    ambient is its studio's, preview.ambient)
+    version=8,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "material": In(
@@ -64,7 +66,13 @@ def _check(params):
         "light_intensities": Param(
             list[float], [1.2], "intensity per light (or one for all); must be > 0", range=(0.0, 100.0)
         ),
-        "ambient": Param(float, 0.35, "ambient light as a share of the base colour", range=(0.0, 1.0)),
+        "baked_ambient": Param(
+            float,
+            0.35,
+            "ambient light as a share of the base colour in the baked CDRF vertex colours (the exported .glb, .usdc "
+            "and .ply and the recording); the path-traced preview does not use them: its ambient is preview.ambient",
+            range=(0.0, 1.0),
+        ),
         "presets": Param(
             list[str],
             [],
@@ -111,7 +119,7 @@ def shade(
     light_directions,
     light_colors,
     light_intensities,
-    ambient,
+    baked_ambient,
     presets,
     syrup_color,
     syrup_depth,
@@ -134,7 +142,7 @@ def shade(
         rice=None if material is None else material.optics,
         sigma0=sigma0_from_water(WATER_CONTENT, SIGMA0_DRY, SIGMA0_WET) if material is None else material.sigma0,
         lights=make_lights(light_directions, light_colors, light_intensities),
-        ambient=ambient,
+        ambient=baked_ambient,
         presets=parse_overrides(presets),
         syrup_color=tuple(syrup_color),
         syrup_depth=syrup_depth,

@@ -231,3 +231,20 @@ def test_the_denoiser_keeps_the_key_lights_glints(shaded):
 
     assert energy(reference) > 0
     assert energy(denoised) > energy(reference) / 3
+
+
+def test_the_studios_ambient_lights_the_preview_and_shades_does_not(shaded):
+    """The preview's ambient is its own parameter (the studio's walls); shade's ambient lit only the baked vertex
+    colours, so a sweep of it left the preview's bytes unchanged: it is now named for what it does."""
+    from pathlib import Path
+
+    from nodegraph.api import default_registry, load_recipe
+    from nodegraph.errors import RecipeError
+    from nodes.shading import shade
+
+    dark, lit = (_render(shaded, ambient=a).astype(float).mean() for a in (0.0, 0.5))
+    assert lit > dark + 5.0
+    assert "ambient" not in shade.params and "baked_ambient" in shade.params
+    recipe = Path(__file__).resolve().parents[2] / "graphs" / "ikura_don.yaml"
+    with pytest.raises(RecipeError, match="unknown parameter 'ambient' for shade.*baked_ambient"):
+        load_recipe(recipe, default_registry(), ["shade.ambient=0.6"])

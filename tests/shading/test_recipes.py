@@ -22,7 +22,7 @@ def test_ikura_don_small_end_to_end_and_shade_only_rerun(tmp_path):
     first = _run("ikura_don", SMALL, tmp_path)
     names = {p.name for p in first.files}
     assert {"ikura_don.glb", "ikura_don.usdc", "ikura_don.ply", "preview.png"} <= names
-    second = _run("ikura_don", SMALL + ["shade.ambient=0.5"], tmp_path)
+    second = _run("ikura_don", SMALL + ["shade.baked_ambient=0.5"], tmp_path)
     ran = {r.node for r in second.records if r.status == "ran"}
     assert ran == {"shade", "export", "preview"}
     # One material: `--set cooked.water_content=22` (the recipe's own suggestion) re-runs the rice's simulation

@@ -26,7 +26,7 @@ def test_materials_per_kind_and_ikura_parts(shaded):
 
 
 def test_wetter_rice_is_whiter_and_glows_past_the_terminator(scene_inputs):
-    light = {"light_directions": [(1.0, 0.0, 0.0)], "ambient": 0.0}
+    light = {"light_directions": [(1.0, 0.0, 0.0)], "baked_ambient": 0.0}
     dry = shade.call(**scene_inputs, material=cooked_material(water_content=0.0), **light)
     wet = shade.call(**scene_inputs, material=cooked_material(water_content=24.0), **light)
     grain_dry, grain_wet = dry.meshes[0], wet.meshes[0]

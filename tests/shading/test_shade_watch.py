@@ -21,10 +21,10 @@ def test_shading_the_same_aggregates_again_does_not_rebuild_their_meshes(scene_i
             return original(self, i)
 
         monkeypatch.setattr(kind, "element_mesh", counting)
-    first = shade.call(**inputs, material=material, ambient=0.3)
+    first = shade.call(**inputs, material=material, baked_ambient=0.3)
     count = len(built)
     assert count == sum(len(a.placement) for a in inputs["aggregates"])
-    second = shade.call(**inputs, material=material, ambient=0.5)
+    second = shade.call(**inputs, material=material, baked_ambient=0.5)
     assert len(built) == count  # the second shading reused them
     assert all(np.array_equal(a.vertices, b.vertices) for a, b in zip(first.meshes, second.meshes))
     assert not all(np.array_equal(a.colors, b.colors) for a, b in zip(first.meshes, second.meshes))
