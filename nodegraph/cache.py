@@ -341,6 +341,9 @@ class Cache:
         ended) stay even above it. An entry goes first (readers then miss it), then its Rerun fragment, then
         each blob that no remaining entry names."""
         limit = self.limit() if limit is None else limit
+        total = self.info().bytes
+        if total <= limit:  # the usual case, known from file sizes alone: no entry need be read
+            return Eviction(0, 0, total, False)
         entries = []
         for path in (self.directory / "entries").glob("*/*.json"):
             try:
@@ -367,7 +370,6 @@ class Cache:
             except OSError:
                 return 0
 
-        total = self.info().bytes
         freed = removed = 0
         for mtime, path, size, blobs in sorted(entries, key=lambda e: e[0]):
             if total - freed <= limit:
