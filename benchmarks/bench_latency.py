@@ -4,7 +4,9 @@
   ≤ 1.5 s). The first run (computing what the cache lacks) is not timed.
 - ``watch``: ``nodegraph watch RECIPE`` on a copy of the recipe beside it; each edit rewrites a parameter of
   one node in the file (default ``shade.baked_ambient``); the time from the save to the watcher's "run N done" line
-  (outputs and recording written), with the CPU seconds the watcher spent meanwhile (target ≤ 2 s).
+  (outputs and recording written), with the CPU seconds the watcher spent meanwhile (target ≤ 2 s). Each save
+  comes ``--pause`` seconds after the watcher says it is watching; with ``--warm``, after it says its warm-up
+  between saves is done (``nodegraph/watch.py``: a save during the warm-up stops it, and pays what it left).
 - ``resave``: a save while the preview of the save before it renders (``--delay`` seconds into it): the time
   from that save to its change in the recording (target ≤ 2 s, as for any save: the watch stops the preview).
 - ``draft``: ``nodegraph run RECIPE --draft`` with an empty node cache (compiled kernels kept; target ≤ 15 s).
@@ -166,15 +168,19 @@ class Watcher:
         self.copy.unlink(missing_ok=True)
 
 
-def bench_watch(recipe: str, edits: int, draft: bool, target: str, values: list[str], extra: list[str]) -> list[tuple]:
+def bench_watch(
+    recipe: str, edits: int, draft: bool, target: str, values: list[str], extra: list[str], pause: float, warm: bool
+) -> list[tuple]:
+    """Each save ``pause`` seconds after the watcher is ready: after its "watching" line, or with ``warm``
+    after its "warm:" line (the warm-up between saves done)."""
     node, param = target.split(".")
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-watch-") as tmp:
         watcher = Watcher(recipe, edits + 1, draft, extra, f"{tmp}/out")
         try:
-            watcher.until("watching", [])
             for i in range(edits):
-                time.sleep(1.0)
+                watcher.until("warm:" if warm else "watching", [])
+                time.sleep(pause)
                 saved, cpu0 = watcher.save(node, param, values[i % len(values)])
                 seen: list = []
                 done, shown, shown_cpu = watcher.until(f"run {i + 2} done", seen, also=f"run {i + 2}: {node} updated")
@@ -227,6 +233,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="cached re-runs timed")
     parser.add_argument("--edits", type=int, default=3, help="saves timed in watch")
     parser.add_argument("--full", action="store_true", help="watch the full recipe, not its draft")
+    parser.add_argument("--pause", type=float, default=1.0, help="watch: seconds from the watcher ready to a save")
+    parser.add_argument("--warm", action="store_true", help="watch: ready once its warm-up is done, not at once")
     parser.add_argument("--param", default="shade.baked_ambient", help="NODE.PARAM that watch edits")
     parser.add_argument("--delay", type=float, default=2.0, help="resave: seconds into the preview of the first save")
     parser.add_argument("--values", default=None, help="values written in turn (default: new random ones in 0.2–0.7)")
@@ -259,7 +267,9 @@ def main() -> None:
                 if args.values
                 else [f"{random.uniform(0.2, 0.7):.6f}" for _ in range(args.edits)]
             )
-            rows += bench_watch(recipe, args.edits, not args.full, args.param, values, cached[:2] + common)
+            rows += bench_watch(
+                recipe, args.edits, not args.full, args.param, values, cached[:2] + common, args.pause, args.warm
+            )
         if "resave" in args.what:
             values = args.values.split(",") if args.values else [f"{random.uniform(0.2, 0.7):.6f}" for _ in range(2)]
             rows += bench_resave(recipe, not args.full, args.param, values, args.delay, cached[:2] + common)

@@ -31,6 +31,7 @@ from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
 from .rerun_log import has_display
+from .watch import Superseded, WatchSession
 
 SETTLE_S = 0.05  # watch: how long a recipe file's bytes must stay the same before a run starts
 SWEEP_RRD = Path("<sweep>.rrd")  # --rrd given without a path
@@ -233,76 +234,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class Superseded(KeyboardInterrupt):
-    """A watched run stopped because the recipe was saved again and the step it was at is no longer needed."""
-
-
-class WatchSession:
-    """What ``nodegraph watch`` keeps between runs: the last run's values by cache key (an edit re-runs a
-    node from its inputs in memory, not from the cache), and when the current run began, to say when each
-    node that ran reached the recording (and a viewer streaming it).
-
-    A save during a run does not wait for it: ``supersede`` gets the cache keys the saved recipe needs, and
-    a step that is not among them stops at once (a signal: a path-traced preview stops within its render, a
-    Python loop at its next line) or before it starts; a step the new recipe still needs (a long
-    simulation under a shading edit) runs on, and the next run takes its result from memory."""
-
-    def __init__(self):
-        self.kept: dict = {}
-        self.run = 0
-        self.seen = time.perf_counter()
-        self.lock = threading.Lock()
-        self.running = None  # (instance, key) of the step computing now
-        self.needed: set[str] | None = None  # the keys the file's last save needs; None: unchanged, or a bad edit
-        self.stopping: str | None = None  # the key of the step a signal was sent to stop
-
-    def begin(self, run: int, seen: float) -> None:
-        self.run, self.seen = run, seen
-        self.running, self.needed, self.stopping = None, None, None
-
-    def started(self, inst, key) -> None:
-        """Before a step runs: stop the run here if the last save no longer needs this step."""
-        with self.lock:
-            if self.needed is not None and key not in self.needed:
-                raise Superseded(inst.label)
-            self.running = (inst, key)
-
-    def ran(self, inst) -> None:
-        with self.lock:
-            self.running = None
-        seconds = time.perf_counter() - self.seen
-        print(f"run {self.run}: {inst.label} updated {seconds:.2f} s after the save was seen", flush=True)
-
-    def supersede(self, needed: set[str] | None) -> None:
-        """The file was saved (again) during the run; ``needed``: the keys it now needs (None: a bad edit,
-        the run goes on and the error shows after it). Stop the step computing now if it is not needed."""
-        with self.lock:
-            self.needed = needed
-            if needed is not None and self.running is not None and self.running[1] not in needed:
-                self.stopping = self.running[1]
-                # to the main thread, which runs the step: Mitsuba's own SIGINT handler cancels the render it runs
-                if hasattr(signal, "pthread_kill"):
-                    signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
-                else:  # no POSIX threads' signals (Windows): Python code stops, a render runs to its end
-                    import _thread
-
-                    _thread.interrupt_main()
-
-    def interrupted(self, signum, frame) -> None:
-        """SIGINT: Ctrl-C, or ``supersede`` stopping a step (then raised only while that step still runs;
-        once it has finished, the next step's start stops the run)."""
-        stopping, running = self.stopping, self.running
-        if stopping is None:
-            raise KeyboardInterrupt
-        self.stopping = None
-        if running is not None and running[1] == stopping:
-            raise Superseded(running[0].label)
-
-    def keep(self, keys) -> None:
-        """Hold only what the last run used."""
-        self.kept = {key: self.kept[key] for key in keys if key in self.kept}
-
-
 def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     if args.no_rrd and (args.spawn or args.rrd):
         given = " and ".join(f for f, on in (("--spawn", args.spawn), ("--rrd", args.rrd)) if on)
@@ -344,7 +275,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
                 session=session,
             )
         if session is not None:
-            session.keep(set(result.keys.values()))
+            session.keep(result)
     except (NodeFailure, KeyboardInterrupt):
         reporter.print_summary()
         raise
@@ -427,7 +358,31 @@ def _cmd_watch(args, registry) -> int:
                 last, saved[now] = now, noticed
                 session.supersede(needed_keys())
 
+    def warm_up(run_digest) -> None:
+        """Between saves: ready the next edit (``WatchSession.warm_up``); a save stops the step under way."""
+        started, steps, done = time.perf_counter(), 0, threading.Event()
+
+        def look() -> None:
+            while not done.wait(args.poll):
+                if settled(run_digest) is not None:
+                    session.stop_warm_up()
+                    return
+
+        watcher = threading.Thread(target=look, daemon=True)
+        watcher.start()
+        try:
+            for _ in session.warm_up(cache):
+                steps += 1
+        except Superseded:
+            pass
+        finally:
+            done.set()
+            watcher.join()
+        if not session.warm_stopped:
+            print(f"warm: {steps} step(s) rehearsed in {time.perf_counter() - started:.1f} s", flush=True)
+
     seen, runs, session = None, 0, WatchSession()
+    cache = Cache(args.cache_dir or default_cache_dir())
     previous = signal.signal(signal.SIGINT, session.interrupted)
     try:
         while args.runs is None or runs < args.runs:
@@ -436,7 +391,7 @@ def _cmd_watch(args, registry) -> int:
             if now is None:
                 time.sleep(args.poll)
                 continue
-            seen, runs = now, runs + 1
+            seen, runs, ok = now, runs + 1, False
             noticed = saved.pop(now, noticed)
             saved.clear()
             session.begin(runs, noticed)
@@ -446,6 +401,7 @@ def _cmd_watch(args, registry) -> int:
             try:
                 _cmd_run(args, registry, session)
                 print(f"run {runs} done in {time.perf_counter() - noticed:.1f} s", flush=True)
+                ok = True
             except Superseded as exc:
                 print(f"run {runs}: stopped at {exc}: the file was saved again", flush=True)
             except RecipeError as exc:
@@ -460,6 +416,8 @@ def _cmd_watch(args, registry) -> int:
                 session.begin(runs, noticed)  # a stop signalled as the run ended is dropped
             if args.runs is None or runs < args.runs:
                 print(f"watching {args.recipe} (Ctrl-C to stop)", flush=True)
+                if ok:
+                    warm_up(now)
     finally:
         signal.signal(signal.SIGINT, previous)
     return 0

@@ -227,13 +227,7 @@ class Executor:
                 self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
                 return outputs
 
-        sources = self.planned.sources(inst)
-        kwargs: dict[str, Any] = {}
-        for port_name, port in spec.inputs.items():
-            pairs = sources.get(port_name, [])
-            values = [self.materialise(src)[out] for src, out in pairs]
-            kwargs[port_name] = values if port.many else (values[0] if values else None)
-        kwargs.update(entry.params)
+        kwargs = self._arguments(inst)
         if self.on_start is not None:
             self.on_start(inst, key)
         capture = None
@@ -297,6 +291,34 @@ class Executor:
                 capture.path.unlink(missing_ok=True)
         return outputs
 
+    def _arguments(self, inst: Instance) -> dict[str, Any]:
+        """The keyword arguments ``inst``'s node is called with: its inputs (pulled) and its parameters."""
+        entry = self.recipe.nodes[inst.node]
+        sources = self.planned.sources(inst)
+        kwargs: dict[str, Any] = {}
+        for port_name, port in entry.spec.inputs.items():
+            values = [self.materialise(src)[out] for src, out in sources.get(port_name, [])]
+            kwargs[port_name] = values if port.many else (values[0] if values else None)
+        kwargs.update(entry.params)
+        return kwargs
+
+    def rehearse(self, inst: Instance) -> None:
+        """Run ``inst`` again on its inputs in hand (``kept``, else the cache), its outputs dropped and nothing
+        logged or stored: what a node's first run in a process pays (imports, kernels loaded from numba's
+        cache, what it derives from its inputs, ``codec.derived``) is paid now, not by the next edit
+        (``nodegraph watch`` between saves). Its inputs must be in ``kept`` or the cache."""
+        spec = self.recipe.nodes[inst.node].spec
+        kwargs = self._arguments(inst)
+        ctx = Context(
+            node_id=inst.node,
+            node_type=spec.type_name,
+            seed=self.planned.seed(inst),
+            effects=frozenset(spec.effects & self.recipe.effects),
+            variant=inst.variant,
+            rerun=EntityLogger(None, inst.entity),
+        )
+        spec.run(ctx, **kwargs)
+
     def _capture_path(self, key: str) -> Path:
         """Where a node's capture is written: beside its cache entry, or a temporary file without a cache."""
         if self.cache is not None:
@@ -349,7 +371,8 @@ class Executor:
     def _log_cached(self, inst: Instance) -> None:
         """Put a loaded cached instance into the recording: the fragment kept with its entry; for an entry
         without one (computed by a worker, or by a run with no recording) or with a damaged one, its outputs
-        are logged into a new fragment, kept with the entry for the next run."""
+        are logged into a new fragment, kept with the entry for the next run. A value held in memory (``kept``)
+        whose entry has gone since (the cache trimmed or cleared) is stored again, with that fragment."""
         key = self.keys[inst]
         start = now()
         fragment = self._kept_fragment(inst)
@@ -358,7 +381,11 @@ class Executor:
             try:
                 self._carry_run_logs(inst, capture)
                 made = self._capture_outputs(inst, capture, self.values[inst])
-                self.cache.add_fragment(key, made)
+                if self.cache.has(key):
+                    self.cache.add_fragment(key, made)
+                else:
+                    spec = self.recipe.nodes[inst.node].spec
+                    self.cache.store(key, self.values[inst], inst.node, spec.type_name, fragment=made)
             finally:
                 capture.path.unlink(missing_ok=True)  # a leftover only if add_fragment did not move it
             fragment = replace(made, path=self.cache.fragment_path(key))

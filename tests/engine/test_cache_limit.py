@@ -33,6 +33,23 @@ def test_least_recently_used_entries_go_first(tmp_path):
     assert cache.info().bytes <= 2 * entry + entry // 2 and cache.info().blobs == 2
 
 
+def test_a_cache_under_its_limit_reads_no_entry(tmp_path, monkeypatch):
+    """Every run ends with a look at the limit: under it (the usual case, known from file sizes) no entry is
+    read, so a cached re-run's cost does not grow with the cache."""
+    from nodegraph import cache as cache_module
+
+    cache = Cache(tmp_path / "c")
+    for i, name in enumerate("abc"):
+        _store(cache, name, float(i), 1000.0 + i)
+
+    def read(*args, **kwargs):
+        raise AssertionError("an entry was read")
+
+    monkeypatch.setattr(cache_module.json, "loads", read)
+    done = cache.evict(limit=10 * cache.info().bytes)
+    assert (done.entries, done.freed, done.over) == (0, 0, False)
+
+
 def test_a_shared_blob_stays_while_an_entry_names_it(tmp_path):
     cache = Cache(tmp_path / "c")
     old = _store(cache, "a", 1.0, 1000.0)

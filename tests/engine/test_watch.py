@@ -181,3 +181,41 @@ def test_a_save_that_still_needs_the_running_step_lets_it_finish(tmp_path):
         assert proc.wait(timeout=60) == 0
     finally:
         proc.kill()
+
+
+def test_the_first_edit_pays_no_first_load_and_finds_the_inputs_in_memory(tmp_path):
+    """Between saves the watch loads the inputs of the quick nodes its first run took from the cache and runs
+    them once (``WatchSession.warm_up``): the first edit then pays neither a node's first load in the process
+    (a kernel loaded from numba's cache, 1 s here) nor a read of its inputs (the cache is gone here)."""
+    trace = tmp_path / "trace"
+    middle = f"""\
+  shifted:
+    type: toy_shift
+    inputs: {{spheres: pts.spheres}}
+    params: {{dx: 1.5}}
+  scaled:
+    type: toy_first_load
+    inputs: {{spheres: shifted.spheres}}
+    params: {{scale: 2.5, load_seconds: 1.0, trace: {trace}}}
+"""
+    text = SLOW.format(output="scaled.spheres", middle=middle)
+    recipe = tmp_path / "r.yaml"
+    recipe.write_text(text)
+    cached = [sys.executable, "-m", "nodegraph.cli", "run", str(recipe), "--plugin", str(TOY), "-q"]
+    cached += ["--cache-dir", str(tmp_path / "cache"), "--out-dir", str(tmp_path / "first")]
+    subprocess.run(cached, cwd=tmp_path, check=True, capture_output=True)  # the watch's first run: all cached
+    assert trace.read_text().split() == ["load", "call"]
+    recipe, proc = _watch(tmp_path, text, runs=2)
+    lines, seen = _lines(proc), []
+    try:
+        _until(lines, "warm:", seen, timeout=60)
+        shutil.rmtree(tmp_path / "cache")
+        recipe.write_text(recipe.read_text().replace("scale: 2.5", "scale: 3.5"))
+        _until(lines, "run 2 done", seen, timeout=60)
+        second = "".join(seen).split("watching")[-1]  # the second run's lines
+        rows = {line.split("│")[1].strip(): line for line in second.splitlines() if line.count("│") > 3}
+        assert "ran" in rows["scaled"] and "cached" in rows["shifted"] and "cached" in rows["pts"], second
+        assert trace.read_text().split()[-2:] == ["call", "call"], trace.read_text()  # the edit's call: no load
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()

@@ -158,6 +158,35 @@ def toy_slow(ctx, spheres, *, seconds, started):
     return SphereSet(spheres.centers.copy(), spheres.radii.copy())
 
 
+_FIRST_LOAD_PAID = False  # toy_first_load: whether this process paid its first load
+
+
+@node(
+    "toy_first_load",
+    version=1,
+    inputs={"spheres": In(SphereSet, "to scale")},
+    outputs={"spheres": Out(SphereSet, "radii scaled")},
+    params={
+        "scale": Param(float, 1.0, "radius factor", range=(0.0, 10.0)),
+        "load_seconds": Param(float, 0.0, "what its first call in a process waits", range=(0.0, 60.0), units="s"),
+        "trace": Param(str, "", "a file: each call appends 'load' when it paid the first load, then 'call'"),
+    },
+)
+def toy_first_load(ctx, spheres, *, scale, load_seconds, trace):
+    """Scales radii; its first call in a process first waits ``load_seconds``, as a node whose kernels numba
+    loads from its cache does."""
+    global _FIRST_LOAD_PAID
+    lines = []
+    if not _FIRST_LOAD_PAID:
+        time.sleep(load_seconds)
+        _FIRST_LOAD_PAID = True
+        lines.append("load")
+    if trace:
+        with open(trace, "a") as file:
+            file.write("".join(f"{line}\n" for line in [*lines, "call"]))
+    return SphereSet(spheres.centers.copy(), spheres.radii * scale)
+
+
 @node(
     "toy_sphere_mesh",
     version=1,

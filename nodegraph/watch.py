@@ -1,0 +1,163 @@
+"""What ``nodegraph watch`` keeps between runs, and how it stops a step a save made unneeded.
+
+Between saves it also warms up: the first run of a node in a process pays for its imports, the kernels numba
+loads from its cache and what the node derives from its inputs (``codec.derived``), which an edit would
+otherwise pay on top of the node's own work (4 s against 1 s for the main job's shading). So once a run is
+done, the watch loads the inputs of the quick nodes it has not run yet and runs each once more on them
+(``Executor.rehearse``), one step at a time, looking at the file between steps.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+import time
+from collections.abc import Iterator
+
+from .cache import Cache
+from .errors import CacheCorruption
+from .executor import Executor, RunResult
+from .plan import Instance
+
+REHEARSE_S = 2.0  # a node that took longer when it ran is not rehearsed: there a first load is a small part
+
+
+class Superseded(KeyboardInterrupt):
+    """A watched run stopped because the recipe was saved again and the step it was at is no longer needed."""
+
+
+class WatchSession:
+    """What ``nodegraph watch`` keeps between runs: the last run's values by cache key (an edit re-runs a
+    node from its inputs in memory, not from the cache), and when the current run began, to say when each
+    node that ran reached the recording (and a viewer streaming it).
+
+    A save during a run does not wait for it: ``supersede`` gets the cache keys the saved recipe needs, and
+    a step that is not among them stops at once (a signal: a path-traced preview stops within its render, a
+    Python loop at its next line) or before it starts; a step the new recipe still needs (a long
+    simulation under a shading edit) runs on, and the next run takes its result from memory.
+
+    Between saves, ``warm_up`` readies the quick nodes the runs so far took from the cache; a save stops it
+    the same way (``stop_warm_up``)."""
+
+    def __init__(self):
+        self.kept: dict = {}
+        self.run = 0
+        self.seen = time.perf_counter()
+        self.lock = threading.Lock()
+        self.running = None  # (instance, key) of the step computing now
+        self.needed: set[str] | None = None  # the keys the file's last save needs; None: unchanged, or a bad edit
+        self.stopping: str | None = None  # the key of the step a signal was sent to stop
+        self.warm: set[str] = set()  # keys of the instances run (or rehearsed) in this process
+        self.last: RunResult | None = None  # the last run that completed
+        self.warm_stopped = False  # a save came during the warm-up
+
+    def begin(self, run: int, seen: float) -> None:
+        self.run, self.seen = run, seen
+        self.running, self.needed, self.stopping = None, None, None
+
+    def _stop_running(self) -> None:
+        """Under ``lock``: signal the main thread to stop the step running now (see ``interrupted``)."""
+        self.stopping = self.running[1]
+        # to the main thread, which runs the step: Mitsuba's own SIGINT handler cancels the render it runs
+        if hasattr(signal, "pthread_kill"):
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+        else:  # no POSIX threads' signals (Windows): Python code stops, a render runs to its end
+            import _thread
+
+            _thread.interrupt_main()
+
+    def started(self, inst, key) -> None:
+        """Before a step runs: stop the run here if the last save no longer needs this step."""
+        with self.lock:
+            if self.needed is not None and key not in self.needed:
+                raise Superseded(inst.label)
+            self.running = (inst, key)
+            self.warm.add(key)
+
+    def ran(self, inst) -> None:
+        with self.lock:
+            self.running = None
+        seconds = time.perf_counter() - self.seen
+        print(f"run {self.run}: {inst.label} updated {seconds:.2f} s after the save was seen", flush=True)
+
+    def supersede(self, needed: set[str] | None) -> None:
+        """The file was saved (again) during the run; ``needed``: the keys it now needs (None: a bad edit,
+        the run goes on and the error shows after it). Stop the step computing now if it is not needed."""
+        with self.lock:
+            self.needed = needed
+            if needed is not None and self.running is not None and self.running[1] not in needed:
+                self._stop_running()
+
+    def stop_warm_up(self) -> None:
+        """The file was saved during ``warm_up``: stop the step rehearsing now, and the steps after it."""
+        with self.lock:
+            self.warm_stopped = True
+            if self.running is not None:
+                self._stop_running()
+
+    def interrupted(self, signum, frame) -> None:
+        """SIGINT: Ctrl-C, or ``supersede`` stopping a step (then raised only while that step still runs;
+        once it has finished, the next step's start stops the run)."""
+        stopping, running = self.stopping, self.running
+        if stopping is None:
+            raise KeyboardInterrupt
+        self.stopping = None
+        if running is not None and running[1] == stopping:
+            raise Superseded(running[0].label)
+
+    def keep(self, result: RunResult) -> None:
+        """Hold only what the last run used; remember the run for ``warm_up``."""
+        keys = set(result.keys.values())
+        self.kept = {key: self.kept[key] for key in keys if key in self.kept}
+        self.last = result
+
+    def warm_up(self, cache: Cache) -> Iterator[str]:
+        """Steps (one per ``next``, each yielding the instance's label) that ready the last run's nodes for an
+        edit: each instance not yet run in this process, whose inputs are cached and whose run took at most
+        ``REHEARSE_S`` when it ran (``Cache.recorded_seconds``), gets its inputs loaded into ``kept`` and is
+        rehearsed. The instances whose edit re-runs the least come first (its own and its dependants' recorded
+        seconds): there a first load weighs most. The caller looks for a save between steps."""
+        if self.last is None:
+            return
+        executor = Executor(self.last.recipe, cache, session=self)
+        order = executor.plan({inst.node for inst in self.last.keys})
+        keys = executor.keys
+        executor.hits = {key for key in set(keys.values()) if cache.has(key)}
+        seconds = {inst: cache.recorded_seconds(keys[inst]) for inst in order}
+        planned = executor.planned
+        sources = {inst: {src for pairs in planned.sources(inst).values() for src, _ in pairs} for inst in order}
+        dependants: dict[Instance, set[Instance]] = {inst: set() for inst in order}
+        for inst in reversed(order):  # reverse topological: each instance's dependants are complete before its own
+            for src in sources[inst]:
+                dependants[src] |= {inst} | dependants[inst]
+
+        def edit_seconds(inst: Instance) -> float:
+            return sum(seconds[i] or REHEARSE_S for i in {inst} | dependants[inst])
+
+        ready = [
+            inst
+            for inst in order
+            if keys[inst] not in self.warm
+            and seconds[inst] is not None
+            and seconds[inst] <= REHEARSE_S
+            and all(keys[src] in self.kept or keys[src] in executor.hits for src in sources[inst])
+        ]
+        self.warm_stopped = False
+        for inst in sorted(ready, key=edit_seconds):
+            if keys[inst] in self.warm:  # an identical instance elsewhere in the recipe was rehearsed
+                continue
+            with self.lock:
+                if self.warm_stopped:
+                    return
+                self.running = (inst, keys[inst])
+            try:
+                executor.rehearse(inst)
+            except CacheCorruption:  # an input's entry went (the cache trimmed or cleared): the edit loads it
+                pass
+            except Exception:  # the node failed where its run had not: the edit will show it, at its place
+                pass
+            finally:
+                with self.lock:  # a stop signalled as the step ended is dropped by ``interrupted``
+                    self.running = None
+            self.warm.add(keys[inst])
+            yield inst.label
