@@ -94,6 +94,7 @@ def measure(name: str, variant: str, full: bool, checkers: Path, work: Path) -> 
         "recipe": name,
         "variant": variant,
         "contact_s": round(sum(r.seconds for r in result.records if r.node in steps), 2),
+        "contact_cpu_s": round(sum(r.cpu_seconds or 0.0 for r in result.records if r.node in steps), 2),
         "total_s": round(total, 1),
         "vol_err_p95": round(float(np.percentile(errors, 95)), 4),
         "vol_err_max": round(float(errors.max()), 4),

@@ -16,7 +16,7 @@ from .flatten_contacts import CONTACT_INPUTS, CONTACT_PARAMS, dented_outputs, wa
 
 @node(
     "deform_contacts",
-    version=2,  # 2: smooth maps of space (dent, bulge) instead of per-vertex moves
+    version=3,  # 2: smooth maps of space (dent, bulge) instead of per-vertex moves; 3: the bulge held by lens planes
     inputs=CONTACT_INPUTS,
     outputs={
         "aggregate": Out(Aggregate, "the same elements, each mesh dented where it pressed into another"),
