@@ -233,12 +233,8 @@ class Executor:
         capture = None
         if self.recording is not None:  # the node's logs and outputs go to a fragment, kept with its entry
             capture = self.recording.capture(self._capture_path(key))
-        ctx = Context(
-            node_id=inst.node,
-            node_type=spec.type_name,
-            seed=self.planned.seed(inst),
-            effects=frozenset(spec.effects & self.recipe.effects),
-            variant=inst.variant,
+        ctx = self._context(
+            inst,
             # the node's own logging under /<node>/log: never at an output's path, where the static output
             # (the final state) would shadow what the node logged on a timeline (a simulation per step)
             rerun=capture.logger(f"{inst.entity}/{LOG}") if capture else EntityLogger(None, inst.entity),
@@ -309,15 +305,19 @@ class Executor:
         (``nodegraph watch`` between saves). Its inputs must be in ``kept`` or the cache."""
         spec = self.recipe.nodes[inst.node].spec
         kwargs = self._arguments(inst)
-        ctx = Context(
+        spec.run(self._context(inst, rerun=EntityLogger(None, inst.entity)), **kwargs)
+
+    def _context(self, inst: Instance, **more: Any) -> Context:
+        """The ``Context`` a run of ``inst`` gets: its node, seed, effects and variant, and ``more``."""
+        spec = self.recipe.nodes[inst.node].spec
+        return Context(
             node_id=inst.node,
             node_type=spec.type_name,
             seed=self.planned.seed(inst),
             effects=frozenset(spec.effects & self.recipe.effects),
             variant=inst.variant,
-            rerun=EntityLogger(None, inst.entity),
+            **more,
         )
-        spec.run(ctx, **kwargs)
 
     def _capture_path(self, key: str) -> Path:
         """Where a node's capture is written: beside its cache entry, or a temporary file without a cache."""
