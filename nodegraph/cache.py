@@ -15,12 +15,13 @@ An entry's modification time is when it was last stored or loaded. Above the siz
 removes the least recently used entries, their Rerun fragments and the blobs no remaining entry names; the CLI
 calls it when a run ends, sparing what that run used.
 
-Every file is written to a temporary name in its final directory and renamed into place, blobs and
-the Rerun fragment before the entry that names them, so a crash at any moment leaves either no entry or
-a whole one; eviction removes an entry before its files, so a reader sees a whole entry or none, and an
-entry whose blob went missing is recomputed (a fragment is checked against the sha256 its entry records
-before it is replayed). A blob whose bytes no longer hash to its name is reported as corruption and
-recomputed. ``clear`` removes only what a cache holds, and only from a directory carrying the marker.
+Every file is written to a temporary name in its final directory and renamed into place, blobs and the Rerun
+fragment before the entry that names them, so a crash of the process at any moment leaves either no entry or a
+whole one (entries and blobs are not flushed to disk: after an OS crash or a power loss one may be torn, and then
+fails its check as it is read and is recomputed); eviction removes an entry before its files, so a reader sees a
+whole entry or none, and an entry whose blob went missing is recomputed (a fragment is checked against the sha256
+its entry records before it is replayed). A blob whose bytes no longer hash to its name is reported as corruption
+and recomputed. ``clear`` removes only what a cache holds, and only from a directory carrying the marker.
 """
 
 from __future__ import annotations

@@ -364,10 +364,14 @@ def _cmd_watch(args, registry) -> int:
 
         def look() -> None:
             while not done.wait(args.poll):
-                if settled(run_digest) is not None:
+                noticed = time.perf_counter()
+                now = settled(run_digest)
+                if now is not None:
+                    saved[now] = noticed  # the update's latency counts from here, not from the warm-up's end
                     session.stop_warm_up()
                     return
 
+        session.warm_stopped = False  # before the watcher starts: a save during the warm-up's planning counts
         watcher = threading.Thread(target=look, daemon=True)
         watcher.start()
         try:

@@ -15,7 +15,6 @@ import time
 from collections.abc import Iterator
 
 from .cache import Cache
-from .errors import CacheCorruption
 from .executor import Executor, RunResult
 from .plan import Instance
 
@@ -120,6 +119,9 @@ class WatchSession:
         if self.last is None:
             return
         executor = Executor(self.last.recipe, cache, session=self)
+        # a rehearsal only loads: an input whose entry went since (evicted, cleared, torn) is not computed
+        # here, where it could take minutes, print as a run and outlast a save; its step is skipped
+        executor.on_start, executor.on_ran = _refuse_to_compute, None
         order = executor.plan({inst.node for inst in self.last.keys})
         keys = executor.keys
         executor.hits = {key for key in set(keys.values()) if cache.has(key)}
@@ -132,7 +134,7 @@ class WatchSession:
                 dependants[src] |= {inst} | dependants[inst]
 
         def edit_seconds(inst: Instance) -> float:
-            return sum(seconds[i] or REHEARSE_S for i in {inst} | dependants[inst])
+            return sum(REHEARSE_S if seconds[i] is None else seconds[i] for i in {inst} | dependants[inst])
 
         ready = [
             inst
@@ -142,7 +144,6 @@ class WatchSession:
             and seconds[inst] <= REHEARSE_S
             and all(keys[src] in self.kept or keys[src] in executor.hits for src in sources[inst])
         ]
-        self.warm_stopped = False
         for inst in sorted(ready, key=edit_seconds):
             if keys[inst] in self.warm:  # an identical instance elsewhere in the recipe was rehearsed
                 continue
@@ -152,12 +153,18 @@ class WatchSession:
                 self.running = (inst, keys[inst])
             try:
                 executor.rehearse(inst)
-            except CacheCorruption:  # an input's entry went (the cache trimmed or cleared): the edit loads it
-                pass
-            except Exception:  # the node failed where its run had not: the edit will show it, at its place
-                pass
+            except Exception:  # an input not in hand (``_refuse_to_compute``), or the node failed where its run
+                pass  # had not: the edit computes it, and shows a failure at its place
             finally:
                 with self.lock:  # a stop signalled as the step ended is dropped by ``interrupted``
                     self.running = None
             self.warm.add(keys[inst])
             yield inst.label
+
+
+class _NotInHand(Exception):
+    """A rehearsal's input is neither held nor cached: computing it is the next run's job."""
+
+
+def _refuse_to_compute(inst: Instance, key: str) -> None:
+    raise _NotInHand(inst.label)

@@ -343,7 +343,7 @@ def _bulge_limit(position, shell, i, pairs, lenses, count, maps, fields, walls, 
       rounds together within a third of the room (less the clearance) the vertex had before them, (room + given −
       clearance) / 3 − given, ``given`` the vertex's earlier bulges: two sides never meet;
     - across a lens (within reach of the neighbour's rest surface) and towards a wall: ⅔ of the distance to the
-      lens' plane or the wall (less the clearance), which neither side crosses however often it bulges, so that a
+      lens' plane, or to the wall less the clearance, which neither side crosses however often it bulges, so that a
       few rounds give the volume back. A plane's distance is linear: it bends the bulge nowhere, where a share of
       the distance to the neighbour's surface copies that convex surface into the skin as a hollow (docs/contact.md).
     """

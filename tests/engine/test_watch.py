@@ -219,3 +219,36 @@ def test_the_first_edit_pays_no_first_load_and_finds_the_inputs_in_memory(tmp_pa
         assert proc.wait(timeout=60) == 0
     finally:
         proc.kill()
+
+
+def test_a_rehearsal_whose_input_is_gone_from_the_cache_skips_its_step_instead_of_computing_it(
+    tmp_path, registry, cache, monkeypatch
+):
+    """The warm-up only loads: an input whose cache entry went after the warm-up planned (evicted, cleared, torn)
+    is not computed there, where it could take minutes, print as a run and outlast a save; its step is skipped."""
+    from nodegraph.cache import Cache
+    from nodegraph.executor import run_recipe
+    from nodegraph.recipe import parse_recipe
+    from nodegraph.watch import WatchSession
+
+    trace = tmp_path / "trace"
+    middle = f"""\
+  scaled:
+    type: toy_first_load
+    inputs: {{spheres: pts.spheres}}
+    params: {{scale: 2.5, trace: {trace}}}
+  shifted:
+    type: toy_shift
+    inputs: {{spheres: scaled.spheres}}
+    params: {{dx: 1.5}}
+"""
+    recipe = parse_recipe(SLOW.format(output="shifted.spheres", middle=middle), registry, file="toy.yaml")
+    result = run_recipe(recipe, cache=cache)
+    assert trace.read_text().split().count("call") == 1
+    session = WatchSession()
+    session.keep(result)
+    scaled = next(inst for inst in result.keys if inst.node == "scaled")
+    cache.discard(result.keys[scaled])  # gone after the warm-up found it: it still counts as cached
+    monkeypatch.setattr(Cache, "has", lambda self, key: True)
+    assert "shifted" in list(session.warm_up(cache))  # its turn came ('scaled', with no entry, has no turn)
+    assert trace.read_text().split().count("call") == 1, trace.read_text()  # 'scaled' was not computed for it
