@@ -337,7 +337,7 @@ def _wall_found(position, shell, walls, clearance, found):
 
 
 @njit(cache=True)
-def _bulge_limit(position, shell, i, pairs, lenses, count, maps, fields, walls, given, settings, found, limit):
+def _bulge_limit(position, shell, i, around, lenses, count, given, settings, found, limit):
     """Per shell vertex the most it may bulge this round (``bulge`` at most, 0 off the shell):
     - towards a neighbour's rest surface, which that neighbour bulges towards too: what keeps the bulges of all
       rounds together within a third of the room (less the clearance) the vertex had before them, (room + given −
@@ -347,6 +347,7 @@ def _bulge_limit(position, shell, i, pairs, lenses, count, maps, fields, walls, 
       few rounds give the volume back. A plane's distance is linear: it bends the bulge nowhere, where a share of
       the distance to the neighbour's surface copies that convex surface into the skin as a hollow (docs/contact.md).
     """
+    pairs, maps, fields, walls = around
     clearance = settings.clearance
     reach = settings.bulge / ROOM_SHARE + clearance
     for k in range(position.shape[0]):
@@ -617,9 +618,7 @@ def _deform_one(i, vertices, around, shells, rings, settings, cap_of, edges, pus
         if volume >= figures.rest[i] * (1.0 - VOLUME_TOLERANCE):
             continue
         _outward(position, maps.lin_inv[i], maps.t[i], shell, outward)
-        _bulge_limit(
-            position, shell, i, pairs, lenses, count, maps, fields, around.walls, given, settings, found, limit
-        )
+        _bulge_limit(position, shell, i, around, lenses, count, given, settings, found, limit)
         before = position.copy()
         figures.bulge[i] = bulge(position, shell, faces, outward, limit, figures.rest[i], settings.bulge)
         for k in range(nv):
