@@ -15,8 +15,9 @@ from .report import Reporter
 class CompileWatch:
     """Listens to numba's ``numba:compile`` events while one node runs.
 
-    A line goes out at the first compilation and, at the end, the seconds spent compiling (outermost
-    compilations only: a kernel compiles the helpers it calls inside its own event).
+    A line goes out at the first compilation, one naming each kernel as its compilation starts (one can take
+    half a minute), and at the end the seconds spent compiling (outermost compilations only: a kernel compiles
+    the helpers it calls inside its own event).
     """
 
     def __init__(self, reporter: Reporter, node: str):
@@ -44,7 +45,7 @@ class CompileWatch:
 
         class _Listener(event.Listener):
             def on_start(self, ev) -> None:
-                watch.compile_started()
+                watch.compile_started(_kernel_name(ev.data.get("dispatcher")))
 
             def on_end(self, ev) -> None:
                 watch.compile_ended()
@@ -52,14 +53,16 @@ class CompileWatch:
         self._listener = _Listener()
         event.register("numba:compile", self._listener)
 
-    def compile_started(self) -> None:
+    def compile_started(self, kernel: str = "a kernel") -> None:
         if self._depth == 0:
             if self.kernels == 0:
                 self.reporter.info(
                     f"compiling kernels for {self.node} (first run after a code change; cached afterwards)…"
                 )
-            self._started = time.perf_counter()
             self.kernels += 1
+            elapsed = f", {self.seconds:.0f} s so far" if self.kernels > 1 else ""
+            self.reporter.info(f"  {self.node}: compiling {kernel} (kernel {self.kernels}{elapsed})…")
+            self._started = time.perf_counter()
         self._depth += 1
 
     def compile_ended(self) -> None:
@@ -77,6 +80,12 @@ class CompileWatch:
         event.unregister("numba:compile", self._listener)
         if self.kernels:
             self.reporter.info(f"compiled {self.kernels} kernel(s) for {self.node} in {self.seconds:.1f} s")
+
+
+def _kernel_name(dispatcher) -> str:
+    """``module.function`` of the kernel a compile event is for."""
+    func = getattr(dispatcher, "py_func", None)
+    return f"{func.__module__}.{func.__qualname__}" if func is not None else "a kernel"
 
 
 class _AfterImport(importlib.abc.MetaPathFinder, importlib.abc.Loader):

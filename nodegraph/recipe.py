@@ -14,7 +14,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
@@ -24,8 +24,10 @@ from .errors import Issue, Location, RecipeError
 from .node import NodeSpec
 from .params import ParamValueError, canonical
 from .registry import Registry
-from .sweep_decl import SweepDecl, check_sweeps
 from .yaml_source import SourceMap, load_yaml, load_yaml_file
+
+if TYPE_CHECKING:
+    from .sweep_decl import SweepDecl
 
 NODE_ID = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 RECIPE_NAME = re.compile(r"^(?!.*\.\.)[A-Za-z0-9_-][A-Za-z0-9_.-]*$")
@@ -345,7 +347,11 @@ class _Validator:
             self._check_recipe_rules(entries)
         self._check_draft(entries)
         raw_sweeps = self.raw.get("sweeps")
-        sweeps = check_sweeps(self, raw_sweeps, entries, raw_nodes) if isinstance(raw_sweeps, dict) else {}
+        sweeps = {}
+        if isinstance(raw_sweeps, dict):  # its models are built on import: only for a recipe that declares sweeps
+            from .sweep_decl import check_sweeps
+
+            sweeps = check_sweeps(self, raw_sweeps, entries, raw_nodes)
         if model is not None and model.name is not None and not RECIPE_NAME.match(model.name):
             self.issue(
                 ("name",),

@@ -8,10 +8,13 @@ import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-from rich.table import Table
+
+if TYPE_CHECKING:  # drawn only on a terminal, or printed without -q: loaded then (a cached re-run needs neither)
+    from rich.progress import Progress
+    from rich.table import Table
 
 _PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
@@ -107,6 +110,15 @@ class Reporter:
             return
         owner = self._progress is None
         if owner:
+            from rich.progress import (
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeElapsedColumn,
+                TimeRemainingColumn,
+            )
+
             self._progress = Progress(
                 TextColumn("{task.description}"),
                 BarColumn(),
@@ -130,6 +142,8 @@ class Reporter:
 
     def summary(self, per_instance: bool = False) -> Table:
         """One row per node (variant families folded into one row, times summed) or per instance."""
+        from rich.table import Table
+
         table = Table(title="nodegraph run")
         logged = any(r.log_seconds is not None for r in self.records)
         for column, justify in (

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from nodegraph import code_digest
 from nodegraph import registry as registry_module
 from nodegraph.cache import Cache
 from nodegraph.code_digest import import_statements, project_modules
@@ -188,3 +189,62 @@ def test_an_installed_plugin_package_reruns_after_its_helper_is_edited(tmp_path)
     assert entries_after_a_run() == 1  # cached: the node does not import it
     (site / PACKAGE / "stove.py").write_text("POWER = 30.0\n")
     assert entries_after_a_run() == 2  # ran again: a module its helper imports changed
+
+
+@pytest.fixture
+def memory(tmp_path, monkeypatch):
+    """Digests remembered in a file of the test's own; files count as settled at once (``RACY_S`` 0)."""
+    monkeypatch.setenv(code_digest.MEMORY_ENV_VAR, str(tmp_path / "digests.json"))
+    monkeypatch.setattr(code_digest, "RACY_S", 0.0)
+    monkeypatch.setattr(code_digest, "_MEMORY", None)
+
+    def next_process():
+        """As a new process meets it: nothing in memory but the file, and no source may be read."""
+        code_digest._MEMORY = None
+        code_digest._PARSED.clear()
+
+    return next_process
+
+
+def digest_reading(monkeypatch) -> tuple[str, int]:
+    """The boil node's digest and how many source files computing it read."""
+    reads = []
+    parse = code_digest._parse
+    monkeypatch.setattr(code_digest, "_parse", lambda path: reads.append(path) or parse(path))
+    found = code_digest._digest(f"{PACKAGE}.boil", {PACKAGE})
+    monkeypatch.setattr(code_digest, "_parse", parse)
+    return found, len(set(reads))
+
+
+def test_a_new_process_reads_no_source_of_unchanged_code_and_rereads_changed_code(kitchen, memory, monkeypatch):
+    package, load = kitchen
+    load()
+    first, reads = digest_reading(monkeypatch)
+    assert reads == 3  # boil, heat, stove
+    memory()
+    assert digest_reading(monkeypatch) == (first, 0)
+    (package / "stove.py").write_text("POWER = 30.0\n")  # same size as before: the stamp's times tell
+    memory()
+    edited, reads = digest_reading(monkeypatch)
+    assert edited != first and reads == 3
+
+
+def test_a_module_added_beside_the_code_is_read_again(kitchen, memory, monkeypatch):
+    """``from . import heat`` may name a new module ``heat.py`` or a package's attribute: a folder that gains a
+    file is read again."""
+    package, load = kitchen
+    load()
+    first, _ = digest_reading(monkeypatch)
+    (package / "spices.py").write_text("PEPPER = 1\n")
+    memory()
+    assert digest_reading(monkeypatch) == (first, 3)
+
+
+def test_a_file_written_just_now_is_not_remembered(kitchen, memory, monkeypatch):
+    """Two writes within one timestamp tick look alike: a file younger than ``RACY_S`` is read each time."""
+    _, load = kitchen
+    load()
+    monkeypatch.setattr(code_digest, "RACY_S", 60.0)
+    digest_reading(monkeypatch)
+    memory()
+    assert digest_reading(monkeypatch)[1] == 3

@@ -66,5 +66,6 @@ def test_compiling_is_announced_once_then_cached(tmp_path, lazy):
     (tmp_path / "recipe.yaml").write_text(RECIPE)
     first = _run(tmp_path)
     assert "compiling kernels for doubling (first run after a code change; cached afterwards)" in first
+    assert "doubling: compiling toy_kernels.double (kernel 1)…" in first  # which kernel, as it starts
     assert "compiled 1 kernel(s) for doubling in " in first
     assert "compil" not in _run(tmp_path)
