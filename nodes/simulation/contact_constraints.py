@@ -36,7 +36,7 @@ from .friction import RELEASE, friction_pair
 
 # the sweep's arguments in bundles (a kernel takes at most 12): the neighbour lists' rows, the grid
 # that colours them, the per-entry arrays, and the scalars of one sweep
-PairRows = namedtuple("PairRows", "nbr_start nbr half")
+PairRows = namedtuple("PairRows", "nbr_start nbr half order")  # row p lists the partners of order[p]
 Colouring = namedtuple("Colouring", "cell_start order dims")
 PairEntries = namedtuple("PairEntries", "allowance anchor load")  # per list entry: tolerated overlap, friction anchor,
 # normal correction so far this substep (anchored friction's load)
@@ -109,7 +109,7 @@ def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
 
 
 @njit(cache=True, inline="always")
-def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0, p1):
+def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
     rows, ``half`` false: each pair from its lower index) but pairs of two asleep particles
     (``awake``, ``integrate.wake_flags``: at rest, nothing to do; with one asleep, ``sleeper_share``):
@@ -124,12 +124,12 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0
     pre-stabilisation removes old overlap: pair friction held nothing and a bar resting on another
     crept at 0.13 mm/s for ever (issue 11). A pair whose gap opens past ``friction.RELEASE`` of the
     radii sum lets go of its anchor."""
-    nbr_start, nbr, half = rows
+    nbr_start, nbr, half, order = rows
     allowance, anchor, load = entries
     wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion = rule
     for p in range(p0, p1):
         i = order[p]
-        for a in range(nbr_start[i], nbr_start[i + 1]):
+        for a in range(nbr_start[p], nbr_start[p + 1]):
             j = nbr[a]
             if not half and j < i:
                 continue  # each pair once, from its lower index
@@ -203,7 +203,7 @@ def contact_sweep(x, x_prev, awake, pushed, w, r, rows, colouring, entries, rule
     The result does not depend on ``chunks``. Sleeping: pairs of two asleep particles are skipped, an
     asleep one is held still and marked ``pushed`` by a fast awake partner (``sleeper_share``;
     ``rule.wake_step`` = inf marks none)."""
-    cell_start, order, dims = colouring
+    cell_start, _, dims = colouring
     slab = dims[1] * dims[2]
     bounds = np.empty(chunks + 1, np.int64)
     for colour in range(3):
@@ -213,12 +213,12 @@ def contact_sweep(x, x_prev, awake, pushed, w, r, rows, colouring, entries, rule
                 ix = colour + 3 * k
                 p0 = cell_start[ix * slab]
                 p1 = cell_start[(ix + 1) * slab]
-                _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0, p1)
+                _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1)
 
 
 @njit(cache=True, inline="always")
-def _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, i):
-    for a in range(nbr_start[i], nbr_start[i + 1]):
+def _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, p, i):
+    for a in range(nbr_start[p], nbr_start[p + 1]):
         j = nbr[a]
         if (not half and j < i) or not (awake[i] or awake[j]):
             continue  # the sweep reads each pair's entry from its lower index only, and skips asleep pairs
@@ -227,22 +227,23 @@ def _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, i):
 
 
 @njit(cache=True, parallel=True)
-def overlap_allowance(x, awake, r, nbr_start, nbr, half, decay, out):
+def overlap_allowance(x, awake, r, nbr_start, nbr, half, order, decay, out):
     """Per list entry, the overlap r_i + r_j − d that remains less decay·min(r_i, r_j) (≥ 0):
     tolerated until the next pre-stabilisation. Entries the sweep skips (j < i in full rows, ``half``
     false; pairs of two asleep particles, ``awake``) are not written."""
-    for i in prange(x.shape[0]):
-        _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, i)
+    for p in prange(x.shape[0]):
+        _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, p, order[p])
 
 
 @njit(cache=True, parallel=True)
-def max_penetration_ratio(x, r, nbr_start, nbr):
+def max_penetration_ratio(x, r, nbr_start, nbr, order):
     """max over contacts of (r_i + r_j − d) / min(r_i, r_j): the residual overlap, in radii."""
     n = x.shape[0]
     worst = np.zeros(n)
-    for i in prange(n):
+    for p in prange(n):
+        i = order[p]
         m = 0.0
-        for a in range(nbr_start[i], nbr_start[i + 1]):
+        for a in range(nbr_start[p], nbr_start[p + 1]):
             j = nbr[a]
             _, _, _, d = pair_normal(x, i, j)
             pen = (r[i] + r[j] - d) / min(r[i], r[j])

@@ -122,6 +122,11 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
     """CSR lists of particles j of another element with |x_i − x_j| ≤ r_i + r_j + reach, and the
     grid they were found in: (nbr_start, nbr, cell_start, order, dims).
 
+    Rows are stored in the grid's sorted order: row p, nbr[nbr_start[p]:nbr_start[p + 1]], lists the
+    partners of particle order[p]. The Gauss–Seidel sweep walks the particles in that order, so it
+    reads the per-entry arrays (partners, allowance, anchors, load) front to back; stored by particle id,
+    each row was a jump in memory, and at 50k particles the sweep took 1.8× as long on a 1 MiB-L2 core.
+
     ``cell_size`` must be ≥ 2·max(r) + reach. One parallel scan into fixed slots, then a
     compacting copy (a count pass and a fill pass scanned every cell twice). Rows of
     particles i ≥ ``n_active`` (static obstacles, which come last) stay empty: every pair with a
@@ -151,19 +156,16 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
     slots = np.empty(n * ROW_CAPACITY, np.int64)
     for p in prange(n):
         if order[p] < n_active:
-            counts[order[p] + 1] = _visit(
-                particles, grid, p, reach, half, n_active, slots, p * ROW_CAPACITY, ROW_CAPACITY
-            )
-    for i in range(n):
-        counts[i + 1] += counts[i]
+            counts[p + 1] = _visit(particles, grid, p, reach, half, n_active, slots, p * ROW_CAPACITY, ROW_CAPACITY)
+    for p in range(n):
+        counts[p + 1] += counts[p]
     nbr = np.empty(counts[n], np.int64)
     for p in prange(n):
-        i = order[p]
-        if i < n_active:
-            c = counts[i + 1] - counts[i]
+        if order[p] < n_active:
+            c = counts[p + 1] - counts[p]
             if c <= ROW_CAPACITY:
                 for k in range(c):
-                    nbr[counts[i] + k] = slots[p * ROW_CAPACITY + k]
+                    nbr[counts[p] + k] = slots[p * ROW_CAPACITY + k]
             else:
-                _visit(particles, grid, p, reach, half, n_active, nbr, counts[i], c)
+                _visit(particles, grid, p, reach, half, n_active, nbr, counts[p], c)
     return counts, nbr, start, order, dims
