@@ -43,7 +43,7 @@ def pile_measures(out):
     from nodes.simulation.spatial_hash import neighbour_lists
 
     p = out["particles"]
-    start, nbr, _, order, _ = neighbour_lists(
+    start, nbr, _, _, order, _ = neighbour_lists(
         p.positions, p.radii, p.element.astype(np.int64), 0.05, 2 * p.radii.max() + 0.05, len(p.positions), False
     )
     pairs = {  # row k lists the partners of particle order[k]

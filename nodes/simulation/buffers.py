@@ -45,6 +45,7 @@ class NeighbourLists:
 
     nbr_start: np.ndarray  # (n + 1,) by sorted position
     nbr: np.ndarray  # particle ids
+    at: np.ndarray  # the same partners' rows (sorted positions)
     half: bool
     cell_start: np.ndarray
     order: np.ndarray  # (n,) the particle id of each row
@@ -53,7 +54,7 @@ class NeighbourLists:
     @classmethod
     def empty(cls, n: int, half: bool) -> NeighbourLists:
         none = np.zeros(0, np.int64)
-        return cls(np.zeros(n + 1, np.int64), none, half, none, np.arange(n, dtype=np.int64), none)
+        return cls(np.zeros(n + 1, np.int64), none, none, half, none, np.arange(n, dtype=np.int64), none)
 
     def csr(self):
         """(nbr_start, nbr, order): the rows and whose they are."""
@@ -62,6 +63,10 @@ class NeighbourLists:
     def rows(self):
         """(nbr_start, nbr, half, order): what the pair kernels read of the lists."""
         return self.nbr_start, self.nbr, self.half, self.order
+
+    def sweep_rows(self):
+        """(nbr_start, nbr, half, order, at): the rows as the sweep reads them (``contact_constraints.PairRows``)."""
+        return self.nbr_start, self.nbr, self.half, self.order, self.at
 
     def grid(self):
         """(cell_start, order, dims): the colouring of ``contact_constraints.contact_sweep``."""

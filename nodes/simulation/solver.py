@@ -417,7 +417,7 @@ class XpbdSolver:
         pairs, m = self.pairs, self.model
         if pairs is None or not pairs.stale():
             return False
-        nbr_start, nbr, *grid = self.dispatch(
+        nbr_start, nbr, at, *grid = self.dispatch(
             "neighbours",
             spatial_hash.neighbour_lists,
             st.x,
@@ -429,7 +429,7 @@ class XpbdSolver:
             pairs.lists.half,
         )
         old = pairs.lists
-        pairs.lists = NeighbourLists(nbr_start, nbr, old.half, *grid)
+        pairs.lists = NeighbourLists(nbr_start, nbr, at, old.half, *grid)
         if "friction" in self.settings.effects and self.settings.anchored_friction:
             anchor = np.empty((len(nbr), 3))
             self.dispatch("friction", friction.carry_anchors, old.csr(), pairs.anchor, pairs.lists.csr(), anchor)
@@ -493,7 +493,7 @@ class XpbdSolver:
             st.pushed,
             m.w,
             m.r,
-            cc.PairRows(*lists.rows()),
+            cc.PairRows(*lists.sweep_rows()),
             cc.Colouring(*lists.grid()),
             cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load),
             cc.ContactRule(
