@@ -43,13 +43,13 @@ def pile_measures(out):
     from nodes.simulation.spatial_hash import neighbour_lists
 
     p = out["particles"]
-    start, nbr, *_ = neighbour_lists(
+    start, nbr, _, _, order, _ = neighbour_lists(
         p.positions, p.radii, p.element.astype(np.int64), 0.05, 2 * p.radii.max() + 0.05, len(p.positions), False
     )
-    pairs = {
+    pairs = {  # row k lists the partners of particle order[k]
         (int(p.element[i]), int(p.element[j]))
-        for i in range(len(p.positions))
-        for j in nbr[start[i] : start[i + 1]]
+        for k, i in enumerate(order)
+        for j in nbr[start[k] : start[k + 1]]
         if np.linalg.norm(p.positions[i] - p.positions[j]) - p.radii[i] - p.radii[j] <= 0.05
     }
     contacts = len(pairs) / (p.element.max() + 1)  # each pair counted from both sides = contacts per grain

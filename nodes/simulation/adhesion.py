@@ -19,20 +19,21 @@ from .contact_constraints import pair_normal
 
 
 @njit(cache=True, parallel=True)
-def adhesion_project(x, awake, w, r, nbr_start, nbr, capture, alpha_tilde, lift, out):
+def adhesion_project(x, awake, w, r, nbr_start, nbr, order, capture, alpha_tilde, lift, out):
     """One Jacobi sweep pulling near-touching pairs together; ``capture`` in length units,
     ``alpha_tilde`` = compliance / h² (larger is weaker), ``lift`` the contacts' mass scaling.
     Asleep particles (``awake``, ``integrate.wake_flags``) are not moved (an awake partner still
     takes its own share of their bond). Writes to ``out`` (no aliasing)."""
     n = x.shape[0]
-    for i in prange(n):
+    for p in prange(n):
+        i = order[p]  # row p lists the partners of order[p] (``spatial_hash.neighbour_lists``)
         ax = 0.0
         ay = 0.0
         az = 0.0
         count = 0
         wi = w[i]
-        stop = nbr_start[i + 1] if awake[i] else nbr_start[i]  # an asleep particle stays put
-        for a in range(nbr_start[i], stop):
+        stop = nbr_start[p + 1] if awake[i] else nbr_start[p]  # an asleep particle stays put
+        for a in range(nbr_start[p], stop):
             j = nbr[a]
             if wi <= 0.0 or w[j] <= 0.0:
                 continue  # no bonds with static obstacles (module docstring)

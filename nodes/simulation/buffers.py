@@ -40,26 +40,33 @@ class ClusterBuffers:
 class NeighbourLists:
     """CSR lists of the particles of other elements within reach, and the grid they were found in
     (``spatial_hash.neighbour_lists``), which is also the contacts' colouring. ``half``: each pair
-    listed once (the Gauss–Seidel contacts); full rows for the Jacobi adhesion."""
+    listed once (the Gauss–Seidel contacts); full rows for the Jacobi adhesion. Row p lists the
+    partners of particle ``order[p]`` (rows in the grid's sorted order)."""
 
-    nbr_start: np.ndarray  # (n + 1,)
-    nbr: np.ndarray
+    nbr_start: np.ndarray  # (n + 1,) by sorted position
+    nbr: np.ndarray  # particle ids
+    at: np.ndarray  # the same partners' rows (sorted positions)
     half: bool
     cell_start: np.ndarray
-    order: np.ndarray
+    order: np.ndarray  # (n,) the particle id of each row
     dims: np.ndarray
 
     @classmethod
     def empty(cls, n: int, half: bool) -> NeighbourLists:
         none = np.zeros(0, np.int64)
-        return cls(np.zeros(n + 1, np.int64), none, half, none, none, none)
+        return cls(np.zeros(n + 1, np.int64), none, none, half, none, np.arange(n, dtype=np.int64), none)
 
     def csr(self):
-        return self.nbr_start, self.nbr
+        """(nbr_start, nbr, order): the rows and whose they are."""
+        return self.nbr_start, self.nbr, self.order
 
     def rows(self):
-        """(nbr_start, nbr, half): what the pair kernels read of the lists."""
-        return self.nbr_start, self.nbr, self.half
+        """(nbr_start, nbr, half, order): what the pair kernels read of the lists."""
+        return self.nbr_start, self.nbr, self.half, self.order
+
+    def sweep_rows(self):
+        """(nbr_start, nbr, half, order, at): the rows as the sweep reads them (``contact_constraints.PairRows``)."""
+        return self.nbr_start, self.nbr, self.half, self.order, self.at
 
     def grid(self):
         """(cell_start, order, dims): the colouring of ``contact_constraints.contact_sweep``."""

@@ -36,7 +36,9 @@ from .friction import RELEASE, friction_pair
 
 # the sweep's arguments in bundles (a kernel takes at most 12): the neighbour lists' rows, the grid
 # that colours them, the per-entry arrays, and the scalars of one sweep
-PairRows = namedtuple("PairRows", "nbr_start nbr half")
+PairRows = namedtuple(
+    "PairRows", "nbr_start nbr half order at"
+)  # row p lists the partners (ids nbr, rows at) of order[p]
 Colouring = namedtuple("Colouring", "cell_start order dims")
 PairEntries = namedtuple("PairEntries", "allowance anchor load")  # per list entry: tolerated overlap, friction anchor,
 # normal correction so far this substep (anchored friction's load)
@@ -47,9 +49,15 @@ ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchor
 def pair_normal(x, i, j):
     """Unit vector from j to i and the distance; coincident particles get a fixed pseudo-random
     direction, antisymmetric in (i, j), so deep overlaps separate deterministically."""
-    nx = x[i, 0] - x[j, 0]
-    ny = x[i, 1] - x[j, 1]
-    nz = x[i, 2] - x[j, 2]
+    return pair_normal_at(x, i, j, i, j)
+
+
+@njit(cache=True, inline="always")
+def pair_normal_at(x, p, q, i, j):
+    """``pair_normal`` of particles i and j held in rows p and q of ``x`` (the sweep's sorted copies)."""
+    nx = x[p, 0] - x[q, 0]
+    ny = x[p, 1] - x[q, 1]
+    nz = x[p, 2] - x[q, 2]
     d = np.sqrt(nx * nx + ny * ny + nz * nz)
     if d > 1e-9:
         return nx / d, ny / d, nz / d, d
@@ -109,9 +117,9 @@ def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
 
 
 @njit(cache=True, inline="always")
-def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0, p1):
+def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
-    rows, ``half`` false: each pair from its lower index) but pairs of two asleep particles
+    rows, ``half`` false: each pair from its lower id) but pairs of two asleep particles
     (``awake``, ``integrate.wake_flags``: at rest, nothing to do; with one asleep, ``sleeper_share``):
     friction when μs > 0 (``friction.friction_pair``; normal load: the pair's overlap as the sweep
     meets it, the d of Macklin et al. 2014 §6.1, plus with anchors the normal correction the pair has
@@ -123,45 +131,47 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0
     correction would leave (the tolerated ``allowance``), ≈ 0 at a resting contact once
     pre-stabilisation removes old overlap: pair friction held nothing and a bar resting on another
     crept at 0.13 mm/s for ever (issue 11). A pair whose gap opens past ``friction.RELEASE`` of the
-    radii sum lets go of its anchor."""
-    nbr_start, nbr, half = rows
+    radii sum lets go of its anchor. The particle arrays are the sweep's sorted copies
+    (``_sorted_copies``: row p holds particle order[p], a partner's row is ``rows.at``)."""
+    nbr_start, nbr, half, order, at = rows
     allowance, anchor, load = entries
     wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion = rule
     for p in range(p0, p1):
         i = order[p]
-        for a in range(nbr_start[i], nbr_start[i + 1]):
+        for a in range(nbr_start[p], nbr_start[p + 1]):
             j = nbr[a]
             if not half and j < i:
                 continue  # each pair once, from its lower index
-            if not (awake[i] or awake[j]):
+            q = at[a]
+            if not (awake[p] or awake[q]):
                 continue
-            nx, ny, nz, d = pair_normal(x, i, j)
-            depth = r[i] + r[j] - d
+            nx, ny, nz, d = pair_normal_at(x, p, q, i, j)
+            depth = r[p] + r[q] - d
             if depth <= 0.0:
-                if anchored and mu_s > 0.0 and depth < -RELEASE * (r[i] + r[j]):
+                if anchored and mu_s > 0.0 and depth < -RELEASE * (r[p] + r[q]):
                     anchor[a, 0] = np.nan
                 continue
-            if awake[i] and awake[j]:
-                share = lifted_share(w, x, i, j, nz, lift, upright)
+            if awake[p] and awake[q]:
+                share = lifted_share(w, x, p, q, nz, lift, upright)
             else:
-                share = sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step)
+                share = sleeper_share(x, x_prev, w, awake, pushed, p, q, wake_step)
             if share < 0.0:
                 continue
             pen = depth - allowance[a] if normal else 0.0
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
-                held = load[a] + max(pen, 0.0) + cohesion * (w[i] + w[j]) if anchored else depth
-                friction_pair(x, x_prev, anchor, a, i, j, (nx, ny, nz), held, share, (mu_s, mu_k, anchored))
+                held = load[a] + max(pen, 0.0) + cohesion * (w[p] + w[q]) if anchored else depth
+                friction_pair(x, x_prev, anchor, a, p, q, (nx, ny, nz), held, share, (mu_s, mu_k, anchored))
             if pen > 0.0:
                 if anchored and mu_s > 0.0:
                     load[a] += pen
                 si = pen * share
                 sj = pen - si
-                x[i, 0] += si * nx
-                x[i, 1] += si * ny
-                x[i, 2] += si * nz
-                x[j, 0] -= sj * nx
-                x[j, 1] -= sj * ny
-                x[j, 2] -= sj * nz
+                x[p, 0] += si * nx
+                x[p, 1] += si * ny
+                x[p, 2] += si * nz
+                x[q, 0] -= sj * nx
+                x[q, 1] -= sj * ny
+                x[q, 2] -= sj * nz
 
 
 @njit(cache=True)
@@ -204,6 +214,7 @@ def contact_sweep(x, x_prev, awake, pushed, w, r, rows, colouring, entries, rule
     asleep one is held still and marked ``pushed`` by a fast awake partner (``sleeper_share``;
     ``rule.wake_step`` = inf marks none)."""
     cell_start, order, dims = colouring
+    xs, xps, aw, pu, ws, rs = _sorted_copies(x, x_prev, awake, pushed, w, r, order)
     slab = dims[1] * dims[2]
     bounds = np.empty(chunks + 1, np.int64)
     for colour in range(3):
@@ -213,12 +224,42 @@ def contact_sweep(x, x_prev, awake, pushed, w, r, rows, colouring, entries, rule
                 ix = colour + 3 * k
                 p0 = cell_start[ix * slab]
                 p1 = cell_start[(ix + 1) * slab]
-                _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, order, p0, p1)
+                _project_slab(xs, xps, aw, pu, ws, rs, rows, entries, rule, p0, p1)
+    for p in prange(order.shape[0]):
+        i = order[p]
+        x[i, 0] = xs[p, 0]
+        x[i, 1] = xs[p, 1]
+        x[i, 2] = xs[p, 2]
+        pushed[i] = pu[p]
+
+
+@njit(cache=True, parallel=True)
+def _sorted_copies(x, x_prev, awake, pushed, w, r, order):
+    """The particles' arrays in the grid's sorted order (row p = particle order[p]): the sweep walks
+    that order and a pair's partners lie in nearby cells, so it reads neighbouring memory instead of
+    jumping by particle id (at 50k particles on a 1 MiB-L2 core the sweep took 1.9× as long)."""
+    n = order.shape[0]
+    xs = np.empty((n, 3))
+    xps = np.empty((n, 3))
+    aw = np.empty(n, np.bool_)
+    pu = np.empty(n, np.bool_)
+    ws = np.empty(n)
+    rs = np.empty(n)
+    for p in prange(n):
+        i = order[p]
+        for k in range(3):
+            xs[p, k] = x[i, k]
+            xps[p, k] = x_prev[i, k]
+        aw[p] = awake[i]
+        pu[p] = pushed[i]
+        ws[p] = w[i]
+        rs[p] = r[i]
+    return xs, xps, aw, pu, ws, rs
 
 
 @njit(cache=True, inline="always")
-def _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, i):
-    for a in range(nbr_start[i], nbr_start[i + 1]):
+def _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, p, i):
+    for a in range(nbr_start[p], nbr_start[p + 1]):
         j = nbr[a]
         if (not half and j < i) or not (awake[i] or awake[j]):
             continue  # the sweep reads each pair's entry from its lower index only, and skips asleep pairs
@@ -227,22 +268,23 @@ def _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, i):
 
 
 @njit(cache=True, parallel=True)
-def overlap_allowance(x, awake, r, nbr_start, nbr, half, decay, out):
+def overlap_allowance(x, awake, r, nbr_start, nbr, half, order, decay, out):
     """Per list entry, the overlap r_i + r_j − d that remains less decay·min(r_i, r_j) (≥ 0):
     tolerated until the next pre-stabilisation. Entries the sweep skips (j < i in full rows, ``half``
     false; pairs of two asleep particles, ``awake``) are not written."""
-    for i in prange(x.shape[0]):
-        _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, i)
+    for p in prange(x.shape[0]):
+        _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, p, order[p])
 
 
 @njit(cache=True, parallel=True)
-def max_penetration_ratio(x, r, nbr_start, nbr):
+def max_penetration_ratio(x, r, nbr_start, nbr, order):
     """max over contacts of (r_i + r_j − d) / min(r_i, r_j): the residual overlap, in radii."""
     n = x.shape[0]
     worst = np.zeros(n)
-    for i in prange(n):
+    for p in prange(n):
+        i = order[p]
         m = 0.0
-        for a in range(nbr_start[i], nbr_start[i + 1]):
+        for a in range(nbr_start[p], nbr_start[p + 1]):
             j = nbr[a]
             _, _, _, d = pair_normal(x, i, j)
             pen = (r[i] + r[j] - d) / min(r[i], r[j])

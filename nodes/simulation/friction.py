@@ -112,17 +112,26 @@ def friction_wall(x, x_prev, anchor, i, nx, ny, nz, depth, rule):
 
 
 @njit(cache=True, parallel=True)
-def carry_anchors(old_start, old_nbr, old_anchor, new_start, new_nbr, new_anchor):
+def carry_anchors(old, old_anchor, new, new_anchor):
     """Copy each pair's anchor from the old neighbour lists to its entry in the rebuilt ones (a pair
     keeps its row: the one of its lower index, or of i in full rows); pairs new to the lists get
-    none (NaN)."""
-    for i in prange(new_start.shape[0] - 1):
-        for a in range(new_start[i], new_start[i + 1]):
+    none (NaN). ``old``, ``new``: the lists' (nbr_start, nbr, order), row p being particle order[p]'s."""
+    old_start, old_nbr, old_order = old
+    new_start, new_nbr, new_order = new
+    n = new_start.shape[0] - 1
+    old_row = np.full(n, -1, np.int64)  # particle id -> its row in the old lists (-1: none)
+    for p in range(min(old_order.shape[0], old_start.shape[0] - 1)):
+        if old_order[p] < n:
+            old_row[old_order[p]] = p
+    for p in prange(n):
+        i = new_order[p]
+        q = old_row[i]
+        for a in range(new_start[p], new_start[p + 1]):
             j = new_nbr[a]
             new_anchor[a, 0] = np.nan
-            if i + 1 >= old_start.shape[0]:
+            if q < 0:
                 continue
-            for b in range(old_start[i], old_start[i + 1]):
+            for b in range(old_start[q], old_start[q + 1]):
                 if old_nbr[b] == j:
                     for k in range(3):
                         new_anchor[a, k] = old_anchor[b, k]

@@ -206,17 +206,30 @@ def _glued(a, b, region_start, link_grain, glued):
 
 @njit(cache=True, parallel=True)
 def glued_allowance(
-    elem, nbr_start, nbr, half, floor_start, floor_partner, floor_depth, region_start, link_grain, glued, allowance
+    elem,
+    nbr_start,
+    nbr,
+    half,
+    order,
+    floor_start,
+    floor_partner,
+    floor_depth,
+    region_start,
+    link_grain,
+    glued,
+    allowance,
 ):
     """Raise each listed pair's tolerated overlap (``contact_constraints``' allowance) to the overlap the
     press left it with while its grains stay glued: the glue keeps the pressed shape, so contacts that
     pushed those overlaps apart only fought it (with the contacts' mass scaling by height that fight
-    lifted a glued onigiri off its plate at 17 mm/s); a deeper overlap is still resolved."""
+    lifted a glued onigiri off its plate at 17 mm/s); a deeper overlap is still resolved. Row p of the
+    lists is particle order[p]'s (``spatial_hash.neighbour_lists``)."""
     m = len(region_start) - 1
-    for i in prange(len(nbr_start) - 1):
+    for p in prange(len(nbr_start) - 1):
+        i = order[p]
         if floor_start[i] == floor_start[i + 1] or elem[i] >= m:
             continue
-        for a in range(nbr_start[i], nbr_start[i + 1]):
+        for a in range(nbr_start[p], nbr_start[p + 1]):
             j = nbr[a]
             if (not half and j < i) or elem[j] >= m:
                 continue

@@ -134,15 +134,15 @@ def _touching(x, r, i, j):
 
 
 @njit(cache=True, parallel=True)
-def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, nbr_start, nbr, still):
+def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, contact_rows, still):
     """Put to sleep (and zero the velocities of) every element whose particles all lie within
     ``still`` (sleep_speed·h: the drift a resting particle may make in one substep) of x_start, measured
     from before pre-stabilisation, none of which was ``pushed``
     (``contact_constraints.sleeper_share``) and none of which touches a particle of another awake
-    element that moved farther (``nbr_start, nbr``: the contact lists, half or full; none without
-    them). An element pinned in an overlap that pre-stabilisation and the solve undo in turn has a
-    velocity but no motion, and sleeps. Every other element is awake: an asleep one that a fast
-    neighbour ran into wakes here.
+    element that moved farther (``contact_rows``: the contact lists' (nbr_start, nbr, order), half or
+    full, row p being particle order[p]'s; none without them). An element pinned in an overlap that
+    pre-stabilisation and the solve undo in turn has a velocity but no motion, and sleeps. Every other
+    element is awake: an asleep one that a fast neighbour ran into wakes here.
 
     The touching rule keeps the supports of a moving element awake until it has settled on them:
     supports that fell asleep under it held still as obstacles, it bounced on them at up to 11 mm/s
@@ -166,11 +166,13 @@ def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, nbr_sta
         asleep[c] = slow[c] and not hit
         if asleep[c] and start[c + 1] > start[c] and awake[start[c]]:
             falling += 1
+    nbr_start, nbr, order = contact_rows
     rows = nbr_start.shape[0] - 1 if falling else 0
-    for i in prange(rows):  # the touching rule: both awake, one fast (each side written alone)
+    for p in prange(rows):  # the touching rule: both awake, one fast (each side written alone)
+        i = order[p]
         if not awake[i] or elem[i] >= m:
             continue
-        for a in range(nbr_start[i], nbr_start[i + 1]):
+        for a in range(nbr_start[p], nbr_start[p + 1]):
             j = nbr[a]
             if not awake[j] or elem[j] >= m or elem[j] == elem[i] or slow[elem[i]] == slow[elem[j]]:
                 continue

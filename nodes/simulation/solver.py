@@ -283,7 +283,7 @@ class XpbdSolver:
                 m.r,
                 m.elem,
                 m.start,
-                *self._contact_rows(),
+                self._contact_rows(),
                 s.sleep_speed * k.h,
             )
         st.time += k.h
@@ -399,10 +399,10 @@ class XpbdSolver:
         return residual
 
     def _contact_rows(self):
-        """(nbr_start, nbr) of the neighbour lists, or empty lists (no pair effects)."""
+        """(nbr_start, nbr, order) of the neighbour lists, or empty lists (no pair effects)."""
         if self.pairs is None:
-            return np.zeros(1, np.int64), np.zeros(0, np.int64)
-        return self.pairs.lists.nbr_start, self.pairs.lists.nbr
+            return np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return self.pairs.lists.csr()
 
     def _tracking(self):
         """(x_built, moved) for the displacement check folded into predict / update_velocity."""
@@ -417,7 +417,7 @@ class XpbdSolver:
         pairs, m = self.pairs, self.model
         if pairs is None or not pairs.stale():
             return False
-        nbr_start, nbr, *grid = self.dispatch(
+        nbr_start, nbr, at, *grid = self.dispatch(
             "neighbours",
             spatial_hash.neighbour_lists,
             st.x,
@@ -429,10 +429,10 @@ class XpbdSolver:
             pairs.lists.half,
         )
         old = pairs.lists
-        pairs.lists = NeighbourLists(nbr_start, nbr, old.half, *grid)
+        pairs.lists = NeighbourLists(nbr_start, nbr, at, old.half, *grid)
         if "friction" in self.settings.effects and self.settings.anchored_friction:
             anchor = np.empty((len(nbr), 3))
-            self.dispatch("friction", friction.carry_anchors, *old.csr(), pairs.anchor, nbr_start, nbr, anchor)
+            self.dispatch("friction", friction.carry_anchors, old.csr(), pairs.anchor, pairs.lists.csr(), anchor)
             pairs.anchor = anchor
             pairs.load = np.zeros(len(nbr))
         pairs.x_built[:] = st.x
@@ -493,7 +493,7 @@ class XpbdSolver:
             st.pushed,
             m.w,
             m.r,
-            cc.PairRows(*lists.rows()),
+            cc.PairRows(*lists.sweep_rows()),
             cc.Colouring(*lists.grid()),
             cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load),
             cc.ContactRule(
