@@ -191,10 +191,20 @@ def case_grid(quick: bool):
     elem = np.arange(n, dtype=np.int64) // 8
     n_active = n - n // 20
 
+    def pairs(lists):
+        """The listed (particle, partner) pairs in row order, whichever way the rows are stored: by particle id
+        (before 2026-11-26: start, nbr, cell_start, order, dims) or by sorted position (start, nbr, at, ...)."""
+        start, nbr, *rest = lists
+        order = rest[-2]
+        owner = order if len(rest) == 4 else np.arange(len(order))
+        return np.repeat(owner, np.diff(start)), nbr
+
     def run():
         half = neighbour_lists(x, r, elem, 0.01, 0.51, n_active, True)
         full = neighbour_lists(x, r, elem, 0.01, 0.51, n_active, False)
-        return digest(*half, *full)
+        (hi, hj), (fi, fj) = pairs(half), pairs(full)
+        key_h, key_f = np.lexsort((hj, hi)), np.lexsort((fj, fi))
+        return digest(hi[key_h], hj[key_h], fi[key_f], fj[key_f])
 
     return run, f"{n} particles"
 

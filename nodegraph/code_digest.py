@@ -35,7 +35,8 @@ from pathlib import Path
 from types import ModuleType
 
 _DIGESTS: weakref.WeakKeyDictionary[ModuleType, str] = weakref.WeakKeyDictionary()
-_PARSED: dict[tuple[str, int, int], tuple[bytes, frozenset[tuple[str, tuple[str, ...]]]]] = {}
+# a file's bytes and imports per state of the file (its path and ``_stamp``), with the time they were read
+_PARSED: dict[tuple, tuple[bytes, frozenset[tuple[str, tuple[str, ...]]], int]] = {}
 MEMORY_ENV_VAR = "NODEGRAPH_CODE_DIGESTS"  # the file that remembers digests across processes ("" or "off": none)
 MEMORY_ROOTS = 400  # digests remembered (a few per node module and tree); the oldest go first
 _MEMORY: dict | None = None
@@ -133,12 +134,14 @@ def _digest(name: str, packages: set[str] | None) -> str:
     if not modules:
         return ""
     digest = hashlib.sha256()
+    read = {}  # file -> (its stamp, when its bytes were read)
     for module, path in sorted(modules.items()):
         source, _ = _parse(path)
+        read[str(path)] = _read_stamps[str(path)]
         digest.update(module.encode() + b"\0" + hashlib.sha256(source).digest())
     found = digest.hexdigest()[:16]
     if where is not None:
-        _remember(where, found, modules.values())
+        _remember(where, found, read)
     return found
 
 
@@ -201,23 +204,29 @@ def remembered_digest(where: str | None) -> str | None:
         return None
     if any(_stamp(path) != stamp for path, stamp in stamps.items()):
         return None
-    return record.get("digest")
+    digest = record.get("digest")
+    return digest if isinstance(digest, str) else None
 
 
-def _remember(where: str, digest: str, files) -> None:
-    """Store the digest with the stamps of its files and their package folders; nothing when one changed
-    within ``RACY_S`` (a second write within the same timestamp tick would go unseen)."""
+def _remember(where: str, digest: str, read: dict[str, tuple[list[int] | None, int]]) -> None:
+    """Store the digest with the stamps of its files (``read``: each file's stamp and the time its bytes were
+    read), of their package folders and of this module (a change to how digests are made voids them all).
+    Nothing is stored when a file changed since it was read, or within ``RACY_S`` before it was read: a second
+    write within the same timestamp tick leaves the stamp as it was, so the bytes read may not be the file's."""
     path = memory_file()
     if path is None:
         return
-    stamps: dict[str, list[int] | None] = {}
-    for file in files:
-        stamps[str(file)] = _stamp(str(file))
-        folder = file.parent
-        while str(folder) not in stamps and (folder == file.parent or (folder / "__init__.py").is_file()):
+    now = time.time_ns()
+    stamps: dict[str, list[int] | None] = {__file__: _stamp(__file__)}
+    for file, (stamp, read_ns) in read.items():
+        if stamp is None or stamp != _stamp(file) or max(stamp[2], stamp[3]) > read_ns - int(RACY_S * 1e9):
+            return
+        stamps[file] = stamp
+        folder = Path(file).parent
+        while str(folder) not in stamps and (folder == Path(file).parent or (folder / "__init__.py").is_file()):
             stamps[str(folder)] = _stamp(str(folder))
             folder = folder.parent
-    recent = time.time_ns() - int(RACY_S * 1e9)
+    recent = now - int(RACY_S * 1e9)
     if any(s is None or max(s[2], s[3]) > recent for s in stamps.values()):
         return
     memory = _load_memory()
@@ -234,15 +243,21 @@ def _remember(where: str, digest: str, files) -> None:
         pass
 
 
+_read_stamps: dict[str, tuple[list[int] | None, int]] = {}  # file -> the stamp and read time of its last parse
+
+
 def _parse(path: Path) -> tuple[bytes, frozenset[tuple[str, tuple[str, ...]]]]:
-    """The file's bytes and its imports (``import_statements``), read once per state of the file."""
-    stat = path.stat()
-    memo = (str(path), stat.st_mtime_ns, stat.st_size)
+    """The file's bytes and its imports (``import_statements``), read once per state of the file (``_stamp``:
+    inode, size, modification and change times)."""
+    stamp = _stamp(str(path))
+    memo = (str(path), *(stamp or ()))
     parsed = _PARSED.get(memo)
     if parsed is None:
+        read_ns = time.time_ns()
         source = path.read_bytes()
-        parsed = _PARSED[memo] = (source, import_statements(source))
-    return parsed
+        parsed = _PARSED[memo] = (source, import_statements(source), read_ns)
+    _read_stamps[str(path)] = (stamp, parsed[2])
+    return parsed[0], parsed[1]
 
 
 # where an import statement can begin: a line's start, or after ``;`` or a compound statement's ``:``

@@ -1,7 +1,14 @@
 """Fixtures shared by several test folders: a small synthetic aggregate (capsule grains + ikura eggs with
 membrane/yolk parts, a bowl) and that aggregate shaded, for the shading and the export tests."""
 
+import os
+import tempfile
+
 import pytest
+
+# the suite remembers code digests in a file of its own, not in the user's cache (``nodegraph.code_digest``);
+# processes it starts inherit the choice
+os.environ.setdefault("NODEGRAPH_CODE_DIGESTS", os.path.join(tempfile.mkdtemp(prefix="nodegraph-digests-"), "d.json"))
 
 
 @pytest.fixture(scope="session")

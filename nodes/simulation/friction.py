@@ -113,9 +113,11 @@ def friction_wall(x, x_prev, anchor, i, nx, ny, nz, depth, rule):
 
 @njit(cache=True, parallel=True)
 def carry_anchors(old, old_anchor, new, new_anchor):
-    """Copy each pair's anchor from the old neighbour lists to its entry in the rebuilt ones (a pair
-    keeps its row: the one of its lower index, or of i in full rows); pairs new to the lists get
-    none (NaN). ``old``, ``new``: the lists' (nbr_start, nbr, order), row p being particle order[p]'s."""
+    """Copy each pair's anchor from the old neighbour lists to its entry in the rebuilt ones, found in the
+    same particle's row; pairs new to the lists get none (NaN). In half rows a pair sits in the row of the
+    partner that comes first in the grid's order, which can change between builds: such a pair is not
+    found and is anchored afresh where it stands (friction then holds from there, as for a new contact).
+    ``old``, ``new``: the lists' (nbr_start, nbr, order), row p being particle order[p]'s."""
     old_start, old_nbr, old_order = old
     new_start, new_nbr, new_order = new
     n = new_start.shape[0] - 1

@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 from importlib.metadata import EntryPoint
 from pathlib import Path
 
@@ -248,3 +249,32 @@ def test_a_file_written_just_now_is_not_remembered(kitchen, memory, monkeypatch)
     digest_reading(monkeypatch)
     memory()
     assert digest_reading(monkeypatch)[1] == 3
+
+
+def test_bytes_read_soon_after_a_change_are_not_remembered_however_late_the_digest(kitchen, memory, monkeypatch):
+    """A long-lived process (a watch) may hold bytes it read within a timestamp tick of a write: a second write
+    in that tick leaves the stamp as it was, so those bytes must not be remembered for other processes, even
+    when the digest is made long after (the guard once looked at the clock when storing, not when reading)."""
+    package, load = kitchen
+    load()
+    monkeypatch.setattr(code_digest, "RACY_S", 1.0)
+    code_digest._parse(package / "stove.py")  # read within a second of the fixture's write
+    time.sleep(1.2)
+    digest_reading(monkeypatch)  # stove's bytes come from the read above
+    memory()
+    assert digest_reading(monkeypatch)[1] == 3
+
+
+def test_a_change_to_how_digests_are_made_voids_the_remembered_ones(kitchen, memory, monkeypatch, tmp_path):
+    """A record made by another version of the digest scheme (which may have followed fewer imports) is not used."""
+    _, load = kitchen
+    load()
+    scheme = tmp_path / "scheme.py"
+    scheme.write_text("VERSION = 1\n")
+    monkeypatch.setattr(code_digest, "__file__", str(scheme))
+    first, _ = digest_reading(monkeypatch)
+    memory()
+    assert digest_reading(monkeypatch) == (first, 0)
+    scheme.write_text("VERSION = 2\n")
+    memory()
+    assert digest_reading(monkeypatch) == (first, 3)
