@@ -3,12 +3,17 @@ centred on the skin, no blur) and after (``sphere_scatter.sink``, ``remesh.blur`
 the porosity sweep's picture: one grain per sink × blur.
 
     python benchmarks/bench_skin.py [--quick]
+    python benchmarks/bench_skin.py --exported    # the dented grains per variety × water content (a small bowl)
 
 The skin score (``nodes/quality/skin.py``) is the concave share of a mesh's edge curvature: 0 for a convex
 ellipsoid, ≈ 0.17 for an ellipsoid with 4 % sinusoidal bumps; cooked rice should score ≤ 0.10. The water content
 is the recipe's ``cooked`` node's: it sets the optics and the physics, not the grain mesh, so a grain scores the
 same at every water content. ``--quick``: the main job and the three varieties only, 4 grains each.
 Writes benchmarks/results/bench_skin.md and docs/images/skin_sweep.png (or under $NODEGRAPH_BENCH_RESULTS).
+``--exported``: the skin of the grains the recipe exports, after the run and ``deform_contacts``: the rice bowl at
+a reduced size (a 28 mm bowl, the recipe's grains at full resolution) per variety × water content; there the water
+content counts, through the physics (stiffness, adhesion: how hard the grains press, so how deep the dents).
+Writes benchmarks/results/bench_skin_exported.md.
 """
 
 from __future__ import annotations
@@ -109,10 +114,65 @@ def render_sweep(grains, path: Path, width: int = 1280, height: int = 560, spp: 
     iio.imwrite(path, linear_to_srgb8(image))
 
 
+EXPORTED_BOWL = ["bowl.size=14.0", "bowl.depth=12.0", "bowl.mound=5.0"]  # the draft's bowl, the full grains
+WATER = (0.0, 15.0, 24.0)
+
+
+def exported_scores(variety: str, water: float, cache_dir: Path) -> dict:
+    """Skin of the rice bowl's library, its grains after the run and after ``deform_contacts`` (all of them)."""
+    from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
+    from nodes.quality.skin import skin_score
+
+    overrides = EXPORTED_BOWL + [f"variety.variety={variety}", f"cooked.water_content={water:g}"]
+    recipe = load_recipe(ROOT / "graphs" / "rice_bowl.yaml", default_registry(), overrides)
+    outputs = ["rice.library", "rice_sim.aggregate", "contact.aggregate", "measure.table"]
+    result = run_recipe(recipe, outputs=outputs, cache=Cache(cache_dir))
+
+    def skins(aggregate):
+        meshes = (aggregate.element_mesh(i) for i in range(len(aggregate.placement)))
+        return [skin_score(m.vertices, m.faces) for m in meshes]
+
+    library = [skin_score(m.vertices, m.faces) for m in result.output("rice.library").meshes]
+    contacts = float(result.output("measure.table").columns["contacts_per_element"][0])
+    return {
+        "grains": len(result.output("contact.aggregate").placement),
+        "library": float(np.mean(library)),
+        "run": float(np.mean(skins(result.output("rice_sim.aggregate")))),
+        "dented": skins(result.output("contact.aggregate")),
+        "contacts": contacts,
+    }
+
+
+def exported_table() -> list[str]:
+    lines = [
+        "| variety | water content (%) | grains | contacts per grain | skin: library | after the run "
+        "| after deform_contacts (mean / p90) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    with tempfile.TemporaryDirectory() as tmp:
+        for variety in VARIETIES:
+            for water in WATER:
+                r = exported_scores(variety, water, Path(tmp) / "cache")
+                lines.append(
+                    f"| {variety} | {water:g} | {r['grains']} | {r['contacts']:.2f} | {r['library']:.3f} "
+                    f"| {r['run']:.3f} | {np.mean(r['dented']):.3f} / {np.percentile(r['dented'], 90):.3f} |"
+                )
+                print(lines[-1], flush=True)
+    return lines
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the main job and the varieties, 4 grains each")
+    parser.add_argument("--exported", action="store_true", help="the dented grains per variety × water content")
     args = parser.parse_args(argv)
+    out = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS", ROOT / "benchmarks" / "results"))
+    if args.exported:
+        lines = exported_table()
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "bench_skin_exported.md").write_text("\n".join(lines) + "\n")
+        print(f"wrote {out / 'bench_skin_exported.md'}")
+        return
     variants = 4 if args.quick else None
     before = ["grain_spheres.sink=0.0", "grain_mesh.blur=0.0"]
     lines = [
@@ -137,7 +197,6 @@ def main(argv=None):
     for blur in BLURS:
         cells = [f"{score:.3f}" for b, _, _, score in grains if b == blur]
         lines.append(f"| {blur:g} | " + " | ".join(cells) + " |")
-    out = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS", ROOT / "benchmarks" / "results"))
     out.mkdir(parents=True, exist_ok=True)
     (out / "bench_skin.md").write_text("\n".join(lines) + "\n")
     picture = ROOT / "docs" / "images" / "skin_sweep.png"

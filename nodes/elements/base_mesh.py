@@ -17,6 +17,8 @@ def _check(p: dict) -> list[tuple[str, str]]:
         issues.append(("path", "shape 'file' needs a path to a mesh file"))
     if p["shape"] != "file" and p["path"]:
         issues.append(("path", f"path is only used with shape 'file' (shape is '{p['shape']}')"))
+    if p["shape"] != "ice_flake" and p["curl"]:
+        issues.append(("curl", f"curl is only used with shape 'ice_flake' (shape is '{p['shape']}')"))
     if p["shape"] in ("ikura", "file") and p["size"] is not None:
         issues.append(("size", f"size is not used by shape '{p['shape']}' (ikura: diameter; file: scale)"))
     return issues
@@ -25,7 +27,8 @@ def _check(p: dict) -> list[tuple[str, str]]:
 @node(
     "base_mesh",
     # 2: the variety is an input (a rice_variety node), no longer a parameter
-    version=2,
+    # 3: ice flake curl (a shaving bends as the blade lifts it)
+    version=3,
     inputs={
         "variety": In(
             RiceVariety,
@@ -58,6 +61,12 @@ def _check(p: dict) -> list[tuple[str, str]]:
             range=(0.001, 0.95),
         ),
         "irregularity": Param(float, 0.25, "ice flake: outline radius variation (fraction)", range=(0.0, 0.6)),
+        "curl": Param(
+            float,
+            0.0,
+            "ice flake: how far the ends rise above the middle, as a fraction of half the length (a curled shaving)",
+            range=(0.0, 1.0),
+        ),
         "shape_seed": Param(
             int, 0, "ice flake: which irregular outline (a shape number, not the recipe seed)", range=(0, 2**31 - 1)
         ),
@@ -82,6 +91,7 @@ def base_mesh(
     diameter,
     lipid_fraction,
     irregularity,
+    curl,
     shape_seed,
     path,
     scale,
@@ -109,7 +119,7 @@ def base_mesh(
         return Mesh(vertices, faces, parts=parts, name="ikura")
     if shape == "ice_flake":
         length, width, thickness = size or DEFAULT_SIZE["ice_flake"]
-        vertices, faces = grain_shapes.ice_flake(length, width, thickness, irregularity, shape_seed)
+        vertices, faces = grain_shapes.ice_flake(length, width, thickness, irregularity, shape_seed, curl)
         return Mesh(vertices, faces, name="ice_flake")
     if not path:
         raise ValueError("shape 'file' needs the parameter path (a mesh file)")

@@ -132,12 +132,20 @@ def ikura_egg(diameter: float, lipid_fraction: float, subdivisions: int = 3):
 
 
 def ice_flake(
-    length: float, width: float, thickness: float, irregularity: float = 0.25, shape_seed: int = 0, segments: int = 24
+    length: float,
+    width: float,
+    thickness: float,
+    irregularity: float = 0.25,
+    shape_seed: int = 0,
+    curl: float = 0.0,
+    segments: int = 24,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """A shaved-ice flake (kakigori, SPEC §1): a thin plate with an irregular star-shaped outline.
+    """A shaved-ice flake (kakigori, SPEC §1): a thin plate with an irregular star-shaped outline, curled.
 
     The outline radius varies by up to ``irregularity`` (a fraction) through a few random low
     harmonics fixed by ``shape_seed`` (a shape parameter, like a preset number: same seed, same flake).
+    A shaving curls as the blade lifts it: the plate bends along its length, its ends rising ``curl`` × half the
+    length above its middle (a parabola, the same shift top and bottom, so it stays closed and outward).
     The plate is closed by a fan on top and bottom around the centre, with quads on the rim.
     """
     rng = np.random.default_rng(shape_seed)
@@ -152,6 +160,7 @@ def ice_flake(
     top = np.column_stack([rim, np.full(segments, half)])
     bottom = np.column_stack([rim, np.full(segments, -half)])
     vertices = np.concatenate([top, bottom, [[0.0, 0.0, half], [0.0, 0.0, -half]]])
+    vertices[:, 2] += curl * (length / 2.0) * (2.0 * vertices[:, 0] / length) ** 2
     s = np.arange(segments)
     n = (s + 1) % segments
     ct, cb = 2 * segments, 2 * segments + 1

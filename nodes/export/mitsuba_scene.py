@@ -195,14 +195,13 @@ def is_volumetric(material: Material) -> bool:
 def medium(material: Material) -> dict:
     """Mitsuba homogeneous medium inside a volumetric element (``random_walk_coefficients``), isotropic phase.
 
-    A translucent material (rice: principled subsurface, not transmissive) scatters the same in every channel, at
-    the mean of the channels' σt; its colour is in the albedo alone. Scattering in starch is nearly grey (potato,
-    Jensen et al. 2001: σ′s = 0.68, 0.70, 0.55 mm⁻¹; the colour is in σa); a σt per channel made volpath sample
-    the distance in one channel and weight the others, colour noise that the denoiser left as opal patches of
+    Every element scatters the same in every channel, at the mean of the channels' σt; its colour is in the albedo
+    alone (rice, the yolk, and syrup in shaved ice, whose red is absorption). Scattering in starch is nearly grey
+    (potato, Jensen et al. 2001: σ′s = 0.68, 0.70, 0.55 mm⁻¹; the colour is in σa); a σt per channel made volpath
+    sample the distance in one channel and weight the others, colour noise that the denoiser left as opal patches of
     green, pink and blue on every grain (docs/look.md, "Warm white rice")."""
     sigma_t, single = random_walk_coefficients(material.subsurface_color, material.subsurface_radius)
-    if material.transmission < TRANSMISSIVE:
-        sigma_t = np.full(3, sigma_t.mean())
+    sigma_t = np.full(3, sigma_t.mean())
     densest = float(sigma_t.max())  # Mitsuba reads an RGB as a reflectance in [0, 1]: the scale carries the unit
     return {
         "type": "homogeneous",

@@ -2,8 +2,8 @@
 
 Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice is interpolated
 by water content (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a
-water film: clearcoat). Ikura has two parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is
-transmissive (IOR 1.31) and carries syrup graded by its depth below the mound's top surface; chestnut (kuri
+water film: clearcoat). Ikura has two parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white
+scattering tuft of fine shavings and carries syrup graded by its depth below the mound's top surface; chestnut (kuri
 gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh, 1 fat.
 """
 
@@ -53,6 +53,12 @@ def parse_overrides(entries: list[str]) -> dict[str, str]:
 
 def _mix(dry, wet, t):
     return tuple(float(a + (b - a) * t) for a, b in zip(dry, wet))
+
+
+def _absorb(clear, dyed, t):
+    """Colour at a share ``t`` of dye: the absorption (−ln of the colour) grows linearly with the concentration
+    (Beer–Lambert), so the colour mixes geometrically; a linear mix would leave half-soaked ice pale pink."""
+    return tuple(float(a ** (1.0 - t) * max(b, 1e-6) ** t) for a, b in zip(clear, dyed))
 
 
 def rice_material(water: float, name: str = "rice") -> Material:
@@ -129,34 +135,36 @@ def ikura_materials() -> tuple[Material, Material]:
 
 
 def ice_materials(syrup_color) -> tuple[Material, Material]:
-    """(plain ice, syrup-soaked ice): transmissive, IOR 1.31, slightly frosted; the syrup tints and glosses it.
-
-    ``subsurface_color`` is what light keeps crossing one part (a 0.4 mm flake): clear ice absorbs almost nothing
-    over a millimetre (its blue shows over metres), so plain ice keeps ≈ 99 %: a heap is white from the light its
-    many interfaces reflect, not grey from absorption compounded over tens of flakes."""
+    """(plain shaved ice, syrup-soaked shaved ice). A flake stands for a tuft of shavings far finer than the mesh
+    (a kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from multiple scattering as snow
+    is, not a clear crystal. Its inside is a dense, nearly lossless scattering medium (mean free path 0.5 mm: a few
+    shavings; ice itself absorbs nothing over millimetres) and its boundary the tuft's effective index, ≈ 1.1 for
+    ≈ 30 % ice in air (n ≈ 1 + 0.3 × 0.31), so a flake has no glassy facet or glint of its own. Syrup fills the
+    pores: the index rises towards the syrup's (sugar solution ≈ 1.35), scattering falls (index-matched ice and syrup
+    are clear: a longer free path) and the colour is the syrup's absorption; the wet top is glossy."""
     ice = Material(
         name=ICE,
-        base_color=(0.92, 0.96, 1.0),
-        subsurface=0.1,
-        subsurface_radius=(5.0, 5.0, 5.0),
-        subsurface_color=(0.99, 0.995, 1.0),
-        roughness=0.15,
-        ior=1.31,
+        base_color=(0.95, 0.96, 0.98),
+        subsurface=1.0,
+        subsurface_radius=(0.2, 0.2, 0.2),
+        subsurface_color=(0.97, 0.975, 0.98),
+        roughness=0.5,
+        ior=1.1,
         transmission=1.0,
-        transmission_roughness=0.15,
+        transmission_roughness=0.0,
     )
     syrup = Material(
         name="ice_syrup",
         base_color=tuple(float(c) for c in syrup_color),
-        subsurface=0.4,
-        subsurface_radius=(1.0, 0.3, 0.3),
+        subsurface=1.0,
+        subsurface_radius=(0.6, 0.6, 0.6),
         subsurface_color=tuple(float(c) for c in syrup_color),
-        roughness=0.05,
+        roughness=0.15,
         clearcoat=0.8,
-        clearcoat_roughness=0.03,
-        ior=1.31,
-        transmission=0.9,
-        transmission_roughness=0.05,
+        clearcoat_roughness=0.05,
+        ior=1.2,
+        transmission=1.0,
+        transmission_roughness=0.0,
     )
     return ice, syrup
 
@@ -168,8 +176,9 @@ def is_ice(material: Material) -> bool:
 
 
 def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material, ...]:
-    """``levels`` + 1 materials from plain ice (0) to fully soaked (``levels``): share k/levels of the syrup's
-    colour, tint, transmission, gloss and coat, linearly mixed (a soaked flake is ice with syrup in its pores)."""
+    """``levels`` + 1 materials from plain ice (0) to fully soaked (``levels``): share k/levels of the syrup in the
+    flake's pores. Its colour is absorbed (``_absorb``: geometric mix); free path, index, gloss and coat mix
+    linearly."""
     if levels < 1:
         raise ValueError(f"syrup levels must be ≥ 1, got {levels}")
     graded = [ice]
@@ -178,14 +187,14 @@ def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material,
         graded.append(
             Material(
                 name=f"ice_syrup_{round(100 * t):d}",
-                base_color=_mix(ice.base_color, syrup.base_color, t),
+                base_color=_absorb(ice.base_color, syrup.base_color, t),
                 subsurface=ice.subsurface + (syrup.subsurface - ice.subsurface) * t,
                 subsurface_radius=_mix(ice.subsurface_radius, syrup.subsurface_radius, t),
-                subsurface_color=_mix(ice.subsurface_color, syrup.subsurface_color, t),
+                subsurface_color=_absorb(ice.subsurface_color, syrup.subsurface_color, t),
                 roughness=ice.roughness + (syrup.roughness - ice.roughness) * t,
                 clearcoat=syrup.clearcoat * t,
                 clearcoat_roughness=syrup.clearcoat_roughness,
-                ior=ice.ior,
+                ior=ice.ior + (syrup.ior - ice.ior) * t,
                 transmission=ice.transmission + (syrup.transmission - ice.transmission) * t,
                 transmission_roughness=ice.transmission_roughness
                 + (syrup.transmission_roughness - ice.transmission_roughness) * t,

@@ -33,7 +33,8 @@ def _check(params):
     # 7: ikura deep orange-red (was amber), its yolk orange; a scenery mesh named 'nori' gets the nori material
     # 8: 'ambient' renamed 'baked_ambient': it lights only the baked vertex colours, never the preview (whose
     #    ambient is its studio's, preview.ambient)
-    version=8,
+    # 9: kakigori ice a white tuft of fine shavings (short free path, index 1.1); syrup colour mixed by absorption
+    version=9,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "material": In(

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -67,6 +69,26 @@ def test_ice_flake_is_thin_irregular_and_depends_on_shape_seed():
     assert not np.allclose(a.vertices, b.vertices)  # the outline depends on shape_seed
     rim = a.vertices[:-2, :2] / (np.ptp(a.vertices[:, :2], axis=0) / 2)
     assert np.ptp(np.linalg.norm(rim, axis=1)) > 0.1  # not an ellipse: irregular outline
+
+
+def test_ice_flake_curls_like_a_shaving():
+    """A curled shaving (issue 26): its ends rise above its middle by ``curl`` × half its length; it stays a closed,
+    outward solid of the same thickness. The kakigori recipe's shavings are fine (≤ 3.6 mm long) and curled."""
+    import yaml
+
+    flat = base_mesh.call(shape="ice_flake", size=(3.0, 2.0, 0.4))
+    curled = base_mesh.call(shape="ice_flake", size=(3.0, 2.0, 0.4), curl=0.3)
+    tm = as_trimesh(curled)
+    assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
+    assert tm.volume == pytest.approx(as_trimesh(flat).volume, rel=0.02)
+    rise = np.ptp(curled.vertices[:, 2]) - np.ptp(flat.vertices[:, 2])
+    assert rise > 0.25  # 0.3 × 1.5 mm at the tips of the plain ellipse; flat: 0
+    with pytest.raises(ValueError, match="curl"):
+        base_mesh.call(shape="rice", curl=0.2)
+    recipe = yaml.safe_load((Path(__file__).resolve().parents[2] / "graphs" / "kakigori.yaml").read_text())
+    flakes = [n["params"] for n in recipe["nodes"].values() if n.get("params", {}).get("shape") == "ice_flake"]
+    assert len(flakes) >= 4
+    assert all(p["size"][0] <= 3.6 and p.get("curl", 0.0) > 0 for p in flakes)  # was 4–4.8 mm, flat
 
 
 def test_user_mesh_is_recentred_and_aligned(tmp_path):

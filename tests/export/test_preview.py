@@ -71,7 +71,7 @@ def test_material_mapping():
     assert material_bsdf(membrane, False)["type"] in ("dielectric", "roughdielectric")
     assert material_bsdf(membrane, False)["int_ior"] == pytest.approx(1.36)
     ice, syrup = mat.ice_materials((0.75, 0.02, 0.06))
-    assert material_bsdf(ice, False)["int_ior"] == pytest.approx(1.31)
+    assert material_bsdf(ice, False)["int_ior"] == pytest.approx(1.1)  # a tuft of shavings in air, not clear ice
     tint = material_bsdf(syrup, False)["specular_transmittance"]["value"]
     assert tint[0] > tint[1]  # the syrup tints the ice red
     glaze = material_bsdf(mat.ceramic_material((0.05, 0.07, 0.16)), False)
@@ -124,9 +124,9 @@ def _ice_heap(count=400, radius=8.0, seed=0):
 
 
 def test_a_heap_of_ice_flakes_is_bright_like_shaved_ice():
-    """Shaved ice is white: light reflected by its many interfaces comes back out. The ice heap's mean luminance,
-    against the same heap in a white diffuse material under the same light, stays well above what paths cut off
-    after 10 bounces and absorption compounded per flake gave (0.075: dark grey)."""
+    """Shaved ice is white: light scattered in its shavings comes back out. The ice heap's mean luminance, against
+    the same heap in a white diffuse material under the same light: 0.59 with each flake a white tuft of fine
+    shavings (issue 26), 0.44 as clear glassy plates, 0.075 (dark grey) with paths cut off after 10 bounces."""
     from nodes.export.mitsuba_scene import Camera, render_layers
     from nodes.shading.materials import is_ice
     from nodes.values import Material
@@ -144,7 +144,7 @@ def test_a_heap_of_ice_flakes_is_bright_like_shaved_ice():
     ice = luminance()
     flakes = white - black > 0.2  # pixels that show the heap
     assert flakes.mean() > 0.1
-    assert ice[flakes].mean() / white[flakes].mean() > 0.2
+    assert ice[flakes].mean() / white[flakes].mean() > 0.5
 
 
 def test_subsurface_puts_a_medium_inside_rice_and_yolks(shaded, tmp_path):

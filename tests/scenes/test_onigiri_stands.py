@@ -1,5 +1,6 @@
 """The onigiri recipe sets its pressed grains on the plate under gravity (issue 24): glued, it keeps its height
-and rests on the plate (issue 26: the lowest grain within 0.5 mm of it), measured on the element meshes."""
+and rests on the plate (issue 26: the lowest grain within 0.5 mm of it), measured on the element meshes after the
+run and on the exported .glb (after deform_contacts and shading: what a user opens)."""
 
 from __future__ import annotations
 
@@ -20,13 +21,33 @@ def mesh_extent(aggregate) -> tuple[float, float]:
     return float(z.min()), float(z.max())
 
 
-def rested(tmp_path, *overrides):
+def plate_gap(glb) -> float:
+    """Lowest grain vertex above the plate's top under the onigiri (mm; < 0: sunk in), read from an exported .glb:
+    nodes named ``<kind>/<number>`` are grains, ``plate`` the plate (shade's mesh names)."""
+    import trimesh
+
+    scene = trimesh.load(glb)
+    world = {}
+    for name in scene.graph.nodes_geometry:
+        transform, geometry = scene.graph[name]
+        world[name] = trimesh.transform_points(scene.geometry[geometry].vertices, transform)
+    grains = [v for name, v in world.items() if "/" in name]
+    assert grains and "plate" in world, sorted(world)[:5]
+    centres = np.array([v.mean(axis=0) for v in grains])
+    plate = world["plate"]
+    reach = 0.5 * float(np.ptp(centres[:, :2], axis=0).min())  # the plate under the onigiri (its well), not the rim
+    under = np.hypot(*(plate[:, :2] - centres[:, :2].mean(axis=0)).T) < reach
+    return float(min(v[:, 2].min() for v in grains) - plate[under, 2].max())
+
+
+def rested(tmp_path, *overrides, exported=False):
     recipe = load_recipe(
-        REPO / "graphs" / "onigiri.yaml", default_registry(), quick_sizes()["onigiri"] + list(overrides)
+        REPO / "graphs" / "onigiri.yaml",
+        default_registry(),
+        quick_sizes()["onigiri"] + list(overrides) + (["export.formats=[glb]"] if exported else []),
     )
-    result = run_recipe(
-        recipe, cache=Cache(tmp_path / "cache"), outputs=["press.aggregate", "rest.aggregate", "plate.mesh"]
-    )
+    outputs = ["press.aggregate", "rest.aggregate", "plate.mesh"] + (["export.files"] if exported else [])
+    result = run_recipe(recipe, cache=Cache(tmp_path / "cache"), outputs=outputs, out_dir=tmp_path / "out")
     pressed, rest = mesh_extent(result.output("press.aggregate")), mesh_extent(result.output("rest.aggregate"))
     plate = result.output("plate.mesh").vertices
     grains = result.output("rest.aggregate").placement.positions
@@ -35,18 +56,27 @@ def rested(tmp_path, *overrides):
     plate_top = float(plate[under, 2].max())
     # height of the top above the plate, against the pressed onigiri's (a loose one also flings a few grains off
     # the plate at 30 substeps: the top, not the lowest grain, says how far it slumped)
-    return (rest[1] - plate_top) / (pressed[1] - plate_top), rest[0] - plate_top
+    kept = (rest[1] - plate_top) / (pressed[1] - plate_top)
+    if exported:
+        return kept, rest[0] - plate_top, plate_gap(tmp_path / "out" / "onigiri.glb")
+    return kept, rest[0] - plate_top
 
 
 @pytest.fixture(scope="module")
 def glued(tmp_path_factory):
-    return rested(tmp_path_factory.mktemp("glued"))
+    return rested(tmp_path_factory.mktemp("glued"), exported=True)
 
 
 def test_the_glued_onigiri_keeps_its_height_on_its_plate(glued):
-    kept, gap = glued
+    kept, gap, _ = glued
     assert kept >= 0.95, kept
     assert abs(gap) <= 0.5, gap  # its lowest grain rests on the plate: neither floating nor sunk in
+
+
+def test_the_exported_onigiri_rests_on_its_plate(glued):
+    """Issue 26, on the exported meshes: the lowest grain in the .glb within 0.5 mm of the plate under it."""
+    _, _, exported = glued
+    assert abs(exported) <= 0.5, exported
 
 
 def test_without_glue_the_same_onigiri_slumps(tmp_path):

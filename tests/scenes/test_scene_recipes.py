@@ -42,7 +42,9 @@ EXPECTED = {
     "ikura_don": ((140, 220), 0.03, 0.10),  # 167 elements: p95 0.013, max 0.040
     "onigiri": ((45, 75), 0.03, 0.10),  # 60 grains: p95 0.017, max 0.054
     "sushi": ((65, 110), 0.03, 0.12),  # 87 grains: p95 0.019, max 0.097
-    "kakigori": ((220, 350), 0.05, 0.07),  # 283 flakes: p95 0.039, max 0.047 (50-vertex flakes, 0.4 mm thick)
+    # 298 flakes: p95 0.051, max 0.069 (3–3.6 mm curled flakes, issue 26; the 4–4.8 mm flat ones: 0.039, 0.047,
+    # ≈ the same 0.17 mm in absolute depth: the bar is in flake lengths)
+    "kakigori": ((220, 350), 0.06, 0.08),
     "rice_chestnut": ((200, 340), 0.10, 0.13),  # 268 elements: p95 0.077, max 0.096 (S: no physics, no flattening)
 }
 SLOW: set[str] = set()  # each runs in 2–7 s on a calm machine (rice_chestnut, the slowest: 18 s at load 10)
