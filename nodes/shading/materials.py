@@ -137,7 +137,7 @@ def ikura_materials() -> tuple[Material, Material]:
 def ice_materials(syrup_color) -> tuple[Material, Material]:
     """(plain shaved ice, syrup-soaked shaved ice). A flake stands for a tuft of shavings far finer than the mesh
     (a kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from multiple scattering as snow
-    is, not a clear crystal. Its inside is a dense, nearly lossless scattering medium (mean free path 0.5 mm: a few
+    is, not a clear crystal. Its inside is a dense, nearly lossless scattering medium (mean free path 0.2 mm: a few
     shavings; ice itself absorbs nothing over millimetres) and its boundary the tuft's effective index, ≈ 1.1 for
     ≈ 30 % ice in air (n ≈ 1 + 0.3 × 0.31), so a flake has no glassy facet or glint of its own. Syrup fills the
     pores: the index rises towards the syrup's (sugar solution ≈ 1.35), scattering falls (index-matched ice and syrup
