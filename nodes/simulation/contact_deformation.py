@@ -14,13 +14,15 @@ smoothly relaxed afterwards, folds a bumpy skin wherever some vertices are held 
   A·max|g'|/b ≤ ``slope``; ℓ ≥ 2A keeps det(∇map) = 1 − A·g·|T'| ≥ ¼. A map with a positive Jacobian turns
   no face over, so the dented mesh stays fold-free and closed whatever its skin's bumps;
 - **bulge** (per element, between dents): the volume the dents took back as a move u_k = min(β, limit_k) along
-  the outward normal of the element's ellipsoid (a smooth field). The limit keeps bulges from meeting: across a
-  lens, ⅔ of the distance to the lens' plane (each side stays under its own plane, however often it bulges);
-  towards a wall, ⅔ of the distance to it; towards a neighbour's rest surface that the neighbour may bulge
-  towards too, the bulges of all rounds together within a third of the room before them. A plane's distance is
-  linear, so the bulge bends nowhere near a lens; a third of the distance to the neighbour's *surface* (the first
-  rule, for every contact) copied the neighbours' convex shapes into the skin as hollows (skin score 0.11 on the
-  main job's rice, 0.074 with the planes). β is the one that gives the element its rest volume back
+  the outward normal of the element's ellipsoid (a smooth field). The limit keeps bulges from meeting: ⅔ of the
+  vertex's distance to each plane the element stays under — its lenses' planes, and towards a neighbour whose rest
+  surface is near but does not overlap, the separating plane halfway across their closest approach (both sides
+  find the same one) — and ⅔ of the distance to the walls. Each side stays under its own planes however often it
+  bulges. A plane's distance is linear in position, so the limit is a lower envelope of linear functions: where
+  it holds the bulge back the skin bends outward (a ridge), never inward. A share of the distance to a
+  neighbour's *surface* copied that convex surface into the skin as a hollow (skin score 0.11 on the main job's
+  rice, 0.074 with the planes), and a plane applied only near its neighbour stepped where the search stopped (the
+  rice bowl 0.119, 0.095 with every plane everywhere). β is the one that gives the element its rest volume back
   (bisection: volume grows with β). Cooked rice is nearly incompressible: a pressed grain bulges.
 
 The contacts: between two elements the plane across their overlap's lens, each element giving way its
@@ -337,42 +339,64 @@ def _wall_found(position, shell, walls, clearance, found):
 
 
 @njit(cache=True)
-def _bulge_limit(position, shell, i, around, lenses, count, given, settings, found, limit):
-    """Per shell vertex the most it may bulge this round (``bulge`` at most, 0 off the shell):
-    - towards a neighbour's rest surface, which that neighbour bulges towards too: what keeps the bulges of all
-      rounds together within a third of the room (less the clearance) the vertex had before them, (room + given −
-      clearance) / 3 − given, ``given`` the vertex's earlier bulges: two sides never meet;
-    - across a lens (within reach of the neighbour's rest surface) and towards a wall: ⅔ of the distance to the
-      lens' plane, or to the wall less the clearance, which neither side crosses however often it bulges, so that a
-      few rounds give the volume back. A plane's distance is linear: it bends the bulge nowhere, where a share of
-      the distance to the neighbour's surface copies that convex surface into the skin as a hollow (docs/contact.md).
+def _gap_planes(rest, shell, i, around, lenses, count, settings, found, out):
+    """Element i's separating planes (``Lenses`` rows from 0) towards each neighbour whose rest surface is within
+    reach but does not overlap i's: the plane halfway across their closest approach, normal to j's surface there
+    (n out of i), less half the clearance. j computes the same plane from its side (the closest pair is the same),
+    so bulges held under their own side's plane never meet. Returns how many."""
+    pairs, maps, fields = around.pairs, around.maps, around.fields
+    reach = settings.bulge / ROOM_SHARE + settings.clearance
+    made = 0
+    for q in range(pairs.start[i], pairs.start[i + 1]):
+        lens = False
+        for c in range(count):
+            lens = lens or lenses.pair[c] == q
+        if lens:
+            continue
+        cx = near_surface(rest, shell, pairs.index[q], maps, fields, reach, found, 0)
+        if cx == 0:
+            continue
+        best = 0
+        for c in range(1, cx):
+            if found.depth[c] > found.depth[best]:
+                best = c
+        k = found.rows[best]
+        n = -found.normal[best]
+        out.pair[made] = q
+        out.normal[made, 0], out.normal[made, 1], out.normal[made, 2] = n[0], n[1], n[2]
+        across = n[0] * rest[k, 0] + n[1] * rest[k, 1] + n[2] * rest[k, 2]
+        out.plane[made] = across - 0.5 * found.depth[best] - 0.5 * settings.clearance
+        made += 1
+    return made
+
+
+@njit(cache=True)
+def _bulge_limit(position, shell, walls, planes, counts, settings, limit):
+    """Per shell vertex the most it may bulge this round (``bulge`` at most, 0 off the shell): ⅔ of its distance to
+    every plane it must stay under — its lenses' planes (``planes[0]``) and the separating planes halfway to its near
+    neighbours (``planes[1]``, ``_gap_planes``) — and ⅔ of its distance to the walls less the clearance. Neither
+    side crosses its plane however often it bulges, so a few rounds give the volume back. The limit is the lower
+    envelope of linear functions of position, so the bulge it holds back bends outward only (a ridge, never a
+    crease): a share of the distance to a neighbour's surface copied that convex surface into the skin as a hollow,
+    and a plane applied only near the neighbour stepped where the search stopped (docs/contact.md).
     """
-    pairs, maps, fields, walls = around
-    clearance = settings.clearance
-    reach = settings.bulge / ROOM_SHARE + clearance
+    lenses, gaps = planes
+    count, gap_count = counts
     for k in range(position.shape[0]):
         limit[k] = settings.bulge if shell[k] else 0.0
-    for q in range(pairs.start[i], pairs.start[i + 1]):
-        lens = -1
-        for c in range(count):
-            if lenses.pair[c] == q:
-                lens = c
-        cx = near_surface(position, shell, pairs.index[q], maps, fields, reach, found, 0)
-        for c in range(cx):
-            k = found.rows[c]
-            if lens < 0:
-                most = ROOM_SHARE * (given[k] - found.depth[c] - clearance) - given[k]
-            else:
-                n = lenses.normal[lens]
-                below = lenses.plane[lens] - (n[0] * position[k, 0] + n[1] * position[k, 1] + n[2] * position[k, 2])
-                most = (1.0 - ROOM_SHARE) * below
-            limit[k] = min(limit[k], most)
+    for planes_of, many in ((lenses, count), (gaps, gap_count)):
+        for c in range(many):
+            n = planes_of.normal[c]
+            for k in range(position.shape[0]):
+                if shell[k]:
+                    below = planes_of.plane[c] - (n[0] * position[k, 0] + n[1] * position[k, 1] + n[2] * position[k, 2])
+                    limit[k] = min(limit[k], (1.0 - ROOM_SHARE) * below)
     for k in range(position.shape[0]):
         if shell[k]:
             val, _, _, _ = sample_phi(
                 walls.phi, walls.origin, walls.pitch, position[k, 0], position[k, 1], position[k, 2]
             )
-            limit[k] = max(0.0, min(limit[k], (1.0 - ROOM_SHARE) * (val - clearance)))
+            limit[k] = max(0.0, min(limit[k], (1.0 - ROOM_SHARE) * (val - settings.clearance)))
 
 
 @njit(cache=True)
@@ -601,10 +625,11 @@ def _deform_one(i, vertices, around, shells, rings, settings, cap_of, edges, pus
     lenses = Lenses(np.empty(rows, np.int64), np.empty((rows, 3)), np.empty(rows))
     figures.rest[i] = _volume(rest, faces)
     count = _lenses(vertices, i, pairs, maps, fields, settings, (found, other), lenses)
+    gaps = Lenses(np.empty(rows, np.int64), np.empty((rows, 3)), np.empty(rows))
+    gap_count = _gap_planes(rest, shell, i, around, lenses, count, settings, found, gaps)
     position = rest.copy()
     outward = np.empty((nv, 3))
     limit = np.empty(nv)
-    given = np.zeros(nv)
     scratch = Scratch(found, cap, np.zeros(count + rows))
     for r in range(settings.rounds):
         figures.capped[i], dents = _dent_all(
@@ -618,11 +643,8 @@ def _deform_one(i, vertices, around, shells, rings, settings, cap_of, edges, pus
         if volume >= figures.rest[i] * (1.0 - VOLUME_TOLERANCE):
             continue
         _outward(position, maps.lin_inv[i], maps.t[i], shell, outward)
-        _bulge_limit(position, shell, i, around, lenses, count, given, settings, found, limit)
-        before = position.copy()
+        _bulge_limit(position, shell, around.walls, (lenses, gaps), (count, gap_count), settings, limit)
         figures.bulge[i] = bulge(position, shell, faces, outward, limit, figures.rest[i], settings.bulge)
-        for k in range(nv):
-            given[k] += np.sqrt(np.sum((position[k] - before[k]) ** 2))
     adjacent = shells.pairs[shells.pair_start[s] : shells.pair_start[s + 1]]
     figures.folded[i] = _unfold(rest, position, faces, adjacent, rings, rings.row[s])
     figures.final[i] = _volume(position, faces)
