@@ -174,10 +174,11 @@ class Figures(NamedTuple):
 @njit(cache=True)
 def _lenses(vertices, i, pairs, maps, fields, settings, give, found, out):
     """Element i's lens contacts (``Lenses``, from row 0): per neighbour j whose rest surface overlaps i's (a vertex
-    of either inside the other), the lens' axis n and the plane at a − s·(a − b) along it, [b, a] how far the two
-    sides reach into each other (j computes the same plane from its side). s is ``share``; against an element of
-    the same aggregate it is split by how readily each gives way, 2·share·give_i / (give_i + give_j), which is
-    ``share`` when both give alike and sums to 1 over the pair at the default ½. Returns how many."""
+    of either inside the other), the lens' axis n and the plane at a − share·(a − b) − e along it, [b, a] how far
+    the two sides reach into each other (j computes the same plane from its side). Against an element of the same
+    aggregate that gives way less readily (``give``), i takes e = (s − share)·min(a − b, bulge) more, s =
+    2·share·give_i / (give_i + give_j): e is 0 when both give alike, −e is j's, and no more than a bulge's depth
+    changes hands, so a deep interlock still splits evenly within both sides' dent budgets. Returns how many."""
     world, vstart = vertices.world, vertices.start
     found_x, found_y = found
     own = world[vstart[i] : vstart[i + 1]]
@@ -187,9 +188,6 @@ def _lenses(vertices, i, pairs, maps, fields, settings, give, found, out):
     count = 0
     for q in range(pairs.start[i], pairs.start[i + 1]):
         j = pairs.index[q]
-        share = settings.share
-        if j < give.shape[0]:
-            share = 2.0 * settings.share * give[i] / (give[i] + give[j])
         # only vertices truly inside (depth > 0): a near-touching one's normal and place say nothing of the lens
         cx = near_surface(own, own_shell, j, maps, fields, 0.0, found_x, 0)
         other = world[vstart[j] : vstart[j + 1]]
@@ -211,7 +209,10 @@ def _lenses(vertices, i, pairs, maps, fields, settings, give, found, out):
                 top = max(top, h + found_y.depth[k])
         out.pair[count] = q
         out.normal[count, 0], out.normal[count, 1], out.normal[count, 2] = n[0], n[1], n[2]
-        out.plane[count] = top - share * (top - bottom) - 0.5 * clearance
+        extra = 0.0
+        if j < give.shape[0]:
+            extra = (2.0 * give[i] / (give[i] + give[j]) - 1.0) * settings.share * min(top - bottom, settings.bulge)
+        out.plane[count] = top - settings.share * (top - bottom) - extra - 0.5 * clearance
         count += 1
     return count
 
