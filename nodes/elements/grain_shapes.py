@@ -139,7 +139,6 @@ def ice_flake(
     shape_seed: int = 0,
     curl: float = 0.0,
     segments: int = 24,
-    rings: int = 3,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A shaved-ice flake (kakigori, SPEC §1): a thin plate with an irregular star-shaped outline, curled.
 
@@ -147,9 +146,7 @@ def ice_flake(
     harmonics fixed by ``shape_seed`` (a shape parameter, like a preset number: same seed, same flake).
     A shaving curls as the blade lifts it: the plate bends along its length, its ends rising ``curl`` × half the
     length above its middle (a parabola, the same shift top and bottom, so it stays closed and outward).
-    The plate is closed by ``rings`` concentric outlines on top and bottom (annuli between them, a fan at the
-    centre), with quads on the rim: vertices across the plate, not only on its rim, so the curl is carried by the
-    faces and the placement's overlap test (its cost points are vertices) sees two flakes crossing mid-plate.
+    The plate is closed by a fan on top and bottom around the centre, with quads on the rim.
     """
     rng = np.random.default_rng(shape_seed)
     angles = np.linspace(0.0, 2.0 * np.pi, segments, endpoint=False)
@@ -160,32 +157,20 @@ def ice_flake(
     wobble *= irregularity / max(np.abs(wobble).max(), 1e-12)
     rim = np.stack([np.cos(angles) * length / 2, np.sin(angles) * width / 2], axis=1) * (1.0 + wobble)[:, None]
     half = thickness / 2.0
-    scale = np.arange(rings, 0, -1) / rings  # outer ring first
-    plane = np.concatenate([rim * f for f in scale])
-    k = len(plane)
-    vertices = np.concatenate(
-        [np.column_stack([plane, np.full(k, half)]), np.column_stack([plane, np.full(k, -half)])]
-        + [[[0.0, 0.0, half], [0.0, 0.0, -half]]]
-    )
+    top = np.column_stack([rim, np.full(segments, half)])
+    bottom = np.column_stack([rim, np.full(segments, -half)])
+    vertices = np.concatenate([top, bottom, [[0.0, 0.0, half], [0.0, 0.0, -half]]])
     vertices[:, 2] += curl * (length / 2.0) * (2.0 * vertices[:, 0] / length) ** 2
     s = np.arange(segments)
     n = (s + 1) % segments
-    ct, cb = 2 * k, 2 * k + 1
-    inner = (rings - 1) * segments
-    parts = [
-        np.column_stack([np.full(segments, ct), inner + s, inner + n]),  # top, normal +z
-        np.column_stack([np.full(segments, cb), k + inner + n, k + inner + s]),  # bottom, normal −z
-        np.column_stack([s, s + k, n + k]),  # rim
-        np.column_stack([s, n + k, n]),
-    ]
-    for ring in range(rings - 1):  # annuli between a ring and the next one in, top then bottom
-        o, i = ring * segments, (ring + 1) * segments
-        parts += [
-            np.column_stack([o + s, o + n, i + n]),
-            np.column_stack([o + s, i + n, i + s]),
-            np.column_stack([k + o + s, k + i + n, k + o + n]),
-            np.column_stack([k + o + s, k + i + s, k + i + n]),
+    ct, cb = 2 * segments, 2 * segments + 1
+    faces = np.concatenate(
+        [
+            np.column_stack([np.full(segments, ct), s, n]),  # top, normal +z
+            np.column_stack([np.full(segments, cb), n + segments, s + segments]),  # bottom, normal −z
+            np.column_stack([s, s + segments, n + segments]),  # rim
+            np.column_stack([s, n + segments, n]),
         ]
-    faces = np.concatenate(parts)
+    )
     _, centroid = volume_centroid(vertices, faces)
     return vertices - centroid, faces
