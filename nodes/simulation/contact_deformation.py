@@ -112,6 +112,7 @@ class DeformSettings(NamedTuple):
     slope: float
     bulge: float
     rounds: int
+    near: bool  # a plane holds only the vertices under it or near its neighbour (``_held``)
 
 
 class Lenses(NamedTuple):
@@ -397,11 +398,34 @@ def _gap_planes(rest, shell, i, around, lenses, count, settings, found, out):
 
 
 @njit(cache=True)
-def _bulge_limit(position, shell, walls, planes, counts, settings, limit):
+def _held(rest, shell, around, planes_of, many, settings, found, held):
+    """How each plane holds each shell vertex (``held[c, k]``): −1, by ⅔ of its distance to the plane (vertices under
+    it at rest, and over it within reach r of the neighbour's rest surface: the lens' cap); a fixed ⅔·(d − r) for
+    a vertex over it at rest a distance d ∈ (r, 2r] from the neighbour; not at all (∞) beyond. A vertex over the
+    plane far from the neighbour is where a curled or bumpy element bends across the plane's extension: held by
+    the plane it could never bulge (curled ice flakes lost their volume so), and its cap grows from 0 at the reach
+    continuously, so the limit has no step."""
+    pairs, maps, fields = around.pairs, around.maps, around.fields
+    reach = settings.bulge / ROOM_SHARE + settings.clearance
+    for c in range(many):
+        n = planes_of.normal[c]
+        for k in range(rest.shape[0]):
+            below = planes_of.plane[c] - (n[0] * rest[k, 0] + n[1] * rest[k, 1] + n[2] * rest[k, 2])
+            held[c, k] = -1.0 if below >= 0.0 else np.inf
+        cx = near_surface(rest, shell, pairs.index[planes_of.pair[c]], maps, fields, 2.0 * reach, found, 0)
+        for e in range(cx):
+            k = found.rows[e]
+            if held[c, k] > 0.0:
+                far = -found.depth[e] - reach
+                held[c, k] = -1.0 if far <= 0.0 else (1.0 - ROOM_SHARE) * far
+
+
+@njit(cache=True)
+def _bulge_limit(position, shell, walls, planes, counts, held, settings, limit):
     """Per shell vertex the most it may bulge this round (``bulge`` at most, 0 off the shell): ⅔ of its distance to
-    every plane it must stay under — its lenses' planes (``planes[0]``) and the separating planes halfway to its near
-    neighbours (``planes[1]``, ``_gap_planes``) — and ⅔ of its distance to the walls less the clearance. Neither
-    side crosses its plane however often it bulges, so a few rounds give the volume back. The limit is the lower
+    every plane that holds it (``_held``) — its lenses' planes (``planes[0]``) and the separating planes halfway to
+    its near neighbours (``planes[1]``, ``_gap_planes``) — and ⅔ of its distance to the walls less the clearance.
+    Neither side crosses its plane however often it bulges, so a few rounds give the volume back. The limit is the lower
     envelope of linear functions of position, so the bulge it holds back bends outward only (a ridge, never a
     crease): a share of the distance to a neighbour's surface copied that convex surface into the skin as a hollow,
     and a plane applied only near the neighbour stepped where the search stopped (docs/contact.md).
@@ -410,13 +434,17 @@ def _bulge_limit(position, shell, walls, planes, counts, settings, limit):
     count, gap_count = counts
     for k in range(position.shape[0]):
         limit[k] = settings.bulge if shell[k] else 0.0
-    for planes_of, many in ((lenses, count), (gaps, gap_count)):
+    for planes_of, many, holds in ((lenses, count, held[0]), (gaps, gap_count, held[1])):
         for c in range(many):
             n = planes_of.normal[c]
             for k in range(position.shape[0]):
-                if shell[k]:
-                    below = planes_of.plane[c] - (n[0] * position[k, 0] + n[1] * position[k, 1] + n[2] * position[k, 2])
-                    limit[k] = min(limit[k], (1.0 - ROOM_SHARE) * below)
+                if not shell[k]:
+                    continue
+                if holds[c, k] >= 0.0:
+                    limit[k] = min(limit[k], holds[c, k])
+                    continue
+                below = planes_of.plane[c] - (n[0] * position[k, 0] + n[1] * position[k, 1] + n[2] * position[k, 2])
+                limit[k] = min(limit[k], (1.0 - ROOM_SHARE) * below)
     for k in range(position.shape[0]):
         if shell[k]:
             val, _, _, _ = sample_phi(
@@ -653,6 +681,12 @@ def _deform_one(i, vertices, around, shells, rings, settings, budgets, push, fig
     count = _lenses(vertices, i, pairs, maps, fields, settings, budgets.give, (found, other), lenses)
     gaps = Lenses(np.empty(rows, np.int64), np.empty((rows, 3)), np.empty(rows))
     gap_count = _gap_planes(rest, shell, i, around, lenses, count, settings, found, gaps)
+    held = (np.empty((rows, nv)), np.empty((rows, nv)))
+    held[0][:] = -1.0
+    held[1][:] = -1.0
+    if settings.near:
+        _held(rest, shell, around, lenses, count, settings, found, held[0])
+        _held(rest, shell, around, gaps, gap_count, settings, found, held[1])
     position = rest.copy()
     outward = np.empty((nv, 3))
     limit = np.empty(nv)
@@ -669,7 +703,7 @@ def _deform_one(i, vertices, around, shells, rings, settings, budgets, push, fig
         if volume >= figures.rest[i] * (1.0 - VOLUME_TOLERANCE):
             continue
         _outward(position, maps.lin_inv[i], maps.t[i], shell, outward)
-        _bulge_limit(position, shell, around.walls, (lenses, gaps), (count, gap_count), settings, limit)
+        _bulge_limit(position, shell, around.walls, (lenses, gaps), (count, gap_count), held, settings, limit)
         figures.bulge[i] = bulge(position, shell, faces, outward, limit, figures.rest[i], settings.bulge)
     adjacent = shells.pairs[shells.pair_start[s] : shells.pair_start[s + 1]]
     figures.folded[i] = _unfold(rest, position, faces, adjacent, rings, rings.row[s])
@@ -719,7 +753,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     figures (dented elements, moved vertices, dent depth, volume error, folded faces)."""
     import trimesh
 
-    given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "slope": 0.35, "bulge": 0.15, "rounds": 8}
+    given = {"clearance": 0.005, "share": 0.5, "cap": 0.5, "slope": 0.35, "bulge": 0.15, "rounds": 8, "near": False}
     given |= settings or {}
     fields: dict[int, int] = {}
     shells: list = []
@@ -763,7 +797,9 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
         walls = Walls(
             np.ascontiguousarray(cphi, np.float64), np.asarray(corigin, np.float64), float(cpitch), wall_reach
         )
-    solve = DeformSettings(gap, float(given["share"]), float(given["slope"]), most_bulge, int(given["rounds"]))
+    solve = DeformSettings(
+        gap, float(given["share"]), float(given["slope"]), most_bulge, int(given["rounds"]), bool(given["near"])
+    )
     face_start = np.concatenate([[0], np.cumsum([len(f) for f in faces_of])]).astype(np.int64)
     adjacency = [
         np.asarray(trimesh.Trimesh(np.zeros((f.max() + 1, 3)), f, process=False).face_adjacency) for f in faces_of
