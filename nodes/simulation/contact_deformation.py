@@ -366,6 +366,15 @@ def _wall_found(position, shell, walls, clearance, found):
 
 
 @njit(cache=True)
+def _is_lens(lenses, count, q):
+    """Whether pair row q is one of the first ``count`` lenses."""
+    for c in range(count):
+        if lenses.pair[c] == q:
+            return True
+    return False
+
+
+@njit(cache=True)
 def _gap_planes(rest, shell, i, around, lenses, count, settings, found, out):
     """Element i's separating planes (``Lenses`` rows from 0) towards each neighbour whose rest surface is within
     reach but does not overlap i's: the plane halfway across their closest approach, normal to j's surface there
@@ -375,10 +384,7 @@ def _gap_planes(rest, shell, i, around, lenses, count, settings, found, out):
     reach = settings.bulge / ROOM_SHARE + settings.clearance
     made = 0
     for q in range(pairs.start[i], pairs.start[i + 1]):
-        lens = False
-        for c in range(count):
-            lens = lens or lenses.pair[c] == q
-        if lens:
+        if _is_lens(lenses, count, q):
             continue
         cx = near_surface(rest, shell, pairs.index[q], maps, fields, reach, found, 0)
         if cx == 0:
@@ -621,10 +627,7 @@ def _dent_pass(position, rest, shell, i, around, lenses, count, settings, edge, 
             made += 1
             capped += _dent_spent(position, rest, shell, cap, m, lenses.normal[c], settings, edge, most, spent, c)
     for q in range(pairs.start[i], pairs.start[i + 1]):
-        lens = False
-        for c in range(count):
-            lens = lens or lenses.pair[c] == q
-        if lens:
+        if _is_lens(lenses, count, q):
             continue
         cx = near_surface(position, shell, pairs.index[q], maps, fields, margin, found, 0)
         m = _surface_cap(found, cx, margin, n, cap) if cx > 0 else 0
@@ -745,6 +748,11 @@ def _mean_edge(vertices: np.ndarray, faces: np.ndarray) -> float:
     return float(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1).mean())
 
 
+def _ratio(volume, rest):
+    """Each element's volume over its rest volume (1 where the rest volume is 0)."""
+    return np.where(rest != 0.0, volume / np.where(rest != 0.0, rest, 1.0), 1.0)
+
+
 def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = None, contacts: bool = True):
     """The moves of ``aggregate``'s elements dented against each other and the ``neighbours``' elements (not moved
     here: deform them with this aggregate as their neighbour) when ``contacts``, and, with ``free_space`` (φ,
@@ -820,7 +828,7 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     todo = np.ones(own, bool)
     push, figures = deform_elements(vertices, around, shell_faces, rings, solve, budgets, todo)
     for _ in range(STARVED_PASSES):
-        starved = np.abs(figures.final / np.where(figures.rest != 0.0, figures.rest, 1.0) - 1.0) > STARVED
+        starved = _ratio(figures.final, figures.rest) < 1.0 - STARVED  # short of volume, not over it
         if not starved.any():
             break
         budgets.give[starved] *= STARVED_GIVE
@@ -834,8 +842,8 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     dents = Dents(owner.astype(np.int64), (moved - vstart[owner]).astype(np.int64), push[moved])
     depth = np.linalg.norm(push[moved], axis=1) / length
     dented = figures.dented != figures.rest
-    error = np.abs(figures.final / np.where(figures.rest != 0.0, figures.rest, 1.0) - 1.0)
-    lost = np.abs(figures.dented / np.where(figures.rest != 0.0, figures.rest, 1.0) - 1.0)
+    error = np.abs(_ratio(figures.final, figures.rest) - 1.0)
+    lost = np.abs(_ratio(figures.dented, figures.rest) - 1.0)
     table = {
         "elements": own,
         "dented_elements": int(dented.sum()),

@@ -257,3 +257,18 @@ def test_a_ball_boxed_in_by_fourteen_keeps_its_volume():
     assert volume_errors(after, before).max() < 0.02
     assert deepest(after, "winding") < 0.01 and deepest(after, "pseudonormal") < 0.01
     assert turned_faces(after, before) == 0 and folded_pairs(after) == 0
+
+
+def test_a_bulge_stops_halfway_to_a_near_neighbour():
+    """A ball pressed 0.4 mm deep from one side bulges back; 0.06 mm off its other side lies a ball of another
+    aggregate that it does not touch. The separating plane halfway across that gap (less half the clearance) holds
+    the bulge: it meets nothing there, where without the plane it swelled into the gap and was dented back flat
+    against the neighbour's surface."""
+    pressed = elements([[0.0, 0.0, 0.0], [1.6, 0.0, 0.0]])
+    near = elements([[-2.06, 0.0, 0.0]])
+    after = run(pressed, neighbours=[near])["aggregate"]
+    ball = after.element_mesh(0).vertices
+    clearance = 0.005 * 2.0
+    assert ball[:, 0].min() >= -1.0 - 0.5 * (0.06 - clearance) - 1e-6
+    assert ball[:, 0].min() < -1.0 - 0.005  # it does bulge that way
+    assert volume_errors(after, pressed).max() < 0.02
