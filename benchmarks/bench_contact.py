@@ -30,7 +30,7 @@ REPO = Path(__file__).resolve().parents[1]
 # --quick runs the reduced main job twice and the checkers: 226 CPU s measured (the numba cache partly cold:
 # compiling is ≈ 164 CPU s of the whole pipeline, docs/performance.md)
 QUICK_CPU_S = 360
-RECIPES = ("ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_bunny")
+RECIPES = ("ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_bunny", "rice_chestnut")
 
 
 # every element its own mesh: the checkers read no EXT_mesh_gpu_instancing (an undented grain would be judged at
