@@ -59,7 +59,7 @@ def quick_scene():
     return scene, Camera(50.0, 20.0, 35.0, 0.1, params["f_stop"], params["focus"]), params
 
 
-KAKIGORI_QUICK = ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0", "settle.frames=2"]
+KAKIGORI_QUICK = ["cup.size=10.0", "cup.depth=8.0", "cup.mound=12.0"]
 
 
 def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:

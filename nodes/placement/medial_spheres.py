@@ -35,10 +35,14 @@ def distance_to_surface(points, vertices, faces):
     return out
 
 
-def surface_samples(vertices: np.ndarray, faces: np.ndarray, count: int):
-    """Deterministic surface samples with normals: vertices and face centroids, thinned by stride."""
+def surface_samples(vertices: np.ndarray, faces: np.ndarray, count: int, spacing: float = 0.0):
+    """Deterministic surface samples with normals: vertices and face centroids, thinned by stride; with
+    ``spacing`` > 0 (element lengths) of the mesh subdivided until no edge is longer (a thin element's poles need
+    samples closer than its thickness)."""
     import trimesh
 
+    if spacing > 0.0:
+        vertices, faces = trimesh.remesh.subdivide_to_size(vertices, faces, max_edge=spacing * element_length(vertices))
     mesh = trimesh.Trimesh(vertices, faces, process=False)
     points = np.vstack([mesh.vertices, mesh.triangles_center])
     normals = np.vstack([mesh.vertex_normals, mesh.face_normals])
@@ -82,8 +86,16 @@ def element_length(vertices: np.ndarray) -> float:
     return float(np.ptp(vertices, axis=0).max())
 
 
-def medial_spheres(vertices: np.ndarray, faces: np.ndarray, tolerance: float, max_spheres: int, samples: int = 2000):
-    """Spheres (centres, radii) whose union matches the mesh within ``tolerance``·length.
+def medial_spheres(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    tolerance: float,
+    max_spheres: int,
+    samples: int = 2000,
+    spacing: float = 0.0,
+):
+    """Spheres (centres, radii) whose union matches the mesh within ``tolerance``·length (surface samples at most
+    ``spacing`` element lengths apart where > 0, ``surface_samples``).
 
     Raises ValueError for an element without interior (flat or open): no inner pole survives.
     """
@@ -91,7 +103,7 @@ def medial_spheres(vertices: np.ndarray, faces: np.ndarray, tolerance: float, ma
 
     vertices, faces = kernel_array(vertices), kernel_array(faces, np.int64)
     length = element_length(vertices)
-    points, normals = surface_samples(vertices, faces, samples)
+    points, normals = surface_samples(vertices, faces, samples, spacing)
     centers, radii = inner_poles(points, normals)
     keep = inside_points(vertices, faces, centers) & (radii > 1e-6 * length)
     centers, radii = centers[keep], radii[keep]

@@ -1,0 +1,148 @@
+"""The ``cull_crossing`` node: after the contact step, remove the elements whose meshes still cut into a neighbour
+deeper than a threshold, deepest first (issue 25). Thin elements that cross (ice flakes whose rims pass through
+each other's sheets) cannot be dented apart within a dent budget, which is a share of their thickness; a shaving
+that would have to pass through another is simply not there. Depth is judged as the exported meshes are judged:
+each vertex inside a neighbour by the fast winding number (robust to folds), its depth the distance to that
+neighbour's surface (libigl: no hand-written inside test is as robust on touching thin meshes).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nodegraph.node import In, Out, node
+from nodegraph.params import Param
+from nodegraph.values import Mesh, Table
+
+from ..values import Aggregate
+
+
+def crossing_depths(meshes: list) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (i < j) whose bounding boxes meet and the deeper of the two ways each cuts into the other (length
+    units; 0 where neither vertex set is inside the other)."""
+    import igl
+    from scipy.spatial import cKDTree
+
+    lo = np.array([m.vertices.min(axis=0) for m in meshes])
+    hi = np.array([m.vertices.max(axis=0) for m in meshes])
+    reach = float(np.linalg.norm(hi - lo, axis=1).max()) if len(meshes) else 0.0
+    pairs = cKDTree(0.5 * (lo + hi)).query_pairs(reach, output_type="ndarray") if len(meshes) > 1 else None
+    if pairs is None or len(pairs) == 0:
+        return np.zeros((0, 2), np.int64), np.zeros(0)
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]  # query_pairs' order is not specified
+    meet = np.all((lo[pairs[:, 0]] <= hi[pairs[:, 1]]) & (lo[pairs[:, 1]] <= hi[pairs[:, 0]]), axis=1)
+    pairs = pairs[meet]
+    fwn = igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER
+    depth = np.zeros(len(pairs))
+    for k, (i, j) in enumerate(pairs):
+        for a, b in ((i, j), (j, i)):
+            inner, outer = meshes[a], meshes[b]
+            d = igl.signed_distance(inner.vertices, outer.vertices, _shell(outer), sign_type=fwn)[0]
+            depth[k] = max(depth[k], -float(d.min()))
+    return pairs.astype(np.int64), depth
+
+
+def wall_depths(meshes: list, colliders: list) -> np.ndarray:
+    """Per element, how deep its vertices reach into any collider solid (length units; 0 for none)."""
+    import igl
+
+    fwn = igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER
+    depth = np.zeros(len(meshes))
+    if not meshes:
+        return depth
+    centres = np.array([m.vertices.mean(axis=0) for m in meshes])
+    reach = np.array([np.linalg.norm(m.vertices - c, axis=1).max() for m, c in zip(meshes, centres)])
+    for wall in colliders:
+        faces = np.ascontiguousarray(wall.faces, np.int64)
+        # only elements whose centre is within their own reach of the wall's surface can cut into it
+        near = np.abs(igl.signed_distance(centres, wall.vertices, faces, sign_type=fwn)[0]) <= reach
+        for i in np.flatnonzero(near):
+            d = igl.signed_distance(meshes[i].vertices, wall.vertices, faces, sign_type=fwn)[0]
+            depth[i] = max(depth[i], -float(d.min()))
+    return depth
+
+
+def _shell(mesh) -> np.ndarray:
+    """The faces of a mesh's outer shell (part 0: an egg's yolk is inside its own skin, not a neighbour's)."""
+    faces = mesh.faces if mesh.parts is None else mesh.faces[mesh.parts == 0]
+    return np.ascontiguousarray(faces, np.int64)
+
+
+def crossed_elements(pairs: np.ndarray, depth: np.ndarray, limit: float, count: int) -> np.ndarray:
+    """Mask of the elements to remove: pairs deeper than ``limit``, deepest first, each time the element of the
+    pair in more such pairs still standing (the higher index on a tie), until no pair deeper than ``limit`` has both
+    elements left."""
+    deep = depth > limit
+    pairs, depth = pairs[deep], depth[deep]
+    gone = np.zeros(count, bool)
+    load = np.bincount(pairs.ravel(), minlength=count)
+    for k in np.lexsort((pairs[:, 1], pairs[:, 0], -depth)):
+        i, j = pairs[k]
+        if gone[i] or gone[j]:
+            continue
+        drop = j if load[j] >= load[i] else i
+        gone[drop] = True
+        for other in np.concatenate([pairs[pairs[:, 0] == drop, 1], pairs[pairs[:, 1] == drop, 0]]):
+            load[other] -= 1
+    return gone
+
+
+def _subset(aggregate, keep: np.ndarray):
+    """The elements of a mask with what each carries (a dented aggregate keeps its dents)."""
+    import dataclasses
+
+    if hasattr(aggregate, "subset"):
+        return aggregate.subset(keep)
+    per_element = {
+        n: getattr(aggregate, n)[keep] for n in ("deformations", "bends") if getattr(aggregate, n) is not None
+    }
+    return dataclasses.replace(aggregate, placement=aggregate.placement.subset(keep), **per_element)
+
+
+@node(
+    "cull_crossing",
+    version=1,
+    inputs={
+        "aggregate": In(Aggregate, "elements after the contact step (deform_contacts.aggregate)"),
+        "colliders": In(
+            Mesh, "container / ground solids: an element cutting into one as deep goes too", optional=True, many=True
+        ),
+    },
+    outputs={
+        "aggregate": Out(Aggregate, "the elements kept: none cuts into another deeper than the threshold"),
+        "table": Out(Table, "one row: elements in, elements removed, the deepest pair before and after"),
+    },
+    params={
+        # half issue 25's bar (0.01 L by both inside tests on the exported file)
+        "threshold": Param(
+            float,
+            0.005,
+            "remove an element while it cuts into a neighbour deeper than this",
+            range=(0.0, 1.0),
+            units="element lengths (the median)",
+        ),
+    },
+)
+def cull_crossing(ctx, aggregate, colliders=None, *, threshold):
+    """Winding-number depth of every touching pair of element meshes; the crossed elements removed, and with
+    ``colliders`` those cutting into a wall."""
+    count = len(aggregate.placement)
+    meshes = [aggregate.element_mesh(i) for i in range(count)]
+    length = float(np.median([np.ptp(m.vertices, axis=0).max() for m in meshes])) if count else 1.0
+    pairs, depth = crossing_depths(meshes)
+    walled = wall_depths(meshes, list(colliders or [])) > threshold * length
+    gone = crossed_elements(pairs, depth, threshold * length, count) | walled
+    kept = _subset(aggregate, ~gone) if gone.any() else aggregate
+    left = depth[~(gone[pairs[:, 0]] | gone[pairs[:, 1]])] if len(pairs) else depth
+    table = {
+        "elements": count,
+        "removed": int(gone.sum()),
+        "in_walls": int(walled.sum()),
+        "deepest_before": float(depth.max() / length) if len(depth) else 0.0,
+        "deepest_after": float(left.max() / length) if len(left) else 0.0,
+    }
+    if ctx.rerun.enabled and gone.any():
+        import rerun as rr
+
+        ctx.rerun.log("removed", rr.Points3D(aggregate.placement.positions[gone], colors=[230, 40, 40]))
+    return {"aggregate": kept, "table": Table({k: np.array([v]) for k, v in table.items()})}
