@@ -5,6 +5,7 @@ watertight share), each element's volume against its volume before the contact s
     python benchmarks/bench_contact.py CHECKERS_DIR                      # every food recipe, reduced sizes
     python benchmarks/bench_contact.py CHECKERS_DIR ikura_don --full     # the main job at full size
     python benchmarks/bench_contact.py --quick                           # the reduced main job (CI smoke run)
+    python benchmarks/bench_contact.py ../shared/tools ikura_don --full --time 2 --work DIR  # CPU s of each step
 
 CHECKERS_DIR holds ``overlap_check.py`` and ``mesh_quality.py`` (they need trimesh, scipy and libigl); by default
 the project's ``../shared/tools`` beside the checkout. "before" runs
@@ -122,6 +123,38 @@ def measure(name: str, variant: str, full: bool, checkers: Path, work: Path) -> 
     return row
 
 
+def time_steps(name: str, full: bool, work: Path, repeat: int) -> list[dict]:
+    """Each contact step of the recipe run as ``flatten_contacts`` and as ``deform_contacts`` on its cached input,
+    in turn, ``repeat`` times in one process (the simulation runs once, or not at all with a warm ``--work``)."""
+    from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
+    from nodes.simulation.deform_contacts import deform_contacts
+    from nodes.simulation.flatten_contacts import flatten_contacts
+
+    path = recipe_file(name, "after")
+    try:
+        recipe = load_recipe(path, default_registry(), overrides(name, full))
+    finally:
+        path.unlink()
+    steps = [n for n, e in recipe.nodes.items() if e.spec.type_name == "deform_contacts"]
+    effects = tuple(e for e in recipe.effects if e in ("contact", "collider"))
+    rows = []
+    for step in steps:
+        wires = {k: [str(w) for w in v] for k, v in recipe.nodes[step].inputs.items()}
+        result = run_recipe(recipe, outputs=[w for v in wires.values() for w in v], cache=Cache(work / f"cache_{name}"))
+        given = {
+            k: result.output(v[0]) if k == "aggregate" else [result.output(w) for w in v] for k, v in wires.items()
+        }
+        params = recipe.nodes[step].params
+        for _ in range(repeat):
+            for spec in (flatten_contacts, deform_contacts):
+                start = time.process_time()
+                spec.call(effects=effects, **given, **{k: v for k, v in params.items() if k in spec.params})
+                rows.append(
+                    {"recipe": name, "step": step, "node": spec.type_name, "cpu_s": time.process_time() - start}
+                )
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     import tempfile
 
@@ -137,6 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--full", action="store_true", help="full sizes (minutes per recipe on 2 cores)")
     parser.add_argument("--quick", action="store_true", help="the reduced main job only (a smoke run)")
     parser.add_argument("--variants", default="before,after")
+    parser.add_argument("--time", type=int, metavar="N", help="time each contact step as both nodes, N times in turn")
     parser.add_argument("--work", type=Path, help="keep the node caches and scenes here (re-runs reuse the simulation)")
     args = parser.parse_args(argv)
     if args.quick:
@@ -145,6 +179,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"checkers: no overlap_check.py in {args.checkers}; give the folder that holds the checkers")
     with tempfile.TemporaryDirectory(prefix="bench-contact-") as tmp:
         work = args.work or Path(tmp)
+        if args.time:
+            for name in args.recipes:
+                for row in time_steps(name, args.full, work, args.time):
+                    print(json.dumps(row | {"cpu_s": round(row["cpu_s"], 2)}), flush=True)
+            return 0
         for name in args.recipes:
             for variant in args.variants.split(","):
                 print(json.dumps(measure(name, variant, args.full, args.checkers, work)), flush=True)
