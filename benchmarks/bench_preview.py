@@ -320,19 +320,22 @@ def passes(quick: bool, cache_dir: Path | None) -> str:
                 params["subsurface"],
             ),
         )
-        loaded = clock("scene load", lambda: mi.load_dict(description))
+        loaded = clock("scene load", lambda: mi.load_dict(description, optimize=False))
         integrator = description["integrator"]
-        clock(
+        image = clock(
             f"image: {spp} spp, {integrator['type']} depth {integrator['max_depth']}", lambda: mi.render(loaded, seed=0)
         )
         guides = mi.load_dict({"type": "aov", "aovs": ms.ALBEDO_AOV})
-        clock(
+        aov = clock(
             f"denoiser guides: {min(spp, ms.GUIDE_SPP)} spp",
             lambda: mi.render(loaded, integrator=guides, seed=0, spp=min(spp, ms.GUIDE_SPP)),
         )
+        color, aov = np.asarray(image, np.float32)[..., :3] * np.float32(ms.EXPOSURE), np.asarray(aov, np.float32)
+        layers = ms.Layers(np.maximum(color, 0.0), np.clip(aov[..., 0:3], 0, 1), np.clip(aov[..., 3:6], -1, 1), color)
+        clock(f"denoiser (OIDN, quality {ms.DENOISE_QUALITY})", lambda: ms.denoise(layers))
         clock(
             f"glints: {ms.HIGHLIGHT_SPP} spp, one bounce",
-            lambda: mi.render(mi.load_dict(ms.highlight_dict(scene, description)), seed=0),
+            lambda: mi.render(mi.load_dict(ms.highlight_dict(scene, description), optimize=False), seed=0),
         )
     subject = "synthetic scene" if quick else "main job"
     head = f"Passes of the default preview, {width} × {height}, {subject}; {conditions()}"

@@ -73,6 +73,7 @@ COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coate
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
+DENOISE_QUALITY = "high"  # OIDN's filter quality
 GUIDE_SPP = 2  # the guides need antialiased edges, not converged light: a cheap pass of its own (was 4: 5.9 CPU s)
 # path length with media: every scattering event inside a grain is a vertex of the path, and light that lights a
 # heap of grains crosses many of them (and reflects inside them). A 3 mm grain at 15 % water is 3–6 mean free
@@ -597,7 +598,7 @@ def denoise(layers: Layers) -> np.ndarray:
         albedo=np.ascontiguousarray(layers.albedo),
         normal=np.ascontiguousarray(layers.normal),
         hdr=True,
-        quality="high",
+        quality=DENOISE_QUALITY,
     )
     return np.maximum(np.asarray(out, np.float32), 0.0)
 

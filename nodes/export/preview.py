@@ -26,7 +26,9 @@ from .studio import AMBIENT
     #    64 with media (docs/look.md, "Warm white rice")
     # 8: 'ambient': the studio's ambient radiance, a parameter (shade's ambient never reached the preview); 8 spp
     #    (was 10), the glints' pass 4 spp (was 8), the guides 2 (was 4): 136 → 105 CPU s on the main job
-    version=8,
+    # 9: 5 spp (was 8): 82.0 → 55.1 CPU s on the main job, −0.5 dB / −0.028 SSIM in the eggs window against 256 spp
+    #    (docs/accuracy.md, "Preview cost")
+    version=9,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={
@@ -35,8 +37,10 @@ from .studio import AMBIENT
         # 8, denoised, media on, depth 64: benchmarks/bench_preview.py --budget on the main job (eggs over rice,
         # against 256 spp at depth 128; docs/accuracy.md, "Preview cost"): 10 spp (glints 8, guides 4) 18.3 dB /
         # SSIM 0.415 / 135.7 CPU s; 8 spp (glints 4, guides 2) 18.2 dB / 0.401 / 104.7 CPU s (52 s on 2 free
-        # cores: the issue's 60 s); 6 spp 18.0 dB / 0.387 / 76.1 CPU s.
-        "samples": Param(int, 8, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)),
+        # cores: the issue's 60 s); 6 spp 18.0 dB / 0.387 / 76.1 CPU s. Then 5 (issue 27), on one quieter run:
+        # 8 spp 18.9 dB / 0.429 / 82.0 CPU s, 6 spp 18.6 / 0.412 / 66.1, 5 spp 18.5 / 0.401 / 55.1, 4 spp 18.3 /
+        # 0.390 / 46.4; the whole 5-spp frame against the 8-spp one 33.2 dB / SSIM 0.966, no visible difference.
+        "samples": Param(int, 5, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)),
         "denoise": Param(bool, True, "Intel Open Image Denoise with albedo + normal guides (pyoidn)"),
         "subsurface": Param(
             bool,
