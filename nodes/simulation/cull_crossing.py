@@ -20,7 +20,6 @@ from ..values import Aggregate
 def crossing_depths(meshes: list) -> tuple[np.ndarray, np.ndarray]:
     """Pairs (i < j) whose bounding boxes meet and the deeper of the two ways each cuts into the other (length
     units; 0 where neither vertex set is inside the other)."""
-    import igl
     from scipy.spatial import cKDTree
 
     lo = np.array([m.vertices.min(axis=0) for m in meshes])
@@ -31,15 +30,21 @@ def crossing_depths(meshes: list) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros((0, 2), np.int64), np.zeros(0)
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]  # query_pairs' order is not specified
     meet = np.all((lo[pairs[:, 0]] <= hi[pairs[:, 1]]) & (lo[pairs[:, 1]] <= hi[pairs[:, 0]]), axis=1)
-    pairs = pairs[meet]
-    fwn = igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER
+    pairs = pairs[meet].astype(np.int64)
+    if len(pairs) == 0:
+        return pairs, np.zeros(0)
+    # each element's mesh against the vertices of all its partners at once (one tree per mesh, not per pair)
+    inner = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    outer = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    row = np.tile(np.arange(len(pairs)), 2)
+    order = np.lexsort((row, outer))
     depth = np.zeros(len(pairs))
-    for k, (i, j) in enumerate(pairs):
-        for a, b in ((i, j), (j, i)):
-            inner, outer = meshes[a], meshes[b]
-            d = igl.signed_distance(inner.vertices, outer.vertices, _shell(outer), sign_type=fwn)[0]
-            depth[k] = max(depth[k], -float(d.min()))
-    return pairs.astype(np.int64), depth
+    starts = np.flatnonzero(np.r_[True, outer[order][1:] != outer[order][:-1]])
+    for group in np.split(order, starts[1:]):
+        host = meshes[outer[group[0]]]
+        deepest = _deepest_inside([meshes[a].vertices for a in inner[group]], host.vertices, _shell(host))
+        np.maximum.at(depth, row[group], deepest)
+    return pairs, depth
 
 
 def wall_depths(meshes: list, colliders: list) -> np.ndarray:
@@ -56,10 +61,21 @@ def wall_depths(meshes: list, colliders: list) -> np.ndarray:
         faces = np.ascontiguousarray(wall.faces, np.int64)
         # only elements whose centre is within their own reach of the wall's surface can cut into it
         near = np.abs(igl.signed_distance(centres, wall.vertices, faces, sign_type=fwn)[0]) <= reach
-        for i in np.flatnonzero(near):
-            d = igl.signed_distance(meshes[i].vertices, wall.vertices, faces, sign_type=fwn)[0]
-            depth[i] = max(depth[i], -float(d.min()))
+        if near.any():
+            found = _deepest_inside([meshes[i].vertices for i in np.flatnonzero(near)], wall.vertices, faces)
+            depth[near] = np.maximum(depth[near], found)
     return depth
+
+
+def _deepest_inside(points: list, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Per point set, how deep its deepest point lies inside the closed mesh (fast winding number sign; ≤ 0 where
+    none is inside), in one libigl call for all the sets."""
+    import igl
+
+    d = igl.signed_distance(
+        np.concatenate(points), vertices, faces, sign_type=igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER
+    )[0]
+    return -np.minimum.reduceat(d, np.cumsum([0] + [len(p) for p in points[:-1]]))
 
 
 def _shell(mesh) -> np.ndarray:
