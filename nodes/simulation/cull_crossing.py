@@ -142,9 +142,11 @@ def _subset(aggregate, keep: np.ndarray):
 def cull_crossing(ctx, aggregate, colliders=None, *, threshold):
     """Winding-number depth of every touching pair of element meshes; the crossed elements removed, and with
     ``colliders`` those cutting into a wall."""
+    from ..placement.medial_spheres import element_length
+
     count = len(aggregate.placement)
     meshes = [aggregate.element_mesh(i) for i in range(count)]
-    length = float(np.median([np.ptp(m.vertices, axis=0).max() for m in meshes])) if count else 1.0
+    length = float(np.median([element_length(m.vertices) for m in meshes])) if count else 1.0
     pairs, depth = crossing_depths(meshes)
     walled = wall_depths(meshes, list(colliders or [])) > threshold * length
     gone = crossed_elements(pairs, depth, threshold * length, count) | walled
