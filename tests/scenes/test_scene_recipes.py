@@ -83,8 +83,6 @@ def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
     """Issue 26: the chestnut pieces must show. At S's refine range (±0.1 b) every one of the 38 placed was the
     deepest of its pairs and the cull removed all of them; the recipe's wider range keeps 30, about half of them
     stepped out over the rice. Full size up to the cull (≈ 6 s)."""
-    import numpy as np
-
     recipe = load_recipe(REPO / "graphs" / "rice_chestnut.yaml", default_registry(), [])
     result = run_recipe(recipe, outputs=["refine.placement", "pile.placement"], cache=Cache(tmp_path / "cache"))
     placed, kept = result.output("refine.placement"), result.output("pile.placement")
