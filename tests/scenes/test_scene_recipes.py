@@ -77,3 +77,17 @@ def test_rice_scenes_meet_the_overlap_target(recipe_name, tmp_path_factory):
 def test_sushi_full_method_runs(tmp_path):
     row = _measure("sushi", tmp_path, ["press.mode=full", "press.frames=30"])
     assert 65 <= row["elements"] <= 110
+
+
+def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
+    """Issue 26: the chestnut pieces must show. At S's refine range (±0.1 b) every one of the 38 placed was the
+    deepest of its pairs and the cull removed all of them; the recipe's wider range keeps 30, about half of them
+    stepped out over the rice. Full size up to the cull (≈ 6 s)."""
+    recipe = load_recipe(REPO / "graphs" / "rice_chestnut.yaml", default_registry(), [])
+    result = run_recipe(recipe, outputs=["refine.placement", "pile.placement"], cache=Cache(tmp_path / "cache"))
+    placed, kept = result.output("refine.placement"), result.output("pile.placement")
+    chestnut = kept.kind_names.index("chestnut")
+    pieces = kept.kinds == chestnut
+    assert int((placed.kinds == chestnut).sum()) == 38
+    assert pieces.sum() >= 25
+    assert (kept.offsets[pieces] > 0.5).sum() >= 10  # out over the rice layer, where the camera sees them
