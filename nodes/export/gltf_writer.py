@@ -19,6 +19,7 @@ import struct
 
 import numpy as np
 
+from ..shading.curvature import row_lengths
 from ..values import Material, ShadedScene
 from .look import PREFIX, principled_attributes
 from .mesh_files import rowwise
@@ -133,18 +134,9 @@ class _Buffer:
 def unit_normals(normals: np.ndarray) -> np.ndarray:
     """float32 unit normals (the validator checks length); a zero normal becomes +z."""
     n = np.asarray(normals, np.float32)
-    length = _lengths(n)
+    length = row_lengths(n)
     n = np.where(length > 1e-6, n / np.maximum(length, 1e-12), np.float32([0, 0, 1]))
-    return (n / _lengths(n)).astype(np.float32)
-
-
-def _lengths(rows: np.ndarray) -> np.ndarray:
-    """(n, 1) lengths of (n, 3) rows: ``np.linalg.norm(rows, axis=1, keepdims=True)`` to the bit (x² + y², then
-    + z², in the rows' precision) without its copies and strided reduction (tests/export: half the time)."""
-    squares = rows[:, 0] * rows[:, 0]
-    squares += rows[:, 1] * rows[:, 1]
-    squares += rows[:, 2] * rows[:, 2]
-    return np.sqrt(squares)[:, None]
+    return (n / row_lengths(n)).astype(np.float32)
 
 
 def float32_blocks(blocks: list[np.ndarray]) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:

@@ -182,9 +182,9 @@ def test_usd_crate_bytes_are_those_of_the_usdgeom_api(which, shaded, tmp_path, m
 
 
 def test_lengths_are_numpy_norms_to_the_bit():
-    from nodes.export.gltf_writer import _lengths
+    from nodes.shading.curvature import row_lengths
 
     rng = np.random.default_rng(2)
     for dtype in (np.float32, np.float64):
         rows = (rng.standard_normal((100_000, 3)) * 10.0 ** rng.uniform(-15, 15, (100_000, 1))).astype(dtype)
-        assert np.array_equal(_lengths(rows), np.linalg.norm(rows, axis=1, keepdims=True))
+        assert np.array_equal(row_lengths(rows), np.linalg.norm(rows, axis=1, keepdims=True))
