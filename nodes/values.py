@@ -193,6 +193,16 @@ class Aggregate:
             normals = self._bent_normals(i, base.vertices, base.normals)
         return Mesh(vertices, base.faces, normals=normals, parts=base.parts, name=f"{base.name}#{i}")
 
+    def without_normals(self) -> Aggregate:
+        """The aggregate with normal-free library meshes: its ``element_mesh`` gives the same vertices, faces and
+        parts without the normal work (rotating them, bending them, re-normalising a dented element's) — for
+        readers of the shapes alone (``measure``; ``shade``, which computes its own normals)."""
+        libraries = tuple(
+            dataclasses.replace(library, meshes=tuple(dataclasses.replace(m, normals=None) for m in library.meshes))
+            for library in self.libraries
+        )
+        return dataclasses.replace(self, libraries=libraries)
+
     def _bent_normals(self, i: int, local: np.ndarray, normals: np.ndarray) -> np.ndarray:
         """cof(J)·n, normalised, with J(v) = D·R + R·B·∂m/∂v the Jacobian of ``element_points``."""
         rotation = self.placement.rotations[i]

@@ -55,14 +55,18 @@ def export(ctx, scene, *, formats, basename, instancing):
     problems = _check({"formats": formats, "basename": basename})
     if problems:
         raise ValueError("; ".join(f"{name}: {message}" for name, message in problems))
-    from .gltf_writer import glb_bytes
+    from .gltf_writer import glb_bytes, material_translucency
+    from .instancing import instance_groups
     from .mesh_files import obj_bytes, ply_bytes
     from .usd_writer import usd_bytes
 
+    groups = weights = None
+    if {"glb", "usda", "usdc"} & set(formats):  # found once for the .glb and the USD files
+        groups, weights = instance_groups(scene) if instancing else [], material_translucency(scene)
     writers = {
-        "glb": lambda s: glb_bytes(s, instancing),
-        "usda": lambda s: usd_bytes(s, binary=False, instancing=instancing),
-        "usdc": lambda s: usd_bytes(s, binary=True, instancing=instancing),
+        "glb": lambda s: glb_bytes(s, instancing, groups, weights),
+        "usda": lambda s: usd_bytes(s, binary=False, instancing=instancing, groups=groups, weights=weights),
+        "usdc": lambda s: usd_bytes(s, binary=True, instancing=instancing, groups=groups, weights=weights),
         "ply": ply_bytes,
         "obj": obj_bytes,
     }

@@ -19,8 +19,10 @@ import struct
 
 import numpy as np
 
+from ..shading.curvature import row_lengths
 from ..values import Material, ShadedScene
 from .look import PREFIX, principled_attributes
+from .mesh_files import rowwise
 
 FLOAT, UINT = 5126, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
@@ -110,9 +112,9 @@ class _Buffer:
         self.views: list[dict] = []
         self.accessors: list[dict] = []
 
-    def add(self, array: np.ndarray, component: int, kind: str, target: int | None, bounds: bool = False) -> int:
+    def add(self, array: np.ndarray, component: int, kind: str, target: int | None, bounds=None) -> int:
         """A view and an accessor for ``array``; ``target`` None for data no vertex shader reads directly
-        (instance transforms)."""
+        (instance transforms); ``bounds``: the (min, max) rows of ``array`` for the accessor (``block_bounds``)."""
         data = np.ascontiguousarray(array).tobytes()
         view = {"buffer": 0, "byteOffset": self.size, "byteLength": len(data)}
         self.views.append(view if target is None else {**view, "target": target})
@@ -123,9 +125,8 @@ class _Buffer:
             self.chunks.append(b"\0" * pad)
             self.size += pad
         accessor = {"bufferView": len(self.views) - 1, "componentType": component, "count": len(array), "type": kind}
-        if bounds:
-            accessor["min"] = array.min(axis=0).tolist()
-            accessor["max"] = array.max(axis=0).tolist()
+        if bounds is not None:
+            accessor["min"], accessor["max"] = bounds[0].tolist(), bounds[1].tolist()
         self.accessors.append(accessor)
         return len(self.accessors) - 1
 
@@ -133,18 +134,32 @@ class _Buffer:
 def unit_normals(normals: np.ndarray) -> np.ndarray:
     """float32 unit normals (the validator checks length); a zero normal becomes +z."""
     n = np.asarray(normals, np.float32)
-    length = np.linalg.norm(n, axis=1, keepdims=True)
+    length = row_lengths(n)
     n = np.where(length > 1e-6, n / np.maximum(length, 1e-12), np.float32([0, 0, 1]))
-    return (n / np.linalg.norm(n, axis=1, keepdims=True)).astype(np.float32)
+    return (n / row_lengths(n)).astype(np.float32)
 
 
-def _mesh_json(buffer: _Buffer, scene: ShadedScene, k: int, vertices: np.ndarray, name: str) -> dict:
-    """glTF mesh k of the scene with the given vertex positions (its own, or a prototype's centred ones)."""
+def float32_blocks(blocks: list[np.ndarray]) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """Vertex blocks (each ≥ 1 row) as float32, with each block's smallest and largest value per column
+    (rows of two arrays; one reduction over all blocks instead of two per block)."""
+    if not blocks:
+        return [], np.empty((0, 3), np.float32), np.empty((0, 3), np.float32)
+    rows = np.asarray(np.concatenate(blocks), np.float32)
+    counts = [len(b) for b in blocks]
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    split = np.split(rows, starts[1:])
+    return split, np.minimum.reduceat(rows, starts, axis=0), np.maximum.reduceat(rows, starts, axis=0)
+
+
+def _mesh_json(
+    buffer: _Buffer, scene: ShadedScene, k: int, positions: np.ndarray, bounds, normals: np.ndarray | None, name: str
+) -> dict:
+    """glTF mesh k of the scene with the given float32 vertex positions (its own, or a prototype's centred ones)
+    and their (min, max), and float32 unit normals (None: none)."""
     mesh = scene.meshes[k]
-    positions = np.asarray(vertices, np.float32)
-    attributes = {"POSITION": buffer.add(positions, FLOAT, "VEC3", ARRAY_BUFFER, bounds=True)}
-    if mesh.normals is not None:
-        attributes["NORMAL"] = buffer.add(unit_normals(mesh.normals), FLOAT, "VEC3", ARRAY_BUFFER)
+    attributes = {"POSITION": buffer.add(positions, FLOAT, "VEC3", ARRAY_BUFFER, bounds=bounds)}
+    if normals is not None:
+        attributes["NORMAL"] = buffer.add(normals, FLOAT, "VEC3", ARRAY_BUFFER)
     if scene.cdrf_sigma:
         sigma = np.asarray(scene.cdrf_sigma[k], np.float32)
         attributes["_CDRF_SIGMA"] = buffer.add(sigma, FLOAT, "SCALAR", ARRAY_BUFFER)
@@ -153,31 +168,39 @@ def _mesh_json(buffer: _Buffer, scene: ShadedScene, k: int, vertices: np.ndarray
     return {"name": name, "primitives": [primitive]}
 
 
-def glb_bytes(scene: ShadedScene, instancing: bool = True) -> bytes:
+def glb_bytes(scene: ShadedScene, instancing: bool = True, groups=None, weights=None) -> bytes:
     """The scene as a .glb (glTF 2.0 binary): JSON chunk + BIN chunk. With ``instancing``, each group of meshes
     that are one mesh moved rigidly (``instancing.instance_groups``) is one mesh drawn by one node with
-    ``EXT_mesh_gpu_instancing`` (per-instance translation and rotation) instead of a copy per element."""
+    ``EXT_mesh_gpu_instancing`` (per-instance translation and rotation) instead of a copy per element. ``groups``
+    and ``weights``: the scene's ``instance_groups`` and ``material_translucency`` when already found (the export
+    node finds them once for every file it writes)."""
     from .instancing import instance_groups
 
     buffer = _Buffer()
     materials, used = [], set()
-    for material, weight in zip(scene.materials, material_translucency(scene)):
+    for material, weight in zip(scene.materials, material_translucency(scene) if weights is None else weights):
         entry, ext = material_json(material, weight)
         materials.append(entry)
         used |= ext
-    groups = {int(group.members[0]): group for group in (instance_groups(scene) if instancing else [])}
+    found = (instance_groups(scene) if groups is None else groups) if instancing else []
+    groups = {int(group.members[0]): group for group in found}
     copies = {int(k) for group in groups.values() for k in group.members[1:]}
+    written = [k for k, mesh in enumerate(scene.meshes) if len(mesh.faces) and k not in copies]
+    if not written:
+        raise ValueError("scene: no mesh with faces to export")
+    positions, lows, highs = float32_blocks(
+        [scene.meshes[k].vertices - groups[k].centre if k in groups else scene.meshes[k].vertices for k in written]
+    )
+    with_normals = [k for k in written if scene.meshes[k].normals is not None]
+    normals = dict(zip(with_normals, rowwise([scene.meshes[k].normals for k in with_normals], unit_normals)))
     meshes, nodes = [], []
-    for k, mesh in enumerate(scene.meshes):
-        if len(mesh.faces) == 0 or k in copies:
-            continue
-        name = mesh.name or f"mesh_{k}"
+    for k, points, low, high in zip(written, positions, lows, highs):
+        name = scene.meshes[k].name or f"mesh_{k}"
+        meshes.append(_mesh_json(buffer, scene, k, points, (low, high), normals.get(k), name))
         group = groups.get(k)
         if group is None:
-            meshes.append(_mesh_json(buffer, scene, k, mesh.vertices, name))
             nodes.append({"name": name, "mesh": len(meshes) - 1})
             continue
-        meshes.append(_mesh_json(buffer, scene, k, mesh.vertices - group.centre, name))
         instances = {
             "TRANSLATION": buffer.add(group.positions.astype(np.float32), FLOAT, "VEC3", None),
             "ROTATION": buffer.add(group.quaternions().astype(np.float32), FLOAT, "VEC4", None),
@@ -189,8 +212,6 @@ def glb_bytes(scene: ShadedScene, instancing: bool = True) -> bytes:
                 "extensions": {INSTANCING: {"attributes": instances}},
             }
         )
-    if not meshes:
-        raise ValueError("scene: no mesh with faces to export")
     root = {
         "name": "aggregate",
         "rotation": Z_UP_TO_Y_UP,
@@ -215,12 +236,6 @@ def glb_bytes(scene: ShadedScene, instancing: bool = True) -> bytes:
         document["extensionsUsed"] = sorted(used)
     text = json.dumps(document, separators=(",", ":")).encode()
     text += b" " * ((-len(text)) % 4)
-    binary = b"".join(buffer.chunks)
-    total = 12 + 8 + len(text) + 8 + len(binary)
-    return (
-        struct.pack("<4sII", b"glTF", 2, total)
-        + struct.pack("<I4s", len(text), b"JSON")
-        + text
-        + struct.pack("<I4s", len(binary), b"BIN\0")
-        + binary
-    )
+    total = 12 + 8 + len(text) + 8 + buffer.size
+    head = struct.pack("<4sII", b"glTF", 2, total) + struct.pack("<I4s", len(text), b"JSON")
+    return b"".join([head, text, struct.pack("<I4s", buffer.size, b"BIN\0"), *buffer.chunks])

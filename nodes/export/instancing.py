@@ -54,42 +54,62 @@ def rigid_fit(prototype: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, fl
     return rotation, float(residual)
 
 
+class _Signatures:
+    """The prototypes' signatures of one bucket, rows of a buffer that grows by doubling (not a stack of every
+    row per mesh: a scene of dented grains has a prototype per grain)."""
+
+    def __init__(self, width: int):
+        self.rows = np.empty((4, width))
+        self.count = 0
+
+    def append(self, signature: np.ndarray) -> None:
+        if self.count == len(self.rows):
+            self.rows = np.concatenate([self.rows, np.empty_like(self.rows)])
+        self.rows[self.count] = signature
+        self.count += 1
+
+    def near(self, signature: np.ndarray, tolerance: float) -> np.ndarray:
+        """Indices (ascending) of the rows within ``tolerance`` of ``signature`` at every vertex: the rows whose
+        first few vertices are, checked in full."""
+        rows = self.rows[: self.count]
+        head = min(8, len(signature))
+        maybe = np.flatnonzero(np.abs(rows[:, :head] - signature[:head]).max(axis=1) <= tolerance)
+        return maybe[np.abs(rows[maybe] - signature).max(axis=1) <= tolerance]
+
+
 def instance_groups(scene: ShadedScene, tolerance: float = TOLERANCE) -> list[InstanceGroup]:
     """The groups of two or more meshes with faces that are one mesh under rigid motions, in scene order;
     meshes in no group are written as they are. Candidates are first narrowed by each vertex's distance from
     the centroid (unchanged by a rigid motion), then confirmed by ``rigid_fit`` on vertices and normals."""
     buckets: dict[tuple, list[list[int]]] = {}  # same material, faces, parts → prototypes, each with members
-    signatures: dict[tuple, list[np.ndarray]] = {}
+    signatures: dict[tuple, _Signatures] = {}
     fits: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # mesh → (rotation, centroid)
+    digests: dict[tuple[int, int], str] = {}  # faces and parts arrays → their hash (a library mesh's are shared)
     for index, mesh in enumerate(scene.meshes):
         if len(mesh.faces) == 0:
             continue
-        parts = b"" if mesh.parts is None else mesh.parts.tobytes()
-        key = (
-            int(scene.material_of[index]),
-            len(mesh.vertices),
-            mesh.normals is None,
-            hashlib.sha1(mesh.faces.tobytes() + parts).hexdigest(),
-        )
+        arrays = (id(mesh.faces), id(mesh.parts))
+        if arrays not in digests:
+            parts = b"" if mesh.parts is None else mesh.parts.tobytes()
+            digests[arrays] = hashlib.sha1(mesh.faces.tobytes() + parts).hexdigest()
+        key = (int(scene.material_of[index]), len(mesh.vertices), mesh.normals is None, digests[arrays])
         centre = mesh.vertices.mean(axis=0)
         local = mesh.vertices - centre
         signature = np.linalg.norm(local, axis=1)
         groups = buckets.setdefault(key, [])
-        seen = signatures.setdefault(key, [])
+        seen = signatures.setdefault(key, _Signatures(len(signature)))
         joined = False
-        if seen:
-            near = np.flatnonzero(np.abs(np.stack(seen) - signature).max(axis=1) <= tolerance)
-            for g in near:
-                first = scene.meshes[groups[g][0]]
-                rotation, residual = rigid_fit(first.vertices - fits[groups[g][0]][1], local)
-                if residual > tolerance:
-                    continue
-                if mesh.normals is not None and np.abs(first.normals @ rotation.T - mesh.normals).max() > 1e-4:
-                    continue
-                groups[g].append(index)
-                fits[index] = (rotation, centre)
-                joined = True
-                break
+        for g in seen.near(signature, tolerance):
+            first = scene.meshes[groups[g][0]]
+            rotation, residual = rigid_fit(first.vertices - fits[groups[g][0]][1], local)
+            if residual > tolerance:
+                continue
+            if mesh.normals is not None and np.abs(first.normals @ rotation.T - mesh.normals).max() > 1e-4:
+                continue
+            groups[g].append(index)
+            fits[index] = (rotation, centre)
+            joined = True
+            break
         if not joined:
             groups.append([index])
             seen.append(signature)

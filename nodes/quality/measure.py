@@ -52,23 +52,29 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
     import numpy as np
     import trimesh
 
-    from .mesh_overlap import element_overlaps, outer_shell
+    from .mesh_overlap import element_overlaps, outer_shell, volume
     from .skin import skin_score
 
     meshes, centres, radii, volumes, lows, tops = [], [], [], [], [], []
     for aggregate in aggregates:
-        for i in range(len(aggregate.placement)):
-            mesh = aggregate.element_mesh(i)
-            vertices, faces = outer_shell(mesh.vertices, mesh.faces, mesh.parts)
+        p = aggregate.placement
+        shapes = aggregate.without_normals()  # the vertices alone: no normals are measured
+        shells, lengths = {}, {}  # per library mesh (kind, variant): its outer shell's faces, its length
+        for i in range(len(p)):
+            mesh = shapes.element_mesh(i)
+            key = (int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))
+            if key not in shells:  # every element of a library mesh shares its faces and parts
+                shells[key] = outer_shell(mesh.faces, mesh.parts)
+                own = aggregate.libraries[key[0]].meshes[key[1]]
+                lengths[key] = float(np.ptp(own.vertices, axis=0).max())  # the element's length in its own frame
+            used, faces = shells[key]
+            vertices = mesh.vertices if used is None else mesh.vertices[used]
             lo, hi = vertices.min(axis=0), vertices.max(axis=0)
             centre = 0.5 * (lo + hi)
-            p = aggregate.placement
-            own = aggregate.libraries[p.kinds[i]].meshes[p.variants[i] % len(aggregate.libraries[p.kinds[i]])]
-            length = float(np.ptp(own.vertices, axis=0).max())  # the element's length in its own frame
-            meshes.append((vertices, faces, length))
+            meshes.append((vertices, faces, lengths[key]))
             centres.append(centre)
             radii.append(float(np.linalg.norm(vertices - centre, axis=1).max()))
-            volumes.append(abs(trimesh.Trimesh(vertices, faces, process=False).volume))
+            volumes.append(abs(volume(vertices, faces)))
             lows.append(lo[2])
             tops.append(hi[2])
     if not meshes:

@@ -72,8 +72,17 @@ def _sums(vertices: np.ndarray, faces: np.ndarray):
     return _face_sums(v, f)
 
 
+def row_lengths(rows: np.ndarray) -> np.ndarray:
+    """(n, 1) lengths of (n, 3) rows: ``np.linalg.norm(rows, axis=1, keepdims=True)`` to the bit (x² + y², then
+    + z², in the rows' precision) without its copies and strided reduction (half the time; tests/export)."""
+    squares = rows[:, 0] * rows[:, 0]
+    squares += rows[:, 1] * rows[:, 1]
+    squares += rows[:, 2] * rows[:, 2]
+    return np.sqrt(squares)[:, None]
+
+
 def _unit(rows: np.ndarray) -> np.ndarray:
-    length = np.linalg.norm(rows, axis=1, keepdims=True)
+    length = row_lengths(rows)
     return np.divide(rows, length, out=np.zeros_like(rows), where=length > 0)
 
 

@@ -65,7 +65,7 @@ def _element_pieces(
     p = aggregate.placement
     kinds = [lib.kind for lib in aggregate.libraries]
     presets = [mat.preset_for_kind(kind, settings.presets) for kind in kinds]
-    meshes = derived(aggregate, "element_meshes", lambda a: [a.element_mesh(i) for i in range(len(a.placement))])
+    meshes = derived(aggregate, "element_shapes", _element_shapes)
     is_ice = np.array([presets[k] == "ice" for k in p.kinds], bool)
     grade = np.zeros(len(p), np.int64)
     if is_ice.any():
@@ -101,6 +101,12 @@ def _element_pieces(
                     _Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{names[part]}"), materials[preset][part])
                 )
     return pieces
+
+
+def _element_shapes(aggregate: Aggregate) -> list[Mesh]:
+    """Each element's world mesh without normals: the scene's normals come from ``normals_and_curvature``."""
+    shapes = aggregate.without_normals()
+    return [shapes.element_mesh(i) for i in range(len(aggregate.placement))]
 
 
 def _parts(mesh: Mesh, names: tuple[str, ...], what: str, preset: str) -> list[tuple[int, np.ndarray, np.ndarray]]:

@@ -113,3 +113,78 @@ def test_instancing_off_writes_a_mesh_per_element():
     files = export.call(scene=scene, formats=["glb"], basename="s", instancing=False).files
     doc, _ = _gltf(files["s.glb"])
     assert len(doc["meshes"]) == len(scene.meshes) and "extensionsRequired" not in doc
+
+
+def _usdgeom_elements(stage, scene, instancing: bool) -> None:
+    """The elements as the UsdGeom API authors them (the writer before its Sdf change block): the reference whose
+    specs, fields and field order ``usd_writer._mesh_prim`` must reproduce."""
+    from pxr import Gf, Sdf, UsdGeom, UsdShade, Vt
+
+    from nodes.export.instancing import instance_groups
+    from nodes.export.usd_writer import prim_names
+
+    looks = [UsdShade.Material(p) for p in stage.GetPrimAtPath("/Scene/Looks").GetChildren()]
+    names = prim_names([mesh.name for mesh in scene.meshes], "mesh")
+    groups = {int(g.members[0]): g for g in (instance_groups(scene) if instancing else [])}
+    copies = {int(k) for g in groups.values() for k in g.members[1:]}
+
+    def mesh_prim(path, k, vertices):
+        mesh, geom = scene.meshes[k], UsdGeom.Mesh.Define(stage, path)
+        points = np.asarray(vertices, np.float32)
+        geom.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
+        geom.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(mesh.faces), 3, np.int32)))
+        geom.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(mesh.faces, np.int32).reshape(-1)))
+        geom.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+        geom.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(np.stack([points.min(0), points.max(0)])))
+        if mesh.normals is not None:
+            geom.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.normals, np.float32)))
+            geom.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+        if mesh.colors is not None:
+            color = geom.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
+            color.Set(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.colors, np.float32)[:, :3]))
+        sigma = UsdGeom.PrimvarsAPI(geom).CreatePrimvar("cdrf_sigma", Sdf.ValueTypeNames.FloatArray, "vertex")
+        sigma.Set(Vt.FloatArray.FromNumpy(np.asarray(scene.cdrf_sigma[k], np.float32)))
+        UsdShade.MaterialBindingAPI.Apply(geom.GetPrim()).Bind(looks[scene.material_of[k]])
+        return geom
+
+    UsdGeom.Scope.Define(stage, "/Scene/Elements")
+    for k, mesh in enumerate(scene.meshes):
+        if len(mesh.faces) == 0 or k in copies:
+            continue
+        if k not in groups:
+            mesh_prim(f"/Scene/Elements/{names[k]}", k, mesh.vertices)
+            continue
+        group, path = groups[k], f"/Scene/Elements/{names[k]}_instances"
+        instancer = UsdGeom.PointInstancer.Define(stage, path)
+        prototype = mesh_prim(f"{path}/{names[k]}", k, mesh.vertices - group.centre)
+        instancer.CreatePrototypesRel().SetTargets([prototype.GetPath()])
+        instancer.CreateProtoIndicesAttr(Vt.IntArray.FromNumpy(np.zeros(len(group.members), np.int32)))
+        instancer.CreatePositionsAttr(Vt.Vec3fArray.FromNumpy(group.positions.astype(np.float32)))
+        q = group.quaternions()
+        instancer.CreateOrientationsAttr(Vt.QuathArray([Gf.Quath(float(r[3]), *map(float, r[:3])) for r in q]))
+        instancer.CreateOrientationsfAttr(Vt.QuatfArray([Gf.Quatf(float(r[3]), *map(float, r[:3])) for r in q]))
+
+
+@pytest.mark.parametrize("which", ["grains", "dented", "shaded"])
+def test_usd_crate_bytes_are_those_of_the_usdgeom_api(which, shaded, tmp_path, monkeypatch):
+    """The Sdf change block authors what the UsdGeom API would, field by field in its order: the same .usdc bytes
+    (a field out of order, e.g. a normal's interpolation before its value, changes them)."""
+    from nodes.export import usd_writer
+
+    scene = {"grains": _scene(), "dented": _scene(dent=1.0), "shaded": shaded}[which]
+    for instancing in (True, False):
+        fast = usd_writer.usd_bytes(scene, binary=True, instancing=instancing)
+        stage = usd_writer.build_stage(scene, instancing)
+        stage.RemovePrim("/Scene/Elements")
+        _usdgeom_elements(stage, scene, instancing)
+        stage.GetRootLayer().Export(str(tmp_path / "reference.usdc"))
+        assert fast == (tmp_path / "reference.usdc").read_bytes()
+
+
+def test_lengths_are_numpy_norms_to_the_bit():
+    from nodes.shading.curvature import row_lengths
+
+    rng = np.random.default_rng(2)
+    for dtype in (np.float32, np.float64):
+        rows = (rng.standard_normal((100_000, 3)) * 10.0 ** rng.uniform(-15, 15, (100_000, 1))).astype(dtype)
+        assert np.array_equal(row_lengths(rows), np.linalg.norm(rows, axis=1, keepdims=True))

@@ -83,3 +83,41 @@ def test_skin_column_reads_the_element_meshes():
     aggregate = balls(0.0)
     library = ElementLibrary("box", (Mesh.from_trimesh(dented, name="box"),))
     assert column(measure.call(aggregates=[Aggregate(aggregate.placement, (library,))]), "skin") > 0.0
+
+
+def test_volume_and_overlaps_are_those_of_trimesh_and_a_libigl_call_per_pair():
+    """The fast paths give the very floats of what they replace: ``volume`` is trimesh's mass-properties volume,
+    and one signed-distance call per neighbour (on every sampled element's points near it) gives each pair the
+    depth of a call per pair."""
+    import igl
+
+    from nodes.quality.mesh_overlap import element_overlaps, volume
+
+    rng = np.random.default_rng(3)
+    sphere = trimesh.creation.icosphere(3)
+    meshes = []
+    for _ in range(40):
+        vertices = sphere.vertices * rng.uniform(0.8, 1.2, 3) + rng.uniform(0.0, 6.0, 3)
+        meshes.append((vertices, sphere.faces, float(np.ptp(vertices, axis=0).max())))
+        assert volume(vertices, sphere.faces) == trimesh.Trimesh(vertices, sphere.faces, process=False).volume
+    centres = np.array([0.5 * (v.min(0) + v.max(0)) for v, _, _ in meshes])
+    radii = np.array([np.linalg.norm(v - c, axis=1).max() for (v, _, _), c in zip(meshes, centres)])
+    sample = np.arange(0, 40, 2)
+    stats = element_overlaps(meshes, centres, radii, sample)
+    depths, contacts = [], np.zeros(len(sample), np.int64)  # a libigl call per pair, as before the grouping
+    for row, i in enumerate(sample):
+        vertices, _, length = meshes[i]
+        for j in range(len(meshes)):
+            if j == i or np.linalg.norm(centres[j] - centres[i]) > radii[i] + radii[j] + 0.02 * length:
+                continue
+            other = meshes[j][0]
+            near = np.all((vertices >= other.min(0) - 0.02 * length) & (vertices <= other.max(0) + 0.02 * length), 1)
+            if near.any():
+                signed = igl.signed_distance(
+                    vertices[near], other, meshes[j][1], sign_type=igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER
+                )[0]
+                if signed.min() < 0.02 * length:
+                    contacts[row] += 1
+                    depths.append(max(0.0, -float(signed.min())) / length)
+    assert len(depths) > 20 and max(depths) > 0.05  # overlapping blobs: the comparison is not vacuous
+    assert sorted(stats.pair_depth.tolist()) == sorted(depths) and stats.contacts.tolist() == contacts.tolist()

@@ -1,0 +1,83 @@
+"""The single-threaded output nodes of a scene — ``measure``, ``shade``, ``export`` (issue 27: every recipe ≤ 60 s
+cold on 2 cores) — timed on their cached inputs, with a digest of what each returns to compare two checkouts.
+
+    python benchmarks/bench_output_nodes.py onigiri CACHE_DIR [--nodes measure,shade,export]
+
+CACHE_DIR holds the recipe's node cache (a copy of a full cold run's, e.g. /work/main/exp/gal_cache/onigiri: the
+inputs are read from it, nothing is written). Each node function runs once in this process, in the order given,
+with the seed the engine derives for it; its wall and CPU seconds are printed (the first node also pays the imports
+its code needs). The last line is JSON: the measure table's values, a sha256 of the shaded scenes' arrays and of
+each exported file, so two checkouts compare with ``diff`` (run each with its own ``PYTHONPATH``, back to back:
+times on a shared machine compare only under the same load, printed beside).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def scene_digest(scene) -> str:
+    """sha256 (16 hex digits) of a shaded scene's mesh arrays, materials and material indices."""
+    digest = hashlib.sha256()
+    for mesh in scene.meshes:
+        for name in ("vertices", "faces", "normals", "colors", "parts"):
+            value = getattr(mesh, name)
+            if value is not None:
+                digest.update(np.ascontiguousarray(value).tobytes())
+    for sigma in scene.cdrf_sigma:
+        digest.update(np.ascontiguousarray(sigma).tobytes())
+    digest.update(repr(scene.materials).encode())
+    digest.update(np.asarray(scene.material_of).tobytes())
+    return digest.hexdigest()[:16]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("recipe", help="a recipe name in graphs/")
+    parser.add_argument("cache", type=Path, help="the recipe's node cache (read only)")
+    parser.add_argument("--nodes", default="measure,shade,export", help="node types to time, in order")
+    args = parser.parse_args()
+
+    from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
+    from nodegraph.context import Context
+    from nodegraph.plan import derive_seed
+
+    recipe = load_recipe(ROOT / "graphs" / f"{args.recipe}.yaml", default_registry(), [])
+    types = args.nodes.split(",")
+    chosen = [n for t in types for n, entry in recipe.nodes.items() if entry.spec.type_name == t]
+    sources = sorted({str(s) for n in chosen for refs in recipe.nodes[n].inputs.values() for s in refs})
+    result = run_recipe(recipe, outputs=sources, cache=Cache(args.cache))
+    print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f}", flush=True)
+    out = {}
+    for node in chosen:
+        entry = recipe.nodes[node]
+        inputs = {}
+        for port, refs in entry.inputs.items():
+            values = [result.output(str(s)) for s in refs]
+            inputs[port] = values if entry.spec.inputs[port].many else values[0]
+        seed = derive_seed(recipe.seed if entry.seed is None else entry.seed, node, None) if entry.spec.random else None
+        ctx = Context.standalone(node_type=entry.spec.type_name, seed=seed)
+        wall, cpu = time.perf_counter(), time.process_time()
+        value = entry.spec.run(ctx, **inputs, **entry.params)
+        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+        print(f"{node}: wall {wall:.2f} s CPU {cpu:.2f} s", flush=True)
+        if entry.spec.type_name == "measure":
+            out[node] = {k: np.asarray(v).tolist() for k, v in value.columns.items()}
+        elif entry.spec.type_name == "shade":
+            out[node] = scene_digest(value)
+        elif entry.spec.type_name == "export":
+            out[node] = {k: hashlib.sha256(v).hexdigest()[:16] for k, v in value.files.items()}
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()
