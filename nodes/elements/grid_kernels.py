@@ -32,8 +32,9 @@ def mesh_distance_band(vertices, faces, h, shape, band):
     dist2 = np.full((ni, nj, nk), limit * limit)
     t = np.empty((3, 3))
     for f in range(faces.shape[0]):
-        for v in range(3):
-            t[v] = vertices[faces[f, v]]
+        for v in range(3):  # element by element: a row assignment compiles numba's shape-mismatch message (≈ 1 s)
+            for d in range(3):
+                t[v, d] = vertices[faces[f, v], d]
         nx = (t[1, 1] - t[0, 1]) * (t[2, 2] - t[0, 2]) - (t[1, 2] - t[0, 2]) * (t[2, 1] - t[0, 1])
         ny = (t[1, 2] - t[0, 2]) * (t[2, 0] - t[0, 0]) - (t[1, 0] - t[0, 0]) * (t[2, 2] - t[0, 2])
         nz = (t[1, 0] - t[0, 0]) * (t[2, 1] - t[0, 1]) - (t[1, 1] - t[0, 1]) * (t[2, 0] - t[0, 0])

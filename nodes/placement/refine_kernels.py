@@ -364,7 +364,7 @@ def refine_offsets(frames, search, neighbours, colour, order, shapes, cost, chun
         i = order[step]
         members[fill[colour[i]]] = i
         fill[colour[i]] += 1
-    max_pts = 0
+    max_pts = np.int64(0)  # not the literal 0: _refine_chunk would compile for Literal[int](0) and again for int64
     for t in range(shapes.pts_start.shape[0] - 1):
         max_pts = max(max_pts, shapes.pts_start[t + 1] - shapes.pts_start[t])
     for c in range(colours):
@@ -422,7 +422,8 @@ def overlap_depths(frames, neighbours, alive, shapes, offset):
     depth = np.zeros(n)
     for i in prange(n):
         if alive[i]:
-            depth[i] = _depth_of(i, alive, frames, neighbours, shapes, offset)
+            # i as int64: the parallel body types it unsigned, and _depth_of and _depth_into compiled twice more
+            depth[i] = _depth_of(np.int64(i), alive, frames, neighbours, shapes, offset)
     return depth
 
 

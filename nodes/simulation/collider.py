@@ -232,7 +232,8 @@ def _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i):
             # which its next touch finds too far, slides once and re-anchors)
         return 0.0
     if val < 0.0 and x_prev is not x:
-        val, gx, gy, gz = _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i)
+        # i as int64: in the parallel loop's body numba types the index unsigned, a second compilation of _swept_back
+        val, gx, gy, gz = _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, np.int64(i))
         pen = r[i] - val
     g = np.sqrt(gx * gx + gy * gy + gz * gz)
     if g < 1e-12:

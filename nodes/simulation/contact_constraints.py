@@ -116,7 +116,7 @@ def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
     return 1.0 if a == i else 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
     rows, ``half`` false: each pair from its lower id) but pairs of two asleep particles

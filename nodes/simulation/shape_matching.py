@@ -120,6 +120,15 @@ def _step_to_goal(x, w, lam, alpha_tilde, i, k, g):
 
 
 @njit(cache=True, inline="always")
+def _copy3(src, dst):
+    """dst[:3, :3] = src element by element: an array assignment compiles numba's shape-mismatch error message
+    (string formatting, ≈ 1 CPU s of a first run's compiling)."""
+    for r_ in range(3):
+        for c_ in range(3):
+            dst[r_, c_] = src[r_, c_]
+
+
+@njit(cache=True, inline="always")
 def _det3(a):
     return (
         a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
@@ -169,7 +178,7 @@ def linear_goal_matrix(x, w, q_rest, start, c, quats, moments, beta, rot_iters, 
     cx, cy, cz = centre_of_mass(x, w, s, e)
     _moment_matrix(x, w, q_rest, s, e, cx, cy, cz, apq)
     extract_rotation(apq, quats[c], rot_iters, rot)
-    goal[:, :] = rot
+    _copy3(rot, goal)
     if beta > 0.0:
         # A = A_pq·A_qq⁺ + R·P_null (unobservable axes follow R), volume-normalised (SPEC §5)
         for r_ in range(3):
@@ -185,7 +194,7 @@ def linear_goal_matrix(x, w, q_rest, start, c, quats, moments, beta, rot_iters, 
                 for c_ in range(3):
                     goal[r_, c_] = f * goal[r_, c_] + (1.0 - beta) * rot[r_, c_]
         else:
-            goal[:, :] = rot
+            _copy3(rot, goal)
     return cx, cy, cz
 
 
