@@ -39,10 +39,11 @@ two 5 % short; a ball pressed by fourteen others lost 31 % (tests/simulation/tes
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import get_num_threads, njit
 
 from .collider import sample_phi
 from .contact_flattening import (
@@ -488,12 +489,12 @@ def _outward(position, lin_inv, t, shell, out):
             if shell[k]:
                 extent[a] = max(extent[a], abs(local[k, a]))
     for k in range(nv):
-        g = np.empty(3)
-        for a in range(3):
-            g[a] = local[k, a] / (extent[a] * extent[a])
+        g0 = local[k, 0] / (extent[0] * extent[0])
+        g1 = local[k, 1] / (extent[1] * extent[1])
+        g2 = local[k, 2] / (extent[2] * extent[2])
         norm = 0.0
         for a in range(3):  # ∇ₓ = (∂u/∂x)ᵀ ∇ᵤ
-            out[k, a] = lin_inv[0, a] * g[0] + lin_inv[1, a] * g[1] + lin_inv[2, a] * g[2]
+            out[k, a] = lin_inv[0, a] * g0 + lin_inv[1, a] * g1 + lin_inv[2, a] * g2
             norm += out[k, a] * out[k, a]
         norm = np.sqrt(norm)
         for a in range(3):
@@ -526,8 +527,7 @@ def bulge(position, shell, faces, outward, limit, target, most):
                 lo = mid
             else:
                 hi = mid
-    _bulged(position, shell, outward, limit, hi, trial)
-    position[:] = trial
+    _bulged(position, shell, outward, limit, hi, position)  # in place: each row reads only itself
     return hi
 
 
@@ -716,20 +716,42 @@ def _deform_one(i, vertices, around, shells, rings, settings, budgets, push, fig
             push[first + k, d] = position[k, d] - rest[k, d]
 
 
-@njit(cache=True)
-def deform_elements(vertices, around, shells, rings, settings, budgets, todo):
-    """Per vertex of each of the first elements (rows of ``around.pairs``) marked in ``todo``: its move, the dents
-    and bulges of the module docstring (the others' rows stay 0). Each element reads the others' rest meshes and
-    writes only its own rows, in a fixed order: deterministic. Serial: a parallel loop here took 79 CPU s to
-    compile for 3 % less time on 2 cores. Returns the moves and the ``Figures``."""
+@njit(cache=True, nogil=True)
+def deform_elements(vertices, around, shells, rings, settings, budgets, order, push, figures):
+    """Per vertex of each element of ``order`` (rows of ``around.pairs``): its move, the dents and bulges of the
+    module docstring, into its rows of ``push`` and ``figures``. Each element reads the others' rest meshes and
+    writes only its own rows, so the elements may run in any order and on any thread (``_deform_all``) with the
+    same bits. Releases the GIL."""
+    for i in order:
+        _deform_one(i, vertices, around, shells, rings, settings, budgets, push, figures)
+
+
+# elements per call of ``deform_elements`` on a thread: small enough that the threads finish together (an element
+# costs from 0.1 to 30 ms), large enough that unboxing the arguments (≈ 0.1 ms) does not count
+CHUNK = 32
+
+
+def _deform_all(vertices, around, shells, rings, settings, budgets, todo):
+    """``deform_elements`` over the elements marked in ``todo``, in chunks on numba's thread count of Python threads
+    (the kernel releases the GIL; one compilation, where a numba parallel loop compiles its body twice: 79 CPU s).
+    The others' rows stay 0. Returns the moves and the ``Figures``."""
     own = around.pairs.start.shape[0] - 1
     push = np.zeros((vertices.start[own], 3))
     figures = Figures(
         np.zeros(own), np.zeros(own), np.zeros(own), np.zeros(own, np.int64), np.zeros(own, np.int64), np.zeros(own)
     )
-    for i in range(own):
-        if todo[i]:
-            _deform_one(i, vertices, around, shells, rings, settings, budgets, push, figures)
+    order = np.flatnonzero(todo).astype(np.int64)
+    chunks = [order[k : k + CHUNK] for k in range(0, len(order), CHUNK)]
+    threads = min(get_num_threads(), len(chunks))
+    if threads <= 1:
+        deform_elements(vertices, around, shells, rings, settings, budgets, order, push, figures)
+        return push, figures
+    with ThreadPoolExecutor(threads) as pool:
+        for _ in pool.map(
+            lambda chunk: deform_elements(vertices, around, shells, rings, settings, budgets, chunk, push, figures),
+            chunks,
+        ):
+            pass
     return push, figures
 
 
@@ -826,14 +848,14 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     rings = vertex_rings(rings_of)
     budgets = Budgets(given["cap"] * elements.thickness[:own], edges, np.ones(own))
     todo = np.ones(own, bool)
-    push, figures = deform_elements(vertices, around, shell_faces, rings, solve, budgets, todo)
+    push, figures = _deform_all(vertices, around, shell_faces, rings, solve, budgets, todo)
     for _ in range(STARVED_PASSES):
         starved = _ratio(figures.final, figures.rest) < 1.0 - STARVED  # short of volume, not over it
         if not starved.any():
             break
         budgets.give[starved] *= STARVED_GIVE
         todo = _with_neighbours(starved, nstart, near)
-        again, redone = deform_elements(vertices, around, shell_faces, rings, solve, budgets, todo)
+        again, redone = _deform_all(vertices, around, shell_faces, rings, solve, budgets, todo)
         rows = np.repeat(todo, np.diff(vstart[: own + 1]))
         push[rows] = again[rows]
         figures = Figures(*(np.where(todo, b, a) for a, b in zip(figures, redone)))
