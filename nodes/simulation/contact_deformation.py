@@ -869,8 +869,9 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
         figures = Figures(*(np.where(todo, b, a) for a, b in zip(figures, redone)))
     moved = np.flatnonzero(np.any(push != 0.0, axis=1))
     owner = np.searchsorted(vstart, moved, side="right") - 1
-    dents = Dents(owner.astype(np.int64), (moved - vstart[owner]).astype(np.int64), push[moved])
-    depth = np.linalg.norm(push[moved], axis=1) / length
+    moves = push[moved]
+    dents = Dents(owner.astype(np.int64), (moved - vstart[owner]).astype(np.int64), moves)
+    depth = np.linalg.norm(moves, axis=1) / length
     dented = figures.dented != figures.rest
     error = np.abs(_ratio(figures.final, figures.rest) - 1.0)
     lost = np.abs(_ratio(figures.dented, figures.rest) - 1.0)
