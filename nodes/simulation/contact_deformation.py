@@ -219,7 +219,7 @@ def _lenses(vertices, i, pairs, maps, fields, settings, give, found, out):
     return count
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _bump(t):
     """g(t) = (1 − t²)² for |t| < 1, else 0: smooth, flat at its top, zero slope at its rim."""
     if t >= 1.0:
@@ -228,7 +228,7 @@ def _bump(t):
     return s * s
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _fade(depth, length):
     """T: 1 above the dent's top (depth ≤ 0), a smoothstep down to 0 at ``length`` below it."""
     if depth <= 0.0:
@@ -366,7 +366,7 @@ def _wall_found(position, shell, walls, clearance, found):
     return count
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _is_lens(lenses, count, q):
     """Whether pair row q is one of the first ``count`` lenses."""
     for c in range(count):
@@ -595,7 +595,7 @@ def _normal(points, f):
     return u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _budget(rest, shell, n, most):
     """How far one contact may dent an element in all: ``most``, and a quarter of the element's rest extent along
     n, so that the dent's depth fade (≥ 2A) stays within the element's near half and dents from opposite sides
