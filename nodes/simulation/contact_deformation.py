@@ -39,10 +39,11 @@ two 5 % short; a ball pressed by fourteen others lost 31 % (tests/simulation/tes
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import get_num_threads, njit
 
 from .collider import sample_phi
 from .contact_flattening import (
@@ -172,7 +173,7 @@ class Figures(NamedTuple):
     bulge: np.ndarray
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _lenses(vertices, i, pairs, maps, fields, settings, give, found, out):
     """Element i's lens contacts (``Lenses``, from row 0): per neighbour j whose rest surface overlaps i's (a vertex
     of either inside the other), the lens' axis n and the plane at a − share·(a − b) − e along it, [b, a] how far
@@ -218,7 +219,7 @@ def _lenses(vertices, i, pairs, maps, fields, settings, give, found, out):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _bump(t):
     """g(t) = (1 − t²)² for |t| < 1, else 0: smooth, flat at its top, zero slope at its rim."""
     if t >= 1.0:
@@ -227,7 +228,7 @@ def _bump(t):
     return s * s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _fade(depth, length):
     """T: 1 above the dent's top (depth ≤ 0), a smoothstep down to 0 at ``length`` below it."""
     if depth <= 0.0:
@@ -238,7 +239,7 @@ def _fade(depth, length):
     return 1.0 - t * t * (3.0 - 2.0 * t)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def dent(position, shell, cap, count, n, slope, edge, most):
     """The smooth dent of the module docstring for the cut-in vertices ``cap`` (rows, need along −n), applied to
     every vertex of the element (an inner part moves with it). The bump's width is the one of ``BUMP_WIDTHS``
@@ -295,7 +296,7 @@ def dent(position, shell, cap, count, n, slope, edge, most):
     return amp
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _plane_cap(position, shell, j, maps, fields, margin, normal, plane, found, cap):
     """The cut-in vertices of a lens contact: near j's rest surface (within ``margin``, the clearance) and above its
     plane."""
@@ -315,7 +316,7 @@ def _plane_cap(position, shell, j, maps, fields, margin, normal, plane, found, c
     return cx
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _surface_cap(found, cx, clearance, n, cap):
     """The cut-in vertices of a contact with a rest surface (``found``: depth and outward normal there): the
     axis n (into the surface, depth-weighted) into ``n``, and how far each must go along −n to be ``clearance``
@@ -342,7 +343,7 @@ def _surface_cap(found, cx, clearance, n, cap):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _wall_found(position, shell, walls, clearance, found):
     """Shell vertices inside the walls (φ < clearance, no deeper than the reach) as ``near_surface`` gives them:
     depth −φ and the wall's outward normal (∇φ: into the free space)."""
@@ -365,7 +366,7 @@ def _wall_found(position, shell, walls, clearance, found):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def _is_lens(lenses, count, q):
     """Whether pair row q is one of the first ``count`` lenses."""
     for c in range(count):
@@ -374,7 +375,7 @@ def _is_lens(lenses, count, q):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _gap_planes(rest, shell, i, around, lenses, count, settings, found, out):
     """Element i's separating planes (``Lenses`` rows from 0) towards each neighbour whose rest surface is within
     reach but does not overlap i's: the plane halfway across their closest approach, normal to j's surface there
@@ -403,7 +404,7 @@ def _gap_planes(rest, shell, i, around, lenses, count, settings, found, out):
     return made
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _held(rest, shell, around, planes_of, many, settings, found, held):
     """How each plane holds each shell vertex (``held[c, k]``): −1, by ⅔ of its distance to the plane (vertices under
     it at rest, and over it within reach r of the neighbour's rest surface: the lens' cap); a fixed ⅔·(d − r) for
@@ -426,7 +427,7 @@ def _held(rest, shell, around, planes_of, many, settings, found, held):
                 held[c, k] = -1.0 if far <= 0.0 else (1.0 - ROOM_SHARE) * far
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _bulge_limit(position, shell, walls, planes, counts, held, settings, limit):
     """Per shell vertex the most it may bulge this round (``bulge`` at most, 0 off the shell): ⅔ of its distance to
     every plane that holds it (``_held``) — its lenses' planes (``planes[0]``) and the separating planes halfway to
@@ -459,7 +460,7 @@ def _bulge_limit(position, shell, walls, planes, counts, held, settings, limit):
             limit[k] = max(0.0, min(limit[k], (1.0 - ROOM_SHARE) * (val - settings.clearance)))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _volume(points, faces):
     """Enclosed volume of a closed shell (divergence theorem)."""
     total = 0.0
@@ -471,7 +472,7 @@ def _volume(points, faces):
     return total / 6.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _outward(position, lin_inv, t, shell, out):
     """Per vertex: the outward unit normal of the element's ellipsoid (its shell's extents in its local frame)
     at the vertex — a smooth direction field for the bulge, unlike the bumpy skin's own normals."""
@@ -488,19 +489,19 @@ def _outward(position, lin_inv, t, shell, out):
             if shell[k]:
                 extent[a] = max(extent[a], abs(local[k, a]))
     for k in range(nv):
-        g = np.empty(3)
-        for a in range(3):
-            g[a] = local[k, a] / (extent[a] * extent[a])
+        g0 = local[k, 0] / (extent[0] * extent[0])
+        g1 = local[k, 1] / (extent[1] * extent[1])
+        g2 = local[k, 2] / (extent[2] * extent[2])
         norm = 0.0
         for a in range(3):  # ∇ₓ = (∂u/∂x)ᵀ ∇ᵤ
-            out[k, a] = lin_inv[0, a] * g[0] + lin_inv[1, a] * g[1] + lin_inv[2, a] * g[2]
+            out[k, a] = lin_inv[0, a] * g0 + lin_inv[1, a] * g1 + lin_inv[2, a] * g2
             norm += out[k, a] * out[k, a]
         norm = np.sqrt(norm)
         for a in range(3):
             out[k, a] = out[k, a] / norm if norm > 0.0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _bulged(position, shell, outward, limit, beta, out):
     """``position`` with each shell vertex moved min(β, its limit) along ``outward``."""
     for k in range(position.shape[0]):
@@ -509,7 +510,7 @@ def _bulged(position, shell, outward, limit, beta, out):
             out[k, a] = position[k, a] + move * outward[k, a]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def bulge(position, shell, faces, outward, limit, target, most):
     """The element's volume back to ``target`` by the bulge of the module docstring: β by bisection in [0, most]
     (the volume grows with β). Moves ``position``; returns β (``most`` when even that is not enough)."""
@@ -526,12 +527,11 @@ def bulge(position, shell, faces, outward, limit, target, most):
                 lo = mid
             else:
                 hi = mid
-    _bulged(position, shell, outward, limit, hi, trial)
-    position[:] = trial
+    _bulged(position, shell, outward, limit, hi, position)  # in place: each row reads only itself
     return hi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _folded(rest, points, faces, pairs):
     """Edge-adjacent face pairs whose normals the deformation turned more than 150° apart (none at rest): a fold,
     which a renderer shows as a crease and which fools a pseudonormal inside test (the checkers' criterion)."""
@@ -544,7 +544,7 @@ def _folded(rest, points, faces, pairs):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _unfold(rest, position, faces, pairs, rings, row):
     """Where the moves sharpened two faces past 150° (a sliver of the library mesh, whose normal turns with any
     move that is not affine across it): the two faces' corners all given one move, the mean of their rings' moves,
@@ -578,16 +578,24 @@ def _unfold(rest, position, faces, pairs, rings, row):
     return _folded(rest, position, faces, pairs)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _cosine(points, f, g):
     """Cosine of the angle between two faces' normals."""
-    a = np.cross(points[f[1]] - points[f[0]], points[f[2]] - points[f[0]])
-    b = np.cross(points[g[1]] - points[g[0]], points[g[2]] - points[g[0]])
-    norm = np.sqrt(np.dot(a, a) * np.dot(b, b))
-    return np.dot(a, b) / norm if norm > 0.0 else 1.0
+    a0, a1, a2 = _normal(points, f)
+    b0, b1, b2 = _normal(points, g)
+    norm = np.sqrt((a0 * a0 + a1 * a1 + a2 * a2) * (b0 * b0 + b1 * b1 + b2 * b2))
+    return (a0 * b0 + a1 * b1 + a2 * b2) / norm if norm > 0.0 else 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
+def _normal(points, f):
+    """A face's area-weighted normal (p1 − p0) × (p2 − p0)."""
+    u0, u1, u2 = points[f[1], 0] - points[f[0], 0], points[f[1], 1] - points[f[0], 1], points[f[1], 2] - points[f[0], 2]
+    v0, v1, v2 = points[f[2], 0] - points[f[0], 0], points[f[2], 1] - points[f[0], 1], points[f[2], 2] - points[f[0], 2]
+    return u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _budget(rest, shell, n, most):
     """How far one contact may dent an element in all: ``most``, and a quarter of the element's rest extent along
     n, so that the dent's depth fade (≥ 2A) stays within the element's near half and dents from opposite sides
@@ -600,7 +608,7 @@ def _budget(rest, shell, n, most):
     return min(most, (hi - lo) / 4.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _dent_spent(position, rest, shell, cap, m, n, settings, edge, most, spent, slot):
     """One dent within what is left of contact ``slot``'s budget; returns 1 when the budget is spent."""
     total = _budget(rest, shell, n, most)
@@ -610,7 +618,7 @@ def _dent_spent(position, rest, shell, cap, m, n, settings, edge, most, spent, s
     return int(total - spent[slot] <= 1e-9 * edge)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _dent_pass(position, rest, shell, i, around, lenses, count, settings, edge, most, scratch):
     """One pass of dents over element i's contacts, in order: its lenses, the other neighbours' rest surfaces
     it came near, the walls. Returns how many dents it made and how many contacts' budgets are spent."""
@@ -644,7 +652,7 @@ def _dent_pass(position, rest, shell, i, around, lenses, count, settings, edge, 
     return made, capped
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _dent_all(position, rest, shell, i, around, lenses, count, settings, edge, most, scratch):
     """Dent passes until none is needed (a dent along one contact's axis can push a vertex past another's plane)
     or every needed one's budget is spent, at most ``DENT_PASSES``. Returns the contacts whose budget ran out and
@@ -659,7 +667,7 @@ def _dent_all(position, rest, shell, i, around, lenses, count, settings, edge, m
     return capped, dents
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _deform_one(i, vertices, around, shells, rings, settings, budgets, push, figures):
     """Element i's dents and bulges (module docstring) into its rows of ``push`` and ``figures``."""
     pairs, maps, fields = around.pairs, around.maps, around.fields
@@ -716,20 +724,42 @@ def _deform_one(i, vertices, around, shells, rings, settings, budgets, push, fig
             push[first + k, d] = position[k, d] - rest[k, d]
 
 
-@njit(cache=True)
-def deform_elements(vertices, around, shells, rings, settings, budgets, todo):
-    """Per vertex of each of the first elements (rows of ``around.pairs``) marked in ``todo``: its move, the dents
-    and bulges of the module docstring (the others' rows stay 0). Each element reads the others' rest meshes and
-    writes only its own rows, in a fixed order: deterministic. Serial: a parallel loop here took 79 CPU s to
-    compile for 3 % less time on 2 cores. Returns the moves and the ``Figures``."""
+@njit(cache=True, error_model="numpy", nogil=True)
+def deform_elements(vertices, around, shells, rings, settings, budgets, order, push, figures):
+    """Per vertex of each element of ``order`` (rows of ``around.pairs``): its move, the dents and bulges of the
+    module docstring, into its rows of ``push`` and ``figures``. Each element reads the others' rest meshes and
+    writes only its own rows, so the elements may run in any order and on any thread (``_deform_all``) with the
+    same bits. Releases the GIL."""
+    for i in order:
+        _deform_one(i, vertices, around, shells, rings, settings, budgets, push, figures)
+
+
+# elements per call of ``deform_elements`` on a thread: small enough that the threads finish together (an element
+# costs from 0.1 to 30 ms), large enough that unboxing the arguments (≈ 0.1 ms) does not count
+CHUNK = 32
+
+
+def _deform_all(vertices, around, shells, rings, settings, budgets, todo):
+    """``deform_elements`` over the elements marked in ``todo``, in chunks on numba's thread count of Python threads
+    (the kernel releases the GIL; one compilation, where a numba parallel loop compiles its body twice: 79 CPU s).
+    The others' rows stay 0. Returns the moves and the ``Figures``."""
     own = around.pairs.start.shape[0] - 1
     push = np.zeros((vertices.start[own], 3))
     figures = Figures(
         np.zeros(own), np.zeros(own), np.zeros(own), np.zeros(own, np.int64), np.zeros(own, np.int64), np.zeros(own)
     )
-    for i in range(own):
-        if todo[i]:
-            _deform_one(i, vertices, around, shells, rings, settings, budgets, push, figures)
+    order = np.flatnonzero(todo).astype(np.int64)
+    chunks = [order[k : k + CHUNK] for k in range(0, len(order), CHUNK)]
+    threads = min(get_num_threads(), len(chunks))
+    if threads <= 1:
+        deform_elements(vertices, around, shells, rings, settings, budgets, order, push, figures)
+        return push, figures
+    with ThreadPoolExecutor(threads) as pool:
+        for _ in pool.map(
+            lambda chunk: deform_elements(vertices, around, shells, rings, settings, budgets, chunk, push, figures),
+            chunks,
+        ):
+            pass
     return push, figures
 
 
@@ -826,21 +856,22 @@ def deform(aggregate, neighbours=(), free_space=None, settings: dict | None = No
     rings = vertex_rings(rings_of)
     budgets = Budgets(given["cap"] * elements.thickness[:own], edges, np.ones(own))
     todo = np.ones(own, bool)
-    push, figures = deform_elements(vertices, around, shell_faces, rings, solve, budgets, todo)
+    push, figures = _deform_all(vertices, around, shell_faces, rings, solve, budgets, todo)
     for _ in range(STARVED_PASSES):
         starved = _ratio(figures.final, figures.rest) < 1.0 - STARVED  # short of volume, not over it
         if not starved.any():
             break
         budgets.give[starved] *= STARVED_GIVE
         todo = _with_neighbours(starved, nstart, near)
-        again, redone = deform_elements(vertices, around, shell_faces, rings, solve, budgets, todo)
+        again, redone = _deform_all(vertices, around, shell_faces, rings, solve, budgets, todo)
         rows = np.repeat(todo, np.diff(vstart[: own + 1]))
         push[rows] = again[rows]
         figures = Figures(*(np.where(todo, b, a) for a, b in zip(figures, redone)))
     moved = np.flatnonzero(np.any(push != 0.0, axis=1))
     owner = np.searchsorted(vstart, moved, side="right") - 1
-    dents = Dents(owner.astype(np.int64), (moved - vstart[owner]).astype(np.int64), push[moved])
-    depth = np.linalg.norm(push[moved], axis=1) / length
+    moves = push[moved]
+    dents = Dents(owner.astype(np.int64), (moved - vstart[owner]).astype(np.int64), moves)
+    depth = np.linalg.norm(moves, axis=1) / length
     dented = figures.dented != figures.rest
     error = np.abs(_ratio(figures.final, figures.rest) - 1.0)
     lost = np.abs(_ratio(figures.dented, figures.rest) - 1.0)

@@ -6,6 +6,7 @@ pressed grain bulges), and no face turns over. Each of these fails on the flatte
 import dataclasses
 
 import igl
+import numba
 import numpy as np
 import pytest
 import trimesh
@@ -150,6 +151,25 @@ def test_a_wall_pushes_vertices_out_and_the_ball_keeps_its_volume():
 def test_deterministic():
     before = elements([[0.0, 0.0, 0.0], [1.6, 0.0, 0.0], [3.2, 0.0, 0.0]])
     assert codec.encode(run(before)["aggregate"]) == codec.encode(run(before)["aggregate"])
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread: nothing to compare")
+def test_the_moves_do_not_depend_on_the_thread_count(monkeypatch):
+    """The elements run in chunks on numba's thread count of Python threads (``_deform_all``): each writes only its
+    own rows, so one thread and two give the same bits (chunks of 2 here: six chunks for twelve pressed balls)."""
+    from nodes.simulation import contact_deformation
+
+    monkeypatch.setattr(contact_deformation, "CHUNK", 2)
+    before = elements([[1.6 * x, 1.6 * y, 0.0] for x in range(6) for y in range(2)])
+    encoded = []
+    threads = numba.get_num_threads()
+    try:
+        for count in (1, 2):
+            numba.set_num_threads(count)
+            encoded.append(codec.encode(run(before)["aggregate"]))
+    finally:
+        numba.set_num_threads(threads)
+    assert encoded[0] == encoded[1]
 
 
 def bumpy_grains(positions, rotations) -> Aggregate:
