@@ -2,6 +2,7 @@
 cold on 2 cores) — timed on their cached inputs, with a digest of what each returns to compare two checkouts.
 
     python benchmarks/bench_output_nodes.py onigiri CACHE_DIR [--nodes measure,shade,export]
+    python benchmarks/bench_output_nodes.py --quick     # the reduced main job in a temporary cache (CI smoke run)
 
 CACHE_DIR holds the recipe's node cache (a copy of a full cold run's, e.g. /work/main/exp/gal_cache/onigiri: the
 inputs are read from it, nothing is written). Each node function runs once in this process, in the order given,
@@ -17,12 +18,15 @@ import argparse
 import hashlib
 import json
 import os
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+# --quick computes the reduced main job's inputs first (the numba cache may be cold in CI: its compiling counts)
+QUICK_CPU_S = 300
 
 
 def scene_digest(scene) -> str:
@@ -42,20 +46,32 @@ def scene_digest(scene) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("recipe", help="a recipe name in graphs/")
-    parser.add_argument("cache", type=Path, help="the recipe's node cache (read only)")
+    parser.add_argument("recipe", nargs="?", help="a recipe name in graphs/")
+    parser.add_argument("cache", nargs="?", type=Path, help="the recipe's node cache (read only)")
     parser.add_argument("--nodes", default="measure,shade,export", help="node types to time, in order")
+    parser.add_argument("--quick", action="store_true", help="the reduced main job, its inputs computed here")
     args = parser.parse_args()
+    if args.quick:
+        import bench_scenes
 
+        with tempfile.TemporaryDirectory(prefix="bench-output-nodes-") as tmp:
+            time_nodes("ikura_don", Path(tmp), args.nodes.split(","), bench_scenes.QUICK["ikura_don"])
+        return
+    if args.recipe is None or args.cache is None:
+        parser.error("give a recipe and its node cache, or --quick")
+    time_nodes(args.recipe, args.cache, args.nodes.split(","), [])
+
+
+def time_nodes(name: str, cache: Path, types: list[str], overrides: list[str]) -> None:
+    """Run each chosen node once on its inputs from ``cache`` (computed there if missing); print times, then JSON."""
     from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
     from nodegraph.context import Context
     from nodegraph.plan import derive_seed
 
-    recipe = load_recipe(ROOT / "graphs" / f"{args.recipe}.yaml", default_registry(), [])
-    types = args.nodes.split(",")
+    recipe = load_recipe(ROOT / "graphs" / f"{name}.yaml", default_registry(), overrides)
     chosen = [n for t in types for n, entry in recipe.nodes.items() if entry.spec.type_name == t]
     sources = sorted({str(s) for n in chosen for refs in recipe.nodes[n].inputs.values() for s in refs})
-    result = run_recipe(recipe, outputs=sources, cache=Cache(args.cache))
+    result = run_recipe(recipe, outputs=sources, cache=Cache(cache))
     print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f}", flush=True)
     out = {}
     for node in chosen:
