@@ -139,18 +139,6 @@ def unit_normals(normals: np.ndarray) -> np.ndarray:
     return (n / row_lengths(n)).astype(np.float32)
 
 
-def float32_blocks(blocks: list[np.ndarray]) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
-    """Vertex blocks (each ≥ 1 row) as float32, with each block's smallest and largest value per column
-    (rows of two arrays; one reduction over all blocks instead of two per block)."""
-    if not blocks:
-        return [], np.empty((0, 3), np.float32), np.empty((0, 3), np.float32)
-    rows = np.asarray(np.concatenate(blocks), np.float32)
-    counts = [len(b) for b in blocks]
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
-    split = np.split(rows, starts[1:])
-    return split, np.minimum.reduceat(rows, starts, axis=0), np.maximum.reduceat(rows, starts, axis=0)
-
-
 def _mesh_json(
     buffer: _Buffer, scene: ShadedScene, k: int, positions: np.ndarray, bounds, normals: np.ndarray | None, name: str
 ) -> dict:
@@ -174,7 +162,7 @@ def glb_bytes(scene: ShadedScene, instancing: bool = True, groups=None, weights=
     ``EXT_mesh_gpu_instancing`` (per-instance translation and rotation) instead of a copy per element. ``groups``
     and ``weights``: the scene's ``instance_groups`` and ``material_translucency`` when already found (the export
     node finds them once for every file it writes)."""
-    from .instancing import instance_groups
+    from .instancing import written_meshes
 
     buffer = _Buffer()
     materials, used = [], set()
@@ -182,19 +170,14 @@ def glb_bytes(scene: ShadedScene, instancing: bool = True, groups=None, weights=
         entry, ext = material_json(material, weight)
         materials.append(entry)
         used |= ext
-    found = (instance_groups(scene) if groups is None else groups) if instancing else []
-    groups = {int(group.members[0]): group for group in found}
-    copies = {int(k) for group in groups.values() for k in group.members[1:]}
-    written = [k for k, mesh in enumerate(scene.meshes) if len(mesh.faces) and k not in copies]
+    out = written_meshes(scene, instancing, groups)
+    groups, written = out.prototypes, out.indices
     if not written:
         raise ValueError("scene: no mesh with faces to export")
-    positions, lows, highs = float32_blocks(
-        [scene.meshes[k].vertices - groups[k].centre if k in groups else scene.meshes[k].vertices for k in written]
-    )
     with_normals = [k for k in written if scene.meshes[k].normals is not None]
     normals = dict(zip(with_normals, rowwise([scene.meshes[k].normals for k in with_normals], unit_normals)))
     meshes, nodes = [], []
-    for k, points, low, high in zip(written, positions, lows, highs):
+    for k, points, low, high in zip(written, out.positions, out.lows, out.highs):
         name = scene.meshes[k].name or f"mesh_{k}"
         meshes.append(_mesh_json(buffer, scene, k, points, (low, high), normals.get(k), name))
         group = groups.get(k)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -128,3 +129,39 @@ def instance_groups(scene: ShadedScene, tolerance: float = TOLERANCE) -> list[In
                 )
             )
     return sorted(out, key=lambda g: int(g.members[0]))
+
+
+class WrittenMeshes(NamedTuple):
+    """What a writer (.glb, USD) writes of a scene: the meshes with faces that are not copies of an instance
+    group's prototype, their float32 positions (a prototype's centred on its group) and each one's bounds."""
+
+    prototypes: dict[int, InstanceGroup]  # by the group's first member, the mesh written as its prototype
+    indices: list[int]
+    positions: list[np.ndarray]  # float32
+    lows: np.ndarray  # (len(indices), 3) float32
+    highs: np.ndarray
+
+
+def written_meshes(scene: ShadedScene, instancing: bool, groups: list[InstanceGroup] | None = None) -> WrittenMeshes:
+    """The meshes to write with ``instancing`` (``groups``: the scene's ``instance_groups`` when already found), as
+    float32 in one conversion and one min/max reduction over all of them, not two per mesh."""
+    found = (instance_groups(scene) if groups is None else groups) if instancing else []
+    prototypes = {int(group.members[0]): group for group in found}
+    copies = {int(k) for group in found for k in group.members[1:]}
+    indices = [k for k, mesh in enumerate(scene.meshes) if len(mesh.faces) and k not in copies]
+    if not indices:
+        empty = np.empty((0, 3), np.float32)
+        return WrittenMeshes(prototypes, indices, [], empty, empty)
+    blocks = [
+        scene.meshes[k].vertices - prototypes[k].centre if k in prototypes else scene.meshes[k].vertices
+        for k in indices
+    ]
+    rows = np.asarray(np.concatenate(blocks), np.float32)
+    starts = np.cumsum([0] + [len(b) for b in blocks[:-1]]).astype(np.int64)
+    return WrittenMeshes(
+        prototypes,
+        indices,
+        np.split(rows, starts[1:]),
+        np.minimum.reduceat(rows, starts, axis=0),
+        np.maximum.reduceat(rows, starts, axis=0),
+    )

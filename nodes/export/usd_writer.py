@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..values import Material, ShadedScene
-from .gltf_writer import SHEEN_ROUGHNESS, float32_blocks
+from .gltf_writer import SHEEN_ROUGHNESS
 from .look import PREFIX, principled_attributes
 
 
@@ -142,7 +142,7 @@ def build_stage(scene: ShadedScene, instancing: bool = True, groups=None, weight
     are byte for byte the same."""
     from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
-    from .instancing import instance_groups
+    from .instancing import written_meshes
 
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
@@ -158,17 +158,12 @@ def build_stage(scene: ShadedScene, instancing: bool = True, groups=None, weight
         for k, (m, name) in enumerate(zip(scene.materials, prim_names([m.name for m in scene.materials], "material")))
     ]
     names = prim_names([mesh.name for mesh in scene.meshes], "mesh")
-    found = (instance_groups(scene) if groups is None else groups) if instancing else []
-    groups = {int(group.members[0]): group for group in found}
-    copies = {int(k) for group in groups.values() for k in group.members[1:]}
+    out = written_meshes(scene, instancing, groups)
+    groups = out.prototypes
     UsdGeom.Scope.Define(stage, "/Scene/Elements")
     layer = stage.GetRootLayer()
-    written = [k for k, mesh in enumerate(scene.meshes) if len(mesh.faces) and k not in copies]
-    points, lows, highs = float32_blocks(
-        [scene.meshes[k].vertices - groups[k].centre if k in groups else scene.meshes[k].vertices for k in written]
-    )
     with Sdf.ChangeBlock():
-        for k, vertices, low, high in zip(written, points, lows, highs):
+        for k, vertices, low, high in zip(out.indices, out.positions, out.lows, out.highs):
             extent = np.stack([low, high])
             group = groups.get(k)
             if group is None:
