@@ -8,9 +8,11 @@ what the importers read: as ``nodegraph:principled:*`` attributes on the USD Mat
 keys in the glTF material's ``extras``. Both importers keep those as the material's custom properties; this
 add-on sets the Principled BSDF from them:
 
-- transmission and IOR (alpha back to 1), with a volume absorption node in the egg's or ice's colour where the
-  importer made none;
-- subsurface weight and radius (radius in mm, the files' unit: Subsurface Scale 0.001, Blender's metres after
+- the light under the skin the preview renders: where the files carry a medium (``mediumSigmaT``,
+  ``mediumAlbedo``: rice grains, ikura yolks, ice flakes) a clear skin of the preview's roughness over a volume
+  that scatters and absorbs as the preview's medium (Cycles renders it; set enough volume bounces);
+- transmission and IOR (alpha back to 1); the skin's tint per crossing is the base colour both files carry;
+- otherwise subsurface weight and radius (radius in mm, the files' unit: Subsurface Scale 0.001, Blender's metres after
   both importers' default unit conversion);
 - sheen and specular level where the importer did not map them.
 
@@ -60,19 +62,31 @@ def _principled(material):
     return next((n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
 
 
-def _ensure_volume(material, look: dict) -> None:
-    """A volume absorption in the attenuation colour over the mean subsurface radius, as the glTF importer makes
-    from KHR_materials_volume, where the material output has no volume yet (the USD importer makes none)."""
+def _set_medium(material, look: dict) -> None:
+    """The preview's medium inside the element (``mediumSigmaT`` mm⁻¹, ``mediumAlbedo``): a volume scatter of
+    σs = albedo × σt and an absorption of σa = (1 − albedo) × σt (Cycles: density × (1 − colour)), isotropic, in
+    place of any volume the importer made (the glTF importer makes an absorption from KHR_materials_volume)."""
     tree = material.node_tree
     output = next((n for n in tree.nodes if n.type == "OUTPUT_MATERIAL"), None)
-    if output is None or output.inputs["Volume"].is_linked:
+    if output is None:
         return
-    radius = look.get("subsurfaceRadius", (1.0, 1.0, 1.0))
-    absorption = tree.nodes.new("ShaderNodeVolumeAbsorption")
-    absorption.location = (output.location.x - 250, output.location.y - 250)
-    absorption.inputs["Color"].default_value = (*look.get("subsurfaceColor", (1.0, 1.0, 1.0)), 1.0)
-    absorption.inputs["Density"].default_value = 1.0 / max(sum(radius) / 3 * MM, 1e-6)
-    tree.links.new(absorption.outputs["Volume"], output.inputs["Volume"])
+    for link in list(output.inputs["Volume"].links):
+        tree.links.remove(link)
+    density = look["mediumSigmaT"] / MM  # per metre: Blender's scene unit
+    albedo = (*look["mediumAlbedo"], 1.0)
+    scatter = tree.nodes.new("ShaderNodeVolumeScatter")
+    absorb = tree.nodes.new("ShaderNodeVolumeAbsorption")
+    both = tree.nodes.new("ShaderNodeAddShader")
+    for node, dy in ((scatter, -250), (absorb, -450), (both, -350)):
+        node.location = (output.location.x - (400 if node is not both else 200), output.location.y + dy)
+    scatter.inputs["Color"].default_value = albedo
+    scatter.inputs["Density"].default_value = density
+    scatter.inputs["Anisotropy"].default_value = 0.0
+    absorb.inputs["Color"].default_value = albedo
+    absorb.inputs["Density"].default_value = density
+    tree.links.new(scatter.outputs["Volume"], both.inputs[0])
+    tree.links.new(absorb.outputs["Volume"], both.inputs[1])
+    tree.links.new(both.outputs["Shader"], output.inputs["Volume"])
 
 
 def apply_look(material) -> bool:
@@ -85,15 +99,26 @@ def apply_look(material) -> bool:
     if "ior" in look:
         inputs["IOR"].default_value = look["ior"]
     transmission = look.get("transmission", 0.0)
-    if transmission > 0:
+    if "mediumSigmaT" in look:  # the preview's light under the skin: a clear skin over a scattering medium
+        inputs["Transmission Weight"].default_value = 1.0
+        inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        inputs["Roughness"].default_value = look["boundaryRoughness"]
+        inputs["Subsurface Weight"].default_value = 0.0
+        inputs["Coat Weight"].default_value = 0.0
+        inputs["Alpha"].default_value = 1.0
+        material.surface_render_method = "DITHERED"
+        _set_medium(material, look)
+    elif transmission > 0:  # the skin's tint per crossing is the base colour both files carry
         inputs["Transmission Weight"].default_value = transmission
         inputs["Alpha"].default_value = 1.0  # the USD importer's reading of opacity = 1 − transmission
         material.surface_render_method = "DITHERED"
-        _ensure_volume(material, look)
     elif look.get("subsurface", 0.0) > 0:
         inputs["Subsurface Weight"].default_value = look["subsurface"]
         inputs["Subsurface Radius"].default_value = look["subsurfaceRadius"]
         inputs["Subsurface Scale"].default_value = MM
+    if "mediumSigmaT" in look:  # the preview's skin over a medium is a plain dielectric
+        inputs["Sheen Weight"].default_value = 0.0
+        return True
     if look.get("sheen", 0.0) > 0 and not inputs["Sheen Weight"].is_linked:
         tint, base = look.get("sheenTint", 0.5), inputs["Base Color"].default_value
         inputs["Sheen Weight"].default_value = look["sheen"]

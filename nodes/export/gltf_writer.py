@@ -4,8 +4,9 @@ Hand-written JSON + one binary buffer because trimesh's exporter (the library at
 materials to core PBR only and drops transmission, volume, IOR, specular, clearcoat, sheen and emissive
 strength. One glTF mesh and node per element part; the root node turns our Z-up millimetres into
 glTF's Y-up metres. The materials carry what the preview renders (``mitsuba_scene``): the ikura membrane,
-ice and syrup as transmission + volume (IOR, attenuation), rice and yolk as diffuse transmission (the CDRF's
-translucency at the material's median curvature) with sheen and clearcoat, the bowl's glaze as clearcoat.
+ice and syrup as transmission + volume (IOR; the skin's tint per crossing as the base colour), rice as
+diffuse transmission (the CDRF's translucency at the material's median curvature) with sheen and clearcoat,
+the bowl's glaze as clearcoat.
 No ``COLOR_0``: the CDRF vertex colours hold lighting, which a viewer multiplying them into the base colour
 would light again; the CDRF's per-vertex σ travels as the custom attribute ``_CDRF_SIGMA`` (rad). Each material's
 ``extras`` carry its whole principled look (``look.principled_attributes``), which Blender keeps as custom
@@ -21,7 +22,7 @@ import numpy as np
 
 from ..shading.curvature import row_lengths
 from ..values import Material, ShadedScene
-from .look import PREFIX, principled_attributes
+from .look import PREFIX, exported_base_color, principled_attributes
 from .mesh_files import rowwise
 
 FLOAT, UINT = 5126, 5125
@@ -42,8 +43,10 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
         "attenuationDistance": max(thickness * 1e-3, 1e-6),  # world units: m
     }
     if material.transmission > 0:
+        # a volume that refracts; its colour is the skin's tint per crossing, carried as the base colour
+        # (``look.crossing_tint``): an absorption on top coloured the light twice (Blender: crimson eggs)
         ext["KHR_materials_transmission"] = {"transmissionFactor": material.transmission}
-        ext["KHR_materials_volume"] = volume
+        ext["KHR_materials_volume"] = {"thicknessFactor": thickness}
     elif translucency > 0:
         ext["KHR_materials_diffuse_transmission"] = {
             "diffuseTransmissionFactor": float(translucency),
@@ -69,7 +72,7 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
     out = {
         "name": material.name,
         "pbrMetallicRoughness": {
-            "baseColorFactor": [*material.base_color, 1.0],
+            "baseColorFactor": [*exported_base_color(material), 1.0],
             "metallicFactor": material.metallic,
             "roughnessFactor": material.roughness,
         },

@@ -5,9 +5,17 @@ it, under one name each, so that one reader (the Blender add-on in ``blender/nod
 Principled BSDF from either file: on the USD Material prim as ``nodegraph:principled:<name>``, in the glTF
 material's ``extras`` under the same key. Colours are tuples of linear RGB; the subsurface radius is in mm, the
 unit of the meshes.
+
+A transmissive element's skin tints the light at each crossing (``crossing_tint``), as the preview renders it; both
+files carry that tint as the base colour, which glTF and the principled BSDF apply to transmitted light, and no
+volume absorption on top. An element the preview fills with a scattering medium (rice grains, ikura yolks, ice
+flakes) carries the medium's coefficients (``medium*``), so that a renderer that can build a medium (Cycles, through
+the add-on) renders the same light under the skin.
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 from ..values import Material
 
@@ -17,7 +25,9 @@ PREFIX = "nodegraph:principled:"
 def principled_attributes(material: Material, translucency: float) -> dict[str, float | tuple[float, ...]]:
     """The material's principled set; ``translucency`` is its diffuse-transmission weight (``subsurface`` times
     the CDRF's translucency at the material's median σ, ``gltf_writer.material_translucency``)."""
-    return {
+    from .mitsuba_scene import boundary_roughness, is_volumetric, medium_coefficients
+
+    look = {
         "ior": float(material.ior),
         "transmission": float(material.transmission),
         "transmissionRoughness": float(material.transmission_roughness),
@@ -29,3 +39,24 @@ def principled_attributes(material: Material, translucency: float) -> dict[str, 
         "sheenTint": float(material.sheen_tint),
         "specular": float(material.specular),
     }
+    if is_volumetric(material):
+        sigma_t, albedo = medium_coefficients(material)
+        look["mediumSigmaT"] = sigma_t  # mm⁻¹, every channel
+        look["mediumAlbedo"] = tuple(float(c) for c in albedo)
+        look["boundaryRoughness"] = boundary_roughness(material)
+    return look
+
+
+def crossing_tint(material: Material) -> np.ndarray:
+    """Transmittance of a transmissive element's skin at each crossing, √``subsurface_color``: light in and out
+    through the element keeps its subsurface colour (the ikura membrane: deep orange-red through the egg)."""
+    return np.sqrt(np.clip(np.asarray(material.subsurface_color, np.float64), 0.0, 1.0))
+
+
+def exported_base_color(material: Material) -> tuple[float, float, float]:
+    """The base colour both files carry: a transmissive material's ``crossing_tint`` (glTF and the principled BSDF
+    tint transmitted light by the base colour at each crossing), else its base colour."""
+    from .mitsuba_scene import TRANSMISSIVE
+
+    color = crossing_tint(material) if material.transmission >= TRANSMISSIVE else material.base_color
+    return tuple(float(c) for c in color)

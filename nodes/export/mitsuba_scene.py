@@ -49,6 +49,7 @@ import numpy as np
 
 from ..values import Material, ShadedScene
 from . import studio
+from .look import crossing_tint
 
 # the light is a studio (``studio``: softbox key, fill, rim, seamless backdrop, thin lens); ``studio_description``
 # gives it as numbers to the Blender side-by-side script (``tools/blender_side_by_side.py``)
@@ -144,7 +145,7 @@ def alpha(roughness: float) -> float:
 def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
     """Mitsuba BSDF for a principled parameter set (see the module note for the three families)."""
     if material.transmission >= TRANSMISSIVE:
-        tint = np.sqrt(np.clip(material.subsurface_color, 0.0, 1.0)) * material.transmission
+        tint = crossing_tint(material) * material.transmission
         a = alpha(material.transmission_roughness)
         bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
         if a > 1e-3:
@@ -201,16 +202,28 @@ def medium(material: Material) -> dict:
     (potato, Jensen et al. 2001: σ′s = 0.68, 0.70, 0.55 mm⁻¹; the colour is in σa); a σt per channel made volpath
     sample the distance in one channel and weight the others, colour noise that the denoiser left as opal patches of
     green, pink and blue on every grain (docs/look.md, "Warm white rice")."""
-    sigma_t, single = random_walk_coefficients(material.subsurface_color, material.subsurface_radius)
-    sigma_t = np.full(3, sigma_t.mean())
-    densest = float(sigma_t.max())  # Mitsuba reads an RGB as a reflectance in [0, 1]: the scale carries the unit
+    sigma_t, single = medium_coefficients(material)
     return {
         "type": "homogeneous",
         "albedo": _rgb(single),
-        "sigma_t": _rgb(sigma_t / densest),
-        "scale": densest,
+        "sigma_t": _rgb(np.ones(3)),  # Mitsuba reads an RGB as a reflectance in [0, 1]: the scale carries the unit
+        "scale": sigma_t,
         "phase": {"type": "isotropic"},
     }
+
+
+def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:
+    """(σt in mm⁻¹, the same in every channel; single-scattering albedo per channel) of the medium inside a
+    volumetric element (``medium``): what the exported files hand a renderer that builds the same medium."""
+    sigma_t, single = random_walk_coefficients(material.subsurface_color, material.subsurface_radius)
+    return float(sigma_t.mean()), single
+
+
+def boundary_roughness(material: Material) -> float:
+    """The principled roughness of a volumetric element's skin (``boundary_bsdf``)."""
+    if material.transmission >= TRANSMISSIVE:
+        return float(material.transmission_roughness)
+    return float(material.clearcoat_roughness if material.clearcoat > 0 else material.roughness)
 
 
 def boundary_bsdf(material: Material) -> dict:
@@ -219,12 +232,8 @@ def boundary_bsdf(material: Material) -> dict:
     else its roughness). Mitsuba's rough dielectric loses the energy of the microfacets' multiple scattering at
     every crossing, and light crosses a heap of grains many times: at the grain's own roughness (α ≈ 0.23 at 15 %
     water) the rice heap rendered grey, L* 68 against 80 at the film's (α ≈ 0.02; docs/look.md)."""
-    if material.transmission >= TRANSMISSIVE:
-        rough = material.transmission_roughness
-    else:
-        rough = material.clearcoat_roughness if material.clearcoat > 0 else material.roughness
     bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
-    a = alpha(rough)
+    a = alpha(boundary_roughness(material))
     if a > 1e-3:
         bsdf = {**bsdf, "type": "roughdielectric", "alpha": a, "distribution": "ggx"}
     return bsdf

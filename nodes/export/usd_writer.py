@@ -30,7 +30,7 @@ import numpy as np
 
 from ..values import Material, ShadedScene
 from .gltf_writer import SHEEN_ROUGHNESS
-from .look import PREFIX, principled_attributes
+from .look import PREFIX, crossing_tint, exported_base_color, principled_attributes
 
 
 def prim_names(texts, fallback: str) -> list[str]:
@@ -58,9 +58,9 @@ def standard_surface_inputs(material: Material) -> dict[str, float | tuple[float
     """The material's principled parameters as MaterialX ``standard_surface`` inputs (name → float or linear RGB).
 
     Lengths are in the scene's unit (mm): ``subsurface_radius`` is the principled radius with ``subsurface_scale``
-    1, and the absorption inside eggs and ice is ``transmission_color`` reached at ``transmission_depth`` = the
-    mean radius, as the glTF file's ``KHR_materials_volume``. Specular follows Blender's convention as there:
-    0.5 is the dielectric default (weight 1)."""
+    1; a transmissive skin tints light at each crossing (``transmission_color`` = ``look.crossing_tint`` with
+    ``transmission_depth`` 0), as the preview renders it and the glTF file's base colour says. Specular follows
+    Blender's convention as there: 0.5 is the dielectric default (weight 1)."""
     tint = (1.0 - material.sheen_tint) + material.sheen_tint * np.asarray(material.base_color)
 
     def rgb(values) -> tuple[float, float, float]:
@@ -76,8 +76,8 @@ def standard_surface_inputs(material: Material) -> dict[str, float | tuple[float
         "specular_anisotropy": float(material.anisotropic),
         "specular_rotation": float(material.anisotropic_rotation),
         "transmission": float(material.transmission),
-        "transmission_color": rgb(material.subsurface_color),
-        "transmission_depth": float(np.mean(material.subsurface_radius)),
+        "transmission_color": rgb(crossing_tint(material)),
+        "transmission_depth": 0.0,  # the tint applies at each crossing of the skin, as in the preview
         "transmission_extra_roughness": float(material.transmission_roughness),
         "subsurface": float(material.subsurface),
         "subsurface_color": rgb(material.subsurface_color),
@@ -100,7 +100,7 @@ def _material(stage, path: str, material: Material, translucency: float):
     shader = UsdShade.Shader.Define(stage, f"{path}/PreviewSurface")
     shader.CreateIdAttr("UsdPreviewSurface")
     inputs = {
-        "diffuseColor": (Sdf.ValueTypeNames.Color3f, Gf.Vec3f(*material.base_color)),
+        "diffuseColor": (Sdf.ValueTypeNames.Color3f, Gf.Vec3f(*exported_base_color(material))),
         "emissiveColor": (
             Sdf.ValueTypeNames.Color3f,
             Gf.Vec3f(*(np.asarray(material.emission) * material.emission_strength).tolist()),

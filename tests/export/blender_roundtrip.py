@@ -55,6 +55,8 @@ def material_report(material) -> dict:
         "subsurface_radius": list(value("Subsurface Radius")),
         "subsurface_scale": value("Subsurface Scale"),
         "volume": output.inputs["Volume"].is_linked,
+        "base_color": list(value("Base Color"))[:3],
+        "scatters": any(n.type == "VOLUME_SCATTER" for n in material.node_tree.nodes),
     }
 
 

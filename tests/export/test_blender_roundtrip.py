@@ -17,6 +17,8 @@ import numpy as np
 import pytest
 
 from nodes.export import export
+from nodes.export.look import crossing_tint
+from nodes.export.mitsuba_scene import is_volumetric
 
 REPO = Path(__file__).resolve().parents[2]
 SCRIPT = Path(__file__).with_name("blender_roundtrip.py")
@@ -79,14 +81,19 @@ def test_blender_sees_the_whole_look(dish, tmp_path, fmt):
     assert set(materials) == {m.name for m in dish.materials}  # clean names, no m0000N_ prefix
     for material in dish.materials:
         seen = materials[material.name]
-        if material.transmission > 0:  # eggs, ice: refract, not see-through ghosts
+        if is_volumetric(material):  # rice, yolks, ice: the preview's clear skin over its scattering medium
+            assert seen["transmission"] == 1.0 and seen["alpha"] == 1.0 and seen["base_color"] == [1.0, 1.0, 1.0]
+            assert seen["volume"] and seen["scatters"] and seen["subsurface"] == 0.0
+            assert seen["ior"] == pytest.approx(material.ior, abs=1e-6)
+        elif material.transmission > 0:  # the egg's membrane: refracts, not a see-through ghost
             assert seen["transmission"] == pytest.approx(material.transmission, abs=1e-6)
             assert seen["ior"] == pytest.approx(material.ior, abs=1e-6)
-            assert seen["alpha"] == 1.0 and seen["volume"]
-        elif material.subsurface > 0:  # rice scatters light
+            assert seen["alpha"] == 1.0 and not seen["scatters"]
+            assert seen["base_color"] == pytest.approx(crossing_tint(material), abs=1e-6)  # tinted once a crossing
+        elif material.subsurface > 0:  # scatters light
             assert seen["subsurface"] == pytest.approx(material.subsurface, abs=1e-6)
             assert seen["subsurface_radius"] == pytest.approx(material.subsurface_radius, abs=1e-6)
             assert seen["subsurface_scale"] == pytest.approx(1e-3)  # mm in Blender's metres
     kinds = {re.sub(r"_.*", "", m.name) for m in dish.materials if m.transmission > 0}
-    assert {"ikura", "ice"} <= kinds and any(m.subsurface > 0 and m.transmission == 0 for m in dish.materials)
+    assert {"ikura", "ice"} <= kinds and any(is_volumetric(m) and m.transmission == 0 for m in dish.materials)
     assert got["render_mean"] > 0.02  # lit, not black
