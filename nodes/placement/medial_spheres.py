@@ -116,21 +116,48 @@ def medial_spheres(
 
 
 def _greedy_cover(points, centers, radii, epsilon, max_spheres):
-    """Set cover: repeatedly keep the sphere touching (within epsilon) most still-uncovered samples."""
-    squares = [np.subtract.outer(centers[:, k], points[:, k]) ** 2 for k in range(3)]
-    distance = np.sqrt(squares[0] + squares[1] + squares[2])  # as np.linalg.norm sums: the same bits
-    touches = distance <= (radii + epsilon)[:, None]
-    gain = touches.sum(axis=1)  # uncovered samples each sphere touches, kept up to date as samples get covered
-    chosen = []
-    while len(chosen) < max_spheres:
-        best = int(np.argmax(gain))
+    """Set cover: repeatedly keep the sphere touching (within epsilon) most still-uncovered samples
+    (``_cover``; the first such sphere on ties)."""
+    reach = np.ascontiguousarray(radii + epsilon, np.float64)
+    return _cover(kernel_array(points), kernel_array(centers), reach, max_spheres)
+
+
+@njit(cache=True)
+def _cover(points, centers, reach, max_spheres):
+    """``_greedy_cover``'s loop: a sample is touched by a sphere when their distance (√ of x² + y² + z², the
+    floats ``np.linalg.norm`` gives) is at most the sphere's reach; each sphere's gain is the count of uncovered
+    samples it touches, lowered as samples get covered. Compiled: the array version copied the touch matrix's
+    columns at every step (0.4 s of a 1,800-face grain)."""
+    n_points, n_centers = points.shape[0], centers.shape[0]
+    touched_by = np.zeros((n_points, n_centers), np.bool_)  # per sample: the spheres touching it
+    gain = np.zeros(n_centers, np.int64)
+    for p in range(n_points):
+        for c in range(n_centers):
+            dx = centers[c, 0] - points[p, 0]
+            dy = centers[c, 1] - points[p, 1]
+            dz = centers[c, 2] - points[p, 2]
+            if np.sqrt(dx * dx + dy * dy + dz * dz) <= reach[c]:
+                touched_by[p, c] = True
+                gain[c] += 1
+    covered = np.zeros(n_points, np.bool_)
+    chosen = np.empty(max(max_spheres, 0), np.int64)
+    count = 0
+    while count < max_spheres:
+        best = 0
+        for c in range(1, n_centers):
+            if gain[c] > gain[best]:
+                best = c
         if gain[best] == 0:
             break
-        chosen.append(best)
-        newly = touches[best].copy()
-        gain -= touches[:, newly].sum(axis=1)
-        touches[:, newly] = False
-    return np.array(chosen, np.int64)
+        chosen[count] = best
+        count += 1
+        for p in range(n_points):
+            if touched_by[p, best] and not covered[p]:
+                covered[p] = True
+                for c in range(n_centers):
+                    if touched_by[p, c]:
+                        gain[c] -= 1
+    return chosen[:count]
 
 
 def largest_inscribed_radius(vertices: np.ndarray, faces: np.ndarray, samples: int = 2000) -> float:
