@@ -86,6 +86,7 @@ class XpbdParams:
     substeps: int
     iterations: int
     particles_per_element: int
+    slender: bool
     mass: float  # mg
     stiffness: float  # N/m
     linear_deformation: float
