@@ -21,7 +21,6 @@ from .settings import PAIR_EFFECTS, XpbdParams, solver_settings
 from .solver import Diagnostics, XpbdSolver
 from .state import State
 
-
 # a japonica grain's length over its width (SPEC §1: 5 × 3 mm raw): the shape ``particles_per_element`` is set for
 REFERENCE_ELONGATION = 5.0 / 3.0
 
