@@ -172,10 +172,11 @@ def build_simulation(
     x, r, w, q = (np.concatenate(a) for a in (xs, rs, ws, qs))
     start = np.concatenate([[0], np.cumsum(sizes)])
     water = {} if material is None else {"water_content": material.water_content}
-    # a cluster of m× the particles moves by its contacts' corrections m× more slowly per substep (shape matching
-    # shares each over its particles): the run settles it at m² × the substeps (docs/look.md: an indica pile's
-    # spheres overlap p95 0.60 mm at 16 particles and 10 substeps, 0.31 at 20, 0.16 at 40)
-    stepped = dataclasses.replace(params, substeps=params.substeps * slender**2)
+    # a cluster of m× the particles gives way to its contacts more slowly per substep (shape matching shares each
+    # correction over its particles), and long grains jam: the run settles them at m³ × the substeps (docs/look.md,
+    # a reduced indica bowl at 16 particles: sphere overlap p95 0.60 mm at 10 substeps, 0.16 at 40; skin after the
+    # contact step 0.116 at 40 (dry rice), 0.095 at 80)
+    stepped = dataclasses.replace(params, substeps=params.substeps * slender**3)
     settings = solver_settings(stepped, effects, float(np.median(r)), **water)
     sdf = None
     if "collider" in effects:

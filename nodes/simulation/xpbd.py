@@ -95,14 +95,14 @@ def _check(params):
         "particles_per_element": Param(
             int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
         ),
-        # True in the rice recipes (docs/look.md, indica): an indica grain (m = 2) at 16 particles and 4 × the
-        # substeps crosses its neighbours p95 0.74 mm after a reduced bowl's run instead of 1.17 mm
+        # True in rice_bowl (docs/look.md, indica): an indica grain (m = 2) at 16 particles and 8 × the substeps
+        # crosses its neighbours p95 0.68 mm after a reduced bowl's run (dry rice) instead of 1.17 mm
         "slender": Param(
             bool,
             False,
             "clusters sized to the element's cross-section: an element m times as elongated as a japonica grain "
             "(length / width over 5/3, rounded, ≥ 1; indica 2) gets m × particles_per_element particles, and the run "
-            "m² × the substeps (a cluster of more particles gives way to its contacts more slowly per substep)",
+            "m³ × the substeps (a cluster of more particles gives way to its contacts more slowly per substep)",
         ),
         "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
         "stiffness": Param(
