@@ -86,7 +86,6 @@ class XpbdParams:
     substeps: int
     iterations: int
     particles_per_element: int
-    slender: bool
     mass: float  # mg
     stiffness: float  # N/m
     linear_deformation: float

@@ -21,18 +21,6 @@ from .settings import PAIR_EFFECTS, XpbdParams, solver_settings
 from .solver import Diagnostics, XpbdSolver
 from .state import State
 
-# a japonica grain's length over its width (SPEC §1: 5 × 3 mm raw): the shape ``particles_per_element`` is set for
-REFERENCE_ELONGATION = 5.0 / 3.0
-
-
-def slender_factor(mesh) -> int:
-    """m ≥ 1: the element's length over its width (its longest and middle extent in its own frame, where the
-    library lays the long axis on x) in units of a japonica grain's (``REFERENCE_ELONGATION``), rounded. An indica
-    grain (11.6 × 4.0 × 2.8 mm) is 2: a cluster of 8 spheres, each no deeper than the grain is thick, leaves its
-    skin up to 0.94 mm outside every sphere, 16 leave 0.59 mm (japonica's 8: 0.47 mm; docs/look.md)."""
-    extent = np.sort(np.ptp(np.asarray(mesh.vertices), axis=0))[::-1]
-    return max(1, int(round(extent[0] / max(extent[1], 1e-12) / REFERENCE_ELONGATION)))
-
 
 @dataclass
 class Simulation:
@@ -149,16 +137,13 @@ def build_simulation(
         aggregate = Aggregate(full_placement(aggregate, colliders), aggregate.libraries)
     p = aggregate.placement
     cache = {}
-    slender = 1  # the largest ``slender_factor`` of the elements (``params.slender``)
     xs, rs, ws, qs, sizes, local_centre, yolk_local = [], [], [], [], [], [], []
     for i in range(len(p)):
         lib = aggregate.libraries[p.kinds[i]]
         key = (int(p.kinds[i]), int(p.variants[i]) % len(lib))
         if key not in cache:
-            m = slender_factor(lib.meshes[key[1]]) if params.slender else 1
-            slender = max(slender, m)
             cache[key] = element_cluster(
-                lib.meshes[key[1]], m * params.particles_per_element, quadratic=params.deformation == "quadratic"
+                lib.meshes[key[1]], params.particles_per_element, quadratic=params.deformation == "quadratic"
             )
         cl = cache[key]
         c0 = cl.centres.mean(axis=0)
@@ -172,12 +157,7 @@ def build_simulation(
     x, r, w, q = (np.concatenate(a) for a in (xs, rs, ws, qs))
     start = np.concatenate([[0], np.cumsum(sizes)])
     water = {} if material is None else {"water_content": material.water_content}
-    # a cluster of m× the particles gives way to its contacts more slowly per substep (shape matching shares each
-    # correction over its particles), and long grains jam: the run settles them at m³ × the substeps (docs/look.md,
-    # a reduced indica bowl at 16 particles: sphere overlap p95 0.60 mm at 10 substeps, 0.16 at 40; skin after the
-    # contact step 0.116 at 40 (dry rice), 0.095 at 80)
-    stepped = dataclasses.replace(params, substeps=params.substeps * slender**3)
-    settings = solver_settings(stepped, effects, float(np.median(r)), **water)
+    settings = solver_settings(params, effects, float(np.median(r)), **water)
     sdf = None
     if "collider" in effects:
         shapes = colliders + moulds

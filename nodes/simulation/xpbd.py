@@ -30,8 +30,7 @@ def _check(params):
 
 @node(
     "xpbd",
-    # 13: slender
-    version=13,
+    version=12,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "material": In(
@@ -94,15 +93,6 @@ def _check(params):
         # issue 17's 0.03 / 0.10 after the flattening.
         "particles_per_element": Param(
             int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
-        ),
-        # True in rice_bowl (docs/look.md, indica): an indica grain (m = 2) at 16 particles and 8 × the substeps
-        # crosses its neighbours p95 0.68 mm after a reduced bowl's run (dry rice) instead of 1.17 mm
-        "slender": Param(
-            bool,
-            False,
-            "clusters sized to the element's cross-section: an element m times as elongated as a japonica grain "
-            "(length / width over 5/3, rounded, ≥ 1; indica 2) gets m × particles_per_element particles, and the run "
-            "m³ × the substeps (a cluster of more particles gives way to its contacts more slowly per substep)",
         ),
         "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
         "stiffness": Param(
@@ -232,8 +222,7 @@ def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=N
     sim = build_simulation(
         aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds, material=material
     )
-    frames, every, meshes_every = p.frames, p.log_every, p.log_meshes_every
-    substeps = sim.solver.settings.substeps  # ``slender``: more than p.substeps
+    frames, every, meshes_every, substeps = p.frames, p.log_every, p.log_meshes_every, p.substeps
     moving = sim.model.n_moving
     ctx.expect_cost(
         moving * frames * substeps * p.iterations / PARTICLE_ITERATIONS_PER_SECOND,

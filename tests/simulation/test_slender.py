@@ -1,6 +1,6 @@
-"""Long (indica) grains in the run (issue 26, docs/look.md): ``xpbd``'s ``slender`` gives an element m times as
-elongated as a japonica grain m× the particles and the run m³× the substeps, so long grains that cross in the pile
-come apart instead of staying crossed into each other (the contact step's deep dents were the concave skin)."""
+"""Long (indica) grains in the run (issue 26, docs/look.md "indica"): long grains that cross in the pile stay crossed
+into each other after the XPBD run, and the contact step's deep dents are then the concave skin. The reduced rice
+bowl of ``bench_skin.py --exported`` with indica grains at the draft's resolution (4 variants, 400 faces)."""
 
 from __future__ import annotations
 
@@ -11,11 +11,8 @@ import pytest
 
 from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
 from nodes.simulation.cull_crossing import crossing_depths
-from nodes.simulation.scenes import grain_mesh
-from nodes.simulation.setup import slender_factor
 
 REPO = Path(__file__).resolve().parents[2]
-# the reduced rice bowl of ``bench_skin.py --exported`` with the draft's coarser grains (4 variants, 400 faces)
 INDICA = [
     "bowl.size=14.0",
     "bowl.depth=12.0",
@@ -27,32 +24,28 @@ INDICA = [
 ]
 
 
-def test_the_factor_is_the_elongation_over_a_japonica_grains():
-    assert slender_factor(grain_mesh(5.0, 3.0, 2.5)) == 1  # japonica, SPEC §1
-    assert slender_factor(grain_mesh(3.5, 3.0, 2.5)) == 1  # aromatic: shorter
-    assert slender_factor(grain_mesh(11.1, 3.7, 2.6)) == 2  # indica
-    assert slender_factor(grain_mesh(4.0, 3.0, 0.4)) == 1  # an ice flake: thin, not long
-
-
-def crossing(slender: bool, tmp_path) -> np.ndarray:
-    """Depths (mm) of the pairs of indica grains that cut into each other after the reduced bowl's run."""
-    recipe = load_recipe(
-        REPO / "graphs" / "rice_bowl.yaml", default_registry(), INDICA + [f"rice_sim.slender={str(slender).lower()}"]
-    )
-    result = run_recipe(recipe, outputs=["rice_sim.aggregate"], cache=Cache(tmp_path / "cache"))
-    aggregate = result.output("rice_sim.aggregate")
-    _, depth = crossing_depths([aggregate.element_mesh(i) for i in range(len(aggregate.placement))])
-    return depth[depth > 0]
-
-
 @pytest.fixture(scope="module")
-def slender_depths(tmp_path_factory):
-    return crossing(True, tmp_path_factory.mktemp("slender"))
+def indica_run(tmp_path_factory):
+    """(the run's aggregate, the bowl's vessel) of the reduced indica bowl."""
+    recipe = load_recipe(REPO / "graphs" / "rice_bowl.yaml", default_registry(), INDICA)
+    cache = Cache(tmp_path_factory.mktemp("indica") / "cache")
+    result = run_recipe(recipe, outputs=["rice_sim.aggregate", "bowl.vessel"], cache=cache)
+    return result.output("rice_sim.aggregate"), result.output("bowl.vessel")
 
 
-def test_long_grains_do_not_stay_crossed_after_the_run(slender_depths):
-    # these draft grains, cutting into each other after the run (pairs, depth p50 / p95 / max in mm; grains 2.6 mm
-    # thick): without slender (8 particles, 10 substeps: a012bc0's run) 216 pairs, 0.57 / 1.12 / 1.30; with it 59,
-    # 0.33 / 0.91 / 1.01 (the bench's full-resolution grains at 15 % water: p95 1.17 -> 0.66 mm, docs/look.md)
-    assert len(slender_depths) <= 120
-    assert np.percentile(slender_depths, 95) <= 1.0 and slender_depths.max() <= 1.15
+def test_the_run_keeps_the_long_grains_in_the_bowl(indica_run):
+    # a fix by more solver effort must not launch grains: 16 particles at 80 substeps (or 8 at 40) sent grains
+    # through the reduced bowl at up to 1,200 mm/s (docs/look.md); the recipe's run keeps all 60 inside
+    aggregate, vessel = indica_run
+    assert not vessel.outside(aggregate.placement.positions, margin=vessel.wall).any()
+
+
+@pytest.mark.xfail(strict=True, reason="issue 26: long grains stay crossed after the run (docs/look.md, indica)")
+def test_long_grains_do_not_stay_crossed_after_the_run(indica_run):
+    # pairs cutting into each other after the run, depth p50 / p95 / max in mm (grains 2.6 mm thick): a012bc0 216
+    # pairs, 0.57 / 1.12 / 1.30 (fails); japonica's grains on full-resolution meshes cross p95 0.62 mm
+    aggregate, _ = indica_run
+    _, depth = crossing_depths([aggregate.element_mesh(i) for i in range(len(aggregate.placement))])
+    depth = depth[depth > 0]
+    assert len(depth) <= 120
+    assert np.percentile(depth, 95) <= 1.0 and depth.max() <= 1.15
