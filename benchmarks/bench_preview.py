@@ -5,7 +5,7 @@ reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 previ
     python benchmarks/bench_preview.py --ice [--quick] [--cache-dir DIR]    # kakigori ice vs path length
     python benchmarks/bench_preview.py --sss [--quick] [--cache-dir DIR]    # subsurface media × depth × spp
     python benchmarks/bench_preview.py --highlights [--quick]   # default preview: time, determinism, highlights
-    python benchmarks/bench_preview.py --budget 10:64,8:48:4:2 [--quick]  # spp:depth[:glint spp[:guide spp[:media]]]
+    python benchmarks/bench_preview.py --budget 10:64,8:48:4:2 [--save DIR]  # spp:depth[:glints[:guides[:media[:rr]]]]
     python benchmarks/bench_preview.py --time 2 [--save PNG] [--quick]  # the default preview alone: time, same bytes
     python benchmarks/bench_preview.py --passes [--quick]       # CPU seconds of each pass of the default preview
 
@@ -226,10 +226,10 @@ def timed(quick: bool, cache_dir: Path | None, repeat: int, save: Path | None) -
     )
 
 
-def budget(configs: str, quick: bool, cache_dir: Path | None) -> str:
-    """The whole default preview (OIDN, glints) at each ``spp:depth[:glint spp[:guide spp[:media 0/1]]]`` of
-    ``configs``: CPU and wall time of the full frame, PSNR/SSIM in the eggs-over-rice window against 256 spp (64 with
-    ``--quick``) at depth 128 with media."""
+def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None = None) -> str:
+    """The whole default preview (OIDN, glints) at each ``spp:depth[:glint spp[:guide spp[:media 0/1[:rr depth]]]]``
+    of ``configs``: CPU and wall time of the full frame, PSNR/SSIM in the eggs-over-rice window against 256 spp (64
+    with ``--quick``) at depth 128 with media; each full frame written to ``save``/<config>.png if given."""
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from nodes.export import mitsuba_scene as ms
@@ -246,24 +246,31 @@ def budget(configs: str, quick: bool, cache_dir: Path | None) -> str:
     reference = linear_to_srgb8(tone_map(truth.noisy()))
     reference_time = time.perf_counter() - t
     rows = []
-    defaults = (ms.HIGHLIGHT_SPP, ms.GUIDE_SPP)
+    defaults = (ms.HIGHLIGHT_SPP, ms.GUIDE_SPP, ms.RR_DEPTH)
     for config in configs.split(","):
         fields = [int(v) for v in config.split(":")]
-        spp, depth, glint_spp, guide_spp, with_media = fields + [*defaults, int(media)][len(fields) - 2 :]
-        ms.HIGHLIGHT_SPP, ms.GUIDE_SPP = glint_spp, guide_spp
+        spp, depth, glint_spp, guide_spp, with_media, rr_depth = (
+            fields + [*defaults[:2], int(media), defaults[2]][len(fields) - 2 :]
+        )
+        ms.HIGHLIGHT_SPP, ms.GUIDE_SPP, ms.RR_DEPTH = glint_spp, guide_spp, rr_depth
         try:
             t, c = time.perf_counter(), cpu_seconds()
-            render(scene, camera, width, height, spp, sun, True, 0, bool(with_media), depth)
+            frame = render(scene, camera, width, height, spp, sun, True, 0, bool(with_media), depth)
             wall, cpu = time.perf_counter() - t, cpu_seconds() - c
+            if save is not None:
+                from PIL import Image
+
+                save.mkdir(parents=True, exist_ok=True)
+                Image.fromarray(frame).save(save / f"{config.replace(':', '_')}.png")
             layers = render_layers(scene, camera, width, height, spp, sun, 0, crop, depth, bool(with_media))
         finally:
-            ms.HIGHLIGHT_SPP, ms.GUIDE_SPP = defaults
+            ms.HIGHLIGHT_SPP, ms.GUIDE_SPP, ms.RR_DEPTH = defaults
         image = linear_to_srgb8(tone_map(layers.denoised()))
         psnr = peak_signal_noise_ratio(reference, image, data_range=255)
         ssim = structural_similarity(reference, image, channel_axis=2, data_range=255)
         rows.append(
-            f"| {spp} | {depth} | {glint_spp} | {guide_spp} | {'on' if with_media else 'off'} | {psnr:.1f} | "
-            f"{ssim:.3f} | {wall:.1f} | {cpu:.1f} | {cpu / (os.cpu_count() or 1):.1f} |"
+            f"| {spp} | {depth} | {rr_depth} | {glint_spp} | {guide_spp} | {'on' if with_media else 'off'} | "
+            f"{psnr:.2f} | {ssim:.3f} | {wall:.1f} | {cpu:.1f} | {cpu / (os.cpu_count() or 1):.1f} |"
         )
         print(rows[-1], flush=True)
     n = os.cpu_count()
@@ -274,9 +281,9 @@ def budget(configs: str, quick: bool, cache_dir: Path | None) -> str:
             f"at ({crop.x}, {crop.y}) against {reference_spp} spp at depth 128 ({reference_time:.0f} s); load average "
             f"{os.getloadavg()[0]:.2f} on {n} cores",
             "",
-            f"| spp | path depth | glint spp | guide spp | media (SSS) | PSNR (dB) | SSIM | wall (s) | CPU (s) | "
-            f"CPU s / {n} |",
-            "|---|---|---|---|---|---|---|---|---|---|",
+            f"| spp | path depth | rr depth | glint spp | guide spp | media (SSS) | PSNR (dB) | SSIM | wall (s) | "
+            f"CPU (s) | CPU s / {n} |",
+            "|---|---|---|---|---|---|---|---|---|---|---|",
             *rows,
         ]
     )
@@ -355,11 +362,15 @@ def main():
     parser.add_argument("--sss", action="store_true", help="subsurface media on/off × path depth × spp instead")
     parser.add_argument("--highlights", action="store_true", help="default preview: time and highlight energy")
     parser.add_argument(
-        "--budget", default=None, help="spp:depth[:glint spp[:guide spp[:media 0/1]]],...: time against quality"
+        "--budget",
+        default=None,
+        help="spp:depth[:glint spp[:guide spp[:media 0/1[:rr depth]]]],...: time against quality",
     )
     parser.add_argument("--time", type=int, default=0, metavar="N", help="the default preview alone, N renders: time")
     parser.add_argument("--passes", action="store_true", help="CPU seconds of each pass of the default preview")
-    parser.add_argument("--save", type=Path, default=None, help="with --time: write the first render here (PNG)")
+    parser.add_argument(
+        "--save", type=Path, default=None, help="--time: the first render's PNG; --budget: a folder for each frame"
+    )
     args = parser.parse_args()
     if args.passes:
         print(passes(args.quick, args.cache_dir))
@@ -368,7 +379,7 @@ def main():
         print(timed(args.quick, args.cache_dir, args.time, args.save))
         return
     if args.budget:
-        print(budget(args.budget, args.quick, args.cache_dir))
+        print(budget(args.budget, args.quick, args.cache_dir, args.save))
         return
     if args.highlights:
         print(highlights(args.quick, args.cache_dir))

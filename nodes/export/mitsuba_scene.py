@@ -68,8 +68,9 @@ MAX_DEPTH_FLAKES = 128
 HIGHLIGHT_ANGLE = 0.12
 HIGHLIGHT_RADIANCE = 60.0
 # the glints' pass is one bounce: samples for antialiased edges, not for converging light. 4 (was 8): 15.8 → ≈ 8 CPU s
-# of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost")
-HIGHLIGHT_SPP = 4
+# of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost"); 2 (issue 27):
+# ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1
+HIGHLIGHT_SPP = 2
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
@@ -81,6 +82,10 @@ GUIDE_SPP = 2  # the guides need antialiased edges, not converged light: a cheap
 # paths thick with albedo ≈ 0.99; at 32 the walks through the heap were cut off and the rice darkened (rice bowl
 # draft, CIELAB L* of the rice's pixels: 73.7 at 32, 80.4 at 64; docs/look.md, "Warm white rice")
 MAX_DEPTH_MEDIA = 64
+# Russian roulette after this many bounces (Mitsuba's default). From the first bounce (1) the image pass cost ≈ 15 %
+# less per sample on the main job but the eggs window lost 0.1–0.2 dB at the same samples: no better per CPU second,
+# so 5 stays (issue 27; docs/accuracy.md, "Preview cost")
+RR_DEPTH = 5
 VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (with the ice, ``is_ice``)
 
 
@@ -209,6 +214,10 @@ def medium(material: Material) -> dict:
         "sigma_t": _rgb(np.ones(3)),  # Mitsuba reads an RGB as a reflectance in [0, 1]: the scale carries the unit
         "scale": sigma_t,
         "phase": {"type": "isotropic"},
+        # no light sampling from inside: the element's dielectric boundary blocks every shadow ray cast from within
+        # (volpath counts light only through a null boundary), so each was a wasted ray; light still reaches the
+        # medium by the phase function's own direction and the boundary's refraction, with full weight
+        "sample_emitters": False,
     }
 
 
@@ -454,7 +463,11 @@ def scene_dict(
         }
     return {
         "type": "scene",
-        "integrator": {"type": "volpath" if media else "path", "max_depth": max_depth or path_depth(scene, subsurface)},
+        "integrator": {
+            "type": "volpath" if media else "path",
+            "max_depth": max_depth or path_depth(scene, subsurface),
+            "rr_depth": RR_DEPTH,
+        },
         "sensor": sensor,
         "sky": {
             "type": "constant",

@@ -28,7 +28,10 @@ from .studio import AMBIENT
     #    (was 10), the glints' pass 4 spp (was 8), the guides 2 (was 4): 136 → 105 CPU s on the main job
     # 9: 5 spp (was 8): 82.0 → 55.1 CPU s on the main job, −0.5 dB / −0.028 SSIM in the eggs window against 256 spp
     #    (docs/accuracy.md, "Preview cost")
-    version=9,
+    # 10: 3 spp (was 5), glints 2 spp (was 4), no light sampling from inside the media (a shadow ray cast there always
+    #     met the element's dielectric skin): 58.5 → 35.6 CPU s, 134 → 84 s wall at load ≈ 8 on the main job,
+    #     −0.6 dB / −0.036 SSIM in the eggs window against 256 spp (docs/accuracy.md, "Preview cost")
+    version=10,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={
@@ -40,7 +43,11 @@ from .studio import AMBIENT
         # cores: the issue's 60 s); 6 spp 18.0 dB / 0.387 / 76.1 CPU s. Then 5 (issue 27), on one quieter run:
         # 8 spp 18.9 dB / 0.429 / 82.0 CPU s, 6 spp 18.6 / 0.412 / 66.1, 5 spp 18.5 / 0.401 / 55.1, 4 spp 18.3 /
         # 0.390 / 46.4; the whole 5-spp frame against the 8-spp one 33.2 dB / SSIM 0.966, no visible difference.
-        "samples": Param(int, 5, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)),
+        # Then 3 (issue 27 again; two runs on one reference, load 6–11, light sampling inside the media off): 5 spp
+        # 18.40 dB / 0.406 / 54.1 CPU s, 4 spp 18.09 / 0.390 / 41.4, 3 spp 17.79 / 0.370 / 30.8, 2 spp 17.29 /
+        # 0.345 / 24.6 (glints 2 spp below 5). The image pass is ≈ 8 CPU s per sample: the eggs hold it (their red
+        # light walks 16–64 bounces inside; plain diffuse eggs halve the pass), so its samples are the lever.
+        "samples": Param(int, 3, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)),
         "denoise": Param(bool, True, "Intel Open Image Denoise with albedo + normal guides (pyoidn)"),
         "subsurface": Param(
             bool,
