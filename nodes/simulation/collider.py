@@ -9,22 +9,27 @@ cannot cross a wall between two projections, whatever the wall's thickness (test
 thin bowl).
 """
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
-from numba import njit, prange
+from numba import get_num_threads, njit, prange
 
 from ..triangle_distance import point_triangle_offset
 from .friction import RELEASE, friction_wall
 
 
-@njit(cache=True)
-def surface_band(vertices, faces, normals, origin, pitch, shape, band):
-    """Exact unsigned distance on grid points within ``band`` of the surface, inf outside the band.
+@njit(cache=True, nogil=True)
+def surface_band_rows(vertices, faces, normals, origin, pitch, band, first, last, dist, align):
+    """Exact unsigned distance on the grid points of rows ``first`` ≤ i < ``last`` within ``band`` of the surface,
+    written into ``dist`` (filled with inf by the caller; ``align``, zeros, is scratch of the same shape).
 
-    Serial over triangles (each writes a small box of grid points; a parallel loop would race).
+    Faces in order, each over the points of its box in these rows; a point farther than the band from the face's
+    plane (a lower bound of its distance to the face; ``slack`` covers rounding) is passed over before the
+    point–triangle distance, and a column's points are taken only where its line crosses that slab. Each row
+    sees the faces in the same order whatever the rows' split, so rows computed apart (on threads,
+    ``surface_band``) give the bits of one pass over the whole grid. Releases the GIL.
     """
-    dist = np.full(shape, np.inf)
-    align = np.zeros(shape)
-    p = np.empty(3)
+    slack = band + 1e-6 * pitch
     lo = np.empty(3, np.int64)
     hi = np.empty(3, np.int64)
     for f in range(faces.shape[0]):
@@ -35,18 +40,29 @@ def surface_band(vertices, faces, normals, origin, pitch, shape, band):
             mn = min(a[k], b[k], c[k]) - band
             mx = max(a[k], b[k], c[k]) + band
             lo[k] = max(0, int(np.floor((mn - origin[k]) / pitch)))
-            hi[k] = min(shape[k] - 1, int(np.ceil((mx - origin[k]) / pitch)))
-        for i in range(lo[0], hi[0] + 1):
-            p[0] = origin[0] + i * pitch
+            hi[k] = min(dist.shape[k] - 1, int(np.ceil((mx - origin[k]) / pitch)))
+        nx, ny, nz = normals[f, 0], normals[f, 1], normals[f, 2]
+        for i in range(max(lo[0], first), min(hi[0], last - 1) + 1):
+            px = origin[0] + i * pitch
+            sx = (px - a[0]) * nx
             for j in range(lo[1], hi[1] + 1):
-                p[1] = origin[1] + j * pitch
-                for k in range(lo[2], hi[2] + 1):
-                    p[2] = origin[2] + k * pitch
-                    ex, ey, ez = point_triangle_offset(p[0], p[1], p[2], a, b, c)
+                py = origin[1] + j * pitch
+                sxy = sx + (py - a[1]) * ny  # signed distance from the face's plane, but for z
+                k0, k1 = lo[2], hi[2]
+                if abs(nz) > 0.05:  # the column crosses the slab |s| ≤ slack between these heights (±1 cell)
+                    z0 = a[2] - (slack + sxy) / nz
+                    z1 = a[2] + (slack - sxy) / nz
+                    k0 = max(k0, int(np.floor((min(z0, z1) - origin[2]) / pitch)) - 1)
+                    k1 = min(k1, int(np.ceil((max(z0, z1) - origin[2]) / pitch)) + 1)
+                for k in range(k0, k1 + 1):
+                    pz = origin[2] + k * pitch
+                    if abs(sxy + (pz - a[2]) * nz) > slack:
+                        continue
+                    ex, ey, ez = point_triangle_offset(px, py, pz, a, b, c)
                     d = np.sqrt(ex * ex + ey * ey + ez * ez)
                     if d > band:
                         continue
-                    dn = ex * normals[f, 0] + ey * normals[f, 1] + ez * normals[f, 2]
+                    dn = ex * nx + ey * ny + ez * nz
                     cos = abs(dn) / d if d > 1e-12 else 1.0
                     # near-ties (within 1e-9, at edges and vertices) keep the face whose normal best explains
                     # the offset: the choice of the former normal-sign rule, kept so φ keeps its bits (a plain
@@ -54,7 +70,47 @@ def surface_band(vertices, faces, normals, origin, pitch, shape, band):
                     if d < dist[i, j, k] - 1e-9 or (d <= dist[i, j, k] + 1e-9 and cos > align[i, j, k]):
                         dist[i, j, k] = d
                         align[i, j, k] = cos
+
+
+# row blocks per thread in ``surface_band``: the bowl's faces are not spread evenly over its rows
+BLOCKS_PER_THREAD = 4
+
+
+def surface_band(vertices, faces, normals, origin, pitch, shape, band):
+    """Exact unsigned distance on grid points within ``band`` of the surface, inf outside the band: blocks of rows
+    (``surface_band_rows``) on numba's thread count of Python threads, the same bits for any count."""
+    dist = np.full(shape, np.inf)
+    align = np.zeros(shape)
+    threads = min(get_num_threads(), shape[0])
+    cuts = np.linspace(0, shape[0], BLOCKS_PER_THREAD * threads + 1).astype(np.int64)
+    blocks = list(zip(cuts[:-1], cuts[1:]))
+
+    def rows(block):
+        surface_band_rows(vertices, faces, normals, origin, pitch, band, block[0], block[1], dist, align)
+
+    if threads <= 1:
+        rows((0, shape[0]))
+    else:
+        with ThreadPoolExecutor(threads) as pool:
+            for _ in pool.map(rows, blocks):
+                pass
     return dist
+
+
+@njit(cache=True)
+def signed_field(dist, inside, depth, clearance):
+    """φ from the band's exact distance where it is finite, else the distance transforms (``depth`` inside,
+    ``clearance`` outside), negative inside: one pass, no temporary grids."""
+    phi = np.empty(dist.shape)
+    nx, ny, nz = dist.shape
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                d = dist[i, j, k]
+                if not np.isfinite(d):
+                    d = depth[i, j, k] if inside[i, j, k] else clearance[i, j, k]
+                phi[i, j, k] = -d if inside[i, j, k] else d
+    return phi
 
 
 def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
@@ -89,10 +145,12 @@ def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
     # the one inside test (column winding number > 0: the union of overlapping solids, nested shells inside);
     # grid points on the surface itself (φ = 0) belong to the free side of the far field's split
     axes = [origin[d] + np.arange(shape[d]) * pitch for d in range(3)]
-    inside = inside_columns(vertices, faces, *axes) & (dist > 0.0)
-    far = np.where(inside, -edt.edt(inside, anisotropy=(pitch,) * 3), edt.edt(~inside, anisotropy=(pitch,) * 3))
-    phi = np.where(np.isfinite(dist), np.where(inside, -dist, dist), far)
-    return np.ascontiguousarray(phi), origin, float(pitch)
+    inside = inside_columns(vertices, faces, *axes)
+    inside &= dist > 0.0
+    threads = get_num_threads()
+    depth = edt.edt(inside, anisotropy=(pitch,) * 3, parallel=threads)
+    clearance = edt.edt(~inside, anisotropy=(pitch,) * 3, parallel=threads)
+    return signed_field(dist, inside, depth, clearance), origin, float(pitch)
 
 
 def free_space_field(colliders, moulds, lo, hi, pitch: float):
