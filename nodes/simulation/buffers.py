@@ -7,7 +7,7 @@ particles were when they were built.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -95,8 +95,6 @@ class PairBuffers:
     # per list entry, the normal correction of this substep so far (anchored friction's load, ``friction``)
     load: np.ndarray
     displacement: float = np.inf
-    # the rotation (w-x-y-z) of the set since the last build that ``spatial_hash.rigid_deviation`` fits, its start
-    motion: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0, 0.0, 0.0]))
 
     @classmethod
     def allocate(cls, model: Model, settings: SolverSettings) -> PairBuffers | None:
@@ -121,8 +119,7 @@ class PairBuffers:
         )
 
     def stale(self) -> bool:
-        """Some particle moved more than half the skin since the last build (or none was built); the solver
-        then asks whether one rigid motion of the whole set explains that move (``spatial_hash.rigid_deviation``)."""
+        """Some particle moved more than half the skin since the last build (or none was built)."""
         return self.displacement > 0.5 * self.skin
 
     def tracking(self):

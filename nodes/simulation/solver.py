@@ -199,7 +199,6 @@ class XpbdSolver:
         self.glue_goal = np.full((len(model.glue.member), 3), np.nan) if model.glue is not None else None
         # the lists the glued floors were found for, each entry's link and pressed overlap (``_pressed``)
         self.glue_floors = (None, None, None)
-        self.rigid_scratch = np.empty((3, 3))  # ``spatial_hash.rigid_deviation``'s rotation
         self.x_mark = model.x0.copy()  # positions at the start of a frame's last solve (diagnostics)
         self.x_begin = model.x0.copy()  # positions at the start of the current solve
         self.solved = 0  # particles solved over the substeps of the current frame
@@ -416,17 +415,10 @@ class XpbdSolver:
             self.pairs.displacement = moved
 
     def _refresh_neighbours(self, st: State) -> bool:
-        """Rebuild the Verlet lists once a particle has moved half the skin since the last build, and not with
-        the rest of the set (``spatial_hash.rigid_deviation``: a rigid motion moves no pair)."""
+        """Rebuild the Verlet lists once a particle has moved half the skin since the last build."""
         pairs, m = self.pairs, self.model
         if pairs is None or not pairs.stale():
             return False
-        if np.isfinite(pairs.displacement):  # lists built: how far from one rigid motion of the whole set
-            deviation = self.dispatch(
-                "neighbours", spatial_hash.rigid_deviation, st.x, pairs.x_built, pairs.motion, self.rigid_scratch
-            )
-            if deviation <= 0.5 * pairs.skin:
-                return False
         nbr_start, nbr, at, *grid = self.dispatch(
             "neighbours",
             spatial_hash.neighbour_lists,
@@ -447,7 +439,6 @@ class XpbdSolver:
             pairs.load = np.zeros(len(nbr))
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
-        pairs.motion[:] = (1.0, 0.0, 0.0, 0.0)
         if "contact" in self.settings.effects:
             pairs.allowance = np.zeros(len(nbr))
         return True

@@ -16,8 +16,6 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from .shape_matching import extract_rotation
-
 MAX_CELLS_PER_PARTICLE = 64
 ROW_CAPACITY = 16  # list slots per particle in the single scan (a settled pile lists ≈ 5 half / 10 full)
 
@@ -175,40 +173,3 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
     for a in prange(at.shape[0]):
         nbr[a] = order[at[a]]
     return counts, nbr, at, start, order, dims
-
-
-@njit(cache=True)
-def rigid_deviation(x, x_built, quat, rot):
-    """The largest distance of a particle from where one rigid motion of the whole set carries its position at
-    the last build of the lists: max_i |x_i − c − R·(x_built_i − c_built)|, R fitted to the set's covariance
-    (``shape_matching.extract_rotation``, from and into ``quat``; ``rot`` 3×3 scratch). A rigid motion keeps every
-    distance, so the lists stay valid while this is under half the skin, however far the set moved: a glued
-    onigiri rocking on its plate (≈ 1 mm at 30 Hz) rebuilt its lists every 2.6 substeps on the particles' own
-    moves. Serial sums in a fixed order: the same at any thread count."""
-    n = x.shape[0]
-    c = np.zeros(3)
-    cb = np.zeros(3)
-    for i in range(n):
-        for k in range(3):
-            c[k] += x[i, k]
-            cb[k] += x_built[i, k]
-    c /= n
-    cb /= n
-    a = np.zeros((3, 3))
-    for i in range(n):
-        for p in range(3):
-            d = x[i, p] - c[p]
-            for q in range(3):
-                a[p, q] += d * (x_built[i, q] - cb[q])
-    extract_rotation(a, quat, 20, rot)
-    worst = 0.0
-    for i in range(n):
-        qx = x_built[i, 0] - cb[0]
-        qy = x_built[i, 1] - cb[1]
-        qz = x_built[i, 2] - cb[2]
-        e = 0.0
-        for k in range(3):
-            g = c[k] + rot[k, 0] * qx + rot[k, 1] * qy + rot[k, 2] * qz - x[i, k]
-            e += g * g
-        worst = max(worst, e)
-    return np.sqrt(worst)
