@@ -276,14 +276,14 @@ def glued_floors(
                     break
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def glued_allowance(link, depth, glued, allowance):
     """Raise each listed pair's tolerated overlap (``contact_constraints``' allowance) to the overlap the
     press left it with while its grains stay glued (``link``, ``depth``: ``glued_floors``): the glue keeps the
     pressed shape, so contacts that pushed those overlaps apart only fought it (with the contacts' mass
     scaling by height that fight lifted a glued onigiri off its plate at 17 mm/s); a deeper overlap is still
-    resolved."""
-    for a in prange(len(link)):
+    resolved. Serial: 0.2 ms for the onigiri's 286,000 entries, and a parallel loop costs ≈ 0.5 s more to compile."""
+    for a in range(len(link)):
         k = link[a]
         if k >= 0 and depth[a] > allowance[a] and glued[k]:
             allowance[a] = depth[a]
