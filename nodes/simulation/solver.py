@@ -197,6 +197,8 @@ class XpbdSolver:
         self.diagnostics = Diagnostics()
         # the glued regions' goals per membership, NaN until matched (``glue``)
         self.glue_goal = np.full((len(model.glue.member), 3), np.nan) if model.glue is not None else None
+        # the lists the glued floors were found for, each entry's link and pressed overlap (``_pressed``)
+        self.glue_floors = (None, None, None)
         self.x_mark = model.x0.copy()  # positions at the start of a frame's last solve (diagnostics)
         self.x_begin = model.x0.copy()  # positions at the start of the current solve
         self.solved = 0  # particles solved over the substeps of the current frame
@@ -529,18 +531,17 @@ class XpbdSolver:
         st.x, pairs.scratch = out, st.x
 
     def _pressed(self, st: State) -> None:
-        """Glued grains' contacts tolerate the overlap the press left them (``glue.glued_allowance``)."""
+        """Glued grains' contacts tolerate the overlap the press left them (``glue.glued_allowance``); the
+        entries' links and pressed overlaps are found once per build of the lists (``glue.glued_floors``)."""
         m, lists = self.model, self.pairs.lists
-        if m.glue is not None:
-            self.dispatch(
-                "glue",
-                glue.glued_allowance,
-                m.elem,
-                *lists.rows(),
-                *m.glue.floor_args(),
-                st.glued,
-                self.pairs.allowance,
-            )
+        if m.glue is None:
+            return
+        if self.glue_floors[0] is not lists:
+            link, depth = np.empty(len(lists.nbr), np.int64), np.empty(len(lists.nbr))
+            self.dispatch("glue", glue.glued_floors, m.elem, *lists.rows(), *m.glue.floor_args(), link, depth)
+            self.glue_floors = (lists, link, depth)
+        _, link, depth = self.glue_floors
+        self.dispatch("glue", glue.glued_allowance, link, depth, st.glued, self.pairs.allowance)
 
     def _glue(self, st: State, tear: bool) -> None:
         """Match the glued regions and pull each particle towards its regions' goals (``glue``); with
