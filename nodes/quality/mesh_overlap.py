@@ -12,11 +12,9 @@ tested. Hand-written around igl because trimesh's signed distance is ~100× slow
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-from numba import get_num_threads
 
 
 @dataclass(frozen=True)
@@ -85,10 +83,7 @@ def element_overlaps(
     for k, (_, j, _) in enumerate(pairs):
         by_neighbour.setdefault(j, []).append(k)
     closest = np.empty(len(pairs))
-
-    def against(item) -> None:
-        """The nearest signed distance of each pair's vertices to neighbour ``j``'s mesh, into its rows."""
-        j, ks = item
+    for j, ks in by_neighbour.items():
         other_v, other_f, _ = meshes[j]
         points = np.concatenate([pairs[k][2] for k in ks])
         signed = igl.signed_distance(points, other_v, other_f, sign_type=igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER)[
@@ -96,17 +91,6 @@ def element_overlaps(
         ]
         starts = np.cumsum([0] + [len(pairs[k][2]) for k in ks[:-1]])
         closest[ks] = np.minimum.reduceat(signed, starts)
-
-    # libigl releases the GIL: threads share the neighbours (each writes only its own rows, so the values do not
-    # depend on the thread count; onigiri's 3,086 grains, 300 sampled: ≈ 2× on 2 cores)
-    threads = min(get_num_threads(), len(by_neighbour))
-    if threads <= 1:
-        for item in by_neighbour.items():
-            against(item)
-    else:
-        with ThreadPoolExecutor(threads) as pool:
-            for _ in pool.map(against, by_neighbour.items()):
-                pass
     depths = []
     contacts = np.zeros(len(sample), np.int64)
     for (row, _, _), nearest in zip(pairs, closest.tolist()):
