@@ -15,7 +15,7 @@ Safe by construction: numba writes each cache file to a temporary name and renam
 reader sees a whole file or none; two processes compiling the same kernel write the same entry. A kernel with
 more than one recorded signature is left to the run (two processes saving different signatures of one function
 at once could pair an index entry with the other's data file). The worker prints nothing, stops when the run
-closes its pipe, is killed if still running when the run ends, and any failure in it (or in starting it) only
+closes its pipe, is killed if still running when the run ends, runs at a lower priority (``nice`` 10), and any failure in it (or in starting it) only
 means the run compiles those kernels itself. Off: ``NODEGRAPH_COMPILE_AHEAD=off``.
 
 ``python benchmarks/bench_compile.py --record`` rewrites the record from a first run of the main job.
@@ -177,11 +177,17 @@ def _cached(dispatcher, sig: tuple) -> bool:
     return key in cache._cache_file._load_index()
 
 
+def latest_first(jobs: list[Job]) -> list[Job]:
+    """The worker's order: the last node's kernels first and, within a node, its last kernel first, so that the
+    run (first to last) and the worker meet in the middle."""
+    return list(reversed(sorted(jobs, key=lambda job: job.position)))
+
+
 def work(jobs: list[Job], reached: list[int]) -> list[str]:
     """Compile ``jobs`` latest first, stopping at the first whose node the run has passed (``reached[0]``);
     kernels cached already are skipped. Returns the kernels compiled (``module.name``)."""
     compiled = []
-    for job in sorted(jobs, key=lambda job: -job.position):
+    for job in latest_first(jobs):
         if job.position < reached[0]:
             break
         try:
@@ -210,6 +216,10 @@ def main() -> None:
         os._exit(0)  # the run closed the pipe (it ended, or died): so does the worker
 
     threading.Thread(target=follow, daemon=True).start()
+    try:
+        os.nice(10)  # on a busy machine the run's own work comes first; an idle core is the worker's
+    except OSError:
+        pass
     from . import numba_cache
 
     numba_cache.configure()

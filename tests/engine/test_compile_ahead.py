@@ -175,3 +175,32 @@ def test_the_worker_stops_with_the_run(tmp_path):
     process = ahead.process
     ahead.close()
     assert process.poll() is not None
+
+
+def test_the_record_names_kernels_that_exist():
+    """Each kernel of nodes/kernel_signatures.json is a numba kernel of that name, its argument types load, and
+    its node type implements the effects it is recorded under (rewrite: bench_compile.py --record)."""
+    import importlib
+    from functools import reduce
+
+    from numba.core.dispatcher import Dispatcher
+
+    import nodes
+    from nodegraph.registry import default_registry
+
+    registry = default_registry()
+    record = json.loads((Path(nodes.__file__).parent / compile_ahead.RECORD).read_text())
+    assert record
+    for type_name, entries in record.items():
+        assert set().union(*(entry["effects"] for entry in entries)) <= registry[type_name].effects
+        for entry in entries:
+            for module, name, args in entry["kernels"]:
+                kernel = reduce(getattr, name.split("."), importlib.import_module(module))
+                assert isinstance(kernel, Dispatcher), f"{module}.{name}"
+                assert all(isinstance(t, types.Type) for t in compile_ahead.decode_types(args))
+
+
+def test_the_worker_starts_from_the_end():
+    """The run compiles from its first node's first kernel on; the worker from the last node's last kernel."""
+    jobs = [compile_ahead.Job(position, "m", name, "") for position, name in [(3, "a"), (3, "b"), (7, "c"), (9, "d")]]
+    assert [job.name for job in compile_ahead.latest_first(jobs)] == ["d", "c", "b", "a"]
