@@ -14,9 +14,10 @@ the worker which node it has reached, and the worker stops at nodes the run has 
 Safe by construction: numba writes each cache file to a temporary name and renames it (``os.replace``), so a
 reader sees a whole file or none; two processes compiling the same kernel write the same entry. A kernel with
 more than one recorded signature is left to the run (two processes saving different signatures of one function
-at once could pair an index entry with the other's data file). The worker prints nothing, stops when the run
-closes its pipe, is killed if still running when the run ends, runs at a lower priority (``nice`` 10), and any failure in it (or in starting it) only
-means the run compiles those kernels itself. Off: ``NODEGRAPH_COMPILE_AHEAD=off``.
+at once could pair an index entry with the other's data file). The worker prints nothing, runs at a lower
+priority (``nice`` 10), stops when the run closes its pipe and is killed if still running when the run ends; any
+failure in it (or in starting it) only means the run compiles those kernels itself.
+Off: ``NODEGRAPH_COMPILE_AHEAD=off``.
 
 ``python benchmarks/bench_compile.py --record`` rewrites the record from a first run of the main job.
 """
