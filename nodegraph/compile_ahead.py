@@ -14,9 +14,11 @@ the worker which node it has reached, and the worker stops at nodes the run has 
 Safe by construction: numba writes each cache file to a temporary name and renames it (``os.replace``), so a
 reader sees a whole file or none; two processes compiling the same kernel write the same entry. A kernel with
 more than one recorded signature is left to the run (two processes saving different signatures of one function
-at once could pair an index entry with the other's data file). The worker prints nothing, runs at a lower
-priority (``nice`` 10), stops when the run closes its pipe and is killed if still running when the run ends; any
-failure in it (or in starting it) only means the run compiles those kernels itself.
+at once could pair an index entry with the other's data file). The worker prints nothing, stops when the run
+closes its pipe and is killed if still running when the run ends; any failure in it (or in starting it) only
+means the run compiles those kernels itself. It runs at the run's priority: its compiling is the run's own work
+done earlier on the second core (as the run's parallel kernels and its preview use both), and at ``nice`` 10 on
+a busy machine it compiled next to nothing (docs/performance.md).
 Off: ``NODEGRAPH_COMPILE_AHEAD=off``.
 
 ``python benchmarks/bench_compile.py --record`` rewrites the record from a first run of the main job.
@@ -217,10 +219,6 @@ def main() -> None:
         os._exit(0)  # the run closed the pipe (it ended, or died): so does the worker
 
     threading.Thread(target=follow, daemon=True).start()
-    try:
-        os.nice(10)  # on a busy machine the run's own work comes first; an idle core is the worker's
-    except OSError:
-        pass
     from . import numba_cache
 
     numba_cache.configure()
