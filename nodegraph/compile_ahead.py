@@ -83,6 +83,15 @@ def _read(path: Path | None, seen: dict[Path, dict]) -> dict:
     return seen[path]
 
 
+def _loaded(module: str, name: str) -> bool:
+    """Whether this process has kernel ``module.name`` compiled or loaded already (a run before this one in the
+    same process, as ``nodegraph watch`` makes): nothing to compile ahead."""
+    try:
+        return bool(reduce(getattr, name.split("."), sys.modules[module]).signatures)
+    except (KeyError, AttributeError):
+        return False
+
+
 def plan_jobs(recipe, order: Iterable, to_run: set) -> list[Job]:
     """The kernels recorded for the instances in ``order`` that will run, each at the position of the first
     instance that needs it: per node type, the entry recorded for exactly the effects the node receives
@@ -99,6 +108,8 @@ def plan_jobs(recipe, order: Iterable, to_run: set) -> list[Job]:
             if entry.get("effects") != effects:
                 continue
             for module, name, args in entry["kernels"]:
+                if _loaded(module, name):
+                    continue
                 plugin = getattr(sys.modules.get(module), "__file__", None) if module.startswith(PLUGIN) else None
                 jobs.setdefault((module, name, args), Job(position, module, name, args, plugin))
     signatures: dict[tuple[str, str], int] = {}

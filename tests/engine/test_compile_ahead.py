@@ -204,3 +204,23 @@ def test_the_worker_starts_from_the_end():
     """The run compiles from its first node's first kernel on; the worker from the last node's last kernel."""
     jobs = [compile_ahead.Job(position, "m", name, "") for position, name in [(3, "a"), (3, "b"), (7, "c"), (9, "d")]]
     assert [job.name for job in compile_ahead.latest_first(jobs)] == ["d", "c", "b", "a"]
+
+
+def test_kernels_this_process_has_are_not_compiled_ahead(tmp_path, monkeypatch):
+    """A second run in one process (``nodegraph watch``) hands the worker only kernels it has not loaded."""
+    import numpy as np
+
+    from nodegraph.plan import Instance
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+
+    _setup(tmp_path)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    recipe = load_recipe(tmp_path / "recipe.yaml", default_registry(plugins=[tmp_path / "ahead.py"]))
+    order = [Instance("early"), Instance("late")]
+    assert [job.name for job in compile_ahead.plan_jobs(recipe, order, set(order))] == ["late_kernel"]
+    assert compile_ahead.plan_jobs(recipe, order, {order[0]}) == []  # the late node is cached: nothing to compile
+    import ahead_kernels
+
+    ahead_kernels.late_kernel(np.zeros(2))
+    assert compile_ahead.plan_jobs(recipe, order, set(order)) == []
