@@ -216,6 +216,7 @@ def test_kernels_this_process_has_are_not_compiled_ahead(tmp_path, monkeypatch):
 
     _setup(tmp_path)
     monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "ahead_kernels", raising=False)  # loaded by another test of this process
     recipe = load_recipe(tmp_path / "recipe.yaml", default_registry(plugins=[tmp_path / "ahead.py"]))
     order = [Instance("early"), Instance("late")]
     assert [job.name for job in compile_ahead.plan_jobs(recipe, order, set(order))] == ["late_kernel"]
