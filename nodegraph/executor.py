@@ -18,6 +18,7 @@ from . import __version__, codec
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
+from .compile_ahead import CompileAhead
 from .compile_progress import CompileWatch
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
@@ -118,10 +119,16 @@ class Executor:
         # cached instances go into the recording after every instance that runs: what an edit changed reaches
         # the recording (and a viewer streaming it) first; the order of chunks in a recording carries no meaning
         later: list[Instance] = []
+        ahead = None
+        if not self.ran_elsewhere:  # kernels of the later instances compile in a second process meanwhile
+            to_run = {inst for inst in order if self.keys[inst] not in self.hits}
+            ahead = CompileAhead.start(self.recipe, order, to_run)
         try:
             with self.reporter.task(self.recipe.name, len(order)) as tick:
-                for inst in order:
+                for position, inst in enumerate(order):
                     tick()
+                    if ahead is not None:
+                        ahead.reached(position)
                     if inst in self.status:
                         continue
                     if self.keys[inst] in self.hits and inst.node not in output_nodes:
@@ -149,6 +156,8 @@ class Executor:
                         break
             raise
         finally:
+            if ahead is not None:
+                ahead.close()
             for inst in order:
                 elsewhere = self.ran_elsewhere.get(self.keys[inst])
                 if elsewhere is not None and inst in self.status and self.status[inst].status == "cached":

@@ -1,0 +1,240 @@
+"""A first run compiles, in a second process, the numba kernels its later nodes will need while it computes the
+earlier ones (issue 27: the main job's first run, empty numba cache, ≤ 90 s on 2 cores; docs/performance.md,
+"Compiling ahead").
+
+A first run compiles one kernel at a time on one core (numba compiles under a process-wide lock). When the run
+starts, ``CompileAhead`` hands a worker process (``python -m nodegraph.compile_ahead``) the kernels recorded for
+the node instances that will run (``kernel_signatures.json`` beside each node package: per node type and the
+effects it receives, each kernel's module, name and argument types), latest node first. The worker compiles
+them into the same on-disk numba cache; the run, meanwhile, computes and compiles from its first node on. When
+the run reaches a node whose kernels the worker compiled, numba finds them in the cache (``Dispatcher.compile``
+reads the cache index on each lookup) and loads the machine code. The two meet in the middle: the run tells
+the worker which node it has reached, and the worker stops at nodes the run has passed.
+
+Safe by construction: numba writes each cache file to a temporary name and renames it (``os.replace``), so a
+reader sees a whole file or none; two processes compiling the same kernel write the same entry. A kernel with
+more than one recorded signature is left to the run (two processes saving different signatures of one function
+at once could pair an index entry with the other's data file). The worker prints nothing, stops when the run
+closes its pipe and is killed if still running when the run ends; any failure in it (or in starting it) only
+means the run compiles those kernels itself. It runs at the run's priority: its compiling is the run's own work
+done earlier on the second core (as the run's parallel kernels and its preview use both), and at ``nice`` 10 on
+a busy machine it compiled next to nothing (docs/performance.md).
+Off: ``NODEGRAPH_COMPILE_AHEAD=off``.
+
+``python benchmarks/bench_compile.py --record`` rewrites the record from a first run of the main job.
+"""
+
+from __future__ import annotations
+
+import base64
+import importlib
+import json
+import os
+import pickle
+import subprocess
+import sys
+import threading
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass
+from functools import reduce
+from pathlib import Path
+
+RECORD = "kernel_signatures.json"
+PLUGIN = "nodegraph_plugin_"  # registry.add_plugin_file's module names
+ENV_VAR = "NODEGRAPH_COMPILE_AHEAD"
+
+
+@dataclass(frozen=True)
+class Job:
+    """One kernel to compile: for the node at ``position`` in the run's order; ``args`` are numba's argument
+    types, pickled (base64)."""
+
+    position: int
+    module: str
+    name: str
+    args: str
+    plugin: str | None = None  # the file of a ``--plugin`` module (loaded under a name no finder knows)
+
+
+def encode_types(args: tuple) -> str:
+    """numba argument types as text for the record."""
+    return base64.b64encode(pickle.dumps(tuple(args), protocol=4)).decode()
+
+
+def decode_types(text: str) -> tuple:
+    return pickle.loads(base64.b64decode(text))
+
+
+def record_path(spec) -> Path | None:
+    """The record of the package the node type ``spec`` comes from (its top-level package's folder)."""
+    top = sys.modules.get((spec.module or spec.run.__module__).split(".")[0])
+    where = getattr(top, "__file__", None)
+    return None if where is None else Path(where).parent / RECORD
+
+
+def _read(path: Path | None, seen: dict[Path, dict]) -> dict:
+    if path is None:
+        return {}
+    if path not in seen:
+        try:
+            seen[path] = json.loads(path.read_text())
+        except (OSError, ValueError):
+            seen[path] = {}
+    return seen[path]
+
+
+def _loaded(module: str, name: str) -> bool:
+    """Whether this process has kernel ``module.name`` compiled or loaded already (a run before this one in the
+    same process, as ``nodegraph watch`` makes): nothing to compile ahead."""
+    try:
+        return bool(reduce(getattr, name.split("."), sys.modules[module]).signatures)
+    except (KeyError, AttributeError):
+        return False
+
+
+def plan_jobs(recipe, order: Iterable, to_run: set) -> list[Job]:
+    """The kernels recorded for the instances in ``order`` that will run, each at the position of the first
+    instance that needs it: per node type, the entry recorded for exactly the effects the node receives
+    (``spec.effects & recipe.effects``; none recorded: nothing). Functions recorded with several signatures are
+    left out (see the module's docstring)."""
+    seen: dict[Path, dict] = {}
+    jobs: dict[tuple[str, str, str], Job] = {}
+    for position, inst in enumerate(order):
+        if inst not in to_run:
+            continue
+        spec = recipe.nodes[inst.node].spec
+        effects = sorted(spec.effects & recipe.effects)
+        for entry in _read(record_path(spec), seen).get(spec.type_name, []):
+            if entry.get("effects") != effects:
+                continue
+            for module, name, args in entry["kernels"]:
+                if _loaded(module, name):
+                    continue
+                plugin = getattr(sys.modules.get(module), "__file__", None) if module.startswith(PLUGIN) else None
+                jobs.setdefault((module, name, args), Job(position, module, name, args, plugin))
+    signatures: dict[tuple[str, str], int] = {}
+    for module, name, _ in jobs:
+        signatures[module, name] = signatures.get((module, name), 0) + 1
+    return [job for (module, name, _), job in jobs.items() if signatures[module, name] == 1]
+
+
+class CompileAhead:
+    """The worker of one run: ``reached(position)`` as the run starts each instance, ``close()`` at its end."""
+
+    command = [sys.executable, "-m", "nodegraph.compile_ahead"]
+
+    def __init__(self, jobs: list[Job]):
+        self.jobs = jobs
+        self.process: subprocess.Popen | None = None
+
+    @classmethod
+    def start(cls, recipe, order: list, to_run: set) -> CompileAhead | None:
+        """A started worker for the kernels ``to_run`` needs, or None (switched off, nothing recorded, or it
+        could not start: the run compiles them itself)."""
+        if os.environ.get(ENV_VAR, "").lower() in ("off", "0", "false", "no"):
+            return None
+        try:
+            ahead = cls(plan_jobs(recipe, order, to_run))
+            if not ahead.jobs:
+                return None
+            ahead._spawn()
+            return ahead
+        except Exception:
+            return None
+
+    def _spawn(self) -> None:
+        from . import numba_cache
+
+        numba_cache.configure()  # the worker compiles into the run's cache, with the run's locator
+        self.process = subprocess.Popen(
+            self.command,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            text=True,
+        )
+        self._send(json.dumps([asdict(job) for job in self.jobs]))
+
+    def _send(self, line: str) -> None:
+        if self.process is None or self.process.poll() is not None:
+            return
+        try:
+            self.process.stdin.write(line + "\n")
+            self.process.stdin.flush()
+        except (OSError, ValueError):  # the worker is gone: the run compiles what is left
+            pass
+
+    def reached(self, position: int) -> None:
+        """The run starts the instance at ``position``: the worker compiles nothing for earlier ones."""
+        self._send(str(position))
+
+    def close(self) -> None:
+        """The run is over: the worker stops (killed if it does not within a moment)."""
+        process, self.process = self.process, None
+        if process is None:
+            return
+        try:
+            process.stdin.close()
+        except OSError:
+            pass
+        try:
+            process.wait(timeout=0.5)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+def _cached(dispatcher, sig: tuple) -> bool:
+    """Whether numba's cache holds ``sig`` already (read from its index, nothing loaded)."""
+    cache = dispatcher._cache
+    key = cache._index_key(sig, dispatcher.targetctx.codegen())
+    return key in cache._cache_file._load_index()
+
+
+def latest_first(jobs: list[Job]) -> list[Job]:
+    """The worker's order: the last node's kernels first and, within a node, its last kernel first, so that the
+    run (first to last) and the worker meet in the middle."""
+    return list(reversed(sorted(jobs, key=lambda job: job.position)))
+
+
+def work(jobs: list[Job], reached: list[int]) -> list[str]:
+    """Compile ``jobs`` latest first, stopping at the first whose node the run has passed (``reached[0]``);
+    kernels cached already are skipped. Returns the kernels compiled (``module.name``)."""
+    compiled = []
+    for job in latest_first(jobs):
+        if job.position < reached[0]:
+            break
+        try:
+            if job.plugin is not None and job.module not in sys.modules:
+                from .registry import Registry
+
+                Registry().add_plugin_file(job.plugin)  # as the run loaded it: same module name, same digest
+            dispatcher = reduce(getattr, job.name.split("."), importlib.import_module(job.module))
+            sig = decode_types(job.args)
+            if _cached(dispatcher, sig):
+                continue
+            dispatcher.compile(sig)
+            compiled.append(f"{job.module}.{job.name}")
+        except Exception:  # a stale record, a kernel that does not compile: the run compiles (and reports) it
+            continue
+    return compiled
+
+
+def main() -> None:
+    jobs = [Job(**job) for job in json.loads(sys.stdin.readline())]
+    reached = [-1]
+
+    def follow() -> None:
+        for line in sys.stdin:
+            reached[0] = max(reached[0], int(line))
+        os._exit(0)  # the run closed the pipe (it ended, or died): so does the worker
+
+    threading.Thread(target=follow, daemon=True).start()
+    from . import numba_cache
+
+    numba_cache.configure()
+    work(jobs, reached)
+
+
+if __name__ == "__main__":
+    main()
