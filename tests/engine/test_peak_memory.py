@@ -12,16 +12,7 @@ import pytest
 from nodegraph import report
 
 
-def _resettable() -> bool:
-    try:
-        with open("/proc/self/clear_refs", "wb") as handle:
-            handle.write(b"5")
-        return True
-    except OSError:
-        return False
-
-
-@pytest.mark.skipif(not _resettable(), reason="this system does not let a process reset its peak RSS")
+@pytest.mark.skipif(not report._reset_peak(), reason="this system does not let a process reset its peak RSS")
 def test_peak_memory_needs_no_sampling_thread_and_sees_a_short_spike():
     before = threading.active_count()
     with report.PeakMemory() as memory:
