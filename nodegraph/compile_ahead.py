@@ -137,12 +137,12 @@ class CompileAhead:
             ahead = cls(plan_jobs(recipe, order, to_run))
             if not ahead.jobs:
                 return None
-            ahead._spawn()
+            ahead.spawn()
             return ahead
         except Exception:
             return None
 
-    def _spawn(self) -> None:
+    def spawn(self) -> None:
         from . import numba_cache
 
         numba_cache.configure()  # the worker compiles into the run's cache, with the run's locator
@@ -184,13 +184,6 @@ class CompileAhead:
             process.wait()
 
 
-def _cached(dispatcher, sig: tuple) -> bool:
-    """Whether numba's cache holds ``sig`` already (read from its index, nothing loaded)."""
-    cache = dispatcher._cache
-    key = cache._index_key(sig, dispatcher.targetctx.codegen())
-    return key in cache._cache_file._load_index()
-
-
 def latest_first(jobs: list[Job]) -> list[Job]:
     """The worker's order: the last node's kernels first and, within a node, its last kernel first, so that the
     run (first to last) and the worker meet in the middle."""
@@ -199,7 +192,8 @@ def latest_first(jobs: list[Job]) -> list[Job]:
 
 def work(jobs: list[Job], reached: list[int]) -> list[str]:
     """Compile ``jobs`` latest first, stopping at the first whose node the run has passed (``reached[0]``);
-    kernels cached already are skipped. Returns the kernels compiled (``module.name``)."""
+    kernels cached already are only loaded (numba's public ``stats`` tell the two apart). Returns the kernels
+    compiled (``module.name``)."""
     compiled = []
     for job in latest_first(jobs):
         if job.position < reached[0]:
@@ -211,10 +205,10 @@ def work(jobs: list[Job], reached: list[int]) -> list[str]:
                 Registry().add_plugin_file(job.plugin)  # as the run loaded it: same module name, same digest
             dispatcher = reduce(getattr, job.name.split("."), importlib.import_module(job.module))
             sig = decode_types(job.args)
-            if _cached(dispatcher, sig):
-                continue
-            dispatcher.compile(sig)
-            compiled.append(f"{job.module}.{job.name}")
+            misses = sum(dispatcher.stats.cache_misses.values())
+            dispatcher.compile(sig)  # from numba's cache where it is there already
+            if sum(dispatcher.stats.cache_misses.values()) > misses:
+                compiled.append(f"{job.module}.{job.name}")
         except Exception:  # a stale record, a kernel that does not compile: the run compiles (and reports) it
             continue
     return compiled
@@ -227,7 +221,7 @@ def main() -> None:
     def follow() -> None:
         for line in sys.stdin:
             reached[0] = max(reached[0], int(line))
-        os._exit(0)  # the run closed the pipe (it ended, or died): so does the worker
+        reached[0] = sys.maxsize  # the run closed the pipe (it ended, or died): stop at the next kernel
 
     threading.Thread(target=follow, daemon=True).start()
     from . import numba_cache

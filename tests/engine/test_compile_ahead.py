@@ -171,7 +171,7 @@ def test_the_worker_stops_with_the_run(tmp_path):
     """``close`` ends a worker still compiling (here one that would run for a minute)."""
     ahead = CompileAhead([compile_ahead.Job(0, "m", "k", "")])
     ahead.command = [sys.executable, "-c", "import time; time.sleep(60)"]
-    ahead._spawn()
+    ahead.spawn()
     process = ahead.process
     ahead.close()
     assert process.poll() is not None
