@@ -20,13 +20,13 @@ import numpy as np
 from ..values import Material
 
 PREFIX = "nodegraph:principled:"
+VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (with the ice, ``is_ice``)
+TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 
 
 def principled_attributes(material: Material, translucency: float) -> dict[str, float | tuple[float, ...]]:
     """The material's principled set; ``translucency`` is its diffuse-transmission weight (``subsurface`` times
     the CDRF's translucency at the material's median σ, ``gltf_writer.material_translucency``)."""
-    from .mitsuba_scene import boundary_roughness, is_volumetric, medium_coefficients
-
     look = {
         "ior": float(material.ior),
         "transmission": float(material.transmission),
@@ -56,7 +56,37 @@ def crossing_tint(material: Material) -> np.ndarray:
 def exported_base_color(material: Material) -> tuple[float, float, float]:
     """The base colour both files carry: a transmissive material's ``crossing_tint`` (glTF and the principled BSDF
     tint transmitted light by the base colour at each crossing), else its base colour."""
-    from .mitsuba_scene import TRANSMISSIVE
-
     color = crossing_tint(material) if material.transmission >= TRANSMISSIVE else material.base_color
     return tuple(float(c) for c in color)
+
+
+def random_walk_coefficients(albedo, radius) -> tuple[np.ndarray, np.ndarray]:
+    """(σt in mm⁻¹, single-scattering albedo) per channel from a principled subsurface colour (multiple-scattering
+    albedo A) and radius (mean free path d, mm): Chiang, Kutz, Burley 2016, eq. for α and s, as in Cycles."""
+    a = np.clip(np.asarray(albedo, np.float64), 0.0, 0.999)
+    d = np.maximum(np.asarray(radius, np.float64), 1e-6)
+    single = 1.0 - np.exp(a * (-5.09406 + a * (2.61188 - a * 4.31805)))
+    s = 1.9 - a + 3.5 * (a - 0.8) ** 2
+    return 1.0 / (d * s), single
+
+
+def is_volumetric(material: Material) -> bool:
+    """Whether the preview renders ``material``'s inside as a scattering medium (closed elements only: rice
+    grains, ikura yolks, ice flakes; fish flesh and fat are open parts of one slab)."""
+    from ..shading.materials import is_ice
+
+    return material.name in VOLUMETRIC_ELEMENTS or is_ice(material)
+
+
+def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:
+    """(σt in mm⁻¹, the same in every channel; single-scattering albedo per channel) of the medium inside a
+    volumetric element (``medium``): what the exported files hand a renderer that builds the same medium."""
+    sigma_t, single = random_walk_coefficients(material.subsurface_color, material.subsurface_radius)
+    return float(sigma_t.mean()), single
+
+
+def boundary_roughness(material: Material) -> float:
+    """The principled roughness of a volumetric element's skin (``boundary_bsdf``)."""
+    if material.transmission >= TRANSMISSIVE:
+        return float(material.transmission_roughness)
+    return float(material.clearcoat_roughness if material.clearcoat > 0 else material.roughness)

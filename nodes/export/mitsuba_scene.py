@@ -49,7 +49,13 @@ import numpy as np
 
 from ..values import Material, ShadedScene
 from . import studio
-from .look import crossing_tint
+from .look import (
+    TRANSMISSIVE,
+    boundary_roughness,
+    crossing_tint,
+    is_volumetric,
+    medium_coefficients,
+)
 
 # the light is a studio (``studio``: softbox key, fill, rim, seamless backdrop, thin lens); ``studio_description``
 # gives it as numbers to the Blender side-by-side script (``tools/blender_side_by_side.py``)
@@ -72,7 +78,6 @@ HIGHLIGHT_RADIANCE = 60.0
 # ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1
 HIGHLIGHT_SPP = 2
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
-TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
 DENOISE_QUALITY = "high"  # OIDN's filter quality
@@ -86,7 +91,6 @@ MAX_DEPTH_MEDIA = 64
 # less per sample on the main job but the eggs window lost 0.1–0.2 dB at the same samples: no better per CPU second,
 # so 5 stays (issue 27; docs/accuracy.md, "Preview cost")
 RR_DEPTH = 5
-VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (with the ice, ``is_ice``)
 
 
 @dataclass(frozen=True)
@@ -181,24 +185,6 @@ def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
     return _principled(material)
 
 
-def random_walk_coefficients(albedo, radius) -> tuple[np.ndarray, np.ndarray]:
-    """(σt in mm⁻¹, single-scattering albedo) per channel from a principled subsurface colour (multiple-scattering
-    albedo A) and radius (mean free path d, mm): Chiang, Kutz, Burley 2016, eq. for α and s, as in Cycles."""
-    a = np.clip(np.asarray(albedo, np.float64), 0.0, 0.999)
-    d = np.maximum(np.asarray(radius, np.float64), 1e-6)
-    single = 1.0 - np.exp(a * (-5.09406 + a * (2.61188 - a * 4.31805)))
-    s = 1.9 - a + 3.5 * (a - 0.8) ** 2
-    return 1.0 / (d * s), single
-
-
-def is_volumetric(material: Material) -> bool:
-    """Whether the preview renders ``material``'s inside as a scattering medium (closed elements only: rice
-    grains, ikura yolks, ice flakes; fish flesh and fat are open parts of one slab)."""
-    from ..shading.materials import is_ice
-
-    return material.name in VOLUMETRIC_ELEMENTS or is_ice(material)
-
-
 def medium(material: Material) -> dict:
     """Mitsuba homogeneous medium inside a volumetric element (``random_walk_coefficients``), isotropic phase.
 
@@ -219,20 +205,6 @@ def medium(material: Material) -> dict:
         # medium by the phase function's own direction and the boundary's refraction, with full weight
         "sample_emitters": False,
     }
-
-
-def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:
-    """(σt in mm⁻¹, the same in every channel; single-scattering albedo per channel) of the medium inside a
-    volumetric element (``medium``): what the exported files hand a renderer that builds the same medium."""
-    sigma_t, single = random_walk_coefficients(material.subsurface_color, material.subsurface_radius)
-    return float(sigma_t.mean()), single
-
-
-def boundary_roughness(material: Material) -> float:
-    """The principled roughness of a volumetric element's skin (``boundary_bsdf``)."""
-    if material.transmission >= TRANSMISSIVE:
-        return float(material.transmission_roughness)
-    return float(material.clearcoat_roughness if material.clearcoat > 0 else material.roughness)
 
 
 def boundary_bsdf(material: Material) -> dict:

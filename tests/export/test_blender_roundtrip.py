@@ -17,8 +17,7 @@ import numpy as np
 import pytest
 
 from nodes.export import export
-from nodes.export.look import crossing_tint
-from nodes.export.mitsuba_scene import is_volumetric
+from nodes.export.look import crossing_tint, is_volumetric
 
 REPO = Path(__file__).resolve().parents[2]
 SCRIPT = Path(__file__).with_name("blender_roundtrip.py")

@@ -170,7 +170,7 @@ def test_subsurface_puts_a_medium_inside_rice_and_yolks(shaded, tmp_path):
 def test_wet_rice_scatters_whiter_and_farther():
     """The medium follows the water content (G fig. 3.1.2.1): wetter rice has a longer mean free path and a higher
     albedo; at 24 % its mean free path is of potato's order (Jensen et al. 2001: 1/σ′s ≈ 1.4–1.8 mm)."""
-    from nodes.export.mitsuba_scene import random_walk_coefficients
+    from nodes.export.look import random_walk_coefficients
     from nodes.shading.materials import rice_material
 
     dry, wet = (rice_material(w) for w in (0.0, 24.0))
