@@ -347,6 +347,7 @@ def _gather(aggregates, fields_of) -> _Elements:
     outer_of: dict[int, tuple] = {}  # per library mesh: its outer shell's vertices and thickness, found once
     for aggregate in aggregates:
         p = aggregate.placement
+        bare = aggregate.without_normals()  # the same vertices, without rotating and bending each mesh's normals
         rot = np.asarray(p.rotations, np.float64)
         lin = rot if aggregate.deformations is None else np.einsum("nij,njk->nik", aggregate.deformations, rot)
         bend = np.zeros((len(p), 3, 6)) if aggregate.bends is None else np.asarray(aggregate.bends, np.float64)
@@ -354,7 +355,7 @@ def _gather(aggregates, fields_of) -> _Elements:
         for i in range(len(p)):
             library = aggregate.libraries[p.kinds[i]]
             base = library.meshes[p.variants[i] % len(library)]
-            mesh = aggregate.element_mesh(i)
+            mesh = bare.element_mesh(i)
             if id(base) not in outer_of:
                 used = outer_vertices(base)
                 outer_of[id(base)] = (used, float(np.ptp(base.vertices[used], axis=0).min()))
@@ -410,19 +411,22 @@ def vertex_rings(meshes) -> VertexRings:
 def _neighbour_lists(elements: _Elements, own: int, margin: float):
     """CSR of each of the first ``own`` elements' neighbours among all (bounding spheres within ``margin``),
     in index order (deterministic)."""
+    from itertools import chain
+
     from scipy.spatial import cKDTree
 
+    if own == 0:
+        return np.zeros(1, np.int64), np.zeros(0, np.int64)
     tree = cKDTree(elements.centre)
     reach = 2.0 * float(elements.radius.max()) + margin
-    lists = []
-    for i in range(own):
-        near = np.array(sorted(tree.query_ball_point(elements.centre[i], reach)), np.int64)
-        gap = np.linalg.norm(elements.centre[near] - elements.centre[i], axis=1)
-        keep = (near != i) & (gap <= elements.radius[i] + elements.radius[near] + margin)
-        lists.append(near[keep])
-    start = np.concatenate([[0], np.cumsum([len(x) for x in lists])]).astype(np.int64)
-    flat = np.concatenate(lists) if lists else np.zeros(0, np.int64)
-    return start, flat.astype(np.int64)
+    found = tree.query_ball_point(elements.centre[:own], reach, return_sorted=True)  # one query for all
+    sizes = np.fromiter((len(f) for f in found), np.int64, count=own)
+    near = np.fromiter(chain.from_iterable(found), np.int64, count=int(sizes.sum()))
+    row = np.repeat(np.arange(own, dtype=np.int64), sizes)
+    gap = np.linalg.norm(elements.centre[near] - elements.centre[row], axis=1)
+    keep = (near != row) & (gap <= elements.radius[row] + elements.radius[near] + margin)
+    start = np.concatenate([[0], np.cumsum(np.bincount(row[keep], minlength=own))]).astype(np.int64)
+    return start, near[keep]
 
 
 def flatten(
@@ -523,6 +527,6 @@ def merged_dents(aggregate, dents: Dents) -> dict:
         offset = np.concatenate([aggregate.dent_offset, offset])
     key = element * (int(vertex.max()) + 1 if len(vertex) else 1) + vertex
     unique, first, inverse = np.unique(key, return_index=True, return_inverse=True)
-    summed = np.zeros((len(unique), 3))
-    np.add.at(summed, inverse, offset)
+    # each key's offsets summed in their order (as np.add.at would, at a tenth of its time)
+    summed = np.stack([np.bincount(inverse, offset[:, d], len(unique)) for d in range(3)], axis=1)
     return {"dent_element": element[first], "dent_vertex": vertex[first], "dent_offset": summed}
