@@ -97,15 +97,43 @@ def test_signed_field_on_threads_gives_the_bits_of_one_pass(monkeypatch):
     shape = (37, 11, 13)
     dist = np.where(rng.random(shape) < 0.3, rng.random(shape), np.inf)
     inside = rng.random(shape) < 0.5
-    depth, clearance = (rng.random(shape).astype(np.float32) for _ in range(2))
-    one = signed_field(dist, inside, depth, clearance, -1.0)  # small: one thread
+    far = rng.random(shape).astype(np.float32)
+    one = signed_field(dist, inside, far, -1.0)  # small: one thread
     monkeypatch.setattr(collider, "THREADED_POINTS", 0)
     threads = numba.get_num_threads()
     try:
         numba.set_num_threads(2)
-        two = signed_field(dist, inside, depth, clearance, -1.0)
+        two = signed_field(dist, inside, far, -1.0)
     finally:
         numba.set_num_threads(threads)
     assert one.tobytes() == two.tobytes()
-    expected = np.where(np.isfinite(dist), dist, np.where(inside, depth, clearance))
+    expected = np.where(np.isfinite(dist), dist, far)
     assert one.tobytes() == (-1.0 * np.where(inside, -expected, expected)).tobytes()
+
+
+def test_one_multi_label_transform_gives_the_bits_of_the_two_binary_ones(monkeypatch):
+    """The far field is one distance transform per grid, of the labels inside 1 / outside 2; it equals, bit for bit,
+    the depth of the inside (``edt`` of ``inside``) inside and the clearance (``edt`` of ``~inside``) outside, as the
+    two transforms it replaced: a solid touching the grid's border, a thin slab, no inside at all, noise."""
+    import edt
+
+    calls = []
+    transform = edt.edt
+    monkeypatch.setattr(edt, "edt", lambda *args, **kwargs: calls.append(args) or transform(*args, **kwargs))
+    signed_distance_grid(
+        [bowl_mesh(radius=8.0, wall=0.7, rim=0.3, segments=24)], -np.full(3, 10.0), np.full(3, 10.0), 0.5
+    )
+    assert len(calls) == 1
+    monkeypatch.setattr(edt, "edt", transform)
+    rng = np.random.default_rng(5)
+    border = np.zeros((30, 25, 20), bool)
+    border[:10] = True
+    slab = np.zeros((10, 40, 40), bool)
+    slab[:, :, 18:21] = True
+    for inside in (border, slab, np.zeros((9, 8, 7), bool), rng.random((33, 27, 19)) < 0.5):
+        for pitch in (1.0, 0.37):
+            far = edt.edt(2 - inside.view(np.uint8), anisotropy=(pitch,) * 3, parallel=2)
+            depth = edt.edt(inside, anisotropy=(pitch,) * 3, parallel=2)
+            clearance = edt.edt(~inside, anisotropy=(pitch,) * 3, parallel=2)
+            assert far[inside].tobytes() == depth[inside].tobytes()
+            assert far[~inside].tobytes() == clearance[~inside].tobytes()
