@@ -54,7 +54,7 @@ def test_rice_bunny_recipe_fills_a_user_mesh_given_on_the_command_line(tmp_path)
 
 def test_rice_bunny_press_stops_once_the_grains_have_come_apart():
     """The bunny's press runs 10 frames (issue 27): its second ten frames moved the grains a median 0.36 mm and left
-    the particle and mesh overlap as they were, for about 9 of its 23 CPU s (the recipe's comment): at most 100
+    the particle and mesh overlap as they were, for 5–9 of its 19–22 CPU s (the recipe's comment): at most 100
     substeps of 2 iterations."""
     press = load_recipe(GRAPHS / "rice_bunny.yaml", default_registry()).nodes["press"]
     params = press.spec.resolve_params(dict(press.params))
