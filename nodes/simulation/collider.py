@@ -97,24 +97,47 @@ def surface_band(vertices, faces, normals, origin, pitch, shape, band):
     return dist
 
 
-@njit(cache=True)
-def signed_field(dist, inside, depth, clearance):
-    """φ from the band's exact distance where it is finite, else the distance transforms (``depth`` inside,
-    ``clearance`` outside), negative inside: one pass, no temporary grids."""
-    phi = np.empty(dist.shape)
-    nx, ny, nz = dist.shape
-    for i in range(nx):
+@njit(cache=True, nogil=True)
+def signed_rows(dist, inside, far, sign, first, last, phi):
+    """``sign`` × φ on rows ``first`` ≤ i < ``last`` into ``phi``: the band's exact distance where it is finite, else
+    ``far``, the distance transform to the other side (out of the solid inside it, into it outside), negative
+    inside. Releases the GIL."""
+    _, ny, nz = dist.shape
+    for i in range(first, last):
         for j in range(ny):
             for k in range(nz):
                 d = dist[i, j, k]
                 if not np.isfinite(d):
-                    d = depth[i, j, k] if inside[i, j, k] else clearance[i, j, k]
-                phi[i, j, k] = -d if inside[i, j, k] else d
+                    d = far[i, j, k]
+                phi[i, j, k] = sign * (-d if inside[i, j, k] else d)
+
+
+# grids smaller than this are signed on one thread: a pool costs more than it saves (an element's shell field)
+THREADED_POINTS = 1 << 20
+
+
+def signed_field(dist, inside, far, sign=1.0):
+    """``sign`` × φ (``signed_rows``) in one pass, no temporary grids: blocks of rows on numba's thread count of
+    Python threads (each point is written alone, so the bits are those of one pass). A mould's φ is −1 × the
+    solid's: the sign here saves a pass over the grid and a copy of it."""
+    phi = np.empty(dist.shape)
+    threads = min(get_num_threads(), dist.shape[0]) if dist.size >= THREADED_POINTS else 1
+    cuts = np.linspace(0, dist.shape[0], threads + 1).astype(np.int64)
+    if threads <= 1:
+        signed_rows(dist, inside, far, float(sign), 0, dist.shape[0], phi)
+        return phi
+    with ThreadPoolExecutor(threads) as pool:
+        for _ in pool.map(
+            lambda b: signed_rows(dist, inside, far, float(sign), b[0], b[1], phi),
+            zip(cuts[:-1], cuts[1:]),
+        ):
+            pass
     return phi
 
 
-def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
-    """φ on a grid covering [lo, hi] for the union of watertight collider meshes (overlapping ones too).
+def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0, sign: float = 1.0):
+    """φ on a grid covering [lo, hi] for the union of watertight collider meshes (overlapping ones too), times
+    ``sign`` (−1: a mould's free space, its inside positive).
 
     Returns (phi float64 (nx, ny, nz), origin, pitch). Raises ValueError for a non-watertight mesh,
     whose inside is undefined.
@@ -147,10 +170,10 @@ def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0):
     axes = [origin[d] + np.arange(shape[d]) * pitch for d in range(3)]
     inside = inside_columns(vertices, faces, *axes)
     inside &= dist > 0.0
-    threads = get_num_threads()
-    depth = edt.edt(inside, anisotropy=(pitch,) * 3, parallel=threads)
-    clearance = edt.edt(~inside, anisotropy=(pitch,) * 3, parallel=threads)
-    return signed_field(dist, inside, depth, clearance), origin, float(pitch)
+    # one multi-label transform (inside 1, outside 2): each point's distance to the nearest point of the other side,
+    # the bits of the two binary transforms (depth of ``inside``, clearance of ``~inside``) in one pass over the grid
+    far = edt.edt(2 - inside.view(np.uint8), anisotropy=(pitch,) * 3, parallel=get_num_threads())
+    return signed_field(dist, inside, far, sign), origin, float(pitch)
 
 
 def free_space_field(colliders, moulds, lo, hi, pitch: float):
@@ -160,8 +183,8 @@ def free_space_field(colliders, moulds, lo, hi, pitch: float):
     phi = None
     for meshes, sign in ((colliders, 1.0), (moulds, -1.0)):
         if meshes:
-            part, origin, pitch = signed_distance_grid(meshes, lo, hi, pitch)
-            phi = sign * part if phi is None else np.minimum(phi, sign * part)
+            part, origin, pitch = signed_distance_grid(meshes, lo, hi, pitch, sign=sign)
+            phi = part if phi is None else np.minimum(phi, part)
     return phi, origin, pitch
 
 

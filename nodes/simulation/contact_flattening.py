@@ -15,6 +15,7 @@ across another is not folded through itself: what that leaves is measured, not h
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -77,19 +78,45 @@ class ShapeFields(NamedTuple):
     dims: np.ndarray  # (s, 3) int64, each grid's own size
 
 
-def shape_fields(shells: list[tuple[np.ndarray, np.ndarray]], cells: int = 32) -> ShapeFields:
-    """φ of each closed shell (vertices, faces) in its local frame, ``cells`` across its longest side plus a
-    3-cell border: the pitch is a grain length / 32 ≈ 0.2 mm for rice (``collider.signed_distance_grid``)."""
+# each shell's grid (``_shell_field``) by the shell's bytes, the most recent first to stay: the main job's two contact
+# steps (rice against eggs, eggs against rice) read the same shells, 0.35 CPU s of each; a grid is ≈ 0.1 MB
+_SHELL_FIELDS: OrderedDict[bytes, tuple] = OrderedDict()
+SHELL_FIELDS_KEPT = 64
+
+
+def _shell_field(vertices: np.ndarray, faces: np.ndarray, cells: int) -> tuple:
+    """(φ, origin, pitch) of one closed shell (``shape_fields``), computed once per process for the same bytes."""
+    import hashlib
+
     import trimesh
 
     from .collider import signed_distance_grid
 
-    grids = []
-    for vertices, faces in shells:
+    vertices, faces = np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64)
+    digest = hashlib.sha256(np.array([len(vertices), len(faces), cells], np.int64).tobytes())
+    digest.update(vertices.tobytes())
+    digest.update(faces.tobytes())
+    key = digest.digest()
+    grid = _SHELL_FIELDS.get(key)
+    if grid is None:
         body = trimesh.Trimesh(vertices, faces, process=False)
         lo, hi = body.bounds
         pitch = float((hi - lo).max()) / cells
-        grids.append(signed_distance_grid([body], lo - 3 * pitch, hi + 3 * pitch, pitch))
+        grid = signed_distance_grid([body], lo - 3 * pitch, hi + 3 * pitch, pitch)
+        for array in grid[:2]:
+            array.setflags(write=False)
+        _SHELL_FIELDS[key] = grid
+        while len(_SHELL_FIELDS) > SHELL_FIELDS_KEPT:
+            _SHELL_FIELDS.popitem(last=False)
+    _SHELL_FIELDS.move_to_end(key)
+    return grid
+
+
+def shape_fields(shells: list[tuple[np.ndarray, np.ndarray]], cells: int = 32) -> ShapeFields:
+    """φ of each closed shell (vertices, faces) in its local frame, ``cells`` across its longest side plus a
+    3-cell border: the pitch is a grain length / 32 ≈ 0.2 mm for rice (``collider.signed_distance_grid``). A shell
+    met before in this process (the other contact step of a scene) keeps its grid (``_shell_field``)."""
+    grids = [_shell_field(vertices, faces, cells) for vertices, faces in shells]
     dims = np.array([g[0].shape for g in grids], np.int64)
     phi = np.full((len(grids), *dims.max(axis=0)), np.inf)
     for s, (grid, _, _) in enumerate(grids):
@@ -347,6 +374,7 @@ def _gather(aggregates, fields_of) -> _Elements:
     outer_of: dict[int, tuple] = {}  # per library mesh: its outer shell's vertices and thickness, found once
     for aggregate in aggregates:
         p = aggregate.placement
+        bare = aggregate.without_normals()  # the same vertices, without rotating and bending each mesh's normals
         rot = np.asarray(p.rotations, np.float64)
         lin = rot if aggregate.deformations is None else np.einsum("nij,njk->nik", aggregate.deformations, rot)
         bend = np.zeros((len(p), 3, 6)) if aggregate.bends is None else np.asarray(aggregate.bends, np.float64)
@@ -354,7 +382,7 @@ def _gather(aggregates, fields_of) -> _Elements:
         for i in range(len(p)):
             library = aggregate.libraries[p.kinds[i]]
             base = library.meshes[p.variants[i] % len(library)]
-            mesh = aggregate.element_mesh(i)
+            mesh = bare.element_mesh(i)
             if id(base) not in outer_of:
                 used = outer_vertices(base)
                 outer_of[id(base)] = (used, float(np.ptp(base.vertices[used], axis=0).min()))
@@ -410,19 +438,22 @@ def vertex_rings(meshes) -> VertexRings:
 def _neighbour_lists(elements: _Elements, own: int, margin: float):
     """CSR of each of the first ``own`` elements' neighbours among all (bounding spheres within ``margin``),
     in index order (deterministic)."""
+    from itertools import chain
+
     from scipy.spatial import cKDTree
 
+    if own == 0:
+        return np.zeros(1, np.int64), np.zeros(0, np.int64)
     tree = cKDTree(elements.centre)
     reach = 2.0 * float(elements.radius.max()) + margin
-    lists = []
-    for i in range(own):
-        near = np.array(sorted(tree.query_ball_point(elements.centre[i], reach)), np.int64)
-        gap = np.linalg.norm(elements.centre[near] - elements.centre[i], axis=1)
-        keep = (near != i) & (gap <= elements.radius[i] + elements.radius[near] + margin)
-        lists.append(near[keep])
-    start = np.concatenate([[0], np.cumsum([len(x) for x in lists])]).astype(np.int64)
-    flat = np.concatenate(lists) if lists else np.zeros(0, np.int64)
-    return start, flat.astype(np.int64)
+    found = tree.query_ball_point(elements.centre[:own], reach, return_sorted=True)  # one query for all
+    sizes = np.fromiter((len(f) for f in found), np.int64, count=own)
+    near = np.fromiter(chain.from_iterable(found), np.int64, count=int(sizes.sum()))
+    row = np.repeat(np.arange(own, dtype=np.int64), sizes)
+    gap = np.linalg.norm(elements.centre[near] - elements.centre[row], axis=1)
+    keep = (near != row) & (gap <= elements.radius[row] + elements.radius[near] + margin)
+    start = np.concatenate([[0], np.cumsum(np.bincount(row[keep], minlength=own))]).astype(np.int64)
+    return start, near[keep]
 
 
 def flatten(
@@ -523,6 +554,6 @@ def merged_dents(aggregate, dents: Dents) -> dict:
         offset = np.concatenate([aggregate.dent_offset, offset])
     key = element * (int(vertex.max()) + 1 if len(vertex) else 1) + vertex
     unique, first, inverse = np.unique(key, return_index=True, return_inverse=True)
-    summed = np.zeros((len(unique), 3))
-    np.add.at(summed, inverse, offset)
+    # each key's offsets summed in their order (as np.add.at would, at a tenth of its time)
+    summed = np.stack([np.bincount(inverse, offset[:, d], len(unique)) for d in range(3)], axis=1)
     return {"dent_element": element[first], "dent_vertex": vertex[first], "dent_offset": summed}
