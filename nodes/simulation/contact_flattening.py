@@ -15,7 +15,6 @@ across another is not folded through itself: what that leaves is measured, not h
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -78,45 +77,19 @@ class ShapeFields(NamedTuple):
     dims: np.ndarray  # (s, 3) int64, each grid's own size
 
 
-# each shell's grid (``_shell_field``) by the shell's bytes, the most recent first to stay: the main job's two contact
-# steps (rice against eggs, eggs against rice) read the same shells, 0.35 CPU s of each; a grid is ≈ 0.1 MB
-_SHELL_FIELDS: OrderedDict[bytes, tuple] = OrderedDict()
-SHELL_FIELDS_KEPT = 64
-
-
-def _shell_field(vertices: np.ndarray, faces: np.ndarray, cells: int) -> tuple:
-    """(φ, origin, pitch) of one closed shell (``shape_fields``), computed once per process for the same bytes."""
-    import hashlib
-
+def shape_fields(shells: list[tuple[np.ndarray, np.ndarray]], cells: int = 32) -> ShapeFields:
+    """φ of each closed shell (vertices, faces) in its local frame, ``cells`` across its longest side plus a
+    3-cell border: the pitch is a grain length / 32 ≈ 0.2 mm for rice (``collider.signed_distance_grid``)."""
     import trimesh
 
     from .collider import signed_distance_grid
 
-    vertices, faces = np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64)
-    digest = hashlib.sha256(np.array([len(vertices), len(faces), cells], np.int64).tobytes())
-    digest.update(vertices.tobytes())
-    digest.update(faces.tobytes())
-    key = digest.digest()
-    grid = _SHELL_FIELDS.get(key)
-    if grid is None:
+    grids = []
+    for vertices, faces in shells:
         body = trimesh.Trimesh(vertices, faces, process=False)
         lo, hi = body.bounds
         pitch = float((hi - lo).max()) / cells
-        grid = signed_distance_grid([body], lo - 3 * pitch, hi + 3 * pitch, pitch)
-        for array in grid[:2]:
-            array.setflags(write=False)
-        _SHELL_FIELDS[key] = grid
-        while len(_SHELL_FIELDS) > SHELL_FIELDS_KEPT:
-            _SHELL_FIELDS.popitem(last=False)
-    _SHELL_FIELDS.move_to_end(key)
-    return grid
-
-
-def shape_fields(shells: list[tuple[np.ndarray, np.ndarray]], cells: int = 32) -> ShapeFields:
-    """φ of each closed shell (vertices, faces) in its local frame, ``cells`` across its longest side plus a
-    3-cell border: the pitch is a grain length / 32 ≈ 0.2 mm for rice (``collider.signed_distance_grid``). A shell
-    met before in this process (the other contact step of a scene) keeps its grid (``_shell_field``)."""
-    grids = [_shell_field(vertices, faces, cells) for vertices, faces in shells]
+        grids.append(signed_distance_grid([body], lo - 3 * pitch, hi + 3 * pitch, pitch))
     dims = np.array([g[0].shape for g in grids], np.int64)
     phi = np.full((len(grids), *dims.max(axis=0)), np.inf)
     for s, (grid, _, _) in enumerate(grids):

@@ -88,24 +88,3 @@ def test_merged_dents_sum_a_vertex_dented_twice_in_order():
     assert merged["dent_offset"].tobytes() == summed.tobytes()
     assert merged["dent_element"].tolist() == [0, 0, 2, 2, 3, 4]
     assert merged["dent_vertex"].tolist() == [3, 7, 1, 5, 2, 0]
-
-
-def test_a_shell_met_again_keeps_its_grid(monkeypatch):
-    """The shells' grids are computed once per process and shell: the main job's second contact step (its eggs
-    against the rice, after the rice against its eggs) reads the first's; the fields are the same bits."""
-    from collections import OrderedDict
-
-    from nodes.simulation import collider, contact_flattening
-
-    monkeypatch.setattr(contact_flattening, "_SHELL_FIELDS", OrderedDict(), raising=False)
-    computed = []
-    grid = collider.signed_distance_grid
-    monkeypatch.setattr(collider, "signed_distance_grid", lambda *a, **k: computed.append(a) or grid(*a, **k))
-    ball, grain = trimesh.creation.icosphere(2), trimesh.creation.icosphere(2)
-    grain.apply_scale([3.0, 1.5, 1.0])
-    shells = [(np.asarray(m.vertices), np.asarray(m.faces, np.int64)) for m in (ball, grain)]
-    first = contact_flattening.shape_fields(shells)
-    again = contact_flattening.shape_fields(shells[::-1])
-    assert len(computed) == 2
-    assert again.phi[0].tobytes() == first.phi[1].tobytes() and again.phi[1].tobytes() == first.phi[0].tobytes()
-    assert again.origin[::-1].tobytes() == first.origin.tobytes()
