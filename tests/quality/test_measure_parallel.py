@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import time
 
 import numpy as np
 import pytest
@@ -191,13 +192,14 @@ def test_a_sample_of_all_elements_in_many_tasks(monkeypatch):
 
 
 def _pid_and_square(x):
+    time.sleep(0.005)  # long enough for the child to start and take some (a fork takes milliseconds)
     return os.getpid(), x * x
 
 
 def test_forked_tasks_are_those_of_a_serial_run_and_run_in_a_child():
-    tasks = [lambda x=x: _pid_and_square(x) for x in range(200)]
+    tasks = [lambda x=x: _pid_and_square(x) for x in range(100)]
     results = run_tasks(tasks, 2)
-    assert [r[1] for r in results] == [x * x for x in range(200)]
+    assert [r[1] for r in results] == [x * x for x in range(100)]
     assert {r[0] for r in results} - {os.getpid()}  # a child computed some of them
 
 
@@ -207,6 +209,7 @@ def test_a_child_that_dies_leaves_its_tasks_to_the_parent():
     def task(x):
         if os.getpid() != parent:
             os._exit(3)  # the child dies without sending anything
+        time.sleep(0.005)  # the child starts meanwhile and takes a task
         return x + 1
 
     assert run_tasks([lambda x=x: task(x) for x in range(50)], 2) == list(range(1, 51))
@@ -214,6 +217,7 @@ def test_a_child_that_dies_leaves_its_tasks_to_the_parent():
 
 def test_a_task_that_raises_raises_in_the_parent():
     def task(x):
+        time.sleep(0.005)
         if x == 7:
             raise ValueError("task 7")
         return x
