@@ -8,7 +8,12 @@ agree, at the same cost): a vertex inside a neighbour lies at depth −d. Depths
 (the largest extent of the element's own mesh). A part nested inside its own element (an ikura yolk
 inside the membrane) is not a neighbour: only the outermost part of each element (``parts == 0``) is
 tested. Hand-written around igl because trimesh's signed distance is ~100× slower and needs rtree
-(ENVIRONMENT.md)."""
+(ENVIRONMENT.md).
+
+Most of the cost is libigl building each neighbour's AABB tree and winding-number hierarchy (≈ 2.3 ms for a
+900-vertex grain, then ≈ 7 µs a point), and libigl holds the GIL: ``overlap_plan`` hands its calls out as tasks
+that forked processes can share (``forked.run_tasks``; each call's values are its own, so any split gives the
+same floats)."""
 
 from __future__ import annotations
 
