@@ -54,7 +54,6 @@ def test_elements_outside_their_vessel_are_counted_and_warned_about():
     """A ball in a bowl (rim radius 10 mm, 8 deep, 4 mm wall), one above its mound, one on its rim's lip (in), one
     past its wall, one under it: the two outside are counted in the table and a warning names them; without
     vessels nothing is tested."""
-
     from nodes.shapes import shape
 
     vessel = shape.call(kind="bowl", size=10.0, depth=8.0, resolution=2)["vessel"]
