@@ -9,8 +9,8 @@ sends back only the tasks' small results. Each task's result depends on the task
 ran it or in what order: the merged results are those of a serial run, bit for bit (tests/quality).
 
 A child that fails (an exception, a crash, no ``fork`` on this platform, a daemonic process such as a Dask worker
-that may not have children) only means its tasks are run here: a task that raises then raises here, as it would
-serially.
+that may not have children, a child still not done ``LATE_S`` after the last task was taken) only means its tasks
+are run here: a task that raises then raises here, as it would serially.
 """
 
 from __future__ import annotations
@@ -18,6 +18,8 @@ from __future__ import annotations
 import multiprocessing
 from collections.abc import Callable, Sequence
 from typing import Any
+
+LATE_S = 60.0  # how long after this process has run out of tasks a child may take to send its results
 
 
 def run_tasks(tasks: Sequence[Callable[[], Any]], processes: int) -> list[Any]:
@@ -27,23 +29,38 @@ def run_tasks(tasks: Sequence[Callable[[], Any]], processes: int) -> list[Any]:
     try:
         context = multiprocessing.get_context("fork")
         counter = context.Value("q", 0)  # the next task to take (with its own lock)
-        children = []
+    except (ValueError, OSError):  # no fork on this platform, no shared memory
+        return [task() for task in tasks]
+    children = []
+    finished = False
+    try:
         for _ in range(min(processes, len(tasks)) - 1):
             receive, send = context.Pipe(duplex=False)
             child = context.Process(target=_child, args=(tasks, counter, send), daemon=True)
-            child.start()
-            send.close()  # the child holds the sending end: a child that dies closes the pipe
+            try:
+                child.start()
+            except (AssertionError, OSError):  # a daemonic process (a Dask worker) has no children; no memory
+                receive.close()
+                break
+            finally:
+                send.close()  # the child holds the sending end: a child that dies closes the pipe
             children.append((child, receive))
-    except (AssertionError, OSError, ValueError):  # no fork here, or a daemonic process: serial
-        return [task() for task in tasks]
-    results = {k: tasks[k]() for k in _take(tasks, counter)}
-    for child, receive in children:
-        try:
-            results |= receive.recv()
-        except (EOFError, OSError):  # the child died: what it took is computed below
-            pass
-        receive.close()
-        child.join()
+        results = {k: tasks[k]() for k in _take(tasks, counter)}
+        for child, receive in children:
+            try:
+                if receive.poll(LATE_S):
+                    results |= receive.recv()
+                else:  # stuck (no task takes this long): what it took is computed below
+                    child.terminate()
+            except (EOFError, OSError):  # the child died: what it took is computed below
+                pass
+        finished = True
+    finally:
+        for child, receive in children:
+            receive.close()
+            if not finished:  # a task raised here (or an interrupt): the children's work is not wanted
+                child.terminate()
+            child.join()
     return [results[k] if k in results else tasks[k]() for k in range(len(tasks))]
 
 

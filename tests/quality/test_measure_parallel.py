@@ -224,3 +224,20 @@ def test_a_task_that_raises_raises_in_the_parent():
 
     with pytest.raises(ValueError, match="task 7"):
         run_tasks([lambda x=x: task(x) for x in range(20)], 2)
+
+
+def test_a_stuck_child_is_ended_and_its_tasks_run_here(monkeypatch):
+    from nodes.quality import forked
+
+    monkeypatch.setattr(forked, "LATE_S", 0.5)
+    parent = os.getpid()
+
+    def task(x):
+        if os.getpid() != parent:
+            time.sleep(3600)  # the child never finishes its first task
+        time.sleep(0.005)
+        return -x
+
+    start = time.perf_counter()
+    assert run_tasks([lambda x=x: task(x) for x in range(50)], 2) == [-x for x in range(50)]
+    assert time.perf_counter() - start < 30.0
