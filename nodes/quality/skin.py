@@ -35,9 +35,9 @@ def skin_score(vertices: np.ndarray, faces: np.ndarray, edges: np.ndarray | None
 
 
 def interior_edges(faces: np.ndarray, vertex_count: int) -> np.ndarray:
-    """The edges shared by two faces, as rows (first face, second face, edge start, edge end, the second face's
-    vertex opposite the edge): the mesh's topology alone, computed once per library mesh by ``measure``.
-    Refuses an edge shared by more than two faces."""
+    """The edges shared by two faces: a (5, edges) array of each one's first face, second face, start and end
+    vertex, and the second face's vertex opposite it — the mesh's topology alone, which ``measure`` computes once
+    per library mesh. Refuses an edge shared by more than two faces."""
     faces = np.asarray(faces, np.int64)
     # each face's three directed edges (v_i → v_{i+1}) with the vertex opposite them
     start = faces.ravel()
