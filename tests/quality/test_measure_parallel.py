@@ -169,7 +169,7 @@ def pile(seed: int = 7) -> list[Aggregate]:
 
 @pytest.mark.parametrize("processes", [1, 2])
 def test_measure_gives_the_floats_of_the_serial_reference(monkeypatch, processes):
-    monkeypatch.setattr(measure_module, "_processes", lambda tasks: processes)
+    monkeypatch.setattr(measure_module, "_processes", lambda tasks, cores: processes)
     aggregates = pile()
     table = measure.call(seed=5, aggregates=aggregates, sample=60)
     expected = reference_measure(aggregates, seed=5, sample=60)
@@ -181,7 +181,7 @@ def test_measure_gives_the_floats_of_the_serial_reference(monkeypatch, processes
 
 def test_a_sample_of_all_elements_in_many_tasks(monkeypatch):
     """Every element sampled, eight libigl tasks and more, on two processes: still the reference's floats."""
-    monkeypatch.setattr(measure_module, "_processes", lambda tasks: 2)
+    monkeypatch.setattr(measure_module, "_processes", lambda tasks, cores: 2)
     aggregates = pile(seed=11)
     table = measure.call(seed=2, aggregates=aggregates, sample=1000)
     expected = reference_measure(aggregates, seed=2, sample=1000)
@@ -241,3 +241,31 @@ def test_a_stuck_child_is_ended_and_its_tasks_run_here(monkeypatch):
     start = time.perf_counter()
     assert run_tasks([lambda x=x: task(x) for x in range(50)], 2) == [-x for x in range(50)]
     assert time.perf_counter() - start < 30.0
+
+
+@pytest.mark.parametrize("free", [1, 2])
+def test_measure_forks_only_onto_a_free_core(monkeypatch, free):
+    """The default count: the cores other processes leave free (``FreeCores``, measured while the meshes are built),
+    and one process for fewer than ``PARALLEL_FROM`` libigl tasks."""
+    from nodes.quality import forked
+    from nodes.simulation import threads
+
+    class Cores:
+        def __init__(self, most):
+            self.most = most
+
+        def threads(self):
+            return free
+
+    asked = []
+
+    def spy(tasks, processes):
+        asked.append(processes)
+        return [task() for task in tasks]
+
+    monkeypatch.setattr(threads, "FreeCores", Cores)
+    monkeypatch.setattr(forked, "run_tasks", spy)
+    aggregates = pile(seed=11)
+    measure.call(seed=2, aggregates=aggregates, sample=1000)  # all 132 sampled: more than 16 tasks
+    measure.call(seed=2, aggregates=aggregates, sample=3)  # a few neighbours: not worth a fork
+    assert asked == [free, 1]
