@@ -269,3 +269,21 @@ def test_measure_forks_only_onto_a_free_core(monkeypatch, free):
     measure.call(seed=2, aggregates=aggregates, sample=1000)  # all 132 sampled: more than 16 tasks
     measure.call(seed=2, aggregates=aggregates, sample=3)  # a few neighbours: not worth a fork
     assert asked == [free, 1]
+
+
+def _in_a_daemon(queue):
+    tasks = [lambda x=x: (os.getpid(), x) for x in range(20)]
+    queue.put((os.getpid(), run_tasks(tasks, 2)))
+
+
+def test_a_daemonic_process_runs_the_tasks_itself():
+    """A daemonic process (a Dask worker) may not have children: the tasks run in it, serially."""
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    daemon = context.Process(target=_in_a_daemon, args=(queue,), daemon=True)
+    daemon.start()
+    pid, results = queue.get(timeout=60)
+    daemon.join()
+    assert results == [(pid, x) for x in range(20)]
