@@ -7,9 +7,10 @@ cold on 2 cores) — timed on their cached inputs, with a digest of what each re
 CACHE_DIR holds the recipe's node cache (a copy of a full cold run's, e.g. /work/main/exp/gal_cache/onigiri: the
 inputs are read from it, nothing is written). Each node function runs once in this process, in the order given,
 with the seed the engine derives for it; its wall and CPU seconds are printed (the first node also pays the imports
-its code needs). The last line is JSON: the measure table's values, a sha256 of the shaded scenes' arrays and of
-each exported file, so two checkouts compare with ``diff`` (run each with its own ``PYTHONPATH``, back to back:
-times on a shared machine compare only under the same load, printed beside).
+its code needs; the CPU seconds of the processes a node forks are printed beside its own). The last line is JSON:
+the measure table's values, a sha256 of the shaded scenes' arrays and of each exported file, so two checkouts
+compare with ``diff`` (run each with its own ``PYTHONPATH``, back to back: times on a shared machine compare only
+under the same load, printed beside).
 """
 
 from __future__ import annotations
@@ -82,10 +83,12 @@ def time_nodes(name: str, cache: Path, types: list[str], overrides: list[str]) -
             inputs[port] = values if entry.spec.inputs[port].many else values[0]
         seed = derive_seed(recipe.seed if entry.seed is None else entry.seed, node, None) if entry.spec.random else None
         ctx = Context.standalone(node_type=entry.spec.type_name, seed=seed)
-        wall, cpu = time.perf_counter(), time.process_time()
+        wall, cpu, before = time.perf_counter(), time.process_time(), os.times()
         value = entry.spec.run(ctx, **inputs, **entry.params)
-        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-        print(f"{node}: wall {wall:.2f} s CPU {cpu:.2f} s", flush=True)
+        wall, cpu, after = time.perf_counter() - wall, time.process_time() - cpu, os.times()
+        children = after.children_user + after.children_system - before.children_user - before.children_system
+        # the children: measure's forked processes (nodes/quality/forked.py), joined before it returns
+        print(f"{node}: wall {wall:.2f} s CPU {cpu:.2f} s + {children:.2f} s in child processes", flush=True)
         if entry.spec.type_name == "measure":
             out[node] = {k: np.asarray(v).tolist() for k, v in value.columns.items()}
         elif entry.spec.type_name == "shade":

@@ -6,6 +6,8 @@ elements ended outside their vessel (a warning names them: a region that does no
 
 from __future__ import annotations
 
+from functools import partial
+
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
@@ -50,40 +52,61 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
     """Mesh-level quality of the aggregates together (elements of one may touch another's); a warning when
     elements end outside their vessels."""
     import numpy as np
-    import trimesh
+    from numba import get_num_threads
 
-    from .mesh_overlap import element_overlaps, outer_shell, volume
-    from .skin import skin_score
+    from ..simulation.threads import FreeCores
+    from .forked import run_tasks
+    from .mesh_overlap import outer_shell, overlap_plan
+    from .skin import interior_edges
 
-    meshes, centres, radii, volumes, lows, tops = [], [], [], [], [], []
+    cores = FreeCores(get_num_threads())  # measures, while the meshes are built, the cores other processes use
+    meshes, keys, bounds, centres, radii = [], [], [], [], []
     for aggregate in aggregates:
         p = aggregate.placement
         shapes = aggregate.without_normals()  # the vertices alone: no normals are measured
         shells, lengths = {}, {}  # per library mesh (kind, variant): its outer shell's faces, its length
         for i in range(len(p)):
             mesh = shapes.element_mesh(i)
-            key = (int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))
+            key = (id(aggregate), int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))
             if key not in shells:  # every element of a library mesh shares its faces and parts
                 shells[key] = outer_shell(mesh.faces, mesh.parts)
-                own = aggregate.libraries[key[0]].meshes[key[1]]
+                own = aggregate.libraries[key[1]].meshes[key[2]]
                 lengths[key] = float(np.ptp(own.vertices, axis=0).max())  # the element's length in its own frame
             used, faces = shells[key]
             vertices = mesh.vertices if used is None else mesh.vertices[used]
             lo, hi = vertices.min(axis=0), vertices.max(axis=0)
             centre = 0.5 * (lo + hi)
             meshes.append((vertices, faces, lengths[key]))
+            keys.append(key)
+            bounds.append((lo, hi))
             centres.append(centre)
             radii.append(float(np.linalg.norm(vertices - centre, axis=1).max()))
-            volumes.append(abs(volume(vertices, faces)))
-            lows.append(lo[2])
-            tops.append(hi[2])
     if not meshes:
         raise ValueError("aggregates: no elements to measure")
     n = len(meshes)
     picked = np.sort(ctx.rng.choice(n, size=min(sample, n), replace=False))
-    stats = element_overlaps(meshes, np.array(centres), np.array(radii), picked, contact)
-    points = np.concatenate([m[0] for m in meshes])
-    hull = trimesh.convex.convex_hull(points[:: max(1, len(points) // 200_000)]).volume
+    bounds = np.array(bounds)
+    plan = overlap_plan(meshes, np.array(centres), np.array(radii), picked, contact, bounds)
+    # The libigl calls, the volumes, the hull and the skin scores as independent tasks on the cores numba may use
+    # and other processes leave free (forked processes: libigl holds the GIL); each task's result is the same in
+    # any process.
+    edges = {}  # per library mesh: its interior edges (the skin score's topology)
+    for i in picked.tolist():
+        if keys[i] not in edges:
+            edges[keys[i]] = interior_edges(meshes[i][1], len(meshes[i][0]))
+    chunks = [range(c, min(c + VOLUMES_PER_TASK, n)) for c in range(0, n, VOLUMES_PER_TASK)]
+    skins = [picked[c : c + SKINS_PER_TASK].tolist() for c in range(0, len(picked), SKINS_PER_TASK)]
+    tasks = [
+        *plan.tasks,
+        *(partial(_volumes, meshes, chunk) for chunk in chunks),
+        *(partial(_skins, meshes, keys, edges, part) for part in skins),
+        partial(_hull_volume, meshes),
+    ]
+    results = run_tasks(tasks, _processes(len(plan.tasks), cores))
+    stats = plan.stats(results[: len(plan.tasks)])
+    volumes = [v for part in results[len(plan.tasks) : len(plan.tasks) + len(chunks)] for v in part]
+    scores = [s for part in results[len(plan.tasks) + len(chunks) : -1] for s in part]
+    hull = results[-1]
     depth = stats.pair_depth if len(stats.pair_depth) else np.zeros(1)
     columns = {
         "elements": np.array([n]),
@@ -95,11 +118,48 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
         "deeper_than_1pct": np.array([np.mean(depth > 0.01)]),
         "contacts_per_element": np.array([stats.contacts.mean()]),
         "packing_fraction": np.array([sum(volumes) / hull]),
-        "fill_height": np.array([np.percentile(tops, 95) - min(lows)]),
+        "fill_height": np.array([np.percentile(bounds[:, 1, 2], 95) - bounds[:, 0, 2].min()]),
         "outside_vessel": np.array([_outside_vessels(ctx, np.array(centres), vessels or [])]),
-        "skin": np.array([np.mean([skin_score(meshes[i][0], meshes[i][1]) for i in picked])]),
+        "skin": np.array([np.mean(scores)]),
     }
     return Table(columns)
+
+
+VOLUMES_PER_TASK = 256  # elements whose volumes one task sums (≈ 30 ms)
+SKINS_PER_TASK = 32  # sampled elements whose skin one task scores (≈ 20 ms)
+PARALLEL_FROM = 16  # libigl tasks (8 neighbour meshes each, ≈ 3 ms a mesh) worth forking a process for
+
+
+def _processes(overlap_tasks: int, cores) -> int:
+    """How many processes run the tasks: the cores other processes have left free of numba's thread count (the cores
+    the run may use; ``FreeCores``) when the libigl calls are worth a fork (a few ms in a large process), else one.
+    A core another process keeps busy is not worth a child: this machine's kernel shares the CPU out per session
+    (autogroup), so the child's work comes out of this process's share, and the two took 5–10 % more CPU s than one
+    (the lying cylinder's inputs at load 5: 8.5–9.0 CPU s against 7.9–8.4, the wall no shorter)."""
+    return cores.threads() if overlap_tasks >= PARALLEL_FROM else 1
+
+
+def _volumes(meshes: list, elements: range) -> list[float]:
+    """The volumes the elements' outer shells enclose."""
+    from .mesh_overlap import volume
+
+    return [abs(volume(meshes[i][0], meshes[i][1])) for i in elements]
+
+
+def _skins(meshes: list, keys: list, edges: dict, elements: list[int]) -> list[float]:
+    """The elements' skin scores (their library mesh's interior edges in ``edges``)."""
+    from .skin import skin_score
+
+    return [skin_score(meshes[i][0], meshes[i][1], edges[keys[i]]) for i in elements]
+
+
+def _hull_volume(meshes: list) -> float:
+    """The volume of the convex hull of every element's vertices (of at most ≈ 200,000 of them, evenly strided)."""
+    import numpy as np
+    import trimesh
+
+    points = np.concatenate([m[0] for m in meshes])
+    return trimesh.convex.convex_hull(points[:: max(1, len(points) // 200_000)]).volume
 
 
 def _outside_vessels(ctx, centres, vessels) -> int:

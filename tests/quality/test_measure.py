@@ -1,6 +1,7 @@
 """The measure node reads overlaps from the element meshes: known depths of spheres, none when apart."""
 
 import numpy as np
+import pytest
 import trimesh
 
 from nodegraph.values import Mesh
@@ -53,8 +54,6 @@ def test_elements_outside_their_vessel_are_counted_and_warned_about():
     """A ball in a bowl (rim radius 10 mm, 8 deep, 4 mm wall), one above its mound, one on its rim's lip (in), one
     past its wall, one under it: the two outside are counted in the table and a warning names them; without
     vessels nothing is tested."""
-    import pytest
-
     from nodes.shapes import shape
 
     vessel = shape.call(kind="bowl", size=10.0, depth=8.0, resolution=2)["vessel"]
@@ -85,10 +84,11 @@ def test_skin_column_reads_the_element_meshes():
     assert column(measure.call(aggregates=[Aggregate(aggregate.placement, (library,))]), "skin") > 0.0
 
 
-def test_volume_and_overlaps_are_those_of_trimesh_and_a_libigl_call_per_pair():
+@pytest.mark.parametrize("processes", [1, 2])
+def test_volume_and_overlaps_are_those_of_trimesh_and_a_libigl_call_per_pair(processes):
     """The fast paths give the very floats of what they replace: ``volume`` is trimesh's mass-properties volume,
-    and one signed-distance call per neighbour (on every sampled element's points near it) gives each pair the
-    depth of a call per pair."""
+    and one signed-distance call per neighbour (on every sampled element's points near it, in one process or
+    two) gives each pair the depth of a call per pair."""
     import igl
 
     from nodes.quality.mesh_overlap import element_overlaps, volume
@@ -103,7 +103,7 @@ def test_volume_and_overlaps_are_those_of_trimesh_and_a_libigl_call_per_pair():
     centres = np.array([0.5 * (v.min(0) + v.max(0)) for v, _, _ in meshes])
     radii = np.array([np.linalg.norm(v - c, axis=1).max() for (v, _, _), c in zip(meshes, centres)])
     sample = np.arange(0, 40, 2)
-    stats = element_overlaps(meshes, centres, radii, sample)
+    stats = element_overlaps(meshes, centres, radii, sample, processes=processes)
     depths, contacts = [], np.zeros(len(sample), np.int64)  # a libigl call per pair, as before the grouping
     for row, i in enumerate(sample):
         vertices, _, length = meshes[i]
