@@ -6,6 +6,7 @@ element, packing fraction), with G table 2's times and counts beside (SPEC §6).
     python benchmarks/bench_scenes.py                 # every recipe at full size (minutes on 2 cores)
     python benchmarks/bench_scenes.py --quick         # reduced sizes through --set overrides: seconds
     python benchmarks/bench_scenes.py rice_bowl ikura_don     # some recipes only
+    python benchmarks/bench_scenes.py --gallery && python tools/gallery.py   # the README pictures from these runs
 
 G's full method against the short one on the rice bowl is ``benchmarks/bench_full_vs_short.py``.
 
@@ -19,6 +20,7 @@ that recipe's).
 from __future__ import annotations
 
 import argparse
+import json
 import multiprocessing
 import os
 import resource
@@ -55,8 +57,6 @@ def recipe_path(name: str) -> Path:
 
 def draft_overrides(name: str) -> list[str]:
     """A recipe's draft: block as --set texts (as ``Recipe.draft``), read without loading the node registry."""
-    import json
-
     import yaml
 
     block = yaml.safe_load(recipe_path(name).read_text()).get("draft") or {}
@@ -73,18 +73,19 @@ def _quick(name: str) -> list[str]:
 QUICK = {name: _quick(name) for name in SCENES}
 
 
-def run_cold(name: str, overrides: list[str], preview_to: Path | None = None) -> dict:
-    """One run in a fresh cache; per-node wall, total, elements, vertices and the measure row."""
+def run_cold(name: str, overrides: list[str], preview_to: Path | None = None, out: Path | None = None) -> dict:
+    """One run in a fresh cache; per-node wall, total, elements, vertices and the measure row. ``out``: where its
+    files go (a temporary folder if None)."""
     from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
 
     recipe = load_recipe(recipe_path(name), default_registry(), overrides)
     with tempfile.TemporaryDirectory(prefix="bench-scenes-") as tmp:
         start = time.perf_counter()
-        result = run_recipe(recipe, cache=Cache(Path(tmp) / "cache"), out_dir=Path(tmp) / "out")
+        result = run_recipe(recipe, cache=Cache(Path(tmp) / "cache"), out_dir=out or Path(tmp) / "out")
         total = time.perf_counter() - start
         if preview_to is not None:
             preview_to.parent.mkdir(parents=True, exist_ok=True)
-            preview_to.write_bytes((Path(tmp) / "out" / "preview.png").read_bytes())
+            preview_to.write_bytes(((out or Path(tmp) / "out") / "preview.png").read_bytes())
     table = result.output("measure.table").columns
     nodes, cpu = {}, {}
     for record in result.records:
@@ -103,18 +104,18 @@ def run_cold(name: str, overrides: list[str], preview_to: Path | None = None) ->
     }
 
 
-def _measured(name: str, overrides: list[str], preview_to: Path | None) -> dict:
-    row = run_cold(name, overrides, preview_to)
+def _measured(name: str, overrides: list[str], preview_to: Path | None, out: Path | None) -> dict:
+    row = run_cold(name, overrides, preview_to, out)
     row["peak_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
     return row
 
 
-def run_isolated(name: str, overrides: list[str], preview_to: Path | None = None) -> dict:
+def run_isolated(name: str, overrides: list[str], preview_to: Path | None = None, out: Path | None = None) -> dict:
     """``run_cold`` in a fresh process (its peak memory is this run's alone), with the load average at its
     start."""
     load = os.getloadavg()[0]
     with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
-        row = pool.submit(_measured, name, overrides, preview_to).result()
+        row = pool.submit(_measured, name, overrides, preview_to, out).result()
     return {**row, "load": load}
 
 
@@ -129,6 +130,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("recipes", nargs="*", help="recipe names (default: every one with a row below)")
     parser.add_argument("--quick", action="store_true", help="reduced sizes: seconds per recipe")
     parser.add_argument("--top", type=int, default=4, help="slowest nodes shown per recipe")
+    parser.add_argument(
+        "--gallery",
+        action="store_true",
+        help="keep each timed run's files in outputs/<recipe>/ with its time (gallery.json): then "
+        "`python tools/gallery.py` (without --run) makes the README's pictures from these very runs",
+    )
     args = parser.parse_args(argv)
     from machine import conditions
 
@@ -138,7 +145,12 @@ def main(argv: list[str] | None = None) -> int:
         quick = QUICK.get(name, PREVIEW)
         run_isolated(name, quick)  # compiles the kernels (numba cache) so the timed run is cold, not compiling
         preview = None if args.quick else REPO / "benchmarks" / "results" / f"{name}.png"  # for a look
-        rows.append((name, run_isolated(name, quick if args.quick else [], preview_to=preview)))
+        out = REPO / "outputs" / name if args.gallery and not args.quick else None
+        rows.append((name, run_isolated(name, quick if args.quick else [], preview_to=preview, out=out)))
+        if out is not None:  # what tools/gallery.py --run writes for one recipe
+            row = rows[-1][1]
+            info = {"cold_s": round(row["total"], 1), "load": round(row["load"], 1), "count": int(row["elements"])}
+            (out / "gallery.json").write_text(json.dumps(info, indent=1) + "\n")
         _print_row(name, rows[-1][1], args.top)
     print()
     print(_table(rows))
