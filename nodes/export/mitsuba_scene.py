@@ -33,7 +33,7 @@ denoising. In the denoised path-traced pass a glint is a few bright samples amon
 denoiser reads as noise and erases (``benchmarks/bench_preview.py --highlights``: highlight energy 0 after
 OIDN); the one-bounce pass of a smooth or glossy reflection has no such noise and needs no denoising. Left
 out of the path-traced pass, the core does not add caustics through the eggs (found only by chance: fireflies).
-Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass;
+Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass (1 spp, ``GUIDE_SPP``);
 Intel Open Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels
 independent (what OIDN expects) and makes the render bit-reproducible: image blocks do not overlap, so
 the order threads finish in cannot change a sum. Meshes go to Mitsuba as binary PLY files in a temporary
@@ -80,8 +80,16 @@ HIGHLIGHT_SPP = 2
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
-DENOISE_QUALITY = "high"  # OIDN's filter quality
-GUIDE_SPP = 2  # the guides need antialiased edges, not converged light: a cheap pass of its own (was 4: 5.9 CPU s)
+# OIDN's filter quality. On the CPU "balanced" gives the same bits as "high" (its own network is for GPUs); "fast"
+# saves ≈ 1.4 of its 2.8 CPU s on the main job but the frame moves 32.1 dB / SSIM 0.956 from high's (eggs window
+# against 256 spp: −0.07 dB, −0.003 SSIM; docs/accuracy.md, "Preview cost"): high stays
+DENOISE_QUALITY = "high"
+# the guides need edges, not converged light: a cheap pass of their own. 1 (was 2, before that 4: 5.9 CPU s): ≈ 0.9
+# CPU s less on the main job; in the eggs window against 256 spp 17.89 dB / SSIM 0.374 at 1, 17.86 / 0.374 at 2 (4
+# seeds); the whole frame against the 2-spp guides' 42.2 dB / SSIM 0.993, no difference seen at 2× zoom (issue 27;
+# docs/accuracy.md, "Preview cost"). Mitsuba's aov integrator around the volpath one (colour and guides in one
+# pass) cost more, not less: 32.7 CPU s against 22.4 + 1.9 for the two passes, and other colour bits
+GUIDE_SPP = 1
 # path length with media: every scattering event inside a grain is a vertex of the path, and light that lights a
 # heap of grains crosses many of them (and reflects inside them). A 3 mm grain at 15 % water is 3–6 mean free
 # paths thick with albedo ≈ 0.99; at 32 the walks through the heap were cut off and the rice darkened (rice bowl
