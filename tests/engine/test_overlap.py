@@ -80,3 +80,14 @@ def test_a_failing_renderer_fails_the_run_and_what_ran_beside_it_is_kept(registr
         run(registry, cache, "alone", overrides=["render.fail=true"])
     status = run(registry, cache, "alone").status()
     assert status["busy"] == "cached" and status["render"] == "ran"  # busy was running as render failed
+
+
+def test_the_recording_holds_what_ran_beside_the_renderer(registry, cache, tmp_path):
+    """The node beside the renderer logs into the run's recording as in turn: every output of both lanes is there."""
+    from rerun.chunk import RrdReader
+
+    result = run(registry, cache, "recorded", rrd=tmp_path / "overlap.rrd")
+    assert result.rrd is not None
+    reader = RrdReader(str(result.rrd))
+    entities = {chunk.entity_path for chunk in reader.stream().to_chunks()}
+    assert {"/render/image", "/busy/spheres", "/after/spheres", "/pts/spheres"} <= entities, entities
