@@ -524,7 +524,7 @@ class Beside:
     only ever run in the second thread then. ``run`` returns once both are done; if ``main`` fails, the second
     thread stops after the instance it is computing. ``elapsed``: the node's own wall time; ``cpu``: the second
     thread's CPU seconds (the node's CPU is the process's less this one; each instance beside it gets its thread's
-    own, so numba worker threads it starts count to the node)."""
+    own, so numba worker threads those instances start count to the node)."""
 
     def __init__(self, main: Instance, order: list[Instance], side: list[Instance], visit, executor: Executor):
         self.main, self.order, self.side, self.visit = main, order, side, visit
@@ -546,7 +546,11 @@ class Beside:
             self.elapsed = now() - start
             if not ok:
                 self._stop.set()
-            thread.join()
+            try:
+                thread.join()
+            except BaseException:  # Ctrl-C while waiting: the second thread stops after its instance
+                self._stop.set()
+                raise
         return result
 
     def _compute_side(self) -> None:
