@@ -312,9 +312,9 @@ def passes(quick: bool, cache_dir: Path | None) -> str:
         return out
 
     with tempfile.TemporaryDirectory(prefix="bench_preview_") as folder:
-        description = clock(
+        description, set_up = clock(
             "scene description (PLY files)",
-            lambda: ms.scene_dict(
+            lambda: ms._described(
                 scene,
                 Path(folder),
                 camera,
@@ -325,6 +325,7 @@ def passes(quick: bool, cache_dir: Path | None) -> str:
                 None,
                 None,
                 params["subsurface"],
+                params["ambient"],
             ),
         )
         loaded = clock("scene load", lambda: mi.load_dict(description, optimize=False))
@@ -340,9 +341,10 @@ def passes(quick: bool, cache_dir: Path | None) -> str:
         color, aov = np.asarray(image, np.float32)[..., :3] * np.float32(ms.EXPOSURE), np.asarray(aov, np.float32)
         layers = ms.Layers(np.maximum(color, 0.0), np.clip(aov[..., 0:3], 0, 1), np.clip(aov[..., 3:6], -1, 1), color)
         clock(f"denoiser (OIDN, quality {ms.DENOISE_QUALITY})", lambda: ms.denoise(layers))
+        window = ms.glints_window(set_up, camera, width, height, ms.glints_core(description))
         clock(
-            f"glints: {ms.HIGHLIGHT_SPP} spp, one bounce",
-            lambda: mi.render(mi.load_dict(ms.highlight_dict(scene, description), optimize=False), seed=0),
+            f"glints: {ms.HIGHLIGHT_SPP} spp, one bounce, in {window.width} × {window.height} px",
+            lambda: mi.render(mi.load_dict(ms.highlight_dict(scene, description, window), optimize=False), seed=0),
         )
     subject = "synthetic scene" if quick else "main job"
     head = f"Passes of the default preview, {width} × {height}, {subject}; {conditions()}"

@@ -6,9 +6,12 @@ cache or computed, pulling its inputs, and logged to the run's recording.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
+import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -27,6 +30,8 @@ from .plan import Instance, Plan, RecipeRef, plan_jobs
 from .recipe import Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
 from .rerun_log import NodeCapture, RunRecording, dispatch_digest, log_value, logger_digest, partial_path
+
+OVERLAP_ENV = "NODEGRAPH_OVERLAP"  # off: every node in turn, none beside another (``Beside``)
 
 
 @dataclass
@@ -84,8 +89,11 @@ class Executor:
         recording: RunRecording | None = None,
         max_seconds: float | None = None,
         session: LiveSession | None = None,
+        overlap: bool = True,
     ):
-        """``session``: what a long-lived caller (``nodegraph watch``) lends each run (``LiveSession``)."""
+        """``session``: what a long-lived caller (``nodegraph watch``) lends each run (``LiveSession``);
+        ``overlap``: a node declared ``overlap`` runs while a second thread computes the instances independent of
+        it (``Beside``; never with a session: its callbacks and the values it keeps expect one thread)."""
         self.recipe = recipe
         self.kept = None if session is None else session.kept
         self.on_ran = None if session is None else session.ran
@@ -101,6 +109,9 @@ class Executor:
         self.hits: set[str] = set()
         self.ran_elsewhere: dict[str, NodeRecord] = {}  # by cache key: instances a pool computed for this run
         self.logged: set[Instance] = set()  # instances whose logs are in the recording
+        self.overlap = overlap
+        self._beside: Beside | None = None
+        self._thread = threading.local()  # ``side``: this thread computes the instances beside a node (``Beside``)
 
     # planning ---------------------------------------------------------------------------------
     def plan(self, node_ids) -> list[Instance]:
@@ -119,6 +130,23 @@ class Executor:
         # cached instances go into the recording after every instance that runs: what an edit changed reaches
         # the recording (and a viewer streaming it) first; the order of chunks in a recording carries no meaning
         later: list[Instance] = []
+
+        def visit(inst: Instance) -> None:
+            if inst in self.status:
+                return
+            if self.keys[inst] in self.hits and inst.node not in output_nodes:
+                if self.recording is not None:
+                    later.append(inst)
+                    return
+                if self._skip_load(inst):
+                    return
+            self.materialise(inst)
+            if self.recording is not None and inst not in self.logged:
+                later.append(inst)  # loaded, not run
+
+        self._beside = self._plan_beside(order, visit)
+        if self._beside is not None:
+            order = self._beside.order
         ahead = None
         if not self.ran_elsewhere:  # kernels of the later instances compile in a second process meanwhile
             to_run = {inst for inst in order if self.keys[inst] not in self.hits}
@@ -129,17 +157,7 @@ class Executor:
                     tick()
                     if ahead is not None:
                         ahead.reached(position)
-                    if inst in self.status:
-                        continue
-                    if self.keys[inst] in self.hits and inst.node not in output_nodes:
-                        if self.recording is not None:
-                            later.append(inst)
-                            continue
-                        if self._skip_load(inst):
-                            continue
-                    self.materialise(inst)
-                    if self.recording is not None and inst not in self.logged:
-                        later.append(inst)  # loaded, not run
+                    visit(inst)
                 for inst in later:
                     if inst in self.logged:
                         continue
@@ -251,25 +269,34 @@ class Executor:
             max_seconds=self.max_seconds,
             checkpoint=None if self.cache is None else Checkpoint(self.cache.directory / "checkpoints" / f"{key}.npz"),
         )
-        start, cpu_start = now(), time.process_time()
-        memory = PeakMemory()
+        beside = self._beside if self._beside is not None and self._beside.main == inst else None
+        side = getattr(self._thread, "side", False)
+        clock = time.thread_time if side else time.process_time  # beside a node: this thread's own CPU
+        start, cpu_start = now(), clock()
+        # the kernel's high-water mark is the process's: reset by one thread, it would cut the other's short
+        memory = PeakMemory() if not side else contextlib.nullcontext()
+        # numba's compile events are the process's: the instances beside this one report their own
+        watch = CompileWatch(self.reporter, inst.label) if beside is None else contextlib.nullcontext()
         try:
-            with memory, CompileWatch(self.reporter, inst.label):
-                result = spec.run(ctx, **kwargs)
+            with memory, watch:
+                result = spec.run(ctx, **kwargs) if beside is None else beside.run(lambda: spec.run(ctx, **kwargs))
             outputs = self._check_outputs(spec, result)
         except BaseException as exc:
             if capture is not None:  # what the node logged before it stopped goes into the partial recording
                 self._append_unfinished(inst, capture)
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
                 raise
-            self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", now() - start)
+            elapsed = now() - start if beside is None or beside.elapsed is None else beside.elapsed
+            self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", elapsed)
             if isinstance(exc, NodeFailure):
                 raise
             raise NodeFailure(inst.node, spec.type_name, exc, inst.variant, self._where(inst)) from exc
         finally:
             if ctx.rerun.enabled:
                 ctx.rerun.reset_time()
-        elapsed, cpu = now() - start, time.process_time() - cpu_start
+        elapsed, cpu = now() - start, clock() - cpu_start
+        if beside is not None:  # its own wall, not the wait for the instances beside it; the CPU they took, less
+            elapsed, cpu = beside.elapsed, cpu - beside.cpu
         for value in outputs.values():
             codec.freeze(value)
         try:
@@ -279,9 +306,8 @@ class Executor:
             self.values[inst] = outputs
             if self.kept is not None:
                 self.kept[key] = outputs
-            self.status[inst] = NodeRecord(
-                inst.label, spec.type_name, status, elapsed, memory.peak_bytes, cpu_seconds=cpu
-            )
+            peak = memory.peak_bytes if isinstance(memory, PeakMemory) else None
+            self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, peak, cpu_seconds=cpu)
             if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment,
                 log_start = now()  # read before the cache keeps it, so the recording and a viewer get it first
                 self._append(inst, fragment, capture.live)
@@ -294,7 +320,36 @@ class Executor:
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)
+        if beside is not None and beside.error is not None:  # an instance beside it failed: this one is stored
+            raise beside.error
         return outputs
+
+    def _plan_beside(self, order: list[Instance], visit: Callable[[Instance], None]) -> Beside | None:
+        """The first instance to run of a node declared ``overlap`` and the run's order with what it needs pulled
+        ahead of it; None when there is none, or nothing to compute beside it."""
+        if not self.overlap or self.kept is not None or self.ran_elsewhere:
+            return None
+        main = next(
+            (i for i in order if self.recipe.nodes[i.node].spec.overlap and self.keys[i] not in self.hits), None
+        )
+        if main is None:
+            return None
+        before: set[Instance] = set()
+        stack = [main]
+        while stack:
+            for src, _ in (pair for pairs in self.planned.sources(stack.pop()).values() for pair in pairs):
+                if src not in before:
+                    before.add(src)
+                    stack.append(src)
+        after = {main}
+        for inst in order:
+            if any(src in after for pairs in self.planned.sources(inst).values() for src, _ in pairs):
+                after.add(inst)
+        side = [i for i in order if i not in before and i not in after]
+        if not any(self.keys[i] not in self.hits for i in side):
+            return None
+        ahead = [i for i in order if i in before]
+        return Beside(main, [*ahead, main, *(i for i in order if i not in before and i != main)], side, visit, self)
 
     def _arguments(self, inst: Instance) -> dict[str, Any]:
         """The keyword arguments ``inst``'s node is called with: its inputs (pulled) and its parameters."""
@@ -459,6 +514,59 @@ class Executor:
         return written
 
 
+class Beside:
+    """A node declared ``overlap`` (``main``: its work in native threads, the GIL released, no numba kernel) runs in
+    the main thread while a second thread computes ``side``, the instances that neither need it nor depend on it,
+    in the run's order (``visit``: as the main loop would, cache and recording included). The main thread does
+    nothing else meanwhile: the executor's state has one writer at a time, and the node itself stays in the main
+    thread, where a signal can stop it (Mitsuba cancels its render on SIGINT there; from any other thread the
+    process aborted). Numba's parallel kernels (its ``workqueue`` layer aborts when two threads launch at once)
+    only ever run in the second thread then. ``run`` returns once both are done; if ``main`` fails, the second
+    thread stops after the instance it is computing. ``elapsed``: the node's own wall time; ``cpu``: the second
+    thread's CPU seconds (the node's CPU is the process's less this one; each instance beside it gets its thread's
+    own, so numba worker threads those instances start count to the node)."""
+
+    def __init__(self, main: Instance, order: list[Instance], side: list[Instance], visit, executor: Executor):
+        self.main, self.order, self.side, self.visit = main, order, side, visit
+        self.executor = executor
+        self.error: BaseException | None = None
+        self.elapsed: float | None = None
+        self.cpu = 0.0
+        self._stop = threading.Event()
+
+    def run(self, body: Callable[[], Any]) -> Any:
+        thread = threading.Thread(target=self._compute_side, name="nodegraph-beside")
+        start = now()
+        thread.start()
+        ok = False
+        try:
+            result = body()
+            ok = True
+        finally:
+            self.elapsed = now() - start
+            if not ok:
+                self._stop.set()
+            try:
+                thread.join()
+            except BaseException:  # Ctrl-C while waiting: the second thread stops after its instance
+                self._stop.set()
+                raise
+        return result
+
+    def _compute_side(self) -> None:
+        self.executor._thread.side = True
+        cpu = time.thread_time()
+        try:
+            for inst in self.side:
+                if self._stop.is_set():
+                    break
+                self.visit(inst)
+        except BaseException as exc:
+            self.error = exc
+        finally:
+            self.cpu = time.thread_time() - cpu
+
+
 def run_recipe(
     recipe: Recipe,
     *,
@@ -487,7 +595,8 @@ def run_recipe(
     recipe and what was logged (``blueprint``)."""
     wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
     warn = reporter.warn if reporter is not None else None
-    executor = Executor(recipe, cache, reporter, None, max_seconds, session)
+    overlap = os.environ.get(OVERLAP_ENV, "on") != "off"
+    executor = Executor(recipe, cache, reporter, None, max_seconds, session, overlap=overlap)
     key = None if out_dir is None else executor.output_key(wires, rrd)
     if key is not None and not spawn:  # a viewer to stream to needs the run itself
         reused = executor.reuse(wires, out_dir, rrd, key)

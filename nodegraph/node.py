@@ -91,6 +91,7 @@ class NodeSpec:
     module: str = ""
     moved: Mapping[str, Moved] = field(default_factory=dict)
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None
+    overlap: bool = False
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
         """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
@@ -162,6 +163,7 @@ def node(
     doc: str | None = None,
     moved: Mapping[str, Moved] | None = None,
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None,
+    overlap: bool = False,
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
     """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
 
@@ -173,7 +175,9 @@ def node(
     ``moved`` names parameters the node no longer has and where each now lives (``Moved``), so a recipe
     that still sets one is told where. ``check_recipe(node_id, nodes)`` checks the node against the rest of
     a valid recipe (``nodes``: every node's ``NodeEntry`` by id) and returns ``[(param, message), ...]``
-    for contradictions between nodes.
+    for contradictions between nodes. ``overlap``: the node's work is native code that releases the GIL (a
+    renderer's own threads) and it launches no numba kernel, so a run may compute the instances that neither need
+    it nor depend on it in a second thread while it runs (``executor.Beside``).
     """
     inputs = dict(inputs or {})
     params = dict(params or {})
@@ -214,6 +218,7 @@ def node(
             module=fn.__module__,
             moved=MappingProxyType(dict(moved or {})),
             check_recipe=check_recipe,
+            overlap=overlap,
         )
 
     return wrap

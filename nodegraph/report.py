@@ -103,7 +103,8 @@ class NodeRecord:
     seconds: float = 0.0
     peak_bytes: int | None = None
     log_seconds: float | None = None  # logging its outputs to Rerun (None: no recording)
-    cpu_seconds: float | None = None  # the process's CPU time while it ran, all threads (None: not run here)
+    cpu_seconds: float | None = None  # the process's CPU time while it ran, all threads (None: not run here;
+    # beside a node declared overlap: the second thread's own, and the rest to that node, executor.Beside)
 
 
 class Reporter:

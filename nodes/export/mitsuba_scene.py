@@ -33,7 +33,7 @@ denoising. In the denoised path-traced pass a glint is a few bright samples amon
 denoiser reads as noise and erases (``benchmarks/bench_preview.py --highlights``: highlight energy 0 after
 OIDN); the one-bounce pass of a smooth or glossy reflection has no such noise and needs no denoising. Left
 out of the path-traced pass, the core does not add caustics through the eggs (found only by chance: fireflies).
-Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass;
+Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass (1 spp, ``GUIDE_SPP``);
 Intel Open Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels
 independent (what OIDN expects) and makes the render bit-reproducible: image blocks do not overlap, so
 the order threads finish in cannot change a sum. Meshes go to Mitsuba as binary PLY files in a temporary
@@ -77,11 +77,23 @@ HIGHLIGHT_RADIANCE = 60.0
 # of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost"); 2 (issue 27):
 # ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1
 HIGHLIGHT_SPP = 2
+# the glints' pass renders only the window of the film where a glint can be (``glints_window``): the subject's hull
+# widened by the lens's blur and this many pixels. On the main job 58 % of the frame, 2.3–2.4 → 1.6 CPU s, every
+# glint pixel of the whole-frame pass inside it (3–4 px from its edges at the bowl's rim)
+GLINTS_MARGIN = 4
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
-DENOISE_QUALITY = "high"  # OIDN's filter quality
-GUIDE_SPP = 2  # the guides need antialiased edges, not converged light: a cheap pass of its own (was 4: 5.9 CPU s)
+# OIDN's filter quality. On the CPU "balanced" gives the same bits as "high" (its own network is for GPUs); "fast"
+# saves ≈ 1.4 of its 2.8 CPU s on the main job but the frame moves 32.1 dB / SSIM 0.956 from high's (eggs window
+# against 256 spp: −0.07 dB, −0.003 SSIM; docs/accuracy.md, "Preview cost"): high stays
+DENOISE_QUALITY = "high"
+# the guides need edges, not converged light: a cheap pass of their own. 1 (was 2, before that 4: 5.9 CPU s): ≈ 0.9
+# CPU s less on the main job; in the eggs window against 256 spp 17.89 dB / SSIM 0.374 at 1, 17.86 / 0.374 at 2 (4
+# seeds); the whole frame against the 2-spp guides' 42.2 dB / SSIM 0.993, no difference seen at 2× zoom (issue 27;
+# docs/accuracy.md, "Preview cost"). Mitsuba's aov integrator around the volpath one (colour and guides in one
+# pass) cost more, not less: 32.7 CPU s against 22.4 + 1.9 for the two passes, and other colour bits
+GUIDE_SPP = 1
 # path length with media: every scattering event inside a grain is a vertex of the path, and light that lights a
 # heap of grains crosses many of them (and reflects inside them). A 3 mm grain at 15 % water is 3–6 mean free
 # paths thick with albedo ≈ 0.99; at 32 the walks through the heap were cut off and the rice darkened (rice bowl
@@ -359,27 +371,77 @@ def specular_bsdf(material: Material) -> dict:
     return {**bsdf, "type": "roughplastic", "alpha": a, "distribution": "ggx"} if a > 1e-3 else bsdf
 
 
-def highlight_dict(scene: ShadedScene, description: dict) -> dict:
+def glints_core(description: dict) -> tuple[np.ndarray, float]:
+    """Centre and radius of the key's bright core (the glints' light): a sphere at the key softbox's centre,
+    ``HIGHLIGHT_ANGLE`` across as seen from the subject."""
+    frame = np.array(description["key"]["to_world"].matrix, np.float64)
+    distance = float(np.linalg.norm(frame[:3, 0])) / np.tan(studio.KEY_ANGLE)
+    return frame[:3, 3], float(distance * np.tan(HIGHLIGHT_ANGLE))
+
+
+def glints_window(
+    set_up: Stage, camera: Camera, width: int, height: int, core: tuple[np.ndarray, float], crop: Crop | None = None
+) -> Crop | None:
+    """The part of the film (within ``crop``, else the whole) where a glint can be: the subject's hull projected,
+    each point widened by the thin lens's circle of confusion at its depth, and the key's bright core (``core``:
+    centre, radius) where it is in front of the camera, with ``GLINTS_MARGIN`` pixels more. Outside it the glints'
+    pass sees only the black backdrop. None when a point is behind the camera (then the whole film)."""
+    forward = -set_up.view
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right = right / np.linalg.norm(right)
+    up = np.cross(right, forward)
+    tan_x = np.tan(np.radians(camera.fov) / 2)
+    tan_y = tan_x * height / width
+    centre, radius = core
+    corners = np.asarray(centre) + radius * np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)])
+    if np.any((corners - set_up.origin) @ forward <= 0):
+        corners = np.empty((0, 3))  # the core is behind the camera: never in the picture
+    rel = np.concatenate([set_up.hull, corners]) - set_up.origin
+    depth = rel @ forward
+    if np.any(depth <= 0):
+        return None
+    aperture, focus = studio.aperture_radius(camera.fov, camera.f_stop), set_up.focus_distance
+    blur = aperture * np.abs(1.0 - focus / depth) / (focus * tan_x) * (width / 2)  # the CoC's radius in pixels
+    x = (1.0 + (rel @ right) / (depth * tan_x)) * width / 2
+    y = (1.0 - (rel @ up) / (depth * tan_y)) * height / 2
+    frame = crop or Crop(0, 0, width, height)
+    x0 = max(frame.x, int(np.floor((x - blur).min())) - GLINTS_MARGIN)
+    y0 = max(frame.y, int(np.floor((y - blur).min())) - GLINTS_MARGIN)
+    x1 = min(frame.x + frame.width, int(np.ceil((x + blur).max())) + GLINTS_MARGIN)
+    y1 = min(frame.y + frame.height, int(np.ceil((y + blur).max())) + GLINTS_MARGIN)
+    if x1 <= x0 or y1 <= y0:  # no glint can fall in the film: one black pixel of it
+        return Crop(frame.x, frame.y, 1, 1)
+    return Crop(x0, y0, x1 - x0, y1 - y0)
+
+
+def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = None) -> dict:
     """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
     surface reflecting only its gloss (``specular_bsdf``), the backdrop black, lit by the key's bright core
-    alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce."""
+    alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce; rendered in ``window`` of the film
+    if given (``glints_window``)."""
     shapes = {}
     for key, shape in description.items():
         if key.startswith("shape_"):
             bsdf = specular_bsdf(scene.materials[int(key.removeprefix("shape_"))])
             shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
-    frame = np.array(description["key"]["to_world"].matrix, np.float64)  # the core sits at the softbox's centre
-    distance = float(np.linalg.norm(frame[:3, 0])) / np.tan(studio.KEY_ANGLE)
+    centre, radius = glints_core(description)
     sensor = dict(description["sensor"])
     sensor["sampler"] = {"type": SAMPLER, "sample_count": min(sensor["sampler"]["sample_count"], HIGHLIGHT_SPP)}
+    if window is not None:
+        sensor["film"] = sensor["film"] | {
+            "crop_offset_x": window.x,
+            "crop_offset_y": window.y,
+            "crop_width": window.width,
+            "crop_height": window.height,
+        }
     return {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": 2},
         "sensor": sensor,
         "key": {
             "type": "sphere",
-            "center": frame[:3, 3].tolist(),
-            "radius": float(distance * np.tan(HIGHLIGHT_ANGLE)),
+            "center": centre.tolist(),
+            "radius": radius,
             "emitter": {"type": "area", "radiance": {"type": "rgb", "value": HIGHLIGHT_RADIANCE}},
         },
         "backdrop": {**description["backdrop"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
@@ -403,6 +465,25 @@ def scene_dict(
     """The Mitsuba scene description; PLY files are written into ``folder``. ``max_depth``: the longest path
     (default ``path_depth``: by the scene's materials); ``subsurface``: media inside the volumetric elements, traced
     by ``volpath``; ``ambient``: radiance of the studio's uniform ambient."""
+    return _described(scene, folder, camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient)[
+        0
+    ]
+
+
+def _described(
+    scene: ShadedScene,
+    folder: Path,
+    camera: Camera,
+    width: int,
+    height: int,
+    spp: int,
+    light_direction,
+    crop: Crop | None,
+    max_depth: int | None,
+    subsurface: bool,
+    ambient: float,
+) -> tuple[dict, Stage]:
+    """``scene_dict`` and the ``Stage`` it set up."""
     import mitsuba as mi
 
     shapes, points = _shapes(scene, folder, subsurface)
@@ -433,7 +514,7 @@ def scene_dict(
             "aperture_radius": studio.aperture_radius(camera.fov, camera.f_stop),
             "focus_distance": set_up.focus_distance,
         }
-    return {
+    description = {
         "type": "scene",
         "integrator": {
             "type": "volpath" if media else "path",
@@ -452,6 +533,7 @@ def scene_dict(
         ),
         **shapes,
     }
+    return description, set_up
 
 
 @dataclass(frozen=True)
@@ -466,12 +548,14 @@ class Stage:
     floor: float  # height of the backdrop's floor: just under the subject's lowest point
     focus_distance: float  # along the optical axis, to the plane in focus
     lights: dict  # name → studio.Light (key, fill, rim)
+    hull: np.ndarray | None = None  # the subject's points on its convex hull (``hull_vertices``)
 
 
 def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) -> Stage:
     """The camera fitted to the subject's ``points`` (``look_at``) and the studio's lights and backdrop around it."""
     lo, hi = points.min(axis=0), points.max(axis=0)
-    origin, target = look_at(points, camera, aspect)
+    hull = hull_vertices(np.asarray(points, np.float64))
+    origin, target = look_at(hull, camera, aspect)
     radius = 0.5 * float(np.linalg.norm(hi - lo))
     view = (origin - target) / np.linalg.norm(origin - target)
     return Stage(
@@ -482,6 +566,7 @@ def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) ->
         float(lo[2]) - 1e-3 * radius,
         studio.focus_distance(points, origin, target, camera.focus),
         studio.lights(target, radius, view, light_direction),
+        hull,
     )
 
 
@@ -564,7 +649,7 @@ def render_layers(
 
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
-        description = scene_dict(
+        description, set_up = _described(
             scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient
         )
         # optimize=False: Mitsuba's merging of identical objects made about one render in six differ from the
@@ -573,9 +658,16 @@ def render_layers(
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV})
         aov = np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=min(spp, GUIDE_SPP)), np.float32)
-        glints = np.asarray(
-            mi.render(mi.load_dict(highlight_dict(scene, description), optimize=False), seed=seed), np.float32
+        window = glints_window(set_up, camera, width, height, glints_core(description), crop)
+        part = np.asarray(
+            mi.render(mi.load_dict(highlight_dict(scene, description, window), optimize=False), seed=seed), np.float32
         )
+    glints = part
+    if window is not None:  # the rest of the film is the black backdrop
+        frame = crop or Crop(0, 0, width, height)
+        glints = np.zeros(image.shape[:2] + part.shape[2:], np.float32)
+        top, left = window.y - frame.y, window.x - frame.x
+        glints[top : top + window.height, left : left + window.width] = part
     color, glints = (np.nan_to_num(x[..., 0:3], nan=0.0, posinf=0.0) * np.float32(EXPOSURE) for x in (image, glints))
     albedo, normal = np.clip(aov[..., 0:3], 0.0, 1.0), np.clip(aov[..., 3:6], -1.0, 1.0)
     return Layers(np.maximum(color, 0.0), albedo, normal, np.maximum(glints, 0.0))

@@ -32,6 +32,9 @@ from .studio import AMBIENT
     #     met the element's dielectric skin): 58.5 → 35.6 CPU s, 134 → 84 s wall at load ≈ 8 on the main job,
     #     −0.6 dB / −0.036 SSIM in the eggs window against 256 spp (docs/accuracy.md, "Preview cost")
     version=10,
+    # Mitsuba renders in its own threads with the GIL released and no numba kernel runs here: the run computes
+    # what does not need the preview (export, measure) in a second thread meanwhile (nodegraph.executor.Beside)
+    overlap=True,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={

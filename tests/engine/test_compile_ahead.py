@@ -225,3 +225,26 @@ def test_kernels_this_process_has_are_not_compiled_ahead(tmp_path, monkeypatch):
 
     ahead_kernels.late_kernel(np.zeros(2))
     assert compile_ahead.plan_jobs(recipe, order, set(order)) == []
+
+
+def test_a_run_whose_kernels_are_all_cached_starts_no_worker(tmp_path, monkeypatch):
+    """A run that had every kernel of its worker's jobs (compiled or loaded) leaves a mark in numba's cache folder:
+    the next run with the same kernels starts no worker (it would only load them, 1.6 CPU s of the main job's run);
+    a change to a kernel's module, or a cleared cache, starts it again."""
+    from nodegraph.plan import Instance
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+
+    _setup(tmp_path)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "ahead_kernels", raising=False)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    recipe = load_recipe(tmp_path / "recipe.yaml", default_registry(plugins=[tmp_path / "ahead.py"]))
+    order = [Instance("early"), Instance("late")]
+    spawned = []
+    monkeypatch.setattr(CompileAhead, "spawn", lambda self: spawned.append(self.jobs))
+    assert CompileAhead.start(recipe, order, set(order)) is not None and len(spawned) == 1  # nothing cached yet
+    _run(tmp_path)  # compiles them, and marks them cached
+    assert CompileAhead.start(recipe, order, set(order)) is None and len(spawned) == 1
+    (tmp_path / "ahead_kernels.py").write_text(KERNELS + "\n# edited\n")
+    assert CompileAhead.start(recipe, order, set(order)) is not None and len(spawned) == 2

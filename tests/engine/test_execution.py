@@ -219,3 +219,19 @@ def test_the_closing_table_gives_each_node_its_cpu_seconds(registry, cache):
     table = reporter.summary()
     assert [c.header for c in table.columns][3:5] == ["wall time", "CPU time"]
     assert all(cell.endswith(" s") for cell in table.columns[4].cells)
+
+
+def test_images_are_written_as_png_at_zlibs_fastest_level(tmp_path):
+    """The preview's PNG is written after its render, on the run's critical path: zlib level 1 (0.06 CPU s for
+    1280 × 720, not 0.25 at level 6), the same pixels."""
+    import imageio.v3 as iio
+
+    from nodegraph.output_files import write_output
+    from nodegraph.values import Image
+
+    pixels = np.random.default_rng(0).integers(0, 256, (90, 160, 3), dtype=np.uint8)
+    (path,) = write_output(Image(pixels), tmp_path, "picture")
+    data = path.read_bytes()
+    idat = data.index(b"IDAT")
+    assert data[idat + 4 : idat + 6] == b"\x78\x01"  # the zlib header of level 1 (level 6: 78 9c)
+    assert np.array_equal(iio.imread(path), pixels)

@@ -2,6 +2,7 @@
 with its own value type, as a user's would be."""
 
 import os
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -223,3 +224,63 @@ def toy_picture(ctx, spheres):
     """A flat tile coloured by where the spheres are (a stand-in for a preview)."""
     red = int(np.clip(128 + 60 * spheres.centers[:, 0].mean(), 0, 255))
     return Image(np.tile(np.array([red, 40, 90], np.uint8), (24, 32, 1)))
+
+
+_MEETING: dict[str, threading.Event] = {}  # toy_render and toy_busy meet here, by the name in their ``meet``
+_MEETING_LOCK = threading.Lock()
+
+
+def _meet(meet: str, me: str, other: str) -> None:
+    """Say that ``me`` is running and wait for ``other`` to say so: true only of two nodes running at once."""
+    if meet == "alone":
+        return
+    with _MEETING_LOCK:
+        mine = _MEETING.setdefault(f"{meet}/{me}", threading.Event())
+        theirs = _MEETING.setdefault(f"{meet}/{other}", threading.Event())
+    mine.set()
+    if not theirs.wait(5.0):
+        raise RuntimeError(f"{me} ran alone: {other} did not run beside it within 5 s")
+
+
+@node(
+    "toy_render",
+    version=1,
+    overlap=True,
+    inputs={"spheres": In(SphereSet, "what to draw")},
+    outputs={"image": Out(Image, "a picture of the spheres")},
+    params={
+        "seconds": Param(float, 0.0, "waits this long, the GIL released, as a renderer's threads do", units="s"),
+        "meet": Param(str, "alone", "a name: the node waits until a toy_busy of the same name runs beside it"),
+        "fail": Param(bool, False, "fail after waiting"),
+    },
+)
+def toy_render(ctx, spheres, *, seconds, meet, fail):
+    """Stands for a renderer (a node declared ``overlap``): it must run in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        raise RuntimeError("a node declared overlap ran outside the main thread")
+    _meet(meet, "render", "busy")
+    time.sleep(seconds)
+    if fail:
+        raise ValueError("toy render failed")
+    pixels = np.zeros((4, 4, 3), np.uint8)
+    pixels[..., 0] = min(255, len(spheres))
+    return Image(pixels)
+
+
+@node(
+    "toy_busy",
+    version=1,
+    inputs={"spheres": In(SphereSet, "passed through")},
+    outputs={"spheres": Out(SphereSet, "same, scaled")},
+    params={
+        "seconds": Param(float, 0.0, "computes (holds a core) this long", units="s"),
+        "meet": Param(str, "alone", "a name: the node waits until a toy_render of the same name runs beside it"),
+    },
+)
+def toy_busy(ctx, spheres, *, seconds, meet):
+    """Keeps a core busy in Python, then passes the spheres on, scaled."""
+    _meet(meet, "busy", "render")
+    end = time.thread_time() + seconds
+    while time.thread_time() < end:
+        pass
+    return SphereSet(spheres.centers * 2.0, spheres.radii.copy())
