@@ -111,7 +111,7 @@ class Executor:
         self.logged: set[Instance] = set()  # instances whose logs are in the recording
         self.overlap = overlap
         self._beside: Beside | None = None
-        self._thread = threading.local()  # ``side``: this thread computes the instances beside a node (``Beside``)
+        self.lane = threading.local()  # ``side``: this thread computes the instances beside a node (``Beside``)
 
     # planning ---------------------------------------------------------------------------------
     def plan(self, node_ids) -> list[Instance]:
@@ -270,7 +270,7 @@ class Executor:
             checkpoint=None if self.cache is None else Checkpoint(self.cache.directory / "checkpoints" / f"{key}.npz"),
         )
         beside = self._beside if self._beside is not None and self._beside.main == inst else None
-        side = getattr(self._thread, "side", False)
+        side = getattr(self.lane, "side", False)
         clock = time.thread_time if side else time.process_time  # beside a node: this thread's own CPU
         start, cpu_start = now(), clock()
         # the kernel's high-water mark is the process's: reset by one thread, it would cut the other's short
@@ -554,7 +554,7 @@ class Beside:
         return result
 
     def _compute_side(self) -> None:
-        self.executor._thread.side = True
+        self.executor.lane.side = True
         cpu = time.thread_time()
         try:
             for inst in self.side:
