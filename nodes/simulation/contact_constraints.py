@@ -41,7 +41,8 @@ PairRows = namedtuple(
 )  # row p lists the partners (ids nbr, rows at) of order[p]
 Colouring = namedtuple("Colouring", "cell_start order dims")
 # per list entry: tolerated overlap, friction anchor, normal correction so far this substep (anchored friction's
-# load), and ``glued``: its grains are glued (``glue``), so it has no friction (``_project_slab``); empty: none is
+# load), and ``glued``: its grains are glued (``glue``), so its friction takes the true masses (``_project_slab``);
+# empty: none is
 PairEntries = namedtuple("PairEntries", "allowance anchor load glued")
 ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion")
 
@@ -133,12 +134,14 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     pre-stabilisation removes old overlap: pair friction held nothing and a bar resting on another
     crept at 0.13 mm/s for ever (issue 11). A pair whose gap opens past ``friction.RELEASE`` of the
     radii sum lets go of its anchor.
-    Pairs of grains the glue still holds (``entries.glued``) get no friction: the glue keeps their places
-    (``glue``), and their friction, anchored and split by the mass scaling (the upper grain takes more: the
-    pair's tangential pushes do not cancel), drove a glued onigiri's rocking on its plate (bulk speed ±170
-    mm/s at ≈ 40 Hz, growing 1.3–1.7× a frame until it slid: nothing ever slept); a torn pair has friction
-    again, anchored where it then stands. The particle arrays are the sweep's sorted copies
-    (``_sorted_copies``: row p holds particle order[p], a partner's row is ``rows.at``)."""
+    The friction of pairs whose grains the glue still holds (``entries.glued``) takes the true masses, not the
+    mass scaling: split like the normal correction (the upper grain taking more), their anchored friction's
+    tangential pushes inside one glued body did not cancel and rocked a glued onigiri on its plate (bulk speed
+    ±170 mm/s at ≈ 40 Hz, growing 1.3–1.7× a frame until it slid: nothing ever slept; docs/validation.md).
+    Without their friction a tall glued block toppled (it is part of the glue's shear stiffness), without the
+    mass scaling of their normal corrections the onigiri slumped to 93 % of its height.
+    The particle arrays are the sweep's sorted copies (``_sorted_copies``: row p holds particle order[p], a
+    partner's row is ``rows.at``)."""
     nbr_start, nbr, half, order, at = rows
     allowance, anchor, load, glued = entries
     wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion = rule

@@ -40,7 +40,7 @@ from .threads import FreeCores, thread_count
 # 2,480 particles: equal times); above, on the cores other processes leave free (``threads``)
 PARALLEL_PARTICLES = 4096
 NO_TRACKING = (np.empty((0, 3)), np.empty(0))
-NO_GLUED = np.zeros(0, np.bool_)  # no list entry glued: every pair has friction (``XpbdSolver._stuck``)
+NO_GLUED = np.zeros(0, np.bool_)  # no list entry glued: every pair's friction mass-scaled (``XpbdSolver._stuck``)
 # the longest travel of a particle in one solve, in radii: a clamp above it runs each substep as
 # ceil(clamp / MAX_TRAVEL) solves (``Coefficients.pieces``); with one solve at clamp 2 (allowed by the
 # node) 47 of 200 fast particles tunnelled through a 0.8 mm bowl wall, at 4 all 200
@@ -546,8 +546,8 @@ class XpbdSolver:
         self.dispatch("glue", glue.glued_allowance, link, depth, st.glued, self.pairs.allowance, stuck)
 
     def _stuck(self, lists) -> np.ndarray:
-        """Per entry of ``lists``, whether its grains are still glued (``_pressed``): the sweep gives those pairs no
-        friction (``contact_constraints.PairEntries``); empty without glue."""
+        """Per entry of ``lists``, whether its grains are still glued (``_pressed``): the sweep splits those pairs'
+        friction by the true masses (``contact_constraints.PairEntries``); empty without glue."""
         return self.glue_floors[3] if self.glue_floors[0] is lists else NO_GLUED
 
     def _glue(self, st: State, tear: bool) -> None:
