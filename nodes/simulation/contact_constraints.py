@@ -40,8 +40,10 @@ PairRows = namedtuple(
     "PairRows", "nbr_start nbr half order at"
 )  # row p lists the partners (ids nbr, rows at) of order[p]
 Colouring = namedtuple("Colouring", "cell_start order dims")
-PairEntries = namedtuple("PairEntries", "allowance anchor load")  # per list entry: tolerated overlap, friction anchor,
-# normal correction so far this substep (anchored friction's load)
+# per list entry: tolerated overlap, friction anchor, normal correction so far this substep (anchored friction's
+# load), and ``glued``: its grains are glued (``glue``), so its friction takes the true masses (``_project_slab``);
+# empty: none is
+PairEntries = namedtuple("PairEntries", "allowance anchor load glued")
 ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion")
 
 
@@ -131,11 +133,19 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     correction would leave (the tolerated ``allowance``), ≈ 0 at a resting contact once
     pre-stabilisation removes old overlap: pair friction held nothing and a bar resting on another
     crept at 0.13 mm/s for ever (issue 11). A pair whose gap opens past ``friction.RELEASE`` of the
-    radii sum lets go of its anchor. The particle arrays are the sweep's sorted copies
-    (``_sorted_copies``: row p holds particle order[p], a partner's row is ``rows.at``)."""
+    radii sum lets go of its anchor.
+    The friction of pairs whose grains the glue still holds (``entries.glued``) takes the true masses, not the
+    mass scaling: split like the normal correction (the upper grain taking more), their anchored friction's
+    tangential pushes inside one glued body did not cancel and rocked a glued onigiri on its plate (bulk speed
+    ±170 mm/s at ≈ 40 Hz, growing 1.3–1.7× a frame until it slid: nothing ever slept; docs/validation.md).
+    Without their friction a tall glued block toppled (it is part of the glue's shear stiffness), without the
+    mass scaling of their normal corrections the onigiri slumped to 93 % of its height.
+    The particle arrays are the sweep's sorted copies (``_sorted_copies``: row p holds particle order[p], a
+    partner's row is ``rows.at``)."""
     nbr_start, nbr, half, order, at = rows
-    allowance, anchor, load = entries
+    allowance, anchor, load, glued = entries
     wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion = rule
+    any_glued = glued.shape[0] > 0
     for p in range(p0, p1):
         i = order[p]
         for a in range(nbr_start[p], nbr_start[p + 1]):
@@ -160,7 +170,9 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
             pen = depth - allowance[a] if normal else 0.0
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
                 held = load[a] + max(pen, 0.0) + cohesion * (w[p] + w[q]) if anchored else depth
-                friction_pair(x, x_prev, anchor, a, p, q, (nx, ny, nz), held, share, (mu_s, mu_k, anchored))
+                # glued grains rub with their true masses: their tangential pushes cancel
+                rub = w[p] / (w[p] + w[q]) if any_glued and glued[a] else share
+                friction_pair(x, x_prev, anchor, a, p, q, (nx, ny, nz), held, rub, (mu_s, mu_k, anchored))
             if pen > 0.0:
                 if anchored and mu_s > 0.0:
                     load[a] += pen

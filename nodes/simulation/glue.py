@@ -252,38 +252,40 @@ def _link_of(a, b, region_start, link_grain):
 def glued_floors(
     elem, nbr_start, nbr, half, order, floor_start, floor_partner, floor_depth, region_start, link_grain, link, depth
 ):
-    """Per entry of the neighbour lists (row p: particle order[p]'s, ``spatial_hash.neighbour_lists``): the link
-    that glues its two grains (``link``, −1 where none: not pressed together, never glued, or a static
-    particle) and the overlap the press left the pair (``depth``). Once per build of the lists: what
-    ``glued_allowance`` reads each substep (searching the floors and regions there took 3.2 ms of a 30 ms
-    onigiri substep on one thread)."""
+    """Per entry of the lists (row p: particle order[p]'s, ``spatial_hash.neighbour_lists``): the link that glues
+    its two grains (``link``, −1 where none: never glued, the same grain, or a static particle) and the overlap the
+    press left the pair (``depth``, 0 where it left none). Once per build of the lists: what ``glued_allowance``
+    reads each substep (searching the floors and regions there took 3.2 ms of a 30 ms onigiri substep on one
+    thread)."""
     m = len(region_start) - 1
     for p in prange(len(nbr_start) - 1):
         i = order[p]
         for a in range(nbr_start[p], nbr_start[p + 1]):
             link[a] = -1
             depth[a] = 0.0
-        if floor_start[i] == floor_start[i + 1] or elem[i] >= m:
-            continue
-        for a in range(nbr_start[p], nbr_start[p + 1]):
             j = nbr[a]
-            if (not half and j < i) or elem[j] >= m:
+            if (not half and j < i) or elem[i] >= m or elem[j] >= m or elem[i] == elem[j]:
+                continue
+            link[a] = _link_of(elem[i], elem[j], region_start, link_grain)
+            if link[a] < 0:
                 continue
             for f in range(floor_start[i], floor_start[i + 1]):
                 if floor_partner[f] == j:
-                    link[a] = _link_of(elem[i], elem[j], region_start, link_grain)
                     depth[a] = floor_depth[f]
                     break
 
 
 @njit(cache=True)
-def glued_allowance(link, depth, glued, allowance):
+def glued_allowance(link, depth, glued, allowance, stuck):
     """Raise each listed pair's tolerated overlap (``contact_constraints``' allowance) to the overlap the
     press left it with while its grains stay glued (``link``, ``depth``: ``glued_floors``): the glue keeps the
     pressed shape, so contacts that pushed those overlaps apart only fought it (with the contacts' mass
     scaling by height that fight lifted a glued onigiri off its plate at 17 mm/s); a deeper overlap is still
-    resolved. Serial: 0.2 ms for the onigiri's 286,000 entries, and a parallel loop costs ≈ 0.5 s more to compile."""
+    resolved. ``stuck`` ← the entry's grains are still glued (their friction takes the true masses:
+    ``contact_constraints.PairEntries``).
+    Serial: 0.2 ms for the onigiri's 286,000 entries, and a parallel loop costs ≈ 0.5 s more to compile."""
     for a in range(len(link)):
         k = link[a]
-        if k >= 0 and depth[a] > allowance[a] and glued[k]:
+        stuck[a] = k >= 0 and glued[k]
+        if stuck[a] and depth[a] > allowance[a]:
             allowance[a] = depth[a]

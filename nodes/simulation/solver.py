@@ -40,6 +40,7 @@ from .threads import FreeCores, thread_count
 # 2,480 particles: equal times); above, on the cores other processes leave free (``threads``)
 PARALLEL_PARTICLES = 4096
 NO_TRACKING = (np.empty((0, 3)), np.empty(0))
+NO_GLUED = np.zeros(0, np.bool_)  # no list entry glued: every pair's friction mass-scaled (``XpbdSolver._stuck``)
 # the longest travel of a particle in one solve, in radii: a clamp above it runs each substep as
 # ceil(clamp / MAX_TRAVEL) solves (``Coefficients.pieces``); with one solve at clamp 2 (allowed by the
 # node) 47 of 200 fast particles tunnelled through a 0.8 mm bowl wall, at 4 all 200
@@ -197,8 +198,9 @@ class XpbdSolver:
         self.diagnostics = Diagnostics()
         # the glued regions' goals per membership, NaN until matched (``glue``)
         self.glue_goal = np.full((len(model.glue.member), 3), np.nan) if model.glue is not None else None
-        # the lists the glued floors were found for, each entry's link and pressed overlap (``_pressed``)
-        self.glue_floors = (None, None, None)
+        # the lists the glued floors were found for, each entry's link, pressed overlap and whether its grains are
+        # still glued (``_pressed``)
+        self.glue_floors = (None, None, None, NO_GLUED)
         self.x_mark = model.x0.copy()  # positions at the start of a frame's last solve (diagnostics)
         self.x_begin = model.x0.copy()  # positions at the start of the current solve
         self.solved = 0  # particles solved over the substeps of the current frame
@@ -497,7 +499,7 @@ class XpbdSolver:
             m.r,
             cc.PairRows(*lists.sweep_rows()),
             cc.Colouring(*lists.grid()),
-            cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load),
+            cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load, self._stuck(lists)),
             cc.ContactRule(
                 float(wake_step),
                 k.lift,
@@ -539,9 +541,14 @@ class XpbdSolver:
         if self.glue_floors[0] is not lists:
             link, depth = np.empty(len(lists.nbr), np.int64), np.empty(len(lists.nbr))
             self.dispatch("glue", glue.glued_floors, m.elem, *lists.rows(), *m.glue.floor_args(), link, depth)
-            self.glue_floors = (lists, link, depth)
-        _, link, depth = self.glue_floors
-        self.dispatch("glue", glue.glued_allowance, link, depth, st.glued, self.pairs.allowance)
+            self.glue_floors = (lists, link, depth, np.zeros(len(lists.nbr), np.bool_))
+        _, link, depth, stuck = self.glue_floors
+        self.dispatch("glue", glue.glued_allowance, link, depth, st.glued, self.pairs.allowance, stuck)
+
+    def _stuck(self, lists) -> np.ndarray:
+        """Per entry of ``lists``, whether its grains are still glued (``_pressed``): the sweep splits those pairs'
+        friction by the true masses (``contact_constraints.PairEntries``); empty without glue."""
+        return self.glue_floors[3] if self.glue_floors[0] is lists else NO_GLUED
 
     def _glue(self, st: State, tear: bool) -> None:
         """Match the glued regions and pull each particle towards its regions' goals (``glue``); with
