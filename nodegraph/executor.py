@@ -279,7 +279,11 @@ class Executor:
         watch = CompileWatch(self.reporter, inst.label) if beside is None else contextlib.nullcontext()
         try:
             with memory, watch:
-                result = spec.run(ctx, **kwargs) if beside is None else beside.run(lambda: spec.run(ctx, **kwargs))
+                result = (
+                    spec.run(ctx, **kwargs)
+                    if beside is None
+                    else beside.run(lambda: spec.run(ctx, **kwargs), None if spec.overlap is True else spec.overlap)
+                )
             outputs = self._check_outputs(spec, result)
         except BaseException as exc:
             if capture is not None:  # what the node logged before it stopped goes into the partial recording
@@ -534,9 +538,13 @@ class Beside:
         self.cpu = 0.0
         self._stop = threading.Event()
 
-    def run(self, body: Callable[[], Any]) -> Any:
+    def run(self, body: Callable[[], Any], prepare: Callable[[], None] | None = None) -> Any:
+        """``body()`` in this thread, ``side`` in a second one started after ``prepare()`` (the node's native
+        libraries loaded: ``NodeSpec.overlap``)."""
         thread = threading.Thread(target=self._compute_side, name="nodegraph-beside")
         start = now()
+        if prepare is not None:
+            prepare()
         thread.start()
         ok = False
         try:

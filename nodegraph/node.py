@@ -91,7 +91,7 @@ class NodeSpec:
     module: str = ""
     moved: Mapping[str, Moved] = field(default_factory=dict)
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None
-    overlap: bool = False
+    overlap: bool | Callable[[], None] = False
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
         """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
@@ -163,7 +163,7 @@ def node(
     doc: str | None = None,
     moved: Mapping[str, Moved] | None = None,
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None,
-    overlap: bool = False,
+    overlap: bool | Callable[[], None] = False,
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
     """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
 
@@ -177,7 +177,10 @@ def node(
     a valid recipe (``nodes``: every node's ``NodeEntry`` by id) and returns ``[(param, message), ...]``
     for contradictions between nodes. ``overlap``: the node's work is native code that releases the GIL (a
     renderer's own threads) and it launches no numba kernel, so a run may compute the instances that neither need
-    it nor depend on it in a second thread while it runs (``executor.Beside``).
+    it nor depend on it in a second thread while it runs (``executor.Beside``). A callable ``overlap`` is called in
+    the main thread before that second thread starts: it loads every native library the node will load, so the node
+    never calls ``dlopen`` while the other thread may be in one (the loader's lock against the GIL: a library whose
+    initialiser drops and retakes the GIL, as USD's does, deadlocked against Mitsuba loading a plugin).
     """
     inputs = dict(inputs or {})
     params = dict(params or {})

@@ -11,6 +11,7 @@ from nodegraph.params import Param
 from nodegraph.values import Image
 
 from ..values import ShadedScene
+from .mitsuba_scene import load_renderer
 from .studio import AMBIENT
 
 
@@ -33,8 +34,10 @@ from .studio import AMBIENT
     #     −0.6 dB / −0.036 SSIM in the eggs window against 256 spp (docs/accuracy.md, "Preview cost")
     version=10,
     # Mitsuba renders in its own threads with the GIL released and no numba kernel runs here: the run computes
-    # what does not need the preview (export, measure) in a second thread meanwhile (nodegraph.executor.Beside)
-    overlap=True,
+    # what does not need the preview (export, measure) in a second thread meanwhile (nodegraph.executor.Beside),
+    # started once every library the preview loads is loaded (load_renderer: USD's loading in the export beside
+    # deadlocked against Mitsuba loading a plugin)
+    overlap=load_renderer,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={

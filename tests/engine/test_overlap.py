@@ -91,3 +91,13 @@ def test_the_recording_holds_what_ran_beside_the_renderer(registry, cache, tmp_p
     reader = RrdReader(str(result.rrd))
     entities = {chunk.entity_path for chunk in reader.stream().to_chunks()}
     assert {"/render/image", "/busy/spheres", "/after/spheres", "/pts/spheres"} <= entities, entities
+
+
+def test_the_renderer_loads_its_libraries_before_anything_runs_beside_it(registry, cache):
+    """Its ``overlap`` callable runs once, in the main thread, before the second thread starts: a library loaded
+    by the renderer while the other thread loads one deadlocked (the loader's lock against the GIL)."""
+    prepared = registry["toy_render"].overlap.__globals__["RENDER_PREPARED"]  # the plugin file's own module
+    prepared.clear()
+    result = run(registry, cache, "prepared")
+    assert result.status()["busy"] == "ran"
+    assert prepared == [False]

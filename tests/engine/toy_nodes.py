@@ -242,10 +242,18 @@ def _meet(meet: str, me: str, other: str) -> None:
         raise RuntimeError(f"{me} ran alone: {other} did not run beside it within 5 s")
 
 
+RENDER_PREPARED: list[bool] = []  # per call of toy_render's ``overlap``: was a thread beside it running already?
+
+
+def _load_render_libraries() -> None:
+    """toy_render's ``overlap`` (as the preview's ``load_renderer``): must run before anything runs beside it."""
+    RENDER_PREPARED.append(any(t.name == "nodegraph-beside" for t in threading.enumerate()))
+
+
 @node(
     "toy_render",
     version=1,
-    overlap=True,
+    overlap=_load_render_libraries,
     inputs={"spheres": In(SphereSet, "what to draw")},
     outputs={"image": Out(Image, "a picture of the spheres")},
     params={
