@@ -67,7 +67,8 @@ def predict(x, v, x_prev, awake, w, r, x_built, moved, accel, h, clamp):
 
 
 @njit(cache=True, inline="always")
-def _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, x_built, moved, track, i):
+def _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, gain, x_built, moved, track, i):
+    predicted = np.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])  # ``predict``'s v
     a = 0.0  # |x − x_prev|², the motion of the solve
     b = 0.0  # |x − x_begin|², the motion over the whole substep, pre-stabilisation included
     for k in range(3):
@@ -76,15 +77,20 @@ def _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, x_built, m
     ref = x_prev if a <= b else x_begin
     for k in range(3):
         v[i, k] = (x[i, k] - ref[i, k]) / h * damping_factor
-    _clamp(v, i, clamp * r[i] / h)
+    _clamp(v, i, min(clamp * r[i] / h, max(predicted, gain)))
     if track:
         _moved(x, x_built, i, moved)
 
 
 @njit(cache=True, parallel=True)
-def update_velocity(x, v, x_prev, x_begin, r, x_built, moved, h, clamp, damping_factor):
+def update_velocity(x, v, x_prev, x_begin, r, x_built, moved, h, clamp, damping_factor, gain):
     """v = (x − x_prev)/h or (x − x_begin)/h, whichever is shorter, clamped, times the damping factor
-    (1 = none); zero restitution. ``x_begin``: the positions before pre-stabilisation. Its moves add
+    (1 = none); zero restitution. ``gain`` (mm/s; inf = none): the solve leaves a particle no faster than
+    max(its predicted speed, gain) — the constraints may slow it or turn it, but speed it up beyond
+    ``gain`` only by carrying it (the positions keep their corrections): a maximum depenetration speed
+    (PhysX's maxDepenetrationVelocity, Macklin et al. 2014 §4.2's bounded separation), so deep overlaps
+    between jammed clusters come apart without launching them. ``x_begin``: the positions before
+    pre-stabilisation. Its moves add
     no velocity (x_prev is taken after them), and they take none away when the solve undoes them: a
     resting particle that pre-stabilisation lifts and the solve lets sink back has not moved, and
     (x − x_prev)/h would give it a velocity the next prediction turns into real motion (jitter that
@@ -93,7 +99,7 @@ def update_velocity(x, v, x_prev, x_begin, r, x_built, moved, h, clamp, damping_
     n = x.shape[0]
     track = x_built.shape[0] == n
     for i in prange(n):
-        _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, x_built, moved, track, i)
+        _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, gain, x_built, moved, track, i)
     return np.sqrt(moved.max()) if track and n > 0 else 0.0
 
 

@@ -60,6 +60,8 @@ class SolverSettings:
     # with the substep count (a per-substep share gave 64-substep runs 6× the speed, and energy)
     overlap_decay_rate: float = 30.0
     shock_propagation: float = 1.0  # mass ratio of a contact particle to one a diameter above it (1 = off)
+    # mm/s: the solve leaves a particle no faster than max(its predicted speed, this) (``integrate.update_velocity``)
+    depenetration_speed: float = np.inf
 
     def __post_init__(self):
         object.__setattr__(self, "effects", frozenset(self.effects))
@@ -86,6 +88,8 @@ class XpbdParams:
     substeps: int
     iterations: int
     particles_per_element: int
+    slender: bool
+    rigid_start: bool
     mass: float  # mg
     stiffness: float  # N/m
     linear_deformation: float
@@ -102,6 +106,7 @@ class XpbdParams:
     sleep_speed: float  # mm/s
     shock_propagation: float
     speed_clamp: float  # radii per substep
+    depenetration_speed: float  # mm/s, 0 = unbounded
     gravity: float  # mm/s²
     white_density: float  # g/cm³
     part_density: float  # g/cm³
@@ -142,6 +147,7 @@ def solver_settings(params: XpbdParams, effects, radius: float, water_content: f
         damping=p.damping,
         sleep_speed=p.sleep_speed,
         speed_clamp=p.speed_clamp,
+        depenetration_speed=p.depenetration_speed if p.depenetration_speed > 0 else np.inf,
         shock_propagation=p.shock_propagation,
         yolk_accel=p.gravity * (p.white_density / p.part_density - 1.0) if "gravity" in effects else 0.0,
     )

@@ -14,12 +14,24 @@ from ..values import Aggregate, ParticleState, Placement
 from .aggregate import DeformedAggregate
 from .buffers import PairBuffers
 from .clusters import element_cluster, matrix_to_quat
-from .collider import free_space_field
+from .collider import free_space_field, rigid_into_free_space
 from .deformation import element_bends, element_transforms
 from .model import Model, Yolks, build_model
 from .settings import PAIR_EFFECTS, XpbdParams, solver_settings
 from .solver import Diagnostics, XpbdSolver
 from .state import State
+
+# a japonica grain's length over its width (SPEC §1: 5 × 3 mm raw): the shape ``particles_per_element`` is set for
+REFERENCE_ELONGATION = 5.0 / 3.0
+
+
+def slender_factor(mesh) -> int:
+    """m ≥ 1: the element's length over its width (its longest and middle extent in its own frame, where the
+    library lays the long axis on x) in units of a japonica grain's (``REFERENCE_ELONGATION``), rounded. An indica
+    grain (11.1 × 3.7 × 2.6 mm) is 2: a cluster of 8 spheres, each no deeper than the grain is thick, leaves its
+    skin up to 0.94 mm outside every sphere, 16 leave 0.59 mm (japonica's 8: 0.47 mm; docs/look.md)."""
+    extent = np.sort(np.ptp(np.asarray(mesh.vertices), axis=0))[::-1]
+    return max(1, int(round(extent[0] / max(extent[1], 1e-12) / REFERENCE_ELONGATION)))
 
 
 @dataclass
@@ -137,13 +149,16 @@ def build_simulation(
         aggregate = Aggregate(full_placement(aggregate, colliders), aggregate.libraries)
     p = aggregate.placement
     cache = {}
+    slender = 1  # the largest ``slender_factor`` of the elements (``params.slender``)
     xs, rs, ws, qs, sizes, local_centre, yolk_local = [], [], [], [], [], [], []
     for i in range(len(p)):
         lib = aggregate.libraries[p.kinds[i]]
         key = (int(p.kinds[i]), int(p.variants[i]) % len(lib))
         if key not in cache:
+            m = slender_factor(lib.meshes[key[1]]) if params.slender else 1
+            slender = max(slender, m)
             cache[key] = element_cluster(
-                lib.meshes[key[1]], params.particles_per_element, quadratic=params.deformation == "quadratic"
+                lib.meshes[key[1]], m * m * params.particles_per_element, quadratic=params.deformation == "quadratic"
             )
         cl = cache[key]
         c0 = cl.centres.mean(axis=0)
@@ -157,7 +172,10 @@ def build_simulation(
     x, r, w, q = (np.concatenate(a) for a in (xs, rs, ws, qs))
     start = np.concatenate([[0], np.cumsum(sizes)])
     water = {} if material is None else {"water_content": material.water_content}
-    settings = solver_settings(params, effects, float(np.median(r)), **water)
+    # a cluster of m× the particles gives way to its contacts more slowly per substep (shape matching shares each
+    # correction over its particles), and long grains jam: the run settles them at m³ × the substeps (docs/look.md)
+    stepped = dataclasses.replace(params, substeps=params.substeps * slender**3)
+    settings = solver_settings(stepped, effects, float(np.median(r)), **water)
     sdf = None
     if "collider" in effects:
         shapes = colliders + moulds
@@ -165,6 +183,8 @@ def build_simulation(
         hi = np.max([c.bounds[1] for c in shapes] + [x.max(axis=0)], axis=0) + 4 * r.max()
         pitch = max(0.5 * r.min(), float((hi - lo).max()) / 192)
         sdf = free_space_field(colliders, moulds, lo, hi, pitch)
+        if params.rigid_start:
+            rigid_into_free_space(x, r, start, *sdf)
     yolk_local = np.array(yolk_local)
     yolks = None
     has_yolk = ~np.isnan(yolk_local[:, 0])

@@ -398,6 +398,7 @@ class XpbdSolver:
             k.h,
             k.clamp,
             k.damping,
+            s.depenetration_speed,
         )
         self._track(moved)
         return residual

@@ -30,7 +30,8 @@ def _check(params):
 
 @node(
     "xpbd",
-    version=12,
+    # 13: rigid_start (on by default), slender, depenetration_speed
+    version=13,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "material": In(
@@ -93,6 +94,19 @@ def _check(params):
         # issue 17's 0.03 / 0.10 after the flattening.
         "particles_per_element": Param(
             int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
+        ),
+        "slender": Param(
+            bool,
+            False,
+            "clusters sized to the element's cross-section: an element m times as elongated as a japonica grain "
+            "(length / width over 5/3, rounded, ≥ 1; indica 2) gets m × particles_per_element particles, and the run "
+            "m³ × the substeps (a cluster of more particles gives way to its contacts more slowly per substep)",
+        ),
+        "rigid_start": Param(
+            bool,
+            True,
+            "move each element whole into the containers' free space before the run where it reaches through a wall "
+            "(a long grain near a bowl's rim): else its particles are pushed out on both sides and the cluster is torn",
         ),
         "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
         "stiffness": Param(
@@ -179,6 +193,14 @@ def _check(params):
             range=(0.1, 2.0),
             units="radii",
         ),
+        "depenetration_speed": Param(
+            float,
+            0.0,
+            "max depenetration speed: the constraints leave a particle no faster than this or its predicted speed "
+            "(gravity's and its own), so deep overlaps come apart without launching elements; 0 = unbounded",
+            range=(0.0, 100000.0),
+            units="mm/s",
+        ),
         "gravity": Param(
             float,
             9810.0,
@@ -222,7 +244,8 @@ def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=N
     sim = build_simulation(
         aggregate, list(colliders or []), ctx.effects, p, obstacles=obstacles, moulds=moulds, material=material
     )
-    frames, every, meshes_every, substeps = p.frames, p.log_every, p.log_meshes_every, p.substeps
+    frames, every, meshes_every = p.frames, p.log_every, p.log_meshes_every
+    substeps = sim.solver.settings.substeps  # ``slender``: more than p.substeps
     moving = sim.model.n_moving
     ctx.expect_cost(
         moving * frames * substeps * p.iterations / PARTICLE_ITERATIONS_PER_SECOND,
