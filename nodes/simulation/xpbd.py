@@ -100,7 +100,8 @@ def _check(params):
             False,
             "clusters sized to the element's cross-section: an element m times as elongated as a japonica grain "
             "(length / width over 5/3, rounded, ≥ 1; indica 2) gets m × particles_per_element particles, and the run "
-            "m³ × the substeps (a cluster of more particles gives way to its contacts more slowly per substep)",
+            "m³ × the substeps (a cluster of more particles gives way to its contacts more slowly per substep), "
+            "with a depenetration speed (50 mm/s unless set)",
         ),
         "rigid_start": Param(
             bool,
@@ -197,7 +198,8 @@ def _check(params):
             float,
             0.0,
             "max depenetration speed: the constraints leave a particle no faster than this or its predicted speed "
-            "(gravity's and its own), so deep overlaps come apart without launching elements; 0 = unbounded",
+            "(gravity's and its own), so deep overlaps come apart without launching elements; 0 = unbounded, but "
+            "50 mm/s in a slender run with m > 1 (its m³ × substeps would launch long grains)",
             range=(0.0, 100000.0),
             units="mm/s",
         ),
