@@ -30,7 +30,7 @@ def _check(params):
 
 @node(
     "xpbd",
-    # 13: rigid_start (on by default), slender, depenetration_speed
+    # 13: rigid_start, slender, depenetration_speed
     version=13,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
@@ -105,7 +105,7 @@ def _check(params):
         ),
         "rigid_start": Param(
             bool,
-            True,
+            False,
             "move each element whole into the containers' free space before the run where it reaches through a wall "
             "(a long grain near a bowl's rim): else its particles are pushed out on both sides and the cluster is torn",
         ),
