@@ -3,9 +3,10 @@
 Hand-written JSON + one binary buffer because trimesh's exporter (the library at hand) maps
 materials to core PBR only and drops transmission, volume, IOR, specular, clearcoat, sheen and emissive
 strength. One glTF mesh and node per element part; the root node turns our Z-up millimetres into
-glTF's Y-up metres. The materials carry what the preview renders (``mitsuba_scene``): the ikura membrane,
-ice and syrup as transmission + volume (IOR; the skin's tint per crossing as the base colour), rice as
+glTF's Y-up metres. The materials carry what the preview renders (``mitsuba_scene``): the ikura membrane
+as transmission + volume (IOR; the skin's tint per crossing as the base colour), rice as
 diffuse transmission (the CDRF's translucency at the material's median curvature) with sheen and clearcoat,
+shaved ice as diffuse transmission of its ``subsurface`` (syrup-soaked ice with part transmission and a coat),
 the bowl's glaze as clearcoat.
 No ``COLOR_0``: the CDRF vertex colours hold lighting, which a viewer multiplying them into the base colour
 would light again; the CDRF's per-vertex σ travels as the custom attribute ``_CDRF_SIGMA`` (rad). Each material's
@@ -92,11 +93,16 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
 
 
 def material_translucency(scene: ShadedScene) -> list[float]:
-    """Per material: its diffuse-transmission weight at the median CDRF σ of its vertices (0 without σ)."""
+    """Per material: its diffuse-transmission weight at the median CDRF σ of its vertices (0 without σ); shaved ice
+    (``materials.is_ice``, a thin diffuser) its ``subsurface``, as the preview renders it."""
     from ..shading.cdrf import translucency
+    from ..shading.materials import is_ice
 
     out = []
     for index, material in enumerate(scene.materials):
+        if is_ice(material):
+            out.append(float(material.subsurface))
+            continue
         sigmas = [s for s, k in zip(scene.cdrf_sigma, scene.material_of) if k == index and len(s)]
         if not sigmas or material.subsurface <= 0:
             out.append(0.0)

@@ -8,8 +8,8 @@ unit of the meshes.
 
 A transmissive element's skin tints the light at each crossing (``crossing_tint``), as the preview renders it; both
 files carry that tint as the base colour, which glTF and the principled BSDF apply to transmitted light, and no
-volume absorption on top. An element the preview fills with a scattering medium (rice grains, ikura yolks, ice
-flakes) carries the medium's coefficients (``medium*``), so that a renderer that can build a medium (Cycles, through
+volume absorption on top. An element the preview fills with a scattering medium (rice grains, ikura yolks)
+carries the medium's coefficients (``medium*``), so that a renderer that can build a medium (Cycles, through
 the add-on) renders the same light under the skin.
 """
 
@@ -20,7 +20,7 @@ import numpy as np
 from ..values import Material
 
 PREFIX = "nodegraph:principled:"
-VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (with the ice, ``is_ice``)
+VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (shaved ice: a thin diffuser)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 
 
@@ -72,10 +72,9 @@ def random_walk_coefficients(albedo, radius) -> tuple[np.ndarray, np.ndarray]:
 
 def is_volumetric(material: Material) -> bool:
     """Whether the preview renders ``material``'s inside as a scattering medium (closed elements only: rice
-    grains, ikura yolks, ice flakes; fish flesh and fat are open parts of one slab)."""
-    from ..shading.materials import is_ice
-
-    return material.name in VOLUMETRIC_ELEMENTS or is_ice(material)
+    grains, ikura yolks; shaved ice is a thin diffuser, ``materials.ice_materials``; fish flesh and fat are open
+    parts of one slab)."""
+    return material.name in VOLUMETRIC_ELEMENTS
 
 
 def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:

@@ -2,18 +2,19 @@
 
 The path tracer does the lighting, so surfaces get their materials, not the baked CDRF colours:
 
-- translucent materials (``subsurface`` > 0: rice, the ikura yolk) are Mitsuba's ``principledthin`` with
-  diffuse transmission ``subsurface × cdrf.translucency(σ)`` per vertex, σ = σ₀|κ| the CDRF kernel width the
-  shade node stored: the CDRF (eq. 7–9) evaluated in the BSDF as light passing through the grain, so
-  strongly curved, wet parts glow past the terminator; sheen for the water film, and its clearcoat as a
-  share of the surface rendered by ``principled`` (``coat_share``; principledthin has no coat lobe);
-- transmissive materials (``transmission`` ≥ 0.5: the ikura membrane, ice, syrup) are (rough) dielectrics
+- translucent materials (``subsurface`` > 0: rice, the ikura yolk, shaved ice) are Mitsuba's ``principledthin`` with
+  diffuse transmission ``subsurface × cdrf.translucency(σ)`` per vertex (shaved ice: ``subsurface`` on every vertex,
+  a thin diffuser), σ = σ₀|κ| the CDRF kernel width the shade node stored: the CDRF (eq. 7–9) evaluated in the BSDF
+  as light passing through the grain, so strongly curved, wet parts glow past the terminator; sheen for the water
+  film, and its clearcoat as a share of the surface rendered by ``principled`` (``coat_share``; principledthin has
+  no coat lobe);
+- transmissive materials (``transmission`` ≥ 0.5: the ikura membrane) are (rough) dielectrics
   whose transmittance per crossing is √``subsurface_color`` (two crossings give that colour): the yolk
-  shows through the orange egg, the rice through the ice;
+  shows through the orange egg;
 - the rest (the bowl's glaze) is ``principled`` with its clearcoat.
 
 With ``subsurface`` on (the default), light goes under the skin for real (Mitsuba's ``volpath``): each closed
-element of rice, each ikura yolk and each ice flake is a homogeneous scattering medium behind a (rough)
+element of rice and each ikura yolk is a homogeneous scattering medium behind a (rough)
 dielectric boundary (``medium``). The medium's mean free path and single-scattering albedo come from the
 material's principled subsurface radius and colour (G Table 3) by the random-walk mapping of Chiang, Kutz and
 Burley 2016, the one Blender's Cycles uses for the same parameters, so both renderers read the same numbers.
@@ -142,8 +143,9 @@ def write_ply(path: Path, vertices, faces, normals, colors, translucency=None) -
 
 
 def path_depth(scene: ShadedScene, subsurface: bool = False) -> int:
-    """The path tracer's longest path: ``MAX_DEPTH_FLAKES`` where the scene has ice (a heap of thin transmissive
-    flakes, many interfaces deep), ``MAX_DEPTH_MEDIA`` where light scatters inside elements (``subsurface``), else
+    """The path tracer's longest path: ``MAX_DEPTH_FLAKES`` where the scene has ice (a heap of thin diffusers
+    that pass light from flake to flake, many flakes deep), ``MAX_DEPTH_MEDIA`` where light scatters inside
+    elements (``subsurface``), else
     ``MAX_DEPTH`` (eggs and rice end paths sooner; the longer cap costs there without changing much)."""
     from ..shading.materials import is_ice
 
@@ -306,6 +308,7 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
     """One PLY shape per material (written into ``folder``; key ``shape_<material index>``) and the scene's
     vertices (what the camera frames and focuses on); with ``subsurface``, the volumetric materials' shapes carry their
     medium inside a dielectric boundary."""
+    from ..shading.materials import is_ice
     from .mesh_files import stacked
 
     shapes = {}
@@ -322,7 +325,11 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
         colors = np.tile(material.base_color, (len(vertices), 1))
         volume = subsurface and is_volumetric(material)
         per_vertex = (
-            not volume and bool(scene.cdrf_sigma) and material.subsurface > 0 and material.transmission < TRANSMISSIVE
+            not volume
+            and bool(scene.cdrf_sigma)
+            and material.subsurface > 0
+            and material.transmission < TRANSMISSIVE
+            and not is_ice(material)
         )
         trans = None
         if per_vertex:

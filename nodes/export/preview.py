@@ -32,7 +32,8 @@ from .studio import AMBIENT
     # 10: 3 spp (was 5), glints 2 spp (was 4), no light sampling from inside the media (a shadow ray cast there always
     #     met the element's dielectric skin): 58.5 → 35.6 CPU s, 134 → 84 s wall at load ≈ 8 on the main job,
     #     −0.6 dB / −0.036 SSIM in the eggs window against 256 spp (docs/accuracy.md, "Preview cost")
-    version=10,
+    # 11: shaved ice a matte thin diffuser, no medium (docs/look.md, "Kakigori"): the heap white, not grey glass
+    version=11,
     # Mitsuba renders in its own threads with the GIL released and no numba kernel runs here: the run computes
     # what does not need the preview (export, measure) in a second thread meanwhile (nodegraph.executor.Beside),
     # started once every library the preview loads is loaded (load_renderer: USD's loading in the export beside
@@ -58,7 +59,7 @@ from .studio import AMBIENT
         "subsurface": Param(
             bool,
             True,
-            "light under the skin: a scattering medium inside each rice grain, ikura yolk and ice flake behind a "
+            "light under the skin: a scattering medium inside each rice grain and ikura yolk behind a "
             "dielectric boundary (volpath; mean free path and albedo from the material's subsurface radius and "
             "colour); off: the thin principled surface with the CDRF translucency per vertex",
         ),

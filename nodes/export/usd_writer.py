@@ -3,7 +3,7 @@
 Z-up, millimetres (``metersPerUnit`` 0.001). Per-vertex CDRF colours go to ``primvars:displayColor`` (the
 fallback colour of viewers without materials) and the CDRF's per-vertex σ to ``primvars:cdrf_sigma``;
 each material's principled parameters map onto UsdPreviewSurface. Transmission has no input there: a
-transmissive material (egg, ice, syrup) gets ``opacity`` = 1 − transmission with its ``ior``, which the
+transmissive material (egg, syrup-soaked ice) gets ``opacity`` = 1 − transmission with its ``ior``, which the
 UsdPreviewSurface specification reads as a translucent surface that still reflects (clear glass at 0), and which
 renderers that translate it to transmission render as refraction. Blender's importer reads ``opacity`` as
 alpha instead; the add-on in ``blender/nodegraph_import`` turns it back into transmission. The full principled

@@ -1,10 +1,10 @@
 """Principled material presets per element kind — G Table 3 colour columns, SPEC §4.
 
-Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice is interpolated
-by water content (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a
-water film: clearcoat). Ikura has two parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white
-scattering tuft of fine shavings and carries syrup graded by its depth below the mound's top surface; chestnut (kuri
-gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh, 1 fat.
+Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice is interpolated by water content
+(0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a water film: clearcoat). Ikura has two
+parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white, matte thin diffuser (a tuft of fine shavings)
+and carries syrup graded by its depth below the mound's top surface; chestnut (kuri gohan) is a yellow, matte,
+slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh, 1 fat.
 """
 
 from __future__ import annotations
@@ -136,42 +136,47 @@ def ikura_materials() -> tuple[Material, Material]:
 
 def ice_materials(syrup_color) -> tuple[Material, Material]:
     """(plain shaved ice, syrup-soaked shaved ice). A flake stands for a tuft of shavings far finer than the mesh
-    (a kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from multiple scattering as snow
-    is, not a clear crystal. Its inside is a dense, nearly lossless scattering medium (mean free path 0.2 mm: a few
-    shavings; ice itself absorbs nothing over millimetres) and its boundary the tuft's effective index, ≈ 1.1 for
-    ≈ 30 % ice in air (n ≈ 1 + 0.3 × 0.31), so a flake has no glassy facet or glint of its own. Syrup fills the
-    pores: the index rises towards the syrup's (sugar solution ≈ 1.35), scattering falls (index-matched ice and syrup
-    are clear: a longer free path) and the colour is the syrup's absorption; the wet top is glossy."""
+    (a kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from its countless interfaces as
+    snow is, not a clear crystal. So it is a thin diffuser, not a medium: a matte, near-Lambertian surface of high
+    albedo (``base_color``; ice absorbs nothing over millimetres) that passes ``subsurface`` of the diffuse light
+    through (half: a tuft a few shavings thick), on every part of the flake alike (no CDRF per vertex), with no
+    glassy facet or glint (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air). Light walks from
+    flake to flake through the heap and comes back out white; as a dense medium behind a dielectric skin each
+    flake let part of the light through unscattered and the heap read as grey glass (docs/look.md, "Kakigori").
+    Syrup fills the pores: the soaked tuft is its ice coloured by the syrup's absorption (``_absorb`` at half the
+    syrup's strength: ice dyed, not syrup alone), more translucent (most diffuse light passes, and part goes
+    straight through: index-matched ice and syrup are clear) and wet (a glossy coat)."""
     ice = Material(
         name=ICE,
-        base_color=(0.95, 0.96, 0.98),
-        subsurface=1.0,
+        base_color=(0.96, 0.965, 0.97),
+        subsurface=0.5,
         subsurface_radius=(0.2, 0.2, 0.2),
-        subsurface_color=(0.97, 0.975, 0.98),
-        roughness=0.5,
+        subsurface_color=(0.96, 0.965, 0.97),
+        roughness=1.0,
+        specular=0.2,
         ior=1.1,
-        transmission=1.0,
-        transmission_roughness=0.0,
     )
+    soaked = _absorb(ice.base_color, syrup_color, 0.5)
     syrup = Material(
         name="ice_syrup",
-        base_color=tuple(float(c) for c in syrup_color),
-        subsurface=1.0,
+        base_color=soaked,
+        subsurface=0.95,
         subsurface_radius=(0.6, 0.6, 0.6),
-        subsurface_color=tuple(float(c) for c in syrup_color),
-        roughness=0.15,
-        clearcoat=0.8,
-        clearcoat_roughness=0.05,
-        ior=1.2,
-        transmission=1.0,
-        transmission_roughness=0.0,
+        subsurface_color=soaked,
+        roughness=0.3,
+        clearcoat=0.7,
+        clearcoat_roughness=0.08,
+        ior=1.3,
+        transmission=0.45,
+        transmission_roughness=0.2,
     )
     return ice, syrup
 
 
 def is_ice(material: Material) -> bool:
-    """Whether a material is kakigori ice (plain or a syrup grade): a thin transmissive flake (the preview traces
-    longer paths through a heap of them, ``mitsuba_scene.path_depth``)."""
+    """Whether a material is kakigori ice (plain or a syrup grade): a thin diffuser whose diffuse transmission is
+    its ``subsurface`` on every vertex (no CDRF); the preview traces longer paths through a heap of them
+    (``mitsuba_scene.path_depth``)."""
     return material.name == ICE or material.name.startswith(ICE + "_syrup")
 
 

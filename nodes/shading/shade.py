@@ -34,7 +34,9 @@ def _check(params):
     # 8: 'ambient' renamed 'baked_ambient': it lights only the baked vertex colours, never the preview (whose
     #    ambient is its studio's, preview.ambient)
     # 9: kakigori ice a white tuft of fine shavings (short free path, index 1.1); syrup colour mixed by absorption
-    version=9,
+    # 10: kakigori ice a matte thin diffuser (white, passes half the diffuse light; no medium, no glint); the soaked
+    #     ice lighter (ice dyed by the syrup), more translucent, wet (docs/look.md, "Kakigori")
+    version=10,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "material": In(

@@ -188,13 +188,25 @@ def first_hits(origins: np.ndarray, directions: np.ndarray, triangles: np.ndarra
 
 
 def wrap_band(
-    vertices: np.ndarray, faces: np.ndarray, width: float, height: float, gap: float, columns: int, rows: int
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    width: float,
+    height: float,
+    gap: float,
+    columns: int,
+    rows: int,
+    drape: np.ndarray | None = None,
+    reach: float = 2.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A sheet folded round the bottom of a closed shape (faces along ±y): for each of ``columns + 1`` cuts across
     x (``width`` wide, centred), rays in the y–z plane from the point at ``height`` above the shape's lowest point
     sweep the half-turn below it (horizontal towards −y, down, horizontal towards +y); their first hits, moved
     ``gap`` out along the hit face's normal, are the sheet's vertices. Its edges: the cuts at ±width/2 and the
-    plane at ``height``. Raises when the band would leave the shape (a ray from outside it, or a miss)."""
+    plane at ``height``. Raises when the band would leave the shape (a ray from outside it, or a miss).
+
+    With ``drape`` (points: the settled grains' vertices) the sheet lies on those points instead of the shape:
+    ``gap`` beyond the farthest of them along each ray (``draped_distances``), never lower than the shape's lowest
+    point less ``gap`` (it stays on the plate the shape was set on)."""
     vertices, faces = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
     triangles = vertices[faces]
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
@@ -217,7 +229,17 @@ def wrap_band(
             f"width: a band {width:g} mm wide and {height:g} mm high leaves the shape "
             f"({hi[0] - lo[0]:g} mm wide): make it narrower or lower"
         )
-    points = origins + distance[:, None] * directions + gap * normals[face]
+    if drape is None:
+        points = origins + distance[:, None] * directions + gap * normals[face]
+    else:
+        along = draped_distances(
+            np.asarray(drape, np.float64), xs, angles, (middle[1], lo[2] + height), reach, distance
+        ).ravel()
+        floor = lo[2] - gap  # the sheet under the shape stays above what the shape stands on
+        down = directions[:, 2] < -1e-9
+        along[down] = np.minimum(along[down] + gap, (lo[2] + height - floor) / -directions[down, 2])
+        along[~down] += gap
+        points = origins + along[:, None] * directions
     k = np.arange((columns + 1) * (rows + 1)).reshape(columns + 1, rows + 1)
     a, b, c, d = k[:-1, :-1], k[1:, :-1], k[1:, 1:], k[:-1, 1:]
     quads = np.stack([a, b, c, d], axis=-1).reshape(-1, 4)
@@ -230,3 +252,42 @@ def wrap_band(
     if np.einsum("ij,ij->", outward, centre_normal) < 0:
         triangles_out = triangles_out[:, ::-1]
     return points, triangles_out
+
+
+def draped_distances(
+    points: np.ndarray,
+    xs: np.ndarray,
+    angles: np.ndarray,
+    centre: tuple[float, float],
+    reach: float,
+    fallback: np.ndarray,
+) -> np.ndarray:
+    """Distances (columns, rows) along the band's rays (cut x ``xs``, angle ``angles`` in the y–z plane from
+    ``centre``) at which a stiff sheet rests on ``points``: the farthest point within ``reach`` (mm) of each ray,
+    spread over ``reach`` so the sheet spans the grains' tops instead of dipping between them. Rays no point lies
+    near take their neighbours' along the band (``fallback``, the shape's own distance, where a whole cut is
+    empty). Binned on the rays' grid — a max filter, not a search per ray."""
+    from scipy import ndimage
+
+    dx = xs[1] - xs[0] if len(xs) > 1 else 1.0
+    da = angles[1] - angles[0]
+    rel_y, rel_z = points[:, 1] - centre[0], points[:, 2] - centre[1]
+    radius = np.hypot(rel_y, rel_z)
+    angle = np.arctan2(rel_z, rel_y)
+    angle = np.where(angle > 0.5 * np.pi, angle - 2.0 * np.pi, angle)  # above −y's horizontal: beside the −π end
+    column = np.rint((points[:, 0] - xs[0]) / dx).astype(np.int64)
+    row = np.rint((angle - angles[0]) / da).astype(np.int64)
+    keep = (column >= 0) & (column < len(xs)) & (row >= 0) & (row < len(angles))
+    farthest = np.full((len(xs), len(angles)), -np.inf)
+    np.maximum.at(farthest, (column[keep], row[keep]), radius[keep])
+    typical = np.median(radius[keep]) if keep.any() else 1.0
+    size = (2 * int(np.ceil(reach / dx)) + 1, 2 * int(np.ceil(reach / max(typical * da, 1e-9))) + 1)
+    spread = ndimage.maximum_filter(farthest, size=size, mode="nearest")
+    fallback = np.asarray(fallback, np.float64).reshape(len(xs), len(angles))
+    out = np.empty_like(spread)
+    index = np.arange(len(angles))
+    for c in range(len(xs)):
+        known = np.isfinite(spread[c])
+        out[c] = np.interp(index, index[known], spread[c, known]) if known.any() else fallback[c]
+    smooth = ndimage.gaussian_filter(out, sigma=0.5 * (np.array(size) - 1) / 2, mode="nearest")
+    return np.maximum(smooth, np.where(np.isfinite(farthest), farthest, -np.inf))

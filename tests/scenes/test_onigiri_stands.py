@@ -30,7 +30,8 @@ def plate_gap(glb) -> float:
     world = {}
     for name in scene.graph.nodes_geometry:
         transform, geometry = scene.graph[name]
-        world[name] = trimesh.transform_points(scene.geometry[geometry].vertices, transform)
+        x, y_up, z = trimesh.transform_points(scene.geometry[geometry].vertices, transform).T
+        world[name] = 1e3 * np.column_stack([x, -z, y_up])  # glTF's Y-up metres → our Z-up millimetres
     grains = [v for name, v in world.items() if "/" in name]
     assert grains and "plate" in world, sorted(world)[:5]
     centres = np.array([v.mean(axis=0) for v in grains])

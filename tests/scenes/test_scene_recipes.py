@@ -42,9 +42,9 @@ EXPECTED = {
     "ikura_don": ((140, 220), 0.03, 0.10),  # 167 elements: p95 0.013, max 0.040
     "onigiri": ((45, 75), 0.03, 0.10),  # 60 grains: p95 0.017, max 0.054
     "sushi": ((65, 110), 0.03, 0.12),  # 87 grains: p95 0.019, max 0.097
-    # 213 flakes: p95 0, max 0.0061 (280 culled; 67 removed as crossing a flake or the cup, issue 25); with the
-    # settle frame and no removal 298 flakes: p95 0.051, max 0.069
-    "kakigori": ((180, 350), 0.003, 0.01),
+    # 546 flakes 2.25–2.7 × 1.5–1.65 × 0.3 mm (issue 26: finer shavings): p95 0.0023, max 0.0067; the 3–3.6 mm
+    # flakes before: 213, p95 0, max 0.0061 (issue 25); with the settle frame and no removal 298: p95 0.051, max 0.069
+    "kakigori": ((400, 700), 0.003, 0.01),
     # 294 elements: p95 0, max 0 with deform_contacts (issue 25); p95 0.077, max 0.096 without it (S: no physics)
     "rice_chestnut": ((200, 340), 0.003, 0.01),
 }

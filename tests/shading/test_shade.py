@@ -10,6 +10,7 @@ from nodegraph.params import ParamValueError
 from nodes.material import cooked_rice
 from nodes.material.cooked import cooked_material
 from nodes.shading import shade
+from nodes.shading.materials import is_ice
 
 
 def test_materials_per_kind_and_ikura_parts(shaded):
@@ -72,7 +73,7 @@ def test_syrup_is_graded_by_depth_below_the_local_top_surface(scene_inputs):
     column's half-soaked ones (a share of the mound's absolute height would leave it dry)."""
     ice = _ice_columns(scene_inputs, {0.0: 10, 20.0: 3})
     scene = shade.call(aggregates=[ice], syrup_depth=15.0, syrup_spread=0.0, syrup_levels=5)
-    assert all(m.transmission > 0 for m in scene.materials)
+    assert all(is_ice(m) for m in scene.materials)
     grade = _grade(scene)
     tall, short = grade[:10], grade[10:]
     assert tall[-1] == 100 and short[-1] == 100  # each column's top is soaked
@@ -87,20 +88,23 @@ def test_syrup_is_graded_by_depth_below_the_local_top_surface(scene_inputs):
 
 
 def test_shaved_ice_is_white_and_its_syrup_colour_fades_downward(scene_inputs):
-    """Kakigori (issue 26): plain ice is a white scatterer (a tuft of fine shavings: short free path, an effective
-    index near air's, no glassy facet) and the syrup's red is strongest on top and fades down the mound: down a
-    column of flakes the red share of each flake's colour never rises, and half-soaked ice is already clearly red
+    """Kakigori (issue 26): plain ice is a white, matte thin diffuser (a tuft of fine shavings: no medium, an
+    effective index near air's, no glassy facet) and the syrup's red is strongest on top and fades down the mound:
+    down a column of flakes the red share of each flake's colour never rises, and half-soaked ice is already red
     (the dye absorbs: colour mixes geometrically with the concentration, not linearly to a pale pink)."""
+    from nodes.export.look import is_volumetric
+
     ice = _ice_columns(scene_inputs, {0.0: 10})
     scene = shade.call(aggregates=[ice], syrup_depth=27.0, syrup_spread=0.0, syrup_levels=6)
     plain = next(m for m in scene.materials if m.name == "ice")
-    assert max(plain.subsurface_radius) <= 0.3 and plain.ior <= 1.15  # white tuft (clear ice: 5 mm, 1.31)
-    assert min(plain.subsurface_color) >= 0.95  # and not tinted
+    assert not is_volumetric(plain) and plain.transmission == 0 and plain.roughness >= 0.9 and plain.ior <= 1.15
+    assert 0.3 <= plain.subsurface <= 0.7  # passes part of the diffuse light on to the flakes behind
+    assert min(plain.base_color) >= 0.95 and min(plain.subsurface_color) >= 0.95  # white, not tinted
     colours = np.array([scene.materials[k].subsurface_color for k in scene.material_of])  # bottom flake first
     redness = colours[:, 0] / colours.sum(axis=1)
-    assert (np.diff(redness) >= 0).all() and redness[-1] > 0.8 and redness[0] < 0.34  # red on top, white below
+    assert (np.diff(redness) >= 0).all() and redness[-1] > 0.6 and redness[0] < 0.34  # red on top, white below
     half = next(m for m in scene.materials if m.name == "ice_syrup_50")
-    assert half.subsurface_color[1] < 0.2  # linear mixing gave 0.50: pink
+    assert half.subsurface_color[1] < 0.4  # linear mixing gives 0.55: pink
 
 
 def test_chestnut_is_its_own_matte_yellow_material(scene_inputs):

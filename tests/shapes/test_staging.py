@@ -68,3 +68,61 @@ def test_a_band_too_wide_for_the_shape_is_refused():
     mould = shape.call(kind="onigiri", size=20.0)["mesh"]
     with pytest.raises(ValueError, match="width"):
         nori.call(shape=mould, width=60.0, height=10.0)
+
+
+def _bulging_grains(mould, bulge: float):
+    """Balls of 2.5 mm radius ≈ 3 mm apart round the mould's lower half, their outer sides ``bulge`` mm outside
+    its surface: rice that slumped out of its mould."""
+    from nodegraph.values import Mesh
+    from nodes.values import Aggregate, ElementLibrary, Placement
+
+    ball = trimesh.creation.icosphere(subdivisions=2, radius=2.5)
+    solid = trimesh.Trimesh(mould.vertices, mould.faces)
+    points, face = trimesh.sample.sample_surface_even(solid, 1500, seed=1)
+    lo = mould.vertices[:, 2].min()
+    low = points[:, 2] < lo + 30.0
+    centres = points[low] + (bulge - 2.5) * solid.face_normals[face[low]]
+    placement = Placement(centres, np.tile([0.0, 0.0, 1.0], (len(centres), 1)))
+    library = ElementLibrary("ball", (Mesh(ball.vertices, ball.faces, name="ball"),))
+    return Aggregate(placement, (library,))
+
+
+def _outside_the_sheet(band, grains, mould, height: float) -> np.ndarray:
+    """How far (mm) each grain vertex in the band's strip lies beyond the sheet, along the band's ray through it
+    (from the point ``height`` over the mould's lowest point, in the y–z plane); ≤ 0 where the sheet covers it.
+    Vertices under the mould's lowest point are left out: there the sheet stays on the plate."""
+    lo, hi = mould.vertices.min(axis=0), mould.vertices.max(axis=0)
+    centre = np.array([0.5 * (lo[1] + hi[1]), lo[2] + height])
+    points = np.concatenate([grains.element_mesh(i).vertices for i in range(len(grains.placement))])
+    x0, x1 = band.vertices[:, 0].min() + 1.0, band.vertices[:, 0].max() - 1.0
+    points = points[
+        (points[:, 0] > x0) & (points[:, 0] < x1) & (points[:, 2] < centre[1] - 3.0) & (points[:, 2] > lo[2])
+    ]
+
+    def polar(p):
+        rel = p[:, 1:] - centre
+        return np.arctan2(rel[:, 1], rel[:, 0]), np.hypot(rel[:, 0], rel[:, 1])
+
+    band_angle, band_radius = polar(band.vertices)
+    angle, radius = polar(points)
+    nearest = cKDTree(np.column_stack([band.vertices[:, 0], 30.0 * band_angle])).query(
+        np.column_stack([points[:, 0], 30.0 * angle])
+    )[1]
+    return radius - band_radius[nearest], nearest
+
+
+def test_the_nori_lies_on_the_rice_that_slumped_out_of_its_mould():
+    """Given the grains, the band covers every grain in its strip (the mould's band leaves grains 1 mm out of it
+    through the sheet) and rests on them: along the median ray, within the gap and a millimetre of the
+    farthest grain under it."""
+    mould = shape.call(kind="onigiri", size=47.3)["mesh"]
+    grains = _bulging_grains(mould, bulge=1.0)
+    params = {"width": 34.0, "height": 28.0, "gap": 0.4}
+    on_mould = nori.call(shape=mould, **params)
+    assert _outside_the_sheet(on_mould, grains, mould, 28.0)[0].max() > 0.4  # the mould's sheet: grains through it
+    draped = nori.call(shape=mould, aggregate=grains, **params)
+    beyond, ray = _outside_the_sheet(draped, grains, mould, 28.0)
+    assert beyond.max() <= -0.25  # under the sheet by its gap (0.4), less the slack of its nearest vertex
+    closest = np.full(len(draped.vertices), -np.inf)  # per sheet vertex: its nearest grain's distance under it
+    np.maximum.at(closest, ray, beyond)
+    assert np.median(closest[np.isfinite(closest)]) > -(0.4 + 1.0)  # it rests on the grains' tops
