@@ -99,7 +99,7 @@ def _check(params):
             bool,
             False,
             "clusters sized to the element's cross-section: an element m times as elongated as a japonica grain "
-            "(length / width over 5/3, rounded, ≥ 1; indica 2) gets m × particles_per_element particles, and the run "
+            "(length / width over 5/3, rounded, ≥ 1; indica 2) gets m² × particles_per_element particles, and the run "
             "m³ × the substeps (a cluster of more particles gives way to its contacts more slowly per substep), "
             "with a depenetration speed (50 mm/s unless set)",
         ),
