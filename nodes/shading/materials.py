@@ -356,27 +356,3 @@ def syrup_levels(depths: np.ndarray, soak_depth, levels: int) -> np.ndarray:
     wet = limit > 0
     concentration[wet] = np.clip(1.0 - np.asarray(depths)[wet] / limit[wet], 0.0, 1.0)
     return np.rint(concentration * levels).astype(np.int64)
-
-
-def heap_normals(centres: np.ndarray, radius: float) -> np.ndarray:
-    """The heap's outward normal at each element: away from the other elements' centres within ``radius``
-    (weighted 1 − distance / radius), +z where they balance. Soaked flakes shade along it (``shade.syrup_smooth``):
-    syrup fills the gaps and the soaked top slumps into one wet surface rather than a shingle of flakes."""
-    from scipy.spatial import cKDTree
-
-    pairs = cKDTree(centres).query_pairs(radius, output_type="ndarray")
-    d = centres[pairs[:, 0]] - centres[pairs[:, 1]]
-    w = 1.0 - np.linalg.norm(d, axis=1, keepdims=True) / radius
-    away = np.zeros_like(centres)
-    np.add.at(away, pairs[:, 0], w * d)
-    np.add.at(away, pairs[:, 1], -w * d)
-    length = np.linalg.norm(away, axis=1, keepdims=True)
-    return np.where(length > 1e-9, away / np.maximum(length, 1e-12), [0.0, 0.0, 1.0])
-
-
-def follow_normals(normals: np.ndarray, toward: np.ndarray, weight: float) -> np.ndarray:
-    """Vertex normals turned ``weight`` of the way to ±``toward`` (the side each already faces): a thin flake's
-    two faces become two sides of the heap's surface."""
-    side = np.where(normals @ toward >= 0.0, 1.0, -1.0)[:, None]
-    bent = (1.0 - weight) * normals + weight * side * toward
-    return bent / np.maximum(np.linalg.norm(bent, axis=1, keepdims=True), 1e-12)

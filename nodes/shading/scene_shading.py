@@ -35,7 +35,6 @@ class ShadeSettings:
     syrup_levels: int
     syrup_runs: int
     syrup_run_length: float
-    syrup_smooth: float
     seed: int  # draws the syrup's runs (``materials.syrup_runs``)
     scenery_color: tuple[float, float, float]
     table: CdrfTable
@@ -45,8 +44,6 @@ class ShadeSettings:
 class _Piece:
     mesh: Mesh  # world-space mesh of one element part (or one scenery mesh)
     material: Material
-    toward: np.ndarray | None = None  # the heap's outward normal, which a soaked flake's shading normals follow
-    bend: float = 0.0  # how far they follow it (``materials.follow_normals``)
 
 
 def _materials(settings: ShadeSettings) -> dict[str, tuple[Material, ...]]:
@@ -68,15 +65,13 @@ def _element_pieces(
     """The aggregate's element parts with their materials, named ``<kind>/<number>[/<part>]``, numbered per
     kind across the scene's aggregates (``numbers``: the next number of each kind). Ice gets the syrup grade
     of its depth below the aggregate's top surface (``materials.soak_depths``, ``materials.syrup_levels``), deeper
-    where a run of syrup goes down the flank (``materials.syrup_runs``), and a soaked flake's shading normals
-    follow the heap's surface by its syrup share (``materials.heap_normals``)."""
+    where a run of syrup goes down the flank (``materials.syrup_runs``)."""
     p = aggregate.placement
     kinds = [lib.kind for lib in aggregate.libraries]
     presets = [mat.preset_for_kind(kind, settings.presets) for kind in kinds]
     meshes = derived(aggregate, "element_shapes", _element_shapes)
     is_ice = np.array([presets[k] == "ice" for k in p.kinds], bool)
     grade = np.zeros(len(p), np.int64)
-    toward = np.zeros((len(p), 3))
     if is_ice.any():
         ice_vertices = [meshes[i].vertices for i in np.flatnonzero(is_ice)]
         cell = float(np.median([np.ptp(v, axis=0).max() for v in ice_vertices]))  # one element length
@@ -85,9 +80,6 @@ def _element_pieces(
         rng = np.random.default_rng(settings.seed)
         limits = mat.syrup_runs(tops, settings.syrup_depth, settings.syrup_runs, settings.syrup_run_length, cell, rng)
         grade[is_ice] = mat.syrup_levels(depths, limits, settings.syrup_levels)
-        if settings.syrup_smooth > 0 and grade.any():
-            centres = np.array([v.mean(axis=0) for v in ice_vertices])
-            toward[is_ice] = mat.heap_normals(centres, 2.0 * cell)
     rice = [k for k in np.unique(p.kinds) if presets[k] == "rice"]
     if settings.rice is None and rice:
         kind = kinds[rice[0]]
@@ -103,8 +95,7 @@ def _element_pieces(
         numbers[kind] = numbers.get(kind, -1) + 1
         mesh = dataclasses.replace(meshes[i], name=f"{kind}/{numbers[kind]:04d}")
         if preset == "ice":
-            bend = settings.syrup_smooth * grade[i] / settings.syrup_levels
-            pieces.append(_Piece(mesh, materials["ice"][grade[i]], toward[i] if bend > 0 else None, bend))
+            pieces.append(_Piece(mesh, materials["ice"][grade[i]]))
         elif preset not in mat.PARTS:
             pieces.append(_Piece(mesh, materials[preset][0]))
         else:
@@ -158,10 +149,6 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
     vertices = np.concatenate([piece.mesh.vertices for piece in pieces])
     faces = np.concatenate([piece.mesh.faces + starts[k] for k, piece in enumerate(pieces)])
     normals, curvature = normals_and_curvature(vertices, faces)
-    for k, piece in enumerate(pieces):
-        if piece.toward is not None:
-            rows = slice(starts[k], starts[k + 1])
-            normals[rows] = mat.follow_normals(normals[rows], piece.toward, piece.bend)
 
     per_vertex = lambda field: np.repeat(np.array([getattr(piece.material, field) for piece in pieces]), counts, axis=0)
     colors = cdrf_colors(

@@ -36,8 +36,8 @@ def _check(params):
     # 9: kakigori ice a white tuft of fine shavings (short free path, index 1.1); syrup colour mixed by absorption
     # 10: kakigori ice a matte thin diffuser (white, passes half the diffuse light; no medium, no glint); the soaked
     #     ice lighter (ice dyed by the syrup), more translucent, wet (docs/look.md, "Kakigori")
-    # 11: syrup runs down the flanks in streaks (syrup_runs, syrup_run_length; drawn from the seed), soaked flakes'
-    #     shading normals follow the heap's surface (syrup_smooth) (docs/look.md, "Kakigori")
+    # 11: syrup runs down the flanks in streaks (syrup_runs, syrup_run_length; drawn from the seed); soaked ice
+    #     bright red from the syrup's absorption, translucent (docs/look.md, "Kakigori")
     version=11,
     random=True,
     inputs={
@@ -119,13 +119,6 @@ def _check(params):
             range=(0.0, 1e4),
             units="mm",
         ),
-        "syrup_smooth": Param(
-            float,
-            0.0,
-            "kakigori: how far a fully soaked flake's shading normals turn to the heap's surface (syrup fills the "
-            "gaps: one wet surface, not a shingle of flakes); a flake follows by its syrup share; 0: its own",
-            range=(0.0, 1.0),
-        ),
         "scenery_color": Param(RGB, (0.05, 0.07, 0.16), "glaze colour of scenery meshes (the bowl)", range=(0.0, 1.0)),
         "table_size": Param(
             tuple[int, int],
@@ -154,7 +147,6 @@ def shade(
     syrup_levels,
     syrup_runs,
     syrup_run_length,
-    syrup_smooth,
     scenery_color,
     table_size,
 ):
@@ -180,7 +172,6 @@ def shade(
         syrup_levels=syrup_levels,
         syrup_runs=syrup_runs,
         syrup_run_length=syrup_run_length,
-        syrup_smooth=syrup_smooth,
         seed=ctx.seed,
         scenery_color=tuple(scenery_color),
         table=CdrfTable.build(*table_size),
