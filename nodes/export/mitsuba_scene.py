@@ -4,10 +4,11 @@ The path tracer does the lighting, so surfaces get their materials, not the bake
 
 - translucent materials (``subsurface`` > 0: rice, the ikura yolk, shaved ice) are Mitsuba's ``principledthin`` with
   diffuse transmission ``subsurface × cdrf.translucency(σ)`` per vertex (shaved ice: ``subsurface`` on every vertex,
-  a thin diffuser), σ = σ₀|κ| the CDRF kernel width the shade node stored: the CDRF (eq. 7–9) evaluated in the BSDF
+  a thin diffuser, as principledthin's ``diff_trans`` = 2 × ``subsurface``: it passes on half its ``diff_trans``),
+  σ = σ₀|κ| the CDRF kernel width the shade node stored: the CDRF (eq. 7–9) evaluated in the BSDF
   as light passing through the grain, so strongly curved, wet parts glow past the terminator; sheen for the water
   film, and its clearcoat as a share of the surface rendered by ``principled`` (``coat_share``; principledthin has
-  no coat lobe);
+  no coat lobe; shaved ice has no such share: its coat is the key's glints alone);
 - transmissive materials (``transmission`` ≥ 0.5: the ikura membrane) are (rough) dielectrics
   whose transmittance per crossing is √``subsurface_color`` (two crossings give that colour): the yolk
   shows through the orange egg;
