@@ -6,7 +6,7 @@ strength. One glTF mesh and node per element part; the root node turns our Z-up 
 glTF's Y-up metres. The materials carry what the preview renders (``mitsuba_scene``): the ikura membrane
 as transmission + volume (IOR; the skin's tint per crossing as the base colour), rice as
 diffuse transmission (the CDRF's translucency at the material's median curvature) with sheen and clearcoat,
-shaved ice as diffuse transmission of its ``subsurface`` (syrup-soaked ice with part transmission and a coat),
+shaved ice as diffuse transmission of its ``subsurface`` (syrup-soaked ice part transmission too, and a coat),
 the bowl's glaze as clearcoat.
 No ``COLOR_0``: the CDRF vertex colours hold lighting, which a viewer multiplying them into the base colour
 would light again; the CDRF's per-vertex σ travels as the custom attribute ``_CDRF_SIGMA`` (rad). Each material's
@@ -43,16 +43,21 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
         "attenuationColor": [float(c) for c in material.subsurface_color],
         "attenuationDistance": max(thickness * 1e-3, 1e-6),  # world units: m
     }
+    from ..shading.materials import is_ice
+
+    diffuse = {
+        "diffuseTransmissionFactor": float(translucency),
+        "diffuseTransmissionColorFactor": [float(c) for c in material.subsurface_color],
+    }
     if material.transmission > 0:
         # a volume that refracts; its colour is the skin's tint per crossing, carried as the base colour
         # (``look.crossing_tint``): an absorption on top coloured the light twice (Blender: crimson eggs)
         ext["KHR_materials_transmission"] = {"transmissionFactor": material.transmission}
         ext["KHR_materials_volume"] = {"thicknessFactor": thickness}
+        if translucency > 0 and is_ice(material):  # syrup-soaked ice passes most of its diffuse light on too
+            ext["KHR_materials_diffuse_transmission"] = diffuse
     elif translucency > 0:
-        ext["KHR_materials_diffuse_transmission"] = {
-            "diffuseTransmissionFactor": float(translucency),
-            "diffuseTransmissionColorFactor": [float(c) for c in material.subsurface_color],
-        }
+        ext["KHR_materials_diffuse_transmission"] = diffuse
         ext["KHR_materials_volume"] = volume
     if material.ior != 1.5:
         ext["KHR_materials_ior"] = {"ior": material.ior}

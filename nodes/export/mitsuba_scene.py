@@ -4,10 +4,11 @@ The path tracer does the lighting, so surfaces get their materials, not the bake
 
 - translucent materials (``subsurface`` > 0: rice, the ikura yolk, shaved ice) are Mitsuba's ``principledthin`` with
   diffuse transmission ``subsurface × cdrf.translucency(σ)`` per vertex (shaved ice: ``subsurface`` on every vertex,
-  a thin diffuser), σ = σ₀|κ| the CDRF kernel width the shade node stored: the CDRF (eq. 7–9) evaluated in the BSDF
+  a thin diffuser, as principledthin's ``diff_trans`` = 2 × ``subsurface``: it passes on half its ``diff_trans``),
+  σ = σ₀|κ| the CDRF kernel width the shade node stored: the CDRF (eq. 7–9) evaluated in the BSDF
   as light passing through the grain, so strongly curved, wet parts glow past the terminator; sheen for the water
   film, and its clearcoat as a share of the surface rendered by ``principled`` (``coat_share``; principledthin has
-  no coat lobe);
+  no coat lobe; shaved ice has no such share: its coat is the key's glints alone);
 - transmissive materials (``transmission`` ≥ 0.5: the ikura membrane) are (rough) dielectrics
   whose transmittance per crossing is √``subsurface_color`` (two crossings give that colour): the yolk
   shows through the orange egg;
@@ -167,6 +168,8 @@ def alpha(roughness: float) -> float:
 
 def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
     """Mitsuba BSDF for a principled parameter set (see the module note for the three families)."""
+    from ..shading.materials import is_ice
+
     if material.transmission >= TRANSMISSIVE:
         tint = crossing_tint(material) * material.transmission
         a = alpha(material.transmission_roughness)
@@ -180,6 +183,8 @@ def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
             if translucent_vertices
             else float(min(1.0, material.subsurface / (1.0 - coat_share(material))))
         )
+        if is_ice(material):  # principledthin passes on diff_trans / 2 of its diffuse light: the share is subsurface
+            diff_trans = float(min(2.0, 2.0 * material.subsurface))
         thin = {
             "type": "principledthin",
             "base_color": _rgb(material.base_color),
@@ -190,7 +195,9 @@ def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
             "sheen": float(material.sheen),
             "sheen_tint": float(material.sheen_tint),
         }
-        if material.clearcoat <= 0:
+        # shaved ice: no opaque coated share (it lit every soaked flake's rim and hid its translucency); its wet
+        # coat is the thin surface's own gloss and the key's glints (``gloss``)
+        if material.clearcoat <= 0 or is_ice(material):
             return thin
         # principledthin has no clearcoat lobe: a share (``coat_share``) of the surface is principled with the
         # coat; the thin share's transmission is raised to keep the whole surface's (``_shapes``).

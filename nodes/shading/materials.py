@@ -3,8 +3,8 @@
 Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice is interpolated by water content
 (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a water film: clearcoat). Ikura has two
 parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white, matte thin diffuser (a tuft of fine shavings)
-and carries syrup graded by its depth below the mound's top surface; chestnut (kuri gohan) is a yellow, matte,
-slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh, 1 fat.
+and carries syrup graded by its depth below the mound's top surface, deeper along runs down the flanks; chestnut
+(kuri gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh, 1 fat.
 """
 
 from __future__ import annotations
@@ -139,35 +139,39 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
     (a kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from its countless interfaces as
     snow is, not a clear crystal. So it is a thin diffuser, not a medium: a matte, near-Lambertian surface of high
     albedo (``base_color``; ice absorbs nothing over millimetres) that passes ``subsurface`` of the diffuse light
-    through (half: a tuft a few shavings thick), on every part of the flake alike (no CDRF per vertex), with no
+    through (a quarter: a tuft a few shavings thick), on every part of the flake alike (no CDRF per vertex), with no
     glassy facet or glint (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air). Light walks from
     flake to flake through the heap and comes back out white; as a dense medium behind a dielectric skin each
     flake let part of the light through unscattered and the heap read as grey glass (docs/look.md, "Kakigori").
-    Syrup fills the pores: the soaked tuft is its ice coloured by the syrup's absorption (``_absorb`` at half the
-    syrup's strength: ice dyed, not syrup alone), more translucent (most diffuse light passes, and part goes
-    straight through: index-matched ice and syrup are clear) and wet (a glossy coat)."""
+    Syrup fills the pores: the soaked tuft scatters less and passes most light on (90 % of its diffuse light, 30 %
+    straight through: index-matched ice and syrup are clear), and its colour is the syrup's absorption, not a
+    pigment: red passes (a red dye absorbs green and blue only), so each crossing keeps the red at the ice's albedo
+    and takes the green and blue at the syrup's hue (``syrup_color`` over its red); light that walks through a few
+    soaked flakes comes out a deep, bright red. It is wet: glossy (roughness 0.15, index 1.33) under a clear coat
+    (the key's glints; ``mitsuba_scene.gloss``)."""
     ice = Material(
         name=ICE,
         base_color=(0.96, 0.965, 0.97),
-        subsurface=0.5,
+        subsurface=0.25,
         subsurface_radius=(0.2, 0.2, 0.2),
         subsurface_color=(0.96, 0.965, 0.97),
         roughness=1.0,
         specular=0.2,
         ior=1.1,
     )
-    soaked = _absorb(ice.base_color, syrup_color, 0.5)
+    hue = np.asarray(syrup_color, np.float64) / max(float(np.max(syrup_color)), 1e-6)
+    soaked = tuple(float(c) for c in np.asarray(ice.base_color) * hue)
     syrup = Material(
         name="ice_syrup",
         base_color=soaked,
-        subsurface=0.95,
+        subsurface=0.9,
         subsurface_radius=(0.6, 0.6, 0.6),
         subsurface_color=soaked,
-        roughness=0.3,
+        roughness=0.15,
         clearcoat=0.7,
         clearcoat_roughness=0.08,
-        ior=1.3,
-        transmission=0.45,
+        ior=1.33,
+        transmission=0.3,
         transmission_roughness=0.2,
     )
     return ice, syrup
@@ -322,11 +326,33 @@ def soak_depths(vertices: list[np.ndarray], cell: float, spread: float) -> np.nd
     return np.maximum(envelope[own[:, 0], own[:, 1]] - tops[:, 2], 0.0)
 
 
-def syrup_levels(depths: np.ndarray, soak_depth: float, levels: int) -> np.ndarray:
+def syrup_runs(tops: np.ndarray, soak_depth: float, runs: int, length: float, width: float, rng) -> np.ndarray:
+    """How deep the syrup soaks at each element (mm): ``soak_depth``, and where one of ``runs`` streaks runs down
+    the flank, up to ``length`` more. Syrup poured on a mound does not sink as an even band: it runs down in
+    streaks and drips. A run has a random azimuth about the mound's axis (the elements' mean x, y; one run in each
+    of ``runs`` equal sectors, so every side of the mound has its share whatever the seed), a length up to
+    ``length`` (0.4–1 of it) and a width along the flank of 0.5–1.5 ``width``; its extra depth falls off with
+    the arc from its centre line (Gaussian), so it tapers to a rounded tip. ``tops``: each element's highest
+    vertex; ``rng`` draws the runs (the recipe's seed)."""
+    limit = np.full(len(tops), float(soak_depth))
+    if runs <= 0 or length <= 0 or not len(tops):
+        return limit
+    azimuth = 2.0 * np.pi * (np.arange(runs) + rng.uniform(0.0, 1.0, runs)) / runs  # one in each sector: all round
+    extra = length * rng.uniform(0.4, 1.0, runs)
+    half = width * rng.uniform(0.5, 1.5, runs)
+    rel = tops[:, :2] - tops[:, :2].mean(axis=0)
+    theta = np.arctan2(rel[:, 1], rel[:, 0])
+    turn = np.angle(np.exp(1j * (theta[:, None] - azimuth[None, :])))  # wrapped to (−π, π]
+    arc = np.hypot(rel[:, 0], rel[:, 1])[:, None] * np.abs(turn)
+    return limit + (extra * np.exp(-((arc / half) ** 2))).max(axis=1)
+
+
+def syrup_levels(depths: np.ndarray, soak_depth, levels: int) -> np.ndarray:
     """Syrup grade per element, 0 (plain ice) … ``levels`` (soaked): the concentration falls linearly from 1 at
-    the top surface to 0 at ``soak_depth`` below it (syrup poured on top, drawn down by gravity through the
-    flakes), rounded to the nearest of ``levels`` steps."""
-    if soak_depth <= 0:
-        return np.zeros(len(depths), np.int64)
-    concentration = np.clip(1.0 - np.asarray(depths) / soak_depth, 0.0, 1.0)
+    the top surface to 0 at ``soak_depth`` below it (one depth, or one per element: ``syrup_runs``; syrup poured on
+    top, drawn down by gravity through the flakes), rounded to the nearest of ``levels`` steps."""
+    limit = np.broadcast_to(np.asarray(soak_depth, np.float64), np.shape(depths))
+    concentration = np.zeros(np.shape(depths))
+    wet = limit > 0
+    concentration[wet] = np.clip(1.0 - np.asarray(depths)[wet] / limit[wet], 0.0, 1.0)
     return np.rint(concentration * levels).astype(np.int64)

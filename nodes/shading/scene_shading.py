@@ -33,6 +33,9 @@ class ShadeSettings:
     syrup_depth: float
     syrup_spread: float
     syrup_levels: int
+    syrup_runs: int
+    syrup_run_length: float
+    seed: int  # draws the syrup's runs (``materials.syrup_runs``)
     scenery_color: tuple[float, float, float]
     table: CdrfTable
 
@@ -61,7 +64,8 @@ def _element_pieces(
 ) -> list[_Piece]:
     """The aggregate's element parts with their materials, named ``<kind>/<number>[/<part>]``, numbered per
     kind across the scene's aggregates (``numbers``: the next number of each kind). Ice gets the syrup grade
-    of its depth below the aggregate's top surface (``materials.soak_depths``, ``materials.syrup_levels``)."""
+    of its depth below the aggregate's top surface (``materials.soak_depths``, ``materials.syrup_levels``), deeper
+    where a run of syrup goes down the flank (``materials.syrup_runs``)."""
     p = aggregate.placement
     kinds = [lib.kind for lib in aggregate.libraries]
     presets = [mat.preset_for_kind(kind, settings.presets) for kind in kinds]
@@ -72,7 +76,10 @@ def _element_pieces(
         ice_vertices = [meshes[i].vertices for i in np.flatnonzero(is_ice)]
         cell = float(np.median([np.ptp(v, axis=0).max() for v in ice_vertices]))  # one element length
         depths = mat.soak_depths(ice_vertices, cell, settings.syrup_spread)
-        grade[is_ice] = mat.syrup_levels(depths, settings.syrup_depth, settings.syrup_levels)
+        tops = np.array([v[np.argmax(v[:, 2])] for v in ice_vertices])
+        rng = np.random.default_rng(settings.seed)
+        limits = mat.syrup_runs(tops, settings.syrup_depth, settings.syrup_runs, settings.syrup_run_length, cell, rng)
+        grade[is_ice] = mat.syrup_levels(depths, limits, settings.syrup_levels)
     rice = [k for k in np.unique(p.kinds) if presets[k] == "rice"]
     if settings.rice is None and rice:
         kind = kinds[rice[0]]

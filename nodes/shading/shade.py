@@ -36,7 +36,10 @@ def _check(params):
     # 9: kakigori ice a white tuft of fine shavings (short free path, index 1.1); syrup colour mixed by absorption
     # 10: kakigori ice a matte thin diffuser (white, passes half the diffuse light; no medium, no glint); the soaked
     #     ice lighter (ice dyed by the syrup), more translucent, wet (docs/look.md, "Kakigori")
-    version=10,
+    # 11: syrup runs down the flanks in streaks (syrup_runs, syrup_run_length; drawn from the seed); soaked ice
+    #     bright red from the syrup's absorption, translucent (docs/look.md, "Kakigori")
+    version=11,
+    random=True,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "material": In(
@@ -102,6 +105,20 @@ def _check(params):
         "syrup_levels": Param(
             int, 6, "kakigori: syrup grades between plain ice and soaked (one material each)", range=(1, 64)
         ),
+        "syrup_runs": Param(
+            int,
+            0,
+            "kakigori: streaks of syrup that run further down the flanks than the rest (random azimuths, drawn from "
+            "the recipe's seed); 0: an even band",
+            range=(0, 256),
+        ),
+        "syrup_run_length": Param(
+            float,
+            0.0,
+            "kakigori: how much deeper than syrup_depth the longest run soaks (each run 0.4–1 of it)",
+            range=(0.0, 1e4),
+            units="mm",
+        ),
         "scenery_color": Param(RGB, (0.05, 0.07, 0.16), "glaze colour of scenery meshes (the bowl)", range=(0.0, 1.0)),
         "table_size": Param(
             tuple[int, int],
@@ -128,6 +145,8 @@ def shade(
     syrup_depth,
     syrup_spread,
     syrup_levels,
+    syrup_runs,
+    syrup_run_length,
     scenery_color,
     table_size,
 ):
@@ -151,6 +170,9 @@ def shade(
         syrup_depth=syrup_depth,
         syrup_spread=syrup_spread,
         syrup_levels=syrup_levels,
+        syrup_runs=syrup_runs,
+        syrup_run_length=syrup_run_length,
+        seed=ctx.seed,
         scenery_color=tuple(scenery_color),
         table=CdrfTable.build(*table_size),
     )

@@ -73,9 +73,17 @@ def test_material_mapping():
     ice, syrup = mat.ice_materials((0.75, 0.02, 0.06))
     plain = material_bsdf(ice, False)  # a tuft of shavings in air: a matte thin diffuser, not clear ice
     assert plain["type"] == "principledthin" and plain["eta"] == pytest.approx(1.1) and plain["roughness"] == 1.0
-    soaked = material_bsdf(syrup, False)["bsdf_0"]  # the wet coat is a share of the surface (blendbsdf)
+    soaked = material_bsdf(syrup, False)  # translucent all over: no opaque coated share (issue 26)
+    assert soaked["type"] == "principledthin"
     assert soaked["base_color"]["value"][0] > 2 * soaked["base_color"]["value"][1]  # the syrup dyes the ice red
     assert soaked["diff_trans"] > plain["diff_trans"] and soaked["spec_trans"] > 0  # soaked: translucent
+    # principledthin passes on diff_trans / 2 of its diffuse light: the ice's subsurface is that share
+    assert plain["diff_trans"] == pytest.approx(2 * ice.subsurface) and soaked["diff_trans"] == pytest.approx(1.8)
+    from nodes.export.gltf_writer import material_json
+
+    gltf, _ = material_json(syrup, syrup.subsurface)  # the glTF carries both transmissions, as the preview renders
+    assert gltf["extensions"]["KHR_materials_diffuse_transmission"]["diffuseTransmissionFactor"] == 0.9
+    assert gltf["extensions"]["KHR_materials_transmission"]["transmissionFactor"] == syrup.transmission
     glaze = material_bsdf(mat.ceramic_material((0.05, 0.07, 0.16)), False)
     assert glaze["type"] == "principled" and glaze["clearcoat"] > 0
     wet, dry = mat.rice_material(24.0), mat.rice_material(0.0)
