@@ -4,7 +4,7 @@ Hand-written JSON + one binary buffer because trimesh's exporter (the library at
 materials to core PBR only and drops transmission, volume, IOR, specular, clearcoat, sheen and emissive
 strength. One glTF mesh and node per element part; the root node turns our Z-up millimetres into
 glTF's Y-up metres. The materials carry what the preview renders (``mitsuba_scene``): the ikura membrane,
-ice and syrup as transmission + volume (IOR; the skin's tint per crossing as the base colour), rice as
+ice and syrup as transmission + volume (IOR; the colour light keeps through the element as the base colour), rice as
 diffuse transmission (the CDRF's translucency at the material's median curvature) with sheen and clearcoat,
 the bowl's glaze as clearcoat.
 No ``COLOR_0``: the CDRF vertex colours hold lighting, which a viewer multiplying them into the base colour
@@ -22,7 +22,7 @@ import numpy as np
 
 from ..shading.curvature import row_lengths
 from ..values import Material, ShadedScene
-from .look import PREFIX, exported_base_color, principled_attributes
+from .look import PREFIX, exported_base_color, exported_specular, principled_attributes
 from .mesh_files import rowwise
 
 FLOAT, UINT = 5126, 5125
@@ -43,8 +43,8 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
         "attenuationDistance": max(thickness * 1e-3, 1e-6),  # world units: m
     }
     if material.transmission > 0:
-        # a volume that refracts; its colour is the skin's tint per crossing, carried as the base colour
-        # (``look.crossing_tint``): an absorption on top coloured the light twice (Blender: crimson eggs)
+        # a volume that refracts; its colour is the base colour (``look.exported_base_color``: what light keeps
+        # through the element), no absorption on top: that coloured the light twice (Blender: crimson eggs)
         ext["KHR_materials_transmission"] = {"transmissionFactor": material.transmission}
         ext["KHR_materials_volume"] = {"thicknessFactor": thickness}
     elif translucency > 0:
@@ -55,9 +55,10 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
         ext["KHR_materials_volume"] = volume
     if material.ior != 1.5:
         ext["KHR_materials_ior"] = {"ior": material.ior}
-    if material.specular != 0.5:
+    specular = exported_specular(material)  # 0 where the coat is the only skin (``look.coat_is_skin``)
+    if specular != 0.5:
         # Blender's convention: specular 0.5 is F0 = 0.04, glTF's default; the factor scales F0.
-        ext["KHR_materials_specular"] = {"specularFactor": min(1.0, 2.0 * material.specular)}
+        ext["KHR_materials_specular"] = {"specularFactor": min(1.0, 2.0 * specular)}
     if material.clearcoat > 0:
         ext["KHR_materials_clearcoat"] = {
             "clearcoatFactor": material.clearcoat,

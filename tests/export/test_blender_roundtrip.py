@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from nodes.export import export
-from nodes.export.look import crossing_tint, is_volumetric
+from nodes.export.look import is_volumetric
 
 REPO = Path(__file__).resolve().parents[2]
 SCRIPT = Path(__file__).with_name("blender_roundtrip.py")
@@ -88,7 +88,10 @@ def test_blender_sees_the_whole_look(dish, tmp_path, fmt):
             assert seen["transmission"] == pytest.approx(material.transmission, abs=1e-6)
             assert seen["ior"] == pytest.approx(material.ior, abs=1e-6)
             assert seen["alpha"] == 1.0 and not seen["scatters"]
-            assert seen["base_color"] == pytest.approx(crossing_tint(material), abs=1e-6)  # tinted once a crossing
+            # Cycles tints each crossing by √base colour: in and out keep the colour, as the preview's skin does
+            assert seen["base_color"] == pytest.approx(material.subsurface_color, abs=1e-6)
+            # one reflecting skin: the coat at the membrane's IOR over no specular of its own (pale eggs before)
+            assert seen["specular_level"] == 0.0 and seen["coat_ior"] == pytest.approx(material.ior, abs=1e-6)
         elif material.subsurface > 0:  # scatters light
             assert seen["subsurface"] == pytest.approx(material.subsurface, abs=1e-6)
             assert seen["subsurface_radius"] == pytest.approx(material.subsurface_radius, abs=1e-6)
