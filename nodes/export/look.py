@@ -42,6 +42,8 @@ def principled_attributes(material: Material, translucency: float) -> dict[str, 
     }
     if coat_is_skin(material):
         look["coatIor"] = float(material.ior)
+    if material.exterior_ior != 1.0:  # an element inside another (the yolk in the egg's fluid)
+        look["exteriorIor"] = float(material.exterior_ior)
     if is_volumetric(material):
         sigma_t, albedo = medium_coefficients(material)
         look["mediumSigmaT"] = sigma_t  # mm⁻¹, every channel
