@@ -11,7 +11,11 @@ add-on sets the Principled BSDF from them:
 - the light under the skin the preview renders: where the files carry a medium (``mediumSigmaT``,
   ``mediumAlbedo``: rice grains, ikura yolks, ice flakes) a clear skin of the preview's roughness over a volume
   that scatters and absorbs as the preview's medium (Cycles renders it; set enough volume bounces);
-- transmission and IOR (alpha back to 1); the skin's tint per crossing is the base colour both files carry;
+- transmission and IOR (alpha back to 1; an element inside another, the yolk in the egg's fluid, gets its IOR
+  relative to it, ``exteriorIor``: Cycles has no stack of IORs); the colour light keeps through the element is
+  the base colour both files carry (Cycles tints each crossing by its square root); where the coat is the
+  element's only reflecting skin (``coatIor``: the ikura membrane) the coat at the element's IOR over no specular
+  of its own;
 - otherwise subsurface weight and radius (radius in mm, the files' unit: Subsurface Scale 0.001, Blender's metres after
   both importers' default unit conversion);
 - sheen and specular level where the importer did not map them.
@@ -96,8 +100,8 @@ def apply_look(material) -> bool:
     if not look or bsdf is None:
         return False
     inputs = bsdf.inputs
-    if "ior" in look:
-        inputs["IOR"].default_value = look["ior"]
+    if "ior" in look:  # Cycles has no stack of IORs: an element inside another gets its IOR relative to it
+        inputs["IOR"].default_value = look["ior"] / look.get("exteriorIor", 1.0)
     transmission = look.get("transmission", 0.0)
     if "mediumSigmaT" in look:  # the preview's light under the skin: a clear skin over a scattering medium
         inputs["Transmission Weight"].default_value = 1.0
@@ -108,10 +112,12 @@ def apply_look(material) -> bool:
         inputs["Alpha"].default_value = 1.0
         material.surface_render_method = "DITHERED"
         _set_medium(material, look)
-    elif transmission > 0:  # the skin's tint per crossing is the base colour both files carry
+    elif transmission > 0:  # the colour light keeps through the element is the base colour both files carry
         inputs["Transmission Weight"].default_value = transmission
         inputs["Alpha"].default_value = 1.0  # the USD importer's reading of opacity = 1 − transmission
         material.surface_render_method = "DITHERED"
+        if "coatIor" in look:  # the coat is the only skin that reflects (its own specular is 0, below)
+            inputs["Coat IOR"].default_value = look["coatIor"]
     elif look.get("subsurface", 0.0) > 0:
         inputs["Subsurface Weight"].default_value = look["subsurface"]
         inputs["Subsurface Radius"].default_value = look["subsurfaceRadius"]

@@ -4,7 +4,7 @@ Hand-written JSON + one binary buffer because trimesh's exporter (the library at
 materials to core PBR only and drops transmission, volume, IOR, specular, clearcoat, sheen and emissive
 strength. One glTF mesh and node per element part; the root node turns our Z-up millimetres into
 glTF's Y-up metres. The materials carry what the preview renders (``mitsuba_scene``): the ikura membrane
-as transmission + volume (IOR; the skin's tint per crossing as the base colour), rice as
+as transmission + volume (IOR; the colour light keeps through the element as the base colour), rice as
 diffuse transmission (the CDRF's translucency at the material's median curvature) with sheen and clearcoat,
 shaved ice as diffuse transmission of its ``subsurface`` (syrup-soaked ice part transmission too, and a coat),
 the bowl's glaze as clearcoat.
@@ -23,7 +23,7 @@ import numpy as np
 
 from ..shading.curvature import row_lengths
 from ..values import Material, ShadedScene
-from .look import PREFIX, exported_base_color, principled_attributes
+from .look import PREFIX, exported_base_color, exported_specular, principled_attributes
 from .mesh_files import rowwise
 
 FLOAT, UINT = 5126, 5125
@@ -50,8 +50,8 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
         "diffuseTransmissionColorFactor": [float(c) for c in material.subsurface_color],
     }
     if material.transmission > 0:
-        # a volume that refracts; its colour is the skin's tint per crossing, carried as the base colour
-        # (``look.crossing_tint``): an absorption on top coloured the light twice (Blender: crimson eggs)
+        # a volume that refracts; its colour is the base colour (``look.exported_base_color``: what light keeps
+        # through the element), no absorption on top: that coloured the light twice (Blender: crimson eggs)
         ext["KHR_materials_transmission"] = {"transmissionFactor": material.transmission}
         ext["KHR_materials_volume"] = {"thicknessFactor": thickness}
         if translucency > 0 and is_ice(material):  # syrup-soaked ice passes most of its diffuse light on too
@@ -61,9 +61,10 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
         ext["KHR_materials_volume"] = volume
     if material.ior != 1.5:
         ext["KHR_materials_ior"] = {"ior": material.ior}
-    if material.specular != 0.5:
+    specular = exported_specular(material)  # 0 where the coat is the only skin (``look.coat_is_skin``)
+    if specular != 0.5:
         # Blender's convention: specular 0.5 is F0 = 0.04, glTF's default; the factor scales F0.
-        ext["KHR_materials_specular"] = {"specularFactor": min(1.0, 2.0 * material.specular)}
+        ext["KHR_materials_specular"] = {"specularFactor": min(1.0, 2.0 * specular)}
     if material.clearcoat > 0:
         ext["KHR_materials_clearcoat"] = {
             "clearcoatFactor": material.clearcoat,

@@ -6,11 +6,12 @@ Principled BSDF from either file: on the USD Material prim as ``nodegraph:princi
 material's ``extras`` under the same key. Colours are tuples of linear RGB; the subsurface radius is in mm, the
 unit of the meshes.
 
-A transmissive element's skin tints the light at each crossing (``crossing_tint``), as the preview renders it; both
-files carry that tint as the base colour, which glTF and the principled BSDF apply to transmitted light, and no
-volume absorption on top. An element the preview fills with a scattering medium (rice grains, ikura yolks)
-carries the medium's coefficients (``medium*``), so that a renderer that can build a medium (Cycles, through
-the add-on) renders the same light under the skin.
+A transmissive element's skin tints the light at each crossing (``crossing_tint``), as the preview renders it;
+both files carry the colour of two crossings (``subsurface_color``) as the base colour, of which Blender's
+principled BSDF applies the square root at each crossing, and no volume absorption on top. An element the preview
+fills with a scattering medium (rice grains, ikura yolks) carries the medium's coefficients
+(``medium*``), so that a renderer that can build a medium (Cycles, through the add-on) renders the same light under
+the skin.
 """
 
 from __future__ import annotations
@@ -37,14 +38,33 @@ def principled_attributes(material: Material, translucency: float) -> dict[str, 
         "diffuseTransmission": float(translucency),
         "sheen": float(material.sheen),
         "sheenTint": float(material.sheen_tint),
-        "specular": float(material.specular),
+        "specular": exported_specular(material),
     }
+    if coat_is_skin(material):
+        look["coatIor"] = float(material.ior)
+    if material.exterior_ior != 1.0:  # an element inside another (the yolk in the egg's fluid)
+        look["exteriorIor"] = float(material.exterior_ior)
     if is_volumetric(material):
         sigma_t, albedo = medium_coefficients(material)
         look["mediumSigmaT"] = sigma_t  # mm⁻¹, every channel
         look["mediumAlbedo"] = tuple(float(c) for c in albedo)
         look["boundaryRoughness"] = boundary_roughness(material)
     return look
+
+
+def coat_is_skin(material: Material) -> bool:
+    """Whether ``material``'s clear coat is the only surface that reflects: a coated transmissive element with no
+    medium inside (the ikura membrane). The preview renders one skin there: a dielectric at the material's IOR,
+    whose sharp gloss is its clear coat (the glints' pass). A principled BSDF with both a coat (glTF: IOR 1.5) and
+    its own specular reflects twice: in Blender the eggs came out pale orange under a whitish sheen. Both files
+    give it no specular of its own (``exported_specular``) and the coat at the material's IOR (``coatIor``)."""
+    return material.transmission >= TRANSMISSIVE and material.clearcoat > 0 and not is_volumetric(material)
+
+
+def exported_specular(material: Material) -> float:
+    """Blender's specular IOR level (0.5: Fresnel at the IOR, 0: no reflection) both files give ``material``: 0
+    where its coat is its skin (``coat_is_skin``), else its own."""
+    return 0.0 if coat_is_skin(material) else float(material.specular)
 
 
 def crossing_tint(material: Material) -> np.ndarray:
@@ -54,9 +74,11 @@ def crossing_tint(material: Material) -> np.ndarray:
 
 
 def exported_base_color(material: Material) -> tuple[float, float, float]:
-    """The base colour both files carry: a transmissive material's ``crossing_tint`` (glTF and the principled BSDF
-    tint transmitted light by the base colour at each crossing), else its base colour."""
-    color = crossing_tint(material) if material.transmission >= TRANSMISSIVE else material.base_color
+    """The base colour both files carry: a transmissive material's ``subsurface_color``, the colour light keeps
+    through the whole element (in and out), else its base colour. Blender's principled BSDF tints each crossing by
+    √base colour (Cycles: ``transmission_tint = sqrt(base_color)``), so two crossings keep the base colour, as
+    the preview's two ``crossing_tint`` do; glTF's transmission tints the transmitted light by it once."""
+    color = material.subsurface_color if material.transmission >= TRANSMISSIVE else material.base_color
     return tuple(float(c) for c in color)
 
 

@@ -463,6 +463,30 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
     }
 
 
+def guide_albedo(material: Material) -> tuple[float, float, float]:
+    """The colour the denoiser's albedo guide gives a surface: what it looks like in white light. A transmissive
+    or volumetric element's own albedo AOV is its skin's Fresnel reflection, ≈ 0.03 grey for eggs and rice alike,
+    so OIDN could not tell a red egg from the white rice beside it and spread the eggs' red over the rice between
+    them (docs/look.md, "Side by side with Blender"); it gets the colour light keeps through it (eggs) or scatters
+    back out of it (rice, yolks, ice), as OIDN asks of dielectrics, and the rest their base colour."""
+    if material.transmission >= TRANSMISSIVE or is_volumetric(material):
+        return tuple(float(c) for c in material.subsurface_color)
+    return tuple(float(c) for c in material.base_color)
+
+
+def guides_dict(scene: ShadedScene, description: dict) -> dict:
+    """The denoiser's guides' scene of a scene description (``scene_dict``): the same shapes (PLY files), camera and
+    backdrop, every element a matte of its ``guide_albedo`` with no medium (Mitsuba's ``aov`` integrator renders
+    its albedo and shading normals)."""
+    shapes = {}
+    for key, shape in description.items():
+        if key.startswith("shape_"):
+            albedo = guide_albedo(scene.materials[int(key.removeprefix("shape_"))])
+            bsdf = {"type": "diffuse", "reflectance": _rgb(albedo)}
+            shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
+    return {"type": "scene", "sensor": description["sensor"], "backdrop": description["backdrop"], **shapes}
+
+
 def scene_dict(
     scene: ShadedScene,
     folder: Path,
@@ -671,7 +695,8 @@ def render_layers(
         loaded = mi.load_dict(description, optimize=False)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV})
-        aov = np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=min(spp, GUIDE_SPP)), np.float32)
+        matte = mi.load_dict(guides_dict(scene, description), optimize=False)
+        aov = np.asarray(mi.render(matte, integrator=guides, seed=seed, spp=min(spp, GUIDE_SPP)), np.float32)
         window = glints_window(set_up, camera, width, height, glints_core(description), crop)
         part = np.asarray(
             mi.render(mi.load_dict(highlight_dict(scene, description, window), optimize=False), seed=seed), np.float32

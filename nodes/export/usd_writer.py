@@ -30,7 +30,7 @@ import numpy as np
 
 from ..values import Material, ShadedScene
 from .gltf_writer import SHEEN_ROUGHNESS
-from .look import PREFIX, crossing_tint, exported_base_color, principled_attributes
+from .look import PREFIX, coat_is_skin, crossing_tint, exported_base_color, exported_specular, principled_attributes
 
 
 def prim_names(texts, fallback: str) -> list[str]:
@@ -70,7 +70,7 @@ def standard_surface_inputs(material: Material) -> dict[str, float | tuple[float
         "base": 1.0,
         "base_color": rgb(material.base_color),
         "metalness": float(material.metallic),
-        "specular": float(min(1.0, 2.0 * material.specular)),
+        "specular": float(min(1.0, 2.0 * exported_specular(material))),
         "specular_roughness": float(material.roughness),
         "specular_IOR": float(material.ior),
         "specular_anisotropy": float(material.anisotropic),
@@ -88,6 +88,7 @@ def standard_surface_inputs(material: Material) -> dict[str, float | tuple[float
         "sheen_roughness": SHEEN_ROUGHNESS,
         "coat": float(material.clearcoat),
         "coat_roughness": float(material.clearcoat_roughness),
+        "coat_IOR": float(material.ior if coat_is_skin(material) else 1.5),
         "emission": float(material.emission_strength if max(material.emission) > 0 else 0.0),
         "emission_color": rgb(material.emission),
     }

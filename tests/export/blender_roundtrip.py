@@ -57,6 +57,8 @@ def material_report(material) -> dict:
         "volume": output.inputs["Volume"].is_linked,
         "base_color": list(value("Base Color"))[:3],
         "scatters": any(n.type == "VOLUME_SCATTER" for n in material.node_tree.nodes),
+        "specular_level": value("Specular IOR Level"),
+        "coat_ior": value("Coat IOR"),
     }
 
 

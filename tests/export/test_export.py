@@ -51,9 +51,13 @@ def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
     assert membrane["KHR_materials_transmission"]["transmissionFactor"] == 1.0  # the yolk shows through
     egg = next(m for m in doc["materials"] if m["name"] == "ikura_membrane")
     red, green, blue, _ = egg["pbrMetallicRoughness"]["baseColorFactor"]
-    assert red > green > blue  # an orange egg, tinted at each crossing of its skin as the preview renders it
+    assert red > green > blue  # an orange-red egg
     membrane_material = next(m for m in shaded.materials if m.name == "ikura_membrane")
-    assert np.square([red, green, blue]) == pytest.approx(membrane_material.subsurface_color)  # in and out
+    # what light keeps in and out, of which Cycles applies √ at each crossing, as the preview's skin does
+    assert [red, green, blue] == pytest.approx(membrane_material.subsurface_color)
+    # one reflecting skin, as the preview's: the coat, with no specular of the transmissive base under it
+    assert membrane["KHR_materials_specular"]["specularFactor"] == 0.0 and "KHR_materials_clearcoat" in membrane
+    assert egg["extras"]["nodegraph:principled:coatIor"] == pytest.approx(1.36)
     assert "attenuationDistance" not in membrane["KHR_materials_volume"]  # no second colouring on the way
     assert doc["materials"][0]["extras"]["nodegraph:principled:subsurface"] > 0  # the whole look, for Blender
     rice = materials["rice"]
@@ -179,6 +183,7 @@ def test_materialx_standard_surface_beside_the_preview_surface(shaded):
     red, green, blue = membrane.GetInput("transmission_color").Get()
     assert red > green > blue  # an orange egg, tinted at each crossing as the glTF's base colour says
     assert membrane.GetInput("transmission_depth").Get() == 0.0
+    assert membrane.GetInput("specular").Get() == 0.0 and membrane.GetInput("coat_IOR").Get() == pytest.approx(1.36)
     assert UsdShade.Shader(stage.GetPrimAtPath("/Scene/Looks/rice/StandardSurface")).GetInput("subsurface").Get() > 0
     _matches_node_definition(shader)
 
