@@ -67,7 +67,7 @@ def predict(x, v, x_prev, awake, w, r, x_built, moved, accel, h, clamp):
 
 
 @njit(cache=True, inline="always")
-def _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, gain, x_built, moved, track, i):
+def _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, gain, x_built, moved, i):
     predicted = np.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])  # ``predict``'s v
     a = 0.0  # |x − x_prev|², the motion of the solve
     b = 0.0  # |x − x_begin|², the motion over the whole substep, pre-stabilisation included
@@ -78,7 +78,7 @@ def _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, gain, x_bu
     for k in range(3):
         v[i, k] = (x[i, k] - ref[i, k]) / h * damping_factor
     _clamp(v, i, min(clamp * r[i] / h, max(predicted, gain)))
-    if track:
+    if x_built.shape[0] == x.shape[0]:  # Verlet-list tracking on
         _moved(x, x_built, i, moved)
 
 
@@ -99,7 +99,7 @@ def update_velocity(x, v, x_prev, x_begin, r, x_built, moved, h, clamp, damping_
     n = x.shape[0]
     track = x_built.shape[0] == n
     for i in prange(n):
-        _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, gain, x_built, moved, track, i)
+        _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, gain, x_built, moved, i)
     return np.sqrt(moved.max()) if track and n > 0 else 0.0
 
 
