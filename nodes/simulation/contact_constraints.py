@@ -19,12 +19,10 @@ few dozen particles high sink into each other; with it each layer rests on the o
 few sweeps. The split uses the height difference of the pair only, w_i / (w_i + w_j·e^{k(z_j − z_i)}),
 so no exponent overflows however tall the pile. Rest positions do not depend on masses.
 Overlap left over at the start of a substep is removed mostly by pre-stabilisation (moves that add
-no velocity, Macklin et al. 2014 §4.2); within the substep each pair may keep that overlap less a
-``decay`` share of the smaller radius (``allowance``). Deep initial overlaps therefore separate
-without a burst of kinetic energy (at most decay·r/h of separation speed; the solver passes
-decay = rate·h, a fixed speed), while old overlaps still shrink every substep: an allowance that
-never decays ratchets, since each impact adds overlap that is then tolerated for good, and falling
-columns ended with coincident particles.
+no velocity, Macklin et al. 2014 §4.2); within the substep each pair may keep what that sweep left
+(``allowance``, less a ``decay`` share of the smaller radius: the solver passes 0, since a decay left the
+tolerated overlaps of long grains in place, docs/look.md). What bounds the separation speed instead is
+``SolverSettings.depenetration_speed`` in ``integrate.update_velocity``.
 """
 
 from collections import namedtuple

@@ -55,10 +55,6 @@ class SolverSettings:
     yolk_accel: float = 0.0  # mm/s², upward buoyant acceleration of the yolk
     yolk_drag: float = 40.0  # 1/s
     rotation_iterations: int = 8
-    # tolerated old overlap shrinks by this many radii per second (0.05 r per substep at 10 × 1/60 s);
-    # a rate, not a share per substep, so the separation speed it allows (≤ rate·r) does not grow
-    # with the substep count (a per-substep share gave 64-substep runs 6× the speed, and energy)
-    overlap_decay_rate: float = 30.0
     shock_propagation: float = 1.0  # mass ratio of a contact particle to one a diameter above it (1 = off)
     # mm/s: the solve leaves a particle no faster than max(its predicted speed, this) (``integrate.update_velocity``)
     depenetration_speed: float = np.inf

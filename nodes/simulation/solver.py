@@ -116,7 +116,6 @@ class Coefficients:
     # an awake particle that moves more than this in a substep wakes the sleepers it touches: the
     # sleep threshold plus the step gravity adds to one resting on them
     wake_step: float
-    decay: float  # share of the smaller radius the tolerated overlap loses per substep
     alpha: float  # XPBD α̃ = compliance / h² of shape matching, bending, adhesion
     bend_alpha: float
     adhesion_alpha: float
@@ -150,7 +149,6 @@ class Coefficients:
             lift=lift,
             upright=gravity,
             wake_step=h * s.sleep_speed + (s.gravity if gravity else 0.0) * h**2,
-            decay=s.overlap_decay_rate * h,
             alpha=s.compliance / (h * h) if model.moments is not None else 0.0,
             bend_alpha=s.bend_compliance / (h * h),
             adhesion_alpha=s.adhesion_compliance / (h * h),
@@ -449,9 +447,9 @@ class XpbdSolver:
     def _prestabilise(self, st: State) -> None:
         """Resolve the overlaps left at the start of the substep before predicting (Macklin et al.
         2014 §4.2 pre-stabilisation): moved before x_prev is taken, they add no velocity. Each overlap is resolved
-        in full; what the sweep leaves is tolerated by the substep's solve (``allowance``). ``Coefficients.decay``
-        (giving up at most decay·min(r) of an old overlap per substep) is not applied: on the reduced indica bowl it
-        left the tolerated overlaps in place (skin after the contact step 0.211 instead of 0.180; docs/look.md).
+        in full; what the sweep leaves is tolerated by the substep's solve (``allowance``, decay 0). A decay (giving up
+        at most decay·min(r) of an old overlap per substep) left the tolerated overlaps in place on the reduced indica
+        bowl (skin after the contact step 0.211 instead of 0.180; docs/look.md).
         Shape matching then pulls a cluster back part of the way, and the solve turns that into speed, h times more
         at more substeps; ``SolverSettings.depenetration_speed`` bounds it (``integrate.update_velocity``)."""
         d, m, pairs = self.dispatch, self.model, self.pairs
