@@ -86,6 +86,7 @@ class XpbdParams:
     particles_per_element: int
     slender: bool
     rigid_start: bool
+    contact_offset: float  # median particle radii
     mass: float  # mg
     stiffness: float  # N/m
     linear_deformation: float

@@ -172,6 +172,8 @@ def build_simulation(
         local_centre.append(c0)
         yolk_local.append(cl.yolk_centre if cl.yolk_centre is not None else np.full(3, np.nan))
     x, r, w, q = (np.concatenate(a) for a in (xs, rs, ws, qs))
+    radius = float(np.median(r))  # the unit of the capture radius and of the contact offset
+    r = r + params.contact_offset * radius
     start = np.concatenate([[0], np.cumsum(sizes)])
     water = {} if material is None else {"water_content": material.water_content}
     # a cluster of m× the particles gives way to its contacts more slowly per substep (shape matching shares each
@@ -180,7 +182,7 @@ def build_simulation(
     # a reduced bowl at up to 1,226 mm/s; docs/look.md)
     speed = params.depenetration_speed or (SLENDER_DEPENETRATION if slender > 1 else 0.0)
     stepped = dataclasses.replace(params, substeps=params.substeps * slender**3, depenetration_speed=speed)
-    settings = solver_settings(stepped, effects, float(np.median(r)), **water)
+    settings = solver_settings(stepped, effects, radius, **water)
     sdf = None
     if "collider" in effects:
         shapes = colliders + moulds
