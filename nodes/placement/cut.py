@@ -8,7 +8,7 @@ A cut can leave pieces resting on nothing: a plane through the bunny's head remo
 ears to it, and the ears hung in the air (issue 26). The kept elements and their contacts form a graph (two
 elements touch when a vertex of one lies within ``gap`` of a vertex of the other, so their surfaces are closer
 than that; ``gap`` should be about an edge of the meshes or more, or touching meshes can be missed: the bunny's
-grain meshes have edges of 0.44 mm, the draft's 0.67, and ``gap`` 0.1 grain lengths is 0.76 mm); a piece of it
+grain meshes have edges of 0.44 mm, the draft's 0.67, and ``gap`` 0.1 grain lengths is 0.75 mm); a piece of it
 holding no element on the floor (within ``gap`` of the lowest kept point, where a preview's backdrop lies) floats.
 ``islands`` says what becomes of such a piece: ``bridge`` keeps the fewest removed elements that join it back to
 the supported ones (a shortest path through the contact graph whose cost is the removed elements it passes),
