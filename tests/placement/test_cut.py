@@ -119,6 +119,29 @@ def test_a_cut_leaves_no_piece_floating(bunny_head):
     assert pieces(floating.placement.positions, 4.4) == [30, 3]  # the head's half and the ear's, 8 mm apart
 
 
+@pytest.mark.parametrize("spread", [10.0, 1e4])  # 1e4: the grid's cells grow far past the reach
+def test_contact_graph_is_every_pair_of_elements_with_vertices_within_reach(spread):
+    from scipy.spatial.distance import cdist
+
+    from nodes.placement.cut import contact_graph
+
+    rng = np.random.default_rng(3)
+    sizes = rng.integers(1, 40, size=30)
+    centres = rng.uniform(-spread, spread, (30, 3)) * (np.arange(30) % 2)[:, None]  # half of them near 0
+    points = np.concatenate([c + rng.normal(0.0, 1.5, (k, 3)) for c, k in zip(centres, sizes)])
+    owner = np.repeat(np.arange(30), sizes)
+    graph = contact_graph(points, owner, 30, 0.7).toarray()
+    start = np.r_[0, np.cumsum(sizes)]
+    near = np.array(
+        [
+            [cdist(points[a:b], points[c:d]).min() <= 0.7 for c, d in zip(start, start[1:])]
+            for a, b in zip(start, start[1:])
+        ]
+    )
+    np.fill_diagonal(near, False)
+    assert near.sum() > 20 and np.array_equal(graph > 0, near) and set(np.unique(graph)) <= {0.0, 1.0}
+
+
 def test_sphere_cut_and_bad_cuts(ball):
     centre = 0.5 * (ball.placement.positions.min(axis=0) + ball.placement.positions.max(axis=0))
     hollow = cut.call(aggregate=ball, kind="sphere", center=(0.0, -8.0, 0.0), radius=8.0)
