@@ -76,6 +76,72 @@ def test_plane_cut_keeps_the_far_half_and_shows_the_inside(ball):
     assert opened.max() > RADIUS / 2 and np.mean(opened > 2 * SPACING + 2.2) > 0.2  # cut: the filled inside
 
 
+def pieces(positions: np.ndarray, reach: float) -> list[int]:
+    """Sizes of the connected pieces of elements whose centres lie closer than ``reach``, largest first."""
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial.distance import cdist
+
+    _, label = connected_components(cdist(positions, positions) < reach, directed=False)
+    return sorted(np.bincount(label).tolist(), reverse=True)
+
+
+@pytest.fixture(scope="module")
+def bunny_head():
+    """Spheres (radius 2.2 mm, 4 mm apart: neighbours overlap 0.4 mm) in a block resting on the floor (the
+    head), and an ear of six above it, 8 mm higher, joined to the block only by the column x = 0, y = −2 (a neck
+    grain at z = 12 and the ear's and block's grains beside it): all in front of the default cut's plane (the
+    centre plane y = 0, the −y side removed). Cut, the ear hangs in the air unless three removed grains stay."""
+    block = [(x, y, z) for x in (-8, -4, 0, 4, 8) for y in (-6, -2, 2, 6) for z in (0, 4, 8)]
+    ear = [(0, y, z) for y in (-2, 2) for z in (16, 20, 24)]
+    centres = np.array(block + ear + [(0, -2, 12)], float)
+    element = Mesh.from_trimesh(trimesh.creation.icosphere(subdivisions=2, radius=2.2), name="grain")
+    n = len(centres)
+    return Aggregate(
+        Placement(centres, np.tile([0, 0, 1.0], (n, 1)), kind_names=("japonica",)),
+        (ElementLibrary("japonica", (element,)),),
+    )
+
+
+def test_a_cut_leaves_no_piece_floating(bunny_head):
+    """Issue 26: the default cut keeps the three removed grains that join the ear to the head (the fewest),
+    ``drop`` removes the ear, ``keep`` leaves it floating above the head as version 1 did."""
+    whole = bunny_head.placement.positions
+    front = whole[:, 1] < 0
+    bridged = cut.call(aggregate=bunny_head)  # the default: islands bridge
+    assert pieces(bridged.placement.positions, 4.4) == [len(bridged.placement)]  # one piece (spheres overlap)
+    added = {tuple(p) for p in bridged.placement.positions[bridged.placement.positions[:, 1] < 0]}
+    assert added == {(0.0, -2.0, 8.0), (0.0, -2.0, 12.0), (0.0, -2.0, 16.0)}
+    assert len(bridged.placement) == (~front).sum() + 3
+    dropped = cut.call(aggregate=bunny_head, islands="drop")
+    assert np.array_equal(dropped.placement.positions, whole[~front & (whole[:, 2] < 12)])  # the block's half
+    floating = cut.call(aggregate=bunny_head, islands="keep")
+    assert np.array_equal(floating.placement.positions, whole[~front])
+    assert pieces(floating.placement.positions, 4.4) == [30, 3]  # the head's half and the ear's, 8 mm apart
+
+
+@pytest.mark.parametrize("spread", [10.0, 1e4])  # 1e4: the grid's cells grow far past the reach
+def test_contact_graph_is_every_pair_of_elements_with_vertices_within_reach(spread):
+    from scipy.spatial.distance import cdist
+
+    from nodes.placement.cut import contact_graph
+
+    rng = np.random.default_rng(3)
+    sizes = rng.integers(1, 40, size=30)
+    centres = rng.uniform(-spread, spread, (30, 3)) * (np.arange(30) % 2)[:, None]  # half of them near 0
+    points = np.concatenate([c + rng.normal(0.0, 1.5, (k, 3)) for c, k in zip(centres, sizes)])
+    owner = np.repeat(np.arange(30), sizes)
+    graph = contact_graph(points, owner, 30, 0.7).toarray()
+    start = np.r_[0, np.cumsum(sizes)]
+    near = np.array(
+        [
+            [cdist(points[a:b], points[c:d]).min() <= 0.7 for c, d in zip(start, start[1:])]
+            for a, b in zip(start, start[1:])
+        ]
+    )
+    np.fill_diagonal(near, False)
+    assert near.sum() > 20 and np.array_equal(graph > 0, near) and set(np.unique(graph)) <= {0.0, 1.0}
+
+
 def test_sphere_cut_and_bad_cuts(ball):
     centre = 0.5 * (ball.placement.positions.min(axis=0) + ball.placement.positions.max(axis=0))
     hollow = cut.call(aggregate=ball, kind="sphere", center=(0.0, -8.0, 0.0), radius=8.0)
@@ -104,8 +170,13 @@ def test_rice_bunny_recipe_has_the_cut_view():
 
 
 def test_rice_bunny_cut_preview_at_a_small_size(tmp_path):
-    """The recipe end to end at a small size: the cut view keeps fewer grains than the pressed bunny, all on
-    the far side of its plane, and writes cut_preview.png beside the whole bunny's preview."""
+    """The recipe end to end at a small size: the cut view keeps the pressed bunny's grains on the far side of its
+    plane, plus the one in front that joins a piece of two grains (10.8 mm above the floor; version 1 left it
+    floating, issue 26) back to the rest, so the kept grains form one piece; and it writes cut_preview.png beside
+    the whole bunny's preview."""
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial.distance import cdist
+
     from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
 
     tiny = [f"{node}.{p}={v}" for node in ("preview", "cut_preview") for p, v in (("width", 48), ("height", 36))]
@@ -115,10 +186,17 @@ def test_rice_bunny_cut_preview_at_a_small_size(tmp_path):
         recipe,
         cache=Cache(tmp_path / "cache"),
         out_dir=tmp_path / "out",
-        outputs=["press.aggregate", "cut.aggregate", "preview.image", "cut_preview.image"],
+        outputs=["contact.aggregate", "cut.aggregate", "preview.image", "cut_preview.image"],
     )
-    pressed, opened = result.output("press.aggregate").placement, result.output("cut.aggregate").placement
+    pressed, opened = result.output("contact.aggregate").placement, result.output("cut.aggregate").placement
     assert 0 < len(opened) < len(pressed) and len(pressed) > 20
     middle = 0.5 * (pressed.positions.min(axis=0) + pressed.positions.max(axis=0))
-    assert (opened.positions[:, 1] >= middle[1]).all()
+    far = pressed.positions[pressed.positions[:, 1] >= middle[1]]
+    assert {tuple(p) for p in far} < {tuple(p) for p in opened.positions} and len(opened) <= len(far) + 2
+    # one piece: grains touch when vertices of their meshes come within 0.1 grain lengths (the cut's gap)
+    aggregate = result.output("cut.aggregate")
+    meshes = [aggregate.element_mesh(i).vertices for i in range(len(opened))]
+    reach = 0.1 * np.median([np.ptp(m.vertices, axis=0).max() for m in aggregate.libraries[0].meshes])
+    touch = np.array([[cdist(a, b).min() < reach for b in meshes] for a in meshes])
+    assert connected_components(touch, directed=False)[0] == 1
     assert {"preview.png", "cut_preview.png"} <= {p.name for p in result.files}
