@@ -275,15 +275,20 @@ NORI = "nori"  # a scenery mesh of this name (the ``nori`` node's band) gets ``n
 
 
 def nori_material() -> Material:
-    """Nori (dried, toasted laver sheet): near-black dark green, a faint sheen from its fibres and a slightly glossy
-    face. Linear (0.010, 0.018, 0.008) = sRGB (25, 36, 23); no measured values at hand, chosen to read as nori."""
+    """Nori (dried, toasted laver sheet): near-black dark green with a satin face — a moderately rough specular lobe
+    (roughness 0.35, F0 0.04) that shows the sheet's ribs and the rice under it — and a faint sheen from its fibres.
+    Base linear (0.022, 0.033, 0.020) = sRGB (41, 51, 39), L* 20. Chosen, not measured: the one published figure
+    at hand, L* 29.1, a* 1.6, b* 2.1 for a test sheet of Vietnamese Porphyra (Tạp chí Công Thương, "nori from
+    Porphyra harvested in Khánh Hòa"), is a colorimeter's, specular included (a black surface's 4 % alone reads
+    L* 24), and commercial yaki-nori is greener; the old linear (0.010, 0.018, 0.008), L* 13, read as a black
+    rectangle with no shading (issue 26)."""
     return Material(
         name=NORI,
-        base_color=(0.010, 0.018, 0.008),
-        roughness=0.45,
+        base_color=(0.022, 0.033, 0.020),
+        roughness=0.42,
         sheen=0.6,
         sheen_tint=0.5,
-        clearcoat=0.25,
+        clearcoat=0.15,
         clearcoat_roughness=0.3,
         ior=1.5,
     )

@@ -38,7 +38,8 @@ def _check(params):
     #     ice lighter (ice dyed by the syrup), more translucent, wet (docs/look.md, "Kakigori")
     # 11: syrup runs down the flanks in streaks (syrup_runs, syrup_run_length; drawn from the seed); soaked ice
     #     bright red from the syrup's absorption, translucent (docs/look.md, "Kakigori")
-    version=11,
+    # 12: nori lighter and satin (base linear (0.022, 0.033, 0.020), roughness 0.35; issue 26, docs/look.md)
+    version=12,
     random=True,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),

@@ -12,7 +12,8 @@ from nodes.values import Aggregate
 
 @node(
     "nori",
-    version=2,
+    # 3: ribs (the mat's fine ridges across the sheet; issue 26)
+    version=3,
     inputs={
         "shape": In(Mesh, "the closed shape the band wraps (the onigiri's mould): its faces along ±y"),
         "aggregate": In(
@@ -41,15 +42,25 @@ from nodes.values import Aggregate
             range=(0.0, 100.0),
             units="mm",
         ),
+        "ribs": Param(
+            float,
+            0.0,
+            "height of the sheet's fine ribbing (the lines of the mat it dried on), outwards; 0 = a smooth sheet",
+            range=(0.0, 10.0),
+            units="mm",
+        ),
+        "rib_period": Param(float, 1.6, "spacing of the ribs along the band", range=(0.01, 100.0), units="mm"),
     },
 )
-def nori(ctx, shape, aggregate=None, *, width, height, gap, columns, rows, reach):
+def nori(ctx, shape, aggregate=None, *, width, height, gap, columns, rows, reach, ribs, rib_period):
     """The shape's surface (or the grains on it) under a plane ``height`` above the shape's lowest point, in a
     strip ``width`` wide across x, ``gap`` outside it: a rectangular sheet folded round the shape's bottom."""
     from .solids import wrap_band
 
     drape = None if aggregate is None else band_points(aggregate, shape, width, reach)
-    vertices, faces = wrap_band(shape.vertices, shape.faces, width, height, gap, columns, rows, drape, reach)
+    vertices, faces = wrap_band(
+        shape.vertices, shape.faces, width, height, gap, columns, rows, drape, reach, ribs, rib_period
+    )
     return Mesh(vertices, faces, name="nori")
 
 

@@ -30,24 +30,28 @@ def lying_cylinder(radius: float, length: float, sections: int = 48) -> trimesh.
 def _rounded_triangle_radius(roundness: float, samples: int = 720):
     """Boundary radius R(θ) of a unit-circumradius triangle whose corners are rounded (2-D Minkowski sum).
 
-    Returns a function θ → R(θ) with max R = 1 (the corners' tips).
+    Returns a function θ → R(θ) with max R = 1 (the corners' tips). Exact on the straight edges: the ray's
+    distance to the hull's nearest supporting line (interpolating R linearly in θ between the hull's vertices,
+    as before session 42, bowed each straight edge out into an arc: the "triangle" was a near disc, 94 × 94 mm
+    for a 47.3 mm circumradius at roundness 0.01, and read as a dome from the front; issue 26).
     """
+    from scipy.spatial import ConvexHull
+
     corner_angles = np.pi / 2 + np.array([0.0, 2.0, 4.0]) * np.pi / 3
     inner = (1.0 - roundness) * np.stack([np.cos(corner_angles), np.sin(corner_angles)], axis=1)
     rho = roundness * 0.5  # inradius of the unit triangle is 1/2; rounding radius in those units
     circle = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
     disc = rho * np.stack([np.cos(circle), np.sin(circle)], axis=1)
     points = (inner[:, None, :] + disc[None, :, :]).reshape(-1, 2)
-    from scipy.spatial import ConvexHull
+    hull = ConvexHull(points)
+    normals, offsets = hull.equations[:, :2], -hull.equations[:, 2]  # inside: normal · p <= offset (> 0)
+    tip = np.linalg.norm(points[hull.vertices], axis=1).max()
 
-    hull = points[ConvexHull(points).vertices]
-    theta = np.arctan2(hull[:, 1], hull[:, 0])
-    radius = np.linalg.norm(hull, axis=1)
-    order = np.argsort(theta)
-    theta, radius = theta[order], radius[order]
-    # Chord interpolation in polar coordinates: fine at 720 samples per corner circle.
-    radius = radius / radius.max()
-    return lambda angles: np.interp(angles, theta, radius, period=2 * np.pi)
+    def radius(angles):
+        directions = np.stack([np.cos(angles), np.sin(angles)], axis=-1)
+        return 1.0 / ((directions @ normals.T) / offsets).max(axis=-1) / tip
+
+    return radius
 
 
 def onigiri(
@@ -197,6 +201,8 @@ def wrap_band(
     rows: int,
     drape: np.ndarray | None = None,
     reach: float = 2.0,
+    ribs: float = 0.0,
+    rib_period: float = 1.6,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A sheet folded round the bottom of a closed shape (faces along ±y): for each of ``columns + 1`` cuts across
     x (``width`` wide, centred), rays in the y–z plane from the point at ``height`` above the shape's lowest point
@@ -206,7 +212,11 @@ def wrap_band(
 
     With ``drape`` (points: the settled grains' vertices) the sheet lies on those points instead of the shape:
     ``gap`` beyond the farthest of them along each ray (``draped_distances``), never lower than the shape's lowest
-    point less ``gap`` (it stays on the plate the shape was set on)."""
+    point less ``gap`` (it stays on the plate the shape was set on).
+
+    ``ribs`` > 0: the sheet's fine ribbing (a nori sheet keeps the lines of the mat it dried on), ridges across the
+    band every ``rib_period`` mm of its length, raised up to ``ribs`` mm outwards along the rays (never inwards:
+    what the sheet covers stays covered)."""
     vertices, faces = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
     triangles = vertices[faces]
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
@@ -240,6 +250,15 @@ def wrap_band(
         along[down] = np.minimum(along[down] + gap, (lo[2] + height - floor) / -directions[down, 2])
         along[~down] += gap
         points = origins + along[:, None] * directions
+    if ribs > 0:
+        grid = points.reshape(columns + 1, rows + 1, 3)
+        length = np.linalg.norm(np.diff(grid, axis=1), axis=2).cumsum(axis=1)
+        length = np.concatenate([np.zeros((columns + 1, 1)), length], axis=1).ravel()
+        lift = 0.5 * ribs * (1.0 - np.cos(2.0 * np.pi * length / rib_period))
+        down = directions[:, 2] < -1e-9  # under the shape no lower than its lowest point less the gap (the plate)
+        room = np.maximum(points[down, 2] - (lo[2] - gap), 0.0) / -directions[down, 2]
+        lift[down] = np.minimum(lift[down], room)
+        points = points + lift[:, None] * directions
     k = np.arange((columns + 1) * (rows + 1)).reshape(columns + 1, rows + 1)
     a, b, c, d = k[:-1, :-1], k[1:, :-1], k[1:, 1:], k[:-1, 1:]
     quads = np.stack([a, b, c, d], axis=-1).reshape(-1, 4)

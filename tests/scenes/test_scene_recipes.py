@@ -40,7 +40,7 @@ def _measure(recipe_name: str, tmp_path, extra=()) -> dict[str, float]:
 EXPECTED = {
     "rice_bowl": ((60, 110), 0.03, 0.10),  # 81 grains: p95 0.014, max 0.062
     "ikura_don": ((140, 220), 0.03, 0.10),  # 167 elements: p95 0.013, max 0.040
-    "onigiri": ((45, 75), 0.03, 0.10),  # 60 grains: p95 0.017, max 0.054
+    "onigiri": ((45, 75), 0.03, 0.10),  # 53 grains (a real onigiri's shape, 14.4 mm): p95 0, max 0.016
     "sushi": ((65, 110), 0.03, 0.12),  # 87 grains: p95 0.019, max 0.097
     # 546 flakes 2.25–2.7 × 1.5–1.65 × 0.3 mm (issue 26: finer shavings): p95 0.0023, max 0.0067; the 3–3.6 mm
     # flakes before: 213, p95 0, max 0.0061 (issue 25); with the settle frame and no removal 298: p95 0.051, max 0.069
@@ -81,13 +81,14 @@ def test_sushi_full_method_runs(tmp_path):
 
 def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
     """Issue 26: the chestnut pieces must show. At S's refine range (±0.1 b) every one of the 38 placed was the
-    deepest of its pairs and the cull removed all of them; the recipe's wider range keeps 30, about half of them
-    stepped out over the rice. Full size up to the cull (≈ 6 s)."""
+    deepest of its pairs and the cull removed all of them; the recipe's wider range kept 30, about half of them
+    stepped out over the rice. Since the onigiri's sides are straight (session 42: its surface is smaller, 2,856
+    elements placed) 32 are placed, 21 kept, 11 out over the rice. Full size up to the cull (≈ 6 s)."""
     recipe = load_recipe(REPO / "graphs" / "rice_chestnut.yaml", default_registry(), [])
     result = run_recipe(recipe, outputs=["refine.placement", "pile.placement"], cache=Cache(tmp_path / "cache"))
     placed, kept = result.output("refine.placement"), result.output("pile.placement")
     chestnut = kept.kind_names.index("chestnut")
     pieces = kept.kinds == chestnut
-    assert int((placed.kinds == chestnut).sum()) == 38
-    assert pieces.sum() >= 25
-    assert (kept.offsets[pieces] > 0.5).sum() >= 10  # out over the rice layer, where the camera sees them
+    assert int((placed.kinds == chestnut).sum()) == 32
+    assert pieces.sum() >= 18
+    assert (kept.offsets[pieces] > 0.5).sum() >= 8  # out over the rice layer, where the camera sees them

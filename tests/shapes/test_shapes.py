@@ -24,6 +24,28 @@ def test_onigiri_has_the_circumscribed_radius_asked_for():
     assert np.ptp(mesh.vertices[:, 1]) == pytest.approx(0.9 * 20.0, rel=0.05)  # thickness share
 
 
+def _widths(vertices, fractions=(0.25, 0.5, 0.75)):
+    """Widths along x of the x–z silhouette at fractions of its height (the vertices within 1 % of each level)."""
+    z = vertices[:, 2]
+    levels = z.min() + np.asarray(fractions) * np.ptp(z)
+    return np.array([np.ptp(vertices[np.abs(z - level) < 0.01 * np.ptp(z), 0]) for level in levels])
+
+
+@pytest.mark.parametrize("roundness", [0.01, 0.35])
+def test_onigiri_seen_from_the_front_is_a_rounded_triangle(roundness):
+    """Issue 26: the front view is a triangle with straight sides, not a dome. A triangle's width falls linearly
+    with height (at 25 / 50 / 75 % of it: ¾, ½, ¼ of its base); rounded corners widen the top a little. The old
+    gauge interpolated the radius linearly in angle between the hull's vertices, which bowed each straight side
+    out into an arc: at roundness 0.01 the widths were 82 / 94 / 82 mm (a disc), at 0.35 84 / 86 / 71."""
+    mesh = shape.call(kind="onigiri", size=47.3, roundness=roundness, resolution=5)["mesh"]
+    w25, w50, w75 = _widths(mesh.vertices)
+    if roundness < 0.1:
+        assert w50 / w25 == pytest.approx(2 / 3, abs=0.03) and w75 / w25 == pytest.approx(1 / 3, abs=0.03)
+    assert w75 / w25 < 0.5 and w50 / w25 < 0.8
+    extent = np.ptp(mesh.vertices, axis=0)
+    assert extent[2] / extent[0] == pytest.approx(np.sqrt(3) / 2, abs=0.05)  # an equilateral triangle's height
+
+
 def test_bowl_region_sits_in_the_cavity_with_a_mound():
     out = shape.call(kind="bowl", size=60.0, depth=45.0, fill=0.8, mound=15.0)
     region, container = out["mesh"], out["container"]

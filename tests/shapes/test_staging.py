@@ -115,9 +115,13 @@ def test_the_nori_lies_on_the_rice_that_slumped_out_of_its_mould():
     """Given the grains, the band covers every grain in its strip (the mould's band leaves grains 1 mm out of it
     through the sheet) and rests on them: along the median ray, within the gap and a millimetre of the
     farthest grain under it."""
-    mould = shape.call(kind="onigiri", size=47.3)["mesh"]
+    from nodegraph.api import default_registry, load_recipe
+
+    recipe = load_recipe(ROOT / "graphs" / "onigiri.yaml", default_registry(), [])
+    mould = shape.call(**recipe.nodes["onigiri"].params)["mesh"]
     grains = _bulging_grains(mould, bulge=1.0)
-    params = {"width": 34.0, "height": 28.0, "gap": 0.4}
+    params = recipe.nodes["nori"].params
+    assert (params["width"], params["height"], params["gap"]) == (34.0, 28.0, 0.4)
     on_mould = nori.call(shape=mould, **params)
     assert _outside_the_sheet(on_mould, grains, mould, 28.0)[0].max() > 0.4  # the mould's sheet: grains through it
     draped = nori.call(shape=mould, aggregate=grains, **params)
@@ -126,3 +130,42 @@ def test_the_nori_lies_on_the_rice_that_slumped_out_of_its_mould():
     closest = np.full(len(draped.vertices), -np.inf)  # per sheet vertex: its nearest grain's distance under it
     np.maximum.at(closest, ray, beyond)
     assert np.median(closest[np.isfinite(closest)]) > -(0.4 + 1.0)  # it rests on the grains' tops
+
+
+def test_the_recipes_nori_is_ribbed_outwards_only():
+    """Issue 26: the band is a sheet with the fine ribs of the mat it dried on — ridges across it every
+    ``rib_period`` mm of its length, raised outwards up to ``ribs`` mm, never inwards (it still covers what it
+    covered), and none under the shape (the sheet there stays above the plate)."""
+    from nodegraph.api import default_registry, load_recipe
+
+    recipe = load_recipe(ROOT / "graphs" / "onigiri.yaml", default_registry(), [])
+    mould = shape.call(**recipe.nodes["onigiri"].params)["mesh"]
+    params = recipe.nodes["nori"].params
+    ribs, period = params["ribs"], params["rib_period"]
+    assert ribs > 0
+    smooth = nori.call(shape=mould, **{**params, "ribs": 0.0})
+    ribbed = nori.call(shape=mould, **params)
+    lo, hi = mould.vertices.min(axis=0), mould.vertices.max(axis=0)
+    centre = np.array([0.5 * (lo[1] + hi[1]), lo[2] + params["height"]])
+    lift = np.hypot(*(ribbed.vertices[:, 1:] - centre).T) - np.hypot(*(smooth.vertices[:, 1:] - centre).T)
+    assert lift.min() >= -1e-9 and lift.max() <= ribs + 1e-9
+    assert ribbed.vertices[:, 2].min() >= lo[2] - params["gap"] - 1e-9  # above the plate (0.44 mm under lo)
+    column = lift.reshape(params["columns"] + 1, params["rows"] + 1)[params["columns"] // 2]
+    points = ribbed.vertices.reshape(params["columns"] + 1, params["rows"] + 1, 3)[params["columns"] // 2]
+    front = points[:, 2] > lo[2] + 5.0  # up the faces, clear of the bend under the shape
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    length = steps[front[1:] & front[:-1]].sum()  # both faces' length, not the bend under the shape between them
+    crests = np.flatnonzero((column[1:-1] > column[:-2]) & (column[1:-1] >= column[2:]) & front[1:-1])
+    assert len(crests) == pytest.approx(length / period, rel=0.15)
+
+
+def test_the_nori_is_dark_green_and_satin():
+    """Issue 26: the band read as a flat black rectangle (linear (0.010, 0.018, 0.008), L* 13): nori is a very dark
+    green (L* 15–30: a colorimeter's 29 for a test sheet, specular included), with a satin specular lobe."""
+    from nodes.shading.materials import nori_material
+
+    material = nori_material()
+    r, g, b = material.base_color
+    lightness = 116.0 * (0.2126 * r + 0.7152 * g + 0.0722 * b) ** (1.0 / 3.0) - 16.0
+    assert 15.0 <= lightness <= 30.0 and g > r and g > b
+    assert 0.3 <= material.roughness <= 0.5
