@@ -294,10 +294,13 @@ def nori_material() -> Material:
     )
 
 
+CERAMIC = "ceramic"
+
+
 def ceramic_material(color) -> Material:
     """The bowl (scenery): a glazed ceramic — a coloured body under a glossy clear glaze."""
     return Material(
-        name="ceramic",
+        name=CERAMIC,
         base_color=tuple(float(c) for c in color),
         roughness=0.35,
         clearcoat=1.0,
