@@ -66,7 +66,7 @@ def test_unbounded_refine_lets_large_elements_stand_out(lumpy, onigiri):
 def test_no_element_stands_out_of_the_shape_beyond_its_share(lumpy, onigiri, protrusion):
     mixed, libraries = lumpy
     refined = overlap_refine.call(
-        seed=2, placement=mixed, libraries=list(libraries), shape=onigiri, protrusion=protrusion
+        seed=2, placement=mixed, libraries=list(libraries), shape=onigiri, protrusion=[protrusion]
     )["placement"]
     share = _reach_share(refined, libraries, onigiri)
     assert share.max() <= protrusion + 0.03  # the bound is kept on the cost points (spread vertices)
