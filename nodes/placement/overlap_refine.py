@@ -62,7 +62,7 @@ def _check(params: dict) -> list[tuple[str, str]]:
         ),
         "protrusion": Param(
             list[float],
-            [0.5],
+            [0.25],
             "with shape, per kind (one value: every kind): the most of an element's own extent along the shape's "
             "normal that may stand outside the shape; the refine stops it there, and one still beyond is moved in "
             "along the inward normal. 0: wholly inside; 0.5: its centre within (nothing hangs out by more than "

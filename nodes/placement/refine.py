@@ -141,12 +141,13 @@ def refine_placement(
 
 
 def cull_placement(
-    placement: Placement, templates: ElementTemplates, threshold: float, offset: float
+    placement: Placement, templates: ElementTemplates, threshold: float, offset: float, ranks=None
 ) -> tuple[np.ndarray, np.ndarray]:
     """(keep mask, depth): deepest first, an element goes while its depth with live neighbours > D.
 
-    ``depth`` is, for kept elements, the depth against the kept neighbours; for culled ones the
-    depth they had before culling.
+    ``ranks``: per element priority; the elements over D are visited lowest rank first (deepest first within a
+    rank), so where a low and a high rank overlap the low one goes. ``depth`` is, for kept elements, the depth
+    against the kept neighbours; for culled ones the depth they had before culling.
     """
     from .refine_kernels import cull_deepest, overlap_depths
 
@@ -159,6 +160,11 @@ def cull_placement(
     near = neighbours(frames.positions, templates, tmpl, np.zeros(n))
     offset = float(offset)
     depth = overlap_depths(frames, near, np.ones(n, np.bool_), shapes, offset)
-    keep = cull_deepest(depth, float(threshold), frames, near, shapes, offset)
+    order_key = depth
+    if ranks is not None and len(ranks):
+        # the kernel visits by descending key and stops at the first ≤ D: lift the elements over D by their rank
+        lift = (ranks.max() - ranks + 1) * (depth.max() + 1.0)
+        order_key = np.where(depth > threshold, depth + lift, depth)
+    keep = cull_deepest(order_key, float(threshold), frames, near, shapes, offset)
     after = overlap_depths(frames, near, keep, shapes, offset)
     return keep, np.where(keep, after, depth)
