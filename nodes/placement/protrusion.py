@@ -4,8 +4,8 @@ SPEC §2.6 (the refine moves elements along their normal; issue 26: nothing floa
 An element's *reach* is how far its outermost point lies outside the shape's surface (mm; < 0: wholly inside);
 its *size* is its extent along the shape's outward normal at the point of the surface nearest its centre. The
 bound is reach ≤ share × size: 0 keeps every element wholly inside, 0.5 lets up to half of it stand out (its
-centre on the surface). A share of the element's own size, not a fixed inset: a chestnut piece 3× a grain may
-stand out 3× as far, and a grain no further than it must.
+centre on the surface). A share of the element's own size, not a fixed inset: a chestnut piece 2× a grain may
+stand out 2× as far as the grain.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ nearest its centre, share = reach / size (``overlap_refine.protrusion`` bounds i
 reach, share max / p95, the count over 25 % and 50 % of its size, wholly outside, and the lowest point.
 
     nodegraph run graphs/rice_chestnut.yaml --set export.instancing=false --out-dir exp/out
-    python benchmarks/bench_protrusion.py exp/out/rice_chestnut.glb --kind onigiri --size 76
+    python benchmarks/protrusion_report.py exp/out/rice_chestnut.glb --kind onigiri --size 76
 """
 
 from __future__ import annotations
