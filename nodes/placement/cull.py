@@ -15,7 +15,7 @@ from .element_templates import template_params
 
 @node(
     "cull",
-    version=3,
+    version=4,  # 4: priority (issue 26: the grains over a chestnut piece give way to it)
     inputs={
         "placement": In(Placement, "refined elements"),
         "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),
@@ -36,11 +36,19 @@ from .element_templates import template_params
         "offset": Param(
             float, 0.0, "T of G eq. 2 (use the value given to overlap_refine)", range=(0.0, 1e3), units="mm"
         ),
+        "priority": Param(
+            list[int],
+            None,
+            "per kind (the placement's kind order): where kinds overlap the lower goes first, so a piece keeps its "
+            "place and the grains over it give way; deepest first within a priority (empty: deepest first over all)",
+            nullable=True,
+        ),
         **template_params(),
     },
 )
-def cull(ctx, placement, libraries, *, threshold, offset, sphere_tolerance, max_spheres, cost_points):
-    """Deepest first, an element goes while its depth against the kept neighbours exceeds D.
+def cull(ctx, placement, libraries, *, threshold, offset, priority, sphere_tolerance, max_spheres, cost_points):
+    """Deepest first (lowest priority first), an element goes while its depth against the kept neighbours
+    exceeds D.
 
     Never culls everything: the last element of an overlapping group has no live neighbour left.
     """
@@ -52,7 +60,10 @@ def cull(ctx, placement, libraries, *, threshold, offset, sphere_tolerance, max_
         return {"placement": placement, "culled": placement, "aggregate": Aggregate(placement, libraries)}
     placement = with_kind_names(placement, libraries)
     templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points)
-    keep, depth = cull_placement(placement, templates, threshold, offset)
+    if priority is not None and len(priority) != len(libraries):
+        raise ValueError(f"priority: {len(priority)} values for {len(libraries)} kinds")
+    ranks = None if priority is None else np.asarray(priority, np.int64)[placement.kinds]
+    keep, depth = cull_placement(placement, templates, threshold, offset, ranks)
     with_depth = dataclasses.replace(placement, overlap=depth)
     kept, culled = with_depth.subset(keep), with_depth.subset(~keep)
     if ctx.rerun.enabled:

@@ -7,7 +7,7 @@ import numpy as np
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
-from nodegraph.values import Table
+from nodegraph.values import Mesh, Table
 
 from ..values import Aggregate, ElementLibrary, Placement
 from .element_templates import template_params
@@ -21,10 +21,15 @@ def _check(params: dict) -> list[tuple[str, str]]:
 
 @node(
     "overlap_refine",
-    version=3,
+    version=4,  # 4: the shape input and protrusion (issue 26: chestnut pieces stood out of the onigiri)
     inputs={
         "placement": In(Placement, "placed, rotated, mixed elements"),
         "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),
+        "shape": In(
+            Mesh,
+            "the closed shape the elements fill (poisson_place's): none reaches out of it by more than protrusion",
+            optional=True,
+        ),
     },
     outputs={
         "placement": Out(Placement, "moved elements: offsets t and residual overlap depth filled"),
@@ -55,6 +60,15 @@ def _check(params: dict) -> list[tuple[str, str]]:
             range=(0.0, 1e3),
             units="mm",
         ),
+        "protrusion": Param(
+            list[float],
+            [0.25],
+            "with shape, per kind (one value: every kind): the most of an element's own extent along the shape's "
+            "normal that may stand outside the shape; the refine stops it there, and one still beyond is moved in "
+            "along the inward normal. 0: wholly inside; 0.5: its centre within (nothing hangs out by more than "
+            "half); 1: none wholly outside. A share of each element's size: a piece 3× a grain may reach 3× as far",
+            range=(0.0, 1.0),
+        ),
         "passes": Param(
             int,
             1,
@@ -72,6 +86,7 @@ def overlap_refine(
     ctx,
     placement,
     libraries,
+    shape=None,
     *,
     cost,
     slope,
@@ -79,6 +94,7 @@ def overlap_refine(
     r,
     c_refine,
     offset,
+    protrusion,
     passes,
     tolerance,
     sphere_tolerance,
@@ -107,7 +123,20 @@ def overlap_refine(
     )
     ranges = np.array([lib.refine_range for lib in libraries])
     orders = [ctx.rng.permutation(len(placement)) for _ in range(passes)]
-    refined = refine_placement(placement, templates, ranges, settings, orders)
+    bound = None
+    if shape is not None:
+        from nodes.shapes.closed_mesh import as_trimesh
+
+        from .protrusion import ShapeBound
+
+        solid = as_trimesh(shape, "overlap_refine shape")
+        points = tuple(np.asarray(mesh.vertices, np.float64) for lib in libraries for mesh in lib.meshes)
+        if len(protrusion) not in (1, len(libraries)):
+            raise ValueError(f"protrusion: {len(protrusion)} values for {len(libraries)} kinds (one: every kind)")
+        shares = np.broadcast_to(np.asarray(protrusion, np.float64), (len(libraries),))
+        share = np.repeat(shares, [len(lib) for lib in libraries])
+        bound = ShapeBound(np.asarray(solid.vertices, np.float64), np.asarray(solid.faces, np.int64), share, points)
+    refined = refine_placement(placement, templates, ranges, settings, orders, bound)
     if ctx.rerun.enabled and len(refined):
         import rerun as rr
 

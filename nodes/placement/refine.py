@@ -13,6 +13,7 @@ import numpy as np
 from ..kernel_arrays import kernel_array
 from ..values import Placement
 from .element_templates import ElementTemplates
+from .protrusion import ShapeBound, offset_caps, settle_inside
 
 COSTS = ("sakurai", "gan")
 
@@ -80,12 +81,20 @@ def _shapes(templates: ElementTemplates):
 
 
 def refine_placement(
-    placement: Placement, templates: ElementTemplates, refine_ranges: np.ndarray, settings: RefineSettings, orders
+    placement: Placement,
+    templates: ElementTemplates,
+    refine_ranges: np.ndarray,
+    settings: RefineSettings,
+    orders,
+    bound: ShapeBound | None = None,
 ) -> Placement:
     """Move each element along its normal to the golden-section minimum of the cost, once per pass.
 
     ``orders``: one permutation per pass (S: a single pass). Later passes search the same range about
     the surface point and charge the travel from it, so passes only re-balance, never drift outward.
+    ``bound``: the shape the elements fill; the search stops each element where it would reach out of it by
+    more than ``bound.share`` of its size, and one still over after the passes is moved in along the shape's
+    inward normal (``protrusion.settle_inside``); its offset then counts that move's part along its normal.
     """
     import numba
 
@@ -96,6 +105,9 @@ def refine_placement(
         return placement
     tmpl = templates.index(placement.kinds, placement.variants)
     lo, hi = _search_ranges(placement, templates, tmpl, refine_ranges, settings)
+    if bound is not None:
+        hi = np.minimum(hi, offset_caps(placement, tmpl, bound))
+        lo = np.minimum(lo, hi)  # one already out too far searches only where it is back within the bound
     travel = np.maximum(np.abs(lo), np.abs(hi))
     frames = _frames(placement.positions.copy(), placement, tmpl)
     shapes = _shapes(templates)
@@ -114,6 +126,9 @@ def refine_placement(
         colour = colour_in_order(order, near.start, near.index)
         search = SearchRange(lo - travelled, hi - travelled, travelled)
         travelled += refine_offsets(frames, search, near, colour, order, shapes, cost, 4 * numba.get_num_threads())
+    if bound is not None:
+        moved = settle_inside(frames.positions, frames.rotations, tmpl, bound)
+        travelled += np.einsum("ij,ij->i", moved, placement.normals)
     near = neighbours(frames.positions, templates, tmpl, np.zeros(n))
     depth = overlap_depths(frames, near, np.ones(n, np.bool_), shapes, cost.offset)
     return dataclasses.replace(
@@ -126,12 +141,13 @@ def refine_placement(
 
 
 def cull_placement(
-    placement: Placement, templates: ElementTemplates, threshold: float, offset: float
+    placement: Placement, templates: ElementTemplates, threshold: float, offset: float, ranks=None
 ) -> tuple[np.ndarray, np.ndarray]:
     """(keep mask, depth): deepest first, an element goes while its depth with live neighbours > D.
 
-    ``depth`` is, for kept elements, the depth against the kept neighbours; for culled ones the
-    depth they had before culling.
+    ``ranks``: per element priority; the elements over D are visited lowest rank first (deepest first within a
+    rank), so where a low and a high rank overlap the low one goes. ``depth`` is, for kept elements, the depth
+    against the kept neighbours; for culled ones the depth they had before culling.
     """
     from .refine_kernels import cull_deepest, overlap_depths
 
@@ -144,6 +160,11 @@ def cull_placement(
     near = neighbours(frames.positions, templates, tmpl, np.zeros(n))
     offset = float(offset)
     depth = overlap_depths(frames, near, np.ones(n, np.bool_), shapes, offset)
-    keep = cull_deepest(depth, float(threshold), frames, near, shapes, offset)
+    order_key = depth
+    if ranks is not None and len(ranks):
+        # the kernel visits by descending key and stops at the first ≤ D: lift the elements over D by their rank
+        lift = (ranks.max() - ranks + 1) * (depth.max() + 1.0)
+        order_key = np.where(depth > threshold, depth + lift, depth)
+    keep = cull_deepest(order_key, float(threshold), frames, near, shapes, offset)
     after = overlap_depths(frames, near, keep, shapes, offset)
     return keep, np.where(keep, after, depth)

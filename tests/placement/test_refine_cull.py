@@ -95,6 +95,26 @@ def test_a_cluster_of_identical_elements_keeps_exactly_one(rice):
     assert len(out["placement"]) == 1 and len(out["culled"]) == 4  # never all: the last one has no live neighbour
 
 
+def test_cull_priority_keeps_the_piece_and_removes_the_grains_in_it():
+    """Issue 26: a piece 3× a grain with grains sunk in it is the deepest of each pair, so deepest first culls
+    the piece; with priority [0, 1] the grains in it go and the piece stays."""
+    grain = ElementLibrary("rice", (ellipsoid((1.1, 0.64, 0.44)),))
+    piece = ElementLibrary("chestnut", (ellipsoid((3.0, 2.6, 2.0)),))
+    positions = np.array([[0.0, 0.0, 0.0], [2.2, 0.0, 0.0], [-2.2, 0.0, 0.0], [0.0, 1.8, 0.0], [0.0, 0.0, 6.0]])
+    placed = Placement(
+        positions,
+        np.tile([0.0, 0.0, 1.0], (5, 1)),
+        kinds=[1, 0, 0, 0, 0],
+        kind_names=("rice", "chestnut"),
+    )
+    deepest = cull.call(placement=placed, libraries=[grain, piece], threshold=0.05)["placement"]
+    assert (deepest.kinds == 1).sum() == 0 and len(deepest) == 4  # the piece went, the grains stayed
+    kept = cull.call(placement=placed, libraries=[grain, piece], threshold=0.05, priority=[0, 1])["placement"]
+    assert (kept.kinds == 1).sum() == 1 and len(kept) == 2  # the piece and the grain clear of it
+    with pytest.raises(ValueError, match="priority"):
+        cull.call(placement=placed, libraries=[grain, piece], priority=[0])
+
+
 def test_flat_element_is_refused_and_thin_elements_work(pile):
     flat = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]), np.array([[0, 1, 2], [1, 3, 2]]))
     with pytest.raises(ValueError, match="no interior"):
