@@ -27,7 +27,7 @@ def pieces(aggregate, reach: float) -> str:
     lowest point."""
     from scipy.sparse.csgraph import connected_components
 
-    from nodes.placement.cut import contact_graph, element_surfaces
+    from nodes.placement.islands import contact_graph, element_surfaces
 
     points, owner, _ = element_surfaces(aggregate)
     count, label = connected_components(contact_graph(points, owner, len(aggregate.placement), reach))
@@ -41,7 +41,7 @@ def pieces(aggregate, reach: float) -> str:
 def main(argv: list[str] | None = None) -> int:
     from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
     from nodes.placement import cut
-    from nodes.placement.cut import element_surfaces
+    from nodes.placement.islands import element_surfaces
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cache-dir", type=Path, help="the node cache of a rice_bunny run (default: a new one)")

@@ -20,12 +20,10 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numba import njit
 
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
-from ..kernel_arrays import kernel_array
 from ..values import Aggregate
 
 KINDS = ("plane", "sphere")
@@ -48,124 +46,6 @@ def cut_mask(positions: np.ndarray, kind: str, normal, offset: float, center, ra
     if kind == "sphere":
         return np.linalg.norm(positions - (middle + np.asarray(center, np.float64)), axis=1) > radius
     raise ValueError(f"kind: '{kind}' is not a cut; allowed: {', '.join(KINDS)}")
-
-
-def element_surfaces(aggregate: Aggregate) -> tuple[np.ndarray, np.ndarray, float]:
-    """Every element's outer-part vertices in world space (those of its ``parts == 0`` faces: an ikura yolk nested
-    inside its membrane touches no neighbour), the element each belongs to, and the median element length (the
-    largest extent of the library meshes)."""
-    shapes = aggregate.without_normals()
-    points, outer = [], {}
-    for i in range(len(aggregate.placement)):
-        mesh = shapes.element_mesh(i)
-        key = (int(aggregate.placement.kinds[i]), int(aggregate.placement.variants[i]))
-        if key not in outer:
-            outer[key] = slice(None) if mesh.parts is None else np.unique(mesh.faces[mesh.parts == 0])
-        points.append(mesh.vertices[outer[key]])
-    owner = np.repeat(np.arange(len(points)), [len(v) for v in points])
-    lengths = [float(np.ptp(m.vertices, axis=0).max()) for library in aggregate.libraries for m in library.meshes]
-    return np.concatenate(points), owner, float(np.median(lengths))
-
-
-@njit(cache=True)
-def touching_pairs(points, owner, count, reach, cells, dims, start, order):
-    """(k, 2) pairs i < j of elements with a vertex of i within ``reach`` of a vertex of j, each pair once.
-    ``points`` grouped by element (``owner`` non-decreasing); ``cells`` their grid cells (size ≥ reach), z fastest,
-    counting-sorted (``order``; cell k holds sorted positions start[k]:start[k + 1]), so a point's partners lie in
-    the 27 cells around its own, 9 runs of the sorted order."""
-    xs = points[order]
-    es = owner[order]
-    seen = np.full(count, -1, np.int64)  # seen[j] = i: the pair (i, j) is out already
-    out = np.empty((8 * count + 16, 2), np.int64)
-    found = 0
-    for p in range(points.shape[0]):
-        i = owner[p]
-        px, py, pz = points[p, 0], points[p, 1], points[p, 2]
-        z0, z1 = max(cells[p, 2] - 1, 0), min(cells[p, 2] + 1, dims[2] - 1)
-        for gx in range(max(cells[p, 0] - 1, 0), min(cells[p, 0] + 2, dims[0])):
-            for gy in range(max(cells[p, 1] - 1, 0), min(cells[p, 1] + 2, dims[1])):
-                base = (gx * dims[1] + gy) * dims[2]
-                for q in range(start[base + z0], start[base + z1 + 1]):
-                    j = es[q]
-                    if j <= i or seen[j] == i:
-                        continue
-                    ex, ey, ez = xs[q, 0] - px, xs[q, 1] - py, xs[q, 2] - pz
-                    if ex * ex + ey * ey + ez * ez <= reach * reach:
-                        seen[j] = i
-                        if found == out.shape[0]:
-                            grown = np.empty((2 * found, 2), np.int64)
-                            grown[:found] = out
-                            out = grown
-                        out[found, 0] = i
-                        out[found, 1] = j
-                        found += 1
-    return out[:found]
-
-
-def contact_graph(points: np.ndarray, owner: np.ndarray, count: int, reach: float):
-    """The elements' contact graph (``count`` × ``count``, symmetric CSR of ones): i and j touch when a vertex
-    of i lies within ``reach`` of a vertex of j (``touching_pairs``; same-element vertex pairs are skipped, not
-    listed: on the bunny's 2.5 M grain vertices a cKDTree listed 16 M pairs within 0.7 mm, almost all within one
-    grain, in 3.5 CPU s). The grid's cells grow past ``reach`` when there would be over 16 a point."""
-    from scipy.sparse import coo_matrix
-
-    points = kernel_array(points)
-    owner = kernel_array(owner, np.int64)
-    origin, cell = points.min(axis=0), reach
-    while True:
-        cells = ((points - origin) / cell).astype(np.int64)
-        dims = cells.max(axis=0) + 1
-        if np.prod(dims.astype(np.float64)) <= 16 * len(points) + 4096:
-            break
-        cell *= 2.0
-    keys = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]
-    start = np.zeros(int(np.prod(dims)) + 1, np.int64)
-    np.cumsum(np.bincount(keys, minlength=len(start) - 1), out=start[1:])
-    order = np.argsort(keys, kind="stable")
-    pairs = touching_pairs(points, owner, count, reach, cells, dims, start, order)
-    i, j = pairs[:, 0], pairs[:, 1]
-    return coo_matrix((np.ones(2 * len(i)), (np.r_[i, j], np.r_[j, i])), shape=(count, count)).tocsr()
-
-
-def supported(graph, keep: np.ndarray, grounded: np.ndarray) -> np.ndarray:
-    """True for the kept elements joined to a grounded kept element by a chain of kept elements in contact."""
-    from scipy.sparse.csgraph import connected_components
-
-    kept = np.flatnonzero(keep)
-    _, label = connected_components(graph[kept][:, kept], directed=False)
-    out = np.zeros(len(keep), bool)
-    out[kept] = np.isin(label, label[grounded[kept]])
-    return out
-
-
-def bridged(graph, keep: np.ndarray, grounded: np.ndarray) -> np.ndarray:
-    """``keep`` plus, for each floating piece, the fewest removed elements joining it to the supported ones.
-
-    One piece at a time, the cheapest first: Dijkstra from every supported element, stepping onto a removed
-    element costs 1 and onto a kept one 1/(n + 1) (so no chain of kept elements outweighs one removed); the piece
-    nearest by that cost gets its path, and the next search starts from the grown set, so a later piece may lean on
-    an earlier bridge. A piece no path reaches stays out."""
-    from scipy.sparse.csgraph import dijkstra
-
-    n = len(keep)
-    keep = keep.copy()
-    unreachable = np.zeros(n, bool)
-    while True:
-        held = supported(graph, keep, grounded)
-        floating = keep & ~held & ~unreachable
-        if not floating.any():
-            return keep & ~unreachable
-        cost = np.where(keep, 1.0 / (n + 1), 1.0)
-        steps = graph.copy()
-        steps.data = cost[steps.indices]  # entering column j costs cost[j]
-        distance, previous, _ = dijkstra(steps, indices=np.flatnonzero(held), min_only=True, return_predecessors=True)
-        target = np.flatnonzero(floating)[np.argmin(distance[floating])]
-        if not np.isfinite(distance[target]):
-            unreachable |= floating
-            continue
-        while target >= 0 and not held[target]:
-            keep[target] = True
-            target = previous[target]
 
 
 @node(
@@ -229,6 +109,8 @@ def cut(ctx, aggregate, *, kind, normal, offset, center, radius, islands, gap):
     if not keep.any():
         raise ValueError(f"the {kind} cut removes every element; move it (offset, center) or shrink it (radius)")
     if islands != "keep":
+        from .islands import bridged, contact_graph, element_surfaces, supported
+
         points, owner, length = element_surfaces(aggregate)
         graph = contact_graph(points, owner, len(keep), gap * length)
         lowest = np.full(len(keep), np.inf)

@@ -123,7 +123,7 @@ def test_a_cut_leaves_no_piece_floating(bunny_head):
 def test_contact_graph_is_every_pair_of_elements_with_vertices_within_reach(spread):
     from scipy.spatial.distance import cdist
 
-    from nodes.placement.cut import contact_graph
+    from nodes.placement.islands import contact_graph
 
     rng = np.random.default_rng(3)
     sizes = rng.integers(1, 40, size=30)
