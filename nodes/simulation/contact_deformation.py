@@ -26,7 +26,9 @@ smoothly relaxed afterwards, folds a bumpy skin wherever some vertices are held 
   (bisection: volume grows with β). Cooked rice is nearly incompressible: a pressed grain bulges.
 
 The contacts: between two elements the plane across their overlap's lens, each element giving way its
-``share`` (``contact_flattening.neighbour_pushes`` flattens onto the same plane); between elements whose rest
+``share`` (``contact_flattening.neighbour_pushes`` flattens onto the same plane), but all of it where the other has
+no vertex inside it (a dent moves the vertices that cut in: a coarse chestnut piece whose face a fine grain's tip
+pokes into cannot give way, and half the depth was left; deform_contacts v5); between elements whose rest
 surfaces did not overlap but whose moved ones come near, the other's rest surface; against a wall or mould the
 wall's distance field (walls do not give). Dent–bulge rounds repeat, the last one dents only.
 
