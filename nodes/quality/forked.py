@@ -11,11 +11,18 @@ ran it or in what order: the merged results are those of a serial run, bit for b
 A child that fails (an exception, a crash, no ``fork`` on this platform, a daemonic process such as a Dask worker
 that may not have children, a child still not done ``LATE_S`` after the last task was taken) only means its tasks
 are run here: a task that raises then raises here, as it would serially.
+
+Only the main thread forks. A fork copies the forking thread alone, and the libraries' fork handlers run in it:
+OpenBLAS's stops its worker threads, so a matrix product that another thread had under way waited for them forever.
+``measure`` runs in the executor's second thread while the preview renders in the main one (``executor.Beside``),
+and the kakigori's run hung there in the preview's ``focus_distance`` (session 43). From any other thread the tasks
+run serially, in that thread.
 """
 
 from __future__ import annotations
 
 import multiprocessing
+import threading
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -24,7 +31,7 @@ LATE_S = 60.0  # how long after this process has run out of tasks a child may ta
 
 def run_tasks(tasks: Sequence[Callable[[], Any]], processes: int) -> list[Any]:
     """``[task() for task in tasks]``, computed by this process and ``processes − 1`` forked children."""
-    if processes <= 1 or len(tasks) < 2:
+    if processes <= 1 or len(tasks) < 2 or threading.current_thread() is not threading.main_thread():
         return [task() for task in tasks]
     try:
         context = multiprocessing.get_context("fork")

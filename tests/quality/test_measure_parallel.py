@@ -203,6 +203,20 @@ def test_forked_tasks_are_those_of_a_serial_run_and_run_in_a_child():
     assert {r[0] for r in results} - {os.getpid()}  # a child computed some of them
 
 
+def test_only_the_main_thread_forks():
+    """From a second thread (``measure`` beside the preview, ``executor.Beside``) the tasks run in that thread: a
+    fork there stopped OpenBLAS's workers under the main thread's matrix product, which then waited forever."""
+    import threading
+
+    tasks = [lambda x=x: _pid_and_square(x) for x in range(100)]
+    out = []
+    thread = threading.Thread(target=lambda: out.append(run_tasks(tasks, 2)))
+    thread.start()
+    thread.join()
+    assert [r[1] for r in out[0]] == [x * x for x in range(100)]
+    assert {r[0] for r in out[0]} == {os.getpid()}
+
+
 def test_a_child_that_dies_leaves_its_tasks_to_the_parent():
     parent = os.getpid()
 
