@@ -6,12 +6,12 @@ Principled BSDF from either file: on the USD Material prim as ``nodegraph:princi
 material's ``extras`` under the same key. Colours are tuples of linear RGB; the subsurface radius is in mm, the
 unit of the meshes.
 
-A transmissive element's skin tints the light at each crossing (``crossing_tint``), as the preview renders it;
-both files carry the colour of two crossings (``subsurface_color``) as the base colour, of which Blender's
-principled BSDF applies the square root at each crossing, and no volume absorption on top. An element the preview
-fills with a scattering medium (rice grains, ikura yolks, shaved ice) carries the medium's coefficients
-(``medium*``; ``boundaryIor`` 1 where the medium has no skin: ice), so that a renderer that can build a medium (Cycles, through the add-on) renders the same light under
-the skin.
+A transmissive element's skin tints the light at each crossing (``crossing_tint``), as the preview renders it; both
+files carry the colour of two crossings (``subsurface_color``) as the base colour, of which Blender's principled BSDF
+applies the square root at each crossing, and no volume absorption on top. An element the preview fills with a
+scattering medium (rice grains, ikura yolks, shaved ice) carries the medium's coefficients (``medium*``; ``boundaryIor``
+1 where the medium has no skin: ice), so that a renderer that can build a medium (Cycles, through the add-on) renders
+the same light under the skin.
 """
 
 from __future__ import annotations

@@ -3,8 +3,9 @@
 Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice is interpolated by water content
 (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a water film: clearcoat). Ikura has two
 parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white tuft of fine shavings, a scattering medium with
-no skin, and carries syrup graded by its depth below the mound's top surface, deeper along runs down the flanks; chestnut
-(kuri gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh, 1 fat.
+no skin, and carries syrup graded by its depth below the mound's top surface, deeper along runs down the flanks;
+chestnut (kuri gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh,
+1 fat.
 """
 
 from __future__ import annotations

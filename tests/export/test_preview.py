@@ -161,11 +161,11 @@ def test_shaved_ice_scatters_light_under_no_skin(tmp_path):
 
 @pytest.mark.parametrize("subsurface", [True, False])
 def test_a_heap_of_ice_flakes_is_bright_like_shaved_ice(subsurface):
-    """Shaved ice is white: light scattered in its shavings comes back out. The ice heap's mean luminance, against
-    the same heap in a white diffuse material (albedo 0.9) under the same light: with each flake a medium behind no
-    skin (subsurface on) 1.22, the same medium behind a dielectric skin at the tuft's index (1.1, rough) 0.28: grey
-    glass (``look.has_skin`` true for ice; seen failing); as a matte thin diffuser (subsurface off) 1.31; 0.44 as clear glassy plates, 0.075 with paths cut off after 10
-    bounces."""
+    """Shaved ice is white: light scattered in its shavings comes back out. The ice heap's mean luminance, against the
+    same heap in a white diffuse material (albedo 0.9) under the same light: with each flake a medium behind no skin
+    (subsurface on) 1.22, the same medium behind a dielectric skin at the tuft's index (1.1, rough) 0.28: grey glass
+    (``look.has_skin`` true for ice; seen failing); as a matte thin diffuser (subsurface off) 1.31; 0.44 as clear
+    glassy plates, 0.075 with paths cut off after 10 bounces."""
     from nodes.export.mitsuba_scene import Camera, render_layers
     from nodes.shading.materials import is_ice
     from nodes.values import Material

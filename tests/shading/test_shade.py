@@ -89,9 +89,10 @@ def test_syrup_is_graded_by_depth_below_the_local_top_surface(scene_inputs):
 
 def test_shaved_ice_is_white_and_its_syrup_colour_fades_downward(scene_inputs):
     """Kakigori (issue 26): plain ice is a white tuft of fine shavings (a scattering medium with no skin; where a
-    renderer has no medium, a matte thin diffuser with an effective index near air's, no glassy facet) and the syrup's red is strongest on top and fades down the mound:
-    down a column of flakes the red share of each flake's colour never rises, and half-soaked ice is already red
-    (the dye absorbs: colour mixes geometrically with the concentration, not linearly to a pale pink)."""
+    renderer has no medium, a matte thin diffuser with an effective index near air's, no glassy facet) and the
+    syrup's red is strongest on top and fades down the mound: down a column of flakes the red share of each flake's
+    colour never rises, and half-soaked ice is already red (the dye absorbs: colour mixes geometrically with the
+    concentration, not linearly to a pale pink)."""
     from nodes.export.look import has_skin, is_volumetric
 
     ice = _ice_columns(scene_inputs, {0.0: 10})
