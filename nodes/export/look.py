@@ -21,7 +21,7 @@ import numpy as np
 from ..values import Material
 
 PREFIX = "nodegraph:principled:"
-VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (shaved ice: a thin diffuser)
+VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (and shaved ice: ``is_ice``)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 
 

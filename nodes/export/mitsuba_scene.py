@@ -67,11 +67,12 @@ from .look import (
 EXPOSURE = 1.5  # linear scale before the tone curve: lit white rice (key + sky) near the knee
 KNEE = 0.75  # the tone curve is linear below this and rolls off above it (white rice keeps its gloss, not clipped)
 MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) and a few grains of rice
-# path length in a heap of ice flakes: light crosses two interfaces per flake and reflects off some, so what comes
-# back out of the heap (why shaved ice is white) has walked through tens of flakes; at MAX_DEPTH the walk was cut
-# off and the ice rendered dark grey. Kakigori's mound, all plain ice, linear luminance of its pixels against the same
-# mound in white diffuse (benchmarks/bench_preview.py --ice, 240 × 180, 8 spp): 0.10 at depth 10, 0.34 at 32, 0.45 at
-# 64, 0.47 at 128 and 256 (converged); Russian roulette ends the paths that carry little.
+# path length in a heap of ice flakes: light scatters many times in each flake's medium (every collision counts)
+# and walks through tens of flakes before it comes back out of the heap (why shaved ice is white); at MAX_DEPTH the
+# walk was cut off and the ice rendered grey. Kakigori's mound, all plain ice, linear luminance of its pixels against
+# the same mound in white diffuse (benchmarks/bench_preview.py --ice, 240 × 180, 8 spp, session 43): as a medium
+# behind no skin 0.69 at depth 10, 0.99 at 32, 1.10 at 64, 1.11 at 128 and 256 (converged); as the thin diffuser
+# (subsurface off) 0.98, 1.33, 1.53, 1.82, 1.85. Russian roulette ends the paths that carry little.
 MAX_DEPTH_FLAKES = 128
 # the key's bright core (a specular-only light, ``highlight_dict``): angular radius (rad) and radiance. 0.12 rad
 # makes a glint ≈ 1–2 px across on a 4.5 mm egg in the main job's 1280 × 720 frame; the radiance puts it above

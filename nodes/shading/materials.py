@@ -147,11 +147,13 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
     off, a glTF viewer), the same flake is a matte thin diffuser: near-Lambertian, high albedo (``base_color``), no
     glassy facet (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air), passing ``subsurface`` of
     its diffuse light on, on every part of the flake alike (no CDRF per vertex).
-    Syrup fills the pores: its dye absorbs green and blue and passes red (``syrup_color`` over its red), so the
-    soaked tuft's medium keeps red at the ice's albedo and takes the green and blue at the syrup's hue; its free path
-    is short (0.05 mm) because absorption happens at the medium's collisions (one σt for every channel,
-    ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm flake (at 0.6 mm the top rendered pale
-    pink). It is wet: glossy (roughness 0.15, index 1.33) under a clear coat (the key's glints;
+    Syrup fills the pores: its dye absorbs green and blue and passes red, so the soaked tuft's medium keeps red at
+    the ice's albedo and takes the green and blue at the square of the syrup's hue (``syrup_color`` over its red:
+    twice the dye's absorbance), so that the soaked top renders the syrup's own colour (at the hue itself the
+    default syrup's top rendered sRGB (226, 86, 114), pink, against the syrup's (225, 39, 69); squared (224, 50, 74);
+    docs/look.md, "Kakigori"). Its free path is short (0.05 mm) because absorption happens at the medium's
+    collisions (one σt for every channel, ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm
+    flake (at 0.6 mm the top rendered pale pink). It is wet: glossy (roughness 0.15, index 1.33) under a clear coat (the key's glints;
     ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its diffuse light on, 30 % straight through
     (index-matched ice and syrup are clear)."""
     ice = Material(
@@ -165,7 +167,7 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
         ior=1.1,
     )
     hue = np.asarray(syrup_color, np.float64) / max(float(np.max(syrup_color)), 1e-6)
-    soaked = tuple(float(c) for c in np.asarray(ice.base_color) * hue)
+    soaked = tuple(float(c) for c in np.asarray(ice.base_color) * hue**2)
     syrup = Material(
         name="ice_syrup",
         base_color=soaked,
