@@ -17,7 +17,8 @@ as in the full frame. Times are the whole ``preview`` path at 1280 × 720 (PLY f
 guide pass, denoising). ``--quick``: a small synthetic scene and a 64-spp reference (seconds).
 ``--ice``: the kakigori mound (``graphs/kakigori.yaml``, reduced sizes with ``--quick``) all in plain ice, its
 pixels' mean linear luminance against the same mound in a white diffuse material under the same light, and the
-render time, per path length (the path tracer's ``max_depth``): why ice got ``mitsuba_scene.MAX_DEPTH_FLAKES``.
+render time, per path length (the path tracer's ``max_depth``), with each flake a medium behind no skin
+(subsurface on, the preview's default) and a thin diffuser (off): why ice got ``mitsuba_scene.MAX_DEPTH_FLAKES``.
 Writes benchmarks/results/bench_preview.{md,png} (or under $NODEGRAPH_BENCH_RESULTS; the plot needs matplotlib).
 """
 
@@ -78,11 +79,13 @@ def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:
     camera = ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"])
     width, height, spp = (96, 72, 8) if quick else (240, 180, 8)
 
-    def luminance(material: Material, depth: int) -> tuple[np.ndarray, float, float]:
+    def luminance(material: Material, depth: int, media: bool = False) -> tuple[np.ndarray, float, float]:
         materials = tuple(material if is_ice(m) else m for m in scene.materials)
         description = dataclasses.replace(scene, materials=materials)
         t, c = time.perf_counter(), cpu_seconds()
-        layers = ms.render_layers(description, camera, width, height, spp, p["sun_direction"], max_depth=depth)
+        layers = ms.render_layers(
+            description, camera, width, height, spp, p["sun_direction"], max_depth=depth, subsurface=media
+        )
         return layers.noisy() @ np.array([0.2126, 0.7152, 0.0722]), time.perf_counter() - t, cpu_seconds() - c
 
     white, _, _ = luminance(Material("white", base_color=(0.9, 0.9, 0.9), roughness=1.0), ms.MAX_DEPTH)
@@ -94,13 +97,17 @@ def ice_vs_depth(quick: bool, cache_dir: Path | None) -> str:
         f"{int(mound.sum())} pixels / the same mound in white diffuse (0.9), {width}×{height}, {spp} spp; "
         f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores",
         "",
-        "| max_depth | ice / white | render wall (s) | render CPU (s) |",
-        "|---|---|---|---|",
+        "| ice | max_depth | ice / white | render wall (s) | render CPU (s) |",
+        "|---|---|---|---|---|",
     ]
-    for depth in (10, 32, 64, 128, 256):
-        ice, wall, cpu = luminance(plain, depth)
-        lines.append(f"| {depth} | {ice[mound].mean() / white[mound].mean():.3f} | {wall:.1f} | {cpu:.1f} |")
-        print(lines[-1], flush=True)
+    for media in (True, False):
+        for depth in (10, 32, 64, 128, 256):
+            ice, wall, cpu = luminance(plain, depth, media)
+            kind = "medium, no skin (subsurface on)" if media else "thin diffuser (subsurface off)"
+            lines.append(
+                f"| {kind} | {depth} | {ice[mound].mean() / white[mound].mean():.3f} | {wall:.1f} | {cpu:.1f} |"
+            )
+            print(lines[-1], flush=True)
     return "\n".join(lines)
 
 

@@ -9,7 +9,8 @@ keys in the glTF material's ``extras``. Both importers keep those as the materia
 add-on sets the Principled BSDF from them:
 
 - the light under the skin the preview renders: where the files carry a medium (``mediumSigmaT``,
-  ``mediumAlbedo``: rice grains, ikura yolks, ice flakes) a clear skin of the preview's roughness over a volume
+  ``mediumAlbedo``: rice grains, ikura yolks, ice flakes) a clear skin of the preview's roughness (none where the
+  files say ``boundaryIor`` 1: ice) over a volume
   that scatters and absorbs as the preview's medium (Cycles renders it; set enough volume bounces);
 - transmission and IOR (alpha back to 1; an element inside another, the yolk in the egg's fluid, gets its IOR
   relative to it, ``exteriorIor``: Cycles has no stack of IORs); the colour light keeps through the element is
@@ -107,6 +108,9 @@ def apply_look(material) -> bool:
         inputs["Transmission Weight"].default_value = 1.0
         inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
         inputs["Roughness"].default_value = look["boundaryRoughness"]
+        if "boundaryIor" in look:  # no skin (shaved ice): an index-matched boundary, neither reflecting nor bending
+            inputs["IOR"].default_value = look["boundaryIor"]
+            inputs["Roughness"].default_value = 0.0
         inputs["Subsurface Weight"].default_value = 0.0
         inputs["Coat Weight"].default_value = 0.0
         inputs["Alpha"].default_value = 1.0

@@ -6,12 +6,12 @@ Principled BSDF from either file: on the USD Material prim as ``nodegraph:princi
 material's ``extras`` under the same key. Colours are tuples of linear RGB; the subsurface radius is in mm, the
 unit of the meshes.
 
-A transmissive element's skin tints the light at each crossing (``crossing_tint``), as the preview renders it;
-both files carry the colour of two crossings (``subsurface_color``) as the base colour, of which Blender's
-principled BSDF applies the square root at each crossing, and no volume absorption on top. An element the preview
-fills with a scattering medium (rice grains, ikura yolks) carries the medium's coefficients
-(``medium*``), so that a renderer that can build a medium (Cycles, through the add-on) renders the same light under
-the skin.
+A transmissive element's skin tints the light at each crossing (``crossing_tint``), as the preview renders it; both
+files carry the colour of two crossings (``subsurface_color``) as the base colour, of which Blender's principled BSDF
+applies the square root at each crossing, and no volume absorption on top. An element the preview fills with a
+scattering medium (rice grains, ikura yolks, shaved ice) carries the medium's coefficients (``medium*``; ``boundaryIor``
+1 where the medium has no skin: ice), so that a renderer that can build a medium (Cycles, through the add-on) renders
+the same light under the skin.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import numpy as np
 from ..values import Material
 
 PREFIX = "nodegraph:principled:"
-VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (shaved ice: a thin diffuser)
+VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (and shaved ice: ``is_ice``)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 
 
@@ -49,6 +49,8 @@ def principled_attributes(material: Material, translucency: float) -> dict[str, 
         look["mediumSigmaT"] = sigma_t  # mm⁻¹, every channel
         look["mediumAlbedo"] = tuple(float(c) for c in albedo)
         look["boundaryRoughness"] = boundary_roughness(material)
+        if not has_skin(material):  # index-matched: the boundary neither reflects nor bends the light
+            look["boundaryIor"] = 1.0
     return look
 
 
@@ -94,9 +96,18 @@ def random_walk_coefficients(albedo, radius) -> tuple[np.ndarray, np.ndarray]:
 
 def is_volumetric(material: Material) -> bool:
     """Whether the preview renders ``material``'s inside as a scattering medium (closed elements only: rice
-    grains, ikura yolks; shaved ice is a thin diffuser, ``materials.ice_materials``; fish flesh and fat are open
-    parts of one slab)."""
-    return material.name in VOLUMETRIC_ELEMENTS
+    grains, ikura yolks, shaved ice and its syrup grades; fish flesh and fat are open parts of one slab)."""
+    from ..shading.materials import is_ice
+
+    return material.name in VOLUMETRIC_ELEMENTS or is_ice(material)
+
+
+def has_skin(material: Material) -> bool:
+    """Whether a volumetric element's medium lies behind a dielectric skin (rice, yolks) or behind none (shaved
+    ice: a tuft of shavings whose pores open to the air; ``mitsuba_scene.boundary_bsdf``)."""
+    from ..shading.materials import is_ice
+
+    return not is_ice(material)
 
 
 def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:

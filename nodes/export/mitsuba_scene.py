@@ -16,7 +16,8 @@ The path tracer does the lighting, so surfaces get their materials, not the bake
 
 With ``subsurface`` on (the default), light goes under the skin for real (Mitsuba's ``volpath``): each closed
 element of rice and each ikura yolk is a homogeneous scattering medium behind a (rough)
-dielectric boundary (``medium``). The medium's mean free path and single-scattering albedo come from the
+dielectric boundary (``medium``); each shaved-ice flake (a tuft of finer shavings in air, no skin of its own) is
+one behind no boundary at all (``null``). The medium's mean free path and single-scattering albedo come from the
 material's principled subsurface radius and colour (G Table 3) by the random-walk mapping of Chiang, Kutz and
 Burley 2016, the one Blender's Cycles uses for the same parameters, so both renderers read the same numbers.
 Rice's radius and colour follow its water content (``shading.materials.rice_material``; G fig. 3.1.2.1: wetter
@@ -56,6 +57,7 @@ from .look import (
     TRANSMISSIVE,
     boundary_roughness,
     crossing_tint,
+    has_skin,
     is_volumetric,
     medium_coefficients,
 )
@@ -65,11 +67,12 @@ from .look import (
 EXPOSURE = 1.5  # linear scale before the tone curve: lit white rice (key + sky) near the knee
 KNEE = 0.75  # the tone curve is linear below this and rolls off above it (white rice keeps its gloss, not clipped)
 MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) and a few grains of rice
-# path length in a heap of ice flakes: light crosses two interfaces per flake and reflects off some, so what comes
-# back out of the heap (why shaved ice is white) has walked through tens of flakes; at MAX_DEPTH the walk was cut
-# off and the ice rendered dark grey. Kakigori's mound, all plain ice, linear luminance of its pixels against the same
-# mound in white diffuse (benchmarks/bench_preview.py --ice, 240 × 180, 8 spp): 0.10 at depth 10, 0.34 at 32, 0.45 at
-# 64, 0.47 at 128 and 256 (converged); Russian roulette ends the paths that carry little.
+# path length in a heap of ice flakes: light scatters many times in each flake's medium (every collision counts)
+# and walks through tens of flakes before it comes back out of the heap (why shaved ice is white); at MAX_DEPTH the
+# walk was cut off and the ice rendered grey. Kakigori's mound, all plain ice, linear luminance of its pixels against
+# the same mound in white diffuse (benchmarks/bench_preview.py --ice, 240 × 180, 8 spp, session 43): as a medium
+# behind no skin 0.69 at depth 10, 0.99 at 32, 1.10 at 64, 1.11 at 128 and 256 (converged); as the thin diffuser
+# (subsurface off) 0.98, 1.33, 1.53, 1.82, 1.85. Russian roulette ends the paths that carry little.
 MAX_DEPTH_FLAKES = 128
 # the key's bright core (a specular-only light, ``highlight_dict``): angular radius (rad) and radiance. 0.12 rad
 # makes a glint ≈ 1–2 px across on a 4.5 mm egg in the main job's 1280 × 720 frame; the radiance puts it above
@@ -222,10 +225,10 @@ def medium(material: Material) -> dict:
         "sigma_t": _rgb(np.ones(3)),  # Mitsuba reads an RGB as a reflectance in [0, 1]: the scale carries the unit
         "scale": sigma_t,
         "phase": {"type": "isotropic"},
-        # no light sampling from inside: the element's dielectric boundary blocks every shadow ray cast from within
-        # (volpath counts light only through a null boundary), so each was a wasted ray; light still reaches the
-        # medium by the phase function's own direction and the boundary's refraction, with full weight
-        "sample_emitters": False,
+        # light sampling from inside only through a null boundary (shaved ice): a dielectric one blocks every
+        # shadow ray cast from within (volpath counts light only through a null boundary), so each was a wasted
+        # ray; light still reaches the medium by the phase function's own direction and the boundary's refraction
+        "sample_emitters": boundary_bsdf(material)["type"] == "null",
     }
 
 
@@ -234,7 +237,15 @@ def boundary_bsdf(material: Material) -> dict:
     a transmissive element's transmission roughness; a translucent one's water film (its clear coat's roughness,
     else its roughness). Mitsuba's rough dielectric loses the energy of the microfacets' multiple scattering at
     every crossing, and light crosses a heap of grains many times: at the grain's own roughness (α ≈ 0.23 at 15 %
-    water) the rice heap rendered grey, L* 68 against 80 at the film's (α ≈ 0.02; docs/look.md)."""
+    water) the rice heap rendered grey, L* 68 against 80 at the film's (α ≈ 0.02; docs/look.md).
+
+    Shaved ice has none (``null``): a flake stands for a tuft of shavings 0.05–0.1 mm thin with air between, whose
+    pores open to the air; its countless small interfaces are the medium's scattering, not one skin. Behind a
+    dielectric skin the light that crossed a flake unscattered was refracted and reflected as by glass, and the
+    heap read as grey glass (docs/look.md, "Kakigori"); the wet gloss of soaked ice is its clear coat (the
+    key's glints, ``gloss``)."""
+    if not has_skin(material):
+        return {"type": "null"}
     bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
     a = alpha(boundary_roughness(material))
     if a > 1e-3:

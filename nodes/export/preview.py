@@ -33,7 +33,9 @@ from .studio import AMBIENT
     #     met the element's dielectric skin): 58.5 → 35.6 CPU s, 134 → 84 s wall at load ≈ 8 on the main job,
     #     −0.6 dB / −0.036 SSIM in the eggs window against 256 spp (docs/accuracy.md, "Preview cost")
     # 11: shaved ice a matte thin diffuser, no medium (docs/look.md, "Kakigori"): the heap white, not grey glass
-    version=11,
+    # 12: shaved ice a scattering medium behind no skin (a null boundary; issue 26: light under the skin of ice
+    #     too): white like a white diffuse heap (1.1 ×), not grey glass (docs/look.md, "Kakigori")
+    version=12,
     # Mitsuba renders in its own threads with the GIL released and no numba kernel runs here: the run computes
     # what does not need the preview (export, measure) in a second thread meanwhile (nodegraph.executor.Beside),
     # started once every library the preview loads is loaded (load_renderer: USD's loading in the export beside

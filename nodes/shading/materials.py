@@ -2,9 +2,10 @@
 
 Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice is interpolated by water content
 (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a water film: clearcoat). Ikura has two
-parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white, matte thin diffuser (a tuft of fine shavings)
-and carries syrup graded by its depth below the mound's top surface, deeper along runs down the flanks; chestnut
-(kuri gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh, 1 fat.
+parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white tuft of fine shavings, a scattering medium with
+no skin, and carries syrup graded by its depth below the mound's top surface, deeper along runs down the flanks;
+chestnut (kuri gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh,
+1 fat.
 """
 
 from __future__ import annotations
@@ -137,18 +138,24 @@ def ikura_materials() -> tuple[Material, Material]:
 def ice_materials(syrup_color) -> tuple[Material, Material]:
     """(plain shaved ice, syrup-soaked shaved ice). A flake stands for a tuft of shavings far finer than the mesh
     (a kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from its countless interfaces as
-    snow is, not a clear crystal. So it is a thin diffuser, not a medium: a matte, near-Lambertian surface of high
-    albedo (``base_color``; ice absorbs nothing over millimetres) that passes ``subsurface`` of the diffuse light
-    through (a quarter: a tuft a few shavings thick), on every part of the flake alike (no CDRF per vertex), with no
-    glassy facet or glint (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air). Light walks from
-    flake to flake through the heap and comes back out white; as a dense medium behind a dielectric skin each
-    flake let part of the light through unscattered and the heap read as grey glass (docs/look.md, "Kakigori").
-    Syrup fills the pores: the soaked tuft scatters less and passes most light on (90 % of its diffuse light, 30 %
-    straight through: index-matched ice and syrup are clear), and its colour is the syrup's absorption, not a
-    pigment: red passes (a red dye absorbs green and blue only), so each crossing keeps the red at the ice's albedo
-    and takes the green and blue at the syrup's hue (``syrup_color`` over its red); light that walks through a few
-    soaked flakes comes out a deep, bright red. It is wet: glossy (roughness 0.15, index 1.33) under a clear coat
-    (the key's glints; ``mitsuba_scene.gloss``)."""
+    snow is, not a clear crystal. The preview renders it as what it is, light scattered under the surface: a dense,
+    nearly lossless medium (free path ``subsurface_radius`` 0.2 mm, multiple-scattering albedo ``subsurface_color``
+    0.96–0.97; ice absorbs nothing over millimetres) behind no skin (``mitsuba_scene.boundary_bsdf``: the tuft's
+    pores open to the air). Light walks through a flake and on to the flakes behind, and comes back out of the heap
+    white; behind a dielectric skin the part that crossed a flake unscattered was refracted as by glass, and the heap
+    read as grey glass (docs/look.md, "Kakigori"). Where a renderer has no medium (the preview with ``subsurface``
+    off, a glTF viewer), the same flake is a matte thin diffuser: near-Lambertian, high albedo (``base_color``), no
+    glassy facet (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air), passing ``subsurface`` of
+    its diffuse light on, on every part of the flake alike (no CDRF per vertex).
+    Syrup fills the pores: its dye absorbs green and blue and passes red, so the soaked tuft's medium keeps red at
+    the ice's albedo and takes the green and blue at the square of the syrup's hue (``syrup_color`` over its red:
+    twice the dye's absorbance), so that the soaked top renders the syrup's own colour (at the hue itself the
+    default syrup's top rendered sRGB (226, 86, 114), pink, against the syrup's (225, 39, 69); squared (224, 50, 74);
+    docs/look.md, "Kakigori"). Its free path is short (0.05 mm) because absorption happens at the medium's
+    collisions (one σt for every channel, ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm
+    flake (at 0.6 mm the top rendered pale pink). It is wet: glossy (roughness 0.15, index 1.33) under a clear coat (the key's glints;
+    ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its diffuse light on, 30 % straight through
+    (index-matched ice and syrup are clear)."""
     ice = Material(
         name=ICE,
         base_color=(0.96, 0.965, 0.97),
@@ -160,12 +167,12 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
         ior=1.1,
     )
     hue = np.asarray(syrup_color, np.float64) / max(float(np.max(syrup_color)), 1e-6)
-    soaked = tuple(float(c) for c in np.asarray(ice.base_color) * hue)
+    soaked = tuple(float(c) for c in np.asarray(ice.base_color) * hue**2)
     syrup = Material(
         name="ice_syrup",
         base_color=soaked,
         subsurface=0.9,
-        subsurface_radius=(0.6, 0.6, 0.6),
+        subsurface_radius=(0.05, 0.05, 0.05),
         subsurface_color=soaked,
         roughness=0.15,
         clearcoat=0.7,
@@ -178,8 +185,9 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
 
 
 def is_ice(material: Material) -> bool:
-    """Whether a material is kakigori ice (plain or a syrup grade): a thin diffuser whose diffuse transmission is
-    its ``subsurface`` on every vertex (no CDRF); the preview traces longer paths through a heap of them
+    """Whether a material is kakigori ice (plain or a syrup grade): a scattering medium with no skin in the
+    preview (``mitsuba_scene.boundary_bsdf``), else a thin diffuser whose diffuse transmission is its
+    ``subsurface`` on every vertex (no CDRF); the preview traces longer paths through a heap of them
     (``mitsuba_scene.path_depth``)."""
     return material.name == ICE or material.name.startswith(ICE + "_syrup")
 

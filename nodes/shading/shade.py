@@ -39,7 +39,9 @@ def _check(params):
     # 11: syrup runs down the flanks in streaks (syrup_runs, syrup_run_length; drawn from the seed); soaked ice
     #     bright red from the syrup's absorption, translucent (docs/look.md, "Kakigori")
     # 12: nori lighter and satin (base linear (0.022, 0.033, 0.020), roughness 0.35; issue 26, docs/look.md)
-    version=12,
+    # 13: syrup-soaked ice's free path 0.05 mm (was 0.6): the preview's ice is a medium again, whose dye absorbs
+    #     at its collisions (docs/look.md, "Kakigori")
+    version=13,
     random=True,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),

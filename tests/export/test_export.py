@@ -273,10 +273,11 @@ def test_the_blender_addon_reads_the_keys_the_exporter_writes(shaded):
     from pathlib import Path
 
     from nodes.export.look import PREFIX, principled_attributes
+    from nodes.shading.materials import ice_materials
 
     source = (Path(__file__).resolve().parents[2] / "blender" / "nodegraph_import" / "__init__.py").read_text()
     ast.parse(source)
     assert f'PREFIX = "{PREFIX}"' in source
     read = set(re.findall(r'look(?:\.get\(|\[)"(\w+)"', source))
-    written = set().union(*(principled_attributes(m, 0.0) for m in shaded.materials))
+    written = set().union(*(principled_attributes(m, 0.0) for m in (*shaded.materials, *ice_materials((1, 0, 0)))))
     assert read and read <= written and {"mediumSigmaT", "mediumAlbedo"} <= read, read

@@ -88,16 +88,18 @@ def test_syrup_is_graded_by_depth_below_the_local_top_surface(scene_inputs):
 
 
 def test_shaved_ice_is_white_and_its_syrup_colour_fades_downward(scene_inputs):
-    """Kakigori (issue 26): plain ice is a white, matte thin diffuser (a tuft of fine shavings: no medium, an
-    effective index near air's, no glassy facet) and the syrup's red is strongest on top and fades down the mound:
-    down a column of flakes the red share of each flake's colour never rises, and half-soaked ice is already red
-    (the dye absorbs: colour mixes geometrically with the concentration, not linearly to a pale pink)."""
-    from nodes.export.look import is_volumetric
+    """Kakigori (issue 26): plain ice is a white tuft of fine shavings (a scattering medium with no skin; where a
+    renderer has no medium, a matte thin diffuser with an effective index near air's, no glassy facet) and the
+    syrup's red is strongest on top and fades down the mound: down a column of flakes the red share of each flake's
+    colour never rises, and half-soaked ice is already red (the dye absorbs: colour mixes geometrically with the
+    concentration, not linearly to a pale pink)."""
+    from nodes.export.look import has_skin, is_volumetric
 
     ice = _ice_columns(scene_inputs, {0.0: 10})
     scene = shade.call(aggregates=[ice], syrup_depth=27.0, syrup_spread=0.0, syrup_levels=6)
     plain = next(m for m in scene.materials if m.name == "ice")
-    assert not is_volumetric(plain) and plain.transmission == 0 and plain.roughness >= 0.9 and plain.ior <= 1.15
+    assert is_volumetric(plain) and not has_skin(plain) and max(plain.subsurface_radius) <= 0.3
+    assert plain.transmission == 0 and plain.roughness >= 0.9 and plain.ior <= 1.15
     assert 0.2 <= plain.subsurface <= 0.5  # passes part of the diffuse light on to the flakes behind
     assert min(plain.base_color) >= 0.95 and min(plain.subsurface_color) >= 0.95  # white, not tinted
     colours = np.array([scene.materials[k].subsurface_color for k in scene.material_of])  # bottom flake first
