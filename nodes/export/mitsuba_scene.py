@@ -49,7 +49,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..shading.materials import CERAMIC
 from ..values import Material, ShadedScene
 from . import studio
 from .look import (
@@ -373,9 +372,7 @@ def specular_bsdf(material: Material) -> dict:
     """Reflection only, as the glints' pass sees a surface: Fresnel at the material's IOR times its gloss weight,
     a microfacet lobe at the gloss roughness (Mitsuba's (rough)plastic with no diffuse part); black when matte."""
     weight, rough = gloss(material)
-    # the glints are the food's: a prop's glaze keeps the softbox's reflection of the path-traced pass, and its core's
-    # glint, out of focus on the bowl's far rim, came out of this pass's 2 spp as a dotted line (docs/look.md)
-    if weight <= 0 or material.name == CERAMIC:
+    if weight <= 0:
         return {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
     bsdf = {
         "type": "plastic",
@@ -435,14 +432,16 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
     """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
     surface reflecting only its gloss (``specular_bsdf``), the backdrop black, lit by the key's bright core
     alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce; rendered in ``window`` of the film
-    if given (``glints_window``)."""
+    if given (``glints_window``), through a pinhole at the lens's centre, with each pixel's distance along its ray
+    as a fourth channel (0: nothing hit), for ``defocus`` to blur as the thin lens would."""
     shapes = {}
     for key, shape in description.items():
         if key.startswith("shape_"):
             bsdf = specular_bsdf(scene.materials[int(key.removeprefix("shape_"))])
             shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
     centre, radius = glints_core(description)
-    sensor = dict(description["sensor"])
+    sensor = {k: v for k, v in description["sensor"].items() if k not in ("aperture_radius", "focus_distance")}
+    sensor["type"] = "perspective"  # the lens's blur is ``defocus``'s, after the pass
     sensor["sampler"] = {"type": SAMPLER, "sample_count": min(sensor["sampler"]["sample_count"], HIGHLIGHT_SPP)}
     if window is not None:
         sensor["film"] = sensor["film"] | {
@@ -453,7 +452,7 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
         }
     return {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": 2},
+        "integrator": {"type": "aov", "aovs": "distance:depth", "integrator": {"type": "path", "max_depth": 2}},
         "sensor": sensor,
         "key": {
             "type": "sphere",
@@ -464,6 +463,27 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
         "backdrop": {**description["backdrop"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
         **shapes,
     }
+
+
+def defocus(glints: np.ndarray, distance: np.ndarray, sensor: dict, width: int, height: int, frame: Crop) -> np.ndarray:
+    """The glints' pass (``highlight_dict``: sharp, through a pinhole; linear RGB and each pixel's distance along
+    its ray, in the ``frame`` of the ``width`` × ``height`` film) as the scene's thin lens (``sensor``) shows it:
+    every glint spread over a uniform disc, its circle of confusion at its depth (``bokeh.scatter_discs``): the
+    smooth bokeh that the lens converges to, where two samples a pixel through the lens gave an out-of-focus glint
+    as a few bright dots (docs/look.md, "Bokeh, not dots"). A pinhole sensor: the pass as it is."""
+    if sensor["type"] != "thinlens":
+        return glints
+    from .bokeh import scatter_discs
+
+    tan_x = np.tan(np.radians(sensor["fov"]) / 2)
+    tan_y = tan_x * height / width
+    x = (2.0 * (np.arange(frame.x, frame.x + frame.width) + 0.5) / width - 1.0) * tan_x
+    y = (1.0 - 2.0 * (np.arange(frame.y, frame.y + frame.height) + 0.5) / height) * tan_y
+    depth = distance / np.sqrt(1.0 + x[None, :] ** 2 + y[:, None] ** 2)  # along the optical axis
+    aperture, focus = float(sensor["aperture_radius"]), float(sensor["focus_distance"])
+    near = np.where(depth > 0, depth, focus)
+    radius = aperture * np.abs(1.0 - focus / near) / (focus * tan_x) * (width / 2)  # as ``glints_window``'s
+    return scatter_discs(np.ascontiguousarray(glints, np.float32), depth.astype(np.float32), radius.astype(np.float32))
 
 
 def guide_albedo(material: Material) -> tuple[float, float, float]:
@@ -710,12 +730,14 @@ def render_layers(
         part = np.asarray(
             mi.render(mi.load_dict(highlight_dict(scene, description, window), optimize=False), seed=seed), np.float32
         )
+    frame = crop or Crop(0, 0, width, height)
     glints = part
     if window is not None:  # the rest of the film is the black backdrop
-        frame = crop or Crop(0, 0, width, height)
         glints = np.zeros(image.shape[:2] + part.shape[2:], np.float32)
         top, left = window.y - frame.y, window.x - frame.x
         glints[top : top + window.height, left : left + window.width] = part
+    sharp = np.maximum(np.nan_to_num(glints[..., 0:3], nan=0.0, posinf=0.0), 0.0)
+    glints = defocus(sharp, glints[..., 3], description["sensor"], width, height, frame)
     color, glints = (np.nan_to_num(x[..., 0:3], nan=0.0, posinf=0.0) * np.float32(EXPOSURE) for x in (image, glints))
     albedo, normal = np.clip(aov[..., 0:3], 0.0, 1.0), np.clip(aov[..., 3:6], -1.0, 1.0)
     return Layers(np.maximum(color, 0.0), albedo, normal, np.maximum(glints, 0.0))
@@ -724,8 +746,9 @@ def render_layers(
 def load_renderer() -> None:
     """Load every Mitsuba plugin (≈ 0.2 s for 100) and Open Image Denoise's CPU device now, so a preview that then
     renders while another thread computes never loads a shared library: a ``dlopen`` here while the other thread is
-    in one can deadlock (the loader's lock against the GIL; USD's initialiser drops and retakes the GIL). The
-    preview node's ``overlap`` (``nodegraph.executor.Beside``)."""
+    in one can deadlock (the loader's lock against the GIL; USD's initialiser drops and retakes the GIL); numba's
+    libraries and the glints' blur kernel (``bokeh``) as well. The preview node's ``overlap``
+    (``nodegraph.executor.Beside``)."""
     import os
 
     import mitsuba as mi
@@ -739,6 +762,9 @@ def load_renderer() -> None:
             plugins.plugin_type(stem)  # loads the plugin's library
     blank = np.zeros((8, 8, 3), np.float32)
     pyoidn.denoise(blank, albedo=blank, normal=blank, hdr=True, quality=DENOISE_QUALITY)
+    from .bokeh import scatter_discs  # numba and the glints' blur kernel (from its cache), loaded here too
+
+    scatter_discs(blank, blank[..., 0], blank[..., 0])
 
 
 def denoise(layers: Layers) -> np.ndarray:

@@ -33,11 +33,13 @@ from .studio import AMBIENT
     #     met the element's dielectric skin): 58.5 → 35.6 CPU s, 134 → 84 s wall at load ≈ 8 on the main job,
     #     −0.6 dB / −0.036 SSIM in the eggs window against 256 spp (docs/accuracy.md, "Preview cost")
     # 11: shaved ice a matte thin diffuser, no medium (docs/look.md, "Kakigori"): the heap white, not grey glass
-    version=11,
-    # Mitsuba renders in its own threads with the GIL released and no numba kernel runs here: the run computes
-    # what does not need the preview (export, measure) in a second thread meanwhile (nodegraph.executor.Beside),
-    # started once every library the preview loads is loaded (load_renderer: USD's loading in the export beside
-    # deadlocked against Mitsuba loading a plugin)
+    # 12: the glints' pass through a pinhole, each glint spread over its circle of confusion (``bokeh``): smooth
+    #     bokeh where 2 spp through the lens gave dots; the glaze glints again (docs/look.md, "Bokeh, not dots")
+    version=12,
+    # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,
+    # nogil): the run computes what does not need the preview (export, measure) in a second thread meanwhile
+    # (nodegraph.executor.Beside), started once every library the preview loads is loaded (load_renderer: USD's
+    # loading in the export beside deadlocked against Mitsuba loading a plugin)
     overlap=load_renderer,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
