@@ -27,19 +27,20 @@ vertex colours of the exported files and, with ``subsurface`` off, as the per-ve
 
 Light: a procedural studio (``studio``): a softbox key along the shade node's key light, a fill two stops under it
 on the camera's side, a rim light behind the subject, a dim ambient and a matte seamless backdrop; the camera is a
-thin lens focused on the front of the subject. The key's small bright core (``HIGHLIGHT_ANGLE``) is a
-specular-only light, as a photographer sets a strip light
-for the glints: it is rendered in a pass of its own, one bounce, every surface reflecting only
-with its gloss (its clear coat, or the skin of a transmissive element: Fresnel at its IOR), and added after
-denoising. In the denoised path-traced pass a glint is a few bright samples among dark ones, which the
-denoiser reads as noise and erases (``benchmarks/bench_preview.py --highlights``: highlight energy 0 after
-OIDN); the one-bounce pass of a smooth or glossy reflection has no such noise and needs no denoising. Left
-out of the path-traced pass, the core does not add caustics through the eggs (found only by chance: fireflies).
-Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass (1 spp, ``GUIDE_SPP``);
-Intel Open Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels
-independent (what OIDN expects) and makes the render bit-reproducible: image blocks do not overlap, so
-the order threads finish in cannot change a sum. Meshes go to Mitsuba as binary PLY files in a temporary
-folder, one per material (its PLY loader is ~50× faster than filling ``mi.Mesh`` buffers from Python).
+thin lens focused on the front of the subject. The key's small bright core (``HIGHLIGHT_ANGLE``) is a specular-only
+light, as a photographer sets a strip light for the glints: it is rendered in a pass of its own, one bounce, every
+surface reflecting only with its gloss (its clear coat, or the skin of a transmissive element: Fresnel at its IOR),
+through a pinhole, each glint then spread over the thin lens's circle of confusion at its depth (``defocus``,
+``bokeh``: smooth bokeh, where 2 spp through the lens gave an out-of-focus glint as a few dots), and added after
+denoising. In the denoised path-traced pass a glint is a few bright samples among dark ones, which the denoiser
+reads as noise and erases (``benchmarks/bench_preview.py --highlights``: highlight energy 0 after OIDN); the
+one-bounce pass of a smooth or glossy reflection has no such noise and needs no denoising. Left out of the
+path-traced pass, the core does not add caustics through the eggs (found only by chance: fireflies). Mitsuba's
+``aov`` integrator gives albedo and shading normals in a second, cheaper pass (1 spp, ``GUIDE_SPP``); Intel Open
+Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels independent (what OIDN
+expects) and makes the render bit-reproducible: image blocks do not overlap, so the order threads finish in cannot
+change a sum. Meshes go to Mitsuba as binary PLY files in a temporary folder, one per material (its PLY loader is
+~50× faster than filling ``mi.Mesh`` buffers from Python).
 """
 
 from __future__ import annotations
@@ -77,12 +78,17 @@ HIGHLIGHT_ANGLE = 0.12
 HIGHLIGHT_RADIANCE = 60.0
 # the glints' pass is one bounce: samples for antialiased edges, not for converging light. 4 (was 8): 15.8 → ≈ 8 CPU s
 # of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost"); 2 (issue 27):
-# ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1
+# ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1. Enough at any depth:
+# the pass is sharp (a pinhole) and the lens's blur comes after (``defocus``); through the lens, 2 spp gave an
+# out-of-focus glint's disc as a few dots, and a smooth disc would need hundreds
 HIGHLIGHT_SPP = 2
 # the glints' pass renders only the window of the film where a glint can be (``glints_window``): the subject's hull
 # widened by the lens's blur and this many pixels. On the main job 58 % of the frame, 2.3–2.4 → 1.6 CPU s, every
 # glint pixel of the whole-frame pass inside it (3–4 px from its edges at the bowl's rim)
 GLINTS_MARGIN = 4
+# the glints' blur (``defocus``) needs each pixel's depth through the pinhole: a 1-spp aov pass over the glints'
+# scene (the aov integrator around the glints' own path integrator cost ≈ 2–3 CPU s more on the main job than the two)
+DEPTH_AOV = "distance:depth"
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
@@ -432,8 +438,8 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
     """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
     surface reflecting only its gloss (``specular_bsdf``), the backdrop black, lit by the key's bright core
     alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce; rendered in ``window`` of the film
-    if given (``glints_window``), through a pinhole at the lens's centre, with each pixel's distance along its ray
-    as a fourth channel (0: nothing hit), for ``defocus`` to blur as the thin lens would."""
+    if given (``glints_window``), through a pinhole at the lens's centre, sharp at every depth, for ``defocus`` to
+    blur as the thin lens would (with ``DEPTH_AOV``'s distances)."""
     shapes = {}
     for key, shape in description.items():
         if key.startswith("shape_"):
@@ -452,7 +458,7 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
         }
     return {
         "type": "scene",
-        "integrator": {"type": "aov", "aovs": "distance:depth", "integrator": {"type": "path", "max_depth": 2}},
+        "integrator": {"type": "path", "max_depth": 2},
         "sensor": sensor,
         "key": {
             "type": "sphere",
@@ -466,8 +472,9 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
 
 
 def defocus(glints: np.ndarray, distance: np.ndarray, sensor: dict, width: int, height: int, frame: Crop) -> np.ndarray:
-    """The glints' pass (``highlight_dict``: sharp, through a pinhole; linear RGB and each pixel's distance along
-    its ray, in the ``frame`` of the ``width`` × ``height`` film) as the scene's thin lens (``sensor``) shows it:
+    """The glints' pass (``highlight_dict``: sharp, through a pinhole; linear RGB, and each pixel's distance along
+    its ray, 0 where nothing is, in the ``frame`` of the ``width`` × ``height`` film) as the scene's thin lens
+    (``sensor``) shows it:
     every glint spread over a uniform disc, its circle of confusion at its depth (``bokeh.scatter_discs``): the
     smooth bokeh that the lens converges to, where two samples a pixel through the lens gave an out-of-focus glint
     as a few bright dots (docs/look.md, "Bokeh, not dots"). A pinhole sensor: the pass as it is."""
@@ -727,9 +734,13 @@ def render_layers(
             np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=GUIDE_SPP), np.float32), loaded, scene
         )
         window = glints_window(set_up, camera, width, height, glints_core(description), crop)
-        part = np.asarray(
-            mi.render(mi.load_dict(highlight_dict(scene, description, window), optimize=False), seed=seed), np.float32
-        )
+        pinhole = mi.load_dict(highlight_dict(scene, description, window), optimize=False)
+        part = np.asarray(mi.render(pinhole, seed=seed), np.float32)[..., 0:3]
+        distance = np.zeros_like(part[..., :1])
+        if description["sensor"]["type"] == "thinlens":  # its blur (``defocus``) needs each pixel's depth
+            depth = mi.load_dict({"type": "aov", "aovs": DEPTH_AOV})
+            distance = np.asarray(mi.render(pinhole, integrator=depth, seed=seed, spp=1), np.float32)
+        part = np.concatenate([part, distance], axis=-1)
     frame = crop or Crop(0, 0, width, height)
     glints = part
     if window is not None:  # the rest of the film is the black backdrop
