@@ -80,7 +80,8 @@ HIGHLIGHT_RADIANCE = 60.0
 # of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost"); 2 (issue 27):
 # ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1. Enough at any depth:
 # the pass is sharp (a pinhole) and the lens's blur comes after (``defocus``); through the lens, 2 spp gave an
-# out-of-focus glint's disc as a few dots, and a smooth disc would need hundreds
+# out-of-focus glint's disc as a few dots (a pixel of a 10-px disc sees a 1–2 px glint from ≈ 1 % of the aperture:
+# ≈ 10 % noise at 10,000 spp; docs/look.md, "Bokeh, not dots")
 HIGHLIGHT_SPP = 2
 # the glints' pass renders only the window of the film where a glint can be (``glints_window``): the subject's hull
 # widened by the lens's blur and this many pixels. On the main job 58 % of the frame, 2.3–2.4 → 1.6 CPU s, every
@@ -474,10 +475,10 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
 def defocus(glints: np.ndarray, distance: np.ndarray, sensor: dict, width: int, height: int, frame: Crop) -> np.ndarray:
     """The glints' pass (``highlight_dict``: sharp, through a pinhole; linear RGB, and each pixel's distance along
     its ray, 0 where nothing is, in the ``frame`` of the ``width`` × ``height`` film) as the scene's thin lens
-    (``sensor``) shows it:
-    every glint spread over a uniform disc, its circle of confusion at its depth (``bokeh.scatter_discs``): the
-    smooth bokeh that the lens converges to, where two samples a pixel through the lens gave an out-of-focus glint
-    as a few bright dots (docs/look.md, "Bokeh, not dots"). A pinhole sensor: the pass as it is."""
+    (``sensor``) shows it: every glint spread over a uniform disc, its circle of confusion at its depth
+    (``bokeh.scatter_discs``): the smooth bokeh that the lens converges to, where two samples a pixel through the
+    lens gave an out-of-focus glint as a few bright dots (docs/look.md, "Bokeh, not dots"). A pinhole sensor: the
+    pass as it is."""
     if sensor["type"] != "thinlens":
         return glints
     from .bokeh import scatter_discs
@@ -775,7 +776,8 @@ def load_renderer() -> None:
     pyoidn.denoise(blank, albedo=blank, normal=blank, hdr=True, quality=DENOISE_QUALITY)
     from .bokeh import scatter_discs  # numba and the glints' blur kernel (from its cache), loaded here too
 
-    scatter_discs(blank, blank[..., 0], blank[..., 0])
+    plane = np.zeros((8, 8), np.float32)  # C-contiguous, as ``defocus`` passes them: the same compiled signature
+    scatter_discs(blank, plane, plane)
 
 
 def denoise(layers: Layers) -> np.ndarray:

@@ -433,3 +433,35 @@ def test_an_out_of_focus_glint_is_a_smooth_disc_not_dots(tmp_path):
     assert dots[far].sum() == 0
     smooth, truth = (uniform_filter(np.asarray(x, np.float64), 5)[far] for x in (glints, converged))
     assert np.abs(smooth - truth).sum() < 0.25 * truth.sum()
+
+
+def test_the_glints_blur_keeps_a_glints_light_unless_a_sharper_nearer_object_covers_it():
+    """``bokeh.scatter_discs``: a glint pixel spread over its circle of confusion keeps its light (the disc sums to
+    it, round: no pixel of it brighter than another but at the anti-aliased edge); a pixel in focus stays as it is;
+    an object nearer than the glint and in focus covers the part of the disc it is on, one as blurred as the glint
+    covers nothing (docs/look.md, "Bokeh, not dots")."""
+    from nodes.export.bokeh import scatter_discs
+
+    glints = np.zeros((41, 41, 3), np.float32)
+    glints[20, 20] = (3.0, 2.0, 1.0)
+    glints[2, 2] = (1.0, 1.0, 1.0)  # in focus
+    depth = np.full((41, 41), 100.0, np.float32)
+    radius = np.full((41, 41), 8.0, np.float32)
+    radius[2, 2] = 0.3
+    out = scatter_discs(glints, depth, radius)
+    assert out[2, 2].tolist() == [1.0, 1.0, 1.0]
+    disc = out.copy()
+    disc[2, 2] = 0.0
+    assert np.allclose(disc.sum(axis=(0, 1)), (3.0, 2.0, 1.0), rtol=1e-5)
+    inside = np.hypot(*np.mgrid[-20:21, -20:21]) <= 7.5
+    assert np.ptp(disc[inside, 0]) < 1e-6 and disc[~(np.hypot(*np.mgrid[-20:21, -20:21]) < 8.5), 0].max() == 0.0
+    near = depth.copy()
+    near[:, :20] = 50.0  # the left half nearer
+    for blur, kept in ((0.0, 0.5), (8.0, 1.0)):
+        r = radius.copy()
+        r[:, :20] = blur
+        r[2, 2] = 0.3
+        covered = scatter_discs(glints, near, r)
+        covered[2, 2] = 0.0
+        assert covered[:, :20, 0].sum() == pytest.approx(0.0 if blur == 0.0 else disc[:, :20, 0].sum(), abs=1e-6)
+        assert covered[..., 0].sum() == pytest.approx(3.0 * kept, rel=0.1)
