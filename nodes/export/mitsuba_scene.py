@@ -80,8 +80,8 @@ HIGHLIGHT_RADIANCE = 60.0
 # of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost"); 2 (issue 27):
 # ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1. Enough at any depth:
 # the pass is sharp (a pinhole) and the lens's blur comes after (``defocus``); through the lens, 2 spp gave an
-# out-of-focus glint's disc as a few dots (a pixel of a 10-px disc sees a 1–2 px glint from ≈ 1 % of the aperture:
-# ≈ 10 % noise at 10,000 spp; docs/look.md, "Bokeh, not dots")
+# out-of-focus glint's disc as a few dots (a pixel of a 6.5-px disc sees a 1–3 px glint from ≈ 1–2 % of the
+# aperture: 10 % noise at ≈ 7,000 spp; docs/look.md, "Bokeh, not dots")
 HIGHLIGHT_SPP = 2
 # the glints' pass renders only the window of the film where a glint can be (``glints_window``): the subject's hull
 # widened by the lens's blur and this many pixels. On the main job 58 % of the frame, 2.3–2.4 → 1.6 CPU s, every
