@@ -8,6 +8,7 @@ reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 previ
     python benchmarks/bench_preview.py --budget 10:64,8:48:4:2 [--save DIR]  # spp:depth[:glints[:guides[:media[:rr]]]]
     python benchmarks/bench_preview.py --time 2 [--save PNG] [--quick]  # the default preview alone: time, same bytes
     python benchmarks/bench_preview.py --passes [--quick]       # CPU seconds of each pass of the default preview
+    python benchmarks/bench_preview.py --bokeh 64 [--save PNG]  # out-of-focus glints: dots, energy vs the lens
 
 The scene is the main job's (``graphs/ikura_don.yaml`` up to ``shade``, from the cache; computed the first
 time), seen by its preview camera. Quality is measured in a window of the 1280 × 720 frame over the
@@ -349,13 +350,129 @@ def passes(quick: bool, cache_dir: Path | None) -> str:
         layers = ms.Layers(np.maximum(color, 0.0), np.clip(aov[..., 0:3], 0, 1), np.clip(aov[..., 3:6], -1, 1), color)
         clock(f"denoiser (OIDN, quality {ms.DENOISE_QUALITY})", lambda: ms.denoise(layers))
         window = ms.glints_window(set_up, camera, width, height, ms.glints_core(description))
+        pinhole = clock(
+            "glints: scene load", lambda: mi.load_dict(ms.highlight_dict(scene, description, window), optimize=False)
+        )
+        part = clock(
+            f"glints: {ms.HIGHLIGHT_SPP} spp, one bounce, pinhole, in {window.width} × {window.height} px",
+            lambda: np.asarray(mi.render(pinhole, seed=0), np.float32),
+        )
+        depth = mi.load_dict({"type": "aov", "aovs": ms.DEPTH_AOV})
+        distance = clock(
+            "glints: depth, 1 spp", lambda: np.asarray(mi.render(pinhole, integrator=depth, seed=0, spp=1), np.float32)
+        )
+        sharp, far = np.zeros((height, width, 3), np.float32), np.zeros((height, width), np.float32)
+        sharp[window.y : window.y + window.height, window.x : window.x + window.width] = part[..., :3]
+        far[window.y : window.y + window.height, window.x : window.x + window.width] = distance[..., 0]
+        frame = ms.Crop(0, 0, width, height)
         clock(
-            f"glints: {ms.HIGHLIGHT_SPP} spp, one bounce, in {window.width} × {window.height} px",
-            lambda: mi.render(mi.load_dict(ms.highlight_dict(scene, description, window), optimize=False), seed=0),
+            "glints: the lens's blur (bokeh)",
+            lambda: ms.defocus(sharp, far, description["sensor"], width, height, frame),
         )
     subject = "synthetic scene" if quick else "main job"
     head = f"Passes of the default preview, {width} × {height}, {subject}; {conditions()}"
     return "\n".join([head, "", "| pass | CPU s | wall s |", "|---|---|---|", *rows])
+
+
+def bokeh(quick: bool, cache_dir: Path | None, reference_spp: int, save: Path | None) -> str:
+    """Out-of-focus glints in the default preview (docs/look.md, "Bokeh, not dots"). The circle of confusion of each
+    pixel (its radius in pixels, from a pinhole depth pass of the scene); in the final 8-bit picture the isolated
+    bright dots: pixels whose sRGB luminance (0–1) exceeds its 5 × 5 neighbourhood's median by more than 0.2, out of
+    focus (circle of confusion ≥ 2 px) and in focus (< 1 px); the glints' layer (linear luminance) against the
+    glints' pass through the thin lens at ``reference_spp`` (what the lens converges to): its energy out of and in
+    focus, the highlight energy in focus (luminance above the reference's 99th percentile there, summed: the
+    ``--highlights`` measure) and, out of focus, the L1 distance of the two smoothed over 5 × 5 pixels relative to
+    the reference's. Works on this and on older code (``PYTHONPATH``): it only calls ``render_layers``,
+    ``scene_dict`` and ``highlight_dict``."""
+    import tempfile
+
+    import mitsuba as mi
+    from scipy.ndimage import median_filter, uniform_filter
+
+    from nodes.export import mitsuba_scene as ms
+    from nodes.export import studio
+    from nodes.export.mesh_files import linear_to_srgb8
+
+    scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
+    width, height, spp, sun = params["width"], params["height"], params["samples"], params["sun_direction"]
+    if quick:
+        width, height = 320, 180
+    media, ambient = params["subsurface"], params["ambient"]
+    runs = []
+    for _ in range(2):
+        t, c = time.perf_counter(), cpu_seconds()
+        layers = ms.render_layers(scene, camera, width, height, spp, sun, 0, subsurface=media, ambient=ambient)
+        image = linear_to_srgb8(ms.tone_map(layers.denoised()))
+        runs.append((time.perf_counter() - t, cpu_seconds() - c, image))
+    if save is not None:
+        from PIL import Image
+
+        Image.fromarray(runs[0][2]).save(save)
+    mi.set_variant("scalar_rgb")
+    weights = np.array([0.2126, 0.7152, 0.0722], np.float32)
+    with tempfile.TemporaryDirectory(prefix="bench_bokeh_") as folder:
+        description = ms.scene_dict(
+            scene, Path(folder), camera, width, height, spp, sun, subsurface=media, ambient=ambient
+        )
+        sensor = description["sensor"]
+        pinhole = {k: v for k, v in sensor.items() if k not in ("aperture_radius", "focus_distance")}
+        depth_pass = {
+            **{k: v for k, v in description.items() if k.startswith("shape_") or k == "backdrop"},
+            "type": "scene",
+            "integrator": {"type": "aov", "aovs": "distance:depth"},
+            "sensor": pinhole | {"type": "perspective", "sampler": {"type": ms.SAMPLER, "sample_count": 1}},
+        }
+        depth_pass = {
+            k: ({kk: vv for kk, vv in v.items() if kk != "interior"} if k.startswith("shape_") else v)
+            for k, v in depth_pass.items()
+        }
+        distance = np.asarray(mi.render(mi.load_dict(depth_pass, optimize=False), seed=0), np.float64)[..., 0]
+        lens = ms.highlight_dict(scene, description)
+        lens["sensor"] = sensor | {"sampler": {"type": ms.SAMPLER, "sample_count": reference_spp}}
+        lens["integrator"] = {"type": "path", "max_depth": 2}
+        t, c = time.perf_counter(), cpu_seconds()
+        converged = np.asarray(mi.render(mi.load_dict(lens, optimize=False), seed=1), np.float32)[..., :3]
+        reference_cpu = cpu_seconds() - c
+    converged = np.nan_to_num(converged, nan=0.0, posinf=0.0) @ weights * np.float32(ms.EXPOSURE)
+    tan_x = np.tan(np.radians(camera.fov) / 2)
+    tan_y = tan_x * height / width
+    x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * tan_x
+    y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * tan_y
+    depth = distance / np.sqrt(1.0 + x[None, :] ** 2 + y[:, None] ** 2)
+    aperture, focus = studio.aperture_radius(camera.fov, camera.f_stop), float(sensor.get("focus_distance", 1.0))
+    radius = aperture * np.abs(1.0 - focus / np.where(depth > 0, depth, focus)) / (focus * tan_x) * (width / 2)
+    out, sharp = (radius >= 2.0) & (depth > 0), (radius < 1.0) & (depth > 0)
+    luma = runs[0][2].astype(np.float64) @ weights / 255.0
+    dots = (luma - median_filter(luma, size=5)) > 0.2
+    glints = layers.highlights @ weights
+    top = float(np.percentile(converged[sharp], 99.0))
+
+    def highlight(color):
+        return float(np.maximum(color[sharp] - top, 0.0).sum())
+
+    smooth, truth = (uniform_filter(np.asarray(v, np.float64), 5)[out] for v in (glints, converged))
+    n = os.cpu_count() or 1
+    times = "; ".join(f"wall {w:.1f} s, CPU {c:.1f} s" for w, c, _ in runs)
+    return "\n".join(
+        [
+            f"Default preview of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height}, "
+            f"{spp} spp, f/{camera.f_stop:g}: {times} (load {os.getloadavg()[0]:.2f}, {n} cores); the same bytes "
+            f"twice: {np.array_equal(runs[0][2], runs[1][2])}",
+            f"Out of focus (circle of confusion ≥ 2 px): {int(out.sum())} px, max radius {radius[depth > 0].max():.1f}"
+            f" px; in focus (< 1 px): {int(sharp.sum())} px",
+            "",
+            "| measure | out of focus | in focus |",
+            "|---|---|---|",
+            f"| isolated bright dots in the picture (luma − 5×5 median > 0.2) | {int(dots[out].sum())} | "
+            f"{int(dots[sharp].sum())} |",
+            f"| glints' energy (linear luminance, summed) | {glints[out].sum():.1f} | {glints[sharp].sum():.1f} |",
+            f"| the lens at {reference_spp} spp ({reference_cpu:.0f} CPU s) | {converged[out].sum():.1f} | "
+            f"{converged[sharp].sum():.1f} |",
+            f"| highlight energy in focus (above {top:.3f}): glints / lens | | {highlight(glints):.1f} / "
+            f"{highlight(converged):.1f} |",
+            f"| L1 (5×5-smoothed) against the lens, relative | {np.abs(smooth - truth).sum() / truth.sum():.3f} | |",
+        ]
+    )
 
 
 def cpu_seconds() -> float:
@@ -378,9 +495,15 @@ def main():
     parser.add_argument("--time", type=int, default=0, metavar="N", help="the default preview alone, N renders: time")
     parser.add_argument("--passes", action="store_true", help="CPU seconds of each pass of the default preview")
     parser.add_argument(
+        "--bokeh", type=int, default=0, metavar="SPP", help="out-of-focus glints against the lens at SPP samples"
+    )
+    parser.add_argument(
         "--save", type=Path, default=None, help="--time: the first render's PNG; --budget: a folder for each frame"
     )
     args = parser.parse_args()
+    if args.bokeh:
+        print(bokeh(args.quick, args.cache_dir, args.bokeh, args.save))
+        return
     if args.passes:
         print(passes(args.quick, args.cache_dir))
         return

@@ -28,19 +28,20 @@ vertex colours of the exported files and, with ``subsurface`` off, as the per-ve
 
 Light: a procedural studio (``studio``): a softbox key along the shade node's key light, a fill two stops under it
 on the camera's side, a rim light behind the subject, a dim ambient and a matte seamless backdrop; the camera is a
-thin lens focused on the front of the subject. The key's small bright core (``HIGHLIGHT_ANGLE``) is a
-specular-only light, as a photographer sets a strip light
-for the glints: it is rendered in a pass of its own, one bounce, every surface reflecting only
-with its gloss (its clear coat, or the skin of a transmissive element: Fresnel at its IOR), and added after
-denoising. In the denoised path-traced pass a glint is a few bright samples among dark ones, which the
-denoiser reads as noise and erases (``benchmarks/bench_preview.py --highlights``: highlight energy 0 after
-OIDN); the one-bounce pass of a smooth or glossy reflection has no such noise and needs no denoising. Left
-out of the path-traced pass, the core does not add caustics through the eggs (found only by chance: fireflies).
-Mitsuba's ``aov`` integrator gives albedo and shading normals in a second, cheaper pass (1 spp, ``GUIDE_SPP``);
-Intel Open Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels
-independent (what OIDN expects) and makes the render bit-reproducible: image blocks do not overlap, so
-the order threads finish in cannot change a sum. Meshes go to Mitsuba as binary PLY files in a temporary
-folder, one per material (its PLY loader is ~50× faster than filling ``mi.Mesh`` buffers from Python).
+thin lens focused on the front of the subject. The key's small bright core (``HIGHLIGHT_ANGLE``) is a specular-only
+light, as a photographer sets a strip light for the glints: it is rendered in a pass of its own, one bounce, every
+surface reflecting only with its gloss (its clear coat, or the skin of a transmissive element: Fresnel at its IOR),
+through a pinhole, each glint then spread over the thin lens's circle of confusion at its depth (``defocus``,
+``bokeh``: smooth bokeh, where 2 spp through the lens gave an out-of-focus glint as a few dots), and added after
+denoising. In the denoised path-traced pass a glint is a few bright samples among dark ones, which the denoiser
+reads as noise and erases (``benchmarks/bench_preview.py --highlights``: highlight energy 0 after OIDN); the
+one-bounce pass of a smooth or glossy reflection has no such noise and needs no denoising. Left out of the
+path-traced pass, the core does not add caustics through the eggs (found only by chance: fireflies). Mitsuba's
+``aov`` integrator gives albedo and shading normals in a second, cheaper pass (1 spp, ``GUIDE_SPP``); Intel Open
+Image Denoise (``pyoidn``) uses them as guides. The box reconstruction filter keeps pixels independent (what OIDN
+expects) and makes the render bit-reproducible: image blocks do not overlap, so the order threads finish in cannot
+change a sum. Meshes go to Mitsuba as binary PLY files in a temporary folder, one per material (its PLY loader is
+~50× faster than filling ``mi.Mesh`` buffers from Python).
 """
 
 from __future__ import annotations
@@ -50,7 +51,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..shading.materials import CERAMIC
 from ..values import Material, ShadedScene
 from . import studio
 from .look import (
@@ -81,12 +81,18 @@ HIGHLIGHT_ANGLE = 0.12
 HIGHLIGHT_RADIANCE = 60.0
 # the glints' pass is one bounce: samples for antialiased edges, not for converging light. 4 (was 8): 15.8 → ≈ 8 CPU s
 # of the main job's preview (benchmarks/bench_preview.py --budget; docs/accuracy.md, "Preview cost"); 2 (issue 27):
-# ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1
+# ≈ 1.8 CPU s less, the glints as sharp, a little thinner at 6× zoom, no difference seen at 1:1. Enough at any depth:
+# the pass is sharp (a pinhole) and the lens's blur comes after (``defocus``); through the lens, 2 spp gave an
+# out-of-focus glint's disc as a few dots (a pixel of a 6.5-px disc sees a 1–3 px glint from ≈ 1–2 % of the
+# aperture: 10 % noise at ≈ 7,000 spp; docs/look.md, "Bokeh, not dots")
 HIGHLIGHT_SPP = 2
 # the glints' pass renders only the window of the film where a glint can be (``glints_window``): the subject's hull
 # widened by the lens's blur and this many pixels. On the main job 58 % of the frame, 2.3–2.4 → 1.6 CPU s, every
 # glint pixel of the whole-frame pass inside it (3–4 px from its edges at the bowl's rim)
 GLINTS_MARGIN = 4
+# the glints' blur (``defocus``) needs each pixel's depth through the pinhole: a 1-spp aov pass over the glints'
+# scene (the aov integrator around the glints' own path integrator cost ≈ 2–3 CPU s more on the main job than the two)
+DEPTH_AOV = "distance:depth"
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
@@ -384,9 +390,7 @@ def specular_bsdf(material: Material) -> dict:
     """Reflection only, as the glints' pass sees a surface: Fresnel at the material's IOR times its gloss weight,
     a microfacet lobe at the gloss roughness (Mitsuba's (rough)plastic with no diffuse part); black when matte."""
     weight, rough = gloss(material)
-    # the glints are the food's: a prop's glaze keeps the softbox's reflection of the path-traced pass, and its core's
-    # glint, out of focus on the bowl's far rim, came out of this pass's 2 spp as a dotted line (docs/look.md)
-    if weight <= 0 or material.name == CERAMIC:
+    if weight <= 0:
         return {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
     bsdf = {
         "type": "plastic",
@@ -446,14 +450,16 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
     """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
     surface reflecting only its gloss (``specular_bsdf``), the backdrop black, lit by the key's bright core
     alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce; rendered in ``window`` of the film
-    if given (``glints_window``)."""
+    if given (``glints_window``), through a pinhole at the lens's centre, sharp at every depth, for ``defocus`` to
+    blur as the thin lens would (with ``DEPTH_AOV``'s distances)."""
     shapes = {}
     for key, shape in description.items():
         if key.startswith("shape_"):
             bsdf = specular_bsdf(scene.materials[int(key.removeprefix("shape_"))])
             shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
     centre, radius = glints_core(description)
-    sensor = dict(description["sensor"])
+    sensor = {k: v for k, v in description["sensor"].items() if k not in ("aperture_radius", "focus_distance")}
+    sensor["type"] = "perspective"  # the lens's blur is ``defocus``'s, after the pass
     sensor["sampler"] = {"type": SAMPLER, "sample_count": min(sensor["sampler"]["sample_count"], HIGHLIGHT_SPP)}
     if window is not None:
         sensor["film"] = sensor["film"] | {
@@ -475,6 +481,28 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
         "backdrop": {**description["backdrop"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
         **shapes,
     }
+
+
+def defocus(glints: np.ndarray, distance: np.ndarray, sensor: dict, width: int, height: int, frame: Crop) -> np.ndarray:
+    """The glints' pass (``highlight_dict``: sharp, through a pinhole; linear RGB, and each pixel's distance along
+    its ray, 0 where nothing is, in the ``frame`` of the ``width`` × ``height`` film) as the scene's thin lens
+    (``sensor``) shows it: every glint spread over a uniform disc, its circle of confusion at its depth
+    (``bokeh.scatter_discs``): the smooth bokeh that the lens converges to, where two samples a pixel through the
+    lens gave an out-of-focus glint as a few bright dots (docs/look.md, "Bokeh, not dots"). A pinhole sensor: the
+    pass as it is."""
+    if sensor["type"] != "thinlens":
+        return glints
+    from .bokeh import scatter_discs
+
+    tan_x = np.tan(np.radians(sensor["fov"]) / 2)
+    tan_y = tan_x * height / width
+    x = (2.0 * (np.arange(frame.x, frame.x + frame.width) + 0.5) / width - 1.0) * tan_x
+    y = (1.0 - 2.0 * (np.arange(frame.y, frame.y + frame.height) + 0.5) / height) * tan_y
+    depth = distance / np.sqrt(1.0 + x[None, :] ** 2 + y[:, None] ** 2)  # along the optical axis
+    aperture, focus = float(sensor["aperture_radius"]), float(sensor["focus_distance"])
+    near = np.where(depth > 0, depth, focus)
+    radius = aperture * np.abs(1.0 - focus / near) / (focus * tan_x) * (width / 2)  # as ``glints_window``'s
+    return scatter_discs(np.ascontiguousarray(glints, np.float32), depth.astype(np.float32), radius.astype(np.float32))
 
 
 def guide_albedo(material: Material) -> tuple[float, float, float]:
@@ -718,15 +746,21 @@ def render_layers(
             np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=GUIDE_SPP), np.float32), loaded, scene
         )
         window = glints_window(set_up, camera, width, height, glints_core(description), crop)
-        part = np.asarray(
-            mi.render(mi.load_dict(highlight_dict(scene, description, window), optimize=False), seed=seed), np.float32
-        )
+        pinhole = mi.load_dict(highlight_dict(scene, description, window), optimize=False)
+        part = np.asarray(mi.render(pinhole, seed=seed), np.float32)[..., 0:3]
+        distance = np.zeros_like(part[..., :1])
+        if description["sensor"]["type"] == "thinlens":  # its blur (``defocus``) needs each pixel's depth
+            depth = mi.load_dict({"type": "aov", "aovs": DEPTH_AOV})
+            distance = np.asarray(mi.render(pinhole, integrator=depth, seed=seed, spp=1), np.float32)
+        part = np.concatenate([part, distance], axis=-1)
+    frame = crop or Crop(0, 0, width, height)
     glints = part
     if window is not None:  # the rest of the film is the black backdrop
-        frame = crop or Crop(0, 0, width, height)
         glints = np.zeros(image.shape[:2] + part.shape[2:], np.float32)
         top, left = window.y - frame.y, window.x - frame.x
         glints[top : top + window.height, left : left + window.width] = part
+    sharp = np.maximum(np.nan_to_num(glints[..., 0:3], nan=0.0, posinf=0.0), 0.0)
+    glints = defocus(sharp, glints[..., 3], description["sensor"], width, height, frame)
     color, glints = (np.nan_to_num(x[..., 0:3], nan=0.0, posinf=0.0) * np.float32(EXPOSURE) for x in (image, glints))
     albedo, normal = np.clip(aov[..., 0:3], 0.0, 1.0), np.clip(aov[..., 3:6], -1.0, 1.0)
     return Layers(np.maximum(color, 0.0), albedo, normal, np.maximum(glints, 0.0))
@@ -735,8 +769,9 @@ def render_layers(
 def load_renderer() -> None:
     """Load every Mitsuba plugin (≈ 0.2 s for 100) and Open Image Denoise's CPU device now, so a preview that then
     renders while another thread computes never loads a shared library: a ``dlopen`` here while the other thread is
-    in one can deadlock (the loader's lock against the GIL; USD's initialiser drops and retakes the GIL). The
-    preview node's ``overlap`` (``nodegraph.executor.Beside``)."""
+    in one can deadlock (the loader's lock against the GIL; USD's initialiser drops and retakes the GIL); numba's
+    libraries and the glints' blur kernel (``bokeh``) as well. The preview node's ``overlap``
+    (``nodegraph.executor.Beside``)."""
     import os
 
     import mitsuba as mi
@@ -750,6 +785,10 @@ def load_renderer() -> None:
             plugins.plugin_type(stem)  # loads the plugin's library
     blank = np.zeros((8, 8, 3), np.float32)
     pyoidn.denoise(blank, albedo=blank, normal=blank, hdr=True, quality=DENOISE_QUALITY)
+    from .bokeh import scatter_discs  # numba and the glints' blur kernel (from its cache), loaded here too
+
+    plane = np.zeros((8, 8), np.float32)  # C-contiguous, as ``defocus`` passes them: the same compiled signature
+    scatter_discs(blank, plane, plane)
 
 
 def denoise(layers: Layers) -> np.ndarray:

@@ -35,11 +35,13 @@ from .studio import AMBIENT
     # 11: shaved ice a matte thin diffuser, no medium (docs/look.md, "Kakigori"): the heap white, not grey glass
     # 12: shaved ice a scattering medium behind no skin (a null boundary; issue 26: light under the skin of ice
     #     too): white like a white diffuse heap (1.1 ×), not grey glass (docs/look.md, "Kakigori")
-    version=12,
-    # Mitsuba renders in its own threads with the GIL released and no numba kernel runs here: the run computes
-    # what does not need the preview (export, measure) in a second thread meanwhile (nodegraph.executor.Beside),
-    # started once every library the preview loads is loaded (load_renderer: USD's loading in the export beside
-    # deadlocked against Mitsuba loading a plugin)
+    # 13: the glints' pass through a pinhole, each glint spread over its circle of confusion (``bokeh``): smooth
+    #     bokeh where 2 spp through the lens gave dots; the glaze glints again (docs/look.md, "Bokeh, not dots")
+    version=13,
+    # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,
+    # nogil, not parallel): the run computes what does not need the preview (export, measure) in a second thread
+    # meanwhile (nodegraph.executor.Beside), started once every library the preview loads is loaded
+    # (load_renderer: USD's loading in the export beside deadlocked against Mitsuba loading a plugin)
     overlap=load_renderer,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},

@@ -153,9 +153,9 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
     default syrup's top rendered sRGB (226, 86, 114), pink, against the syrup's (225, 39, 69); squared (224, 50, 74);
     docs/look.md, "Kakigori"). Its free path is short (0.05 mm) because absorption happens at the medium's
     collisions (one σt for every channel, ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm
-    flake (at 0.6 mm the top rendered pale pink). It is wet: glossy (roughness 0.15, index 1.33) under a clear coat (the key's glints;
-    ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its diffuse light on, 30 % straight through
-    (index-matched ice and syrup are clear)."""
+    flake (at 0.6 mm the top rendered pale pink). It is wet: glossy (roughness 0.15, index 1.33) under a clear coat
+    (the key's glints; ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its diffuse light on, 30 %
+    straight through (index-matched ice and syrup are clear)."""
     ice = Material(
         name=ICE,
         base_color=(0.96, 0.965, 0.97),

@@ -392,3 +392,85 @@ def test_the_denoisers_albedo_tells_the_eggs_from_the_rice(shaded, monkeypatch):
     rice_rgb = np.median(albedo[rice], axis=0)
     assert egg_red > 0.5 and egg_green < 0.3 * egg_red  # a red egg, not a grey skin
     assert rice_rgb.min() > 0.5  # pale rice
+
+
+def _defocused_spheres():
+    """Two spheres under a glossy clear coat (roughness 0.15): a small one near the camera, in focus (the lens
+    focuses on the subject's nearest point), and a large one 120 mm behind it, far out of focus at f/16."""
+    from nodegraph.values import Mesh
+    from nodes.elements.grain_shapes import icosphere
+    from nodes.export.mitsuba_scene import Camera
+    from nodes.values import Material, ShadedScene
+
+    vertices, faces = icosphere(4)
+    elevation, azimuth = np.radians(30.0), np.radians(20.0)
+    view = np.array([np.sin(azimuth) * np.cos(elevation), -np.cos(azimuth) * np.cos(elevation), np.sin(elevation)])
+    spheres = [(np.zeros(3), 6.0), (-120.0 * view + np.array([30.0, 0.0, 0.0]), 20.0)]
+    meshes = [Mesh(vertices * radius + centre, faces, normals=vertices.copy()) for centre, radius in spheres]
+    glossy = Material(name="glossy", base_color=(0.05, 0.05, 0.05), clearcoat=1.0, clearcoat_roughness=0.15, ior=1.5)
+    return ShadedScene(meshes, (glossy,), np.zeros(2, np.int32)), Camera(30.0, 20.0, 35.0, 0.1, 16.0, 0.0)
+
+
+def test_an_out_of_focus_glint_is_a_smooth_disc_not_dots(tmp_path):
+    """The key's glint on a sphere far out of focus is a blur disc. The glints' pass sampled it through the thin lens
+    at 2 spp (``HIGHLIGHT_SPP``), so each pixel of the disc saw the glint or not: a few bright dots (here 30
+    isolated pixels, 4× their neighbourhood's mean, in the far sphere's half of the frame, on the old code; the
+    session-42 fix was to give the bowl's glaze no glints). The pass is now sharp, through a pinhole, and each glint
+    pixel spread over its circle of confusion (``mitsuba_scene.defocus``): no dot, and the half frame, smoothed over
+    5 × 5 pixels, within 25 % (L1, relative) of what the lens converges to (the pass through the lens at 256 spp):
+    10 % against 1,024 spp, where 2 spp through the lens were 58 % off."""
+    import mitsuba as mi
+    from scipy.ndimage import uniform_filter
+
+    from nodes.export import mitsuba_scene as ms
+
+    scene, camera = _defocused_spheres()
+    width, height, sun = 160, 90, (-0.45, -0.6, 0.75)
+    weights = np.array([0.2126, 0.7152, 0.0722], np.float32)
+    glints = ms.render_layers(scene, camera, width, height, 2, sun).highlights @ weights
+    mi.set_variant("scalar_rgb")
+    description = ms.scene_dict(scene, tmp_path, camera, width, height, 2, sun)
+    lens = ms.highlight_dict(scene, description)
+    lens["sensor"] = description["sensor"] | {"sampler": {"type": ms.SAMPLER, "sample_count": 256}}
+    lens["integrator"] = {"type": "path", "max_depth": 2}
+    converged = np.asarray(mi.render(mi.load_dict(lens, optimize=False), seed=1))[..., :3] @ weights
+    converged *= np.float32(ms.EXPOSURE)
+    far = np.s_[:, width // 2 :]  # the far sphere's half of the frame
+    assert converged[far].sum() > 10.0  # it has a glint, spread wide
+    neighbours = (uniform_filter(glints.astype(np.float64), 5) * 25 - glints) / 24
+    dots = (glints > 4.0 * neighbours) & (glints > 0.05 * converged[far].max())
+    assert dots[far].sum() == 0
+    smooth, truth = (uniform_filter(np.asarray(x, np.float64), 5)[far] for x in (glints, converged))
+    assert np.abs(smooth - truth).sum() < 0.25 * truth.sum()
+
+
+def test_the_glints_blur_keeps_a_glints_light_unless_a_sharper_nearer_object_covers_it():
+    """``bokeh.scatter_discs``: a glint pixel spread over its circle of confusion keeps its light (the disc sums to
+    it, round: no pixel of it brighter than another but at the anti-aliased edge); a pixel in focus stays as it is;
+    an object nearer than the glint and in focus covers the part of the disc it is on, one as blurred as the glint
+    covers nothing (docs/look.md, "Bokeh, not dots")."""
+    from nodes.export.bokeh import scatter_discs
+
+    glints = np.zeros((41, 41, 3), np.float32)
+    glints[20, 20] = (3.0, 2.0, 1.0)
+    glints[2, 2] = (1.0, 1.0, 1.0)  # in focus
+    depth = np.full((41, 41), 100.0, np.float32)
+    radius = np.full((41, 41), 8.0, np.float32)
+    radius[2, 2] = 0.3
+    out = scatter_discs(glints, depth, radius)
+    assert out[2, 2].tolist() == [1.0, 1.0, 1.0]
+    disc = out.copy()
+    disc[2, 2] = 0.0
+    assert np.allclose(disc.sum(axis=(0, 1)), (3.0, 2.0, 1.0), rtol=1e-5)
+    inside = np.hypot(*np.mgrid[-20:21, -20:21]) <= 7.5
+    assert np.ptp(disc[inside, 0]) < 1e-6 and disc[~(np.hypot(*np.mgrid[-20:21, -20:21]) < 8.5), 0].max() == 0.0
+    near = depth.copy()
+    near[:, :20] = 50.0  # the left half nearer
+    for blur, kept in ((0.0, 0.5), (8.0, 1.0)):
+        r = radius.copy()
+        r[:, :20] = blur
+        r[2, 2] = 0.3
+        covered = scatter_discs(glints, near, r)
+        covered[2, 2] = 0.0
+        assert covered[:, :20, 0].sum() == pytest.approx(0.0 if blur == 0.0 else disc[:, :20, 0].sum(), abs=1e-6)
+        assert covered[..., 0].sum() == pytest.approx(3.0 * kept, rel=0.1)
