@@ -234,7 +234,7 @@ def medium(material: Material) -> dict:
         # light sampling from inside only through a null boundary (shaved ice): a dielectric one blocks every
         # shadow ray cast from within (volpath counts light only through a null boundary), so each was a wasted
         # ray; light still reaches the medium by the phase function's own direction and the boundary's refraction
-        "sample_emitters": boundary_bsdf(material)["type"] == "null",
+        "sample_emitters": not has_skin(material),
     }
 
 
@@ -433,7 +433,7 @@ def glints_window(
     if np.any(depth <= 0):
         return None
     aperture, focus = studio.aperture_radius(camera.fov, camera.f_stop), set_up.focus_distance
-    blur = aperture * np.abs(1.0 - focus / depth) / (focus * tan_x) * (width / 2)  # the CoC's radius in pixels
+    blur = studio.blur_radius(depth, aperture, focus, tan_x, width)
     x = (1.0 + (rel @ right) / (depth * tan_x)) * width / 2
     y = (1.0 - (rel @ up) / (depth * tan_y)) * height / 2
     frame = crop or Crop(0, 0, width, height)
@@ -500,8 +500,7 @@ def defocus(glints: np.ndarray, distance: np.ndarray, sensor: dict, width: int, 
     y = (1.0 - 2.0 * (np.arange(frame.y, frame.y + frame.height) + 0.5) / height) * tan_y
     depth = distance / np.sqrt(1.0 + x[None, :] ** 2 + y[:, None] ** 2)  # along the optical axis
     aperture, focus = float(sensor["aperture_radius"]), float(sensor["focus_distance"])
-    near = np.where(depth > 0, depth, focus)
-    radius = aperture * np.abs(1.0 - focus / near) / (focus * tan_x) * (width / 2)  # as ``glints_window``'s
+    radius = studio.blur_radius(np.where(depth > 0, depth, focus), aperture, focus, tan_x, width)
     return scatter_discs(np.ascontiguousarray(glints, np.float32), depth.astype(np.float32), radius.astype(np.float32))
 
 

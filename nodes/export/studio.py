@@ -179,6 +179,13 @@ def aperture_radius(fov: float, f_stop: float) -> float:
     return 0.0 if f_stop <= 0 else focal_length(fov) / (2.0 * f_stop)
 
 
+def blur_radius(depth, aperture: float, focus: float, tan_x: float, width: int):
+    """Pixels: the radius of a thin lens's circle of confusion for points at ``depth`` along the optical axis
+    (aperture radius ``aperture``, in focus at ``focus``, half the horizontal field's tangent ``tan_x``, a film
+    ``width`` pixels wide): A |1 − f/z| / (f tan(fov_x / 2)) × width / 2."""
+    return aperture * np.abs(1.0 - focus / np.asarray(depth)) / (focus * tan_x) * (width / 2)
+
+
 def focus_distance(points: np.ndarray, origin: np.ndarray, target: np.ndarray, focus: float) -> float:
     """Distance along the optical axis from the camera to the plane in focus: the ``focus`` quantile of the
     subject's depths (0 its nearest point, 1 its farthest)."""
