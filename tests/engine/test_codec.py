@@ -44,3 +44,17 @@ def test_object_arrays_and_garbage_are_refused():
         codec.decode(b"not a zip")
     with pytest.raises(codec.DecodeError, match="expected Mesh"):
         codec.decode(codec.encode(Table({"x": np.arange(2)})), Mesh)
+
+
+def test_a_table_read_back_from_the_cache_writes_the_same_csv(tmp_path):
+    """The codec stores a dict's keys sorted, so a table decoded from the cache has its columns in name order; the
+    CSV it writes must not depend on that order (the main job's measure.csv changed its header on a cached run)."""
+    from nodegraph.output_files import write_output
+
+    table = Table({"frame": np.arange(3), "skin": np.ones(3), "overlap": np.zeros(3)}, index="frame")
+    (tmp_path / "cold").mkdir()
+    (tmp_path / "cached").mkdir()
+    cold = write_output(table, tmp_path / "cold", "t")[0].read_bytes()
+    cached = write_output(codec.decode(codec.encode(table)), tmp_path / "cached", "t")[0].read_bytes()
+    assert cold == cached
+    assert cold.splitlines()[0] == b"frame,overlap,skin"
