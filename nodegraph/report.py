@@ -121,7 +121,8 @@ class Reporter:
 
     def warn(self, message: str) -> None:
         if not self.quiet:
-            self.console.print(f"[yellow]warning:[/yellow] {message}")
+            # soft wrap: a hard wrap at the console's width breaks paths and phrases in pipes and logs
+            self.console.print(f"[yellow]warning:[/yellow] {message}", soft_wrap=True)
 
     def info(self, message: str) -> None:
         if not self.quiet:

@@ -94,7 +94,8 @@ def test_params_indented_as_a_node_get_one_indentation_hint(registry):
     assert "'params' is a key of a node, not a node: check the indentation; indent it under node 'pts'" in str(issue)
 
 
-def test_a_failed_first_run_does_not_claim_an_older_recording(tmp_path, capsys):
+def test_a_failed_first_run_does_not_claim_an_older_recording(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "40")  # a narrow terminal: warnings must not be hard-wrapped mid-phrase
     recipe = tmp_path / "my_don.yaml"
     recipe.write_text(
         "outputs: [boom.spheres]\nnodes:\n  pts: {type: toy_points}\n"
