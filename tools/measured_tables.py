@@ -166,8 +166,8 @@ TABLES = {
         None,
         [
             ("", field("quantity")),
-            ("preview (pinhole + circle of confusion)", value("preview", 3)),
-            ("thin lens, 64 spp", value("lens_64spp", 3)),
+            ("preview (pinhole + circle of confusion)", value("preview")),
+            ("thin lens, 64 spp", value("lens_64spp")),
         ],
     ),
     "blender": (
