@@ -181,6 +181,21 @@ TABLES = {
             ("R share between", value("r_share_between", 2)),
         ],
     ),
+    "contact": (
+        "contact.jsonl",
+        None,
+        [
+            ("recipe", code("recipe")),
+            ("elements", field("elements")),
+            ("winding p95 / max (L)", value("winding_p95_max")),
+            ("pseudonormal p95 / max (L)", value("pseudonormal_p95_max")),
+            ("pairs > 1 %", value("pairs_over_1pct")),
+            ("folded pairs / faces", value("folded_pairs")),
+            ("volume error p95 / max (> 2 %)", value("volume_error")),
+            ("contact CPU s", value("contact_cpu")),
+            ("total s", value("total")),
+        ],
+    ),
     "cut_islands": (
         "cut.jsonl",
         None,
