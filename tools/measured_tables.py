@@ -196,6 +196,18 @@ TABLES = {
             ("total s", value("total")),
         ],
     ),
+    "blender_instancing": (
+        "blender_instancing.jsonl",
+        None,
+        [
+            ("file", field("file")),
+            ("objects", value("objects")),
+            ("meshes", value("meshes")),
+            ("mesh data", value("mesh_data")),
+            ("import s", value("import_s")),
+            ("bytes", value("bytes")),
+        ],
+    ),
     "cut_islands": (
         "cut.jsonl",
         None,
