@@ -208,6 +208,34 @@ TABLES = {
             ("bytes", value("bytes")),
         ],
     ),
+    "preview_budget": (
+        "preview_budget.jsonl",
+        None,
+        [
+            ("spp", lambda r: str(r["config"]["spp"])),
+            ("roulette from bounce", lambda r: str(r["config"]["rr_depth"])),
+            ("glint spp", lambda r: str(r["config"]["glint_spp"])),
+            ("guide spp", lambda r: str(r["config"]["guide_spp"])),
+            ("PSNR (dB)", value("psnr")),
+            ("SSIM", value("ssim")),
+            ("CPU s", value("cpu")),
+        ],
+    ),
+    "preview_sample_cost": (
+        "preview_sample_cost.jsonl",
+        None,
+        [("variant", field("variant")), ("CPU s", value("cpu")), ("eggs' red (linear)", value("eggs_red"))],
+    ),
+    "preview_guides": (
+        "preview_guides.jsonl",
+        None,
+        [
+            ("guide spp", lambda r: str(r["config"]["guide_spp"])),
+            ("OIDN", lambda r: r["config"]["oidn"]),
+            ("PSNR (dB)", value("psnr")),
+            ("SSIM", value("ssim")),
+        ],
+    ),
     "cut_islands": (
         "cut.jsonl",
         None,
