@@ -236,6 +236,41 @@ TABLES = {
             ("SSIM", value("ssim")),
         ],
     ),
+    "latency": (
+        "latency.jsonl",
+        None,
+        [
+            ("what", field("what")),
+            ("wall s", value("wall")),
+            ("CPU s", value("cpu")),
+            ("load", field("load")),
+            ("command", code("command")),
+        ],
+    ),
+    "recording": (
+        "recording.jsonl",
+        None,
+        [
+            (".rrd MB", value("rrd_mb")),
+            ("chunks (MiB, count)", lambda r: f"{r['values']['chunks_mib']} MiB, {r['values']['chunks']}"),
+            ("entities with data", value("entities")),
+            ("`/shade/scene` MiB", value("shade_scene_mib")),
+            ("read into a chunk store s", value("read_s")),
+            ("viewer ingest s", value("viewer_ingest_s")),
+            ("shade's outputs logged s", value("shade_log_s")),
+        ],
+    ),
+    "rerun_logging": (
+        "rerun_logging.jsonl",
+        None,
+        [
+            ("node", field("node")),
+            ("load ms", value("load_ms")),
+            ("cold log ms", value("cold_log_ms")),
+            ("cached replay ms", value("replay_ms")),
+            ("fragment MB", value("fragment_mb")),
+        ],
+    ),
     "cut_islands": (
         "cut.jsonl",
         None,
