@@ -71,8 +71,7 @@ def write_output(value: Any, directory: Path, stem: str) -> list[Path]:
 def _(value: Table, directory: Path, stem: str) -> list[Path]:
     """A table of 1-D columns as CSV (a header row of column names); other tables as a named .npz. Columns in name
     order, the table's index first: a dict's order is not part of a value (``codec`` stores it sorted), so a table
-    read back from the cache wrote its columns in another order than the run that computed it (the main job's
-    measure.csv, session 43)."""
+    read back from the cache would otherwise write its columns in another order than the run that computed it."""
     names = sorted(value.columns, key=lambda name: (name != value.index, name))
     columns = {name: np.asarray(value.columns[name]) for name in names}
     if not all(c.ndim == 1 for c in columns.values()):

@@ -48,16 +48,10 @@ from .studio import AMBIENT
     params={
         "width": Param(int, 1280, "image width", range=(16, 4096), units="px"),
         "height": Param(int, 720, "image height", range=(16, 4096), units="px"),
-        # 8, denoised, media on, depth 64: benchmarks/bench_preview.py --budget on the main job (eggs over rice,
-        # against 256 spp at depth 128; docs/accuracy.md, "Preview cost"): 10 spp (glints 8, guides 4) 18.3 dB /
-        # SSIM 0.415 / 135.7 CPU s; 8 spp (glints 4, guides 2) 18.2 dB / 0.401 / 104.7 CPU s (52 s on 2 free
-        # cores: the issue's 60 s); 6 spp 18.0 dB / 0.387 / 76.1 CPU s. Then 5 (issue 27), on one quieter run:
-        # 8 spp 18.9 dB / 0.429 / 82.0 CPU s, 6 spp 18.6 / 0.412 / 66.1, 5 spp 18.5 / 0.401 / 55.1, 4 spp 18.3 /
-        # 0.390 / 46.4; the whole 5-spp frame against the 8-spp one 33.2 dB / SSIM 0.966, no visible difference.
-        # Then 3 (issue 27 again; two runs on one reference, load 6–11, light sampling inside the media off): 5 spp
-        # 18.40 dB / 0.406 / 54.1 CPU s, 4 spp 18.09 / 0.390 / 41.4, 3 spp 17.79 / 0.370 / 30.8, 2 spp 17.29 /
-        # 0.345 / 24.6 (glints 2 spp below 5). The image pass is ≈ 8 CPU s per sample: the eggs hold it (their red
-        # light walks 16–64 bounces inside; plain diffuse eggs halve the pass), so its samples are the lever.
+        # 3: priced against 256 spp at depth 128 on the main job's eggs over rice (benchmarks/bench_preview.py
+        # --budget; docs/accuracy.md, "Preview cost"): 5 spp 18.40 dB / SSIM 0.406 / 54.1 CPU s, 4 spp 18.09 / 0.390 /
+        # 41.4, 3 spp 17.79 / 0.370 / 30.8, 2 spp 17.29 / 0.345 / 24.6. The image pass is ≈ 8 CPU s per sample: the
+        # eggs hold it (their red light walks 16–64 bounces inside), so its samples are the lever.
         "samples": Param(int, 3, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)),
         "denoise": Param(bool, True, "Intel Open Image Denoise with albedo + normal guides (pyoidn)"),
         "subsurface": Param(

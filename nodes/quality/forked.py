@@ -15,7 +15,7 @@ are run here: a task that raises then raises here, as it would serially.
 Only the main thread forks. A fork copies the forking thread alone, and the libraries' fork handlers run in it:
 OpenBLAS's stops its worker threads, so a matrix product that another thread had under way waited for them forever.
 ``measure`` runs in the executor's second thread while the preview renders in the main one (``executor.Beside``),
-and the kakigori's run hung there in the preview's ``focus_distance`` (session 43). From any other thread the tasks
+and a fork from there hangs a run in the preview's ``focus_distance``. From any other thread the tasks
 run serially, in that thread.
 """
 
