@@ -76,8 +76,7 @@ def render_sweep(grains, path: Path, width: int = 1280, height: int = 560, spp: 
     import imageio.v3 as iio
     import mitsuba as mi
 
-    from nodes.export.mesh_files import linear_to_srgb8
-    from nodes.export.mitsuba_scene import write_ply
+    from nodes.export.mesh_files import linear_to_srgb8, write_ply
 
     mi.set_variant("scalar_rgb")
     shapes = {}
