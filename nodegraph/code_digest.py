@@ -44,7 +44,8 @@ ENGINE = __name__.partition(".")[0]
 # made canonical (``params``), its context and random stream made (``context``), its inputs decoded from and its
 # outputs encoded into the cache (``codec``)
 ENGINE_ROOTS = (f"{ENGINE}.params", f"{ENGINE}.context", f"{ENGINE}.codec")
-LIBRARIES = "installed distributions"  # the memory's record of them (``installed_distributions``)
+LIBRARIES = "installed distributions"  # the memory's records of them, one per sys.path (``installed_distributions``)
+LIBRARY_RECORDS = 8  # sys.path sets remembered (the CLI's, python -c's, a test session's, …); the oldest go first
 
 # per loaded module and set of project packages: its digest and the third-party top-level packages it imports
 _DIGESTS: weakref.WeakKeyDictionary[ModuleType, dict[frozenset[str], tuple[str, tuple[str, ...]]]] = (
@@ -211,7 +212,8 @@ def installed_distributions() -> dict[str, list[str]]:
     global _INSTALLED
     if _INSTALLED is None:
         folders = {path: _stamp(path) for path in sorted({p or "." for p in sys.path})}
-        record = _load_memory().get(LIBRARIES)
+        where = f"{LIBRARIES} {json.dumps(sorted(folders))}"
+        record = _load_memory().get(where)
         if isinstance(record, dict) and record.get("stamps") == folders and isinstance(record.get("installed"), dict):
             _INSTALLED = record["installed"]
         else:
@@ -230,7 +232,7 @@ def installed_distributions() -> dict[str, list[str]]:
             _INSTALLED = installed
             recent = time.time_ns() - int(RACY_S * 1e9)
             if all(s is None or max(s[2], s[3]) <= recent for s in folders.values()):
-                _store(LIBRARIES, {"stamps": folders, "installed": installed})
+                _store(where, {"stamps": folders, "installed": installed})
     return _INSTALLED
 
 
@@ -324,15 +326,17 @@ def _remember(where: str, found: tuple[str, tuple[str, ...]], read: dict[str, tu
 
 
 def _store(where: str, record: dict) -> None:
-    """Remember ``record`` under ``where`` (the newest), forgetting the oldest digests beyond ``MEMORY_ROOTS``."""
+    """Remember ``record`` under ``where`` (the newest), forgetting the oldest digests beyond ``MEMORY_ROOTS`` and
+    the oldest records of installed distributions beyond ``LIBRARY_RECORDS``."""
     path = memory_file()
     if path is None:
         return
     memory = _load_memory()
     memory.pop(where, None)
     memory[where] = record
-    digests = [key for key in memory if key != LIBRARIES]
-    for old in digests[: max(0, len(digests) - MEMORY_ROOTS)]:
+    libraries = [key for key in memory if key.startswith(LIBRARIES)]
+    digests = [key for key in memory if not key.startswith(LIBRARIES)]
+    for old in digests[: max(0, len(digests) - MEMORY_ROOTS)] + libraries[: max(0, len(libraries) - LIBRARY_RECORDS)]:
         del memory[old]
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -166,19 +166,35 @@ def test_an_edit_to_the_engine_reruns_the_nodes_whose_results_it_decides(
     assert run(load(), cache)[0] == ("ran" if reruns else "cached")
 
 
-def test_the_libraries_installed_are_remembered_across_processes(memory, monkeypatch):
-    """Reading every distribution's metadata takes ≈ 0.4 s: a new process reads the remembered answer, unless a
-    folder on sys.path changed (a distribution installed, upgraded or removed)."""
+def test_the_libraries_installed_are_remembered_across_processes(memory, monkeypatch, tmp_path):
+    """Reading every distribution's metadata takes ≈ 0.4 s: a new process reads the answer remembered for its
+    sys.path (one record per sys.path: the CLI's and python -c's differ), unless a folder on it changed (a
+    distribution installed, upgraded or removed)."""
     import importlib.metadata
 
-    monkeypatch.setattr(code_digest, "_INSTALLED", None)
-    monkeypatch.setattr(code_digest, "RACY_S", 0.0)
-    first = code_digest.installed_distributions()
-    assert any(item.startswith("numpy==") for item in first["numpy"])
-    memory()
-    monkeypatch.setattr(code_digest, "_INSTALLED", None)
-    monkeypatch.setattr(importlib.metadata, "packages_distributions", lambda: pytest.fail("read again"))
-    assert code_digest.installed_distributions() == first
+    real = importlib.metadata.packages_distributions
+    reads = []
+    monkeypatch.setattr(importlib.metadata, "packages_distributions", lambda: reads.append(1) or real())
+
+    def new_process(search_path):
+        monkeypatch.setattr(sys, "path", search_path)
+        monkeypatch.setattr(code_digest, "_INSTALLED", None)
+        memory()
+        return code_digest.installed_distributions()
+
+    path = list(sys.path)
+    first = new_process(path)
+    assert any(item.startswith("numpy==") for item in first["numpy"]) and len(reads) == 1
+    assert new_process(path) == first and len(reads) == 1
+    other = tmp_path / "site"
+    other.mkdir()
+    new_process([str(other), *path])
+    assert new_process(path) == first and new_process([str(other), *path]) and len(reads) == 2
+    info = other / "pepper-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: pepper\nVersion: 1.0\n")
+    (info / "top_level.txt").write_text("pepper\n")
+    assert new_process([str(other), *path])["pepper"] == ["pepper==1.0"] and len(reads) == 3
 
 
 TRICKY = b'''
