@@ -1,4 +1,4 @@
-"""Node type declarations: typed ports, parameters, effects and a version, readable as data.
+"""Node type declarations: typed ports, parameters and effects, readable as data.
 
 A node module declares a node with the ``@node`` decorator around a plain function::
 
@@ -10,9 +10,9 @@ A node module declares a node with the ``@node`` decorator around a plain functi
 
 The decorator returns a ``NodeSpec``; the registry finds specs by scanning module attributes,
 so declaring a node has no side effect and there is no global registry. A node's cached results are
-keyed on the code it runs (``code_digest``), so editing it or a helper it imports re-runs it;
-``version`` is an explicit extra, bumped only for what that code digest cannot see (a data file the
-code reads, a library upgrade that changes results).
+keyed on the code it runs (``code_digest``: its modules and the engine's) and on the versions of the libraries
+that code imports, so editing it, a helper it imports or the engine, or upgrading a library it uses, re-runs it;
+there is no version to bump by hand.
 """
 
 from __future__ import annotations
@@ -79,7 +79,6 @@ class NodeSpec:
     """Everything the engine knows about a node type; ``run`` is the implementation."""
 
     type_name: str
-    version: str
     doc: str
     run: Callable[..., Any]
     inputs: Mapping[str, In] = field(default_factory=dict)
@@ -153,7 +152,6 @@ class NodeSpec:
 def node(
     type_name: str,
     *,
-    version: int | str = 1,
     outputs: Mapping[str, Out],
     inputs: Mapping[str, In] | None = None,
     params: Mapping[str, Param] | None = None,
@@ -167,8 +165,8 @@ def node(
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
     """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
 
-    ``version`` enters the cache key beside the digest of the node's code: bump it to recompute cached
-    results when something outside the project's modules changed them. ``effects`` are the physical
+    The node's cache key covers the code it runs and the libraries' versions (``code_digest``), so nothing is
+    bumped by hand when either changes. ``effects`` are the physical
     effects the node implements; at run time ``ctx.effects`` holds only those the recipe asked for.
     ``random`` nodes get ``ctx.rng`` and the seed enters their cache key; others cannot draw random
     numbers. ``check(params)`` returns ``[(param, message), ...]`` for constraints between parameters.
@@ -209,7 +207,6 @@ def node(
         text = doc or (inspect.getdoc(fn) or "").strip()
         return NodeSpec(
             type_name=type_name,
-            version=str(version),
             doc=text,
             run=fn,
             inputs=MappingProxyType(inputs),

@@ -26,9 +26,6 @@ def _check(p: dict) -> list[tuple[str, str]]:
 
 @node(
     "base_mesh",
-    # 2: the variety is an input (a rice_variety node), no longer a parameter
-    # 3: ice flake curl (a shaving bends as the blade lifts it)
-    version=3,
     inputs={
         "variety": In(
             RiceVariety,

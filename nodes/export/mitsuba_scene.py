@@ -139,20 +139,6 @@ class Crop:
     height: int
 
 
-def write_ply(path: Path, vertices, faces, normals, colors, translucency=None) -> None:
-    """Binary little-endian PLY with float normals, float linear colours (Mitsuba: ``vertex_color``) and
-    optionally a per-vertex diffuse transmission (``trans_x``: Mitsuba's ``vertex_trans``)."""
-    from .mesh_files import binary_ply
-
-    names = ("x", "y", "z", "nx", "ny", "nz", "r", "g", "b")
-    columns = [vertices, normals, colors[:, :3]]
-    if translucency is not None:
-        names += ("trans_x",)
-        columns.append(np.asarray(translucency).reshape(-1, 1))
-    rows = np.hstack(columns).astype("<f4")
-    path.write_bytes(binary_ply([(names, rows)], faces))
-
-
 def path_depth(scene: ShadedScene, subsurface: bool = False) -> int:
     """The path tracer's longest path: ``MAX_DEPTH_FLAKES`` where the scene has ice (a heap of thin diffusers
     that pass light from flake to flake, many flakes deep), ``MAX_DEPTH_MEDIA`` where light scatters inside
@@ -334,7 +320,7 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
     vertices (what the camera frames and focuses on); with ``subsurface``, the volumetric materials' shapes carry their
     medium inside a dielectric boundary."""
     from ..shading.materials import is_ice
-    from .mesh_files import stacked
+    from .mesh_files import stacked, write_ply
 
     shapes = {}
     seen = []

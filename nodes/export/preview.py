@@ -17,27 +17,6 @@ from .studio import AMBIENT
 
 @node(
     "preview",
-    # 2: materials in the path tracer (dielectric ikura, translucent rice from the CDRF σ, glazed bowl),
-    #    key light + sky + table, OIDN denoising, 1280 × 720 and 12 spp by default
-    # 3: paths through ice up to 128 bounces (mitsuba_scene.path_depth): a heap of flakes was cut off dark grey
-    # 4: subsurface: media inside rice, ikura yolks and ice (volpath)
-    # 5: the key's glints in a one-bounce pass added after denoising (the denoiser erased them); 10 spp (was 12)
-    # 6: a procedural studio (softbox key, fill, rim light, seamless backdrop) and a thin lens (``studio``)
-    # 7: warm white rice: its medium scatters the same in every channel, its skin is the water film's, path depth
-    #    64 with media (docs/look.md, "Warm white rice")
-    # 8: 'ambient': the studio's ambient radiance, a parameter (shade's ambient never reached the preview); 8 spp
-    #    (was 10), the glints' pass 4 spp (was 8), the guides 2 (was 4): 136 → 105 CPU s on the main job
-    # 9: 5 spp (was 8): 82.0 → 55.1 CPU s on the main job, −0.5 dB / −0.028 SSIM in the eggs window against 256 spp
-    #    (docs/accuracy.md, "Preview cost")
-    # 10: 3 spp (was 5), glints 2 spp (was 4), no light sampling from inside the media (a shadow ray cast there always
-    #     met the element's dielectric skin): 58.5 → 35.6 CPU s, 134 → 84 s wall at load ≈ 8 on the main job,
-    #     −0.6 dB / −0.036 SSIM in the eggs window against 256 spp (docs/accuracy.md, "Preview cost")
-    # 11: shaved ice a matte thin diffuser, no medium (docs/look.md, "Kakigori"): the heap white, not grey glass
-    # 12: shaved ice a scattering medium behind no skin (a null boundary; issue 26: light under the skin of ice
-    #     too): white like a white diffuse heap (1.1 ×), not grey glass (docs/look.md, "Kakigori")
-    # 13: the glints' pass through a pinhole, each glint spread over its circle of confusion (``bokeh``): smooth
-    #     bokeh where 2 spp through the lens gave dots; the glaze glints again (docs/look.md, "Bokeh, not dots")
-    version=13,
     # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,
     # nogil, not parallel): the run computes what does not need the preview (export, measure) in a second thread
     # meanwhile (nodegraph.executor.Beside), started once every library the preview loads is loaded

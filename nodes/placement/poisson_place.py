@@ -47,7 +47,6 @@ def _fitting_r_hint(mode, vertices, faces, r_fails, candidate_spacing, inset) ->
 
 @node(
     "poisson_place",
-    version=4,
     inputs={
         "shape": In(Mesh, "closed target shape (outward normals)"),
         "elements": In(

@@ -9,7 +9,6 @@ from nodegraph.values import Mesh
 
 @node(
     "mesh_file",
-    version=1,
     outputs={"mesh": Out(Mesh, "the closed user mesh, outward normals")},
     params={
         "path": Param(str, doc="mesh file (.stl, .obj, .ply, .off, .glb) readable by trimesh", file=True),

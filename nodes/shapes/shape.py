@@ -58,10 +58,6 @@ def _region_fits_vessels(node_id: str, nodes) -> list[tuple[str, str]]:
 
 @node(
     "shape",
-    # 3: the vessel output (a bowl's numbers, for vessel_region and measure)
-    # 4: kind 'plate': a round plate with a flat well and a rim (was a box under the onigiri)
-    # 5: the onigiri's sides straight (its gauge bowed them into arcs: a near disc seen from the front; issue 26)
-    version=5,
     outputs={
         "mesh": Out(
             Mesh, "the closed region the elements fill (for a bowl: the cavity to the fill height plus the mound)"

@@ -87,7 +87,6 @@ def dented_outputs(aggregate, dents, figures) -> dict:
 
 @node(
     "flatten_contacts",
-    version=11,  # 11: wall_cells (was fixed at 256)
     inputs=CONTACT_INPUTS,
     outputs={
         "aggregate": Out(Aggregate, "the same elements, each mesh flattened where it pressed into another"),

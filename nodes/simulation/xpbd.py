@@ -30,8 +30,6 @@ def _check(params):
 
 @node(
     "xpbd",
-    # 13: rigid_start, slender, depenetration_speed; 14: contact_offset
-    version=14,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "material": In(

@@ -28,7 +28,7 @@ from nodegraph import Out, node
 from nodegraph.values import Table
 {eager}
 
-@node("kernel_toy", version=1, outputs={{"table": Out(Table, "doubled")}})
+@node("kernel_toy", outputs={{"table": Out(Table, "doubled")}})
 def kernel_toy(ctx):
     """Runs one numba kernel."""
     {lazy}
