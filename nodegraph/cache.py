@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from . import codec
+from . import codec, interrupt
 from .errors import CacheCorruption, NodegraphError
 
 DEFAULT_DIR = ".nodegraph/cache"
@@ -84,6 +84,7 @@ def atomic_write(path: Path, data: bytes, durable: bool = True) -> None:
     tears there is found and computed again."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    interrupt.note(tmp)  # removed by a supervising parent if this process is killed before the rename
     try:
         os.fchmod(fd, 0o666 & ~_UMASK)  # as open() would make it (mkstemp's 0600 would hide outputs from others)
         with os.fdopen(fd, "wb") as handle:
@@ -171,6 +172,7 @@ class Cache:
         folder.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{key}.rrd.", suffix=".tmp", dir=folder)
         os.close(fd)
+        interrupt.note(tmp)
         return Path(tmp)
 
     def _keep_fragment(self, key: str, fragment: Fragment) -> dict[str, Any]:

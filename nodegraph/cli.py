@@ -16,6 +16,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from . import interrupt
 from .cache import (
     LIMIT_ENV_VAR,
     LIMIT_FILE,
@@ -721,6 +722,11 @@ def main(argv: list[str] | None = None) -> int:
         # the recording is closed as partial beside the last complete one
         signal.signal(signal.SIGTERM, _interrupt)
     args = build_parser().parse_args(argv)
+    if argv is None and args.command in ("run", "sweep", "watch"):
+        # in a child that a signal stops within interrupt.GRACE seconds, whatever its node is doing
+        status = interrupt.supervise()
+        if status is not None:
+            return status
     try:
         registry = default_registry(plugins=args.plugin) if args.command not in ("cache", "inspect") else None
         return COMMANDS[args.command](args, registry)

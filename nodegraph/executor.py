@@ -17,7 +17,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Protocol
 
-from . import __version__, codec
+from . import __version__, codec, interrupt
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
@@ -393,6 +393,7 @@ class Executor:
             return self.cache.capture_path(key)
         fd, tmp = tempfile.mkstemp(prefix="nodegraph-", suffix=".rrd")
         os.close(fd)
+        interrupt.note(tmp)
         return Path(tmp)
 
     def _capture_outputs(self, inst: Instance, capture: NodeCapture, outputs: dict[str, Any]) -> Fragment:
@@ -616,7 +617,7 @@ def run_recipe(
             rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=recording_id(recipe)
         )
     recording = executor.recording
-    ok = False
+    ok = stopped = False
     try:
         if pool is not None:
             executor.ran_elsewhere = compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds)
@@ -624,12 +625,17 @@ def run_recipe(
         if out_dir is not None:
             executor.write_outputs(result, wires, out_dir)
         ok = True
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: stopped on purpose, its partial recording is not wanted
+        stopped = True
+        raise
     finally:
         if recording is not None:
             blueprint = build_blueprint(recipe, recording.index) if ok else None
             written = recording.close(complete=ok, blueprint=blueprint)
             if ok:
                 result.rrd = written
+            elif stopped:
+                written.unlink(missing_ok=True)
             elif warn is not None:
                 kept = (
                     f"the last complete recording {recording.path} was left as it was"
