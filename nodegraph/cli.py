@@ -194,6 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser("check", help="validate a recipe; nothing runs")
     check.add_argument("recipe", type=Path)
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    check.add_argument("--yes", action="store_true", help="pass a request larger than a run starts on unasked")
     _draft(check)
     _common(check)
 
@@ -241,7 +242,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         raise NodegraphError(
             f"--no-rrd contradicts {given}: a viewer and a recording file both need the recording; drop one of them"
         )
-    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft, limits=not args.yes)
     out_dir = args.out_dir or Path("outputs") / (recipe.name + ("_draft" if args.draft else ""))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
@@ -486,7 +487,7 @@ def _cmd_inspect(args, registry) -> int:
 
 
 def _cmd_check(args, registry) -> int:
-    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft, limits=not args.yes)
     if recipe.draft and not args.draft:  # the draft's values are checked too, where they would apply
         load_recipe(args.recipe, registry, args.overrides, draft=True)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())

@@ -156,9 +156,17 @@ class _Validator:
     """Collects issues while building a Recipe."""
 
     def __init__(
-        self, raw: dict, source: SourceMap, registry: Registry, overrides: list[str], name: str | None, draft=False
+        self,
+        raw: dict,
+        source: SourceMap,
+        registry: Registry,
+        overrides: list[str],
+        name: str | None,
+        draft=False,
+        limits=False,
     ):
         self.raw = raw
+        self.limits = limits
         self.source = source
         self.registry = registry
         self.draft = draft
@@ -378,12 +386,19 @@ class _Validator:
         )
 
     def _check_recipe_rules(self, entries: dict[str, NodeEntry]) -> None:
-        """Each node type's ``check_recipe``: contradictions between the nodes of a valid recipe."""
+        """Each node type's ``check_recipe``: contradictions between the nodes of a valid recipe; with ``limits``,
+        each one's ``check_size`` too: a request larger than a run starts on without ``--yes``."""
         view = MappingProxyType(entries)
         for node_id, entry in entries.items():
             if entry.spec.check_recipe is None:
                 continue
             for param, message in entry.spec.check_recipe(node_id, view):
+                self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+        for node_id, entry in entries.items() if self.limits else ():
+            if entry.spec.check_size is None:
+                continue
+            for param, message in entry.spec.check_size(node_id, view):
+                message += "; or run with --yes to go ahead"
                 self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
 
     def _moved(self, node_id: str, model: NodeModel, path: tuple, moved, key: str) -> None:
@@ -676,17 +691,21 @@ def parse_recipe(text: str, registry: Registry, file: str = "<recipe>", override
     return _finish(raw, source, registry, list(overrides), None)
 
 
-def load_recipe(path: str | Path, registry: Registry, overrides: list[str] = (), draft: bool = False) -> Recipe:
+def load_recipe(
+    path: str | Path, registry: Registry, overrides: list[str] = (), draft: bool = False, limits: bool = False
+) -> Recipe:
     """Load and validate a recipe file; raise RecipeError listing every problem with file:line:column.
 
     ``draft``: apply the recipe's ``draft:`` block (reduced counts to iterate on a look) before ``overrides``;
-    the recipe's ``overrides`` then start with the draft's, so a worker that reloads it gets the same recipe."""
+    the recipe's ``overrides`` then start with the draft's, so a worker that reloads it gets the same recipe.
+    ``limits``: refuse a request larger than a run should start on unasked, too (the nodes' ``check_size``: what
+    the command line does without ``--yes``)."""
     raw, source = load_yaml_file(path)
-    return _finish(raw, source, registry, list(overrides), Path(path).stem, draft)
+    return _finish(raw, source, registry, list(overrides), Path(path).stem, draft, limits)
 
 
-def _finish(raw, source, registry, overrides, name, draft=False) -> Recipe:
-    validator = _Validator(raw, source, registry, overrides, name, draft)
+def _finish(raw, source, registry, overrides, name, draft=False, limits=False) -> Recipe:
+    validator = _Validator(raw, source, registry, overrides, name, draft, limits)
     recipe = validator.build()
     if validator.issues or recipe is None:
         issues = sorted(
