@@ -25,7 +25,14 @@ from .compile_ahead import CompileAhead
 from .compile_progress import CompileWatch
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
-from .output_files import MANIFEST, current_outputs, write_manifest, write_output
+from .output_files import (
+    MANIFEST,
+    current_outputs,
+    earlier_outputs,
+    settle_earlier,
+    write_manifest,
+    write_output,
+)
 from .plan import Instance, Plan, RecipeRef, plan_jobs
 from .recipe import Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
@@ -644,6 +651,14 @@ def run_recipe(
                 )
                 warn(f"the run did not complete: what it recorded is in {written}; {kept}")
     if out_dir is not None:
+        earlier, removed = settle_earlier(out_dir, result.files, recipe.digest())
+        if removed and reporter is not None:
+            names = sorted(str(p.relative_to(out_dir)) for p in removed)
+            reporter.info(
+                f"removed {len(removed)} output(s) of an earlier run with other settings from {out_dir}: "
+                + ", ".join(names[:5])
+                + (" …" if len(names) > 5 else "")
+            )
         write_manifest(
             out_dir,
             result.files,
@@ -659,17 +674,20 @@ def run_recipe(
                 "written": datetime.now(UTC).isoformat(timespec="seconds"),
             },
             recording=result.rrd,
+            earlier=earlier,
         )
         _warn_others(out_dir, result.files, warn)
     return result
 
 
 def _warn_others(out_dir: Path, files: list[Path], warn) -> None:
-    """Say which files in ``out_dir`` the run did not write (the manifest, recordings aside)."""
+    """Say which files in ``out_dir`` neither the run nor an earlier one of its settings wrote (the manifest,
+    recordings aside)."""
+    kept = set(earlier_outputs(out_dir))  # the same settings' files, from an earlier run (``settle_earlier``)
     others = sorted(
         p.name
         for p in out_dir.iterdir()
-        if p.is_file() and p not in files and p.name != MANIFEST and not p.name.endswith(".rrd")
+        if p.is_file() and p not in files and p.name not in kept and p.name != MANIFEST and not p.name.endswith(".rrd")
     )
     if others and warn is not None:
         warn(
