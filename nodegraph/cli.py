@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import re
 import signal
 import sys
 import threading
@@ -511,9 +512,39 @@ def doc_summary(doc: str | None) -> str:
     return paragraph[: end.start() + 1] if end else paragraph
 
 
+# a citation in a summary: "— SPEC §2.3 (G §3.2.2.2)", "(G eq. 6)", "(issue 25)", "G eq. 5", "(G's rice bunny)"
+_CITATION = re.compile(
+    r"\s+—\s+.*$"
+    r"|\s*\([^()]*(?:\bSPEC\b|\beqs?\.|§|\bfig\.|\btable\b|\bissue \d|\b[GSU]'s\b)[^()]*\)"
+    r"|\b(?:[A-Z]+ )?eqs?\. [\d–,]+\s*"
+)
+SUMMARY_WIDTH = 100  # characters of a summary in the listing before it is cut at a clause
+_EQUATION = re.compile(r"\s*\[[^\]]*\]\s*=.*$")  # "swelling [x, y, z] = P·[r, s, t]": the words before it stay
+
+
+def plain_summary(spec) -> str:
+    """What a node type does, in words, for the one-line listing (``nodegraph nodes``): its module's opening
+    sentence ("The ``rotate`` node: random rotation per P_num in a local uvw frame — SPEC §2.3 (…)") without the
+    citations and equations, which ``describe`` shows with the rest; the implementation's first sentence, likewise
+    cleaned, where the module does not open with the node's name (a module of several nodes, a plugin)."""
+    module = sys.modules.get(spec.module)
+    opening = doc_summary(getattr(module, "__doc__", None))
+    named = re.match(
+        rf"^(?:The ``{re.escape(spec.type_name)}`` node|Node ``{re.escape(spec.type_name)}``):\s*", opening
+    )
+    text = opening[named.end() :] if named else doc_summary(spec.doc)
+    text = re.sub(r"\s*\(``[^`]*``\)", "", text)  # "(``cooked.cooked_material``)": a pointer into the code
+    text = _EQUATION.sub("", _CITATION.sub("", text)).replace("``", "")
+    text = text.replace(" ∪ ", " and ").replace(" → ", " into ").strip(" ,;:.")
+    if len(text) > SUMMARY_WIDTH:  # a long one to its first clause that ends the thought
+        cut = re.search(r", each |, so |; ", text[30:])
+        text = text[: 30 + cut.start()] if cut else text
+    return text[:1].upper() + text[1:] + "." if text else ""
+
+
 def _cmd_nodes(args, registry) -> int:
     for spec in registry.specs():
-        summary = doc_summary(spec.doc)
+        summary = plain_summary(spec)
         effects = f"  [effects: {', '.join(sorted(spec.effects))}]" if spec.effects else ""
         print(f"{spec.type_name:<18} v{spec.version:<3} {summary}{effects}")
     if not registry.names():
