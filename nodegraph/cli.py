@@ -459,7 +459,7 @@ def _cmd_sweep(args, registry) -> int:
             rrd=rrd,
         )
     _trim(cache, started, reporter)
-    for path in write_sweep(result, out_dir):
+    for path in write_sweep(result, out_dir, warn=reporter.warn):
         print(f"wrote {path}")
     if rrd is not None:
         print(f"wrote {rrd}: {len(result.points)} recordings, one per point (open with: rerun {rrd})")
