@@ -421,7 +421,7 @@ class Cache:
                 "nothing removed. Give --cache-dir the cache directory itself"
             )
         failed = []
-        for part in ("entries", "blobs", "rerun", "checkpoints", LIMIT_FILE, MARKER):
+        for part in ("entries", "blobs", "rerun", "checkpoints", "node_times.json", LIMIT_FILE, MARKER):
             target = self.directory / part
             try:
                 if target.is_dir():

@@ -17,7 +17,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Protocol
 
-from . import __version__, codec, interrupt
+from . import __version__, codec, interrupt, node_times
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
@@ -158,8 +158,12 @@ class Executor:
         if not self.ran_elsewhere:  # kernels of the later instances compile in a second process meanwhile
             to_run = {inst for inst in order if self.keys[inst] not in self.hits}
             ahead = CompileAhead.start(self.recipe, order, to_run)
+        times = None if self.cache is None else node_times.load(self.cache.directory, self.recipe.name)
+        plan = (
+            None if times is None else [node_times.expected(times, i.label, self.keys[i] in self.hits) for i in order]
+        )
         try:
-            with self.reporter.task(self.recipe.name, len(order)) as tick:
+            with self.reporter.task(self.recipe.name, len(order), plan=plan) as tick:
                 for position, inst in enumerate(order):
                     tick()
                     if ahead is not None:
@@ -189,6 +193,8 @@ class Executor:
                     self.status[inst] = replace(elsewhere, log_seconds=self.status[inst].log_seconds)
                 if inst in self.status:
                     self.reporter.record(self.status[inst])
+            if self.cache is not None:  # what the next run's progress bar expects
+                node_times.remember(self.cache.directory, self.recipe.name, [self.status[i] for i in self.status])
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
 
     def reuse(self, outputs: list[Wire], directory: Path, rrd: Path | None, key: str) -> RunResult | None:
