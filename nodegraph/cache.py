@@ -39,7 +39,7 @@ from typing import Any
 from . import codec, interrupt
 from .errors import CacheCorruption, NodegraphError
 
-DEFAULT_DIR = ".nodegraph/cache"
+DEFAULT_DIR = ".nodegraph/cache"  # before issue 47: in the current folder; still used where one exists
 ENV_VAR = "NODEGRAPH_CACHE"
 LIMIT_ENV_VAR = "NODEGRAPH_CACHE_LIMIT"
 LIMIT_FILE = "limit"
@@ -57,7 +57,15 @@ os.umask(_UMASK)
 
 
 def default_cache_dir() -> Path:
-    return Path(os.environ.get(ENV_VAR) or DEFAULT_DIR)
+    """``$NODEGRAPH_CACHE``, else the user's cache folder (``$XDG_CACHE_HOME`` or ``~/.cache``, then
+    ``nodegraph/cache``, beside the kernels' ``nodegraph/numba``): one cache whichever folder a command runs in.
+    A cache an earlier version made in ``.nodegraph/cache`` of the current folder is still used there (its
+    results stay warm) until it is moved or cleared."""
+    if os.environ.get(ENV_VAR):
+        return Path(os.environ[ENV_VAR])
+    if (Path(DEFAULT_DIR) / MARKER).is_file():
+        return Path(DEFAULT_DIR)
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "nodegraph" / "cache"
 
 
 def check_writable(directory: Path, what: str, fix: str) -> None:

@@ -55,7 +55,10 @@ def _common(parser: argparse.ArgumentParser) -> None:
         help="load node types from a Python file (repeatable)",
     )
     parser.add_argument(
-        "--cache-dir", type=Path, default=None, help="cache directory (default: $NODEGRAPH_CACHE or .nodegraph/cache)"
+        "--cache-dir",
+        type=Path,
+        default=None,
+        help="cache directory (default: $NODEGRAPH_CACHE, else ~/.cache/nodegraph/cache)",
     )
 
 
