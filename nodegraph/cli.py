@@ -246,7 +246,10 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         raise NodegraphError(
             f"--no-rrd contradicts {given}: a viewer and a recording file both need the recording; drop one of them"
         )
-    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft, limits=not args.yes)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    if _work_due(recipe, args.outputs, None if args.no_cache else (args.cache_dir or default_cache_dir())):
+        # what takes a moment to check (a placement against its shape's mesh), said before any work
+        load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
     out_dir = args.out_dir or Path("outputs") / (recipe.name + ("_draft" if args.draft else ""))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
@@ -295,6 +298,21 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         if result.rrd is not None:
             print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
     return 0
+
+
+def _work_due(recipe: Recipe, outputs: list[str], cache_dir: Path | None) -> bool:
+    """Whether a node with a ``check_work`` would run for ``outputs`` (its result not in the cache): a cached
+    re-run skips those checks and what they load (a shape's mesh: trimesh, 0.6 CPU s)."""
+    from .plan import Plan
+
+    wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
+    plan = Plan(recipe)
+    order = plan.add({w.node for w in wires})
+    checked = [inst for inst in order if recipe.nodes[inst.node].spec.check_work is not None]
+    if not checked:
+        return False
+    cache = Cache(cache_dir) if cache_dir is not None else None
+    return cache is None or not all(cache.has(plan.keys[inst]) for inst in checked)
 
 
 @contextlib.contextmanager
@@ -491,7 +509,7 @@ def _cmd_inspect(args, registry) -> int:
 
 
 def _cmd_check(args, registry) -> int:
-    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft, limits=not args.yes)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
     if recipe.draft and not args.draft:  # the draft's values are checked too, where they would apply
         load_recipe(args.recipe, registry, args.overrides, draft=True)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())

@@ -85,6 +85,14 @@ def _target(node_id: str, nodes):
 _SHAPES: dict[tuple, object] = {}  # the last shape made for a check, by its parameters
 
 
+def _weigh_r(node_id: str, nodes) -> list[tuple[str, str, bool]]:
+    """r against the shape it fills: too large for it (refused), or placing more than ``MAX_ELEMENTS`` (refused
+    unless --yes)."""
+    return [(p, m, False) for p, m in _fits_shape(node_id, nodes)] or [
+        (p, m, True) for p, m in _not_too_many(node_id, nodes)
+    ]
+
+
 def _fits_shape(node_id: str, nodes) -> list[tuple[str, str]]:
     """r against the shape it fills, before any work: points 2r apart in a shape narrower than 2r find none (the
     run said so only after its search for an r that fits, minutes at a small shape)."""
@@ -189,8 +197,7 @@ def _not_too_many(node_id: str, nodes) -> list[tuple[str, str]]:
         ),
     },
     random=True,
-    check_recipe=_fits_shape,
-    check_size=_not_too_many,
+    check_work=_weigh_r,
 )
 def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, candidate_spacing, inset, max_candidates):
     """Dart throwing over dense candidates (random order, flags) until none is free; maximal over them."""

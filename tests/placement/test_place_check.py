@@ -33,3 +33,34 @@ def test_run_refuses_it_before_any_work(tmp_path):
     )
     assert done.returncode == 2 and "would place ≈ 162,804 elements" in done.stderr
     assert not (tmp_path / "c").exists() and not (tmp_path / "outputs").exists()
+
+
+SMALL = """\
+name: small_place
+seed: 1
+outputs: [place.stats]
+nodes:
+  ball: {type: shape, params: {kind: sphere, size: 4.0, resolution: 2}}
+  place: {type: poisson_place, inputs: {shape: ball.mesh}, params: {mode: volume, r: 1.0}}
+"""
+LIST_MODULES = """
+import runpy, sys
+sys.argv = ["nodegraph", "run", *sys.argv[1:]]
+try:
+    runpy.run_module("nodegraph.cli", run_name="__main__")
+except SystemExit as stop:
+    assert not stop.code, stop.code
+print(" ".join(sorted(sys.modules)))
+"""
+
+
+def test_a_cached_rerun_does_not_weigh_r_again(tmp_path):
+    """The check makes the shape's mesh (trimesh: 0.6 CPU s): only when the placement is to run, not on a cached
+    re-run (issue 27: ≤ 1.5 s)."""
+    (tmp_path / "small.yaml").write_text(SMALL)
+    args = [str(tmp_path / "small.yaml"), "--cache-dir", str(tmp_path / "c"), "--no-rrd", "-q"]
+    command = [sys.executable, "-c", LIST_MODULES, *args]
+    first = subprocess.run(command, cwd=tmp_path, check=True, capture_output=True, text=True).stdout.split()
+    assert "trimesh" in first
+    again = subprocess.run(command, cwd=tmp_path, check=True, capture_output=True, text=True).stdout.split()
+    assert "nodegraph.cache" in again and "trimesh" not in again
