@@ -55,14 +55,21 @@ def remove_leftovers(listing: Path) -> list[Path]:
 _stopped_at: float | None = None
 
 
-def stop(signum, frame) -> None:
-    """The child's handler of SIGINT and SIGTERM: a ``KeyboardInterrupt``, once per stop (Ctrl-C at a terminal
-    reaches the child and the parent, which passes it on too)."""
+def repeated() -> bool:
+    """Whether a stop signal repeats one of the last ``REPEAT`` seconds (Ctrl-C at a terminal reaches the child and
+    the parent, which passes it on too: one stop, not a second interrupting the first's cleanup); notes this one."""
     global _stopped_at
-    if _stopped_at is not None and time.monotonic() - _stopped_at < REPEAT:
-        return
-    _stopped_at = time.monotonic()
-    raise KeyboardInterrupt
+    now = time.monotonic()
+    again = _stopped_at is not None and now - _stopped_at < REPEAT
+    if not again:
+        _stopped_at = now
+    return again
+
+
+def stop(signum, frame) -> None:
+    """The child's handler of SIGINT and SIGTERM: a ``KeyboardInterrupt``, once per stop (``repeated``)."""
+    if not repeated():
+        raise KeyboardInterrupt
 
 
 def supervise() -> int | None:

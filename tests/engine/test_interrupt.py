@@ -61,3 +61,44 @@ def test_a_signal_stops_a_run_inside_a_numba_kernel_within_2_s_and_leaves_no_par
         os.kill(runner, 0)
     assert not leftovers(tmp_path), leftovers(tmp_path)
     assert (tmp_path / "cache" / "entries").is_dir()  # what finished (pts) is cached
+
+
+SLOW = """\
+name: slowstop
+seed: 2
+effects: []
+outputs: [slow]
+nodes:
+  pts: {type: toy_points, params: {count: 6}}
+  slow: {type: toy_slow, inputs: {spheres: pts.spheres}, params: {seconds: 30.0, started: "STARTED"}}
+"""
+
+
+def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
+    """Ctrl-C reaches every process of the terminal's group, the run's and the supervisor's, which passes it on:
+    the run stops once, by itself (a node in Python code stops at once), with its message and no traceback."""
+    started = tmp_path / "started"
+    (tmp_path / "slow.yaml").write_text(SLOW.replace("STARTED", str(started)))
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slow.yaml"), "--plugin", TOY]
+    command += ["--cache-dir", str(tmp_path / "cache")]
+    proc = subprocess.Popen(
+        command,
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own group, as a terminal's job: killpg is Ctrl-C
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        node_started(started, proc)
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=2.0)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    err = proc.stderr.read()
+    assert proc.returncode == 130, err
+    assert "interrupted; nodes that finished are cached" in err and "Traceback" not in err, err
+    assert "did not stop within" not in err  # it stopped by itself, not killed
+    assert not leftovers(tmp_path), leftovers(tmp_path)
