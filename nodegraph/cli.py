@@ -549,7 +549,7 @@ def doc_summary(doc: str | None) -> str:
     return paragraph[: end.start() + 1] if end else paragraph
 
 
-# a citation in a summary: "— SPEC §2.3 (G §3.2.2.2)", "(G eq. 6)", "(issue 25)", "G eq. 5", "(G's rice bunny)"
+# a citation in a summary: "— SPEC §2.3 (G §3.2.2.2)", "(G eq. 6)", "(issue 25)", "G eq. 5", "(G's bunny)"
 _CITATION = re.compile(
     r"\s+—\s+.*$"
     r"|\s*\([^()]*(?:\bSPEC\b|\beqs?\.|§|\bfig\.|\btable\b|\bissue \d|\b[GSU]'s\b)[^()]*\)"

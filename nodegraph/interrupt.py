@@ -1,7 +1,7 @@
 """Ctrl-C and SIGTERM stop a run within ``GRACE`` seconds, whichever node is running, leaving nothing half-written.
 
 A Python signal handler runs only when the main thread runs Python code: a numba kernel that holds the GIL (the
-placement's ``neighbour_lists`` at a small spacing: minutes) is deaf to it, and only SIGKILL stopped such a run. So
+a neighbour search over a few hundred thousand points: minutes) is deaf to it, and only SIGKILL stopped such a run. So
 ``nodegraph run``, ``sweep`` and ``watch`` as commands run in a forked child (``supervise``) while the parent, which
 does nothing else, waits. On Ctrl-C or SIGTERM the parent passes the signal on; the child stops as before where it
 can (finished nodes stay cached); one that has not ended after ``GRACE`` seconds is killed, and the parent removes
