@@ -1,6 +1,6 @@
 """Ctrl-C and SIGTERM stop a run within ``GRACE`` seconds, whichever node is running, leaving nothing half-written.
 
-A Python signal handler runs only when the main thread runs Python code: a numba kernel that holds the GIL (the
+A Python signal handler runs only when the main thread runs Python code: a numba kernel that holds the GIL (say
 a neighbour search over a few hundred thousand points: minutes) is deaf to it, and only SIGKILL stopped such a run. So
 ``nodegraph run``, ``sweep`` and ``watch`` as commands run in a forked child (``supervise``) while the parent, which
 does nothing else, waits. On Ctrl-C or SIGTERM the parent passes the signal on; the child stops as before where it
