@@ -134,7 +134,9 @@ def _wait(pid: int, listing: Path) -> int:
             os.kill(pid, signal.SIGKILL)
             killed = True
         time.sleep(0.02)
-    removed = remove_leftovers(listing)
+    # stopped or killed: what it left unfinished goes; a run that ended by itself (done, or failed: its partial
+    # recording kept for what the failing node logged, as it says) cleaned up after itself
+    removed = remove_leftovers(listing) if received or os.WIFSIGNALED(status) else []
     if killed:
         if sys.stderr.isatty():
             sys.stderr.write("\x1b[?25h\n")  # the progress bar hid the cursor

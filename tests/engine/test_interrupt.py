@@ -102,3 +102,16 @@ def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
     assert "interrupted; nodes that finished are cached" in err and "Traceback" not in err, err
     assert "did not stop within" not in err  # it stopped by itself, not killed
     assert not leftovers(tmp_path), leftovers(tmp_path)
+
+
+def test_a_failed_run_keeps_the_partial_recording_it_names(tmp_path):
+    """The supervisor removes what a stopped or killed run left, not what a failed run keeps on purpose."""
+    (tmp_path / "fail.yaml").write_text(
+        "name: failrun\noutputs: [boom.spheres]\nnodes:\n  pts: {type: toy_points}\n"
+        "  boom: {type: toy_fail, inputs: {spheres: pts.spheres}}\n"
+    )
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "fail.yaml"), "--plugin", TOY]
+    done = subprocess.run([*command, "--cache-dir", str(tmp_path / "c")], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 1, done.stderr
+    partial = tmp_path / "outputs" / "failrun" / "failrun.partial.rrd"
+    assert str(partial.name) in done.stderr and partial.is_file()
