@@ -91,6 +91,7 @@ class NodeSpec:
     moved: Mapping[str, Moved] = field(default_factory=dict)
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None
     overlap: bool | Callable[[], None] = False
+    check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
         """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
@@ -162,6 +163,7 @@ def node(
     moved: Mapping[str, Moved] | None = None,
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None,
     overlap: bool | Callable[[], None] = False,
+    check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None,
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
     """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
 
@@ -173,9 +175,13 @@ def node(
     ``moved`` names parameters the node no longer has and where each now lives (``Moved``), so a recipe
     that still sets one is told where. ``check_recipe(node_id, nodes)`` checks the node against the rest of
     a valid recipe (``nodes``: every node's ``NodeEntry`` by id) and returns ``[(param, message), ...]``
-    for contradictions between nodes. ``overlap``: the node's work is native code that releases the GIL (a
-    renderer's own threads) and it launches no numba kernel, so a run may compute the instances that neither need
-    it nor depend on it in a second thread while it runs (``executor.Beside``). A callable ``overlap`` is called in
+    for contradictions between nodes. ``check_work(node_id, nodes)``, the same for what takes a moment to
+    check (a shape's mesh made to weigh a placement against it), as ``[(param, message, yes), ...]``, ``yes``: a
+    request larger than a run should start on unasked, which ``--yes`` passes; ``nodegraph check`` runs it, and
+    ``run`` before any work when the node's result is not cached (``load_recipe(work=True)``). ``overlap``: the
+    node's work is native code that releases the GIL (a renderer's own threads) and it launches no numba kernel,
+    so a run may compute the instances that neither need it nor depend on it in a second thread while it runs
+    (``executor.Beside``). A callable ``overlap`` is called in
     the main thread before that second thread starts: it loads every native library the node will load, so the node
     never calls ``dlopen`` while the other thread may be in one (the loader's lock against the GIL: a library whose
     initialiser drops and retakes the GIL, as USD's does, deadlocked against Mitsuba loading a plugin).
@@ -219,6 +225,7 @@ def node(
             moved=MappingProxyType(dict(moved or {})),
             check_recipe=check_recipe,
             overlap=overlap,
+            check_work=check_work,
         )
 
     return wrap

@@ -277,3 +277,34 @@ def toy_busy(ctx, spheres, *, seconds, meet):
     while time.thread_time() < end:
         pass
     return SphereSet(spheres.centers * 2.0, spheres.radii.copy())
+
+
+@node(
+    "toy_spin",
+    version=1,
+    inputs={"spheres": In(SphereSet, "passed through")},
+    outputs={"spheres": Out(SphereSet, "same")},
+    params={
+        "steps": Param(int, 1, "iterations of a numba loop that holds the GIL (1e11: minutes)", range=(1, 10**12)),
+        "started": Param(str, "", "a folder: the node writes a file named by its process id there, the loop compiled"),
+    },
+)
+def toy_spin(ctx, spheres, *, steps, started):
+    """Stands for a long numba kernel (the placement's neighbour search): deaf to signals while it runs."""
+    import math
+
+    import numba
+
+    @numba.njit
+    def spin(n):
+        total = 0.0
+        for i in range(n):
+            total += math.sin(i)
+        return total
+
+    spin(1)  # compiled: from the file on, the loop itself runs
+    if started:
+        Path(started).mkdir(parents=True, exist_ok=True)
+        (Path(started) / str(os.getpid())).touch()
+    spin(steps)
+    return SphereSet(spheres.centers.copy(), spheres.radii.copy())
