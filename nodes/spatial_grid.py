@@ -66,6 +66,7 @@ def grid_shape(lo, hi, cell, max_cells):
 
 @njit(cache=True, inline="always")
 def _cell(lo, dims, cell, x, y, z):
+    """``cell_of`` on a grid's fields."""
     ix = min(int((x - lo[0]) / cell), dims[0] - 1)
     iy = min(int((y - lo[1]) / cell), dims[1] - 1)
     iz = min(int((z - lo[2]) / cell), dims[2] - 1)
@@ -106,12 +107,12 @@ def cell_keys(x, lo, dims, cell):
 
 
 @njit(cache=True)
-def cell_starts(keys, order, total):
-    """start (total + 1,): cell k holds sorted positions start[k]:start[k + 1] of the points sorted by ``keys``
-    (``order``: any sort by key, the within-cell order is the caller's)."""
+def cell_starts(keys, total):
+    """start (total + 1,): cell k holds sorted positions start[k]:start[k + 1] once the points are sorted by key
+    (by ``counting_sort`` or any other sort: the order within a cell is the sort's)."""
     start = np.zeros(total + 1, np.int64)
-    for q in range(order.shape[0]):
-        start[keys[order[q]] + 1] += 1
+    for i in range(keys.shape[0]):
+        start[keys[i] + 1] += 1
     for k in range(total):
         start[k + 1] += start[k]
     return start
@@ -120,15 +121,10 @@ def cell_starts(keys, order, total):
 @njit(cache=True)
 def counting_sort(keys, total):
     """(start, order): the points sorted by key, stably (a cell's points in id order), by counting."""
-    n = keys.shape[0]
-    start = np.zeros(total + 1, np.int64)
-    for i in range(n):
-        start[keys[i] + 1] += 1
-    for k in range(total):
-        start[k + 1] += start[k]
+    start = cell_starts(keys, total)
     fill = start[:-1].copy()
-    order = np.empty(n, np.int64)
-    for i in range(n):
+    order = np.empty(keys.shape[0], np.int64)
+    for i in range(keys.shape[0]):
         order[fill[keys[i]]] = i
         fill[keys[i]] += 1
     return start, order

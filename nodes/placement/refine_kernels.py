@@ -106,7 +106,7 @@ def neighbour_lists(positions, reach):
     dims, cell = grid_shape(lo, hi, cell, 64 * n + 4 * 1024 * 1024)
     keys = cell_keys(positions, lo, dims, cell)
     order = np.argsort(keys)
-    grid = CellGrid(cell_starts(keys, order, dims[0] * dims[1] * dims[2]), order, lo, dims, cell)
+    grid = CellGrid(cell_starts(keys, dims[0] * dims[1] * dims[2]), order, lo, dims, cell)
     counts = np.zeros(n + 1, np.int64)
     for sweep in range(2):
         if sweep == 1:
