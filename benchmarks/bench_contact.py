@@ -143,8 +143,8 @@ def time_steps(name: str, full: bool, work: Path, repeat: int) -> list[dict]:
     """Each contact step of the recipe run as ``flatten_contacts`` and as ``deform_contacts`` on its cached input,
     in turn, ``repeat`` times in one process (the simulation runs once, or not at all with a warm ``--work``)."""
     from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
-    from nodes.simulation.deform_contacts import deform_contacts
-    from nodes.simulation.flatten_contacts import flatten_contacts
+    from nodes.contact_shaping.deform_contacts import deform_contacts
+    from nodes.contact_shaping.flatten_contacts import flatten_contacts
 
     path = recipe_file(name, "after")
     try:
