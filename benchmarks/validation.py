@@ -23,6 +23,8 @@ REPO = Path(__file__).resolve().parents[1]
 DOC = REPO / "docs" / "validation.md"
 IMAGES = REPO / "docs" / "images" / "validation"
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
+# the node's parameters but no sleeping: the measurements here read the settling itself (as measured before issue 45)
+NO_SLEEP = dict(sleep_speed=0.0)
 SPHERE_MASS = 0.025e-3 * 1000  # g: 25 mg per sphere, as a grain (rest positions do not depend on it)
 
 
@@ -81,19 +83,17 @@ def ground(half: float, top: float, pitch: float):
 # -- sphere heaps ----------------------------------------------------------------------------------
 def sphere_run(x, radius, mu, anchored, sdf, **solver):
     """A solver run of loose spheres of one ``radius`` (one particle per element) at sliding friction μs = ``mu``
-    (μk = 0.7 μs), rigid contacts, against the collider field ``sdf``; ``solver``: further SolverSettings."""
+    (μk = 0.7 μs), rigid contacts, against the collider field ``sdf``; ``solver``: further xpbd node parameters."""
     from nodes.simulation.scenes import solver_run
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.settings import solver_settings_for
 
     n = len(x)
-    settings = SolverSettings(
+    settings = solver_settings_for(
         EFFECTS,
-        mu_s=mu,
-        mu_k=0.7 * mu,
-        compliance=np.inf,
-        damping=0.1,
-        shock_propagation=4.0,
-        anchored_friction=anchored,
+        radius,
+        static_threshold=mu,
+        friction_model="anchored" if anchored else "substep",
+        **NO_SLEEP,
         **solver,
     )
     return solver_run(
@@ -308,7 +308,7 @@ def silo_fill(
     walls' normal force (g-force), bed height H (mm, 98th percentile of the centres + r), seconds. ``follow``:
     the wall anchors follow pre-stabilisation's moves (``wall_gauge``), a solver change tried from outside."""
     from nodes.simulation.scenes import solver_run
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.settings import solver_settings_for
 
     radius = 1.0
     rng = np.random.default_rng(seed)
@@ -325,16 +325,15 @@ def silo_fill(
             break
     x = np.concatenate(layers)[:n] + rng.uniform(-0.2, 0.2, (n, 3)) * radius
     top = float(x[:, 2].max()) + 4 * radius
-    settings = SolverSettings(
+    settings = solver_settings_for(
         EFFECTS,
+        radius,
         substeps=substeps,
         iterations=iterations,
-        mu_s=mu,
-        mu_k=0.7 * mu,
-        compliance=np.inf,
-        damping=0.1,
+        static_threshold=mu,
         shock_propagation=shock,
-        anchored_friction=anchored,
+        friction_model="anchored" if anchored else "substep",
+        **NO_SLEEP,
     )
     gauge = wall_gauge(n, follow)
     run = solver_run(
@@ -413,7 +412,7 @@ def ellipsoid_packing(alpha, n, size=1.5, particles=8, frames=150, seed=0):
     from nodes.simulation.clusters import element_cluster, matrix_to_quat
     from nodes.simulation.collider import signed_distance_grid
     from nodes.simulation.scenes import grain_mesh, open_box, solver_run
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.settings import solver_settings_for
 
     axes = size * np.array([alpha, 1.0, 1.0 / alpha])
     cluster = element_cluster(grain_mesh(*(2 * axes)), particles, quadratic=False)
@@ -428,9 +427,8 @@ def ellipsoid_packing(alpha, n, size=1.5, particles=8, frames=150, seed=0):
     m = len(cluster.radii)
     x = np.concatenate([cluster.centres @ t.T + o for t, o in zip(turns, origins)])
     top = float(x[:, 2].max()) + 2 * axes.max()
-    settings = SolverSettings(
-        EFFECTS, mu_s=0.0, mu_k=0.0, compliance=1 / (1000 * 2000.0), damping=0.1, shock_propagation=4.0
-    )
+    # frictionless; β = 0 as measured
+    settings = solver_settings_for(EFFECTS, size, static_threshold=0.0, linear_deformation=0.0, **NO_SLEEP)
     run = solver_run(
         x,
         np.tile(cluster.radii, n),
@@ -477,7 +475,7 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90) -> dict:
     plate's mean height above the ground (mm), the grain's unloaded thickness and seconds."""
     from nodes.simulation.clusters import element_cluster
     from nodes.simulation.scenes import grain_mesh, solver_run
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.settings import solver_settings_for
 
     cluster = element_cluster(grain_mesh(), particles, quadratic=False)
     grain = cluster.centres - cluster.centres.mean(axis=0)
@@ -495,15 +493,7 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90) -> dict:
     n = len(grain)
     x = np.concatenate(grains + [plate])
     plate_g = 3 * load / 9.81 * 1000  # N → g
-    settings = SolverSettings(
-        EFFECTS,
-        compliance=1 / (1000 * 2000.0),
-        linear_deformation=0.3,
-        mu_s=0.6,
-        mu_k=0.42,
-        damping=0.1,
-        shock_propagation=4.0,
-    )
+    settings = solver_settings_for(EFFECTS, 0.5, **NO_SLEEP)
     run = solver_run(
         x,
         np.concatenate([cluster.radii] * 3 + [np.full(len(plate), 0.5)]),

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..material.cooked import cooked_material
 from ..values import Aggregate, ParticleState, Placement
 from .aggregate import DeformedAggregate
 from .buffers import PairBuffers
@@ -135,8 +136,8 @@ def build_simulation(
 ) -> Simulation:
     """Clusters per element (``element_cluster``), the free-space field of the colliders and moulds
     with effect 'collider', yolks with 'buoyancy', static obstacles with a pair effect; the model,
-    its initial state and a solver with the settings of ``params`` and the cooked ``material``'s water
-    content (``solver_settings``; None: the cooked_rice defaults)."""
+    its initial state and a solver with the settings of ``params`` and the cooked ``material``'s moisture
+    factors (``solver_settings``; None: the cooked_rice defaults, ``cooked_material()``)."""
     if len(aggregate.placement) == 0:
         raise ValueError("aggregate: the placement is empty; nothing to simulate")
     moulds = list(moulds or [])
@@ -175,14 +176,13 @@ def build_simulation(
     radius = float(np.median(r))  # the unit of the capture radius and of the contact offset
     r = r + params.contact_offset * radius
     start = np.concatenate([[0], np.cumsum(sizes)])
-    water = {} if material is None else {"water_content": material.water_content}
     # a cluster of m× the particles gives way to its contacts more slowly per substep (shape matching shares each
     # correction over its particles), and long grains jam: the run settles them at m³ × the substeps, where the speed
     # the constraints add is capped (SLENDER_DEPENETRATION unless given: 16 × 80 threw 38 of 60 indica grains out of
     # a reduced bowl at up to 1,226 mm/s; docs/look.md)
     speed = params.depenetration_speed or (SLENDER_DEPENETRATION if slender > 1 else 0.0)
     stepped = dataclasses.replace(params, substeps=params.substeps * slender**3, depenetration_speed=speed)
-    settings = solver_settings(stepped, effects, radius, **water)
+    settings = solver_settings(stepped, effects, radius, material if material is not None else cooked_material())
     sdf = None
     if "collider" in effects:
         shapes = colliders + moulds

@@ -32,7 +32,7 @@ from . import (
 )
 from .buffers import ClusterBuffers, NeighbourLists, PairBuffers
 from .model import Model
-from .settings import SolverSettings
+from .settings import ROTATION_ITERATIONS, SLEEP_PROBE, YOLK_DRAG, SolverSettings
 from .state import State
 from .threads import FreeCores, thread_count
 
@@ -222,7 +222,7 @@ class XpbdSolver:
         each awake grain then woke the column under it, and piles hardly slept). An awake partner
         moving faster than ``Coefficients.wake_step`` wakes the sleeper at the end of the substep
         (the impact is taken by the awake one alone for that substep). With every element asleep the
-        substep solves nothing; every ``sleep_probe`` frames one substep solves all, under gravity,
+        substep solves nothing; every ``SLEEP_PROBE`` frames one substep solves all, under gravity,
         and re-tests them: a sleeper whose support went away falls and wakes."""
         with thread_count(self.threads):
             return self._substep(state)
@@ -231,7 +231,7 @@ class XpbdSolver:
         s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
         awake = m.n_moving
         if s.sleep_speed > 0:
-            probe = st.substeps_done % (self.steps * s.sleep_probe) == 0
+            probe = st.substeps_done % (self.steps * SLEEP_PROBE) == 0
             awake = d("sleep", integrate.wake_flags, st.x, st.x_start, st.asleep, st.awake, st.pushed, m.start, probe)
         st.substeps_done += 1
         self.solved += awake
@@ -253,7 +253,7 @@ class XpbdSolver:
                 m.yolks.owner,
                 k.yolk_accel,
                 k.h,
-                s.yolk_drag,
+                YOLK_DRAG,
             )
         residual = self._solve(st) if awake else 0.0
         if y is not None:
@@ -353,7 +353,7 @@ class XpbdSolver:
                     clusters.lam,
                     k.alpha,
                     s.linear_deformation,
-                    s.rotation_iterations,
+                    ROTATION_ITERATIONS,
                     *quadratic,
                 )
             if m.bend is not None:
@@ -561,7 +561,7 @@ class XpbdSolver:
             g.rows(),
             st.glued,
             st.glue_quats,
-            self.settings.rotation_iterations,
+            ROTATION_ITERATIONS,
             self.glue_goal,
             tear,
             self.settings.glue_tear,
