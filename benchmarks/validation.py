@@ -6,9 +6,9 @@ knobs the case needed, the seconds it took and a plot into docs/validation.md (p
     python benchmarks/validation.py            # full sizes (minutes on 2 cores)
     python benchmarks/validation.py --quick    # reduced sizes (≈ 1–2 min), what tests/simulation pins
 
-Friction models (``SolverSettings.anchored_friction``): 'anchored' (the default) measures the drift since a
-contact began sticking (``nodes/simulation/friction.py``); 'substep' is Macklin et al. 2014's position-level rule
-applied to each substep's displacement.
+Friction models (the node's ``friction_model``, ``nodes/simulation/friction_models.py``): 'anchored' (the
+default) measures the drift since a contact began sticking (``nodes/simulation/friction.py``); 'substep' is Macklin
+et al. 2014's position-level rule applied to each substep's displacement.
 """
 
 import argparse

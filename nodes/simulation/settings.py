@@ -19,6 +19,7 @@ import numpy as np
 
 from nodegraph.params import Param, ParamValueError
 
+from .friction_models import FRICTION_MODELS, AnchoredFriction, SubstepFriction
 from .moisture import WATER_CONTENT
 
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
@@ -258,10 +259,8 @@ class SolverSettings:
     bend_compliance: float  # s²/g of the long-axis bend constraints (``bending``); inf = none
     mu_s: float
     mu_k: float
-    # friction measured from where each contact began sticking, against the normal load the contact carried
-    # this substep (``friction``); False: Macklin et al. 2014's per-substep rule, under which heaps creep flat
-    # (issue 24, docs/validation.md)
-    anchored_friction: bool
+    # the friction model, a strategy chosen once from the node's ``friction_model`` (``friction_models``)
+    friction: SubstepFriction | AnchoredFriction
     capture: float  # mm
     adhesion_compliance: float  # s²/g
     glue: float  # share of the way to the glued regions' goal per iteration (``glue``); 0 = no glue
@@ -312,7 +311,7 @@ def solver_settings(params: XpbdParams, effects, radius: float, material) -> Sol
         bend_compliance=1.0 / (1000.0 * stiffness * p.bend_stiffness) if stiffness * p.bend_stiffness > 0 else np.inf,
         mu_s=mu_s,
         mu_k=mu_s * p.dynamic_scale,
-        anchored_friction=p.friction_model == "anchored",
+        friction=FRICTION_MODELS[p.friction_model],
         capture=p.capture_radius * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
         glue=p.glue,

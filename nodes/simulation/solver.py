@@ -24,13 +24,13 @@ from . import (
     buoyancy,
     collider,
     contact_constraints,
-    friction,
     glue,
     integrate,
     shape_matching,
     spatial_hash,
 )
 from .buffers import ClusterBuffers, NeighbourLists, PairBuffers
+from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
 from .settings import ROTATION_ITERATIONS, SLEEP_PROBE, YOLK_DRAG, SolverSettings
 from .state import State
@@ -107,8 +107,7 @@ class Coefficients:
     pieces: int  # solves per substep: ceil(speed_clamp / MAX_TRAVEL)
     clamp: float  # speed clamp per solve, radii (≤ MAX_TRAVEL)
     accel: np.ndarray  # (1, 3) gravity, mm/s²
-    mu_s: float
-    mu_k: float
+    friction: FrictionRule  # μs, μk (0 without 'friction') and where the slip is measured from
     damping: float  # velocity factor per substep
     # mass scaling by height (``contact_constraints``), 1/mm: only where gravity says which way is up
     lift: float
@@ -143,8 +142,9 @@ class Coefficients:
             pieces=pieces,
             clamp=s.speed_clamp / pieces,
             accel=np.array([[0.0, 0.0, -s.gravity]]) if gravity else np.zeros((1, 3)),
-            mu_s=s.mu_s if "friction" in effects else 0.0,
-            mu_k=s.mu_k if "friction" in effects else 0.0,
+            friction=s.friction.rule(
+                s.mu_s if "friction" in effects else 0.0, s.mu_k if "friction" in effects else 0.0
+            ),
             damping=(1.0 - s.damping) ** (h * 60.0) if "damping" in effects else 1.0,
             lift=lift,
             upright=gravity,
@@ -153,11 +153,7 @@ class Coefficients:
             bend_alpha=s.bend_compliance / (h * h),
             adhesion_alpha=s.adhesion_compliance / (h * h),
             yolk_accel=np.array([0.0, 0.0, s.yolk_accel]),
-            cohesion=(
-                s.capture * h * h / s.adhesion_compliance
-                if "adhesion" in effects and s.anchored_friction and s.adhesion_compliance > 0
-                else 0.0
-            ),
+            cohesion=s.friction.cohesion(s.capture, h, s.adhesion_compliance) if "adhesion" in effects else 0.0,
         )
 
 
@@ -382,7 +378,7 @@ class XpbdSolver:
                     m.w,
                     m.r,
                     *m.collider.args(),
-                    (k.mu_s, k.mu_k, s.anchored_friction),
+                    k.friction,
                 )
         moved = d(
             "integrate",
@@ -433,11 +429,8 @@ class XpbdSolver:
         )
         old = pairs.lists
         pairs.lists = NeighbourLists(nbr_start, nbr, at, old.half, *grid)
-        if "friction" in self.settings.effects and self.settings.anchored_friction:
-            anchor = np.empty((len(nbr), 3))
-            self.dispatch("friction", friction.carry_anchors, old.csr(), pairs.anchor, pairs.lists.csr(), anchor)
-            pairs.anchor = anchor
-            pairs.load = np.zeros(len(nbr))
+        if "friction" in self.settings.effects:  # the model's per-pair data follows the pairs
+            self.settings.friction.lists_rebuilt(self.dispatch, old, pairs)
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
         if "contact" in self.settings.effects:
@@ -459,7 +452,7 @@ class XpbdSolver:
             pairs.allowance[:] = 0.0
             pairs.load[:] = 0.0
             self._pressed(st)
-            self._contacts(st, friction=self.settings.anchored_friction, wake_step=np.inf)
+            self._contacts(st, friction=self.settings.friction.rubs_in_prestabilisation, wake_step=np.inf)
             d("contact", allowance, st.x, st.awake, m.r, *pairs.lists.rows(), 0.0, pairs.allowance)
             self._pressed(st)
         if m.collider is not None:
@@ -472,7 +465,7 @@ class XpbdSolver:
                 m.w,
                 m.r,
                 *m.collider.args(),
-                (0.0, 0.0, False),
+                NO_FRICTION,
             )
 
     def _contacts(self, st: State, friction=False, wake_step=None) -> None:
@@ -503,9 +496,9 @@ class XpbdSolver:
                 float(wake_step),
                 k.lift,
                 k.upright,
-                k.mu_s if rub else 0.0,
-                k.mu_k,
-                s.anchored_friction,
+                k.friction.mu_s if rub else 0.0,
+                k.friction.mu_k,
+                k.friction.anchored,
                 normal,
                 k.cohesion,
             ),
