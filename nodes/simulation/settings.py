@@ -20,7 +20,7 @@ import numpy as np
 from nodegraph.params import Param, ParamValueError
 
 from .friction_models import FRICTION_MODELS, AnchoredFriction, SubstepFriction
-from .moisture import WATER_CONTENT
+from .moisture import WATER_CONTENT, moisture_factors
 
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 PAIR_EFFECTS = frozenset({"contact", "friction", "adhesion"})  # the effects that need neighbour lists
@@ -289,12 +289,14 @@ class SolverSettings:
         return self.dt / self.substeps
 
 
-def solver_settings(params: XpbdParams, effects, radius: float, material) -> SolverSettings:
+def solver_settings(params: XpbdParams, effects, radius: float, material=None) -> SolverSettings:
     """Table-3 style parameters → solver settings (SPEC §3); 'moisture' rescales stiffness, friction
     and adhesion by the cooked ``material``'s factors (``CookedMaterial.stiffness_scale``, ``friction_scale``,
-    ``adhesion_scale``: computed once, by ``cooked_material``, from its water content). ``radius``: the
-    particles' median radius (mm), the unit of the capture radius."""
+    ``adhesion_scale``: computed once, by ``cooked_material``, from its water content; None: the cooked_rice
+    defaults, ``moisture_factors(WATER_CONTENT)``). ``radius``: the particles' median radius (mm), the unit of
+    the capture radius."""
     p = params
+    material = material if material is not None else moisture_factors(WATER_CONTENT)
     moist = "moisture" in effects
     stiffness = p.stiffness * (material.stiffness_scale if moist else 1.0)
     adhesion = p.clumping * (material.adhesion_scale if moist else 1.0) * ADHESION_STIFFNESS
@@ -330,6 +332,4 @@ def solver_settings_for(effects, radius: float, water_content: float = WATER_CON
     ``water_content`` (%), with ``params`` given in the node's units (``PARAMS``: stiffness in N/m, not
     compliance; static_threshold and dynamic_scale, not μs and μk; friction_model, not a flag) and the rest
     at the node's defaults: the one way tests, benchmarks and scenes get a solver."""
-    from ..material.cooked import cooked_material
-
-    return solver_settings(xpbd_params(**params), effects, radius, cooked_material(water_content=water_content))
+    return solver_settings(xpbd_params(**params), effects, radius, moisture_factors(water_content))

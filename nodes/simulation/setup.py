@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..material.cooked import cooked_material
 from ..values import Aggregate, ParticleState, Placement
 from .aggregate import DeformedAggregate
 from .buffers import PairBuffers
@@ -137,7 +136,7 @@ def build_simulation(
     """Clusters per element (``element_cluster``), the free-space field of the colliders and moulds
     with effect 'collider', yolks with 'buoyancy', static obstacles with a pair effect; the model,
     its initial state and a solver with the settings of ``params`` and the cooked ``material``'s moisture
-    factors (``solver_settings``; None: the cooked_rice defaults, ``cooked_material()``)."""
+    factors (``solver_settings``; None: the cooked_rice defaults)."""
     if len(aggregate.placement) == 0:
         raise ValueError("aggregate: the placement is empty; nothing to simulate")
     moulds = list(moulds or [])
@@ -182,7 +181,7 @@ def build_simulation(
     # a reduced bowl at up to 1,226 mm/s; docs/look.md)
     speed = params.depenetration_speed or (SLENDER_DEPENETRATION if slender > 1 else 0.0)
     stepped = dataclasses.replace(params, substeps=params.substeps * slender**3, depenetration_speed=speed)
-    settings = solver_settings(stepped, effects, radius, material if material is not None else cooked_material())
+    settings = solver_settings(stepped, effects, radius, material)
     sdf = None
     if "collider" in effects:
         shapes = colliders + moulds
