@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 SCRIPT = """
 import hashlib
-from nodes.simulation.scenes import rice_bowl
+from support.scenes import rice_bowl
 from nodes.simulation.xpbd import xpbd
 aggregate, colliders = rice_bowl(30, seed=1)
 effects = ("gravity", "contact", "friction", "adhesion", "collider", "moisture", "damping")

@@ -5,9 +5,9 @@ lists, ``glued_allowance`` each substep), at one thread and at two."""
 import numba
 import numpy as np
 import pytest
+from support.scenes import GLUE_EFFECTS, pressed_block
 
 from nodes.simulation import glue
-from nodes.simulation.scenes import GLUE_EFFECTS, pressed_block
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.threads import thread_count

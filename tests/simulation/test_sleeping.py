@@ -5,9 +5,9 @@ changes nothing."""
 import hashlib
 
 import numpy as np
+from support.scenes import box_mesh, solver_run
 
 from nodes.simulation.collider import signed_distance_grid
-from nodes.simulation.scenes import box_mesh, solver_run
 from nodes.simulation.settings import solver_settings_for
 
 RADIUS = 0.6

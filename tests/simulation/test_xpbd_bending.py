@@ -4,9 +4,9 @@ import hashlib
 
 import numpy as np
 import pytest
+from support.scenes import rice_bowl, solver_run
 
 from nodes.simulation.bending import bend_triples
-from nodes.simulation.scenes import rice_bowl, solver_run
 from nodes.simulation.settings import solver_settings_for
 from nodes.simulation.xpbd import xpbd
 

@@ -5,10 +5,10 @@ import hashlib
 
 import numpy as np
 import pytest
+from support.scenes import box_mesh, ikura_mesh, rice_bowl
 
 from nodegraph.context import Context, EntityLogger
 from nodes.simulation.aggregate import DeformedAggregate
-from nodes.simulation.scenes import box_mesh, ikura_mesh, rice_bowl
 from nodes.simulation.settings import EFFECTS as ALL
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation

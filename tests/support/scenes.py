@@ -1,7 +1,7 @@
 """Scenes for the solver's tests, benchmarks and scripts, built directly in Python (no placement nodes
 needed): ellipsoid rice grains, ikura eggs with a yolk, a bowl and a ground slab as watertight solids,
-grains on a jittered grid inside the bowl, and a small shaded-food scene. Not a node module: nothing
-here is imported to list or run nodes."""
+grains on a jittered grid inside the bowl, and a small shaded-food scene. Dev-only (tests/support, not the
+shipped package): tests and benchmarks import it, nothing in ``nodes`` does."""
 
 from __future__ import annotations
 
@@ -243,9 +243,9 @@ def pressed_block(nx=3, ny=3, nz=10, squeeze=0.8, seed=2, press_frames=10):
     """(aggregate, colliders): a tall block of randomly turned grains set on a grid a little tighter than the grains
     (pressed: they overlap), relaxed for ``press_frames`` without gravity as the recipes' press relaxes them in
     their mould, standing on a ground slab: sticky rice ready to be set down (``glue``; tests and validation)."""
-    from .settings import XpbdParams
-    from .setup import build_simulation, finish_simulation
-    from .xpbd import xpbd
+    from nodes.simulation.settings import XpbdParams
+    from nodes.simulation.setup import build_simulation, finish_simulation
+    from nodes.simulation.xpbd import xpbd
 
     size = np.full(3, 4.0 * squeeze)
     ix, iy, iz = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
@@ -270,9 +270,9 @@ def pressed_block(nx=3, ny=3, nz=10, squeeze=0.8, seed=2, press_frames=10):
 def block_heights(block, glue, frames=40, **given):
     """Per frame, the particles' height over the height at the start of ``block`` (``pressed_block``) set down
     under gravity with ``glue`` and the xpbd parameters ``given``; and the simulation."""
-    from .settings import XpbdParams
-    from .setup import build_simulation
-    from .xpbd import xpbd
+    from nodes.simulation.settings import XpbdParams
+    from nodes.simulation.setup import build_simulation
+    from nodes.simulation.xpbd import xpbd
 
     aggregate, colliders = block
     p = XpbdParams(**xpbd.resolve_params({"frames": frames, "glue": glue, "clumping": 0.5, **given}))
