@@ -12,7 +12,7 @@ import numpy as np
 
 from ..values import Aggregate, ParticleState, Placement
 from .aggregate import DeformedAggregate
-from .buffers import PairBuffers
+from .buffers import Contacts
 from .clusters import element_cluster, matrix_to_quat
 from .collider import free_space_field, rigid_into_free_space
 from .deformation import element_bends, element_transforms
@@ -55,12 +55,12 @@ class Simulation:
     def progress(self, frames_done: int) -> SimulationProgress:
         """What a resumed run needs to go on bit for bit: the state, the Verlet lists with their build
         positions (a fresh build would change the contacts' order), the diagnostics so far."""
-        return SimulationProgress(frames_done, self.state, self.solver.pairs, self.solver.diagnostics)
+        return SimulationProgress(frames_done, self.state, self.solver.contacts, self.solver.diagnostics)
 
     def resume(self, progress: SimulationProgress) -> int:
         """Continue from ``progress`` (writable arrays); returns the frames already done."""
         self.state = progress.state
-        self.solver.pairs = progress.pairs
+        self.solver.contacts = progress.contacts
         self.solver.diagnostics = progress.diagnostics
         return progress.frames_done
 
@@ -71,7 +71,7 @@ class SimulationProgress:
 
     frames_done: int
     state: State
-    pairs: PairBuffers | None
+    contacts: Contacts | None
     diagnostics: Diagnostics
 
 

@@ -99,7 +99,7 @@ def test_unwired_obstacles_allocate_nothing():
     plain = build_simulation(aggregate, colliders, effects, typed())
     empty = build_simulation(aggregate, colliders, effects, typed(), obstacles=[])
     for sim in (plain, empty):
-        m, st, pairs = sim.model, sim.state, sim.solver.pairs
+        m, st, pairs = sim.model, sim.state, sim.solver.contacts
         assert m.n_moving == len(m.x0) == len(m.w) == len(m.elem) == m.start[-1]
         per_particle = (
             st.x,

@@ -129,6 +129,11 @@ class SolverRun:
     def frame(self) -> None:
         self.solver.frame(self.state)
 
+    def step(self) -> float:
+        """One solve in place, Newton's way: ``step(state_in, state_out, control, contacts, dt)``."""
+        s = self.solver
+        return s.step(self.state, self.state, s.default_control, s.contacts, s.coefficients.h)
+
     def centres(self) -> np.ndarray:
         return self.model.centres(self.state.x)
 
