@@ -13,7 +13,7 @@ os.environ.setdefault("NODEGRAPH_CODE_DIGESTS", os.path.join(tempfile.mkdtemp(pr
 
 @pytest.fixture(scope="session")
 def scene_inputs():
-    from nodes.simulation.scenes import small_food_scene
+    from support.scenes import small_food_scene
 
     return small_food_scene()
 
