@@ -281,7 +281,6 @@ def toy_busy(ctx, spheres, *, seconds, meet):
 
 @node(
     "toy_spin",
-    version=1,
     inputs={"spheres": In(SphereSet, "passed through")},
     outputs={"spheres": Out(SphereSet, "same")},
     params={
