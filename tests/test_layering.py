@@ -37,12 +37,21 @@ def test_no_import_cycles(package, depth):
     assert not cycles, "imports that point both ways:\n" + "\n".join(cycles)
 
 
+# private names of other libraries the engine uses on purpose, each with its reason
+FOREIGN_PRIVATE = {
+    "os._exit",  # the documented way to end a forked child without running the parent's clean-up
+    "cache_file._load_index",  # numba's cache index, read to say why a kernel compiles (guarded: numba may move it)
+}
+
+
 def test_no_engine_module_uses_another_objects_private_names():
     """``pool`` called ``executor._sources``: a private name is used only on ``self`` or ``cls``."""
     reaches = []
     for path in sorted((ROOT / "nodegraph").glob("*.py")):
         for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
             private = isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")
-            if private and not (isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")):
+            if not private or ast.unparse(node) in FOREIGN_PRIVATE:
+                continue
+            if not (isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")):
                 reaches.append(f"{path.name}:{node.lineno}: {ast.unparse(node)}")
     assert not reaches, "\n".join(reaches)

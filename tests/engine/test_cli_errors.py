@@ -21,9 +21,9 @@ def test_nodes_lists_what_each_node_does_in_words_without_equations(capsys):
 
     assert main(["nodes"]) == 0
     out = capsys.readouterr().out
-    assert "rotate             v1   Random rotation per P_num in a local uvw frame." in out
-    assert "distance_field     v1   Signed distance to the element surface." in out
-    assert "expand             v2   The cooked grain's swelling." in out
+    assert "rotate             Random rotation per P_num in a local uvw frame." in out
+    assert "distance_field     Signed distance to the element surface." in out
+    assert "expand             The cooked grain's swelling." in out
     for line in out.splitlines():
         assert not re.search(r"[=·→∪]|SPEC|§|\beqs?\.|``|\(G\b", line), line
     assert main(["describe", "rotate"]) == 0
