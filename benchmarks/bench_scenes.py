@@ -143,7 +143,8 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for name in names:
         quick = QUICK.get(name, PREVIEW)
-        run_isolated(name, quick)  # compiles the kernels (numba cache) so the timed run is cold, not compiling
+        if not args.quick:  # compiles the kernels (numba cache) so the timed run is cold, not compiling
+            run_isolated(name, quick)  # (a --quick run is a smoke test: its times include the compile)
         preview = None if args.quick else REPO / "benchmarks" / "results" / f"{name}.png"  # for a look
         out = REPO / "outputs" / name if args.gallery and not args.quick else None
         rows.append((name, run_isolated(name, quick if args.quick else [], preview_to=preview, out=out)))

@@ -38,7 +38,8 @@ def test_ikura_don_small_end_to_end_and_shade_only_rerun(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("recipe_name", ["ikura_don", "rice_bowl", "onigiri"])
-def test_full_size_recipes(recipe_name, tmp_path):
-    result = _run(recipe_name, [], tmp_path)
-    assert {f"{recipe_name}.glb", "preview.png"} <= {p.name for p in result.files}
+def test_the_main_job_runs_at_full_size(tmp_path):
+    """README's first command, at full size: the only recipe run whole in the suite (each other recipe runs at its
+    reduced size in tests/scenes; a full-size run of each costs 50-85 CPU s for no assertion those lack)."""
+    result = _run("ikura_don", [], tmp_path)
+    assert {"ikura_don.glb", "preview.png"} <= {p.name for p in result.files}
