@@ -27,6 +27,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_scenes  # noqa: E402
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 REPO = Path(__file__).resolve().parents[1]
 # --quick runs the reduced main job twice and the checkers: 226 CPU s measured (the numba cache partly cold:
 # compiling is ≈ 164 CPU s of the whole pipeline, docs/performance.md)

@@ -31,6 +31,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from machine import conditions
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -17,6 +17,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from machine import conditions
 
 from nodes.simulation.scenes import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column

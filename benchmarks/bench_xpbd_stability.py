@@ -18,6 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from nodes.simulation.collider import signed_distance_grid
 from nodes.simulation.scenes import bowl_mesh, mechanical_energy, solver_run, stack_column
 from nodes.simulation.settings import SolverSettings

@@ -18,6 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 REPO = Path(__file__).resolve().parents[1]
 
 DOC = REPO / "docs" / "validation.md"

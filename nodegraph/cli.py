@@ -16,6 +16,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from . import runtime
 from .cache import (
     LIMIT_ENV_VAR,
     LIMIT_FILE,
@@ -721,6 +722,7 @@ def main(argv: list[str] | None = None) -> int:
         # the recording is closed as partial beside the last complete one
         signal.signal(signal.SIGTERM, _interrupt)
     args = build_parser().parse_args(argv)
+    runtime.configure()  # numba's kernel cache, before any node imports a kernel module
     try:
         registry = default_registry(plugins=args.plugin) if args.command not in ("cache", "inspect") else None
         return COMMANDS[args.command](args, registry)

@@ -153,11 +153,11 @@ class CompileAhead:
         import hashlib
         from importlib.metadata import version
 
-        from . import numba_cache
+        from . import numba_cache, runtime
         from .code_digest import module_digest
         from .registry import node_package_names
 
-        numba_cache.configure()
+        runtime.configure()
         packages = set(node_package_names()) | {"nodegraph"}
         rows = []
         for job in sorted(self.jobs, key=lambda job: (job.module, job.name, job.args)):
@@ -176,9 +176,9 @@ class CompileAhead:
         return marker is not None and marker.is_file()
 
     def spawn(self) -> None:
-        from . import numba_cache
+        from . import runtime
 
-        numba_cache.configure()  # the worker compiles into the run's cache, with the run's locator
+        runtime.configure()  # the worker compiles into the run's cache, with the run's locator
         self.process = subprocess.Popen(
             self.command,
             stdin=subprocess.PIPE,
@@ -267,9 +267,9 @@ def main() -> None:
         reached[0] = sys.maxsize  # the run closed the pipe (it ended, or died): stop at the next kernel
 
     threading.Thread(target=follow, daemon=True).start()
-    from . import numba_cache
+    from . import runtime
 
-    numba_cache.configure()
+    runtime.configure()
     work(jobs, reached)
 
 

@@ -17,7 +17,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Protocol
 
-from . import __version__, codec
+from . import __version__, codec, runtime
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
@@ -122,6 +122,7 @@ class Executor:
     # running ----------------------------------------------------------------------------------
     def run(self, outputs: list[Wire] | None = None) -> RunResult:
         """Materialise the requested outputs (default: the recipe's) and everything they need."""
+        runtime.configure()  # numba's kernel cache, before the nodes import their kernel modules
         outputs = list(outputs or self.recipe.outputs)
         order = self.plan({w.node for w in outputs})
         if self.cache is not None:
