@@ -529,7 +529,7 @@ class Beside:
     only ever run in the second thread then. ``run`` returns once both are done; if ``main`` fails, the second
     thread stops after the instance it is computing. ``elapsed``: the node's own wall time; ``cpu``: the second
     thread's CPU seconds (the node's CPU is the process's less this one; each instance beside it gets its thread's
-    own, so numba worker threads those instances start count to the node)."""
+    own, so numba worker threads those instances start count to the node). The policy it belongs to: ``runtime``."""
 
     def __init__(self, main: Instance, order: list[Instance], side: list[Instance], visit, executor: Executor):
         self.main, self.order, self.side, self.visit = main, order, side, visit
