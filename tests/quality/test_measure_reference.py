@@ -178,3 +178,28 @@ def test_a_sample_of_all_elements_in_many_tasks():
     assert {name: table.columns[name][0].item() for name in expected} == {
         name: float(value) if isinstance(value, np.floating) else value for name, value in expected.items()
     }
+
+
+def test_measure_forks_no_process_even_with_free_cores(monkeypatch):
+    """No fork of a running process (nodegraph/runtime.py): a fork copies the forking thread alone, and OpenBLAS's
+    fork handler stopped its workers under another thread's matrix product (a run hung: 8feda45). measure forked
+    children for its libigl calls when ``FreeCores`` found a free core; it failed here then."""
+    import os
+
+    from nodes.simulation import threads
+
+    class Free:
+        def __init__(self, most):
+            self.most = most
+
+        def threads(self):
+            return 2
+
+    def no_fork():
+        raise RuntimeError("measure forked a process")
+
+    monkeypatch.setattr(threads, "FreeCores", Free)
+    monkeypatch.setattr(os, "fork", no_fork)
+    aggregates = pile(seed=11)
+    table = measure.call(seed=2, aggregates=aggregates, sample=1000)  # 132 sampled: the old code forked from 16 tasks
+    assert table.columns["sampled"][0] == 132
