@@ -22,7 +22,12 @@ a busy machine it compiled next to nothing (docs/performance.md).
 A run that ends with every kernel of its worker's jobs in hand (compiled or loaded, so in numba's cache) marks
 them cached (``CompileAhead.cached``): the next run with the same kernels, code and numba starts no worker, which
 would only load them before the run does (1.6 CPU s of the main job's run from an empty node cache).
-Off: ``NODEGRAPH_COMPILE_AHEAD=off``.
+The worker starts only onto a free core (``core_free``: the load average leaves one idle besides the run's own;
+``nodegraph/runtime.py``): on a busy machine it has no core of its own, only a share of the run's, and two
+compilations side by side each ran slower (the main job's first run, ``--draft``, at load 8–12: 1.08× and 1.20×
+the wall, 1.12× and 1.07× the CPU seconds with the worker, two pairs; docs/performance.md, "One policy for parallel
+work").
+``NODEGRAPH_COMPILE_AHEAD=off``: never; ``on``: whatever the load; unset (``auto``): onto a free core.
 
 ``python benchmarks/bench_compile.py --record`` rewrites the record from a first run of the main job.
 """
@@ -133,8 +138,11 @@ class CompileAhead:
     @classmethod
     def start(cls, recipe, order: list, to_run: set) -> CompileAhead | None:
         """A started worker for the kernels ``to_run`` needs, or None (switched off, nothing recorded, or it
-        could not start: the run compiles them itself)."""
-        if os.environ.get(ENV_VAR, "").lower() in ("off", "0", "false", "no"):
+        could not start, or no core is free: the run compiles them itself)."""
+        setting = os.environ.get(ENV_VAR, "auto").lower()
+        if setting in ("off", "0", "false", "no"):
+            return None
+        if setting == "auto" and not core_free():
             return None
         try:
             ahead = cls(plan_jobs(recipe, order, to_run))
@@ -225,6 +233,16 @@ class CompileAhead:
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait()
+
+
+def core_free() -> bool:
+    """Whether a core is idle besides the one this run uses: the 1-minute load average plus one is at most the
+    cores this process may run on (no load average: assumed free)."""
+    try:
+        load = os.getloadavg()[0]
+    except OSError:
+        return True
+    return load + 1.0 <= len(os.sched_getaffinity(0))
 
 
 def latest_first(jobs: list[Job]) -> list[Job]:

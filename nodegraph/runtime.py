@@ -23,7 +23,8 @@ nothing else starts threads or processes:
    ``export``) meanwhile. The node stays in the main thread, where a signal stops it; only the second thread launches
    numba's parallel kernels then (numba's workqueue layer aborts on two launching at once).
 3. *Other processes*, for what one process cannot share: the compile-ahead worker on a first run (numba compiles one
-   kernel at a time, under a process-wide lock; ``compile_ahead``), started by exec; and, when asked for, Dask
+   kernel at a time, under a process-wide lock; ``compile_ahead``), started by exec and only onto a core the load
+   average shows idle (on a busy machine a second process only splits the run's share); and, when asked for, Dask
    workers (``--workers`` / ``--scheduler``: sweeps, other machines; ``dask_pool``), started by spawn. No process
    forks a copy of itself while it runs: a fork copies the forking thread alone and runs the libraries' fork
    handlers, and OpenBLAS's stopped its workers under a matrix product another thread had under way (a run hung in
