@@ -268,6 +268,7 @@ def test_by_default_the_worker_starts_only_onto_a_free_core(tmp_path, monkeypatc
 
     _setup(tmp_path)
     monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "ahead_kernels", raising=False)  # not loaded by an earlier test: jobs to plan
     monkeypatch.delenv(compile_ahead.ENV_VAR)
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
     monkeypatch.setattr(os, "getloadavg", lambda: (load, load, load))
