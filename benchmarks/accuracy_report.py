@@ -784,7 +784,7 @@ def write_report(inputs: dict, results: Path) -> None:
         "the full sweeps take many times longer on this loaded 2-core machine; `--full` runs them"
         if quick
         else "full mode"
-        + (f", except {', '.join(cut)} in its quick mode (the full run did not fit this session's time)" if cut else "")
+        + (f", except {', '.join(cut)} in its quick mode (the full run did not fit the time allowed)" if cut else "")
     )
     lines = [
         "# Accuracy against time",

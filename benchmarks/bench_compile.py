@@ -76,7 +76,7 @@ from nodegraph.values import Table
 def double(values):
     return 2.0 * values
 
-@node("compile_probe", version=1, outputs={"table": Out(Table, "doubled")})
+@node("compile_probe", outputs={"table": Out(Table, "doubled")})
 def compile_probe(ctx):
     """One numba kernel."""
     return Table({"x": double(np.arange(4.0))})

@@ -108,7 +108,7 @@ def case_flatten(quick: bool):
     import trimesh
 
     from nodegraph.values import Mesh
-    from nodes.simulation.contact_flattening import flatten
+    from nodes.contact_shaping.contact_flattening import flatten
     from nodes.values import Aggregate, ElementLibrary, Placement
 
     side = 4 if quick else 7

@@ -94,11 +94,19 @@ def bench_draft(recipe: str, extra: list[str]) -> list[tuple]:
 
 def _node_times(summary: str) -> dict[str, float]:
     """Seconds per node from a run's summary table."""
+    from nodegraph.report import parse_duration
+
     out = {}
+    wall = None
     for line in summary.splitlines():
-        cells = [c.strip() for c in line.split("│")]
-        if len(cells) > 5 and cells[4].endswith(" ms"):
-            out[cells[1]] = float(cells[4][:-3]) / 1000
+        cells = [c.strip() for c in line.replace("┃", "│").split("│")]
+        if "wall time" in cells:  # the header: the table drops its type column where it would not fit
+            wall = cells.index("wall time")
+        elif wall is not None and len(cells) > wall:
+            try:
+                out[cells[1]] = parse_duration(cells[wall])
+            except ValueError:
+                continue
     return out
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -24,7 +25,10 @@ runtime.configure()  # numba's kernel cache and locator, before a kernel module 
 
 from machine import conditions
 
-from nodes.simulation.scenes import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
+
+from support.scenes import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column
+
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.xpbd import xpbd
@@ -171,7 +175,7 @@ def bench_effects(quick):
 
 
 def run_to_rest(run, frames, repeats=1, make=None):
-    """Run ``frames`` frames of a ``setup.Simulation`` or ``nodes.simulation.scenes.SolverRun``; returns (wall of the
+    """Run ``frames`` frames of a ``setup.Simulation`` or ``support.scenes.SolverRun``; returns (wall of the
     frames alone, element centres, max penetration / r over the run, last residual, energy drift and
     rise of ``energy_drift``). With ``repeats`` > 1 the (deterministic) run is repeated on fresh runs
     from ``make`` and the fastest wall kept."""
@@ -271,7 +275,7 @@ def accuracy_table(rows, reference, second):
 
 
 def bench_accuracy(quick):
-    """Substeps × iterations on the rice bowl and on the stack test (``nodes.simulation.scenes.stack_column``),
+    """Substeps × iterations on the rice bowl and on the stack test (``support.scenes.stack_column``),
     plus the xpbd node's defaults (10 × 2); Pareto front on wall time vs error against a reference run.
 
     Both scenes are below ``solver.PARALLEL_PARTICLES``: the solver runs them on one thread (on the

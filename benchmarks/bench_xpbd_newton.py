@@ -31,6 +31,8 @@ runtime.configure()  # numba's kernel cache and locator, before a kernel module 
 
 from machine import conditions
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
+
 ROOT = Path(__file__).resolve().parents[1]
 # packages this benchmark needs beyond the project's own (tests/benchmarks skips it without them)
 REQUIRES = ("newton", "warp")
@@ -53,9 +55,10 @@ def initial_grid(n, seed=0):
 
 def box_solver(n, dispatch=None, threads=None):
     """Our solver on the jittered grid in the open box (mm, g, s), ready to run: a ``SolverRun`` (``scenes``)."""
+    from support.scenes import open_box, solver_run
+
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.scenes import open_box, solver_run
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.settings import solver_settings_for
 
     x, side = initial_grid(n)
     x_mm, r_mm, side_mm = x * 1000, RADIUS * 1000, side * 1000
@@ -66,13 +69,16 @@ def box_solver(n, dispatch=None, threads=None):
         np.array([side_mm + 20, side_mm + 20, height]),
         r_mm / 2,
     )
-    settings = SolverSettings(
+    # Newton's example: μ 0.5 for both; as measured: no sleeping, β = 0
+    settings = solver_settings_for(
         frozenset({"gravity", "contact", "friction", "collider"}),
+        r_mm,
         substeps=SUBSTEPS,
         iterations=1,
-        mu_s=0.5,
-        mu_k=0.5,
-        shock_propagation=4.0,
+        static_threshold=0.5,
+        dynamic_scale=1.0,
+        sleep_speed=0.0,
+        linear_deformation=0.0,
     )
     return solver_run(
         x_mm,

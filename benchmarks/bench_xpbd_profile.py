@@ -58,7 +58,7 @@ def profile(n, settle, timed, threads=None, clock=time.perf_counter):
     d.kernel_calls.clear()
     t = clock()
     for _ in range(timed * SUBSTEPS):
-        s.solver.substep(s.state)
+        s.step()
     wall = clock() - t
     steps = timed * SUBSTEPS
     rows = [(name, 1e3 * sec / steps, d.kernel_calls[name] / steps) for name, sec in d.seconds.most_common()]

@@ -1,6 +1,6 @@
 """xpbd stability map (issue 11): where the solver holds.
 
-Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``nodes.simulation.scenes.stack_column``, the
+Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``support.scenes.stack_column``, the
 upper cube ``ratio``× heavier) dropped 0.1 r onto the ground; max inter-element penetration / r over
 the run, energy growth (max of E − E₀ over the run, in M·g·r; gravity does the only work, so > 0 is
 a gain) and the settled error of the element centres against the analytic rest (r). A refused
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,20 +23,26 @@ from nodegraph import runtime
 
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
+
+from support.scenes import bowl_mesh, mechanical_energy, solver_run, stack_column
+
 from nodes.simulation.collider import signed_distance_grid
-from nodes.simulation.scenes import bowl_mesh, mechanical_energy, solver_run, stack_column
-from nodes.simulation.settings import SolverSettings
+from nodes.simulation.settings import solver_settings_for
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = Path(os.environ.get("NODEGRAPH_BENCH_RESULTS") or ROOT / "benchmarks" / "results")
 
 
 ITERATIONS = 2  # the node's default
+# compliance (s²/g) → the node's stiffness (N/m); 0 (rigid) is no node setting: its stiffest, 1e5 N/m
+STIFFNESS = {0.0: 100000.0, 1e-6: 1000.0, 1e-3: 1.0}
 
 
 def stack_cell(dt, substeps, ratio, compliance, frames):
     try:
-        s, rest, mass = stack_column(2, dt=dt, substeps=substeps, iterations=ITERATIONS, compliance=compliance)
+        stiffness = STIFFNESS[compliance]
+        s, rest, mass = stack_column(2, dt=dt, substeps=substeps, iterations=ITERATIONS, stiffness=stiffness)
     except ValueError:
         return None
     s.model.w[8:] /= ratio
@@ -53,7 +60,9 @@ def stack_cell(dt, substeps, ratio, compliance, frames):
 def wall_cell(clamp, wall, frames=20):
     bowl = bowl_mesh(radius=20.0, wall=wall, rim=0.3, segments=64)
     sdf = signed_distance_grid([bowl], np.array([-24.0, -24, -24]), np.array([24.0, 24, 10]), min(0.25, wall / 2))
-    settings = SolverSettings(frozenset({"contact", "collider"}), substeps=4, iterations=1, speed_clamp=clamp)
+    settings = solver_settings_for(
+        frozenset({"contact", "collider"}), 0.5, substeps=4, iterations=1, speed_clamp=clamp, sleep_speed=0.0
+    )
     rng = np.random.default_rng(1)
     n = 200
     x = rng.uniform(-4, 4, (n, 3))

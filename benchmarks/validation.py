@@ -6,13 +6,14 @@ knobs the case needed, the seconds it took and a plot into docs/validation.md (p
     python benchmarks/validation.py            # full sizes (minutes on 2 cores)
     python benchmarks/validation.py --quick    # reduced sizes (≈ 1–2 min), what tests/simulation pins
 
-Friction models (``SolverSettings.anchored_friction``): 'anchored' (the default) measures the drift since a
-contact began sticking (``nodes/simulation/friction.py``); 'substep' is Macklin et al. 2014's position-level rule
-applied to each substep's displacement.
+Friction models (the node's ``friction_model``, ``nodes/simulation/friction_models.py``): 'anchored' (the
+default) measures the drift since a contact began sticking (``nodes/simulation/friction.py``); 'substep' is Macklin
+et al. 2014's position-level rule applied to each substep's displacement.
 """
 
 import argparse
 import dataclasses
+import sys
 import time
 from pathlib import Path
 
@@ -22,11 +23,15 @@ from nodegraph import runtime
 
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
+
 REPO = Path(__file__).resolve().parents[1]
 
 DOC = REPO / "docs" / "validation.md"
 IMAGES = REPO / "docs" / "images" / "validation"
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
+# the node's parameters but no sleeping: the measurements here read the settling itself (as measured before issue 45)
+NO_SLEEP = dict(sleep_speed=0.0)
 SPHERE_MASS = 0.025e-3 * 1000  # g: 25 mg per sphere, as a grain (rest positions do not depend on it)
 
 
@@ -75,8 +80,9 @@ def ball(n: int, spacing, seed: int = 0) -> np.ndarray:
 
 def ground(half: float, top: float, pitch: float):
     """φ of a ground slab (top face z = 0) over [−half, half]² × [−3, top]."""
+    from support.scenes import box_mesh
+
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.scenes import box_mesh
 
     slab = box_mesh([-half - 5, -half - 5, -6], [half + 5, half + 5, 0], "ground")
     return signed_distance_grid([slab], np.array([-half, -half, -3.0]), np.array([half, half, top]), pitch)
@@ -85,19 +91,18 @@ def ground(half: float, top: float, pitch: float):
 # -- sphere heaps ----------------------------------------------------------------------------------
 def sphere_run(x, radius, mu, anchored, sdf, **solver):
     """A solver run of loose spheres of one ``radius`` (one particle per element) at sliding friction μs = ``mu``
-    (μk = 0.7 μs), rigid contacts, against the collider field ``sdf``; ``solver``: further SolverSettings."""
-    from nodes.simulation.scenes import solver_run
-    from nodes.simulation.settings import SolverSettings
+    (μk = 0.7 μs), rigid contacts, against the collider field ``sdf``; ``solver``: further xpbd node parameters."""
+    from support.scenes import solver_run
+
+    from nodes.simulation.settings import solver_settings_for
 
     n = len(x)
-    settings = SolverSettings(
+    settings = solver_settings_for(
         EFFECTS,
-        mu_s=mu,
-        mu_k=0.7 * mu,
-        compliance=np.inf,
-        damping=0.1,
-        shock_propagation=4.0,
-        anchored_friction=anchored,
+        radius,
+        static_threshold=mu,
+        friction_model="anchored" if anchored else "substep",
+        **NO_SLEEP,
         **solver,
     )
     return solver_run(
@@ -136,8 +141,8 @@ def rice_heap(n, anchored, frames=(150,), substeps=10, friction=1.0, seed=0, sha
     damping; no adhesion: dry rice). Returns (``heap_angle``, ``mound_angle``) after each of ``frames`` and
     the seconds."""
     from scipy.spatial.transform import Rotation
+    from support.scenes import box_mesh, rice_library
 
-    from nodes.simulation.scenes import box_mesh, rice_library
     from nodes.simulation.settings import XpbdParams
     from nodes.simulation.setup import build_simulation
     from nodes.simulation.xpbd import xpbd
@@ -187,8 +192,9 @@ def packing_fraction(n, mu, anchored, frames=150, radius=1.0, seed=0):
     """Pour n spheres (a loose lattice, spacing 2.3 r) into an open box and let them settle; the packing
     fraction is the spheres' volume inside the box's core (two diameters from the walls and floor, below
     the top two diameters of the bed), counted on a 0.1 r sample grid. Returns (φ, seconds)."""
+    from support.scenes import open_box
+
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.scenes import open_box
 
     side = 16.0 * radius
     rng = np.random.default_rng(seed)
@@ -228,10 +234,10 @@ def silo_field(diameter: float, top: float, pitch: float):
     slab (top face z = 0), up to ``top``; the grid covers the walls' whole thickness, so no particle a contact
     pushes into a wall finds free space behind it."""
     import trimesh
+    from support.scenes import box_mesh
 
     from nodegraph.values import Mesh
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.scenes import box_mesh
 
     radius = diameter / 2
     tube = trimesh.creation.annulus(radius, radius + 8.0, height=top + 6.0, sections=96)
@@ -311,8 +317,9 @@ def silo_fill(
     Returns a dict: filled mass M, apparent mass at the base (floor force / g) and the walls' share (g), the
     walls' normal force (g-force), bed height H (mm, 98th percentile of the centres + r), seconds. ``follow``:
     the wall anchors follow pre-stabilisation's moves (``wall_gauge``), a solver change tried from outside."""
-    from nodes.simulation.scenes import solver_run
-    from nodes.simulation.settings import SolverSettings
+    from support.scenes import solver_run
+
+    from nodes.simulation.settings import solver_settings_for
 
     radius = 1.0
     rng = np.random.default_rng(seed)
@@ -329,16 +336,15 @@ def silo_fill(
             break
     x = np.concatenate(layers)[:n] + rng.uniform(-0.2, 0.2, (n, 3)) * radius
     top = float(x[:, 2].max()) + 4 * radius
-    settings = SolverSettings(
+    settings = solver_settings_for(
         EFFECTS,
+        radius,
         substeps=substeps,
         iterations=iterations,
-        mu_s=mu,
-        mu_k=0.7 * mu,
-        compliance=np.inf,
-        damping=0.1,
+        static_threshold=mu,
         shock_propagation=shock,
-        anchored_friction=anchored,
+        friction_model="anchored" if anchored else "substep",
+        **NO_SLEEP,
     )
     gauge = wall_gauge(n, follow)
     run = solver_run(
@@ -413,11 +419,11 @@ def ellipsoid_packing(alpha, n, size=1.5, particles=8, frames=150, seed=0):
     not reach their surface), and of the particles (the solid the solver sees), on a 0.1·size sample grid.
     Returns (φ of the ellipsoids, φ of the particles, seconds)."""
     from scipy.spatial.transform import Rotation
+    from support.scenes import grain_mesh, open_box, solver_run
 
     from nodes.simulation.clusters import element_cluster, matrix_to_quat
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.scenes import grain_mesh, open_box, solver_run
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.settings import solver_settings_for
 
     axes = size * np.array([alpha, 1.0, 1.0 / alpha])
     cluster = element_cluster(grain_mesh(*(2 * axes)), particles, quadratic=False)
@@ -432,9 +438,8 @@ def ellipsoid_packing(alpha, n, size=1.5, particles=8, frames=150, seed=0):
     m = len(cluster.radii)
     x = np.concatenate([cluster.centres @ t.T + o for t, o in zip(turns, origins)])
     top = float(x[:, 2].max()) + 2 * axes.max()
-    settings = SolverSettings(
-        EFFECTS, mu_s=0.0, mu_k=0.0, compliance=1 / (1000 * 2000.0), damping=0.1, shock_propagation=4.0
-    )
+    # frictionless; β = 0 as measured
+    settings = solver_settings_for(EFFECTS, size, static_threshold=0.0, linear_deformation=0.0, **NO_SLEEP)
     run = solver_run(
         x,
         np.tile(cluster.radii, n),
@@ -479,9 +484,10 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90) -> dict:
     cluster) whose weight is 3 × ``load`` (N): a plate that cannot tip, each grain carrying ``load``. At the xpbd
     node's defaults (stiffness 2,000 N/m, β 0.3, 10 substeps × 2 iterations, shock propagation 4). Returns the
     plate's mean height above the ground (mm), the grain's unloaded thickness and seconds."""
+    from support.scenes import grain_mesh, solver_run
+
     from nodes.simulation.clusters import element_cluster
-    from nodes.simulation.scenes import grain_mesh, solver_run
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.settings import solver_settings_for
 
     cluster = element_cluster(grain_mesh(), particles, quadratic=False)
     grain = cluster.centres - cluster.centres.mean(axis=0)
@@ -499,15 +505,7 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90) -> dict:
     n = len(grain)
     x = np.concatenate(grains + [plate])
     plate_g = 3 * load / 9.81 * 1000  # N → g
-    settings = SolverSettings(
-        EFFECTS,
-        compliance=1 / (1000 * 2000.0),
-        linear_deformation=0.3,
-        mu_s=0.6,
-        mu_k=0.42,
-        damping=0.1,
-        shock_propagation=4.0,
-    )
+    settings = solver_settings_for(EFFECTS, 0.5, **NO_SLEEP)
     run = solver_run(
         x,
         np.concatenate([cluster.radii] * 3 + [np.full(len(plate), 0.5)]),
@@ -541,7 +539,8 @@ def squeeze_body(
     thickness) held, ``load`` (N) pressing its top tenth down, ramped up over ``ramp`` frames. Strain = 1 − the
     distance between the two patches' mean heights over the rest one; the largest edge stretch (current over
     rest length, what the break test reads), tears and pieces at the end."""
-    from nodes.simulation.scenes import grain_mesh
+    from support.scenes import grain_mesh
+
     from nodes.tearing.body import BodySettings, ElasticBody
 
     tm = grain_mesh().to_trimesh()
@@ -785,7 +784,7 @@ def run_cases(quick: bool, ellipsoids: bool | None = None) -> tuple[list[Case], 
 
 def glue_case(quick: bool, figures: dict) -> Case:
     """A pressed block of sticky rice set down under gravity, glued and not, against the substeps (``glue``)."""
-    from nodes.simulation.scenes import block_heights, pressed_block
+    from support.scenes import block_heights, pressed_block
 
     t = time.perf_counter()
     block = pressed_block()
@@ -825,8 +824,9 @@ def ellipsoid_case(quick: bool, figures: dict) -> Case:
     alphas = (1.0, 1.25, 1.5) if quick else (1.0, 1.125, 1.25, 1.5, 2.0)
     cover = []  # the share of each ellipsoid's volume its 8 particles fill
     rng = np.random.default_rng(0)
+    from support.scenes import grain_mesh
+
     from nodes.simulation.clusters import element_cluster
-    from nodes.simulation.scenes import grain_mesh
 
     for a in alphas:
         axes = 1.5 * np.array([a, 1.0, 1.0 / a])

@@ -36,10 +36,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from . import codec
+from . import codec, interrupt
 from .errors import CacheCorruption, NodegraphError
 
-DEFAULT_DIR = ".nodegraph/cache"
+DEFAULT_DIR = ".nodegraph/cache"  # before issue 47: in the current folder; still used where one exists
 ENV_VAR = "NODEGRAPH_CACHE"
 LIMIT_ENV_VAR = "NODEGRAPH_CACHE_LIMIT"
 LIMIT_FILE = "limit"
@@ -57,7 +57,15 @@ os.umask(_UMASK)
 
 
 def default_cache_dir() -> Path:
-    return Path(os.environ.get(ENV_VAR) or DEFAULT_DIR)
+    """``$NODEGRAPH_CACHE``, else the user's cache folder (``$XDG_CACHE_HOME`` or ``~/.cache``, then
+    ``nodegraph/cache``, beside the kernels' ``nodegraph/numba``): one cache whichever folder a command runs in.
+    A cache an earlier version made in ``.nodegraph/cache`` of the current folder is still used there (its
+    results stay warm) until it is moved or cleared."""
+    if os.environ.get(ENV_VAR):
+        return Path(os.environ[ENV_VAR])
+    if (Path(DEFAULT_DIR) / MARKER).is_file():
+        return Path(DEFAULT_DIR)
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "nodegraph" / "cache"
 
 
 def check_writable(directory: Path, what: str, fix: str) -> None:
@@ -84,6 +92,7 @@ def atomic_write(path: Path, data: bytes, durable: bool = True) -> None:
     tears there is found and computed again."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    interrupt.note(tmp)  # removed by a supervising parent if this process is killed before the rename
     try:
         os.fchmod(fd, 0o666 & ~_UMASK)  # as open() would make it (mkstemp's 0600 would hide outputs from others)
         with os.fdopen(fd, "wb") as handle:
@@ -171,6 +180,7 @@ class Cache:
         folder.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{key}.rrd.", suffix=".tmp", dir=folder)
         os.close(fd)
+        interrupt.note(tmp)
         return Path(tmp)
 
     def _keep_fragment(self, key: str, fragment: Fragment) -> dict[str, Any]:
@@ -419,7 +429,7 @@ class Cache:
                 "nothing removed. Give --cache-dir the cache directory itself"
             )
         failed = []
-        for part in ("entries", "blobs", "rerun", "checkpoints", LIMIT_FILE, MARKER):
+        for part in ("entries", "blobs", "rerun", "checkpoints", "node_times.json", LIMIT_FILE, MARKER):
             target = self.directory / part
             try:
                 if target.is_dir():

@@ -1,5 +1,5 @@
 """Resumable work for long nodes: a node saves its progress now and then; a re-run of the same
-node instance (same cache key: same inputs, parameters, seed, effects, versions) starts from there.
+node instance (same cache key: same code, libraries, inputs, parameters, seed, effects) starts from there.
 
 The checkpoint sits in the cache directory (``checkpoints/<key>.npz``), written atomically with the
 value codec, so an interrupted run (Ctrl-C, SIGTERM, a lost machine) loses at most ``interval``

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import re
 import signal
 import sys
 import threading
@@ -16,7 +17,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from . import runtime
+from . import interrupt, runtime
 from .cache import (
     LIMIT_ENV_VAR,
     LIMIT_FILE,
@@ -54,7 +55,10 @@ def _common(parser: argparse.ArgumentParser) -> None:
         help="load node types from a Python file (repeatable)",
     )
     parser.add_argument(
-        "--cache-dir", type=Path, default=None, help="cache directory (default: $NODEGRAPH_CACHE or .nodegraph/cache)"
+        "--cache-dir",
+        type=Path,
+        default=None,
+        help="cache directory (default: $NODEGRAPH_CACHE, else ~/.cache/nodegraph/cache)",
     )
 
 
@@ -194,6 +198,7 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser("check", help="validate a recipe; nothing runs")
     check.add_argument("recipe", type=Path)
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
+    check.add_argument("--yes", action="store_true", help="pass a request larger than a run starts on unasked")
     _draft(check)
     _common(check)
 
@@ -242,7 +247,10 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             f"--no-rrd contradicts {given}: a viewer and a recording file both need the recording; drop one of them"
         )
     recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
-    out_dir = args.out_dir or Path("outputs") / (recipe.name + ("_draft" if args.draft else ""))
+    if _work_due(recipe, args.outputs, None if args.no_cache else (args.cache_dir or default_cache_dir())):
+        # what takes a moment to check (a placement against its shape's mesh), said before any work
+        load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
+    out_dir = args.out_dir or outputs_root(args.recipe) / (recipe.name + ("_draft" if args.draft else ""))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
@@ -290,6 +298,37 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         if result.rrd is not None:
             print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
     return 0
+
+
+PROJECT_MARKERS = ("pyproject.toml", ".git")
+
+
+def outputs_root(recipe_path: Path) -> Path:
+    """Where a recipe's outputs go unless --out-dir says: ``outputs/`` of its project (the nearest folder above the
+    recipe holding a pyproject.toml or .git: this repository for graphs/*.yaml), else beside the recipe; whichever
+    folder the command runs in. Shown relative to the current folder where it lies below it."""
+    recipe_dir = Path(recipe_path).resolve().parent
+    root = next((d for d in (recipe_dir, *recipe_dir.parents) if any((d / m).exists() for m in PROJECT_MARKERS)), None)
+    folder = (root or recipe_dir) / "outputs"
+    try:
+        return folder.relative_to(Path.cwd().resolve())
+    except ValueError:
+        return folder
+
+
+def _work_due(recipe: Recipe, outputs: list[str], cache_dir: Path | None) -> bool:
+    """Whether a node with a ``check_work`` would run for ``outputs`` (its result not in the cache): a cached
+    re-run skips those checks and what they load (a shape's mesh: trimesh, 0.6 CPU s)."""
+    from .plan import Plan
+
+    wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
+    plan = Plan(recipe)
+    order = plan.add({w.node for w in wires})
+    checked = [inst for inst in order if recipe.nodes[inst.node].spec.check_work is not None]
+    if not checked:
+        return False
+    cache = Cache(cache_dir) if cache_dir is not None else None
+    return cache is None or not all(cache.has(plan.keys[inst]) for inst in checked)
 
 
 @contextlib.contextmanager
@@ -433,7 +472,7 @@ def _cmd_sweep(args, registry) -> int:
 
     base = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
-    out_dir = args.out_dir or Path("outputs") / base.name / "sweeps"
+    out_dir = args.out_dir or outputs_root(args.recipe) / base.name / "sweeps"
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     check_writable(out_dir, "sweep table", "choose another folder with --out-dir")
     if cache is not None:
@@ -457,7 +496,7 @@ def _cmd_sweep(args, registry) -> int:
             rrd=rrd,
         )
     _trim(cache, started, reporter)
-    for path in write_sweep(result, out_dir):
+    for path in write_sweep(result, out_dir, warn=reporter.warn):
         print(f"wrote {path}")
     if rrd is not None:
         print(f"wrote {rrd}: {len(result.points)} recordings, one per point (open with: rerun {rrd})")
@@ -486,7 +525,7 @@ def _cmd_inspect(args, registry) -> int:
 
 
 def _cmd_check(args, registry) -> int:
-    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
     if recipe.draft and not args.draft:  # the draft's values are checked too, where they would apply
         load_recipe(args.recipe, registry, args.overrides, draft=True)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())
@@ -510,11 +549,41 @@ def doc_summary(doc: str | None) -> str:
     return paragraph[: end.start() + 1] if end else paragraph
 
 
+# a citation in a summary: "— SPEC §2.3 (G §3.2.2.2)", "(G eq. 6)", "(issue 25)", "G eq. 5", "(G's bunny)"
+_CITATION = re.compile(
+    r"\s+—\s+.*$"
+    r"|\s*\([^()]*(?:\bSPEC\b|\beqs?\.|§|\bfig\.|\btable\b|\bissue \d|\b[GSU]'s\b)[^()]*\)"
+    r"|\b(?:[A-Z]+ )?eqs?\. [\d–,]+\s*"
+)
+SUMMARY_WIDTH = 100  # characters of a summary in the listing before it is cut at a clause
+_EQUATION = re.compile(r"\s*\[[^\]]*\]\s*=.*$")  # "swelling [x, y, z] = P·[r, s, t]": the words before it stay
+
+
+def plain_summary(spec) -> str:
+    """What a node type does, in words, for the one-line listing (``nodegraph nodes``): its module's opening
+    sentence ("The ``rotate`` node: random rotation per P_num in a local uvw frame — SPEC §2.3 (…)") without the
+    citations and equations, which ``describe`` shows with the rest; the implementation's first sentence, likewise
+    cleaned, where the module does not open with the node's name (a module of several nodes, a plugin)."""
+    module = sys.modules.get(spec.module)
+    opening = doc_summary(getattr(module, "__doc__", None))
+    named = re.match(
+        rf"^(?:The ``{re.escape(spec.type_name)}`` node|Node ``{re.escape(spec.type_name)}``):\s*", opening
+    )
+    text = opening[named.end() :] if named else doc_summary(spec.doc)
+    text = re.sub(r"\s*\(``[^`]*``\)", "", text)  # "(``cooked.cooked_material``)": a pointer into the code
+    text = _EQUATION.sub("", _CITATION.sub("", text)).replace("``", "")
+    text = text.replace(" ∪ ", " and ").replace(" → ", " into ").strip(" ,;:.")
+    if len(text) > SUMMARY_WIDTH:  # a long one to its first clause that ends the thought
+        cut = re.search(r", each |, so |; ", text[30:])
+        text = text[: 30 + cut.start()] if cut else text
+    return text[:1].upper() + text[1:] + "." if text else ""
+
+
 def _cmd_nodes(args, registry) -> int:
     for spec in registry.specs():
-        summary = doc_summary(spec.doc)
+        summary = plain_summary(spec)
         effects = f"  [effects: {', '.join(sorted(spec.effects))}]" if spec.effects else ""
-        print(f"{spec.type_name:<18} v{spec.version:<3} {summary}{effects}")
+        print(f"{spec.type_name:<18} {summary}{effects}")
     if not registry.names():
         print("(no node types found)")
     return 0
@@ -522,7 +591,7 @@ def _cmd_nodes(args, registry) -> int:
 
 def describe_spec(spec) -> str:
     """Plain-text description of a node type: header, doc, ports, parameters (readable in a pipe)."""
-    lines = [f"{spec.type_name}  (version {spec.version}, {spec.module})"]
+    lines = [f"{spec.type_name}  ({spec.module})"]
     if spec.doc:
         lines += ["", *spec.doc.splitlines()]
     lines += ["", f"random: {'yes (seeded per node and variant)' if spec.random else 'no'}"]
@@ -567,7 +636,7 @@ def markdown_reference(registry) -> str:
     """Every node type as Markdown: doc, effects, ports and a parameter table (type, default, range, units)."""
     lines = ["# Node reference", "", "Generated by `nodegraph docs` from the node declarations.", ""]
     for spec in registry.specs():
-        lines += [f"## `{spec.type_name}` (v{spec.version})", "", spec.doc or "", ""]
+        lines += [f"## `{spec.type_name}`", "", spec.doc or "", ""]
         facts = [f"module `{spec.module}`", "random" if spec.random else "deterministic"]
         if spec.effects:
             facts.append("effects: " + ", ".join(f"`{e}`" for e in sorted(spec.effects)))
@@ -722,7 +791,12 @@ def main(argv: list[str] | None = None) -> int:
         # the recording is closed as partial beside the last complete one
         signal.signal(signal.SIGTERM, _interrupt)
     args = build_parser().parse_args(argv)
-    runtime.configure()  # numba's kernel cache, before any node imports a kernel module
+    runtime.configure()  # numba's kernel cache, before any node imports a kernel module (and before the fork)
+    if argv is None and args.command in ("run", "sweep", "watch"):
+        # in a child that a signal stops within interrupt.GRACE seconds, whatever its node is doing
+        status = interrupt.supervise()
+        if status is not None:
+            return status
     try:
         registry = default_registry(plugins=args.plugin) if args.command not in ("cache", "inspect") else None
         return COMMANDS[args.command](args, registry)

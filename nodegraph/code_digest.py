@@ -5,9 +5,14 @@ Node functions import their kernels inside their bodies (``from . import distanc
 imports are read from each module's source (``import_statements``: every import statement, parsed with
 ``ast``), at any depth, relative or absolute, without importing anything. A module counts as the
 project's when its top-level package is the node's own or one of the installed node packages
-(``nodegraph.nodes`` entry points); the engine is covered by its version, third-party libraries by
-nothing (bump the node's ``version`` when a library upgrade matters). A plugin file (``--plugin``)
-is its own project: its digest covers the file.
+(``nodegraph.nodes`` entry points). A node's digest (``node_code_digest``) also follows its imports into the
+engine (``nodegraph.values``, ``nodegraph.node``, …) and covers the engine modules that hand every node its
+parameters, context and inputs and store its outputs (``ENGINE_ROOTS``): editing the engine's code re-runs the
+nodes whose results it can change, and nothing else (the executor, the CLI and the reports decide which results
+are computed, not what they are). Third-party libraries enter by version: ``node_libraries`` gives the
+installed version of every distribution whose top-level package the node's modules import (numpy, numba,
+trimesh, …), so a library upgrade re-runs the nodes that use it and no ``version`` is bumped by hand. A plugin
+file (``--plugin``) is its own project: its digest covers the file.
 A package's ``__init__`` counts only where it is imported by name (``from pkg import helper`` naming a
 function defined there), not because a module below it is, so an edit to one node module does not
 change the keys of its siblings.
@@ -34,7 +39,19 @@ import weakref
 from pathlib import Path
 from types import ModuleType
 
-_DIGESTS: weakref.WeakKeyDictionary[ModuleType, str] = weakref.WeakKeyDictionary()
+ENGINE = __name__.partition(".")[0]
+# the engine modules every node's result passes through, whatever it imports: its parameters are validated and
+# made canonical (``params``), its context and random stream made (``context``), its inputs decoded from and its
+# outputs encoded into the cache (``codec``)
+ENGINE_ROOTS = (f"{ENGINE}.params", f"{ENGINE}.context", f"{ENGINE}.codec")
+LIBRARIES = "installed distributions"  # the memory's records of them, one per sys.path (``installed_distributions``)
+LIBRARY_RECORDS = 8  # sys.path sets remembered (the CLI's, python -c's, a test session's, …); the oldest go first
+
+# per loaded module and set of project packages: its digest and the third-party top-level packages it imports
+_DIGESTS: weakref.WeakKeyDictionary[ModuleType, dict[frozenset[str], tuple[str, tuple[str, ...]]]] = (
+    weakref.WeakKeyDictionary()
+)
+_INSTALLED: dict[str, list[str]] | None = None
 # a file's bytes and imports per state of the file (its path and ``_stamp``), with the time they were read
 _PARSED: dict[tuple, tuple[bytes, frozenset[tuple[str, tuple[str, ...]]], int]] = {}
 MEMORY_ENV_VAR = "NODEGRAPH_CODE_DIGESTS"  # the file that remembers digests across processes ("" or "off": none)
@@ -44,21 +61,56 @@ RACY_S = 2.0  # a file changed this recently may change again within its timesta
 
 
 def node_code_digest(spec, packages: set[str] | None = None) -> str:
-    """The digest of the code ``spec`` (a ``NodeSpec``) runs: see ``module_digest``."""
-    return module_digest(spec.module, packages)
+    """The digest of the code ``spec`` (a ``NodeSpec``) runs: its module and every module of ``packages`` (default:
+    the installed node packages) and of the engine it imports, transitively (``module_digest``), and the engine
+    modules every node's result passes through (``ENGINE_ROOTS``)."""
+    packages = _packages(packages) | {ENGINE}
+    parts = [module_digest(spec.module, packages)] + [module_digest(root, {ENGINE}) for root in ENGINE_ROOTS]
+    return hashlib.sha256("/".join(parts).encode()).hexdigest()[:16]
+
+
+def node_libraries(spec, packages: set[str] | None = None) -> dict[str, str]:
+    """Distribution → installed version for every third-party top-level package that the code ``spec`` runs
+    imports (``node_code_digest``'s modules): what a library upgrade changes in its cache key."""
+    packages = _packages(packages) | {ENGINE}
+    tops = set(module_libraries(spec.module, packages))
+    for root in ENGINE_ROOTS:
+        tops.update(module_libraries(root, {ENGINE}))
+    installed = installed_distributions()
+    return dict(sorted(item.split("==", 1) for top in tops for item in installed.get(top, ())))
 
 
 def module_digest(name: str, packages: set[str] | None = None) -> str:
     """sha256 (16 hex digits) over the names and bytes of ``name`` and every project module it imports,
     transitively (``project_modules``); computed once per loaded module object. "" for a module with no
     source file."""
+    return _digest_and_libraries(name, packages)[0]
+
+
+def module_libraries(name: str, packages: set[str] | None = None) -> tuple[str, ...]:
+    """The third-party top-level packages (not the project's, not the standard library's) that ``name`` and the
+    project modules it imports import, transitively."""
+    return _digest_and_libraries(name, packages)[1]
+
+
+def _packages(packages: set[str] | None) -> set[str]:
+    if packages is None:
+        from .registry import node_package_names
+
+        packages = set(node_package_names())
+    return set(packages)
+
+
+def _digest_and_libraries(name: str, packages: set[str] | None) -> tuple[str, tuple[str, ...]]:
+    packages = _packages(packages)
     module = sys.modules.get(name)
     if module is None:
         return _digest(name, packages)
-    digest = _DIGESTS.get(module)
-    if digest is None:
-        digest = _DIGESTS[module] = _digest(name, packages)
-    return digest
+    known = _DIGESTS.setdefault(module, {})
+    found = known.get(frozenset(packages))
+    if found is None:
+        found = known[frozenset(packages)] = _digest(name, packages)
+    return found
 
 
 def project_modules(name: str, packages: set[str] | None = None) -> dict[str, Path]:
@@ -121,28 +173,67 @@ def module_file(name: str) -> Path | None:
     return None
 
 
-def _digest(name: str, packages: set[str] | None) -> str:
-    if packages is None:
-        from .registry import node_package_names
-
-        packages = set(node_package_names())
+def _digest(name: str, packages: set[str]) -> tuple[str, tuple[str, ...]]:
     where = _memory_key(name, packages)
     remembered = remembered_digest(where)
     if remembered is not None:
         return remembered
     modules = project_modules(name, packages)
     if not modules:
-        return ""
+        return "", ()
+    project = packages | {name.partition(".")[0]}
     digest = hashlib.sha256()
+    libraries = set()
     read = {}  # file -> (its stamp, when its bytes were read)
     for module, path in sorted(modules.items()):
-        source, _ = _parse(path)
+        source, imports = _parse(path)
         read[str(path)] = _read_stamps[str(path)]
         digest.update(module.encode() + b"\0" + hashlib.sha256(source).digest())
-    found = digest.hexdigest()[:16]
+        libraries.update(_third_party(imports, project))
+    found = digest.hexdigest()[:16], tuple(sorted(libraries))
     if where is not None:
         _remember(where, found, read)
     return found
+
+
+def _third_party(imports, project: set[str]) -> set[str]:
+    """The top-level packages of the absolute imports in ``imports`` that are neither the project's nor the
+    standard library's."""
+    tops = {target.partition(".")[0] for target, _ in imports if not target.startswith(".")}
+    return {top for top in tops if top not in project and top not in sys.stdlib_module_names and top != "__future__"}
+
+
+def installed_distributions() -> dict[str, list[str]]:
+    """Top-level package → ``["distribution==version", ...]`` of every installed distribution
+    (``importlib.metadata.packages_distributions``). Reading every distribution's metadata takes ≈ 0.4 s, so the
+    answer is read once per process and remembered across processes beside the digests, with the stamps of the
+    folders on ``sys.path``: installing, upgrading or removing a distribution adds or renames its
+    ``.dist-info`` folder there, which changes the folder's stamp."""
+    global _INSTALLED
+    if _INSTALLED is None:
+        folders = {path: _stamp(path) for path in sorted({p or "." for p in sys.path})}
+        where = f"{LIBRARIES} {json.dumps(sorted(folders))}"
+        record = _load_memory().get(where)
+        if isinstance(record, dict) and record.get("stamps") == folders and isinstance(record.get("installed"), dict):
+            _INSTALLED = record["installed"]
+        else:
+            from importlib.metadata import PackageNotFoundError, packages_distributions, version
+
+            versions: dict[str, str] = {}
+            installed = {}
+            for top, distributions in packages_distributions().items():
+                for dist in distributions:
+                    if dist not in versions:
+                        try:
+                            versions[dist] = version(dist)
+                        except PackageNotFoundError:
+                            versions[dist] = ""
+                installed[top] = sorted({f"{dist}=={versions[dist]}" for dist in distributions})
+            _INSTALLED = installed
+            recent = time.time_ns() - int(RACY_S * 1e9)
+            if all(s is None or max(s[2], s[3]) <= recent for s in folders.values()):
+                _store(where, {"stamps": folders, "installed": installed})
+    return _INSTALLED
 
 
 # digests remembered across processes ------------------------------------------------------------------
@@ -191,7 +282,7 @@ def _load_memory() -> dict:
     return _MEMORY
 
 
-def remembered_digest(where: str | None) -> str | None:
+def remembered_digest(where: str | None) -> tuple[str, tuple[str, ...]] | None:
     """The digest remembered for ``where`` (``_memory_key``) if every file it covers, and every package folder
     on the way to them (a module added beside them changes what an import names), has its stamp still."""
     if where is None:
@@ -204,17 +295,19 @@ def remembered_digest(where: str | None) -> str | None:
         return None
     if any(_stamp(path) != stamp for path, stamp in stamps.items()):
         return None
-    digest = record.get("digest")
-    return digest if isinstance(digest, str) else None
+    digest, libraries = record.get("digest"), record.get("libraries")
+    if not isinstance(digest, str) or not isinstance(libraries, list):
+        return None
+    return digest, tuple(libraries)
 
 
-def _remember(where: str, digest: str, read: dict[str, tuple[list[int] | None, int]]) -> None:
-    """Store the digest with the stamps of its files (``read``: each file's stamp and the time its bytes were
-    read), of their package folders and of this module (a change to how digests are made voids them all).
-    Nothing is stored when a file changed since it was read, or within ``RACY_S`` before it was read: a second
-    write within the same timestamp tick leaves the stamp as it was, so the bytes read may not be the file's."""
-    path = memory_file()
-    if path is None:
+def _remember(where: str, found: tuple[str, tuple[str, ...]], read: dict[str, tuple[list[int] | None, int]]) -> None:
+    """Store the digest and the libraries imported (``found``) with the stamps of its files (``read``: each
+    file's stamp and the time its bytes were read), of their package folders and of this module (a change to how
+    digests are made voids them all). Nothing is stored when a file changed since it was read, or within ``RACY_S``
+    before it was read: a second write within the same timestamp tick leaves the stamp as it was, so the bytes read
+    may not be the file's."""
+    if memory_file() is None:
         return
     now = time.time_ns()
     stamps: dict[str, list[int] | None] = {__file__: _stamp(__file__)}
@@ -229,10 +322,21 @@ def _remember(where: str, digest: str, read: dict[str, tuple[list[int] | None, i
     recent = now - int(RACY_S * 1e9)
     if any(s is None or max(s[2], s[3]) > recent for s in stamps.values()):
         return
+    _store(where, {"digest": found[0], "libraries": list(found[1]), "stamps": stamps})
+
+
+def _store(where: str, record: dict) -> None:
+    """Remember ``record`` under ``where`` (the newest), forgetting the oldest digests beyond ``MEMORY_ROOTS`` and
+    the oldest records of installed distributions beyond ``LIBRARY_RECORDS``."""
+    path = memory_file()
+    if path is None:
+        return
     memory = _load_memory()
     memory.pop(where, None)
-    memory[where] = {"digest": digest, "stamps": stamps}
-    for old in list(memory)[: max(0, len(memory) - MEMORY_ROOTS)]:
+    memory[where] = record
+    libraries = [key for key in memory if key.startswith(LIBRARIES)]
+    digests = [key for key in memory if not key.startswith(LIBRARIES)]
+    for old in digests[: max(0, len(digests) - MEMORY_ROOTS)] + libraries[: max(0, len(libraries) - LIBRARY_RECORDS)]:
         del memory[old]
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

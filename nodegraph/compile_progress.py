@@ -1,11 +1,12 @@
-"""Tells the user when a node's numba kernels compile (a first run after a code change can spend a minute
-there, silent otherwise) and how long it took; cached kernels load without a compile event, so a warm
+"""Tells the user when a node's numba kernels compile (a first run, or one after a code change, can spend a minute
+there, silent otherwise), why, and how long it took; cached kernels load without a compile event, so a warm
 run prints nothing."""
 
 from __future__ import annotations
 
 import importlib.abc
 import importlib.util
+import os
 import sys
 import time
 
@@ -45,7 +46,8 @@ class CompileWatch:
 
         class _Listener(event.Listener):
             def on_start(self, ev) -> None:
-                watch.compile_started(_kernel_name(ev.data.get("dispatcher")))
+                dispatcher = ev.data.get("dispatcher")
+                watch.compile_started(_kernel_name(dispatcher), _why_compiling(dispatcher))
 
             def on_end(self, ev) -> None:
                 watch.compile_ended()
@@ -53,12 +55,10 @@ class CompileWatch:
         self._listener = _Listener()
         event.register("numba:compile", self._listener)
 
-    def compile_started(self, kernel: str = "a kernel") -> None:
+    def compile_started(self, kernel: str = "a kernel", why: str = "compiled once, cached afterwards") -> None:
         if self._depth == 0:
             if self.kernels == 0:
-                self.reporter.info(
-                    f"compiling kernels for {self.node} (first run after a code change; cached afterwards)…"
-                )
+                self.reporter.info(f"compiling kernels for {self.node} ({why})…")
             self.kernels += 1
             elapsed = f", {self.seconds:.0f} s so far" if self.kernels > 1 else ""
             self.reporter.info(f"  {self.node}: compiling {kernel} (kernel {self.kernels}{elapsed})…")
@@ -80,6 +80,24 @@ class CompileWatch:
         event.unregister("numba:compile", self._listener)
         if self.kernels:
             self.reporter.info(f"compiled {self.kernels} kernel(s) for {self.node} in {self.seconds:.1f} s")
+
+
+def _why_compiling(dispatcher) -> str:
+    """Why a kernel compiles, from numba's cache index of it: none yet (a first run on this machine, or after the
+    cache was cleared), one for other code (its module or one it imports changed: the stamp, ``numba_locator``), or
+    one for this code but other argument types."""
+    cache_file = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
+    index = getattr(cache_file, "_index_path", None)
+    if index is None:  # not a cached kernel (cache=False): it compiles in every process
+        return "compiled in every run"
+    try:
+        if not os.path.exists(index):
+            return "not in numba's cache yet: compiled once, cached afterwards"
+        if not cache_file._load_index():
+            return "their code changed since they were cached; cached afterwards"
+    except Exception:  # numba's internals moved: say what is true either way
+        return "compiled once, cached afterwards"
+    return "new argument types; cached afterwards"
 
 
 def _kernel_name(dispatcher) -> str:

@@ -17,7 +17,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Protocol
 
-from . import __version__, codec, runtime
+from . import __version__, codec, interrupt, node_times, runtime
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
@@ -25,7 +25,14 @@ from .compile_ahead import CompileAhead
 from .compile_progress import CompileWatch
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
-from .output_files import MANIFEST, current_outputs, write_manifest, write_output
+from .output_files import (
+    MANIFEST,
+    current_outputs,
+    earlier_outputs,
+    settle_earlier,
+    write_manifest,
+    write_output,
+)
 from .plan import Instance, Plan, RecipeRef, plan_jobs
 from .recipe import Recipe, Wire
 from .report import NodeRecord, PeakMemory, Reporter, now
@@ -152,8 +159,12 @@ class Executor:
         if not self.ran_elsewhere:  # kernels of the later instances compile in a second process meanwhile
             to_run = {inst for inst in order if self.keys[inst] not in self.hits}
             ahead = CompileAhead.start(self.recipe, order, to_run)
+        times = None if self.cache is None else node_times.load(self.cache.directory, self.recipe.name)
+        plan = (
+            None if times is None else [node_times.expected(times, i.label, self.keys[i] in self.hits) for i in order]
+        )
         try:
-            with self.reporter.task(self.recipe.name, len(order)) as tick:
+            with self.reporter.task(self.recipe.name, len(order), plan=plan) as tick:
                 for position, inst in enumerate(order):
                     tick()
                     if ahead is not None:
@@ -183,6 +194,8 @@ class Executor:
                     self.status[inst] = replace(elsewhere, log_seconds=self.status[inst].log_seconds)
                 if inst in self.status:
                     self.reporter.record(self.status[inst])
+            if self.cache is not None:  # what the next run's progress bar expects
+                node_times.remember(self.cache.directory, self.recipe.name, [self.status[i] for i in self.status])
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
 
     def reuse(self, outputs: list[Wire], directory: Path, rrd: Path | None, key: str) -> RunResult | None:
@@ -394,6 +407,7 @@ class Executor:
             return self.cache.capture_path(key)
         fd, tmp = tempfile.mkstemp(prefix="nodegraph-", suffix=".rrd")
         os.close(fd)
+        interrupt.note(tmp)
         return Path(tmp)
 
     def _capture_outputs(self, inst: Instance, capture: NodeCapture, outputs: dict[str, Any]) -> Fragment:
@@ -617,7 +631,7 @@ def run_recipe(
             rrd, recording_name(recipe), spawn=spawn, warn=warn, recording_id=recording_id(recipe)
         )
     recording = executor.recording
-    ok = False
+    ok = stopped = False
     try:
         if pool is not None:
             executor.ran_elsewhere = compute_in_pool(pool, recipe, wires, cache, plugins, reporter, max_seconds)
@@ -625,12 +639,17 @@ def run_recipe(
         if out_dir is not None:
             executor.write_outputs(result, wires, out_dir)
         ok = True
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: stopped on purpose, its partial recording is not wanted
+        stopped = True
+        raise
     finally:
         if recording is not None:
             blueprint = build_blueprint(recipe, recording.index) if ok else None
             written = recording.close(complete=ok, blueprint=blueprint)
             if ok:
                 result.rrd = written
+            elif stopped:
+                written.unlink(missing_ok=True)
             elif warn is not None:
                 kept = (
                     f"the last complete recording {recording.path} was left as it was"
@@ -639,6 +658,14 @@ def run_recipe(
                 )
                 warn(f"the run did not complete: what it recorded is in {written}; {kept}")
     if out_dir is not None:
+        earlier, removed = settle_earlier(out_dir, result.files, recipe.digest())
+        if removed and reporter is not None:
+            names = sorted(str(p.relative_to(out_dir)) for p in removed)
+            reporter.info(
+                f"removed {len(removed)} output(s) of an earlier run with other settings from {out_dir}: "
+                + ", ".join(names[:5])
+                + (" …" if len(names) > 5 else "")
+            )
         write_manifest(
             out_dir,
             result.files,
@@ -654,17 +681,20 @@ def run_recipe(
                 "written": datetime.now(UTC).isoformat(timespec="seconds"),
             },
             recording=result.rrd,
+            earlier=earlier,
         )
         _warn_others(out_dir, result.files, warn)
     return result
 
 
 def _warn_others(out_dir: Path, files: list[Path], warn) -> None:
-    """Say which files in ``out_dir`` the run did not write (the manifest, recordings aside)."""
+    """Say which files in ``out_dir`` neither the run nor an earlier one of its settings wrote (the manifest,
+    recordings aside)."""
+    kept = set(earlier_outputs(out_dir))  # the same settings' files, from an earlier run (``settle_earlier``)
     others = sorted(
         p.name
         for p in out_dir.iterdir()
-        if p.is_file() and p not in files and p.name != MANIFEST and not p.name.endswith(".rrd")
+        if p.is_file() and p not in files and p.name not in kept and p.name != MANIFEST and not p.name.endswith(".rrd")
     )
     if others and warn is not None:
         warn(

@@ -1,4 +1,4 @@
-"""Node type declarations: typed ports, parameters, effects and a version, readable as data.
+"""Node type declarations: typed ports, parameters and effects, readable as data.
 
 A node module declares a node with the ``@node`` decorator around a plain function::
 
@@ -10,9 +10,9 @@ A node module declares a node with the ``@node`` decorator around a plain functi
 
 The decorator returns a ``NodeSpec``; the registry finds specs by scanning module attributes,
 so declaring a node has no side effect and there is no global registry. A node's cached results are
-keyed on the code it runs (``code_digest``), so editing it or a helper it imports re-runs it;
-``version`` is an explicit extra, bumped only for what that code digest cannot see (a data file the
-code reads, a library upgrade that changes results).
+keyed on the code it runs (``code_digest``: its modules and the engine's) and on the versions of the libraries
+that code imports, so editing it, a helper it imports or the engine, or upgrading a library it uses, re-runs it;
+there is no version to bump by hand.
 """
 
 from __future__ import annotations
@@ -79,7 +79,6 @@ class NodeSpec:
     """Everything the engine knows about a node type; ``run`` is the implementation."""
 
     type_name: str
-    version: str
     doc: str
     run: Callable[..., Any]
     inputs: Mapping[str, In] = field(default_factory=dict)
@@ -92,6 +91,7 @@ class NodeSpec:
     moved: Mapping[str, Moved] = field(default_factory=dict)
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None
     overlap: bool | Callable[[], None] = False
+    check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
         """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
@@ -153,7 +153,6 @@ class NodeSpec:
 def node(
     type_name: str,
     *,
-    version: int | str = 1,
     outputs: Mapping[str, Out],
     inputs: Mapping[str, In] | None = None,
     params: Mapping[str, Param] | None = None,
@@ -164,20 +163,25 @@ def node(
     moved: Mapping[str, Moved] | None = None,
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None,
     overlap: bool | Callable[[], None] = False,
+    check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None,
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
     """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
 
-    ``version`` enters the cache key beside the digest of the node's code: bump it to recompute cached
-    results when something outside the project's modules changed them. ``effects`` are the physical
+    The node's cache key covers the code it runs and the libraries' versions (``code_digest``), so nothing is
+    bumped by hand when either changes. ``effects`` are the physical
     effects the node implements; at run time ``ctx.effects`` holds only those the recipe asked for.
     ``random`` nodes get ``ctx.rng`` and the seed enters their cache key; others cannot draw random
     numbers. ``check(params)`` returns ``[(param, message), ...]`` for constraints between parameters.
     ``moved`` names parameters the node no longer has and where each now lives (``Moved``), so a recipe
     that still sets one is told where. ``check_recipe(node_id, nodes)`` checks the node against the rest of
     a valid recipe (``nodes``: every node's ``NodeEntry`` by id) and returns ``[(param, message), ...]``
-    for contradictions between nodes. ``overlap``: the node's work is native code that releases the GIL (a
-    renderer's own threads) and it launches no numba kernel, so a run may compute the instances that neither need
-    it nor depend on it in a second thread while it runs (``executor.Beside``). A callable ``overlap`` is called in
+    for contradictions between nodes. ``check_work(node_id, nodes)``, the same for what takes a moment to
+    check (a shape's mesh made to weigh a placement against it), as ``[(param, message, yes), ...]``, ``yes``: a
+    request larger than a run should start on unasked, which ``--yes`` passes; ``nodegraph check`` runs it, and
+    ``run`` before any work when the node's result is not cached (``load_recipe(work=True)``). ``overlap``: the
+    node's work is native code that releases the GIL (a renderer's own threads) and it launches no numba kernel,
+    so a run may compute the instances that neither need it nor depend on it in a second thread while it runs
+    (``executor.Beside``). A callable ``overlap`` is called in
     the main thread before that second thread starts: it loads every native library the node will load, so the node
     never calls ``dlopen`` while the other thread may be in one (the loader's lock against the GIL: a library whose
     initialiser drops and retakes the GIL, as USD's does, deadlocked against Mitsuba loading a plugin).
@@ -209,7 +213,6 @@ def node(
         text = doc or (inspect.getdoc(fn) or "").strip()
         return NodeSpec(
             type_name=type_name,
-            version=str(version),
             doc=text,
             run=fn,
             inputs=MappingProxyType(inputs),
@@ -222,6 +225,7 @@ def node(
             moved=MappingProxyType(dict(moved or {})),
             check_recipe=check_recipe,
             overlap=overlap,
+            check_work=check_work,
         )
 
     return wrap

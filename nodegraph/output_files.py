@@ -71,8 +71,7 @@ def write_output(value: Any, directory: Path, stem: str) -> list[Path]:
 def _(value: Table, directory: Path, stem: str) -> list[Path]:
     """A table of 1-D columns as CSV (a header row of column names); other tables as a named .npz. Columns in name
     order, the table's index first: a dict's order is not part of a value (``codec`` stores it sorted), so a table
-    read back from the cache wrote its columns in another order than the run that computed it (the main job's
-    measure.csv, session 43)."""
+    read back from the cache would otherwise write its columns in another order than the run that computed it."""
     names = sorted(value.columns, key=lambda name: (name != value.index, name))
     columns = {name: np.asarray(value.columns[name]) for name in names}
     if not all(c.ndim == 1 for c in columns.values()):
@@ -131,10 +130,59 @@ def _(value: FileSet, directory: Path, stem: str) -> list[Path]:
 MANIFEST = "manifest.json"
 
 
-def write_manifest(directory: Path, files: list[Path], run: dict[str, Any], recording: Path | None = None) -> Path:
+def settle_earlier(directory: Path, files: list[Path], digest: str) -> tuple[dict[str, Any], list[Path]]:
+    """What the folder's last manifest lists that this run (recipe ``digest``, writing ``files``) did not write
+    again: with the same digest (the same settings, other outputs asked for: ``--output``) those still as written
+    are kept, returned to be listed as ``earlier`` in this run's manifest; with another digest those still as
+    written are removed, so no output of other settings sits beside this run's (their values stay in the cache:
+    running those settings again writes them in seconds). Returns (kept records by name, removed paths). A file
+    changed since it was written is someone's own: left, and said as not from this run (``executor``)."""
+    try:
+        manifest = json.loads((directory / MANIFEST).read_bytes())
+        records = {**manifest.get("earlier", {}), **manifest["files"]}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return {}, []
+    written = {str(path.relative_to(directory)) for path in files}
+    kept: dict[str, Any] = {}
+    removed: list[Path] = []
+    for name, record in records.items():
+        path = directory / name
+        if name in written or Path(name).is_absolute() or ".." in Path(name).parts:
+            continue
+        try:
+            if _stamp(path) != {"bytes": record["bytes"], "mtime_ns": record.get("mtime_ns")}:
+                continue
+        except (OSError, KeyError, TypeError):
+            continue
+        if manifest.get("digest") == digest:
+            kept[name] = {"written": manifest.get("written"), **record}
+        else:
+            path.unlink()
+            removed.append(path)
+            if path.parent != directory and not any(path.parent.iterdir()):
+                path.parent.rmdir()  # a variant family's folder, emptied
+    return kept, removed
+
+
+def earlier_outputs(directory: Path) -> list[str]:
+    """The files the folder's manifest lists as ``earlier``: of the same settings, kept from an earlier run."""
+    try:
+        return list(json.loads((directory / MANIFEST).read_bytes()).get("earlier", {}))
+    except (OSError, ValueError, AttributeError):
+        return []
+
+
+def write_manifest(
+    directory: Path,
+    files: list[Path],
+    run: dict[str, Any],
+    recording: Path | None = None,
+    earlier: dict[str, Any] | None = None,
+) -> Path:
     """``manifest.json`` beside the outputs: which run wrote them (``run``: recipe, digest, seed, overrides,
     time, the run's ``output_key``, ...) and the sha256, size and modification time of each file it wrote
-    (and of its ``recording``); files in the folder it does not list are not from this run."""
+    (and of its ``recording``); ``earlier``: files an earlier run of the same settings wrote that this one kept
+    (``settle_earlier``); files in the folder it lists in neither are not from this run's settings."""
     listing = {}
     for path in files:
         data = path.read_bytes()
@@ -144,6 +192,8 @@ def write_manifest(directory: Path, files: list[Path], run: dict[str, Any], reco
             "mtime_ns": path.stat().st_mtime_ns,
         }
     run = dict(run, files=listing)
+    if earlier:
+        run["earlier"] = earlier
     if recording is not None:
         run["recording"] = {"path": str(recording.resolve()), **_stamp(recording)}
     path = directory / MANIFEST

@@ -2,11 +2,12 @@
 from, each instance's seed and its cache key; and, for a pool of workers, the jobs.
 
 Each node instance (a node, or one variant of a variant family) has a cache key that covers the node
-type, a digest of the code it runs (``code_digest``) and its declared ``version``, the engine version,
-the canonical parameters, the keys of the upstream values, the derived seed (random nodes only), the
-requested effects the node implements and the bytes of the files its file parameters name. Keys depend
-on upstream *keys*, not values, so the whole run is planned before anything loads. The executor and the
-pools (``pool``, ``dask_pool``) both plan through this module.
+type, a digest of the code it runs (``code_digest.node_code_digest``: its modules, the project's and the
+engine's, that they import), the installed versions of the third-party libraries that code imports
+(``code_digest.node_libraries``), the canonical parameters, the keys of the upstream values, the derived
+seed (random nodes only), the requested effects the node implements and the bytes of the files its file
+parameters name. Keys depend on upstream *keys*, not values, so the whole run is planned before anything
+loads. The executor and the pools (``pool``, ``dask_pool``) both plan through this module.
 """
 
 from __future__ import annotations
@@ -16,15 +17,16 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import __version__
 from .cache import Cache
-from .code_digest import node_code_digest
+from .code_digest import node_code_digest, node_libraries
 from .errors import NodegraphError
 from .params import canonical
 from .recipe import NodeEntry, Recipe, Wire
 from .registry import node_package_names
 
-CACHE_FORMAT = 2  # 2: the domain value types moved from nodegraph.values to nodes.values (stored type names)
+# 2: the domain value types moved from nodegraph.values to nodes.values (stored type names); 3: keys cover the engine's
+# code and the libraries' versions, no declared node version
+CACHE_FORMAT = 3
 
 
 @dataclass(frozen=True, order=True)
@@ -116,10 +118,9 @@ class Plan:
         sources = sorted(self.sources(inst).items())
         payload = {
             "format": CACHE_FORMAT,
-            "engine": __version__,
             "type": entry.spec.type_name,
             "code": node_code_digest(entry.spec, self._node_packages()),
-            "version": entry.spec.version,
+            "libraries": node_libraries(entry.spec, self._node_packages()),
             "params": canonical(entry.params),
             "inputs": {port: [[self.keys[src], out] for src, out in pairs] for port, pairs in sources},
             "seed": self.seed(inst),

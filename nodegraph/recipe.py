@@ -156,9 +156,18 @@ class _Validator:
     """Collects issues while building a Recipe."""
 
     def __init__(
-        self, raw: dict, source: SourceMap, registry: Registry, overrides: list[str], name: str | None, draft=False
+        self,
+        raw: dict,
+        source: SourceMap,
+        registry: Registry,
+        overrides: list[str],
+        name: str | None,
+        draft=False,
+        work=False,
+        yes=False,
     ):
         self.raw = raw
+        self.work, self.yes = work, yes
         self.source = source
         self.registry = registry
         self.draft = draft
@@ -378,12 +387,21 @@ class _Validator:
         )
 
     def _check_recipe_rules(self, entries: dict[str, NodeEntry]) -> None:
-        """Each node type's ``check_recipe``: contradictions between the nodes of a valid recipe."""
+        """Each node type's ``check_recipe``: contradictions between the nodes of a valid recipe; with ``work``,
+        each one's ``check_work`` too (with ``yes``, less what ``--yes`` passes)."""
         view = MappingProxyType(entries)
         for node_id, entry in entries.items():
             if entry.spec.check_recipe is None:
                 continue
             for param, message in entry.spec.check_recipe(node_id, view):
+                self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+        for node_id, entry in entries.items() if self.work else ():
+            if entry.spec.check_work is None:
+                continue
+            for param, message, passes_with_yes in entry.spec.check_work(node_id, view):
+                if passes_with_yes and self.yes:
+                    continue
+                message += "; or run with --yes to go ahead" if passes_with_yes else ""
                 self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
 
     def _moved(self, node_id: str, model: NodeModel, path: tuple, moved, key: str) -> None:
@@ -676,17 +694,26 @@ def parse_recipe(text: str, registry: Registry, file: str = "<recipe>", override
     return _finish(raw, source, registry, list(overrides), None)
 
 
-def load_recipe(path: str | Path, registry: Registry, overrides: list[str] = (), draft: bool = False) -> Recipe:
+def load_recipe(
+    path: str | Path,
+    registry: Registry,
+    overrides: list[str] = (),
+    draft: bool = False,
+    work: bool = False,
+    yes: bool = False,
+) -> Recipe:
     """Load and validate a recipe file; raise RecipeError listing every problem with file:line:column.
 
     ``draft``: apply the recipe's ``draft:`` block (reduced counts to iterate on a look) before ``overrides``;
-    the recipe's ``overrides`` then start with the draft's, so a worker that reloads it gets the same recipe."""
+    the recipe's ``overrides`` then start with the draft's, so a worker that reloads it gets the same recipe.
+    ``work``: the nodes' ``check_work`` too, what takes a moment to check (``nodegraph check``; ``run`` when there
+    is work to do); ``yes``: less the requests larger than a run starts on unasked (``--yes``)."""
     raw, source = load_yaml_file(path)
-    return _finish(raw, source, registry, list(overrides), Path(path).stem, draft)
+    return _finish(raw, source, registry, list(overrides), Path(path).stem, draft, work, yes)
 
 
-def _finish(raw, source, registry, overrides, name, draft=False) -> Recipe:
-    validator = _Validator(raw, source, registry, overrides, name, draft)
+def _finish(raw, source, registry, overrides, name, draft=False, work=False, yes=False) -> Recipe:
+    validator = _Validator(raw, source, registry, overrides, name, draft, work, yes)
     recipe = validator.build()
     if validator.issues or recipe is None:
         issues = sorted(

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from . import interrupt
 from .cache import Fragment
 from .context import EntityLogger, LogIndex
 from .errors import NodegraphError
@@ -76,7 +77,8 @@ class NodeCapture:
 class RunRecording:
     """One recording per run, written to ``name.partial.rrd`` and renamed over ``name.rrd``
     only when the run completes, so an interrupted or failed run never replaces a complete recording
-    (its partial file stays beside it, named as partial; the next complete run removes it).
+    (its partial file stays beside it, named as partial, until the next complete run; a run stopped by
+    Ctrl-C or SIGTERM removes it: ``executor.run_recipe``, ``interrupt``).
 
     ``recording_id`` names the run (e.g. a digest of recipe and overrides), so runs of two settings
     are two recordings that a viewer shows side by side. ``spawn`` also streams to a viewer (a second
@@ -90,6 +92,7 @@ class RunRecording:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.partial = partial_path(self.path)
+        interrupt.note(self.partial)
         self.index = LogIndex()
         self.loggers = logger_digest()
         self.recording_id = recording_id or str(uuid.uuid4())
@@ -188,6 +191,7 @@ def merge_recordings(parts: list[Path], path: Path) -> Path:
     import subprocess
 
     partial = partial_path(path)
+    interrupt.note(partial)
     done = subprocess.run(
         [sys.executable, "-m", "rerun", "rrd", "merge", "-o", str(partial), *map(str, parts)],
         capture_output=True,

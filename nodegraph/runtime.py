@@ -25,8 +25,9 @@ nothing else starts threads or processes:
 3. *Other processes*, for what one process cannot share: the compile-ahead worker on a first run (numba compiles one
    kernel at a time, under a process-wide lock; ``compile_ahead``), started by exec and only onto a core the load
    average shows idle (on a busy machine a second process only splits the run's share); and, when asked for, Dask
-   workers (``--workers`` / ``--scheduler``: sweeps, other machines; ``dask_pool``), started by spawn. No process
-   forks a copy of itself while it runs: a fork copies the forking thread alone and runs the libraries' fork
+   workers (``--workers`` / ``--scheduler``: sweeps, other machines; ``dask_pool``), started by spawn. The command
+   line forks once, before any work (``interrupt.supervise``: the parent only waits, to stop the child on a signal).
+   Once work has started no process forks: a fork copies the forking thread alone and runs the libraries' fork
    handlers, and OpenBLAS's stopped its workers under a matrix product another thread had under way (a run hung in
    the preview; commit 8feda45). Work that holds the GIL (libigl in ``measure``) runs in one thread.
 

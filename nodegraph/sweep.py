@@ -531,14 +531,30 @@ def _png(pixels: np.ndarray) -> bytes:
     return buffer.getvalue()
 
 
-def write_sweep(result: SweepResult, directory: Path) -> list[Path]:
+def _has_matplotlib() -> bool:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+NO_MATPLOTLIB = "no plot: matplotlib is not installed (pip install matplotlib draws it on the next sweep)"
+
+
+def write_sweep(result: SweepResult, directory: Path, warn=None) -> list[Path]:
     """``<directory>/<sweep>.md``, ``.csv`` and ``.png`` (the plot only with matplotlib and metrics), and a
-    contact sheet per pulled Image output."""
+    contact sheet per pulled Image output. Without matplotlib the plot is missing and said so (``warn``, and a line
+    in the .md), never silently."""
     directory.mkdir(parents=True, exist_ok=True)
     stem = result.sweep.name
     image = plot_sweep(result, directory / f"{stem}.png")
     sheets = contact_sheets(result, directory)
     markdown = sweep_markdown(result, image.name if image else None, tuple(p.name for p in sheets))
+    if image is None and result.metric_names and not _has_matplotlib():
+        markdown += f"\n({NO_MATPLOTLIB})\n"
+        if warn is not None:
+            warn(f"{NO_MATPLOTLIB}; the table is in {directory / f'{stem}.md'}")
     atomic_write(directory / f"{stem}.md", markdown.encode())
     atomic_write(directory / f"{stem}.csv", sweep_csv(result).encode())
     return [directory / f"{stem}.md", directory / f"{stem}.csv"] + ([image] if image else []) + sheets

@@ -14,6 +14,7 @@ import threading
 import time
 from collections.abc import Iterator
 
+from . import interrupt
 from .cache import Cache
 from .executor import Executor, RunResult
 from .plan import Instance
@@ -99,6 +100,8 @@ class WatchSession:
         once it has finished, the next step's start stops the run)."""
         stopping, running = self.stopping, self.running
         if stopping is None:
+            if interrupt.repeated():  # the same Ctrl-C, passed on by the supervising parent
+                return
             raise KeyboardInterrupt
         self.stopping = None
         if running is not None and running[1] == stopping:

@@ -11,8 +11,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
+MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")  # trimesh's triangle mesh readers
 STL_HEADER = 84  # 80-byte header + uint32 triangle count
 STL_TRIANGLE = 50
+
+
+def suffix_problem(path: str | Path) -> str | None:
+    """Why ``path`` is not a mesh file by its name (README.md, a .blend), or None: said when the recipe is checked,
+    not after the nodes before the mesh has been read."""
+    suffix = Path(path).suffix.lower()
+    if suffix in MESH_SUFFIXES:
+        return None
+    kind = f"a {suffix} file" if suffix else "a file without an extension"
+    return f"{Path(path).name} is {kind}, not a mesh file; allowed: {', '.join(MESH_SUFFIXES)}"
 
 
 def stl_problem(data: bytes) -> str | None:
@@ -43,6 +54,9 @@ def read_mesh(path: str | Path, process: bool = True):
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"no such mesh file: {path}")
+    problem = suffix_problem(path)
+    if problem is not None:
+        raise ValueError(problem)
     if path.suffix.lower() == ".stl":
         problem = stl_problem(path.read_bytes())
         if problem is not None:

@@ -18,7 +18,7 @@ runtime.configure()
 
 @pytest.fixture(scope="session")
 def scene_inputs():
-    from nodes.simulation.scenes import small_food_scene
+    from support.scenes import small_food_scene
 
     return small_food_scene()
 
@@ -29,3 +29,34 @@ def shaded(scene_inputs):
     from nodes.shading import shade
 
     return shade.call(**scene_inputs, material=cooked_material())
+
+
+def pytest_configure(config):
+    # NODEGRAPH_TEST_CPU_LOG=FILE: one JSON line per test with its CPU seconds (this process and its finished
+    # children, setup to teardown): where the suite's time goes, independent of the machine's load
+    path = os.environ.get("NODEGRAPH_TEST_CPU_LOG")
+    if path:
+        config.pluginmanager.register(CpuLog(path), "nodegraph-cpu-log")
+
+
+class CpuLog:
+    def __init__(self, path):
+        self.path = path
+
+    @staticmethod
+    def _cpu():
+        import resource
+
+        own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+        return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_protocol(self, item, nextitem):
+        import json
+        import time
+
+        cpu, wall = self._cpu(), time.perf_counter()
+        yield
+        with open(self.path, "a") as log:
+            record = {"test": item.nodeid, "cpu_s": self._cpu() - cpu, "wall_s": time.perf_counter() - wall}
+            log.write(json.dumps(record) + "\n")

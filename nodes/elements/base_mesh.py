@@ -15,6 +15,12 @@ def _check(p: dict) -> list[tuple[str, str]]:
     issues = []
     if p["shape"] == "file" and not p["path"]:
         issues.append(("path", "shape 'file' needs a path to a mesh file"))
+    if p["shape"] == "file" and p["path"]:
+        from ..mesh_io import suffix_problem
+
+        problem = suffix_problem(p["path"])
+        if problem is not None:
+            issues.append(("path", problem))
     if p["shape"] != "file" and p["path"]:
         issues.append(("path", f"path is only used with shape 'file' (shape is '{p['shape']}')"))
     if p["shape"] != "ice_flake" and p["curl"]:
@@ -26,9 +32,6 @@ def _check(p: dict) -> list[tuple[str, str]]:
 
 @node(
     "base_mesh",
-    # 2: the variety is an input (a rice_variety node), no longer a parameter
-    # 3: ice flake curl (a shaving bends as the blade lifts it)
-    version=3,
     inputs={
         "variety": In(
             RiceVariety,

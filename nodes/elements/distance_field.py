@@ -12,7 +12,6 @@ METHODS = ("exact", "euclidean", "manhattan")
 
 @node(
     "distance_field",
-    version=1,
     inputs={
         "volume": In(Volume, "occupancy M from voxelise"),
         "mesh": In(Mesh, "the mesh voxelised (method exact)", optional=True),

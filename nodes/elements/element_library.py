@@ -10,8 +10,6 @@ from ..values import ElementLibrary, RiceVariety
 
 @node(
     "element_library",
-    # 2: the kind can come from a rice variety (input 'variety')
-    version=2,
     inputs={
         "meshes": In(Mesh, "element meshes (every variant of a family, or a list of wires)", many=True),
         "variety": In(RiceVariety, "rice: the variety, whose name is the element kind", optional=True),

@@ -15,8 +15,6 @@ def _check(p: dict) -> list[tuple[str, str]]:
 
 @node(
     "expand",
-    # 2: the variety is an input (a rice_variety node), no longer a parameter
-    version=2,
     inputs={
         "field": In(DistanceField, "signed distance field of the grain"),
         "variety": In(

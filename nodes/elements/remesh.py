@@ -11,7 +11,6 @@ from .element_values import GrainMesh
 
 @node(
     "remesh",
-    version=1,
     inputs={"field": In(DistanceField, "signed distance field (positive inside)")},
     outputs={"mesh": Out(Mesh, "watertight outward grain, centred at its volume centroid (GrainMesh)")},
     params={

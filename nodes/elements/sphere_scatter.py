@@ -15,7 +15,6 @@ def _check(p: dict) -> list[tuple[str, str]]:
 
 @node(
     "sphere_scatter",
-    version=1,
     inputs={"mesh": In(Mesh, "closed base mesh (mm)")},
     outputs={"spheres": Out(SphereSet, "sphere centres and radii; tags 0 = surface (sunk by sink), 1 = inside")},
     params={

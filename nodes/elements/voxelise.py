@@ -17,7 +17,6 @@ DEFAULT_RESOLUTION = 64
 
 @node(
     "voxelise",
-    version=1,
     inputs={
         "mesh": In(Mesh, "closed element mesh", optional=True),
         "spheres": In(SphereSet, "spheres added to the mesh", optional=True),

@@ -31,10 +31,6 @@ def _check(params):
 
 @node(
     "export",
-    # 4: meshes that are one mesh moved rigidly are instanced (USD PointInstancer, glTF EXT_mesh_gpu_instancing)
-    # 3: clean USD prim names, USD opacity 1 − transmission, the whole look in glTF extras; 2: KHR sheen,
-    # diffuse transmission, volume; _CDRF_SIGMA instead of COLOR_0; USD principled attributes
-    version=4,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={

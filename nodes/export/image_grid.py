@@ -14,7 +14,6 @@ from nodegraph.values import Image
 
 @node(
     "image_grid",
-    version=1,
     inputs={"images": In(Image, "tiles of one size, in order (e.g. previews)", many=True)},
     outputs={"image": Out(Image, "the tiles side by side, captioned")},
     params={

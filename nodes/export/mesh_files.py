@@ -7,6 +7,8 @@ re-run target of a shade change cannot afford.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from ..values import ShadedScene
@@ -68,6 +70,19 @@ def binary_ply(blocks: list[tuple[tuple[str, ...], np.ndarray]], faces: np.ndarr
         + f"element face {len(triangles)}\nproperty list uchar int vertex_indices\nend_header\n"
     )
     return header.encode() + vertices.tobytes() + triangles.tobytes()
+
+
+def write_ply(path: Path, vertices, faces, normals, colors, translucency=None) -> None:
+    """A Mitsuba PLY shape at ``path``: binary little-endian PLY with float normals, float linear colours
+    (Mitsuba: ``vertex_color``) and optionally a per-vertex diffuse transmission (``trans_x``: Mitsuba's
+    ``vertex_trans``)."""
+    names = ("x", "y", "z", "nx", "ny", "nz", "r", "g", "b")
+    columns = [vertices, normals, colors[:, :3]]
+    if translucency is not None:
+        names += ("trans_x",)
+        columns.append(np.asarray(translucency).reshape(-1, 1))
+    rows = np.hstack(columns).astype("<f4")
+    path.write_bytes(binary_ply([(names, rows)], faces))
 
 
 def ply_bytes(scene: ShadedScene) -> bytes:

@@ -70,7 +70,7 @@ MAX_DEPTH = 10  # path length: light through the egg (membrane, yolk, membrane) 
 # path length in a heap of ice flakes: light scatters many times in each flake's medium (every collision counts)
 # and walks through tens of flakes before it comes back out of the heap (why shaved ice is white); at MAX_DEPTH the
 # walk was cut off and the ice rendered grey. Kakigori's mound, all plain ice, linear luminance of its pixels against
-# the same mound in white diffuse (benchmarks/bench_preview.py --ice, 240 × 180, 8 spp, session 43): as a medium
+# the same mound in white diffuse (benchmarks/bench_preview.py --ice, 240 × 180, 8 spp): as a medium
 # behind no skin 0.69 at depth 10, 0.99 at 32, 1.10 at 64, 1.11 at 128 and 256 (converged); as the thin diffuser
 # (subsurface off) 0.98, 1.33, 1.53, 1.82, 1.85. Russian roulette ends the paths that carry little.
 MAX_DEPTH_FLAKES = 128
@@ -137,20 +137,6 @@ class Crop:
     y: int
     width: int
     height: int
-
-
-def write_ply(path: Path, vertices, faces, normals, colors, translucency=None) -> None:
-    """Binary little-endian PLY with float normals, float linear colours (Mitsuba: ``vertex_color``) and
-    optionally a per-vertex diffuse transmission (``trans_x``: Mitsuba's ``vertex_trans``)."""
-    from .mesh_files import binary_ply
-
-    names = ("x", "y", "z", "nx", "ny", "nz", "r", "g", "b")
-    columns = [vertices, normals, colors[:, :3]]
-    if translucency is not None:
-        names += ("trans_x",)
-        columns.append(np.asarray(translucency).reshape(-1, 1))
-    rows = np.hstack(columns).astype("<f4")
-    path.write_bytes(binary_ply([(names, rows)], faces))
 
 
 def path_depth(scene: ShadedScene, subsurface: bool = False) -> int:
@@ -334,7 +320,7 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
     vertices (what the camera frames and focuses on); with ``subsurface``, the volumetric materials' shapes carry their
     medium inside a dielectric boundary."""
     from ..shading.materials import is_ice
-    from .mesh_files import stacked
+    from .mesh_files import stacked, write_ply
 
     shapes = {}
     seen = []

@@ -17,27 +17,6 @@ from .studio import AMBIENT
 
 @node(
     "preview",
-    # 2: materials in the path tracer (dielectric ikura, translucent rice from the CDRF σ, glazed bowl),
-    #    key light + sky + table, OIDN denoising, 1280 × 720 and 12 spp by default
-    # 3: paths through ice up to 128 bounces (mitsuba_scene.path_depth): a heap of flakes was cut off dark grey
-    # 4: subsurface: media inside rice, ikura yolks and ice (volpath)
-    # 5: the key's glints in a one-bounce pass added after denoising (the denoiser erased them); 10 spp (was 12)
-    # 6: a procedural studio (softbox key, fill, rim light, seamless backdrop) and a thin lens (``studio``)
-    # 7: warm white rice: its medium scatters the same in every channel, its skin is the water film's, path depth
-    #    64 with media (docs/look.md, "Warm white rice")
-    # 8: 'ambient': the studio's ambient radiance, a parameter (shade's ambient never reached the preview); 8 spp
-    #    (was 10), the glints' pass 4 spp (was 8), the guides 2 (was 4): 136 → 105 CPU s on the main job
-    # 9: 5 spp (was 8): 82.0 → 55.1 CPU s on the main job, −0.5 dB / −0.028 SSIM in the eggs window against 256 spp
-    #    (docs/accuracy.md, "Preview cost")
-    # 10: 3 spp (was 5), glints 2 spp (was 4), no light sampling from inside the media (a shadow ray cast there always
-    #     met the element's dielectric skin): 58.5 → 35.6 CPU s, 134 → 84 s wall at load ≈ 8 on the main job,
-    #     −0.6 dB / −0.036 SSIM in the eggs window against 256 spp (docs/accuracy.md, "Preview cost")
-    # 11: shaved ice a matte thin diffuser, no medium (docs/look.md, "Kakigori"): the heap white, not grey glass
-    # 12: shaved ice a scattering medium behind no skin (a null boundary; issue 26: light under the skin of ice
-    #     too): white like a white diffuse heap (1.1 ×), not grey glass (docs/look.md, "Kakigori")
-    # 13: the glints' pass through a pinhole, each glint spread over its circle of confusion (``bokeh``): smooth
-    #     bokeh where 2 spp through the lens gave dots; the glaze glints again (docs/look.md, "Bokeh, not dots")
-    version=13,
     # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,
     # nogil, not parallel): the run computes what does not need the preview (export, measure) in a second thread
     # meanwhile (nodegraph.executor.Beside), started once every library the preview loads is loaded
@@ -48,16 +27,10 @@ from .studio import AMBIENT
     params={
         "width": Param(int, 1280, "image width", range=(16, 4096), units="px"),
         "height": Param(int, 720, "image height", range=(16, 4096), units="px"),
-        # 8, denoised, media on, depth 64: benchmarks/bench_preview.py --budget on the main job (eggs over rice,
-        # against 256 spp at depth 128; docs/accuracy.md, "Preview cost"): 10 spp (glints 8, guides 4) 18.3 dB /
-        # SSIM 0.415 / 135.7 CPU s; 8 spp (glints 4, guides 2) 18.2 dB / 0.401 / 104.7 CPU s (52 s on 2 free
-        # cores: the issue's 60 s); 6 spp 18.0 dB / 0.387 / 76.1 CPU s. Then 5 (issue 27), on one quieter run:
-        # 8 spp 18.9 dB / 0.429 / 82.0 CPU s, 6 spp 18.6 / 0.412 / 66.1, 5 spp 18.5 / 0.401 / 55.1, 4 spp 18.3 /
-        # 0.390 / 46.4; the whole 5-spp frame against the 8-spp one 33.2 dB / SSIM 0.966, no visible difference.
-        # Then 3 (issue 27 again; two runs on one reference, load 6–11, light sampling inside the media off): 5 spp
-        # 18.40 dB / 0.406 / 54.1 CPU s, 4 spp 18.09 / 0.390 / 41.4, 3 spp 17.79 / 0.370 / 30.8, 2 spp 17.29 /
-        # 0.345 / 24.6 (glints 2 spp below 5). The image pass is ≈ 8 CPU s per sample: the eggs hold it (their red
-        # light walks 16–64 bounces inside; plain diffuse eggs halve the pass), so its samples are the lever.
+        # 3: priced against 256 spp at depth 128 on the main job's eggs over rice (benchmarks/bench_preview.py
+        # --budget; docs/accuracy.md, "Preview cost"): 5 spp 18.40 dB / SSIM 0.406 / 54.1 CPU s, 4 spp 18.09 / 0.390 /
+        # 41.4, 3 spp 17.79 / 0.370 / 30.8, 2 spp 17.29 / 0.345 / 24.6. The image pass is ≈ 8 CPU s per sample: the
+        # eggs hold it (their red light walks 16–64 bounces inside), so its samples are the lever.
         "samples": Param(int, 3, "samples per pixel (noise vs time; see benchmarks/bench_preview.py)", range=(1, 4096)),
         "denoise": Param(bool, True, "Intel Open Image Denoise with albedo + normal guides (pyoidn)"),
         "subsurface": Param(

@@ -156,7 +156,7 @@ def backdrop_mesh(target: np.ndarray, radius: float, floor: float, view: np.ndar
 
 def backdrop_dict(path: Path, target: np.ndarray, radius: float, floor: float, view: np.ndarray) -> dict:
     """The sweep as a PLY shape written to ``path``, matte ``BACKDROP_COLOR``."""
-    from .mitsuba_scene import write_ply
+    from .mesh_files import write_ply
 
     vertices, faces, normals = backdrop_mesh(target, radius, floor, view)
     colors = np.tile(BACKDROP_COLOR, (len(vertices), 1))

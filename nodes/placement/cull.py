@@ -15,7 +15,6 @@ from .element_templates import template_params
 
 @node(
     "cull",
-    version=4,  # 4: priority (issue 26: the grains over a chestnut piece give way to it)
     inputs={
         "placement": In(Placement, "refined elements"),
         "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),

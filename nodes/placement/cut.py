@@ -50,8 +50,6 @@ def cut_mask(positions: np.ndarray, kind: str, normal, offset: float, center, ra
 
 @node(
     "cut",
-    # 2: islands, gap (pieces the cut leaves resting on nothing are bridged back by default)
-    version=2,
     inputs={"aggregate": In(Aggregate, "placed or simulated elements (a volume fill)")},
     outputs={
         "aggregate": Out(

@@ -2,8 +2,8 @@
 
 Candidates are visited in a random order; a free one is placed and every candidate closer than
 the minimum distance (2r: exclusion spheres of radius r do not overlap) is flagged. The result
-is maximal over the candidates. A sorted cell list (cell = min distance) finds the candidates to
-flag; hand-written in numba because the flagging loop is sequential by nature.
+is maximal over the candidates. A sorted cell list (``spatial_grid``, cell ≥ min distance) finds the
+candidates to flag; hand-written in numba because the flagging loop is sequential by nature.
 """
 
 from __future__ import annotations
@@ -11,21 +11,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-
-@njit(cache=True)
-def _cell_keys(points, origin, cell, dims):
-    n = points.shape[0]
-    keys = np.empty(n, np.int64)
-    for i in range(n):
-        ix = int((points[i, 0] - origin[0]) / cell)
-        iy = int((points[i, 1] - origin[1]) / cell)
-        iz = int((points[i, 2] - origin[2]) / cell)
-        keys[i] = (ix * dims[1] + iy) * dims[2] + iz
-    return keys
+from ..spatial_grid import CellGrid, build_grid, column_run, neighbour_block
 
 
 @njit(cache=True)
-def _throw(points, order, min_distance, origin, dims, sorted_keys, sorted_index):
+def _throw(points, order, min_distance, grid):
+    """Placed candidate ids in placing order; ``grid`` (``spatial_grid``) sorts the candidates by cells ≥ the
+    minimum distance. Which candidates a placed one flags does not depend on the order they are visited in, so
+    neither does the result (nor on how coarse the grid is)."""
     n = points.shape[0]
     flagged = np.zeros(n, np.bool_)
     placed = np.empty(n, np.int64)
@@ -38,24 +31,18 @@ def _throw(points, order, min_distance, origin, dims, sorted_keys, sorted_index)
         placed[count] = i
         count += 1
         flagged[i] = True
-        cx = int((points[i, 0] - origin[0]) / min_distance)
-        cy = int((points[i, 1] - origin[1]) / min_distance)
-        cz = int((points[i, 2] - origin[2]) / min_distance)
-        for x in range(max(cx - 1, 0), min(cx + 2, dims[0])):
-            for y in range(max(cy - 1, 0), min(cy + 2, dims[1])):
-                for z in range(max(cz - 1, 0), min(cz + 2, dims[2])):
-                    key = (x * dims[1] + y) * dims[2] + z
-                    start = np.searchsorted(sorted_keys, key)
-                    k = start
-                    while k < n and sorted_keys[k] == key:
-                        j = sorted_index[k]
-                        if not flagged[j]:
-                            dx = points[j, 0] - points[i, 0]
-                            dy = points[j, 1] - points[i, 1]
-                            dz = points[j, 2] - points[i, 2]
-                            if dx * dx + dy * dy + dz * dz < d2:
-                                flagged[j] = True
-                        k += 1
+        x0, x1, y0, y1, z0, z1 = neighbour_block(grid, points[i, 0], points[i, 1], points[i, 2])
+        for gx in range(x0, x1):
+            for gy in range(y0, y1):
+                q0, q1 = column_run(grid, gx, gy, z0, z1)
+                for q in range(q0, q1):
+                    j = grid.order[q]
+                    if not flagged[j]:
+                        dx = points[j, 0] - points[i, 0]
+                        dy = points[j, 1] - points[i, 1]
+                        dz = points[j, 2] - points[i, 2]
+                        if dx * dx + dy * dy + dz * dz < d2:
+                            flagged[j] = True
     return placed[:count]
 
 
@@ -65,12 +52,8 @@ def dart_throw(points: np.ndarray, order: np.ndarray, min_distance: float) -> np
         return np.zeros(0, np.int64)
     points = np.ascontiguousarray(points, np.float64)
     origin = points.min(axis=0) - 1e-9
-    dims = np.floor((points.max(axis=0) - origin) / min_distance).astype(np.int64) + 1
-    keys = _cell_keys(points, origin, float(min_distance), dims)
-    sorted_index = np.argsort(keys, kind="stable")
-    return _throw(
-        points, np.asarray(order, np.int64), float(min_distance), origin, dims, keys[sorted_index], sorted_index
-    )
+    grid = CellGrid(*build_grid(points, origin, float(min_distance), 64.0 * len(points) + 4096))
+    return _throw(points, np.asarray(order, np.int64), float(min_distance), grid)
 
 
 def min_distance_ratio(points: np.ndarray, min_distance: float) -> float:

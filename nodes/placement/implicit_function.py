@@ -13,8 +13,6 @@ from ..values import ElementLibrary
 
 @node(
     "medial_spheres",
-    # 4: sample_spacing (thin elements: kakigori's flakes)
-    version=4,
     inputs={"library": In(ElementLibrary, "elements whose implicit functions overlap_refine and cull evaluate")},
     outputs={
         "library": Out(

@@ -1,5 +1,5 @@
 """The kept elements' contact graph and what floats in it, for the ``cut`` node (issue 26): two elements touch when
-a vertex of one lies within a reach of a vertex of the other (a small typed kernel on a counting-sorted grid: no
+a vertex of one lies within a reach of a vertex of the other (a small typed kernel on ``spatial_grid``'s cells: no
 library finds vertex pairs between different elements and keeps only the element pairs); its pieces and shortest
 bridges by scipy's csgraph. Its own module so that loading the node registry imports neither numba nor scipy (a
 cached re-run needs neither: tests/engine/test_cached_rerun_imports.py).
@@ -11,6 +11,7 @@ import numpy as np
 from numba import njit
 
 from ..kernel_arrays import kernel_array
+from ..spatial_grid import CellGrid, build_grid, column_run, neighbour_block
 from ..values import Aggregate
 
 
@@ -32,11 +33,11 @@ def element_surfaces(aggregate: Aggregate) -> tuple[np.ndarray, np.ndarray, floa
 
 
 @njit(cache=True)
-def touching_pairs(points, owner, count, reach, cells, dims, start, order):
+def touching_pairs(points, owner, count, reach, grid):
     """(k, 2) pairs i < j of elements with a vertex of i within ``reach`` of a vertex of j, each pair once.
-    ``points`` grouped by element (``owner`` non-decreasing); ``cells`` their grid cells (size ≥ reach), z fastest,
-    counting-sorted (``order``; cell k holds sorted positions start[k]:start[k + 1]), so a point's partners lie in
-    the 27 cells around its own, 9 runs of the sorted order."""
+    ``points`` grouped by element (``owner`` non-decreasing); ``grid`` (``spatial_grid``) sorts them by cells of
+    at least ``reach``, so a point's partners lie in the 27 cells around its own."""
+    order = grid.order
     xs = points[order]
     es = owner[order]
     seen = np.full(count, -1, np.int64)  # seen[j] = i: the pair (i, j) is out already
@@ -45,11 +46,11 @@ def touching_pairs(points, owner, count, reach, cells, dims, start, order):
     for p in range(points.shape[0]):
         i = owner[p]
         px, py, pz = points[p, 0], points[p, 1], points[p, 2]
-        z0, z1 = max(cells[p, 2] - 1, 0), min(cells[p, 2] + 1, dims[2] - 1)
-        for gx in range(max(cells[p, 0] - 1, 0), min(cells[p, 0] + 2, dims[0])):
-            for gy in range(max(cells[p, 1] - 1, 0), min(cells[p, 1] + 2, dims[1])):
-                base = (gx * dims[1] + gy) * dims[2]
-                for q in range(start[base + z0], start[base + z1 + 1]):
+        x0, x1, y0, y1, z0, z1 = neighbour_block(grid, px, py, pz)
+        for gx in range(x0, x1):
+            for gy in range(y0, y1):
+                q0, q1 = column_run(grid, gx, gy, z0, z1)
+                for q in range(q0, q1):
                     j = es[q]
                     if j <= i or seen[j] == i:
                         continue
@@ -75,18 +76,8 @@ def contact_graph(points: np.ndarray, owner: np.ndarray, count: int, reach: floa
 
     points = kernel_array(points)
     owner = kernel_array(owner, np.int64)
-    origin, cell = points.min(axis=0), reach
-    while True:
-        cells = ((points - origin) / cell).astype(np.int64)
-        dims = cells.max(axis=0) + 1
-        if np.prod(dims.astype(np.float64)) <= 16 * len(points) + 4096:
-            break
-        cell *= 2.0
-    keys = (cells[:, 0] * dims[1] + cells[:, 1]) * dims[2] + cells[:, 2]
-    start = np.zeros(int(np.prod(dims)) + 1, np.int64)
-    np.cumsum(np.bincount(keys, minlength=len(start) - 1), out=start[1:])
-    order = np.argsort(keys, kind="stable")
-    pairs = touching_pairs(points, owner, count, reach, cells, dims, start, order)
+    grid = CellGrid(*build_grid(points, points.min(axis=0), float(reach), 16.0 * len(points) + 4096))
+    pairs = touching_pairs(points, owner, count, float(reach), grid)
     i, j = pairs[:, 0], pairs[:, 1]
     return coo_matrix((np.ones(2 * len(i)), (np.r_[i, j], np.r_[j, i])), shape=(count, count)).tocsr()
 

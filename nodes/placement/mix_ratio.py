@@ -15,7 +15,6 @@ from ..values import Aggregate, ElementLibrary, Placement
 
 @node(
     "mix_ratio",
-    version=1,
     inputs={
         "placement": In(Placement, "placed (and rotated) points"),
         "libraries": In(ElementLibrary, "one library per element kind", many=True),

@@ -21,7 +21,6 @@ def _check(params: dict) -> list[tuple[str, str]]:
 
 @node(
     "overlap_refine",
-    version=4,  # 4: the shape input and protrusion (issue 26: chestnut pieces stood out of the onigiri)
     inputs={
         "placement": In(Placement, "placed, rotated, mixed elements"),
         "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),

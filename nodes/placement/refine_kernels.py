@@ -18,6 +18,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
+from ..spatial_grid import CellGrid, cell_keys, cell_starts, column_run, grid_shape, neighbour_block
+
 SAKURAI, GAN = 0, 1
 INV_PHI = (np.sqrt(5.0) - 1.0) / 2.0
 
@@ -84,22 +86,27 @@ class Bumps(NamedTuple):
 
 @njit(cache=True)
 def neighbour_lists(positions, reach):
-    """CSR lists of all j ≠ i with ‖p_i − p_j‖ < reach_i + reach_j, from a grid of cell 2·max(reach)."""
+    """CSR lists of all j ≠ i with ‖p_i − p_j‖ < reach_i + reach_j, from a grid of cell 2·max(reach)
+    (``spatial_grid``).
+
+    A row lists its neighbours in the grid's visiting order, and ``_overlap_at`` sums the overlaps in that
+    order, so the order is part of the refine's result. Within a cell the elements come in the order of
+    numba's ``np.argsort`` of the cell keys (its quicksort: not stable), as they always have; the grid's
+    stable ``counting_sort`` would list tied elements in id order and move the refine in the last bits.
+    The grid's cell starts are dense (8 bytes a cell), so the cell doubles while there would be more than
+    64·n + 4 Mi cells (32 MiB): only sparse scenes hundreds of cells across reach that, and there the rows
+    hold the same neighbours in another order (the searchsorted lookups before 2026-12 needed no guard)."""
     n = positions.shape[0]
     cell = 2.0 * reach.max() + 1e-12
     lo = np.empty(3)
-    dims = np.empty(3, np.int64)
+    hi = np.empty(3)
     for d in range(3):
         lo[d] = positions[:, d].min() - 1e-9
-        dims[d] = int((positions[:, d].max() - lo[d]) / cell) + 1
-    coords = np.empty((n, 3), np.int64)
-    keys = np.empty(n, np.int64)
-    for i in range(n):
-        for d in range(3):
-            coords[i, d] = int((positions[i, d] - lo[d]) / cell)
-        keys[i] = (coords[i, 0] * dims[1] + coords[i, 1]) * dims[2] + coords[i, 2]
+        hi[d] = positions[:, d].max()
+    dims, cell = grid_shape(lo, hi, cell, 64 * n + 4 * 1024 * 1024)
+    keys = cell_keys(positions, lo, dims, cell)
     order = np.argsort(keys)
-    sorted_keys = keys[order]
+    grid = CellGrid(cell_starts(keys, dims[0] * dims[1] * dims[2]), order, lo, dims, cell)
     counts = np.zeros(n + 1, np.int64)
     for sweep in range(2):
         if sweep == 1:
@@ -108,24 +115,22 @@ def neighbour_lists(positions, reach):
             out = np.empty(counts[n], np.int64)
             fill = counts[:n].copy()
         for i in range(n):
-            for x in range(max(coords[i, 0] - 1, 0), min(coords[i, 0] + 2, dims[0])):
-                for y in range(max(coords[i, 1] - 1, 0), min(coords[i, 1] + 2, dims[1])):
-                    for z in range(max(coords[i, 2] - 1, 0), min(coords[i, 2] + 2, dims[2])):
-                        key = (x * dims[1] + y) * dims[2] + z
-                        k = np.searchsorted(sorted_keys, key)
-                        while k < n and sorted_keys[k] == key:
-                            j = order[k]
-                            k += 1
-                            if j == i:
-                                continue
-                            dist2 = ((positions[i] - positions[j]) ** 2).sum()
-                            limit = reach[i] + reach[j]
-                            if dist2 < limit * limit:
-                                if sweep == 0:
-                                    counts[i + 1] += 1
-                                else:
-                                    out[fill[i]] = j
-                                    fill[i] += 1
+            x0, x1, y0, y1, z0, z1 = neighbour_block(grid, positions[i, 0], positions[i, 1], positions[i, 2])
+            for gx in range(x0, x1):
+                for gy in range(y0, y1):
+                    q0, q1 = column_run(grid, gx, gy, z0, z1)
+                    for q in range(q0, q1):
+                        j = order[q]
+                        if j == i:
+                            continue
+                        dist2 = ((positions[i] - positions[j]) ** 2).sum()
+                        limit = reach[i] + reach[j]
+                        if dist2 < limit * limit:
+                            if sweep == 0:
+                                counts[i + 1] += 1
+                            else:
+                                out[fill[i]] = j
+                                fill[i] += 1
     return counts, out
 
 

@@ -16,7 +16,6 @@ FIELDS = ("none", "flow", "radial")
 
 @node(
     "rotate",
-    version=1,
     inputs={"placement": In(Placement, "placed points with normals")},
     outputs={"placement": Out(Placement, "the same points with rotations")},
     params={

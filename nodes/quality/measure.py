@@ -17,8 +17,6 @@ from ..values import Aggregate, Vessel
 
 @node(
     "measure",
-    # 3: outside_vessel; 4: skin
-    version=4,
     random=True,
     inputs={
         "aggregates": In(Aggregate, "the final aggregates (their element meshes are measured)", many=True),

@@ -31,7 +31,6 @@ def contact_depths(positions: np.ndarray, radii: np.ndarray, element: np.ndarray
 
 @node(
     "particle_contacts",
-    version=1,
     inputs={"particles": In(ParticleState, "the simulation's particles (xpbd.particles)")},
     outputs={"stats": Out(Table, "one row: overlap depth between elements, pile height, particle speed")},
 )

@@ -25,23 +25,6 @@ def _check(params):
 
 @node(
     "shade",
-    # 2: meshes named <kind>/<number>[/<part>] (Rerun entity paths, glTF node names)
-    # 3: per-vertex CDRF σ in the scene (renderers evaluate the CDRF), sheen; ikura membrane a clear dielectric
-    # 4: syrup graded by depth below the mound's top (syrup_depth, _spread, _levels); chestnut, salmon, tuna presets
-    # 5: plain ice keeps ≈ 99 % of the light per flake crossing (was 90–95 %: 5 mm of ice per 0.4 mm flake)
-    # 6: water content and σ₀ come from the cooked material (input 'material')
-    # 7: ikura deep orange-red (was amber), its yolk orange; a scenery mesh named 'nori' gets the nori material
-    # 8: 'ambient' renamed 'baked_ambient': it lights only the baked vertex colours, never the preview (whose
-    #    ambient is its studio's, preview.ambient)
-    # 9: kakigori ice a white tuft of fine shavings (short free path, index 1.1); syrup colour mixed by absorption
-    # 10: kakigori ice a matte thin diffuser (white, passes half the diffuse light; no medium, no glint); the soaked
-    #     ice lighter (ice dyed by the syrup), more translucent, wet (docs/look.md, "Kakigori")
-    # 11: syrup runs down the flanks in streaks (syrup_runs, syrup_run_length; drawn from the seed); soaked ice
-    #     bright red from the syrup's absorption, translucent (docs/look.md, "Kakigori")
-    # 12: nori lighter and satin (base linear (0.022, 0.033, 0.020), roughness 0.35; issue 26, docs/look.md)
-    # 13: syrup-soaked ice's free path 0.05 mm (was 0.6): the preview's ice is a medium again, whose dye absorbs
-    #     at its collisions (docs/look.md, "Kakigori")
-    version=13,
     random=True,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),

@@ -15,7 +15,6 @@ OPERATIONS = ("difference", "union", "intersection")
 
 @node(
     "boolean",
-    version=1,
     inputs={"a": In(Mesh, "first closed shape"), "b": In(Mesh, "second closed shape (subtracted for difference)")},
     outputs={"mesh": Out(Mesh, "the closed result")},
     params={"operation": Param(str, "difference", "a − b, a ∪ b or a ∩ b", choices=OPERATIONS)},

@@ -21,7 +21,6 @@ FAT_LINES = {"salmon": (7.0, 1.4, 25.0, 6.0), "tuna": (9.0, 0.6, 20.0, 4.0)}
 
 @node(
     "drape",
-    version=1,
     inputs={"aggregate": In(Aggregate, "the aggregate the slab rests on (its element meshes' top)")},
     outputs={"aggregate": Out(Aggregate, "the draped slab: one element of kind 'salmon' or 'tuna'")},
     params={

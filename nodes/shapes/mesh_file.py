@@ -7,12 +7,18 @@ from nodegraph.params import Param
 from nodegraph.values import Mesh
 
 
+def _check(params: dict) -> list[tuple[str, str]]:
+    from ..mesh_io import suffix_problem
+
+    problem = suffix_problem(params["path"])
+    return [] if problem is None else [("path", problem)]
+
+
 @node(
     "mesh_file",
-    version=1,
     outputs={"mesh": Out(Mesh, "the closed user mesh, outward normals")},
     params={
-        "path": Param(str, doc="mesh file (.stl, .obj, .ply, .off, .glb) readable by trimesh", file=True),
+        "path": Param(str, doc="mesh file (.stl, .obj, .ply, .off, .glb, .gltf) readable by trimesh", file=True),
         "size": Param(
             float,
             0.0,
@@ -23,6 +29,7 @@ from nodegraph.values import Mesh
         "center": Param(bool, True, "move the bounding-box centre to the origin"),
         "repair": Param(bool, True, "fix inverted normals and fill small holes instead of refusing the mesh"),
     },
+    check=_check,
 )
 def mesh_file(ctx, *, path, size, center, repair):
     """Load a closed mesh; an open or inside-out one is repaired (``repair``) or refused with a clear error."""

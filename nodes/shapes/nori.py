@@ -12,8 +12,6 @@ from nodes.values import Aggregate
 
 @node(
     "nori",
-    # 3: ribs (the mat's fine ridges across the sheet; issue 26)
-    version=3,
     inputs={
         "shape": In(Mesh, "the closed shape the band wraps (the onigiri's mould): its faces along ±y"),
         "aggregate": In(

@@ -56,12 +56,45 @@ def _region_fits_vessels(node_id: str, nodes) -> list[tuple[str, str]]:
     return [("size", problems[0])] if problems else []
 
 
+CONTAINERS = ("bowl", "block")  # the kinds whose container output is a mesh; empty for the others
+
+
+def _outputs_there(node_id: str, nodes) -> list[tuple[str, str]]:
+    """What a node reads of this shape must exist for its kind: a container (a collider: an empty one failed the
+    simulation deep inside, 'zero-size array to reduction operation minimum') only a bowl or block has, and the
+    numbers a vessel_region derives its region from only a bowl has."""
+    me = nodes[node_id].params
+    for reader, entry in nodes.items():
+        for port, wires in entry.inputs.items():
+            for wire in wires:
+                if wire.node != node_id:
+                    continue
+                if wire.port == "container" and me["kind"] not in CONTAINERS:
+                    return [
+                        (
+                            "kind",
+                            f"a shape of kind '{me['kind']}' has no container, but '{reader}' reads "
+                            f"{node_id}.container as its {port}; allowed: {', '.join(CONTAINERS)} (or wire another "
+                            "node's mesh there)",
+                        )
+                    ]
+                if wire.port == "vessel" and entry.spec.type_name == "vessel_region" and me["kind"] != "bowl":
+                    return [
+                        (
+                            "kind",
+                            f"'{reader}' derives its region from {node_id}.vessel, the numbers of a bowl; a shape of "
+                            f"kind '{me['kind']}' has none; allowed: bowl",
+                        )
+                    ]
+    return []
+
+
+def _recipe_rules(node_id: str, nodes) -> list[tuple[str, str]]:
+    return _outputs_there(node_id, nodes) or _region_fits_vessels(node_id, nodes)
+
+
 @node(
     "shape",
-    # 3: the vessel output (a bowl's numbers, for vessel_region and measure)
-    # 4: kind 'plate': a round plate with a flat well and a rim (was a box under the onigiri)
-    # 5: the onigiri's sides straight (its gauge bowed them into arcs: a near disc seen from the front; issue 26)
-    version=5,
     outputs={
         "mesh": Out(
             Mesh, "the closed region the elements fill (for a bowl: the cavity to the fill height plus the mound)"
@@ -125,7 +158,7 @@ def _region_fits_vessels(node_id: str, nodes) -> list[tuple[str, str]]:
         ),
     },
     check=_check,
-    check_recipe=_region_fits_vessels,
+    check_recipe=_recipe_rules,
 )
 def shape(
     ctx,

@@ -32,8 +32,8 @@ def _rounded_triangle_radius(roundness: float, samples: int = 720):
 
     Returns a function θ → R(θ) with max R = 1 (the corners' tips). Exact on the straight edges: the ray's
     distance to the hull's nearest supporting line (interpolating R linearly in θ between the hull's vertices,
-    as before session 42, bowed each straight edge out into an arc: the "triangle" was a near disc, 94 × 94 mm
-    for a 47.3 mm circumradius at roundness 0.01, and read as a dome from the front; issue 26).
+    bows each straight edge out into an arc: the "triangle" becomes a near disc, 94 × 94 mm for a 47.3 mm
+    circumradius at roundness 0.01, and reads as a dome from the front).
     """
     from scipy.spatial import ConvexHull
 

@@ -9,9 +9,6 @@ module (``shape_matching``, ``contact_constraints``, ``friction``, ``adhesion``,
 effects. The kernels are imported when the node runs, so listing nodes stays cheap.
 """
 
-from .cull_crossing import cull_crossing
-from .deform_contacts import deform_contacts
-from .flatten_contacts import flatten_contacts
 from .xpbd import xpbd
 
-__all__ = ["cull_crossing", "deform_contacts", "flatten_contacts", "xpbd"]
+__all__ = ["xpbd"]

@@ -1,8 +1,9 @@
-"""The solver's scratch between kernels — SPEC §3: typed, and allocated only for what runs (no
-shape matching: no λ; no pair effect: no neighbour lists; no 'adhesion': no Jacobi copy).
+"""The solver's scratch between kernels and the ``Contacts`` — SPEC §3: typed, and allocated only for what
+runs (no shape matching: no λ; no pair effect: no neighbour lists; no 'adhesion': no Jacobi copy).
 
-A solver's buffers follow the one ``State`` it steps: the Verlet lists remember where that state's
-particles were when they were built.
+``Contacts`` (Newton's name) are the neighbour lists and the data each pair keeps across substeps (friction
+anchors and loads, tolerated overlaps): they follow the particles of the ``State`` they were built for, and
+``XpbdSolver.step`` takes them as an argument.
 """
 
 from __future__ import annotations
@@ -74,8 +75,8 @@ class NeighbourLists:
 
 
 @dataclass(eq=False)
-class PairBuffers:
-    """Verlet neighbour lists and the pair families' scratch; allocated with a pair effect.
+class Contacts:
+    """Verlet neighbour lists and what each listed pair keeps across substeps; allocated with a pair effect.
 
     The lists hold pairs within contact (+ capture with 'adhesion') + ``skin`` and are rebuilt only
     once some particle has moved half the skin since the last build: ``displacement`` is that
@@ -97,7 +98,7 @@ class PairBuffers:
     displacement: float = np.inf
 
     @classmethod
-    def allocate(cls, model: Model, settings: SolverSettings) -> PairBuffers | None:
+    def allocate(cls, model: Model, settings: SolverSettings) -> Contacts | None:
         """None without a pair effect (contact, friction, adhesion)."""
         effects = settings.effects
         if not PAIR_EFFECTS & effects:

@@ -331,7 +331,7 @@ def _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i):
 @njit(cache=True, parallel=True)
 def collider_project(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
-    (``friction.friction_wall``, normal load = the penetration; ``rule`` = (μs, μk, anchored),
+    (``friction.friction_wall``, normal load = the penetration; ``rule``: a ``friction_models.FrictionRule``,
     ``anchor`` (n, 3) per particle; μs = 0 skips friction and leaves the anchors). In place; particles
     are independent. ``blocks``: the ``block_minimum`` of φ (particles far from every wall are skipped).
     Returns max (r − φ)/r."""

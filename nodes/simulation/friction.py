@@ -57,9 +57,10 @@ def tangential_slip(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k):
 def friction_pair(x, x_prev, anchor, a, i, j, normal, depth, share, rule):
     """Friction on the pair (i, j) of list entry ``a`` with unit normal ``normal`` = (nx, ny, nz)
     (j → i) and overlap ``depth``, in place; i takes ``share`` of the correction, j the rest (the
-    contacts' mass scaling). ``rule`` = (μs, μk, anchored): without anchors the drift is the substep's
-    (Macklin's rule); with them a pair without an anchor is anchored where it stood at the substep's
-    start (its first substep is Macklin's rule) and a sliding pair is re-anchored after its step."""
+    contacts' mass scaling). ``rule``: a ``friction_models.FrictionRule`` (μs, μk, anchored); without
+    anchors the drift is the substep's (Macklin's rule); with them a pair without an anchor is anchored where
+    it stood at the substep's start (its first substep is Macklin's rule) and a sliding pair is re-anchored
+    after its step."""
     mu_s, mu_k, anchored = rule
     nx, ny, nz = normal
     if anchored:

@@ -6,6 +6,8 @@ from 0 to 120 min), viscosity falls. Our reading, with water content w in % of g
 −40 % at 24 %), adhesion × w/(w + 8) (no capillary bridges when dry, saturating when wet).
 """
 
+from typing import NamedTuple
+
 WATER_CONTENT = 15.0  # % — the default cooked rice (G's renders span 0–24 %; 15 % is the rice of G ch.5's bowls)
 
 
@@ -15,3 +17,17 @@ def moisture_scales(water_content: float) -> dict[str, float]:
     if w < 0:
         raise ValueError(f"water_content must be ≥ 0 %, got {w}")
     return {"stiffness": 1.0 / (1.0 + w / 10.0), "friction": max(0.0, 1.0 - w / 60.0), "adhesion": w / (w + 8.0)}
+
+
+class MoistureFactors(NamedTuple):
+    """The factors a ``CookedMaterial`` carries, by the same names: what the solver reads of a material."""
+
+    stiffness_scale: float
+    friction_scale: float
+    adhesion_scale: float
+
+
+def moisture_factors(water_content: float) -> MoistureFactors:
+    """``moisture_scales`` as the fields of a cooked material: the simulation's factors when none is wired."""
+    scales = moisture_scales(water_content)
+    return MoistureFactors(scales["stiffness"], scales["friction"], scales["adhesion"])

@@ -1,63 +1,279 @@
 """The xpbd node's parameters and the solver's settings — SPEC §3 (G Table 3) and §5.
 
-``XpbdParams`` is the node's declared parameters as one typed value (user units: N/m, mg, radii, %,
-g/cm³), built once by the node; ``solver_settings`` turns it into ``SolverSettings``, the solver's
-units (mm, g, s). ``EFFECTS`` is the one list of the physical effects the solver implements: the
-node declares it and the solver checks requests against it. numpy only, no numba: the node's module
-imports this at registry time.
+``PARAMS`` declares the node's parameters once: type, default, range, units and the measurement behind
+each default. ``XpbdParams`` is generated from it (one typed field per parameter, user units: N/m, mg,
+radii, %, g/cm³), and ``xpbd_params`` validates given values and fills in the declared defaults.
+``solver_settings`` turns an ``XpbdParams`` into ``SolverSettings``, the solver's units (mm, g, s);
+``SolverSettings`` has no defaults of its own, so tests, benchmarks and scenes build theirs through
+``solver_settings_for`` with overrides in the node's units, and every solver they run is one a recipe
+can ask for. ``EFFECTS`` is the one list of the physical effects the solver implements: the node
+declares it and the solver checks requests against it. numpy only, no numba: the node's module imports
+this at registry time.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, make_dataclass
 
 import numpy as np
 
-from .moisture import WATER_CONTENT, moisture_scales
+from nodegraph.params import Param, ParamValueError
+
+from .friction_models import FRICTION_MODELS, AnchoredFriction, SubstepFriction
+from .moisture import WATER_CONTENT, moisture_factors
 
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 PAIR_EFFECTS = frozenset({"contact", "friction", "adhesion"})  # the effects that need neighbour lists
 ADHESION_STIFFNESS = 10.0  # N/m at clumping 1: pulls a 25 mg grain with ≈ 40× its weight per mm of gap
 
+# Solver constants no recipe sets (not node parameters), each with its reason:
+# every this many frames one substep solves the asleep elements too (under gravity), so an element whose
+# support went away falls and wakes; between probes only a push wakes it
+SLEEP_PROBE = 1
+YOLK_DRAG = 40.0  # 1/s: a yolk's drag towards its egg's velocity (``buoyancy.yolk_predict``)
+ROTATION_ITERATIONS = 8  # iterations of the rotation extraction in shape matching and glue (Müller 2016)
+
+
+PARAMS = {
+    "mode": Param(
+        str,
+        "short",
+        "short: relax the given placement; full: drop identical elements "
+        "packed on a regular grid in one orientation (G §3.2.1)",
+        choices=("short", "full"),
+    ),
+    "frames": Param(int, 60, "frames to simulate", range=(1, 100000), units="frames"),
+    "dt": Param(float, 1 / 60, "frame duration", range=(1e-4, 1.0), units="s"),
+    # 10 × 2 from the accuracy sweeps (bench_xpbd.py --only accuracy: 150-grain bowl, 8-cube stack):
+    # on the stack each doubling of substeps cuts the rest error ≈ 4×, of iterations ≈ 2×; 10 × 2
+    # is on the bowl's front and rests the stack within 0.19 r, gaining no energy; settings with
+    # few substeps and many iterations win on the resting stack but let the bowl's drop sink in
+    # (1 × 8: 1.07 r). The 2,000-grain bowl runs in ≈ 8.5 s of its 30 s budget at 10 × 2.
+    # Re-checked in CPU time (benchmarks/bench_solver_default.py, docs/accuracy.md): at equal passes a substep
+    # costs more than an iteration (20 × 1: 1.2–1.4× the CPU, for half the stack's rest error); no setting of
+    # 16–20 passes is better on every error at no more CPU, so 10 × 2 stays.
+    "substeps": Param(
+        int,
+        10,
+        "XPBD substeps per frame (accuracy: see the accuracy benchmark); a run is refused when gravity's "
+        "step g·h² exceeds iterations/4 × the median particle radius (resting stacks would sink past 1 r)",
+        range=(1, 256),
+    ),
+    "iterations": Param(int, 2, "constraint iterations per substep", range=(1, 64)),
+    # 8 from `nodegraph sweep graphs/sweeps/rice_bowl_particles.yaml` (≈ 340 grains, covering clusters, p95 / max
+    # mesh overlap in grain lengths after flatten_contacts; straight after the run): 4 → 0.022 / 0.151 (0.187 /
+    # 0.244), 8 → 0.015 / 0.044 (0.144 / 0.244) in 15.8 s, 16 → 0.011 / 0.089 (0.105 / 0.153) in 16.3 s, 32 →
+    # 0.011 / 0.026 (0.101 / 0.163) in 19.4 s. 8 is on the time–metric Pareto front of every metric and meets
+    # issue 17's 0.03 / 0.10 after the flattening.
+    "particles_per_element": Param(
+        int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
+    ),
+    "slender": Param(
+        bool,
+        False,
+        "clusters sized to the element's cross-section: an element m times as elongated as a japonica grain "
+        "(length / width over 5/3, rounded, ≥ 1; indica 2) gets m² × particles_per_element particles, and the run "
+        "m³ × the substeps (a cluster of more particles gives way to its contacts more slowly per substep), "
+        "with a depenetration speed (50 mm/s unless set)",
+    ),
+    "rigid_start": Param(
+        bool,
+        False,
+        "move each element whole into the containers' free space before the run where it reaches through a wall "
+        "(a long grain near a bowl's rim): else its particles are pushed out on both sides and the cluster is torn",
+    ),
+    # 0.1: the dry japonica bowl's exported skin 0.133 → 0.078 (packing 0.76 → 0.66); docs/look.md
+    "contact_offset": Param(
+        float,
+        0.0,
+        "added to every particle's radius, in median particle radii: a cluster's spheres sit inside the element "
+        "and leave its surface uncovered between them, so touching clusters let the meshes nest into each other "
+        "(deep dents after the run); the offset keeps them apart by up to twice as much where the cover is tight",
+        range=(0.0, 0.5),
+        units="radii",
+    ),
+    "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
+    "stiffness": Param(
+        float,
+        2000.0,
+        "shape-matching stiffness, compliance = 1/stiffness; 0 lets a cluster fall apart",
+        range=(0.0, 100000.0),
+        units="N/m",
+    ),
+    "linear_deformation": Param(
+        float,
+        0.3,
+        "β: share of the volume-preserving linear fit in the goal (SPEC §5, U eq. 3.19); 0 = rigid goal",
+        range=(0.0, 1.0),
+    ),
+    "deformation": Param(
+        str,
+        "linear",
+        "goal of the β share: linear (A) or quadratic (Ã, 3×9: also bends "
+        "and twists, SPEC §5); clusters with < 10 particles or collinear/planar ones stay "
+        "linear",
+        choices=("linear", "quadratic"),
+    ),
+    "bend_stiffness": Param(
+        float,
+        0.0,
+        "bend constraints along the long axis of elongated grains (G: 10 for "
+        "rice): stiffness of each chain triple's midpoint offset, in units of the shape-"
+        "matching stiffness; 0 = none",
+        range=(0.0, 10.0),
+    ),
+    "damping": Param(float, 0.1, "velocity fraction removed per 1/60 s (effect 'damping')", range=(0.0, 1.0)),
+    "friction": Param(float, 1.0, "multiplier on both friction coefficients (effect 'friction')", range=(0.0, 1.0)),
+    "static_threshold": Param(float, 0.6, "μs, static friction coefficient (Houdini's reading)", range=(0.0, 1.0)),
+    "dynamic_scale": Param(float, 0.7, "μk / μs", range=(0.0, 1.0)),
+    # anchored by default: under the per-substep rule rice heaps creep flat (issue 24, docs/validation.md)
+    "friction_model": Param(
+        str,
+        "anchored",
+        "anchored: static friction restores the slip since the contact began sticking, against the normal "
+        "load the contact carried this substep (rice heaps rest at 30–40°, docs/validation.md); substep: it "
+        "holds each substep's slip only (Macklin et al. 2014; heaps creep flat)",
+        choices=("substep", "anchored"),
+    ),
+    "capture_radius": Param(
+        float,
+        0.2,
+        "adhesion reach beyond contact, in particle radii (effect 'adhesion')",
+        range=(0.0, 1.0),
+        units="radii",
+    ),
+    "clumping": Param(float, 0.3, "adhesion strength (breakable bonds within the capture radius)", range=(0.0, 1.0)),
+    "glue": Param(
+        float,
+        0.0,
+        "glued grains (pressed sticky rice, effect 'adhesion'): grains within the capture radius of each other "
+        "at the start keep their places in each grain's neighbourhood (lattice shape matching), this share of "
+        "the way per iteration, until one stands a particle radius from its place (the paste tears); "
+        "stiff piles need substeps (an onigiri keeps 98 % of its height at 30); 0 = none",
+        range=(0.0, 1.0),
+    ),
+    "sleep_speed": Param(
+        float,
+        2.0,
+        "elements slower than this are put to rest each substep (0 = never)",
+        range=(0.0, 1000.0),
+        units="mm/s",
+    ),
+    "shock_propagation": Param(
+        float,
+        4.0,
+        "contact mass ratio of a particle to one a diameter above it "
+        "(Macklin et al. 2014 mass scaling): carries a tall pile's weight down in few "
+        "iterations; 1 = off (a 2,000-sphere pile then sinks to 2 r of overlap)",
+        range=(1.0, 1000.0),
+    ),
+    "speed_clamp": Param(
+        float,
+        1.0,
+        "max particle travel per substep (anti-tunnelling); above 1 the substep runs as ceil(clamp) solves of "
+        "≤ 1 r each (a wall or particle is never crossed); refused when gravity alone exceeds it (g·h² > clamp·r)",
+        range=(0.1, 2.0),
+        units="radii",
+    ),
+    "depenetration_speed": Param(
+        float,
+        0.0,
+        "max depenetration speed: the constraints leave a particle no faster than this or its predicted speed "
+        "(gravity's and its own), so deep overlaps come apart without launching elements; 0 = unbounded, but "
+        "50 mm/s in a slender run with m > 1 (its m³ × substeps would launch long grains)",
+        range=(0.0, 100000.0),
+        units="mm/s",
+    ),
+    "gravity": Param(
+        float,
+        9810.0,
+        "gravitational acceleration (effect 'gravity'), along −z",
+        range=(0.0, 100000.0),
+        units="mm/s²",
+    ),
+    "white_density": Param(
+        float, 1.03, "density of the medium around the buoyant part (ikura white)", range=(0.1, 10.0), units="g/cm³"
+    ),
+    "part_density": Param(
+        float,
+        0.93,
+        "density of the buoyant part (faces with parts == 1: the yolk)",
+        range=(0.1, 10.0),
+        units="g/cm³",
+    ),
+    "log_every": Param(int, 10, "log particles to Rerun every k frames (0 = never)", range=(0, 100000), units="frames"),
+    "log_meshes_every": Param(
+        int,
+        30,
+        "log the element meshes to Rerun every k frames and at the last "
+        "(0 = never; a 2,000-grain bowl logs ≈ 10 MB per snapshot)",
+        range=(0, 100000),
+        units="frames",
+    ),
+}
+
+
+# the node's parameters as one typed value, a field per declared parameter (no hand-copied field list)
+XpbdParams = make_dataclass(
+    "XpbdParams",
+    [(name, param.type) for name, param in PARAMS.items()],
+    frozen=True,
+)
+XpbdParams.__module__ = __name__
+XpbdParams.__doc__ = """The ``xpbd`` node's parameters, validated and with defaults filled in (``xpbd_params``, or the
+node's ``NodeSpec.resolve_params``); generated from ``PARAMS``, where their meanings, units and ranges are declared."""
+
+
+def xpbd_params(**given) -> XpbdParams:
+    """``given`` node parameters (node units) validated by their declarations, the rest at the declared
+    defaults. Raises ParamValueError naming the parameter and what is allowed, KeyError for an unknown name."""
+    unknown = set(given) - set(PARAMS)
+    if unknown:
+        raise KeyError(f"xpbd has no parameter {', '.join(sorted(unknown))}; it has: {', '.join(PARAMS)}")
+    values = {}
+    for name, param in PARAMS.items():
+        if name not in given:
+            values[name] = param.default
+            continue
+        try:
+            values[name] = param.validate(given[name])
+        except ParamValueError as error:
+            raise ParamValueError(f"xpbd.{name}: {error}", error.allowed) from None
+    return XpbdParams(**values)
+
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """Physical and numerical settings in the solver's units (mm, g, s); see the ``xpbd`` node.
-    Raises ValueError for an effect outside ``EFFECTS`` or a step that cannot run."""
+    """Physical and numerical settings in the solver's units (mm, g, s), derived from the node's parameters
+    by ``solver_settings`` (no defaults here: see ``PARAMS``). Raises ValueError for an effect outside
+    ``EFFECTS`` or a step that cannot run."""
 
     effects: frozenset[str]
-    substeps: int = 10
-    iterations: int = 2
-    dt: float = 1.0 / 60.0
-    gravity: float = 9810.0
-    compliance: float = 1e-6  # s²/g; 0 = infinitely stiff clusters, inf = no shape matching
-    linear_deformation: float = 0.0  # β of SPEC §5
-    quadratic: bool = False  # quadratic deformation (SPEC §5) for clusters that can support it
-    bend_compliance: float = np.inf  # s²/g of the long-axis bend constraints (``bending``); inf = none
-    mu_s: float = 0.6
-    mu_k: float = 0.4
-    # friction measured from where each contact began sticking, against the normal load the contact carried
-    # this substep (``friction``); False: Macklin et al. 2014's per-substep rule, under which heaps creep flat
-    # (issue 24, docs/validation.md)
-    anchored_friction: bool = True
-    capture: float = 0.2  # mm
-    adhesion_compliance: float = 1e-3  # s²/g
-    glue: float = 0.0  # share of the way to the glued regions' goal per iteration (``glue``); 0 = no glue
+    substeps: int
+    iterations: int
+    dt: float  # s
+    gravity: float  # mm/s²
+    compliance: float  # s²/g; inf = no shape matching
+    linear_deformation: float  # β of SPEC §5
+    quadratic: bool  # quadratic deformation (SPEC §5) for clusters that can support it
+    bend_compliance: float  # s²/g of the long-axis bend constraints (``bending``); inf = none
+    mu_s: float
+    mu_k: float
+    # the friction model, a strategy chosen once from the node's ``friction_model`` (``friction_models``)
+    friction: SubstepFriction | AnchoredFriction
+    capture: float  # mm
+    adhesion_compliance: float  # s²/g
+    glue: float  # share of the way to the glued regions' goal per iteration (``glue``); 0 = no glue
     # a glued grain further than this (mm) from its place in a neighbour's region tears off: one particle radius
     # (0.2 r tore most of a glued onigiri's paste as it settled onto its plate, 1 r none; docs/validation.md)
-    glue_tear: float = 1.0
-    damping: float = 0.0  # fraction of velocity removed per 1/60 s
-    sleep_speed: float = 0.0  # mm/s
-    # every this many frames one substep solves the asleep elements too (under gravity), so an
-    # element whose support went away falls and wakes; between probes only a push wakes it
-    sleep_probe: int = 1
-    speed_clamp: float = 1.0  # particle radii per substep
-    yolk_accel: float = 0.0  # mm/s², upward buoyant acceleration of the yolk
-    yolk_drag: float = 40.0  # 1/s
-    rotation_iterations: int = 8
-    shock_propagation: float = 1.0  # mass ratio of a contact particle to one a diameter above it (1 = off)
+    glue_tear: float
+    damping: float  # fraction of velocity removed per 1/60 s
+    sleep_speed: float  # mm/s
+    speed_clamp: float  # particle radii per substep
+    yolk_accel: float  # mm/s², upward buoyant acceleration of the yolk
+    shock_propagation: float  # mass ratio of a contact particle to one a diameter above it (1 = off)
     # mm/s: the solve leaves a particle no faster than max(its predicted speed, this) (``integrate.update_velocity``)
-    depenetration_speed: float = np.inf
+    depenetration_speed: float
 
     def __post_init__(self):
         object.__setattr__(self, "effects", frozenset(self.effects))
@@ -73,57 +289,18 @@ class SolverSettings:
         return self.dt / self.substeps
 
 
-@dataclass(frozen=True)
-class XpbdParams:
-    """The ``xpbd`` node's parameters, validated and with defaults filled in (``NodeSpec.resolve_params``);
-    their meanings, units and ranges are declared with the node."""
-
-    mode: str
-    frames: int
-    dt: float
-    substeps: int
-    iterations: int
-    particles_per_element: int
-    slender: bool
-    rigid_start: bool
-    contact_offset: float  # median particle radii
-    mass: float  # mg
-    stiffness: float  # N/m
-    linear_deformation: float
-    deformation: str
-    bend_stiffness: float  # × stiffness
-    damping: float
-    friction: float
-    static_threshold: float
-    dynamic_scale: float
-    friction_model: str  # substep | anchored
-    capture_radius: float  # particle radii
-    clumping: float
-    glue: float
-    sleep_speed: float  # mm/s
-    shock_propagation: float
-    speed_clamp: float  # radii per substep
-    depenetration_speed: float  # mm/s, 0 = unbounded
-    gravity: float  # mm/s²
-    white_density: float  # g/cm³
-    part_density: float  # g/cm³
-    log_every: int
-    log_meshes_every: int
-
-
-def solver_settings(params: XpbdParams, effects, radius: float, water_content: float = WATER_CONTENT) -> SolverSettings:
+def solver_settings(params: XpbdParams, effects, radius: float, material=None) -> SolverSettings:
     """Table-3 style parameters → solver settings (SPEC §3); 'moisture' rescales stiffness, friction
-    and adhesion (``moisture_scales``) at ``water_content`` % (the cooked material's: the node's input
-    'material'). ``radius``: the particles' median radius (mm), the unit of the capture radius."""
+    and adhesion by the cooked ``material``'s factors (``CookedMaterial.stiffness_scale``, ``friction_scale``,
+    ``adhesion_scale``: computed once, by ``cooked_material``, from its water content; None: the cooked_rice
+    defaults, ``moisture_factors(WATER_CONTENT)``). ``radius``: the particles' median radius (mm), the unit of
+    the capture radius."""
     p = params
-    scale = (
-        moisture_scales(water_content)
-        if "moisture" in effects
-        else {"stiffness": 1.0, "friction": 1.0, "adhesion": 1.0}
-    )
-    stiffness = p.stiffness * scale["stiffness"]
-    adhesion = p.clumping * scale["adhesion"] * ADHESION_STIFFNESS
-    mu_s = p.static_threshold * p.friction * scale["friction"]
+    material = material if material is not None else moisture_factors(WATER_CONTENT)
+    moist = "moisture" in effects
+    stiffness = p.stiffness * (material.stiffness_scale if moist else 1.0)
+    adhesion = p.clumping * (material.adhesion_scale if moist else 1.0) * ADHESION_STIFFNESS
+    mu_s = p.static_threshold * p.friction * (material.friction_scale if moist else 1.0)
     return SolverSettings(
         effects=frozenset(effects),
         substeps=p.substeps,
@@ -136,7 +313,7 @@ def solver_settings(params: XpbdParams, effects, radius: float, water_content: f
         bend_compliance=1.0 / (1000.0 * stiffness * p.bend_stiffness) if stiffness * p.bend_stiffness > 0 else np.inf,
         mu_s=mu_s,
         mu_k=mu_s * p.dynamic_scale,
-        anchored_friction=p.friction_model == "anchored",
+        friction=FRICTION_MODELS[p.friction_model],
         capture=p.capture_radius * radius,
         adhesion_compliance=1.0 / (1000.0 * adhesion) if adhesion > 0 else np.inf,
         glue=p.glue,
@@ -148,3 +325,11 @@ def solver_settings(params: XpbdParams, effects, radius: float, water_content: f
         shock_propagation=p.shock_propagation,
         yolk_accel=p.gravity * (p.white_density / p.part_density - 1.0) if "gravity" in effects else 0.0,
     )
+
+
+def solver_settings_for(effects, radius: float, water_content: float = WATER_CONTENT, **params) -> SolverSettings:
+    """The settings the ``xpbd`` node runs with for these ``effects``, median particle ``radius`` (mm) and
+    ``water_content`` (%), with ``params`` given in the node's units (``PARAMS``: stiffness in N/m, not
+    compliance; static_threshold and dynamic_scale, not μs and μk; friction_model, not a flag) and the rest
+    at the node's defaults: the one way tests, benchmarks and scenes get a solver."""
+    return solver_settings(xpbd_params(**params), effects, radius, moisture_factors(water_content))

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..values import Aggregate, ParticleState, Placement
 from .aggregate import DeformedAggregate
-from .buffers import PairBuffers
+from .buffers import Contacts
 from .clusters import element_cluster, matrix_to_quat
 from .collider import free_space_field, rigid_into_free_space
 from .deformation import element_bends, element_transforms
@@ -55,12 +55,12 @@ class Simulation:
     def progress(self, frames_done: int) -> SimulationProgress:
         """What a resumed run needs to go on bit for bit: the state, the Verlet lists with their build
         positions (a fresh build would change the contacts' order), the diagnostics so far."""
-        return SimulationProgress(frames_done, self.state, self.solver.pairs, self.solver.diagnostics)
+        return SimulationProgress(frames_done, self.state, self.solver.contacts, self.solver.diagnostics)
 
     def resume(self, progress: SimulationProgress) -> int:
         """Continue from ``progress`` (writable arrays); returns the frames already done."""
         self.state = progress.state
-        self.solver.pairs = progress.pairs
+        self.solver.contacts = progress.contacts
         self.solver.diagnostics = progress.diagnostics
         return progress.frames_done
 
@@ -71,7 +71,7 @@ class SimulationProgress:
 
     frames_done: int
     state: State
-    pairs: PairBuffers | None
+    contacts: Contacts | None
     diagnostics: Diagnostics
 
 
@@ -135,8 +135,8 @@ def build_simulation(
 ) -> Simulation:
     """Clusters per element (``element_cluster``), the free-space field of the colliders and moulds
     with effect 'collider', yolks with 'buoyancy', static obstacles with a pair effect; the model,
-    its initial state and a solver with the settings of ``params`` and the cooked ``material``'s water
-    content (``solver_settings``; None: the cooked_rice defaults)."""
+    its initial state and a solver with the settings of ``params`` and the cooked ``material``'s moisture
+    factors (``solver_settings``; None: the cooked_rice defaults)."""
     if len(aggregate.placement) == 0:
         raise ValueError("aggregate: the placement is empty; nothing to simulate")
     moulds = list(moulds or [])
@@ -175,14 +175,13 @@ def build_simulation(
     radius = float(np.median(r))  # the unit of the capture radius and of the contact offset
     r = r + params.contact_offset * radius
     start = np.concatenate([[0], np.cumsum(sizes)])
-    water = {} if material is None else {"water_content": material.water_content}
     # a cluster of m× the particles gives way to its contacts more slowly per substep (shape matching shares each
     # correction over its particles), and long grains jam: the run settles them at m³ × the substeps, where the speed
     # the constraints add is capped (SLENDER_DEPENETRATION unless given: 16 × 80 threw 38 of 60 indica grains out of
     # a reduced bowl at up to 1,226 mm/s; docs/look.md)
     speed = params.depenetration_speed or (SLENDER_DEPENETRATION if slender > 1 else 0.0)
     stepped = dataclasses.replace(params, substeps=params.substeps * slender**3, depenetration_speed=speed)
-    settings = solver_settings(stepped, effects, radius, **water)
+    settings = solver_settings(stepped, effects, radius, material)
     sdf = None
     if "collider" in effects:
         shapes = colliders + moulds

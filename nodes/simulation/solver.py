@@ -2,9 +2,12 @@
 families, update velocities; only the requested effects allocate buffers and run kernels.
 
 In Newton's shape: a ``Model`` (what a run does not change, ``model``), a ``State`` (what each
-substep changes, ``state``), ``SolverSettings`` (``settings``), and the solver, which holds the
-kernels' scratch (``buffers``) and the settings in the form the kernels take (``Coefficients``).
-Kernel arguments come in that order too: state arrays, model arrays, buffers, coefficients.
+substep changes, ``state``), a ``Control`` (what a caller may change between steps, ``state``),
+``Contacts`` (the neighbour lists and what each pair keeps across substeps, ``buffers``) and
+``XpbdSolver.step(state_in, state_out, control, contacts, dt)``; ``SolverSettings`` (``settings``) are
+fixed per solver, which holds the kernels' scratch and the settings in the form the kernels take
+(``Coefficients``). Kernel arguments come in that order too: state arrays, model arrays, buffers,
+coefficients.
 
 Every kernel call goes through ``KernelDispatch``, which counts calls per constraint family: the
 effects-gating test and the effects-cost benchmark read those counters.
@@ -24,16 +27,16 @@ from . import (
     buoyancy,
     collider,
     contact_constraints,
-    friction,
     glue,
     integrate,
     shape_matching,
     spatial_hash,
 )
-from .buffers import ClusterBuffers, NeighbourLists, PairBuffers
+from .buffers import ClusterBuffers, Contacts, NeighbourLists
+from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
-from .settings import SolverSettings
-from .state import State
+from .settings import ROTATION_ITERATIONS, SLEEP_PROBE, YOLK_DRAG, SolverSettings
+from .state import Control, State
 from .threads import FreeCores, thread_count
 
 # below this many particles the kernels run on one thread: threads gain nothing there (ikura don,
@@ -106,9 +109,8 @@ class Coefficients:
     h: float  # one solve, s: the substep, or its share when the speed clamp splits it (``pieces``)
     pieces: int  # solves per substep: ceil(speed_clamp / MAX_TRAVEL)
     clamp: float  # speed clamp per solve, radii (≤ MAX_TRAVEL)
-    accel: np.ndarray  # (1, 3) gravity, mm/s²
-    mu_s: float
-    mu_k: float
+    accel: np.ndarray  # (1, 3) gravity, mm/s²: the default ``Control``'s
+    friction: FrictionRule  # μs, μk (0 without 'friction') and where the slip is measured from
     damping: float  # velocity factor per substep
     # mass scaling by height (``contact_constraints``), 1/mm: only where gravity says which way is up
     lift: float
@@ -119,7 +121,7 @@ class Coefficients:
     alpha: float  # XPBD α̃ = compliance / h² of shape matching, bending, adhesion
     bend_alpha: float
     adhesion_alpha: float
-    yolk_accel: np.ndarray  # (3,) buoyant acceleration of the yolks
+    yolk_accel: np.ndarray  # (3,) buoyant acceleration of the yolks: the default ``Control``'s
     # adhesion's pull at the capture distance as a friction load per unit of the pair's inverse mass (mm·g): F·h²,
     # F = capture / adhesion compliance; 0 without 'adhesion' or anchors (``contact_constraints._project_slab``)
     cohesion: float
@@ -143,8 +145,9 @@ class Coefficients:
             pieces=pieces,
             clamp=s.speed_clamp / pieces,
             accel=np.array([[0.0, 0.0, -s.gravity]]) if gravity else np.zeros((1, 3)),
-            mu_s=s.mu_s if "friction" in effects else 0.0,
-            mu_k=s.mu_k if "friction" in effects else 0.0,
+            friction=s.friction.rule(
+                s.mu_s if "friction" in effects else 0.0, s.mu_k if "friction" in effects else 0.0
+            ),
             damping=(1.0 - s.damping) ** (h * 60.0) if "damping" in effects else 1.0,
             lift=lift,
             upright=gravity,
@@ -153,11 +156,7 @@ class Coefficients:
             bend_alpha=s.bend_compliance / (h * h),
             adhesion_alpha=s.adhesion_compliance / (h * h),
             yolk_accel=np.array([0.0, 0.0, s.yolk_accel]),
-            cohesion=(
-                s.capture * h * h / s.adhesion_compliance
-                if "adhesion" in effects and s.anchored_friction and s.adhesion_compliance > 0
-                else 0.0
-            ),
+            cohesion=s.friction.cohesion(s.capture, h, s.adhesion_compliance) if "adhesion" in effects else 0.0,
         )
 
 
@@ -192,7 +191,8 @@ class XpbdSolver:
         self.coefficients = Coefficients.of(model, settings)
         self.steps = settings.substeps * self.coefficients.pieces  # solves per frame
         self.clusters = ClusterBuffers.allocate(model)
-        self.pairs = PairBuffers.allocate(model, settings)
+        self.contacts = Contacts.allocate(model, settings)  # the contacts ``frame`` steps with
+        self.default_control = self.control()  # the control ``frame`` steps with
         self.diagnostics = Diagnostics()
         # the glued regions' goals per membership, NaN until matched (``glue``)
         self.glue_goal = np.full((len(model.glue.member), 3), np.nan) if model.glue is not None else None
@@ -211,10 +211,17 @@ class XpbdSolver:
         self.cores = FreeCores(most) if threads is None else None
         self.threads = most
 
-    # -- one substep ------------------------------------------------------------------------
-    def substep(self, state: State) -> float:
-        """Advance by one solve of h = dt / substeps / ``Coefficients.pieces``; returns the largest constraint
-        residual of the last iteration.
+    def control(self) -> Control:
+        """A ``Control`` with the settings' accelerations (fresh arrays a caller may change between steps)."""
+        k = self.coefficients
+        return Control(accel=k.accel.copy(), yolk_accel=k.yolk_accel.copy())
+
+    # -- one step ---------------------------------------------------------------------------
+    def step(self, state_in: State, state_out: State, control: Control, contacts: Contacts | None, dt: float) -> float:
+        """Advance ``state_in`` by one solve into ``state_out`` (they may be the same state), under ``control``,
+        with ``contacts`` (``Contacts.allocate``; they follow the particles they were built for); returns the
+        largest constraint residual of the last iteration. ``dt`` must be the solve the settings fix,
+        h = dt / substeps / ``Coefficients.pieces`` (``Coefficients.h``): the coefficients are derived for it.
 
         Asleep elements are frozen: not predicted, not shape-matched, pairs of two asleep particles
         skipped, and an asleep particle holds still against an awake one like a static obstacle, so
@@ -222,22 +229,29 @@ class XpbdSolver:
         each awake grain then woke the column under it, and piles hardly slept). An awake partner
         moving faster than ``Coefficients.wake_step`` wakes the sleeper at the end of the substep
         (the impact is taken by the awake one alone for that substep). With every element asleep the
-        substep solves nothing; every ``sleep_probe`` frames one substep solves all, under gravity,
+        substep solves nothing; every ``SLEEP_PROBE`` frames one substep solves all, under gravity,
         and re-tests them: a sleeper whose support went away falls and wakes."""
+        h = self.coefficients.h
+        if not abs(dt - h) <= 1e-12 * h:
+            raise ValueError(
+                f"dt: this solver steps by h = {h:.6g} s (dt / substeps / pieces of its settings), not {dt:.6g} s"
+            )
+        if state_out is not state_in:
+            state_out.assign(state_in)
         with thread_count(self.threads):
-            return self._substep(state)
+            return self._substep(state_out, control, contacts)
 
-    def _substep(self, st: State) -> float:
+    def _substep(self, st: State, control: Control, contacts: Contacts | None) -> float:
         s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
         awake = m.n_moving
         if s.sleep_speed > 0:
-            probe = st.substeps_done % (self.steps * s.sleep_probe) == 0
+            probe = st.substeps_done % (self.steps * SLEEP_PROBE) == 0
             awake = d("sleep", integrate.wake_flags, st.x, st.x_start, st.asleep, st.awake, st.pushed, m.start, probe)
         st.substeps_done += 1
         self.solved += awake
         if awake:
             self.x_begin[:] = st.x  # before pre-stabilisation (``integrate.update_velocity``)
-            self._prestabilise(st)
+            self._prestabilise(st, contacts)
         y = st.yolks
         if y is not None:  # drag towards the egg velocity of the last substep
             d(
@@ -251,11 +265,11 @@ class XpbdSolver:
                 m.w,
                 m.start,
                 m.yolks.owner,
-                k.yolk_accel,
+                control.yolk_accel,
                 k.h,
-                s.yolk_drag,
+                YOLK_DRAG,
             )
-        residual = self._solve(st) if awake else 0.0
+        residual = self._solve(st, control, contacts) if awake else 0.0
         if y is not None:
             d(
                 "buoyancy",
@@ -285,16 +299,16 @@ class XpbdSolver:
                 m.r,
                 m.elem,
                 m.start,
-                self._contact_rows(),
+                self._contact_rows(contacts),
                 s.sleep_speed * k.h,
             )
         st.time += k.h
         return residual
 
-    def _solve(self, st: State) -> float:
+    def _solve(self, st: State, control: Control, contacts: Contacts | None) -> float:
         """Predict, the constraint iterations, velocities from positions; returns the residual."""
         s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
-        pairs, clusters = self.pairs, self.clusters
+        pairs, clusters = contacts, self.clusters
         moved = d(
             "integrate",
             integrate.predict,
@@ -304,13 +318,14 @@ class XpbdSolver:
             st.awake,
             m.w,
             m.r,
-            *self._tracking(),
-            k.accel,
+            *self._tracking(pairs),
+            control.accel,
             k.h,
             k.clamp,
         )
-        self._track(moved)
-        if self._refresh_neighbours(st) and "contact" in s.effects:  # overlap tolerated: as after pre-stabilisation
+        self._track(pairs, moved)
+        refreshed = self._refresh_neighbours(st, pairs)
+        if refreshed and "contact" in s.effects:  # overlap tolerated: as after pre-stabilisation
             d(
                 "contact",
                 contact_constraints.overlap_allowance,
@@ -321,7 +336,7 @@ class XpbdSolver:
                 0.0,
                 pairs.allowance,
             )
-            self._pressed(st)
+            self._pressed(st, pairs)
         if clusters is not None:
             clusters.clear()
         quadratic = m.quadratic.args() if m.quadratic is not None else ()
@@ -330,12 +345,12 @@ class XpbdSolver:
             # once per substep, not per iteration: bonds accumulate no λ, so repeating them per
             # iteration made them rigid as iterations grew, and at 32 × 8 they fought the contacts
             # and pumped energy into the pile (accuracy benchmark)
-            self._adhesion(st)
+            self._adhesion(st, pairs)
         first = True
         for _ in range(s.iterations):
             residual = 0.0
             if {"contact", "friction"} & s.effects:  # one sweep: friction on each pair after its contact
-                self._contacts(st, friction=True)
+                self._contacts(st, pairs, friction=True)
             if m.glue is not None:  # glued grains keep their places, then each grain its shape
                 self._glue(st, tear=first)
             # the element's shape is restored after the contacts, the walls have the last word
@@ -353,7 +368,7 @@ class XpbdSolver:
                     clusters.lam,
                     k.alpha,
                     s.linear_deformation,
-                    s.rotation_iterations,
+                    ROTATION_ITERATIONS,
                     *quadratic,
                 )
             if m.bend is not None:
@@ -382,7 +397,7 @@ class XpbdSolver:
                     m.w,
                     m.r,
                     *m.collider.args(),
-                    (k.mu_s, k.mu_k, s.anchored_friction),
+                    k.friction,
                 )
         moved = d(
             "integrate",
@@ -392,32 +407,35 @@ class XpbdSolver:
             st.x_prev,
             self.x_begin,
             m.r,
-            *self._tracking(),
+            *self._tracking(pairs),
             k.h,
             k.clamp,
             k.damping,
             s.depenetration_speed,
         )
-        self._track(moved)
+        self._track(pairs, moved)
         return residual
 
-    def _contact_rows(self):
+    @staticmethod
+    def _contact_rows(contacts: Contacts | None):
         """(nbr_start, nbr, order) of the neighbour lists, or empty lists (no pair effects)."""
-        if self.pairs is None:
+        if contacts is None:
             return np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
-        return self.pairs.lists.csr()
+        return contacts.lists.csr()
 
-    def _tracking(self):
+    @staticmethod
+    def _tracking(contacts: Contacts | None):
         """(x_built, moved) for the displacement check folded into predict / update_velocity."""
-        return self.pairs.tracking() if self.pairs is not None else NO_TRACKING
+        return contacts.tracking() if contacts is not None else NO_TRACKING
 
-    def _track(self, moved: float) -> None:
-        if self.pairs is not None:
-            self.pairs.displacement = moved
+    @staticmethod
+    def _track(contacts: Contacts | None, moved: float) -> None:
+        if contacts is not None:
+            contacts.displacement = moved
 
-    def _refresh_neighbours(self, st: State) -> bool:
+    def _refresh_neighbours(self, st: State, pairs: Contacts | None) -> bool:
         """Rebuild the Verlet lists once a particle has moved half the skin since the last build."""
-        pairs, m = self.pairs, self.model
+        m = self.model
         if pairs is None or not pairs.stale():
             return False
         nbr_start, nbr, at, *grid = self.dispatch(
@@ -433,18 +451,15 @@ class XpbdSolver:
         )
         old = pairs.lists
         pairs.lists = NeighbourLists(nbr_start, nbr, at, old.half, *grid)
-        if "friction" in self.settings.effects and self.settings.anchored_friction:
-            anchor = np.empty((len(nbr), 3))
-            self.dispatch("friction", friction.carry_anchors, old.csr(), pairs.anchor, pairs.lists.csr(), anchor)
-            pairs.anchor = anchor
-            pairs.load = np.zeros(len(nbr))
+        if "friction" in self.settings.effects:  # the model's per-pair data follows the pairs
+            self.settings.friction.lists_rebuilt(self.dispatch, old, pairs)
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
         if "contact" in self.settings.effects:
             pairs.allowance = np.zeros(len(nbr))
         return True
 
-    def _prestabilise(self, st: State) -> None:
+    def _prestabilise(self, st: State, pairs: Contacts | None) -> None:
         """Resolve the overlaps left at the start of the substep before predicting (Macklin et al.
         2014 §4.2 pre-stabilisation): moved before x_prev is taken, they add no velocity. Each overlap is resolved
         in full; what the sweep leaves is tolerated by the substep's solve (``allowance``, decay 0). A decay (giving up
@@ -452,16 +467,16 @@ class XpbdSolver:
         bowl (skin after the contact step 0.211 instead of 0.180; docs/look.md).
         Shape matching then pulls a cluster back part of the way, and the solve turns that into speed, h times more
         at more substeps; ``SolverSettings.depenetration_speed`` bounds it (``integrate.update_velocity``)."""
-        d, m, pairs = self.dispatch, self.model, self.pairs
-        self._refresh_neighbours(st)
+        d, m = self.dispatch, self.model
+        self._refresh_neighbours(st, pairs)
         if "contact" in self.settings.effects:
             allowance = contact_constraints.overlap_allowance
             pairs.allowance[:] = 0.0
             pairs.load[:] = 0.0
-            self._pressed(st)
-            self._contacts(st, friction=self.settings.anchored_friction, wake_step=np.inf)
+            self._pressed(st, pairs)
+            self._contacts(st, pairs, friction=self.settings.friction.rubs_in_prestabilisation, wake_step=np.inf)
             d("contact", allowance, st.x, st.awake, m.r, *pairs.lists.rows(), 0.0, pairs.allowance)
-            self._pressed(st)
+            self._pressed(st, pairs)
         if m.collider is not None:
             d(
                 "collider",
@@ -472,15 +487,15 @@ class XpbdSolver:
                 m.w,
                 m.r,
                 *m.collider.args(),
-                (0.0, 0.0, False),
+                NO_FRICTION,
             )
 
-    def _contacts(self, st: State, friction=False, wake_step=None) -> None:
+    def _contacts(self, st: State, pairs: Contacts, friction=False, wake_step=None) -> None:
         """One Gauss–Seidel sweep of the contacts (if asked) and, with ``friction`` and the effect,
         friction on each pair just before its normal correction; one run of slabs per thread.
         ``wake_step``: ``Coefficients.wake_step`` unless given (pre-stabilisation passes inf: the
         overlaps it undoes are no impact)."""
-        s, k, m, pairs = self.settings, self.coefficients, self.model, self.pairs
+        s, k, m = self.settings, self.coefficients, self.model
         lists = pairs.lists
         normal = "contact" in s.effects
         rub = friction and "friction" in s.effects
@@ -503,18 +518,18 @@ class XpbdSolver:
                 float(wake_step),
                 k.lift,
                 k.upright,
-                k.mu_s if rub else 0.0,
-                k.mu_k,
-                s.anchored_friction,
+                k.friction.mu_s if rub else 0.0,
+                k.friction.mu_k,
+                k.friction.anchored,
                 normal,
                 k.cohesion,
             ),
             self.threads,
         )
 
-    def _adhesion(self, st: State) -> None:
+    def _adhesion(self, st: State, pairs: Contacts) -> None:
         """One Jacobi sweep of the adhesion bonds into the scratch copy, which becomes the positions."""
-        k, m, pairs = self.coefficients, self.model, self.pairs
+        k, m = self.coefficients, self.model
         out = pairs.scratch
         self.dispatch(
             "adhesion",
@@ -531,10 +546,10 @@ class XpbdSolver:
         )
         st.x, pairs.scratch = out, st.x
 
-    def _pressed(self, st: State) -> None:
+    def _pressed(self, st: State, pairs: Contacts) -> None:
         """Glued grains' contacts tolerate the overlap the press left them (``glue.glued_allowance``); the
         entries' links and pressed overlaps are found once per build of the lists (``glue.glued_floors``)."""
-        m, lists = self.model, self.pairs.lists
+        m, lists = self.model, pairs.lists
         if m.glue is None:
             return
         if self.glue_floors[0] is not lists:
@@ -542,7 +557,7 @@ class XpbdSolver:
             self.dispatch("glue", glue.glued_floors, m.elem, *lists.rows(), *m.glue.floor_args(), link, depth)
             self.glue_floors = (lists, link, depth, np.zeros(len(lists.nbr), np.bool_))
         _, link, depth, stuck = self.glue_floors
-        self.dispatch("glue", glue.glued_allowance, link, depth, st.glued, self.pairs.allowance, stuck)
+        self.dispatch("glue", glue.glued_allowance, link, depth, st.glued, pairs.allowance, stuck)
 
     def _stuck(self, lists) -> np.ndarray:
         """Per entry of ``lists``, whether its grains are still glued (``_pressed``): the sweep splits those pairs'
@@ -561,7 +576,7 @@ class XpbdSolver:
             g.rows(),
             st.glued,
             st.glue_quats,
-            self.settings.rotation_iterations,
+            ROTATION_ITERATIONS,
             self.glue_goal,
             tear,
             self.settings.glue_tear,
@@ -570,14 +585,16 @@ class XpbdSolver:
 
     # -- one frame --------------------------------------------------------------------------
     def frame(self, state: State) -> None:
-        """``substeps`` substeps (``steps`` solves), then the per-frame diagnostics."""
+        """``substeps`` substeps (``steps`` solves) of ``state`` in place, with the solver's own ``contacts`` and
+        ``default_control``, then the per-frame diagnostics."""
         if self.cores is not None:
             self.threads = self.cores.threads()
         residual = 0.0
+        h = self.coefficients.h
         for i in range(self.steps):
             if i == self.steps - 1:
                 self.x_mark[:] = state.x
-            residual = self.substep(state)
+            residual = self.step(state, state, self.default_control, self.contacts, h)
         with thread_count(self.threads):
             self._diagnose(state, residual)
 
@@ -585,7 +602,7 @@ class XpbdSolver:
         s, m = self.settings, self.model
         pen = 0.0
         if "contact" in s.effects:
-            pen = contact_constraints.max_penetration_ratio(st.x, m.r, *self.pairs.lists.csr())
+            pen = contact_constraints.max_penetration_ratio(st.x, m.r, *self.contacts.lists.csr())
         if m.collider is not None:
             pen = max(pen, collider.collider_penetration(st.x, m.r, *m.collider.grid()))
         dg = self.diagnostics

@@ -1,10 +1,11 @@
-"""Uniform grid and per-particle neighbour lists (CSR) for the contact family — SPEC §3.
+"""Per-particle neighbour lists (CSR) for the contact family — SPEC §3.
 
 Hand-written in numba rather than scipy's cKDTree because the lists are rebuilt every substep and
 must skip same-element pairs. Particles are counting-sorted into a dense grid over their bounding
-box with z fastest, so the 27 neighbour cells of a particle are 9 contiguous runs of the sorted
-order. The cell size grows if the box would need more than ``MAX_CELLS_PER_PARTICLE``·n cells
-(a scattered or exploding scene), which only makes the search coarser, never wrong.
+box (``nodes.spatial_grid``: z fastest, so the 27 neighbour cells of a particle are 9 contiguous
+runs of the sorted order). The cell size grows if the box would need more than
+``MAX_CELLS_PER_PARTICLE``·n cells (a scattered or exploding scene), which only makes the search
+coarser, never wrong.
 
 The grid is also the contacts' graph colouring (``contact_constraints.contact_sweep``): a
 particle's neighbours lie in the 27 cells around its own at build time, so slabs of cells whose x
@@ -16,18 +17,10 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
+from ..spatial_grid import CellGrid, build_grid, column_run, neighbour_block
+
 MAX_CELLS_PER_PARTICLE = 64
 ROW_CAPACITY = 16  # list slots per particle in the single scan (a settled pile lists ≈ 5 half / 10 full)
-
-
-class Grid(NamedTuple):
-    """Particles counting-sorted by cell (``build_grid``): cell k holds sorted positions start[k]:start[k + 1]."""
-
-    start: np.ndarray  # (cells + 1,) int64
-    order: np.ndarray  # (n,) int64: the particle id at each sorted position
-    lo: np.ndarray  # (3,) the grid's corner
-    dims: np.ndarray  # (3,) int64 cells per axis, z fastest
-    cell: float  # cell size
 
 
 class SortedParticles(NamedTuple):
@@ -36,42 +29,6 @@ class SortedParticles(NamedTuple):
     x: np.ndarray  # (n, 3)
     r: np.ndarray  # (n,)
     elem: np.ndarray  # (n,) int64
-
-
-@njit(cache=True)
-def build_grid(x, cell_size):
-    """Counting sort of particles by cell; returns (cell_start, order, lo, dims, cell_size): a ``Grid``'s fields."""
-    n = x.shape[0]
-    lo = np.empty(3)
-    hi = np.empty(3)
-    for k in range(3):
-        lo[k] = x[:, k].min()
-        hi[k] = x[:, k].max()
-    cell = cell_size
-    dims = np.empty(3, np.int64)
-    while True:
-        for k in range(3):
-            dims[k] = int((hi[k] - lo[k]) / cell) + 1
-        if dims[0] * dims[1] * dims[2] <= MAX_CELLS_PER_PARTICLE * n + 4096:
-            break
-        cell *= 2.0
-    total = dims[0] * dims[1] * dims[2]
-    keys = np.empty(n, np.int64)
-    start = np.zeros(total + 1, np.int64)
-    for i in range(n):
-        ix = min(int((x[i, 0] - lo[0]) / cell), dims[0] - 1)
-        iy = min(int((x[i, 1] - lo[1]) / cell), dims[1] - 1)
-        iz = min(int((x[i, 2] - lo[2]) / cell), dims[2] - 1)
-        keys[i] = (ix * dims[1] + iy) * dims[2] + iz
-        start[keys[i] + 1] += 1
-    for k in range(total):
-        start[k + 1] += start[k]
-    fill = start[:-1].copy()
-    order = np.empty(n, np.int64)
-    for i in range(n):
-        order[fill[keys[i]]] = i
-        fill[keys[i]] += 1
-    return start, order, lo, dims, cell
 
 
 @njit(cache=True, inline="always")
@@ -86,24 +43,19 @@ def _visit(particles, grid, p, reach, half, n_active, out, write_at, cap):
     writes the partners' sorted positions q (their ids are order[q]).
     """
     xs, rs, es = particles.x, particles.r, particles.elem
-    start, order, lo, dims, cell = grid.start, grid.order, grid.lo, grid.dims, grid.cell
+    order = grid.order
     px, py, pz = xs[p, 0], xs[p, 1], xs[p, 2]
-    ix = min(int((px - lo[0]) / cell), dims[0] - 1)
-    iy = min(int((py - lo[1]) / cell), dims[1] - 1)
-    iz = min(int((pz - lo[2]) / cell), dims[2] - 1)
-    z0 = max(iz - 1, 0)
-    z1 = min(iz + 1, dims[2] - 1)
+    x0, x1, y0, y1, z0, z1 = neighbour_block(grid, px, py, pz)
     statics = n_active < xs.shape[0]
     mine = es[p]
     rp = rs[p] + reach
     found = 0
-    for gx in range(max(ix - 1, 0), min(ix + 2, dims[0])):
-        for gy in range(max(iy - 1, 0), min(iy + 2, dims[1])):
-            base = (gx * dims[1] + gy) * dims[2]
-            q0 = start[base + z0]
+    for gx in range(x0, x1):
+        for gy in range(y0, y1):
+            q0, q1 = column_run(grid, gx, gy, z0, z1)
             if half and not statics:
                 q0 = max(q0, p + 1)
-            for q in range(q0, start[base + z1 + 1]):
+            for q in range(q0, q1):
                 if half and q < p and order[q] < n_active:
                     continue
                 ex = xs[q, 0] - px
@@ -137,9 +89,12 @@ def neighbour_lists(x, r, elem, reach, cell_size, n_active, half):
     half the scan; the Jacobi adhesion kernel needs full rows,
     where the pair kernels take each pair from its lower index.
     """
-    start, order, lo, dims, cell = build_grid(x, cell_size)
-    grid = Grid(start, order, lo, dims, cell)  # built here: a parallel loop finds a named tuple's class at its call
     n = x.shape[0]
+    lo = np.empty(3)
+    for k in range(3):
+        lo[k] = x[:, k].min()
+    start, order, lo, dims, cell = build_grid(x, lo, cell_size, MAX_CELLS_PER_PARTICLE * n + 4096)
+    grid = CellGrid(start, order, lo, dims, cell)  # built here: a parallel loop finds a named tuple's class at its call
     xs = np.empty((n, 3))
     rs = np.empty(n)
     es = np.empty(n, np.int64)

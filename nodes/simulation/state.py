@@ -28,7 +28,7 @@ class State:
     partner ran into), ``x_start`` the positions at the substep start, or for an asleep particle
     when it fell asleep: the sleep test's reference (untouched without sleeping). Friction against
     the walls is anchored (``wall_anchor``); the pairs' anchors follow the neighbour lists
-    (``buffers.PairBuffers``)."""
+    (``buffers.Contacts``)."""
 
     x: np.ndarray  # (n, 3)
     v: np.ndarray  # (n, 3)
@@ -45,9 +45,32 @@ class State:
     time: float = 0.0
     substeps_done: int = 0
 
+    def assign(self, other: State) -> None:
+        """Make this state a copy of ``other`` (same model), in place: ``XpbdSolver.step`` from one state into
+        another."""
+        for name in ("x", "v", "x_prev", "quats", "x_start", "asleep", "awake", "pushed", "wall_anchor"):
+            np.copyto(getattr(self, name), getattr(other, name))
+        if other.yolks is not None:
+            for name in ("x", "v", "x_prev"):
+                np.copyto(getattr(self.yolks, name), getattr(other.yolks, name))
+        if other.glued is not None:
+            np.copyto(self.glued, other.glued)
+            np.copyto(self.glue_quats, other.glue_quats)
+        self.time, self.substeps_done = other.time, other.substeps_done
+
     def rotations(self) -> np.ndarray:
         """Current cluster rotations (m, 3, 3) from the warm-started quaternions."""
         out = np.empty((len(self.quats), 3, 3))
         for c in range(len(self.quats)):
             quat_to_matrix(self.quats[c], out[c])
         return out
+
+
+@dataclass(eq=False)
+class Control:
+    """What a caller may change between steps (Newton's ``Control``): the external accelerations. The solver's
+    ``control()`` gives the settings' own (gravity along −z with effect 'gravity', the yolks' buoyancy); the
+    gravity-step check and the sleep and mass-scaling thresholds stay those of the settings."""
+
+    accel: np.ndarray  # (1, 3) mm/s², on every moving particle (``integrate.predict``)
+    yolk_accel: np.ndarray  # (3,) mm/s², on the yolks (``buoyancy.yolk_predict``)

@@ -9,11 +9,10 @@ from __future__ import annotations
 import numpy as np
 
 from nodegraph.node import In, Moved, Out, node
-from nodegraph.params import Param
 from nodegraph.values import Mesh
 
 from ..values import Aggregate, CookedMaterial, ParticleState
-from .settings import EFFECTS, XpbdParams
+from .settings import EFFECTS, PARAMS, XpbdParams
 
 # particle-iterations per second of a substep's work (10 substeps × 2 iterations of a 2,000-grain bowl,
 # 16,000 particles, 60 frames in 7.3 s on 2 cores: 2.6e6; ``frames: 100000`` of ikura don's rice took
@@ -30,8 +29,6 @@ def _check(params):
 
 @node(
     "xpbd",
-    # 13: rigid_start, slender, depenetration_speed; 14: contact_offset
-    version=14,
     inputs={
         "aggregate": In(Aggregate, "placed elements (aperiodic placement for mode 'short')"),
         "material": In(
@@ -61,187 +58,7 @@ def _check(params):
         "aggregate": Out(Aggregate, "elements at rest: new positions, rotations, per-element deformations"),
         "particles": Out(ParticleState, "the simulation particles at the last frame"),
     },
-    params={
-        "mode": Param(
-            str,
-            "short",
-            "short: relax the given placement; full: drop identical elements "
-            "packed on a regular grid in one orientation (G §3.2.1)",
-            choices=("short", "full"),
-        ),
-        "frames": Param(int, 60, "frames to simulate", range=(1, 100000), units="frames"),
-        "dt": Param(float, 1 / 60, "frame duration", range=(1e-4, 1.0), units="s"),
-        # 10 × 2 from the accuracy sweeps (bench_xpbd.py --only accuracy: 150-grain bowl, 8-cube stack):
-        # on the stack each doubling of substeps cuts the rest error ≈ 4×, of iterations ≈ 2×; 10 × 2
-        # is on the bowl's front and rests the stack within 0.19 r, gaining no energy; settings with
-        # few substeps and many iterations win on the resting stack but let the bowl's drop sink in
-        # (1 × 8: 1.07 r). The 2,000-grain bowl runs in ≈ 8.5 s of its 30 s budget at 10 × 2.
-        # Re-checked in CPU time (benchmarks/bench_solver_default.py, docs/accuracy.md): at equal passes a substep
-        # costs more than an iteration (20 × 1: 1.2–1.4× the CPU, for half the stack's rest error); no setting of
-        # 16–20 passes is better on every error at no more CPU, so 10 × 2 stays.
-        "substeps": Param(
-            int,
-            10,
-            "XPBD substeps per frame (accuracy: see the accuracy benchmark); a run is refused when gravity's "
-            "step g·h² exceeds iterations/4 × the median particle radius (resting stacks would sink past 1 r)",
-            range=(1, 256),
-        ),
-        "iterations": Param(int, 2, "constraint iterations per substep", range=(1, 64)),
-        # 8 from `nodegraph sweep graphs/sweeps/rice_bowl_particles.yaml` (≈ 340 grains, covering clusters, p95 / max
-        # mesh overlap in grain lengths after flatten_contacts; straight after the run): 4 → 0.022 / 0.151 (0.187 /
-        # 0.244), 8 → 0.015 / 0.044 (0.144 / 0.244) in 15.8 s, 16 → 0.011 / 0.089 (0.105 / 0.153) in 16.3 s, 32 →
-        # 0.011 / 0.026 (0.101 / 0.163) in 19.4 s. 8 is on the time–metric Pareto front of every metric and meets
-        # issue 17's 0.03 / 0.10 after the flattening.
-        "particles_per_element": Param(
-            int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
-        ),
-        "slender": Param(
-            bool,
-            False,
-            "clusters sized to the element's cross-section: an element m times as elongated as a japonica grain "
-            "(length / width over 5/3, rounded, ≥ 1; indica 2) gets m² × particles_per_element particles, and the run "
-            "m³ × the substeps (a cluster of more particles gives way to its contacts more slowly per substep), "
-            "with a depenetration speed (50 mm/s unless set)",
-        ),
-        "rigid_start": Param(
-            bool,
-            False,
-            "move each element whole into the containers' free space before the run where it reaches through a wall "
-            "(a long grain near a bowl's rim): else its particles are pushed out on both sides and the cluster is torn",
-        ),
-        # 0.1: the dry japonica bowl's exported skin 0.133 → 0.078 (packing 0.76 → 0.66); docs/look.md
-        "contact_offset": Param(
-            float,
-            0.0,
-            "added to every particle's radius, in median particle radii: a cluster's spheres sit inside the element "
-            "and leave its surface uncovered between them, so touching clusters let the meshes nest into each other "
-            "(deep dents after the run); the offset keeps them apart by up to twice as much where the cover is tight",
-            range=(0.0, 0.5),
-            units="radii",
-        ),
-        "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
-        "stiffness": Param(
-            float,
-            2000.0,
-            "shape-matching stiffness, compliance = 1/stiffness; 0 lets a cluster fall apart",
-            range=(0.0, 100000.0),
-            units="N/m",
-        ),
-        "linear_deformation": Param(
-            float,
-            0.3,
-            "β: share of the volume-preserving linear fit in the goal (SPEC §5, U eq. 3.19); 0 = rigid goal",
-            range=(0.0, 1.0),
-        ),
-        "deformation": Param(
-            str,
-            "linear",
-            "goal of the β share: linear (A) or quadratic (Ã, 3×9: also bends "
-            "and twists, SPEC §5); clusters with < 10 particles or collinear/planar ones stay "
-            "linear",
-            choices=("linear", "quadratic"),
-        ),
-        "bend_stiffness": Param(
-            float,
-            0.0,
-            "bend constraints along the long axis of elongated grains (G: 10 for "
-            "rice): stiffness of each chain triple's midpoint offset, in units of the shape-"
-            "matching stiffness; 0 = none",
-            range=(0.0, 10.0),
-        ),
-        "damping": Param(float, 0.1, "velocity fraction removed per 1/60 s (effect 'damping')", range=(0.0, 1.0)),
-        "friction": Param(float, 1.0, "multiplier on both friction coefficients (effect 'friction')", range=(0.0, 1.0)),
-        "static_threshold": Param(float, 0.6, "μs, static friction coefficient (Houdini's reading)", range=(0.0, 1.0)),
-        "dynamic_scale": Param(float, 0.7, "μk / μs", range=(0.0, 1.0)),
-        # substep by default until the bounds of the tests it moves are re-measured (docs/validation.md)
-        "friction_model": Param(
-            str,
-            "anchored",
-            "anchored: static friction restores the slip since the contact began sticking, against the normal "
-            "load the contact carried this substep (rice heaps rest at 30–40°, docs/validation.md); substep: it "
-            "holds each substep's slip only (Macklin et al. 2014; heaps creep flat)",
-            choices=("substep", "anchored"),
-        ),
-        "capture_radius": Param(
-            float,
-            0.2,
-            "adhesion reach beyond contact, in particle radii (effect 'adhesion')",
-            range=(0.0, 1.0),
-            units="radii",
-        ),
-        "clumping": Param(
-            float, 0.3, "adhesion strength (breakable bonds within the capture radius)", range=(0.0, 1.0)
-        ),
-        "glue": Param(
-            float,
-            0.0,
-            "glued grains (pressed sticky rice, effect 'adhesion'): grains within the capture radius of each other "
-            "at the start keep their places in each grain's neighbourhood (lattice shape matching), this share of "
-            "the way per iteration, until one stands a particle radius from its place (the paste tears); "
-            "stiff piles need substeps (an onigiri keeps 98 % of its height at 30); 0 = none",
-            range=(0.0, 1.0),
-        ),
-        "sleep_speed": Param(
-            float,
-            2.0,
-            "elements slower than this are put to rest each substep (0 = never)",
-            range=(0.0, 1000.0),
-            units="mm/s",
-        ),
-        "shock_propagation": Param(
-            float,
-            4.0,
-            "contact mass ratio of a particle to one a diameter above it "
-            "(Macklin et al. 2014 mass scaling): carries a tall pile's weight down in few "
-            "iterations; 1 = off (a 2,000-sphere pile then sinks to 2 r of overlap)",
-            range=(1.0, 1000.0),
-        ),
-        "speed_clamp": Param(
-            float,
-            1.0,
-            "max particle travel per substep (anti-tunnelling); above 1 the substep runs as ceil(clamp) solves of "
-            "≤ 1 r each (a wall or particle is never crossed); refused when gravity alone exceeds it (g·h² > clamp·r)",
-            range=(0.1, 2.0),
-            units="radii",
-        ),
-        "depenetration_speed": Param(
-            float,
-            0.0,
-            "max depenetration speed: the constraints leave a particle no faster than this or its predicted speed "
-            "(gravity's and its own), so deep overlaps come apart without launching elements; 0 = unbounded, but "
-            "50 mm/s in a slender run with m > 1 (its m³ × substeps would launch long grains)",
-            range=(0.0, 100000.0),
-            units="mm/s",
-        ),
-        "gravity": Param(
-            float,
-            9810.0,
-            "gravitational acceleration (effect 'gravity'), along −z",
-            range=(0.0, 100000.0),
-            units="mm/s²",
-        ),
-        "white_density": Param(
-            float, 1.03, "density of the medium around the buoyant part (ikura white)", range=(0.1, 10.0), units="g/cm³"
-        ),
-        "part_density": Param(
-            float,
-            0.93,
-            "density of the buoyant part (faces with parts == 1: the yolk)",
-            range=(0.1, 10.0),
-            units="g/cm³",
-        ),
-        "log_every": Param(
-            int, 10, "log particles to Rerun every k frames (0 = never)", range=(0, 100000), units="frames"
-        ),
-        "log_meshes_every": Param(
-            int,
-            30,
-            "log the element meshes to Rerun every k frames and at the last "
-            "(0 = never; a 2,000-grain bowl logs ≈ 10 MB per snapshot)",
-            range=(0, 100000),
-            units="frames",
-        ),
-    },
+    params=PARAMS,
     effects=EFFECTS,
     check=_check,
     moved={"water_content": Moved("material", "water_content", "cooked_rice")},

@@ -36,7 +36,6 @@ def _check(params):
 
 @node(
     "elastic_body",
-    version=1,
     inputs={"mesh": In(Mesh, "closed surface to simulate (instead of the 'shape' solid)", optional=True)},
     outputs={
         "mesh": Out(Mesh, "the surface at the last frame, openings capped; colours and parts: piece id"),

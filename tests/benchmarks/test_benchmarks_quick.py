@@ -3,8 +3,8 @@ at import for weeks because nothing ran it). Found by glob: a benchmark added to
 
 A benchmark that needs packages outside the project's dependencies names them in a module-level
 ``REQUIRES = ("pkg", ...)`` and is skipped where they are missing. Results go to a temporary folder
-(``NODEGRAPH_BENCH_RESULTS``), not to ``benchmarks/results/``. Marked ``bench_quick``: CI runs them with
-the rest (``-m "not bench_quick"`` leaves them out).
+(``NODEGRAPH_BENCH_RESULTS``), not to ``benchmarks/results/``, and nothing goes into docs/. Marked
+``bench_quick``: CI runs them with the rest (``-m "not bench_quick"`` leaves them out).
 """
 
 import ast
@@ -28,6 +28,11 @@ def children_cpu() -> float:
     """CPU seconds (user + system) of this process's finished children: the work, whatever the machine's load."""
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
+
+
+def docs_stamps() -> dict[Path, tuple[int, int]]:
+    """Size and modification time of every file under docs/: a ``--quick`` run changes none."""
+    return {p: (p.stat().st_size, p.stat().st_mtime_ns) for p in (ROOT / "docs").rglob("*") if p.is_file()}
 
 
 def module_constant(path: Path, name: str, default):
@@ -55,6 +60,7 @@ def test_benchmark_quick_mode_runs(path, tmp_path, monkeypatch):
         MPLBACKEND="Agg",
         PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
     )
+    docs = docs_stamps()
     start, cpu_start = time.perf_counter(), children_cpu()
     done = subprocess.run(
         [sys.executable, str(path), "--quick"],
@@ -66,6 +72,8 @@ def test_benchmark_quick_mode_runs(path, tmp_path, monkeypatch):
     )
     seconds, cpu = time.perf_counter() - start, children_cpu() - cpu_start
     assert done.returncode == 0, f"{path.name} --quick failed:\n{done.stdout[-2000:]}\n{done.stderr[-4000:]}"
+    changed = sorted({str(p.relative_to(ROOT)) for p, _ in docs_stamps().items() ^ docs.items()})
+    assert not changed, f"{path.name} --quick wrote into docs/ (results go to $NODEGRAPH_BENCH_RESULTS): {changed}"
     print(f"{path.name} --quick: {seconds:.1f} s wall, {cpu:.1f} CPU s (load {os.getloadavg()[0]:.1f})")
     # a benchmark whose smoke run is a whole recipe states its own budget (``QUICK_CPU_S``), compile included
     limit = module_constant(path, "QUICK_CPU_S", CPU_LIMIT_S)

@@ -158,3 +158,21 @@ def test_the_cache_does_not_flush_what_it_checks_as_it_reads(cache, tmp_path, mo
     assert flushes == []
     write_output(value, tmp_path, "table")
     assert len(flushes) == 1
+
+
+def test_the_default_cache_is_the_same_whichever_folder_a_command_runs_in(tmp_path, monkeypatch):
+    """Issue 47: the cache was .nodegraph/cache of the current folder, so a run from another folder began cold."""
+    from nodegraph.cache import default_cache_dir
+
+    monkeypatch.delenv("NODEGRAPH_CACHE", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    seen = set()
+    for folder in ("a", "b/c"):
+        (tmp_path / folder).mkdir(parents=True)
+        monkeypatch.chdir(tmp_path / folder)
+        seen.add(default_cache_dir().resolve())
+    assert seen == {tmp_path / "xdg" / "nodegraph" / "cache"}
+    Cache(tmp_path / "b" / "c" / ".nodegraph" / "cache").store("k" * 64, {}, "n", "t")  # an earlier version's
+    assert default_cache_dir() == Path(".nodegraph/cache")  # still used where it is: its results stay warm
+    monkeypatch.setenv("NODEGRAPH_CACHE", str(tmp_path / "mine"))
+    assert default_cache_dir() == tmp_path / "mine"

@@ -14,17 +14,20 @@ from .test_validation import VALID
 REPO = Path(__file__).resolve().parents[2]
 
 
-def test_nodes_prints_whole_first_sentences(capsys):
+def test_nodes_lists_what_each_node_does_in_words_without_equations(capsys):
+    """Issue 47: the listing showed "R = [u v w]·R_zyx(γ, β, α)" and "G eq. 5 …"; equations and citations are for
+    ``describe``, which still shows them."""
+    import re
+
     assert main(["nodes"]) == 0
     out = capsys.readouterr().out
-    assert "static obstacle particles (e.g. eggs on settled rice)" in out  # used to stop at "(e.g."
-    from nodegraph.registry import default_registry
-
-    for spec in default_registry().specs():
-        paragraph = " ".join((spec.doc or "").strip().split("\n\n")[0].split())
-        summary = doc_summary(spec.doc)
-        assert summary == paragraph or (paragraph.startswith(summary) and summary.endswith("."))
-        assert summary in out
+    assert "rotate             v1   Random rotation per P_num in a local uvw frame." in out
+    assert "distance_field     v1   Signed distance to the element surface." in out
+    assert "expand             v2   The cooked grain's swelling." in out
+    for line in out.splitlines():
+        assert not re.search(r"[=·→∪]|SPEC|§|\beqs?\.|``|\(G\b", line), line
+    assert main(["describe", "rotate"]) == 0
+    assert "R = [u v w]·R_zyx" in capsys.readouterr().out
 
 
 def test_doc_summary_cuts_at_a_sentence_end_only():
@@ -94,7 +97,8 @@ def test_params_indented_as_a_node_get_one_indentation_hint(registry):
     assert "'params' is a key of a node, not a node: check the indentation; indent it under node 'pts'" in str(issue)
 
 
-def test_a_failed_first_run_does_not_claim_an_older_recording(tmp_path, capsys):
+def test_a_failed_first_run_does_not_claim_an_older_recording(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "40")  # a narrow terminal: warnings must not be hard-wrapped mid-phrase
     recipe = tmp_path / "my_don.yaml"
     recipe.write_text(
         "outputs: [boom.spheres]\nnodes:\n  pts: {type: toy_points}\n"

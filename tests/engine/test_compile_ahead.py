@@ -45,7 +45,7 @@ from nodegraph import In, Out, node
 from nodegraph.values import Table
 
 
-@node("ahead_early", version=1, outputs={"table": Out(Table, "numbers")})
+@node("ahead_early", outputs={"table": Out(Table, "numbers")})
 def ahead_early(ctx):
     """Waits (≤ 20 s) until the late node's kernel is in numba's cache: compiled by the run's second process."""
     from ahead_kernels import early_kernel
@@ -57,7 +57,7 @@ def ahead_early(ctx):
     return Table({"x": early_kernel(np.arange(4.0))})
 
 
-@node("ahead_late", version=1, effects=("moisture",), inputs={"table": In(Table, "numbers")},
+@node("ahead_late", effects=("moisture",), inputs={"table": In(Table, "numbers")},
       outputs={"table": Out(Table, "tripled")})
 def ahead_late(ctx, table):
     """Runs one kernel, and a second with effect 'moisture'."""

@@ -1,5 +1,5 @@
-"""A first run compiles each helper of a kernel once (issue 27: first run ≤ 90 s; docs/performance.md, "Compiling
-less"). In a ``parallel=True`` kernel numba types the loop body a second time with the ``prange`` index unsigned, so
+"""A first run compiles each helper of a kernel once (issue 27: first run ≤ 90 s; docs/performance.md, "Compiling the
+kernels"). In a ``parallel=True`` kernel numba types the loop body a second time with the ``prange`` index unsigned, so
 a non-inlined helper taking the index compiled for int64 and again for uint64; an array assignment (``a[:, :] = b``)
 compiled numba's shape-mismatch message (string formatting). Checked in a fresh process with an empty numba cache:
 kernels loaded from the cache compile no helpers."""

@@ -28,7 +28,7 @@ from nodegraph import Out, node
 from nodegraph.values import Table
 {eager}
 
-@node("kernel_toy", version=1, outputs={{"table": Out(Table, "doubled")}})
+@node("kernel_toy", outputs={{"table": Out(Table, "doubled")}})
 def kernel_toy(ctx):
     """Runs one numba kernel."""
     {lazy}
@@ -65,7 +65,10 @@ def test_compiling_is_announced_once_then_cached(tmp_path, lazy):
     (tmp_path / "toy_kernels.py").write_text(KERNELS)
     (tmp_path / "recipe.yaml").write_text(RECIPE)
     first = _run(tmp_path)
-    assert "compiling kernels for doubling (first run after a code change; cached afterwards)" in first
+    # issue 47: a first run said "first run after a code change" to someone who had changed nothing
+    assert "compiling kernels for doubling (not in numba's cache yet: compiled once, cached afterwards)" in first
     assert "doubling: compiling toy_kernels.double (kernel 1)…" in first  # which kernel, as it starts
     assert "compiled 1 kernel(s) for doubling in " in first
     assert "compil" not in _run(tmp_path)
+    (tmp_path / "toy_kernels.py").write_text(KERNELS + "\n# edited\n")
+    assert "compiling kernels for doubling (their code changed since they were cached" in _run(tmp_path)

@@ -78,3 +78,26 @@ def test_a_reused_result_still_gives_its_values(recipe, tmp_path):
     again = run_recipe(loaded, cache=cache, out_dir=out)
     assert again.values == {} and again.files == first.files  # nothing loaded, nothing written
     assert (again.output("surf").vertices == first.output("surf").vertices).all()  # loaded when asked
+
+
+def test_outputs_of_other_settings_never_sit_beside_a_run(recipe, tmp_path, capsys):
+    """Issue 47: ``--output surf`` rewrote surf but left the merged spheres of an earlier, different run beside it."""
+    import json
+
+    out = tmp_path / "outputs" / "toyrun"
+    assert cli("run", str(recipe), "--no-rrd") == 0
+    (out / "notes.txt").write_text("mine")
+    capsys.readouterr()
+    # the same settings, one output asked for: the other is still this setting's, kept and listed as earlier
+    assert cli("run", str(recipe), "--no-rrd", "--output", "surf") == 0
+    err = capsys.readouterr().err
+    assert (out / "merge.spheres.npz").exists() and "merge.spheres.npz" not in err
+    assert "notes.txt" in err  # not nodegraph's: left, and said
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert set(manifest["files"]) == {"surf.ply"} and set(manifest["earlier"]) == {"merge.spheres.npz"}
+    # other settings: the earlier outputs go, and the run says so
+    assert cli("run", str(recipe), "--no-rrd", "--output", "surf", "--set", "pts.count=9") == 0
+    err = capsys.readouterr().err
+    assert not (out / "merge.spheres.npz").exists() and (out / "surf.ply").exists() and (out / "notes.txt").exists()
+    assert "removed 1 output(s) of an earlier run with other settings" in err and "merge.spheres.npz" in err
+    assert "earlier" not in json.loads((out / "manifest.json").read_text())

@@ -207,7 +207,7 @@ def test_progress_bars_nest_on_a_terminal(registry, cache):
 def test_the_closing_table_gives_each_node_its_cpu_seconds(registry, cache):
     """A node's CPU seconds (all the process's threads while it ran) stand beside its wall time: on a shared
     machine they are the figure to compare. Cached nodes have none."""
-    from nodegraph.report import Reporter
+    from nodegraph.report import Reporter, parse_duration
 
     first = run(registry, cache)
     ran = [r for r in first.records if r.status == "ran"]
@@ -216,9 +216,9 @@ def test_the_closing_table_gives_each_node_its_cpu_seconds(registry, cache):
     reporter = Reporter(quiet=True)
     for record in first.records:
         reporter.record(record)
-    table = reporter.summary()
+    table = reporter.summary(width=200)
     assert [c.header for c in table.columns][3:5] == ["wall time", "CPU time"]
-    assert all(cell.endswith(" s") for cell in table.columns[4].cells)
+    assert all(parse_duration(cell) >= 0.0 for cell in table.columns[4].cells)
 
 
 def test_images_are_written_as_png_at_zlibs_fastest_level(tmp_path):

@@ -50,7 +50,7 @@ def test_node_functions_are_recognised_and_nothing_else(tmp_path):
     (tmp_path / "nodegraph").mkdir()
     args = ", ".join(f"a{k}" for k in range(LIMIT + 1))
     (package / "wide.py").write_text(
-        f"@node('x', version=1, outputs={{}})\ndef declared(ctx, {args}): ...\n\n"
+        f"@node('x', outputs={{}})\ndef declared(ctx, {args}): ...\n\n"
         f"@njit(cache=True)\ndef kernel({args}): ...\n\n"
         f"def narrow({', '.join(f'a{k}' for k in range(LIMIT))}): ...\n"
     )

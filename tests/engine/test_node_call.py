@@ -48,7 +48,6 @@ def test_effects_are_those_asked_for_and_implemented(registry):
 def test_check_between_parameters_applies():
     @node(
         "toy_range",
-        version=1,
         outputs={"mesh": Out(Mesh)},
         params={"lo": Param(float, 0.0), "hi": Param(float, 1.0)},
         check=lambda p: [("hi", "must exceed lo")] if p["hi"] <= p["lo"] else [],
@@ -65,4 +64,4 @@ def test_seed_and_effects_cannot_name_a_port_or_parameter():
     for kind in ("inputs", "params"):
         declared = {"seed": In(Mesh)} if kind == "inputs" else {"effects": Param(int, 1)}
         with pytest.raises(NodeDeclarationError, match="cannot name an input or parameter"):
-            node("bad", version=1, outputs={"y": Out(Mesh)}, **{kind: declared})(lambda ctx, **kw: None)
+            node("bad", outputs={"y": Out(Mesh)}, **{kind: declared})(lambda ctx, **kw: None)

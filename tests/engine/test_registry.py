@@ -17,7 +17,7 @@ PLUGIN = textwrap.dedent('''
     from nodegraph.values import Table
     import numpy as np
 
-    @node("user_constant", version=2, outputs={"table": Out(Table, "one value")},
+    @node("user_constant", outputs={"table": Out(Table, "one value")},
           params={"value": Param(float, 1.0, "the value", range=(0, 10))})
     def user_constant(ctx, *, value):
         """A user's node: a one-row table."""
@@ -40,7 +40,7 @@ def test_entry_point_package_is_scanned_through_its_init(tmp_path, monkeypatch):
         registry_module, "entry_points", lambda group: fake if group == registry_module.ENTRY_POINT_GROUP else []
     )
     reg = registry_module.default_registry()
-    assert "user_constant" in reg and reg["user_constant"].version == "2"
+    assert "user_constant" in reg
     sys.modules.pop("my_food_nodes", None)
 
 
@@ -61,8 +61,6 @@ def test_duplicate_type_names_are_refused(tmp_path):
 
 def test_declaration_errors_are_caught_when_declared():
     with pytest.raises(NodeDeclarationError, match="both as input and parameter"):
-        node("bad", version=1, inputs={"x": In(Mesh)}, outputs={"y": Out(Mesh)}, params={"x": Param(int, 1)})(
-            lambda ctx, x: x
-        )
+        node("bad", inputs={"x": In(Mesh)}, outputs={"y": Out(Mesh)}, params={"x": Param(int, 1)})(lambda ctx, x: x)
     with pytest.raises(NodeDeclarationError, match="lacks arguments"):
-        node("bad", version=1, inputs={"mesh": In(Mesh)}, outputs={"y": Out(Table)})(lambda ctx: None)
+        node("bad", inputs={"mesh": In(Mesh)}, outputs={"y": Out(Table)})(lambda ctx: None)

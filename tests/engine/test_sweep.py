@@ -2,6 +2,7 @@
 the rest of the recipe, the table, CSV and plot with the Pareto front, and the in-process pool."""
 
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -215,3 +216,15 @@ def test_cli_sweep_lays_the_previews_out_on_a_contact_sheet(sweep_file, tmp_path
     assert len(reds) == 6  # each point's own pictures (two variants each), not one repeated
     text = (out / "grid.md").read_text()
     assert "![grid_picture_image.png](grid_picture_image.png)" in text and "merge.stats.count:sum ↑" in text
+
+
+def test_a_sweep_without_matplotlib_says_it_drew_no_plot(sweep_file, tmp_path, capsys, monkeypatch):
+    """Issue 47: the plot was skipped silently when matplotlib was missing."""
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if not installed: its import fails
+    args = ["sweep", str(sweep_file), "--grid", "shift.dx=0,1", "--metric", "merge.stats.count:sum"]
+    args += ["--set", "slow.seconds=0", "--cache-dir", str(tmp_path / "cache"), "--plugin", TOY]
+    assert main(args) == 0
+    out = tmp_path / "outputs" / "toy_sweep" / "sweeps"
+    assert not (out / "grid.png").exists()
+    assert "no plot: matplotlib is not installed" in capsys.readouterr().err
+    assert "no plot: matplotlib is not installed" in (out / "grid.md").read_text()

@@ -193,7 +193,7 @@ def test_a_moved_parameter_names_where_it_lives_now_and_recipe_checks_see_every_
 
     spheres = registry.get("toy_points").outputs["spheres"].type
 
-    @node("toy_step", version=1, outputs={"spheres": Out(spheres, "")}, params={"dx": Param(float, 1.0, "")})
+    @node("toy_step", outputs={"spheres": Out(spheres, "")}, params={"dx": Param(float, 1.0, "")})
     def toy_step(ctx, *, dx):
         return None
 
@@ -203,7 +203,6 @@ def test_a_moved_parameter_names_where_it_lives_now_and_recipe_checks_see_every_
 
     @node(
         "toy_mover",
-        version=1,
         inputs={"step": In(spheres, "", optional=True)},
         outputs={"spheres": Out(spheres, "")},
         params={"dx": Param(float, 1.0, "")},

@@ -35,7 +35,6 @@ def _(value: SphereSet, log) -> None:
 
 @node(
     "toy_points",
-    version=1,
     random=True,
     outputs={"spheres": Out(SphereSet, "random spheres")},
     params={
@@ -54,7 +53,6 @@ def toy_points(ctx, *, count, scale, mode):
 
 @node(
     "toy_shift",
-    version=1,
     inputs={"spheres": In(SphereSet, "to move")},
     outputs={"spheres": Out(SphereSet, "moved")},
     params={"dx": Param(float, 0.0, "shift along x", range=(-10.0, 10.0), units="mm")},
@@ -66,7 +64,6 @@ def toy_shift(ctx, spheres, *, dx):
 
 @node(
     "toy_merge",
-    version=1,
     inputs={"parts": In(SphereSet, "sets to merge", many=True)},
     outputs={"spheres": Out(SphereSet, "all spheres"), "stats": Out(Table, "count per part")},
 )
@@ -78,7 +75,6 @@ def toy_merge(ctx, parts):
 
 @node(
     "toy_mesh",
-    version=1,
     outputs={"mesh": Out(Mesh, "a tetrahedron")},
     params={"size": Param(float, 1.0, "edge scale", range=(0.001, 10.0), units="mm")},
 )
@@ -90,7 +86,6 @@ def toy_mesh(ctx, *, size):
 
 @node(
     "toy_measure",
-    version=1,
     inputs={"mesh": In(Mesh, "mesh to measure")},
     outputs={"table": Out(Table, "vertex count")},
 )
@@ -101,7 +96,6 @@ def toy_measure(ctx, mesh):
 
 @node(
     "toy_physics",
-    version=1,
     effects=("gravity", "friction", "adhesion"),
     inputs={"spheres": In(SphereSet, "particles")},
     outputs={"spheres": Out(SphereSet, "after one step"), "effects": Out(Table, "effects seen")},
@@ -119,9 +113,7 @@ def toy_physics(ctx, spheres, *, dt):
     }
 
 
-@node(
-    "toy_fail", version=1, inputs={"spheres": In(SphereSet, "anything")}, outputs={"spheres": Out(SphereSet, "never")}
-)
+@node("toy_fail", inputs={"spheres": In(SphereSet, "anything")}, outputs={"spheres": Out(SphereSet, "never")})
 def toy_fail(ctx, spheres):
     """Logs two steps of a scalar, then always fails."""
     import rerun as rr
@@ -134,7 +126,6 @@ def toy_fail(ctx, spheres):
 
 @node(
     "toy_slow",
-    version=1,
     inputs={"spheres": In(SphereSet, "passed through")},
     outputs={"spheres": Out(SphereSet, "same")},
     params={
@@ -164,7 +155,6 @@ _FIRST_LOAD_PAID = False  # toy_first_load: whether this process paid its first 
 
 @node(
     "toy_first_load",
-    version=1,
     inputs={"spheres": In(SphereSet, "to scale")},
     outputs={"spheres": Out(SphereSet, "radii scaled")},
     params={
@@ -190,7 +180,6 @@ def toy_first_load(ctx, spheres, *, scale, load_seconds, trace):
 
 @node(
     "toy_sphere_mesh",
-    version=1,
     inputs={"spheres": In(SphereSet, "centres")},
     outputs={"mesh": Out(Mesh, "one tetrahedron per sphere")},
 )
@@ -204,7 +193,6 @@ def toy_sphere_mesh(ctx, spheres):
 
 @node(
     "toy_file_table",
-    version=1,
     outputs={"table": Out(Table, "one row per line of the file")},
     params={"path": Param(str, doc="text file", file=True)},
 )
@@ -216,7 +204,6 @@ def toy_file_table(ctx, *, path):
 
 @node(
     "toy_picture",
-    version=1,
     inputs={"spheres": In(SphereSet, "to picture")},
     outputs={"image": Out(Image, "a 24 × 32 tile whose red is the spheres' mean x")},
 )
@@ -252,7 +239,6 @@ def _load_render_libraries() -> None:
 
 @node(
     "toy_render",
-    version=1,
     overlap=_load_render_libraries,
     inputs={"spheres": In(SphereSet, "what to draw")},
     outputs={"image": Out(Image, "a picture of the spheres")},
@@ -277,7 +263,6 @@ def toy_render(ctx, spheres, *, seconds, meet, fail):
 
 @node(
     "toy_busy",
-    version=1,
     inputs={"spheres": In(SphereSet, "passed through")},
     outputs={"spheres": Out(SphereSet, "same, scaled")},
     params={
@@ -292,3 +277,33 @@ def toy_busy(ctx, spheres, *, seconds, meet):
     while time.thread_time() < end:
         pass
     return SphereSet(spheres.centers * 2.0, spheres.radii.copy())
+
+
+@node(
+    "toy_spin",
+    inputs={"spheres": In(SphereSet, "passed through")},
+    outputs={"spheres": Out(SphereSet, "same")},
+    params={
+        "steps": Param(int, 1, "iterations of a numba loop that holds the GIL (1e11: minutes)", range=(1, 10**12)),
+        "started": Param(str, "", "a folder: the node writes a file named by its process id there, the loop compiled"),
+    },
+)
+def toy_spin(ctx, spheres, *, steps, started):
+    """Stands for a long numba kernel (the placement's neighbour search): deaf to signals while it runs."""
+    import math
+
+    import numba
+
+    @numba.njit
+    def spin(n):
+        total = 0.0
+        for i in range(n):
+            total += math.sin(i)
+        return total
+
+    spin(1)  # compiled: from the file on, the loop itself runs
+    if started:
+        Path(started).mkdir(parents=True, exist_ok=True)
+        (Path(started) / str(os.getpid())).touch()
+    spin(steps)
+    return SphereSet(spheres.centers.copy(), spheres.radii.copy())

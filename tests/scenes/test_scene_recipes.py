@@ -46,7 +46,7 @@ EXPECTED = {
     # flakes before: 213, p95 0, max 0.0061 (issue 25); with the settle frame and no removal 298: p95 0.051, max 0.069
     "kakigori": ((400, 700), 0.003, 0.01),
     # 294 elements: p95 0, max 0 with deform_contacts (issue 25); p95 0.077, max 0.096 without it (S: no physics).
-    # Session 42 (the onigiri's straight sides, the cull's priority for the chestnut pieces): 203; max 0.026 while a
+    # With the onigiri's straight sides and the cull's priority for the chestnut pieces: 203; max 0.026 while a
     # grain's tip poking into a coarse piece's face (no piece vertex inside the grain) was dented only its half
     # (deform_contacts v4), max 0 with v5
     "rice_chestnut": ((180, 340), 0.003, 0.01),

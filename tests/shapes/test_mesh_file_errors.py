@@ -49,3 +49,19 @@ def test_relative_paths_in_a_recipe_resolve_from_its_folder(tmp_path, monkeypatc
     trimesh.creation.icosphere(1).export(elsewhere / "mine.stl")
     loaded = load_recipe(recipe, default_registry(), overrides=["m.path=mine.stl"])
     assert loaded.nodes["m"].params["path"] == "mine.stl"
+
+
+def test_check_refuses_a_path_that_is_not_a_mesh_and_says_which_files_are(tmp_path, capsys):
+    from nodegraph.cli import main
+
+    (tmp_path / "README.md").write_text("# not a mesh\n")
+    recipe = tmp_path / "r.yaml"
+    recipe.write_text(
+        "outputs: [m, e]\nnodes:\n  m: {type: mesh_file, params: {path: README.md}}\n"
+        "  e: {type: base_mesh, params: {shape: file, path: README.md}}\n"
+    )
+    assert main(["check", str(recipe)]) == 2
+    err = capsys.readouterr().err
+    assert f"{recipe}:3:" in err and f"{recipe}:4:" in err  # each node's line
+    assert "node 'm', path: README.md is a .md file, not a mesh file; allowed: .stl, .obj, .ply" in err
+    assert "node 'e', path: README.md is a .md file" in err

@@ -4,11 +4,11 @@ import datafusion
 import numpy as np
 import pytest
 from rerun.chunk import RrdReader
+from support.scenes import rice_bowl
 
 from nodegraph.checkpoint import Checkpoint
 from nodegraph.context import Context
 from nodegraph.rerun_log import RunRecording
-from nodes.simulation.scenes import rice_bowl
 from nodes.simulation.xpbd import xpbd
 
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "moisture", "damping")

@@ -9,10 +9,10 @@ import numba
 import numpy as np
 import pytest
 import trimesh
+from support.scenes import bowl_mesh
 
 from nodes.simulation import collider
 from nodes.simulation.collider import free_space_field, signed_distance_grid, signed_field, surface_band_rows
-from nodes.simulation.scenes import bowl_mesh
 
 BAND_CELLS = 3.0
 

@@ -20,7 +20,8 @@ DRY_BOWL = ["bowl.size=14.0", "bowl.depth=12.0", "bowl.mound=5.0", "cooked.water
 
 
 def test_the_offset_grows_every_particle_by_its_share_of_the_median_radius():
-    from nodes.simulation.scenes import rice_library
+    from support.scenes import rice_library
+
     from nodes.values import Aggregate, Placement
 
     library = rice_library(seed=1)

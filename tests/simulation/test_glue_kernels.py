@@ -5,9 +5,9 @@ lists, ``glued_allowance`` each substep), at one thread and at two."""
 import numba
 import numpy as np
 import pytest
+from support.scenes import GLUE_EFFECTS, pressed_block
 
 from nodes.simulation import glue
-from nodes.simulation.scenes import GLUE_EFFECTS, pressed_block
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.threads import thread_count
@@ -62,7 +62,7 @@ def test_glue_match_fits_each_region_rigidly(torn, threads):
 
 def reference_allowance(sim):
     """Per entry of the lists: the pressed overlap of a pair whose grains are still glued, else 0."""
-    m, st, lists = sim.model, sim.state, sim.solver.pairs.lists
+    m, st, lists = sim.model, sim.state, sim.solver.contacts.lists
     g = m.glue
     floors = {}
     for i in range(len(g.floor_start) - 1):
@@ -88,9 +88,9 @@ def test_glued_contacts_tolerate_their_pressed_overlap_while_glued(torn):
     sim = torn
     expected = reference_allowance(sim)
     assert (expected > 0).sum() >= 20  # pressed glued pairs (40 of 1,802 entries), torn ones left out
-    allowance = sim.solver.pairs.allowance
+    allowance = sim.solver.contacts.allowance
     allowance[:] = 0.0
-    sim.solver._pressed(sim.state)
+    sim.solver._pressed(sim.state, sim.solver.contacts)
     assert np.array_equal(allowance, expected)
     # a tear after the lists were built is seen without a new build; a larger allowance is kept
     g = sim.model.glue
@@ -98,7 +98,7 @@ def test_glued_contacts_tolerate_their_pressed_overlap_while_glued(torn):
     sim.state.glued[keep] = False
     allowance[:] = 0.0
     allowance[-1] = 5.0
-    sim.solver._pressed(sim.state)
+    sim.solver._pressed(sim.state, sim.solver.contacts)
     expected = reference_allowance(sim)
     expected[-1] = max(expected[-1], 5.0)
     assert np.array_equal(allowance, expected)

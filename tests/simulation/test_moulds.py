@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
+from support.scenes import rice_library
 
 from nodegraph.values import Mesh
-from nodes.simulation.scenes import rice_library
 from nodes.simulation.xpbd import xpbd
 from nodes.values import Aggregate, Placement
 

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.scenes import long_grain, open_box
 
 from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
-from nodes.simulation.cull_crossing import crossing_depths
-from nodes.simulation.scenes import long_grain, open_box
+from nodes.contact_shaping.cull_crossing import crossing_depths
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.xpbd import xpbd

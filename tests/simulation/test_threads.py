@@ -8,8 +8,8 @@ import time
 
 import numba
 import pytest
+from support.scenes import rice_bowl
 
-from nodes.simulation.scenes import rice_bowl
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
 from nodes.simulation.threads import WINDOW_S, FreeCores

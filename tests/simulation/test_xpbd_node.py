@@ -5,10 +5,10 @@ import hashlib
 
 import numpy as np
 import pytest
+from support.scenes import box_mesh, ikura_mesh, rice_bowl
 
 from nodegraph.context import Context, EntityLogger
 from nodes.simulation.aggregate import DeformedAggregate
-from nodes.simulation.scenes import box_mesh, ikura_mesh, rice_bowl
 from nodes.simulation.settings import EFFECTS as ALL
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
@@ -44,7 +44,7 @@ def test_absent_effects_allocate_nothing_and_run_no_kernel(bowl):
     for family in ("friction", "adhesion", "collider", "buoyancy"):
         assert calls[family] == 0, family
     assert lean.model.collider is None  # colliders were wired, but 'collider' was not asked: no SDF built
-    assert lean.state.yolks is None and lean.solver.pairs.scratch is None  # no yolk state, no Jacobi copy
+    assert lean.state.yolks is None and lean.solver.contacts.scratch is None  # no yolk state, no Jacobi copy
     full = build_simulation(aggregate, colliders, frozenset(ALL), typed())
     full.frame()
     for family in ("contact", "friction", "adhesion", "collider"):
@@ -55,7 +55,7 @@ def test_no_pair_effect_builds_no_neighbour_lists(bowl):
     aggregate, colliders = bowl
     sim = build_simulation(aggregate, colliders, frozenset({"gravity", "collider"}), typed())
     sim.frame()
-    assert sim.solver.dispatch.calls["neighbours"] == 0 and sim.solver.pairs is None
+    assert sim.solver.dispatch.calls["neighbours"] == 0 and sim.solver.contacts is None
 
 
 def test_grains_settle_inside_the_bowl(bowl):

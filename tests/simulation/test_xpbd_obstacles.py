@@ -4,8 +4,8 @@ the bed never moves and is not in the outputs; unwired, nothing is appended or a
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
+from support.scenes import ikura_mesh, rice_bowl
 
-from nodes.simulation.scenes import ikura_mesh, rice_bowl
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation, finish_simulation
 from nodes.simulation.xpbd import xpbd
@@ -99,7 +99,7 @@ def test_unwired_obstacles_allocate_nothing():
     plain = build_simulation(aggregate, colliders, effects, typed())
     empty = build_simulation(aggregate, colliders, effects, typed(), obstacles=[])
     for sim in (plain, empty):
-        m, st, pairs = sim.model, sim.state, sim.solver.pairs
+        m, st, pairs = sim.model, sim.state, sim.solver.contacts
         assert m.n_moving == len(m.x0) == len(m.w) == len(m.elem) == m.start[-1]
         per_particle = (
             st.x,

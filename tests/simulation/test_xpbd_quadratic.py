@@ -6,8 +6,8 @@ import hashlib
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from support.scenes import rice_bowl
 
-from nodes.simulation.scenes import rice_bowl
 from nodes.simulation.shape_matching import (
     LinearMoments,
     QuadraticMoments,

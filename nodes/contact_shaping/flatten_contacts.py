@@ -58,7 +58,7 @@ def wall_field(ctx, aggregate, colliders, moulds, wall_cells):
     """The walls' free-space field around the aggregate and its walls (effect 'collider'), None without walls."""
     import numpy as np
 
-    from .collider import free_space_field
+    from ..simulation.collider import free_space_field
 
     if "collider" not in ctx.effects or not (colliders or moulds) or not len(aggregate.placement):
         return None
@@ -76,7 +76,7 @@ def dented_outputs(aggregate, dents, figures) -> dict:
 
     import numpy as np
 
-    from .aggregate import DeformedAggregate
+    from ..simulation.aggregate import DeformedAggregate
     from .contact_flattening import merged_dents
 
     fields = {f.name: getattr(aggregate, f.name) for f in dataclasses.fields(aggregate)}
@@ -87,7 +87,6 @@ def dented_outputs(aggregate, dents, figures) -> dict:
 
 @node(
     "flatten_contacts",
-    version=11,  # 11: wall_cells (was fixed at 256)
     inputs=CONTACT_INPUTS,
     outputs={
         "aggregate": Out(Aggregate, "the same elements, each mesh flattened where it pressed into another"),

@@ -117,7 +117,6 @@ def _subset(aggregate, keep: np.ndarray):
 
 @node(
     "cull_crossing",
-    version=1,
     inputs={
         "aggregate": In(Aggregate, "elements after the contact step (deform_contacts.aggregate)"),
         "colliders": In(

@@ -1,7 +1,7 @@
 """Scenes for the solver's tests, benchmarks and scripts, built directly in Python (no placement nodes
 needed): ellipsoid rice grains, ikura eggs with a yolk, a bowl and a ground slab as watertight solids,
-grains on a jittered grid inside the bowl, and a small shaded-food scene. Not a node module: nothing
-here is imported to list or run nodes."""
+grains on a jittered grid inside the bowl, and a small shaded-food scene. Dev-only (tests/support, not the
+shipped package): tests and benchmarks import it, nothing in ``nodes`` does."""
 
 from __future__ import annotations
 
@@ -129,6 +129,11 @@ class SolverRun:
     def frame(self) -> None:
         self.solver.frame(self.state)
 
+    def step(self) -> float:
+        """One solve in place, Newton's way: ``step(state_in, state_out, control, contacts, dt)``."""
+        s = self.solver
+        return s.step(self.state, self.state, s.default_control, s.contacts, s.coefficients.h)
+
     def centres(self) -> np.ndarray:
         return self.model.centres(self.state.x)
 
@@ -148,13 +153,13 @@ def stack_column(layers=8, radius=1.0, per_side=2, mass=25.0, gap=0.1, **setting
     (top face z = 0), dropped from ``gap``·r apart (the lowest ``gap``·r above the ground).
 
     Rigid stacking has an exact rest: particle layer j at z = (2j+1)·r, so element k is centred at
-    z = per_side·(2k+1)·r over x = y = 0. ``settings`` override the solver settings, whose defaults
-    are the xpbd node's (stiffness 2,000 N/m, friction μs 0.6, μk 0.42, shock propagation 4) with
-    β = 0 and no damping: rigid elements (sag under the stack's weight < 1 µm) and nothing that
-    hides an energy gain. Returns (``SolverRun``, rest element centres (layers, 3), element mass in g).
+    z = per_side·(2k+1)·r over x = y = 0. ``settings``: xpbd node parameters (node units) over the node's
+    defaults (stiffness 2,000 N/m, friction μs 0.6, μk 0.42, shock propagation 4) with β = 0, no sleeping and
+    no damping: rigid elements (sag under the stack's weight < 1 µm) and nothing that hides an energy gain.
+    Returns (``SolverRun``, rest element centres (layers, 3), element mass in g).
     """
     from nodes.simulation.collider import signed_distance_grid
-    from nodes.simulation.settings import SolverSettings
+    from nodes.simulation.settings import solver_settings_for
 
     side = 2.0 * radius * per_side
     grid = (np.stack(np.meshgrid(*[np.arange(per_side)] * 3, indexing="ij"), -1).reshape(-1, 3) + 0.5) * 2 * radius
@@ -169,14 +174,9 @@ def stack_column(layers=8, radius=1.0, per_side=2, mass=25.0, gap=0.1, **setting
     ground = box_mesh([-2 * side, -2 * side, -depth - side], [2 * side, 2 * side, 0.0], "ground")
     top = rest[-1, 2] + lift[-1] + side
     sdf = signed_distance_grid([ground], np.array([-side, -side, -depth]), np.array([side, side, top]), radius / 2)
-    options = dict(
-        effects=frozenset({"gravity", "contact", "friction", "collider"}),
-        compliance=1.0 / (1000.0 * 2000.0),
-        linear_deformation=0.0,
-        mu_s=0.6,
-        mu_k=0.42,
-        shock_propagation=4.0,
-    )
+    # the xpbd node's defaults (stiffness 2,000 N/m, μs 0.6, μk 0.42, shock propagation 4) but β = 0 (rigid elements)
+    # and no sleeping: the accuracy benchmark measures the solve's rest error, which a stack put to sleep would freeze
+    options = dict(linear_deformation=0.0, sleep_speed=0.0)
     options.update(settings)
     run = solver_run(
         x,
@@ -185,7 +185,7 @@ def stack_column(layers=8, radius=1.0, per_side=2, mass=25.0, gap=0.1, **setting
         np.arange(layers + 1) * n_el,
         np.tile(q, (layers, 1)),
         np.tile([1.0, 0, 0, 0], (layers, 1)),
-        SolverSettings(**options),
+        solver_settings_for(frozenset({"gravity", "contact", "friction", "collider"}), radius, **options),
         sdf=sdf,
     )
     return run, rest, mass * 1e-3
@@ -248,9 +248,9 @@ def pressed_block(nx=3, ny=3, nz=10, squeeze=0.8, seed=2, press_frames=10):
     """(aggregate, colliders): a tall block of randomly turned grains set on a grid a little tighter than the grains
     (pressed: they overlap), relaxed for ``press_frames`` without gravity as the recipes' press relaxes them in
     their mould, standing on a ground slab: sticky rice ready to be set down (``glue``; tests and validation)."""
-    from .settings import XpbdParams
-    from .setup import build_simulation, finish_simulation
-    from .xpbd import xpbd
+    from nodes.simulation.settings import XpbdParams
+    from nodes.simulation.setup import build_simulation, finish_simulation
+    from nodes.simulation.xpbd import xpbd
 
     size = np.full(3, 4.0 * squeeze)
     ix, iy, iz = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
@@ -275,9 +275,9 @@ def pressed_block(nx=3, ny=3, nz=10, squeeze=0.8, seed=2, press_frames=10):
 def block_heights(block, glue, frames=40, **given):
     """Per frame, the particles' height over the height at the start of ``block`` (``pressed_block``) set down
     under gravity with ``glue`` and the xpbd parameters ``given``; and the simulation."""
-    from .settings import XpbdParams
-    from .setup import build_simulation
-    from .xpbd import xpbd
+    from nodes.simulation.settings import XpbdParams
+    from nodes.simulation.setup import build_simulation
+    from nodes.simulation.xpbd import xpbd
 
     aggregate, colliders = block
     p = XpbdParams(**xpbd.resolve_params({"frames": frames, "glue": glue, "clumping": 0.5, **given}))

@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .collider import sample_phi
+from ..simulation.collider import sample_phi
 
 
 class ElementMaps(NamedTuple):
@@ -82,7 +82,7 @@ def shape_fields(shells: list[tuple[np.ndarray, np.ndarray]], cells: int = 32) -
     3-cell border: the pitch is a grain length / 32 ≈ 0.2 mm for rice (``collider.signed_distance_grid``)."""
     import trimesh
 
-    from .collider import signed_distance_grid
+    from ..simulation.collider import signed_distance_grid
 
     grids = []
     for vertices, faces in shells:

@@ -18,10 +18,6 @@ PLANE_HOLDS = ("everywhere", "near")
 
 @node(
     "deform_contacts",
-    # 2: smooth maps of space (dent, bulge) instead of per-vertex moves; 3: the bulge held by lens planes; 4: held by
-    # every plane everywhere (``planes``), boxed-in elements give way less
-    # 5: a side with no vertex inside the other gives way none, the other all (coarse pieces against fine grains)
-    version=5,
     inputs=CONTACT_INPUTS,
     outputs={
         "aggregate": Out(Aggregate, "the same elements, each mesh dented where it pressed into another"),

@@ -9,7 +9,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from nodegraph.values import Mesh
-from nodes.simulation.cull_crossing import crossed_elements, cull_crossing
+from nodes.contact_shaping.cull_crossing import crossed_elements, cull_crossing
 from nodes.values import Aggregate, ElementLibrary, Placement
 
 

@@ -36,7 +36,7 @@ An element boxed in so tightly that no bulge gives its volume back (more than ``
 gives way less on another pass: its lenses with the others of its aggregate split by how readily each side gives
 way, so its neighbours, which have room outside, take more of the depth (up to ``STARVED_PASSES`` passes, only the
 starved elements and their neighbours recomputed). The rice bowl had two such grains 6 and 13 % short, the onigiri
-two 5 % short; a ball pressed by fourteen others lost 31 % (tests/simulation/test_deform_contacts.py).
+two 5 % short; a ball pressed by fourteen others lost 31 % (tests/contact_shaping/test_deform_contacts.py).
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import get_num_threads, njit
 
-from .collider import sample_phi
+from ..simulation.collider import sample_phi
 from .contact_flattening import (
     ContactPairs,
     Dents,

@@ -10,9 +10,9 @@ import trimesh
 
 from nodegraph import codec
 from nodegraph.values import Mesh
+from nodes.contact_shaping.flatten_contacts import flatten_contacts
 from nodes.placement.cut import cut
 from nodes.quality import measure
-from nodes.simulation.flatten_contacts import flatten_contacts
 from nodes.values import Aggregate, ElementLibrary, Placement
 
 

@@ -11,8 +11,8 @@ import scipy.spatial
 import trimesh
 
 from nodegraph.values import Mesh
+from nodes.contact_shaping.contact_flattening import Dents, _gather, _neighbour_lists, merged_dents
 from nodes.simulation.aggregate import DeformedAggregate
-from nodes.simulation.contact_flattening import Dents, _gather, _neighbour_lists, merged_dents
 from nodes.values import Aggregate, ElementLibrary, Placement
 
 

@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 
 from nodegraph import codec
 from nodegraph.values import Mesh
-from nodes.simulation.deform_contacts import deform_contacts
+from nodes.contact_shaping.deform_contacts import deform_contacts
 from nodes.values import Aggregate, ElementLibrary, Placement
 
 PRESS = deform_contacts  # the node under test (flatten_contacts here shows what each test catches)
@@ -157,7 +157,7 @@ def test_deterministic():
 def test_the_moves_do_not_depend_on_the_thread_count(monkeypatch):
     """The elements run in chunks on numba's thread count of Python threads (``_deform_all``): each writes only its
     own rows, so one thread and two give the same bits (chunks of 2 here: six chunks for twelve pressed balls)."""
-    from nodes.simulation import contact_deformation
+    from nodes.contact_shaping import contact_deformation
 
     monkeypatch.setattr(contact_deformation, "CHUNK", 2)
     before = elements([[1.6 * x, 1.6 * y, 0.0] for x in range(6) for y in range(2)])
@@ -227,8 +227,8 @@ def test_a_sliver_turned_by_an_uneven_move_is_unfolded():
     """A needle pair of faces (an edge a fiftieth of its neighbours', as in the library's meshes) turned past 150° by
     a move that is not affine across it (its short edge turned 120° on top of an affine move): ``_unfold`` leaves no
     fold (each folded pair is carried by one move, which keeps its rest angle)."""
-    from nodes.simulation.contact_deformation import _folded, _unfold
-    from nodes.simulation.contact_flattening import vertex_rings
+    from nodes.contact_shaping.contact_deformation import _folded, _unfold
+    from nodes.contact_shaping.contact_flattening import vertex_rings
 
     sphere = trimesh.creation.icosphere(3)
     rest = np.array(sphere.vertices)

@@ -1,0 +1,150 @@
+"""Ctrl-C and SIGTERM stop a run within ``GRACE`` seconds, whichever node is running, leaving nothing half-written.
+
+A Python signal handler runs only when the main thread runs Python code: a numba kernel that holds the GIL (say
+a neighbour search over a few hundred thousand points: minutes) is deaf to it, and only SIGKILL stopped such a run. So
+``nodegraph run``, ``sweep`` and ``watch`` as commands run in a forked child (``supervise``) while the parent, which
+does nothing else, waits. On Ctrl-C or SIGTERM the parent passes the signal on; the child stops as before where it
+can (finished nodes stay cached); one that has not ended after ``GRACE`` seconds is killed, and the parent removes
+what it left half-written.
+
+What a run writes to a temporary or partial name (a recording's ``*.partial.rrd``, a node's capture, a file
+written by ``cache.atomic_write``) is named here first (``note``): a file in the list that still exists when the
+child has ended is an unfinished one (a finished file was renamed into place), and is removed.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ENV_VAR = "NODEGRAPH_LEFTOVERS"  # set in the child: the file that lists its temporary and partial files
+GRACE = 1.0  # seconds the child has to stop by itself after a signal, before it is killed
+REPEAT = 0.5  # seconds after a stop in which a second signal is the same stop (Ctrl-C reaches parent and child)
+
+
+def note(path: str | os.PathLike) -> None:
+    """Name a file this process writes under a temporary or partial name, so that a supervising parent removes it
+    if the process is killed before it renames or removes it. Nothing without a supervisor."""
+    listing = os.environ.get(ENV_VAR)
+    if listing:
+        with open(listing, "a", encoding="utf-8") as out:
+            out.write(os.fspath(path) + "\n")
+
+
+def remove_leftovers(listing: Path) -> list[Path]:
+    """Remove the files named in ``listing`` that still exist (what a killed run left unfinished); those removed."""
+    try:
+        names = listing.read_text(encoding="utf-8").splitlines()
+    except OSError:
+        return []
+    removed = []
+    for name in dict.fromkeys(names):
+        path = Path(name)
+        try:
+            path.unlink()
+        except OSError:
+            continue
+        removed.append(path)
+    return removed
+
+
+_stopped_at: float | None = None
+
+
+def repeated() -> bool:
+    """Whether a stop signal repeats one of the last ``REPEAT`` seconds (Ctrl-C at a terminal reaches the child and
+    the parent, which passes it on too: one stop, not a second interrupting the first's cleanup); notes this one."""
+    global _stopped_at
+    now = time.monotonic()
+    again = _stopped_at is not None and now - _stopped_at < REPEAT
+    if not again:
+        _stopped_at = now
+    return again
+
+
+def stop(signum, frame) -> None:
+    """The child's handler of SIGINT and SIGTERM: a ``KeyboardInterrupt``, once per stop (``repeated``)."""
+    if not repeated():
+        raise KeyboardInterrupt
+
+
+def supervise() -> int | None:
+    """In the parent: fork, and return the child's exit status once it has ended (killed after ``GRACE`` seconds
+    if a signal did not stop it). In the child: None, the command to be run by the caller. None, too, where there
+    is no ``fork`` (Windows: the command runs in this process, as before)."""
+    if not hasattr(os, "fork") or os.environ.get(ENV_VAR):
+        return None
+    fd, name = tempfile.mkstemp(prefix="nodegraph-leftovers-", suffix=".txt")
+    os.close(fd)
+    listing = Path(name)
+    parent = os.getpid()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:
+        os.environ[ENV_VAR] = name
+        _die_with(parent)
+        signal.signal(signal.SIGINT, stop)
+        signal.signal(signal.SIGTERM, stop)
+        return None
+    try:
+        return _wait(pid, listing)
+    finally:
+        listing.unlink(missing_ok=True)
+
+
+def _die_with(parent: int) -> None:
+    """Have the kernel kill this child if the parent dies first (SIGKILL to the parent: nothing is left running)."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG (Linux)
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # the parent died before the request was made
+        os._exit(1)
+
+
+def _wait(pid: int, listing: Path) -> int:
+    received: list[float] = []  # when each signal came
+
+    def forward(signum, frame) -> None:
+        received.append(time.monotonic())
+        try:
+            os.kill(pid, signum)
+        except ProcessLookupError:
+            pass
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, forward)
+    killed = False
+    status = None
+    while status is None:
+        done, code = os.waitpid(pid, os.WNOHANG)
+        if done:
+            status = code
+            break
+        # a second Ctrl-C: at once
+        if received and not killed and (len(received) > 1 or time.monotonic() - received[0] > GRACE):
+            os.kill(pid, signal.SIGKILL)
+            killed = True
+        time.sleep(0.02)
+    # stopped or killed: what it left unfinished goes; a run that ended by itself (done, or failed: its partial
+    # recording kept for what the failing node logged, as it says) cleaned up after itself
+    removed = remove_leftovers(listing) if received or os.WIFSIGNALED(status) else []
+    if killed:
+        if sys.stderr.isatty():
+            sys.stderr.write("\x1b[?25h\n")  # the progress bar hid the cursor
+        what = f"; removed {len(removed)} unfinished file(s)" if removed else ""
+        print(
+            f"interrupted: the running node did not stop within {GRACE:g} s and was ended{what}; "
+            "nodes that finished are cached",
+            file=sys.stderr,
+        )
+        return 130
+    return os.WEXITSTATUS(status) if os.WIFEXITED(status) else 128 + os.WTERMSIG(status)

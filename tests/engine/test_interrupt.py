@@ -1,0 +1,117 @@
+"""Ctrl-C and SIGTERM stop a run within 2 s, whichever node is running, and leave nothing half-written (issue 47)."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+TOY = str(Path(__file__).with_name("toy_nodes.py"))
+RECIPE = """\
+name: spinrun
+seed: 2
+effects: []
+outputs: [spin]
+nodes:
+  pts: {type: toy_points, params: {count: 6}}
+  spin: {type: toy_spin, inputs: {spheres: pts.spheres}, params: {steps: STEPS, started: "STARTED"}}
+"""
+
+
+def leftovers(folder: Path) -> list[str]:
+    """Partial recordings and temporary files under ``folder``."""
+    return sorted(str(p) for p in folder.rglob("*") if ".partial" in p.name or p.name.endswith(".tmp"))
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["INT", "TERM"])
+def test_a_signal_stops_a_run_inside_a_numba_kernel_within_2_s_and_leaves_no_partial_files(tmp_path, sig, node_started):
+    started = tmp_path / "started"
+    (tmp_path / "spin.yaml").write_text(RECIPE.replace("STEPS", str(10**12)).replace("STARTED", str(started)))
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "spin.yaml"), "--plugin", TOY]
+    command += ["--cache-dir", str(tmp_path / "cache"), "-q"]
+    proc = subprocess.Popen(
+        command,
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # as at a terminal (see test_recordings)
+    )
+    try:
+        runner = node_started(started, proc)
+        time.sleep(0.2)  # inside the loop, which holds the GIL
+        sent = time.monotonic()
+        proc.send_signal(sig)
+        try:
+            proc.wait(timeout=2.0)
+        except subprocess.TimeoutExpired:
+            pytest.fail("the run was still going 2 s after the signal")
+        took = time.monotonic() - sent
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    err = proc.stderr.read()
+    assert proc.returncode == 130, err
+    assert took < 2.0
+    assert "interrupted" in err
+    with pytest.raises(ProcessLookupError):  # the process that ran the node is gone too
+        os.kill(runner, 0)
+    assert not leftovers(tmp_path), leftovers(tmp_path)
+    assert (tmp_path / "cache" / "entries").is_dir()  # what finished (pts) is cached
+
+
+SLOW = """\
+name: slowstop
+seed: 2
+effects: []
+outputs: [slow]
+nodes:
+  pts: {type: toy_points, params: {count: 6}}
+  slow: {type: toy_slow, inputs: {spheres: pts.spheres}, params: {seconds: 30.0, started: "STARTED"}}
+"""
+
+
+def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
+    """Ctrl-C reaches every process of the terminal's group, the run's and the supervisor's, which passes it on:
+    the run stops once, by itself (a node in Python code stops at once), with its message and no traceback."""
+    started = tmp_path / "started"
+    (tmp_path / "slow.yaml").write_text(SLOW.replace("STARTED", str(started)))
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slow.yaml"), "--plugin", TOY]
+    command += ["--cache-dir", str(tmp_path / "cache")]
+    proc = subprocess.Popen(
+        command,
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own group, as a terminal's job: killpg is Ctrl-C
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        node_started(started, proc)
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=2.0)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    err = proc.stderr.read()
+    assert proc.returncode == 130, err
+    assert "interrupted; nodes that finished are cached" in err and "Traceback" not in err, err
+    assert "did not stop within" not in err  # it stopped by itself, not killed
+    assert not leftovers(tmp_path), leftovers(tmp_path)
+
+
+def test_a_failed_run_keeps_the_partial_recording_it_names(tmp_path):
+    """The supervisor removes what a stopped or killed run left, not what a failed run keeps on purpose."""
+    (tmp_path / "fail.yaml").write_text(
+        "name: failrun\noutputs: [boom.spheres]\nnodes:\n  pts: {type: toy_points}\n"
+        "  boom: {type: toy_fail, inputs: {spheres: pts.spheres}}\n"
+    )
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "fail.yaml"), "--plugin", TOY]
+    done = subprocess.run([*command, "--cache-dir", str(tmp_path / "c")], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 1, done.stderr
+    partial = tmp_path / "outputs" / "failrun" / "failrun.partial.rrd"
+    assert str(partial.name) in done.stderr and partial.is_file()

@@ -1,0 +1,49 @@
+"""The closing table of a run fits an 80-column terminal: one line per node, no cell wrapped (issue 47)."""
+
+import io
+
+from rich.console import Console
+
+from nodegraph.report import NodeRecord, Reporter
+
+# the rice bowl's nodes and types: the longest names a run of the project's recipes shows
+NODES = [
+    ("grain_spheres", "sphere_scatter", 16),
+    ("grain_field", "distance_field", 16),
+    ("rice", "element_library", 1),
+    ("implicit", "medial_spheres", 1),
+    ("rice_place", "poisson_place", 1),
+    ("refine", "overlap_refine", 1),
+    ("contact", "deform_contacts", 1),
+    ("preview", "preview", 1),
+]
+
+
+def table_lines(width: int) -> list[str]:
+    out = io.StringIO()
+    reporter = Reporter(console=Console(file=out, width=width))
+    for i, (node, kind, count) in enumerate(NODES):
+        for v in range(count):
+            label = node if count == 1 else f"{node}[{v}]"
+            status = "ran" if i % 2 else "cached"
+            reporter.record(NodeRecord(label, kind, status, 97.3 * i, 1.7 * 2**30, 0.0123, cpu_seconds=123.4 * i))
+    reporter.print_summary()
+    return out.getvalue().splitlines()
+
+
+def test_the_run_table_fits_80_columns_one_line_per_node():
+    lines = table_lines(80)
+    rows = [line for line in lines if line.startswith("│")]
+    assert len(rows) == len(NODES), "\n".join(lines)  # no cell wrapped onto a second line
+    assert max(len(line) for line in lines) <= 80
+    assert rows[0].split("│")[1].strip() == "grain_spheres" and "cached ×16" in rows[0]
+    wide = table_lines(160)
+    assert "deform_contacts" in "\n".join(wide)  # the type column where there is room
+
+
+def test_durations_read_back():
+    from nodegraph.report import format_duration, parse_duration
+
+    for seconds in (0.0002, 0.035, 1.23, 85.1, 987.0, 12000.0):
+        assert len(format_duration(seconds)) <= 7
+        assert abs(parse_duration(format_duration(seconds)) - seconds) <= 0.01 * seconds + 60 * (seconds > 3600)

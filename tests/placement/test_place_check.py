@@ -1,0 +1,66 @@
+"""``nodegraph check`` (and run, before any work) weighs a placement's r against the shape it fills (issue 47,
+item 2a, 2b): too large for the shape, or so small it would place more elements than a run starts on unasked."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+from nodegraph.cli import main
+
+RICE_BOWL = str(Path(__file__).resolve().parents[2] / "graphs" / "rice_bowl.yaml")
+
+
+def test_an_r_larger_than_the_shape_is_refused_by_check(capsys):
+    assert main(["check", RICE_BOWL, "--set", "rice_place.r=60"]) == 2
+    err = capsys.readouterr().err
+    assert "--set:1: node 'rice_place', r: 60 is larger than the shape 'bowl' (bowl) it fills" in err
+    assert "the shape spans 74.2 mm; allowed: r < 37.1" in err
+
+
+def test_a_placement_too_large_is_refused_unless_yes(capsys):
+    assert main(["check", RICE_BOWL, "--set", "rice_place.r=0.4"]) == 2
+    err = capsys.readouterr().err
+    assert "node 'rice_place', r: 0.4 would place ≈ 162,804 elements in 'bowl'" in err
+    assert "r ≥ 0.59 stays under; or run with --yes to go ahead" in err
+    assert main(["check", RICE_BOWL, "--set", "rice_place.r=0.4", "--yes"]) == 0
+    assert main(["check", RICE_BOWL, "--set", "rice_place.r=0.6"]) == 0  # the r it names passes
+
+
+def test_run_refuses_it_before_any_work(tmp_path):
+    command = [sys.executable, "-m", "nodegraph.cli", "run", RICE_BOWL, "--set", "rice_place.r=0.4"]
+    done = subprocess.run(  # the old code ran for minutes: the timeout fails it
+        [*command, "--cache-dir", str(tmp_path / "c")], cwd=tmp_path, capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 2 and "would place ≈ 162,804 elements" in done.stderr
+    assert not (tmp_path / "c").exists() and not (tmp_path / "outputs").exists()
+
+
+SMALL = """\
+name: small_place
+seed: 1
+outputs: [place.stats]
+nodes:
+  ball: {type: shape, params: {kind: sphere, size: 4.0, resolution: 2}}
+  place: {type: poisson_place, inputs: {shape: ball.mesh}, params: {mode: volume, r: 1.0}}
+"""
+LIST_MODULES = """
+import runpy, sys
+sys.argv = ["nodegraph", "run", *sys.argv[1:]]
+try:
+    runpy.run_module("nodegraph.cli", run_name="__main__")
+except SystemExit as stop:
+    assert not stop.code, stop.code
+print(" ".join(sorted(sys.modules)))
+"""
+
+
+def test_a_cached_rerun_does_not_weigh_r_again(tmp_path):
+    """The check makes the shape's mesh (trimesh: 0.6 CPU s): only when the placement is to run, not on a cached
+    re-run (issue 27: ≤ 1.5 s)."""
+    (tmp_path / "small.yaml").write_text(SMALL)
+    args = [str(tmp_path / "small.yaml"), "--cache-dir", str(tmp_path / "c"), "--no-rrd", "-q"]
+    command = [sys.executable, "-c", LIST_MODULES, *args]
+    first = subprocess.run(command, cwd=tmp_path, check=True, capture_output=True, text=True).stdout.split()
+    assert "trimesh" in first
+    again = subprocess.run(command, cwd=tmp_path, check=True, capture_output=True, text=True).stdout.split()
+    assert "nodegraph.cache" in again and "trimesh" not in again

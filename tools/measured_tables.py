@@ -1,0 +1,334 @@
+"""The docs' measured tables, rendered from ``benchmarks/measured/*.jsonl``.
+
+A measurement is one JSON line: what was measured, the command, its values, the unit, the machine's load and
+date, and the machine. A doc asks for a table between two marker comments::
+
+    <!-- table: scene_times -->
+    (generated)
+    <!-- /table -->
+
+    python tools/measured_tables.py            # rewrite every table in README.md and docs/*.md
+    python tools/measured_tables.py --check    # exit 1 if a doc differs from its data (tests/docs runs this)
+
+To change a figure, re-run its command and replace its line in the JSONL file, then run this tool; a number
+edited by hand in a doc fails the check.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+MEASURED = ROOT / "benchmarks" / "measured"
+MARKER = re.compile(r"(<!-- table: (?P<name>[a-z0-9_]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
+
+
+def records(name: str) -> list[dict]:
+    """The records of one JSONL file of ``benchmarks/measured/``."""
+    lines = (MEASURED / name).read_text().splitlines()
+    return [json.loads(line) for line in lines if line.strip()]
+
+
+def number(value, digits: int | None = None) -> str:
+    """A figure as the docs print it: a thousands separator, the decimals it was recorded with (or ``digits``),
+    "—" for none."""
+    if value is None or value == "":
+        return "—"
+    if isinstance(value, str):
+        return value
+    if isinstance(value, int) and not isinstance(value, bool):
+        return f"{value:,}"
+    return f"{value:,}" if digits is None else f"{value:,.{digits}f}"
+
+
+def value(key: str, digits: int | None = None):
+    return lambda r: number(r["values"].get(key), digits)
+
+
+def field(key: str, digits: int | None = None):
+    return lambda r: number(r.get(key), digits)
+
+
+def code(key: str):
+    return lambda r: f"`{r[key]}`"
+
+
+def pair(*keys: str, digits: int | None = None):
+    return lambda r: " / ".join(number(r["values"].get(k), digits) for k in keys)
+
+
+def ratio(a: str, b: str, digits: int = 2):
+    return lambda r: f"{r['values'][a] / r['values'][b]:.{digits}f}×"
+
+
+# name: (file, record filter, [(column header, cell)])
+TABLES = {
+    "scene_times": (
+        "scenes.jsonl",
+        None,
+        [
+            ("recipe", code("recipe")),
+            ("elements", field("elements")),
+            ("preview", field("preview")),
+            ("wall s", lambda r: f"**{number(r['values']['wall'])}**"),
+            ("nodes' CPU s", value("nodes_cpu")),
+            ("slowest nodes, wall s (CPU s)", field("slowest_nodes")),
+        ],
+    ),
+    "main_job": (
+        "main_job.jsonl",
+        None,
+        [
+            ("run", field("what")),
+            ("wall s", value("wall")),
+            ("CPU s", lambda r: number(r["values"].get("cpu", r["values"].get("compile")))),
+            ("command", code("command")),
+        ],
+    ),
+    "compile_kernels": (
+        "compile.jsonl",
+        None,
+        [
+            ("kernel", code("kernel")),
+            ("argument types", field("arguments")),
+            ("compile s", value("compile", 2)),
+            ("CPU s", value("cpu", 2)),
+        ],
+    ),
+    "xpbd_newton": (
+        "xpbd_newton.jsonl",
+        None,
+        [
+            ("particles", field("particles")),
+            ("threads, ours / Newton", lambda r: "1 / 1" if "one thread each" in r["what"] else "2 / 1"),
+            ("unit", field("unit")),
+            ("ours", value("ours")),
+            ("Newton", value("newton")),
+            ("ratio", ratio("ours", "newton")),
+        ],
+    ),
+    "roofline": (
+        "roofline.jsonl",
+        None,
+        [
+            ("what", field("what")),
+            ("threads", field("threads")),
+            ("value", lambda r: number(next(iter(r["values"].values())))),
+            ("unit", field("unit")),
+            ("load", field("load")),
+        ],
+    ),
+    "skin_by_variety": (
+        "skin.jsonl",
+        None,
+        [
+            ("variety", field("variety")),
+            ("water %", field("water_content")),
+            ("grains", field("grains")),
+            ("contacts per grain", field("contacts_per_grain", 2)),
+            ("library", value("library", 3)),
+            ("after the run", value("after_run", 3)),
+            ("after deform_contacts, mean / p90", pair("after_contact_mean", "after_contact_p90", digits=3)),
+        ],
+    ),
+    "contact_offset": (
+        "contact_offset.jsonl",
+        None,
+        [
+            ("`contact_offset` (radii)", field("contact_offset", 2)),
+            ("skin 0 % / 15 % / 24 %", pair("skin_0", "skin_15", "skin_24", digits=3)),
+            ("packing 0 % / 15 %", pair("packing_0", "packing_15", digits=2)),
+            ("contacts per grain 0 % / 15 %", pair("contacts_0", "contacts_15")),
+        ],
+    ),
+    "ice_whiteness": (
+        "ice.jsonl",
+        lambda r: "depth_128" in r["values"],
+        [("ice", field("ice"))]
+        + [(f"depth {d}", value(f"depth_{d}", 2)) for d in (10, 32, 64, 128, 256)]
+        + [("render CPU s at 128", value("cpu_128"))],
+    ),
+    "ice_cost": (
+        "ice.jsonl",
+        lambda r: "cpu_ratio" in r["values"],
+        [
+            ("median CPU s, medium / thin diffuser", pair("cpu_a", "cpu_b")),
+            ("CPU ratio", value("cpu_ratio", 2)),
+            ("wall ratio", value("wall_ratio", 2)),
+        ],
+    ),
+    "glints": (
+        "glints.jsonl",
+        None,
+        [
+            ("", field("quantity")),
+            ("preview (pinhole + circle of confusion)", value("preview")),
+            ("thin lens, 64 spp", value("lens_64spp")),
+        ],
+    ),
+    "blender": (
+        "blender.jsonl",
+        None,
+        [
+            ("render", field("renderer")),
+            ("egg", value("egg")),
+            ("rice", value("rice")),
+            ("rice between eggs", value("between")),
+            ("R share between", value("r_share_between", 2)),
+        ],
+    ),
+    "contact": (
+        "contact.jsonl",
+        None,
+        [
+            ("recipe", code("recipe")),
+            ("elements", field("elements")),
+            ("winding p95 / max (L)", value("winding_p95_max")),
+            ("pseudonormal p95 / max (L)", value("pseudonormal_p95_max")),
+            ("pairs > 1 %", value("pairs_over_1pct")),
+            ("folded pairs / faces", value("folded_pairs")),
+            ("volume error p95 / max (> 2 %)", value("volume_error")),
+            ("contact CPU s", value("contact_cpu")),
+            ("total s", value("total")),
+        ],
+    ),
+    "blender_instancing": (
+        "blender_instancing.jsonl",
+        None,
+        [
+            ("file", field("file")),
+            ("objects", value("objects")),
+            ("meshes", value("meshes")),
+            ("mesh data", value("mesh_data")),
+            ("import s", value("import_s")),
+            ("bytes", value("bytes")),
+        ],
+    ),
+    "preview_budget": (
+        "preview_budget.jsonl",
+        None,
+        [
+            ("spp", lambda r: str(r["config"]["spp"])),
+            ("roulette from bounce", lambda r: str(r["config"]["rr_depth"])),
+            ("glint spp", lambda r: str(r["config"]["glint_spp"])),
+            ("guide spp", lambda r: str(r["config"]["guide_spp"])),
+            ("PSNR (dB)", value("psnr")),
+            ("SSIM", value("ssim")),
+            ("CPU s", value("cpu")),
+        ],
+    ),
+    "preview_sample_cost": (
+        "preview_sample_cost.jsonl",
+        None,
+        [("variant", field("variant")), ("CPU s", value("cpu")), ("eggs' red (linear)", value("eggs_red"))],
+    ),
+    "preview_guides": (
+        "preview_guides.jsonl",
+        None,
+        [
+            ("guide spp", lambda r: str(r["config"]["guide_spp"])),
+            ("OIDN", lambda r: r["config"]["oidn"]),
+            ("PSNR (dB)", value("psnr")),
+            ("SSIM", value("ssim")),
+        ],
+    ),
+    "latency": (
+        "latency.jsonl",
+        None,
+        [
+            ("what", field("what")),
+            ("wall s", value("wall")),
+            ("CPU s", value("cpu")),
+            ("load", field("load")),
+            ("command", code("command")),
+        ],
+    ),
+    "recording": (
+        "recording.jsonl",
+        None,
+        [
+            (".rrd MB", value("rrd_mb")),
+            ("chunks (MiB, count)", lambda r: f"{r['values']['chunks_mib']} MiB, {r['values']['chunks']}"),
+            ("entities with data", value("entities")),
+            ("`/shade/scene` MiB", value("shade_scene_mib")),
+            ("read into a chunk store s", value("read_s")),
+            ("viewer ingest s", value("viewer_ingest_s")),
+            ("shade's outputs logged s", value("shade_log_s")),
+        ],
+    ),
+    "rerun_logging": (
+        "rerun_logging.jsonl",
+        None,
+        [
+            ("node", field("node")),
+            ("load ms", value("load_ms")),
+            ("cold log ms", value("cold_log_ms")),
+            ("cached replay ms", value("replay_ms")),
+            ("fragment MB", value("fragment_mb")),
+        ],
+    ),
+    "cut_islands": (
+        "cut.jsonl",
+        None,
+        [
+            ("`cut.islands`", field("islands")),
+            ("grains kept", value("kept")),
+            ("pieces", value("pieces")),
+            ("", field("note")),
+        ],
+    ),
+}
+
+
+def render(name: str) -> str:
+    """One table in Markdown, with a line saying where, how and when its figures were measured."""
+    file, keep, columns = TABLES[name]
+    rows = [r for r in records(file) if keep is None or keep(r)]
+    lines = ["| " + " | ".join(h for h, _ in columns) + " |", "|" + "---|" * len(columns)]
+    lines += ["| " + " | ".join(cell(r) for _, cell in columns) + " |" for r in rows]
+
+    def distinct(key):
+        return list(dict.fromkeys(str(r.get(key, "")) for r in rows if r.get(key)))
+
+    shown = any(h == "command" for h, _ in columns)
+    commands = "" if shown else " by " + " · ".join(f"`{c}`" for c in distinct("command"))
+    source = (
+        f"Measured on {', '.join(distinct('machine'))}{commands}; load {', '.join(distinct('load'))}; "
+        f"{', '.join(distinct('date'))}. Data: `benchmarks/measured/{file}`."
+    )
+    return "\n".join(lines) + "\n\n" + source + "\n"
+
+
+def rewrite(text: str) -> str:
+    """The text with every marked table rendered from the data; an unknown table name raises KeyError."""
+    return MARKER.sub(lambda m: m.group(1) + render(m.group("name")) + m.group(4), text)
+
+
+def documents() -> list[Path]:
+    return [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="change nothing; exit 1 if a doc is stale")
+    args = parser.parse_args(argv)
+    stale = []
+    for path in documents():
+        text = path.read_text()
+        new = rewrite(text)
+        if new != text:
+            stale.append(path.relative_to(ROOT))
+            if not args.check:
+                path.write_text(new)
+    verb = "stale" if args.check else "rewritten"
+    for path in stale:
+        print(f"{path}: {verb}")
+    return 1 if args.check and stale else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
