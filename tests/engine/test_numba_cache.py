@@ -104,7 +104,7 @@ from nodegraph.values import Table
 from toy_kernels import double  # decorated as the plugin loads, before any run starts
 
 
-@node("kernel_toy", version=1, outputs={"table": Out(Table, "doubled")})
+@node("kernel_toy", outputs={"table": Out(Table, "doubled")})
 def kernel_toy(ctx):
     """Runs one numba kernel."""
     return Table({"x": double(np.arange(4.0))})
