@@ -26,6 +26,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from nodes.simulation.clusters import element_cluster
 from nodes.simulation.shape_matching import quadratic_moments
 

@@ -28,6 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 REPO = Path(__file__).resolve().parents[1]
 CHECKERS_ENV_VAR = "NODEGRAPH_CHECKERS"
 

@@ -18,6 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ["bunny.size=16.0", "grain_spheres.variants=2", "grain_volume.resolution=24", "press.frames=2"]
 

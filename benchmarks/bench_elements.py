@@ -33,6 +33,10 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from nodes.elements import base_mesh, distance_field, expand, remesh, sphere_scatter, voxelise
 from nodes.elements.level_set_mesh import grain_surface
 from nodes.elements.sphere_sampling import surface_points

@@ -33,6 +33,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 ROOT = Path(__file__).resolve().parent.parent
 LIMIT = 12
 

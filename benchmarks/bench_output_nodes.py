@@ -87,7 +87,7 @@ def time_nodes(name: str, cache: Path, types: list[str], overrides: list[str]) -
         value = entry.spec.run(ctx, **inputs, **entry.params)
         wall, cpu, after = time.perf_counter() - wall, time.process_time() - cpu, os.times()
         children = after.children_user + after.children_system - before.children_user - before.children_system
-        # the children: measure's forked processes (nodes/quality/forked.py), joined before it returns
+        # the children: processes a node started and joined before it returned (none now: nodegraph/runtime.py)
         print(f"{node}: wall {wall:.2f} s CPU {cpu:.2f} s + {children:.2f} s in child processes", flush=True)
         if entry.spec.type_name == "measure":
             out[node] = {k: np.asarray(v).tolist() for k, v in value.columns.items()}

@@ -21,6 +21,10 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from nodegraph.values import Mesh
 from nodes.placement import cull, mix_ratio, poisson_place, rotate
 from nodes.shapes import shape

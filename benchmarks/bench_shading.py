@@ -17,6 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from nodes.shading.cdrf import CdrfTable, cdrf_exact, cdrf_quadrature, curvature_sigma, sigma0_from_water
 
 

@@ -29,6 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 ROOT = Path(__file__).resolve().parents[1]
 RECIPES = ["ikura_don", "rice_bowl", "onigiri", "sushi", "rice_bunny", "rice_chestnut", "water_series"]
 VARIETIES = ["japonica", "indica", "aromatic"]

@@ -23,6 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from nodes.tearing.body import BodySettings, ElasticBody
 from nodes.tearing.elastic_body import pull_field
 from nodes.tearing.surface_mesh import SurfaceMesh, cube_surface, union_labels

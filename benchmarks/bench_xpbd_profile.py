@@ -18,6 +18,10 @@ import time
 from collections import Counter
 from pathlib import Path
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from bench_xpbd_newton import SUBSTEPS, box_solver
 from machine import conditions
 

@@ -15,6 +15,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 from bench_xpbd import RICE, pile_measures
 from machine import conditions
 

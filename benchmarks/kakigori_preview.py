@@ -12,6 +12,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -16,6 +16,10 @@ from collections import defaultdict
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 
 def element_vertices(path: str) -> dict[str, list[np.ndarray]]:
     """Each glTF mesh's vertices in the scene's own Z-up millimetres (the root node's Y-up metres undone)."""

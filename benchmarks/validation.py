@@ -19,6 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
 
 REPO = Path(__file__).resolve().parents[1]

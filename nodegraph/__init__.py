@@ -1,9 +1,5 @@
 """nodegraph: typed, cached, pull-based node graphs for procedural elastic aggregates."""
 
-from . import numba_cache
-
-numba_cache.configure()  # before any kernel module imports numba
-
 from .context import Context
 from .errors import Issue, NodeFailure, NodegraphError, RecipeError
 from .node import In, Moved, NodeSpec, Out, node

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from . import interrupt
+from . import interrupt, runtime
 from .cache import (
     LIMIT_ENV_VAR,
     LIMIT_FILE,
@@ -791,6 +791,7 @@ def main(argv: list[str] | None = None) -> int:
         # the recording is closed as partial beside the last complete one
         signal.signal(signal.SIGTERM, _interrupt)
     args = build_parser().parse_args(argv)
+    runtime.configure()  # numba's kernel cache, before any node imports a kernel module (and before the fork)
     if argv is None and args.command in ("run", "sweep", "watch"):
         # in a child that a signal stops within interrupt.GRACE seconds, whatever its node is doing
         status = interrupt.supervise()

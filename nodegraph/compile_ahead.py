@@ -22,7 +22,12 @@ a busy machine it compiled next to nothing (docs/performance.md).
 A run that ends with every kernel of its worker's jobs in hand (compiled or loaded, so in numba's cache) marks
 them cached (``CompileAhead.cached``): the next run with the same kernels, code and numba starts no worker, which
 would only load them before the run does (1.6 CPU s of the main job's run from an empty node cache).
-Off: ``NODEGRAPH_COMPILE_AHEAD=off``.
+The worker starts only onto a free core (``core_free``: the load average leaves one idle besides the run's own;
+``nodegraph/runtime.py``): on a busy machine it has no core of its own, only a share of the run's, and two
+compilations side by side each ran slower (the main job's first run, ``--draft``, at load 8–12: 1.08× and 1.20×
+the wall, 1.12× and 1.07× the CPU seconds with the worker, two pairs; docs/performance.md, "One policy for parallel
+work").
+``NODEGRAPH_COMPILE_AHEAD=off``: never; ``on``: whatever the load; unset (``auto``): onto a free core.
 
 ``python benchmarks/bench_compile.py --record`` rewrites the record from a first run of the main job.
 """
@@ -133,8 +138,11 @@ class CompileAhead:
     @classmethod
     def start(cls, recipe, order: list, to_run: set) -> CompileAhead | None:
         """A started worker for the kernels ``to_run`` needs, or None (switched off, nothing recorded, or it
-        could not start: the run compiles them itself)."""
-        if os.environ.get(ENV_VAR, "").lower() in ("off", "0", "false", "no"):
+        could not start, or no core is free: the run compiles them itself)."""
+        setting = os.environ.get(ENV_VAR, "auto").lower()
+        if setting in ("off", "0", "false", "no"):
+            return None
+        if setting == "auto" and not core_free():
             return None
         try:
             ahead = cls(plan_jobs(recipe, order, to_run))
@@ -153,11 +161,11 @@ class CompileAhead:
         import hashlib
         from importlib.metadata import version
 
-        from . import numba_cache
+        from . import numba_cache, runtime
         from .code_digest import module_digest
         from .registry import node_package_names
 
-        numba_cache.configure()
+        runtime.configure()
         packages = set(node_package_names()) | {"nodegraph"}
         rows = []
         for job in sorted(self.jobs, key=lambda job: (job.module, job.name, job.args)):
@@ -176,9 +184,9 @@ class CompileAhead:
         return marker is not None and marker.is_file()
 
     def spawn(self) -> None:
-        from . import numba_cache
+        from . import runtime
 
-        numba_cache.configure()  # the worker compiles into the run's cache, with the run's locator
+        runtime.configure()  # the worker compiles into the run's cache, with the run's locator
         self.process = subprocess.Popen(
             self.command,
             stdin=subprocess.PIPE,
@@ -227,6 +235,16 @@ class CompileAhead:
             process.wait()
 
 
+def core_free() -> bool:
+    """Whether a core is idle besides the one this run uses: the 1-minute load average plus one is at most the
+    cores this process may run on (no load average: assumed free)."""
+    try:
+        load = os.getloadavg()[0]
+    except OSError:
+        return True
+    return load + 1.0 <= len(os.sched_getaffinity(0))
+
+
 def latest_first(jobs: list[Job]) -> list[Job]:
     """The worker's order: the last node's kernels first and, within a node, its last kernel first, so that the
     run (first to last) and the worker meet in the middle."""
@@ -267,9 +285,9 @@ def main() -> None:
         reached[0] = sys.maxsize  # the run closed the pipe (it ended, or died): stop at the next kernel
 
     threading.Thread(target=follow, daemon=True).start()
-    from . import numba_cache
+    from . import runtime
 
-    numba_cache.configure()
+    runtime.configure()
     work(jobs, reached)
 
 

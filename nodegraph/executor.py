@@ -17,7 +17,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Protocol
 
-from . import __version__, codec, interrupt, node_times
+from . import __version__, codec, interrupt, node_times, runtime
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
@@ -129,6 +129,7 @@ class Executor:
     # running ----------------------------------------------------------------------------------
     def run(self, outputs: list[Wire] | None = None) -> RunResult:
         """Materialise the requested outputs (default: the recipe's) and everything they need."""
+        runtime.configure()  # numba's kernel cache, before the nodes import their kernel modules
         outputs = list(outputs or self.recipe.outputs)
         order = self.plan({w.node for w in outputs})
         if self.cache is not None:
@@ -542,7 +543,7 @@ class Beside:
     only ever run in the second thread then. ``run`` returns once both are done; if ``main`` fails, the second
     thread stops after the instance it is computing. ``elapsed``: the node's own wall time; ``cpu``: the second
     thread's CPU seconds (the node's CPU is the process's less this one; each instance beside it gets its thread's
-    own, so numba worker threads those instances start count to the node)."""
+    own, so numba worker threads those instances start count to the node). The policy it belongs to: ``runtime``."""
 
     def __init__(self, main: Instance, order: list[Instance], side: list[Instance], visit, executor: Executor):
         self.main, self.order, self.side, self.visit = main, order, side, visit

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
+from . import runtime
 from .cache import Cache
 from .errors import NodeFailure, NodegraphError
 from .executor import Executor
@@ -81,6 +82,7 @@ def run_job(job: Job, cache_dir: str, *_upstream) -> JobResult:
     """What a worker does with a job: load the recipe, check the key, compute the instance into the cache.
     The upstream results are passed only so that a scheduler runs this after them. An instance another
     worker finished meanwhile (a retried job) is loaded, not recomputed."""
+    runtime.configure()  # numba's kernel cache in this worker process, before the node imports its kernels
     inst = Instance(job.node, job.variant)
     try:
         recipe = load_for_job(job.recipe)

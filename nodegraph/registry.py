@@ -102,7 +102,12 @@ def node_package_names() -> list[str]:
 
 
 def default_registry(plugins: Iterable[str | Path] = (), entry_point_modules: bool = True) -> Registry:
-    """Installed node packages (entry points, the built-in ones among them), then ``--plugin`` files."""
+    """Installed node packages (entry points, the built-in ones among them), then ``--plugin`` files; numba's
+    kernel cache is configured first (``runtime.configure``): a module that decorates a kernel as it is imported
+    gets the project's cache and locator."""
+    from . import runtime
+
+    runtime.configure()
     registry = Registry()
     if entry_point_modules:
         loaded: set[str] = set()

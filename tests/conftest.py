@@ -6,9 +6,14 @@ import tempfile
 
 import pytest
 
+from nodegraph import runtime
+
 # the suite remembers code digests in a file of its own, not in the user's cache (``nodegraph.code_digest``);
 # processes it starts inherit the choice
 os.environ.setdefault("NODEGRAPH_CODE_DIGESTS", os.path.join(tempfile.mkdtemp(prefix="nodegraph-digests-"), "d.json"))
+# numba's kernel cache and per-module locator, as a run has them (``import nodegraph`` sets nothing), before a test
+# imports a kernel module; processes the tests start inherit them
+runtime.configure()
 
 
 @pytest.fixture(scope="session")

@@ -24,6 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
+from nodegraph import runtime
+
+runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+
 REPO = Path(__file__).resolve().parents[1]
 SCRIPT = REPO / "tools" / "blender_render_glb.py"
 

@@ -12,8 +12,6 @@ Two routes, both signed (positive inside, negative outside, in mm):
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 
 from ..kernel_arrays import kernel_array
@@ -23,7 +21,10 @@ METRICS = ("euclidean", "manhattan")
 
 
 def _threads() -> int:
-    return max(1, min(os.cpu_count() or 1, 8))
+    """edt's threads: numba's thread count, the process's cores (nodegraph/runtime.py), at most 8."""
+    import numba
+
+    return max(1, min(numba.get_num_threads(), 8))
 
 
 def cell_distance(mask: np.ndarray, metric: str) -> np.ndarray:

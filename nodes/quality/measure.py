@@ -50,14 +50,10 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
     """Mesh-level quality of the aggregates together (elements of one may touch another's); a warning when
     elements end outside their vessels."""
     import numpy as np
-    from numba import get_num_threads
 
-    from ..simulation.threads import FreeCores
-    from .forked import run_tasks
     from .mesh_overlap import outer_shell, overlap_plan
     from .skin import interior_edges
 
-    cores = FreeCores(get_num_threads())  # measures, while the meshes are built, the cores other processes use
     meshes, keys, bounds, centres, radii = [], [], [], [], []
     for aggregate in aggregates:
         p = aggregate.placement
@@ -85,9 +81,8 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
     picked = np.sort(ctx.rng.choice(n, size=min(sample, n), replace=False))
     bounds = np.array(bounds)
     plan = overlap_plan(meshes, np.array(centres), np.array(radii), picked, contact, bounds)
-    # The libigl calls, the volumes, the hull and the skin scores as independent tasks on the cores numba may use
-    # and other processes leave free (forked processes: libigl holds the GIL); each task's result is the same in
-    # any process.
+    # The libigl calls, the volumes, the hull and the skin scores, in one thread: libigl holds the GIL, and this node
+    # runs beside the preview (executor.Beside), which keeps both cores busy (nodegraph/runtime.py)
     edges = {}  # per library mesh: its interior edges (the skin score's topology)
     for i in picked.tolist():
         if keys[i] not in edges:
@@ -100,7 +95,7 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
         *(partial(_skins, meshes, keys, edges, part) for part in skins),
         partial(_hull_volume, meshes),
     ]
-    results = run_tasks(tasks, _processes(len(plan.tasks), cores))
+    results = [task() for task in tasks]
     stats = plan.stats(results[: len(plan.tasks)])
     volumes = [v for part in results[len(plan.tasks) : len(plan.tasks) + len(chunks)] for v in part]
     scores = [s for part in results[len(plan.tasks) + len(chunks) : -1] for s in part]
@@ -125,16 +120,6 @@ def measure(ctx, aggregates, vessels=None, *, sample, contact):
 
 VOLUMES_PER_TASK = 256  # elements whose volumes one task sums (≈ 30 ms)
 SKINS_PER_TASK = 32  # sampled elements whose skin one task scores (≈ 20 ms)
-PARALLEL_FROM = 16  # libigl tasks (8 neighbour meshes each, ≈ 3 ms a mesh) worth forking a process for
-
-
-def _processes(overlap_tasks: int, cores) -> int:
-    """How many processes run the tasks: the cores other processes have left free of numba's thread count (the cores
-    the run may use; ``FreeCores``) when the libigl calls are worth a fork (a few ms in a large process), else one.
-    A core another process keeps busy is not worth a child: this machine's kernel shares the CPU out per session
-    (autogroup), so the child's work comes out of this process's share, and the two took 5–10 % more CPU s than one
-    (the lying cylinder's inputs at load 5: 8.5–9.0 CPU s against 7.9–8.4, the wall no shorter)."""
-    return cores.threads() if overlap_tasks >= PARALLEL_FROM else 1
 
 
 def _volumes(meshes: list, elements: range) -> list[float]:

@@ -11,9 +11,8 @@ tested. Hand-written around igl because trimesh's signed distance is ~100× slow
 (ENVIRONMENT.md).
 
 Most of the cost is libigl building each neighbour's AABB tree and winding-number hierarchy (≈ 2.3 ms for a
-900-vertex grain, then ≈ 7 µs a point), and libigl holds the GIL: ``overlap_plan`` hands its calls out as tasks
-that forked processes can share (``forked.run_tasks``; each call's values are its own, so any split gives the
-same floats)."""
+900-vertex grain, then ≈ 7 µs a point); ``overlap_plan`` groups the calls into tasks (8 neighbour meshes each), each
+giving its own values, run in turn in one thread: libigl holds the GIL (``nodegraph/runtime.py``)."""
 
 from __future__ import annotations
 
@@ -21,8 +20,6 @@ from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
-
-from .forked import run_tasks
 
 
 @dataclass(frozen=True)
@@ -63,20 +60,18 @@ def element_overlaps(
     sample: np.ndarray,
     contact: float = 0.02,
     bounds: np.ndarray | None = None,
-    processes: int = 1,
 ) -> OverlapStats:
     """Depths and contacts of ``sample`` elements against their neighbours (bounding spheres within the
     contact distance). ``meshes[i]`` = (vertices, faces, length) of element i's outer shell; ``bounds[i]`` its
-    vertices' (min, max) (computed when not given); ``processes``: how many processes run the libigl calls
-    (``forked.run_tasks``; the same values for any count)."""
+    vertices' (min, max) (computed when not given)."""
     plan = overlap_plan(meshes, centres, radii, sample, contact, bounds)
-    return plan.stats(run_tasks(plan.tasks, processes))
+    return plan.stats([task() for task in plan.tasks])
 
 
 @dataclass(frozen=True)
 class OverlapPlan:
-    """The touching candidates of a sample and the libigl calls that measure them: ``tasks`` (to run in any
-    process, ``forked.run_tasks``) each give the closest signed distance of their pairs, in ``order``."""
+    """The touching candidates of a sample and the libigl calls that measure them: ``tasks`` (independent calls,
+    run in any order) each give the closest signed distance of their pairs, in ``order``."""
 
     rows: np.ndarray  # (pairs,) each pair's row in ``sample``
     lengths: np.ndarray  # (pairs,) the sampled element's length

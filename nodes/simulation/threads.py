@@ -7,7 +7,8 @@ the same 10k-sphere profile ran 366 and then 12 substeps/s on two threads, as th
 processes came and went, and one thread launched in 2.8 µs where two took 370 µs. So the solver
 measures, between frames, how much CPU the other processes used (``/proc/stat`` minus this
 process's own time) and runs on the cores they leave. The kernels' results do not depend on the
-thread count (tested), only their speed. Hand-written: no library reports "cores used by other
+thread count (tested), only their speed. Only the solver adapts so (``nodegraph/runtime.py``, the policy for parallel
+work: other kernels run on numba's thread count). Hand-written: no library reports "cores used by other
 processes" (psutil gives the same numbers from the same files, as one more dependency).
 """
 

@@ -81,6 +81,13 @@ nodes:
 """
 
 
+@pytest.fixture(autouse=True)
+def _whatever_the_load(monkeypatch):
+    """The worker starts here whatever the machine's load (by default only onto a free core: ``core_free``); the
+    runs these tests start inherit it."""
+    monkeypatch.setenv(compile_ahead.ENV_VAR, "on")
+
+
 def _setup(tmp_path: Path, effects: str = "") -> None:
     (tmp_path / "ahead.py").write_text(PLUGIN)
     (tmp_path / "ahead_kernels.py").write_text(KERNELS)
@@ -248,3 +255,27 @@ def test_a_run_whose_kernels_are_all_cached_starts_no_worker(tmp_path, monkeypat
     assert CompileAhead.start(recipe, order, set(order)) is None and len(spawned) == 1
     (tmp_path / "ahead_kernels.py").write_text(KERNELS + "\n# edited\n")
     assert CompileAhead.start(recipe, order, set(order)) is not None and len(spawned) == 2
+
+
+@pytest.mark.parametrize("load, starts", [(0.3, True), (1.6, False), (9.0, False)])
+def test_by_default_the_worker_starts_only_onto_a_free_core(tmp_path, monkeypatch, load, starts):
+    """Unset, the worker starts only when the load average leaves a core idle besides the run's own: on a busy
+    machine it only took a share of the run's cores (the main job's first run at load 8-12: 1.08x and 1.20x the
+    wall). Failed when it started at any load."""
+    from nodegraph.plan import Instance
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+
+    _setup(tmp_path)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "ahead_kernels", raising=False)  # not loaded by an earlier test: jobs to plan
+    monkeypatch.delenv(compile_ahead.ENV_VAR)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    monkeypatch.setattr(os, "getloadavg", lambda: (load, load, load))
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
+    recipe = load_recipe(tmp_path / "recipe.yaml", default_registry(plugins=[tmp_path / "ahead.py"]))
+    order = [Instance("early"), Instance("late")]
+    spawned = []
+    monkeypatch.setattr(CompileAhead, "spawn", lambda self: spawned.append(self.jobs))
+    assert (CompileAhead.start(recipe, order, set(order)) is not None) == starts
+    assert len(spawned) == (1 if starts else 0)

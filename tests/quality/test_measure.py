@@ -84,11 +84,10 @@ def test_skin_column_reads_the_element_meshes():
     assert column(measure.call(aggregates=[Aggregate(aggregate.placement, (library,))]), "skin") > 0.0
 
 
-@pytest.mark.parametrize("processes", [1, 2])
-def test_volume_and_overlaps_are_those_of_trimesh_and_a_libigl_call_per_pair(processes):
+def test_volume_and_overlaps_are_those_of_trimesh_and_a_libigl_call_per_pair():
     """The fast paths give the very floats of what they replace: ``volume`` is trimesh's mass-properties volume,
-    and one signed-distance call per neighbour (on every sampled element's points near it, in one process or
-    two) gives each pair the depth of a call per pair."""
+    and one signed-distance call per neighbour (on every sampled element's points near it) gives each pair the
+    depth of a call per pair."""
     import igl
 
     from nodes.quality.mesh_overlap import element_overlaps, volume
@@ -103,7 +102,7 @@ def test_volume_and_overlaps_are_those_of_trimesh_and_a_libigl_call_per_pair(pro
     centres = np.array([0.5 * (v.min(0) + v.max(0)) for v, _, _ in meshes])
     radii = np.array([np.linalg.norm(v - c, axis=1).max() for (v, _, _), c in zip(meshes, centres)])
     sample = np.arange(0, 40, 2)
-    stats = element_overlaps(meshes, centres, radii, sample, processes=processes)
+    stats = element_overlaps(meshes, centres, radii, sample)
     depths, contacts = [], np.zeros(len(sample), np.int64)  # a libigl call per pair, as before the grouping
     for row, i in enumerate(sample):
         vertices, _, length = meshes[i]

@@ -1,22 +1,14 @@
-"""measure on two cores gives the very floats of the serial measure it replaced (kept below as the reference), and
-the forked task runner returns what a serial run returns, whoever computes each task."""
+"""measure, its libigl calls grouped into tasks, gives the very floats of the measure it replaced (kept below as the
+reference)."""
 
 from __future__ import annotations
 
-import importlib
-import os
-import time
-
 import numpy as np
-import pytest
 import trimesh
 
 from nodegraph.values import Mesh
 from nodes.quality import measure
-from nodes.quality.forked import run_tasks
 from nodes.values import Aggregate, ElementLibrary, Placement
-
-measure_module = importlib.import_module("nodes.quality.measure")
 
 
 def reference_measure(aggregates, seed, sample=300, contact=0.02) -> dict[str, float]:
@@ -167,9 +159,7 @@ def pile(seed: int = 7) -> list[Aggregate]:
     ]
 
 
-@pytest.mark.parametrize("processes", [1, 2])
-def test_measure_gives_the_floats_of_the_serial_reference(monkeypatch, processes):
-    monkeypatch.setattr(measure_module, "_processes", lambda tasks, cores: processes)
+def test_measure_gives_the_floats_of_the_serial_reference():
     aggregates = pile()
     table = measure.call(seed=5, aggregates=aggregates, sample=60)
     expected = reference_measure(aggregates, seed=5, sample=60)
@@ -179,9 +169,8 @@ def test_measure_gives_the_floats_of_the_serial_reference(monkeypatch, processes
     assert got == {name: float(value) if isinstance(value, np.floating) else value for name, value in expected.items()}
 
 
-def test_a_sample_of_all_elements_in_many_tasks(monkeypatch):
-    """Every element sampled, eight libigl tasks and more, on two processes: still the reference's floats."""
-    monkeypatch.setattr(measure_module, "_processes", lambda tasks, cores: 2)
+def test_a_sample_of_all_elements_in_many_tasks():
+    """Every element sampled, eight libigl tasks and more: still the reference's floats."""
     aggregates = pile(seed=11)
     table = measure.call(seed=2, aggregates=aggregates, sample=1000)
     expected = reference_measure(aggregates, seed=2, sample=1000)
@@ -191,113 +180,26 @@ def test_a_sample_of_all_elements_in_many_tasks(monkeypatch):
     }
 
 
-def _pid_and_square(x):
-    time.sleep(0.005)  # long enough for the child to start and take some (a fork takes milliseconds)
-    return os.getpid(), x * x
+def test_measure_forks_no_process_even_with_free_cores(monkeypatch):
+    """No fork of a running process (nodegraph/runtime.py): a fork copies the forking thread alone, and OpenBLAS's
+    fork handler stopped its workers under another thread's matrix product (a run hung: 8feda45). measure forked
+    children for its libigl calls when ``FreeCores`` found a free core; it failed here then."""
+    import os
 
-
-def test_forked_tasks_are_those_of_a_serial_run_and_run_in_a_child():
-    tasks = [lambda x=x: _pid_and_square(x) for x in range(100)]
-    results = run_tasks(tasks, 2)
-    assert [r[1] for r in results] == [x * x for x in range(100)]
-    assert {r[0] for r in results} - {os.getpid()}  # a child computed some of them
-
-
-def test_only_the_main_thread_forks():
-    """From a second thread (``measure`` beside the preview, ``executor.Beside``) the tasks run in that thread: a
-    fork there stopped OpenBLAS's workers under the main thread's matrix product, which then waited forever."""
-    import threading
-
-    tasks = [lambda x=x: _pid_and_square(x) for x in range(100)]
-    out = []
-    thread = threading.Thread(target=lambda: out.append(run_tasks(tasks, 2)))
-    thread.start()
-    thread.join()
-    assert [r[1] for r in out[0]] == [x * x for x in range(100)]
-    assert {r[0] for r in out[0]} == {os.getpid()}
-
-
-def test_a_child_that_dies_leaves_its_tasks_to_the_parent():
-    parent = os.getpid()
-
-    def task(x):
-        if os.getpid() != parent:
-            os._exit(3)  # the child dies without sending anything
-        time.sleep(0.005)  # the child starts meanwhile and takes a task
-        return x + 1
-
-    assert run_tasks([lambda x=x: task(x) for x in range(50)], 2) == list(range(1, 51))
-
-
-def test_a_task_that_raises_raises_in_the_parent():
-    def task(x):
-        time.sleep(0.005)
-        if x == 7:
-            raise ValueError("task 7")
-        return x
-
-    with pytest.raises(ValueError, match="task 7"):
-        run_tasks([lambda x=x: task(x) for x in range(20)], 2)
-
-
-def test_a_stuck_child_is_ended_and_its_tasks_run_here(monkeypatch):
-    from nodes.quality import forked
-
-    monkeypatch.setattr(forked, "LATE_S", 0.5)
-    parent = os.getpid()
-
-    def task(x):
-        if os.getpid() != parent:
-            time.sleep(3600)  # the child never finishes its first task
-        time.sleep(0.005)
-        return -x
-
-    start = time.perf_counter()
-    assert run_tasks([lambda x=x: task(x) for x in range(50)], 2) == [-x for x in range(50)]
-    assert time.perf_counter() - start < 30.0
-
-
-@pytest.mark.parametrize("free", [1, 2])
-def test_measure_forks_only_onto_a_free_core(monkeypatch, free):
-    """The default count: the cores other processes leave free (``FreeCores``, measured while the meshes are built),
-    and one process for fewer than ``PARALLEL_FROM`` libigl tasks."""
-    from nodes.quality import forked
     from nodes.simulation import threads
 
-    class Cores:
+    class Free:
         def __init__(self, most):
             self.most = most
 
         def threads(self):
-            return free
+            return 2
 
-    asked = []
+    def no_fork():
+        raise RuntimeError("measure forked a process")
 
-    def spy(tasks, processes):
-        asked.append(processes)
-        return [task() for task in tasks]
-
-    monkeypatch.setattr(threads, "FreeCores", Cores)
-    monkeypatch.setattr(forked, "run_tasks", spy)
+    monkeypatch.setattr(threads, "FreeCores", Free)
+    monkeypatch.setattr(os, "fork", no_fork)
     aggregates = pile(seed=11)
-    measure.call(seed=2, aggregates=aggregates, sample=1000)  # all 132 sampled: more than 16 tasks
-    measure.call(seed=2, aggregates=aggregates, sample=3)  # a few neighbours: not worth a fork
-    assert asked == [free, 1]
-
-
-def _in_a_daemon(queue):
-    tasks = [lambda x=x: (os.getpid(), x) for x in range(20)]
-    queue.put((os.getpid(), run_tasks(tasks, 2)))
-
-
-def test_a_daemonic_process_runs_the_tasks_itself():
-    """A daemonic process (a Dask worker) may not have children: the tasks run in it, serially."""
-    import multiprocessing
-
-    context = multiprocessing.get_context("fork")
-    queue = context.Queue()
-    daemon = context.Process(target=_in_a_daemon, args=(queue,), daemon=True)
-    daemon.start()
-    pid, results = queue.get(timeout=60)
-    daemon.join()
-    assert results == [(pid, x) for x in range(20)]
+    table = measure.call(seed=2, aggregates=aggregates, sample=1000)  # 132 sampled: the old code forked from 16 tasks
+    assert table.columns["sampled"][0] == 132
