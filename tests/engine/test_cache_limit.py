@@ -140,3 +140,19 @@ def test_the_run_used_last_stays_whole_when_other_work_fills_the_cache(tmp_path)
     done = cache.evict(limit=4 * entry + entry // 2, spare_since=since)
     assert done.entries >= 1 and not done.over
     assert all(cache.has(key) for key in main.keys.values())  # the main job, whole
+
+
+def test_the_cache_keeps_outputs_deflated(tmp_path):
+    """Issue 47: a rice-bowl run wrote 313 MB of outputs into the cache, stored as they are; deflated (a mesh's
+    faces, an exported file's bytes shrink most) the same value takes far less, and loads back equal."""
+    from nodegraph import codec
+    from nodegraph.values import Mesh
+
+    grid = np.stack(np.meshgrid(np.arange(60.0), np.arange(60.0), [0.0]), axis=-1).reshape(-1, 3)
+    faces = np.array([[i, i + 1, i + 60] for i in range(len(grid) - 61)], np.int64)
+    mesh = Mesh(grid, faces, name="sheet")
+    cache = Cache(tmp_path / "c")
+    cache.store("m" * 64, {"mesh": mesh}, "m", "toy")
+    assert cache.info().bytes < 0.5 * len(codec.encode(mesh))
+    again = cache.load("m" * 64, {"mesh": Mesh})["mesh"]
+    assert np.array_equal(again.faces, faces) and np.array_equal(again.vertices, grid)
