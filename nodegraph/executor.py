@@ -196,6 +196,9 @@ class Executor:
                     self.reporter.record(self.status[inst])
             if self.cache is not None:  # what the next run's progress bar expects
                 node_times.remember(self.cache.directory, self.recipe.name, [self.status[i] for i in self.status])
+        if self.cache is not None:  # used now, whole: what it had no need to load too (the upstream of a cached
+            for key in {self.keys[inst] for inst in order} & self.hits:  # output), so the cache keeps the run whole
+                self.cache.touch(key)
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
 
     def reuse(self, outputs: list[Wire], directory: Path, rrd: Path | None, key: str) -> RunResult | None:

@@ -10,6 +10,55 @@ from nodegraph.values import Mesh
 from nodes.values import Aggregate
 
 
+def band_size(shape: Mesh, width: float, height: float) -> tuple[float, float]:
+    """The band's width and height in mm from its shares of the shape's width (x) and height (z)."""
+    extent = shape.vertices.max(axis=0) - shape.vertices.min(axis=0)
+    return float(width * extent[0]), float(height * extent[2])
+
+
+def _band_fits(node_id: str, nodes) -> list[tuple[str, str, bool]]:
+    """The band against the shape it dresses, before any work (the run said so after its simulation, 52 s in):
+    when a ``shape`` node's parameters make that shape, the band is wrapped round it at a few rays, and a band
+    that leaves it is refused with the widest share that fits at its height."""
+    from .shape import made_for_check
+
+    entry = nodes[node_id]
+    source = made_for_check(entry.inputs.get("shape") or [], nodes)
+    if source is None:
+        return []
+    source_id, mould = source
+    params = entry.params
+    if _leaves(mould, params["width"], params["height"]) is None:
+        return []
+    low, high = 0.0, params["width"]  # the widest share that fits at this height: a bisection
+    for _ in range(20):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if _leaves(mould, middle, params["height"]) is None else (low, middle)
+    extent = mould.vertices.max(axis=0) - mould.vertices.min(axis=0)
+    allowed = f"width ≤ {low:.3f} at height {params['height']:g}" if low > 0 else "a lower height"
+    return [
+        (
+            "width",
+            f"a band {params['width']:g} × {extent[0]:.1f} mm wide and {params['height']:g} × {extent[2]:.1f} mm "
+            f"high leaves the shape '{source_id}' it dresses; allowed: {allowed} (shares of the shape's width "
+            "and height)",
+            False,
+        )
+    ]
+
+
+def _leaves(mould, width: float, height: float) -> str | None:
+    """Why a band of these shares leaves ``mould`` (wrapped at a few rays), or None when it fits."""
+    from .solids import wrap_band
+
+    mm_width, mm_height = band_size(mould, width, height)
+    try:
+        wrap_band(mould.vertices, mould.faces, mm_width, mm_height, 0.0, 4, 16)
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
 @node(
     "nori",
     inputs={
@@ -22,13 +71,17 @@ from nodes.values import Aggregate
     },
     outputs={"mesh": Out(Mesh, "the band: an open sheet named 'nori' (shade gives it the nori material)")},
     params={
-        "width": Param(float, 30.0, "band width along x, centred on the shape", range=(0.1, 1e4), units="mm"),
+        "width": Param(
+            float,
+            0.38,
+            "band width along x, centred on the shape, as a share of the shape's width (it follows the shape)",
+            range=(0.001, 1.0),
+        ),
         "height": Param(
             float,
-            25.0,
-            "how far up the faces the band reaches, from the shape's lowest point",
-            range=(0.1, 1e4),
-            units="mm",
+            0.35,
+            "how far up the faces the band reaches from the shape's lowest point, as a share of the shape's height",
+            range=(0.001, 0.999),
         ),
         "gap": Param(float, 0.3, "distance of the sheet from the shape's surface", range=(0.0, 100.0), units="mm"),
         "columns": Param(int, 24, "faces across the band's width", range=(1, 1000)),
@@ -49,12 +102,15 @@ from nodes.values import Aggregate
         ),
         "rib_period": Param(float, 1.6, "spacing of the ribs along the band", range=(0.01, 100.0), units="mm"),
     },
+    check_work=_band_fits,
 )
 def nori(ctx, shape, aggregate=None, *, width, height, gap, columns, rows, reach, ribs, rib_period):
-    """The shape's surface (or the grains on it) under a plane ``height`` above the shape's lowest point, in a
-    strip ``width`` wide across x, ``gap`` outside it: a rectangular sheet folded round the shape's bottom."""
+    """The shape's surface (or the grains on it) under a plane ``height`` (a share of the shape's height) above
+    the shape's lowest point, in a strip ``width`` (a share of its width) across x, ``gap`` outside it: a
+    rectangular sheet folded round the shape's bottom."""
     from .solids import wrap_band
 
+    width, height = band_size(shape, width, height)
     drape = None if aggregate is None else band_points(aggregate, shape, width, reach)
     vertices, faces = wrap_band(
         shape.vertices, shape.faces, width, height, gap, columns, rows, drape, reach, ribs, rib_period

@@ -56,6 +56,25 @@ def _region_fits_vessels(node_id: str, nodes) -> list[tuple[str, str]]:
     return [("size", problems[0])] if problems else []
 
 
+def made_for_check(wires, nodes) -> tuple[str, Mesh] | None:
+    """(source node id, mesh) of the shape one input reads (``wires``), when a ``shape`` node's parameters make it
+    (made now, milliseconds once its modules are loaded): what a prop or a placement is weighed against before
+    any work; None when only running the recipe would tell (a mesh file, a boolean)."""
+    if len(wires) != 1:
+        return None
+    source = nodes[wires[0].node]
+    if source.spec.type_name != "shape" or wires[0].port not in ("", "mesh"):
+        return None
+    key = tuple(sorted(source.params.items()))
+    if key not in _MADE:  # a recipe's props ask for the same shape
+        _MADE.clear()
+        _MADE[key] = source.spec.call(**source.params)["mesh"]
+    return wires[0].node, _MADE[key]
+
+
+_MADE: dict[tuple, Mesh] = {}  # the last shape made for a check, by its parameters
+
+
 CONTAINERS = ("bowl", "block")  # the kinds whose container output is a mesh; empty for the others
 
 

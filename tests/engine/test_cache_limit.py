@@ -103,3 +103,56 @@ def test_cli_shows_sets_and_applies_the_limit(tmp_path, monkeypatch, capsys):
     assert main(["run", str(recipe), "--no-rrd", "-q", "--plugin", str(TOY)]) == 0  # a run ends above the limit
     assert cache.info().entries == first.entries
     assert main(["cache", "clear", "--yes"]) == 0 and not (tmp_path / "cache").exists()
+
+
+MAIN = """\
+seed: {seed}
+outputs: [shifted]
+nodes:
+  pts: {{type: toy_points, params: {{count: 20000}}}}
+  shifted: {{type: toy_shift, inputs: {{spheres: pts.spheres}}, params: {{dx: 1.0}}}}
+"""
+
+
+def test_the_run_used_last_stays_whole_when_other_work_fills_the_cache(tmp_path):
+    """Issue 47: the main job, other work, the main job again (its output cached: its upstream is not loaded),
+    then more work past the limit. The main job was used after the first other work, so that work goes and the
+    main job stays whole (it went in part: its upstream, stored first and never read again, looked oldest)."""
+    import time
+
+    from nodegraph.executor import run_recipe
+    from nodegraph.recipe import parse_recipe
+    from nodegraph.registry import Registry
+
+    registry = Registry()
+    registry.add_plugin_file(TOY)
+    cache = Cache(tmp_path / "c")
+
+    def run(seed):
+        return run_recipe(parse_recipe(MAIN.format(seed=seed), registry, file=f"r{seed}.yaml"), cache=cache)
+
+    main = run(1)
+    entry = cache.info().bytes // 2
+    run(2)  # other work
+    assert all(r.status == "cached" for r in run(1).records)  # back to the main job, from the cache
+    since = time.time()
+    run(3)  # more work: past the limit
+    done = cache.evict(limit=4 * entry + entry // 2, spare_since=since)
+    assert done.entries >= 1 and not done.over
+    assert all(cache.has(key) for key in main.keys.values())  # the main job, whole
+
+
+def test_the_cache_keeps_outputs_deflated(tmp_path):
+    """Issue 47: a rice-bowl run wrote 313 MB of outputs into the cache, stored as they are; deflated (a mesh's
+    faces, an exported file's bytes shrink most) the same value takes far less, and loads back equal."""
+    from nodegraph import codec
+    from nodegraph.values import Mesh
+
+    grid = np.stack(np.meshgrid(np.arange(60.0), np.arange(60.0), [0.0]), axis=-1).reshape(-1, 3)
+    faces = np.array([[i, i + 1, i + 60] for i in range(len(grid) - 61)], np.int64)
+    mesh = Mesh(grid, faces, name="sheet")
+    cache = Cache(tmp_path / "c")
+    cache.store("m" * 64, {"mesh": mesh}, "m", "toy")
+    assert cache.info().bytes < 0.5 * len(codec.encode(mesh))
+    again = cache.load("m" * 64, {"mesh": Mesh})["mesh"]
+    assert np.array_equal(again.faces, faces) and np.array_equal(again.vertices, grid)

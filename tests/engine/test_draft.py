@@ -71,4 +71,27 @@ def test_scene_recipes_have_a_valid_draft(name):
 
     path = Path(__file__).resolve().parents[2] / "graphs" / f"{name}.yaml"
     recipe = load_recipe(path, default_registry(), draft=True)
-    assert recipe.draft and recipe.nodes["preview"].params["width"] <= 320
+    assert recipe.draft and recipe.nodes["preview"].params["width"] <= 480
+
+
+def test_the_ikura_draft_is_the_final_at_fewer_elements():
+    """Issue 47: the ikura draft was a 160 × 90 sparse scatter with the bowl floor showing. Now the final's
+    camera, framing and materials, a preview large enough to judge a look (≥ 480 px wide, the final's aspect),
+    and the same elements at the same spacing (fewer, in a smaller bowl whose regions follow it: not sparser)."""
+    from pathlib import Path
+
+    from nodegraph.registry import default_registry
+
+    path = Path(__file__).resolve().parents[2] / "graphs" / "ikura_don.yaml"
+    final = load_recipe(path, default_registry())
+    draft = load_recipe(path, default_registry(), draft=True)
+    look = {k: v for k, v in final.nodes["preview"].params.items() if k not in ("width", "height", "samples")}
+    assert {k: draft.nodes["preview"].params[k] for k in look} == look  # camera, framing, lens, studio
+    width, height = (draft.nodes["preview"].params[k] for k in ("width", "height"))
+    final_width, final_height = (final.nodes["preview"].params[k] for k in ("width", "height"))
+    assert width >= 480 and width * final_height == height * final_width  # the final's framing, smaller
+    for node_id in ("cooked", "shade", "egg_base", "grain_base", "rice_place", "egg_place", "rice_refine"):
+        assert draft.nodes[node_id].params == final.nodes[node_id].params, node_id  # materials, elements, spacing
+    for entry in draft.nodes.values():  # the regions are derived from the bowl, so they follow it
+        if entry.spec.type_name == "vessel_region":
+            assert [w.node for w in entry.inputs["vessel"]] == ["bowl"]

@@ -11,7 +11,8 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from nodes.mesh_inside import inside_points
-from nodes.shapes import nori, shape
+from nodes.shapes import nori, plate, shape
+from nodes.shapes.nori import band_size
 from nodes.shapes.solids import first_hits
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -23,9 +24,9 @@ def _recipe_shapes(draft: bool):
 
     recipe = load_recipe(ROOT / "graphs" / "onigiri.yaml", default_registry(), [], draft=draft)
     mould = shape.call(**recipe.nodes["onigiri"].params)["mesh"]
-    plate = shape.call(**recipe.nodes["plate"].params)["mesh"]
+    dish = plate.call(shape=mould, **recipe.nodes["plate"].params)
     band = nori.call(shape=mould, **recipe.nodes["nori"].params)
-    return mould, plate, band
+    return mould, dish, band
 
 
 @pytest.mark.parametrize("draft", [False, True])
@@ -67,7 +68,7 @@ def test_the_nori_band_wraps_the_onigiris_bottom():
 def test_a_band_too_wide_for_the_shape_is_refused():
     mould = shape.call(kind="onigiri", size=20.0)["mesh"]
     with pytest.raises(ValueError, match="width"):
-        nori.call(shape=mould, width=60.0, height=10.0)
+        nori.call(shape=mould, width=1.0, height=0.5)
 
 
 def _bulging_grains(mould, bulge: float):
@@ -121,11 +122,13 @@ def test_the_nori_lies_on_the_rice_that_slumped_out_of_its_mould():
     mould = shape.call(**recipe.nodes["onigiri"].params)["mesh"]
     grains = _bulging_grains(mould, bulge=1.0)
     params = recipe.nodes["nori"].params
-    assert (params["width"], params["height"], params["gap"]) == (34.0, 28.0, 0.4)
+    assert (params["width"], params["height"], params["gap"]) == (0.38, 0.35, 0.4)
+    height = band_size(mould, params["width"], params["height"])[1]
+    assert height == pytest.approx(28.0, abs=0.5)
     on_mould = nori.call(shape=mould, **params)
-    assert _outside_the_sheet(on_mould, grains, mould, 28.0)[0].max() > 0.4  # the mould's sheet: grains through it
+    assert _outside_the_sheet(on_mould, grains, mould, height)[0].max() > 0.4  # the mould's sheet: grains through it
     draped = nori.call(shape=mould, aggregate=grains, **params)
-    beyond, ray = _outside_the_sheet(draped, grains, mould, 28.0)
+    beyond, ray = _outside_the_sheet(draped, grains, mould, height)
     assert beyond.max() <= -0.25  # under the sheet by its gap (0.4), less the slack of its nearest vertex
     closest = np.full(len(draped.vertices), -np.inf)  # per sheet vertex: its nearest grain's distance under it
     np.maximum.at(closest, ray, beyond)
@@ -146,7 +149,7 @@ def test_the_recipes_nori_is_ribbed_outwards_only():
     smooth = nori.call(shape=mould, **{**params, "ribs": 0.0})
     ribbed = nori.call(shape=mould, **params)
     lo, hi = mould.vertices.min(axis=0), mould.vertices.max(axis=0)
-    centre = np.array([0.5 * (lo[1] + hi[1]), lo[2] + params["height"]])
+    centre = np.array([0.5 * (lo[1] + hi[1]), lo[2] + band_size(mould, params["width"], params["height"])[1]])
     lift = np.hypot(*(ribbed.vertices[:, 1:] - centre).T) - np.hypot(*(smooth.vertices[:, 1:] - centre).T)
     assert lift.min() >= -1e-9 and lift.max() <= ribs + 1e-9
     assert ribbed.vertices[:, 2].min() >= lo[2] - params["gap"] - 1e-9  # above the plate (0.44 mm under lo)
