@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
@@ -38,8 +37,6 @@ from nodegraph import runtime
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
 
 from machine import conditions
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -57,8 +54,8 @@ def main_job_scene(cache_dir: Path | None):
 
 
 def quick_scene():
-    """A few capsule grains and eggs in a bowl (``support.scenes.small_food_scene``, as the tests use)."""
-    from support.scenes import small_food_scene
+    """A few capsule grains and eggs in a bowl (``scene_builders.small_food_scene``, as the tests use)."""
+    from scene_builders import small_food_scene
 
     from nodes.export.mitsuba_scene import Camera
     from nodes.export.preview import preview

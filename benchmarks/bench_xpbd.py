@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
@@ -24,10 +23,7 @@ from nodegraph import runtime
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
 
 from machine import conditions
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
-
-from support.scenes import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column
+from scene_builders import energy_drift, ikura_don, mechanical_energy, rice_bowl, stack_column
 
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation
@@ -175,7 +171,7 @@ def bench_effects(quick):
 
 
 def run_to_rest(run, frames, repeats=1, make=None):
-    """Run ``frames`` frames of a ``setup.Simulation`` or ``support.scenes.SolverRun``; returns (wall of the
+    """Run ``frames`` frames of a ``setup.Simulation`` or ``scene_builders.SolverRun``; returns (wall of the
     frames alone, element centres, max penetration / r over the run, last residual, energy drift and
     rise of ``energy_drift``). With ``repeats`` > 1 the (deterministic) run is repeated on fresh runs
     from ``make`` and the fastest wall kept."""
@@ -275,7 +271,7 @@ def accuracy_table(rows, reference, second):
 
 
 def bench_accuracy(quick):
-    """Substeps × iterations on the rice bowl and on the stack test (``support.scenes.stack_column``),
+    """Substeps × iterations on the rice bowl and on the stack test (``scene_builders.stack_column``),
     plus the xpbd node's defaults (10 × 2); Pareto front on wall time vs error against a reference run.
 
     Both scenes are below ``solver.PARALLEL_PARTICLES``: the solver runs them on one thread (on the

@@ -31,8 +31,6 @@ runtime.configure()  # numba's kernel cache and locator, before a kernel module 
 
 from machine import conditions
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
-
 ROOT = Path(__file__).resolve().parents[1]
 # packages this benchmark needs beyond the project's own (tests/benchmarks skips it without them)
 REQUIRES = ("newton", "warp")
@@ -55,7 +53,7 @@ def initial_grid(n, seed=0):
 
 def box_solver(n, dispatch=None, threads=None):
     """Our solver on the jittered grid in the open box (mm, g, s), ready to run: a ``SolverRun`` (``scenes``)."""
-    from support.scenes import open_box, solver_run
+    from scene_builders import open_box, solver_run
 
     from nodes.simulation.collider import signed_distance_grid
     from nodes.simulation.settings import solver_settings_for

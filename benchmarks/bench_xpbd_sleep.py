@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 from pathlib import Path
 
@@ -22,10 +21,7 @@ runtime.configure()  # numba's kernel cache and locator, before a kernel module 
 
 from bench_xpbd import RICE, pile_measures
 from machine import conditions
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
-
-from support.scenes import rice_bowl
+from scene_builders import rice_bowl
 
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation, finish_simulation

@@ -1,6 +1,6 @@
 """xpbd stability map (issue 11): where the solver holds.
 
-Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``support.scenes.stack_column``, the
+Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``scene_builders.stack_column``, the
 upper cube ``ratio``× heavier) dropped 0.1 r onto the ground; max inter-element penetration / r over
 the run, energy growth (max of E − E₀ over the run, in M·g·r; gravity does the only work, so > 0 is
 a gain) and the settled error of the element centres against the analytic rest (r). A refused
@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -23,9 +22,8 @@ from nodegraph import runtime
 
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
 
-from support.scenes import bowl_mesh, mechanical_energy, solver_run, stack_column
+from scene_builders import bowl_mesh, mechanical_energy, solver_run, stack_column
 
 from nodes.simulation.collider import signed_distance_grid
 from nodes.simulation.settings import solver_settings_for

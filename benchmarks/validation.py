@@ -13,7 +13,6 @@ et al. 2014's position-level rule applied to each substep's displacement.
 
 import argparse
 import dataclasses
-import sys
 import time
 from pathlib import Path
 
@@ -23,7 +22,6 @@ from nodegraph import runtime
 
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/support: the scenes tests share
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -80,7 +78,7 @@ def ball(n: int, spacing, seed: int = 0) -> np.ndarray:
 
 def ground(half: float, top: float, pitch: float):
     """φ of a ground slab (top face z = 0) over [−half, half]² × [−3, top]."""
-    from support.scenes import box_mesh
+    from scene_builders import box_mesh
 
     from nodes.simulation.collider import signed_distance_grid
 
@@ -92,7 +90,7 @@ def ground(half: float, top: float, pitch: float):
 def sphere_run(x, radius, mu, anchored, sdf, **solver):
     """A solver run of loose spheres of one ``radius`` (one particle per element) at sliding friction μs = ``mu``
     (μk = 0.7 μs), rigid contacts, against the collider field ``sdf``; ``solver``: further xpbd node parameters."""
-    from support.scenes import solver_run
+    from scene_builders import solver_run
 
     from nodes.simulation.settings import solver_settings_for
 
@@ -140,8 +138,8 @@ def rice_heap(n, anchored, frames=(150,), substeps=10, friction=1.0, seed=0, sha
     speed clamp, ≈ 0.5 m/s), at the xpbd node's defaults (effects gravity, contact, friction, collider,
     damping; no adhesion: dry rice). Returns (``heap_angle``, ``mound_angle``) after each of ``frames`` and
     the seconds."""
+    from scene_builders import box_mesh, rice_library
     from scipy.spatial.transform import Rotation
-    from support.scenes import box_mesh, rice_library
 
     from nodes.simulation.settings import XpbdParams
     from nodes.simulation.setup import build_simulation
@@ -192,7 +190,7 @@ def packing_fraction(n, mu, anchored, frames=150, radius=1.0, seed=0):
     """Pour n spheres (a loose lattice, spacing 2.3 r) into an open box and let them settle; the packing
     fraction is the spheres' volume inside the box's core (two diameters from the walls and floor, below
     the top two diameters of the bed), counted on a 0.1 r sample grid. Returns (φ, seconds)."""
-    from support.scenes import open_box
+    from scene_builders import open_box
 
     from nodes.simulation.collider import signed_distance_grid
 
@@ -234,7 +232,7 @@ def silo_field(diameter: float, top: float, pitch: float):
     slab (top face z = 0), up to ``top``; the grid covers the walls' whole thickness, so no particle a contact
     pushes into a wall finds free space behind it."""
     import trimesh
-    from support.scenes import box_mesh
+    from scene_builders import box_mesh
 
     from nodegraph.values import Mesh
     from nodes.simulation.collider import signed_distance_grid
@@ -317,7 +315,7 @@ def silo_fill(
     Returns a dict: filled mass M, apparent mass at the base (floor force / g) and the walls' share (g), the
     walls' normal force (g-force), bed height H (mm, 98th percentile of the centres + r), seconds. ``follow``:
     the wall anchors follow pre-stabilisation's moves (``wall_gauge``), a solver change tried from outside."""
-    from support.scenes import solver_run
+    from scene_builders import solver_run
 
     from nodes.simulation.settings import solver_settings_for
 
@@ -418,8 +416,8 @@ def ellipsoid_packing(alpha, n, size=1.5, particles=8, frames=150, seed=0):
     ellipsoids themselves at the clusters' poses (the grains as drawn; they interpenetrate where the particles do
     not reach their surface), and of the particles (the solid the solver sees), on a 0.1·size sample grid.
     Returns (φ of the ellipsoids, φ of the particles, seconds)."""
+    from scene_builders import grain_mesh, open_box, solver_run
     from scipy.spatial.transform import Rotation
-    from support.scenes import grain_mesh, open_box, solver_run
 
     from nodes.simulation.clusters import element_cluster, matrix_to_quat
     from nodes.simulation.collider import signed_distance_grid
@@ -484,7 +482,7 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90) -> dict:
     cluster) whose weight is 3 × ``load`` (N): a plate that cannot tip, each grain carrying ``load``. At the xpbd
     node's defaults (stiffness 2,000 N/m, β 0.3, 10 substeps × 2 iterations, shock propagation 4). Returns the
     plate's mean height above the ground (mm), the grain's unloaded thickness and seconds."""
-    from support.scenes import grain_mesh, solver_run
+    from scene_builders import grain_mesh, solver_run
 
     from nodes.simulation.clusters import element_cluster
     from nodes.simulation.settings import solver_settings_for
@@ -539,7 +537,7 @@ def squeeze_body(
     thickness) held, ``load`` (N) pressing its top tenth down, ramped up over ``ramp`` frames. Strain = 1 − the
     distance between the two patches' mean heights over the rest one; the largest edge stretch (current over
     rest length, what the break test reads), tears and pieces at the end."""
-    from support.scenes import grain_mesh
+    from scene_builders import grain_mesh
 
     from nodes.tearing.body import BodySettings, ElasticBody
 
@@ -784,7 +782,7 @@ def run_cases(quick: bool, ellipsoids: bool | None = None) -> tuple[list[Case], 
 
 def glue_case(quick: bool, figures: dict) -> Case:
     """A pressed block of sticky rice set down under gravity, glued and not, against the substeps (``glue``)."""
-    from support.scenes import block_heights, pressed_block
+    from scene_builders import block_heights, pressed_block
 
     t = time.perf_counter()
     block = pressed_block()
@@ -824,7 +822,7 @@ def ellipsoid_case(quick: bool, figures: dict) -> Case:
     alphas = (1.0, 1.25, 1.5) if quick else (1.0, 1.125, 1.25, 1.5, 2.0)
     cover = []  # the share of each ellipsoid's volume its 8 particles fill
     rng = np.random.default_rng(0)
-    from support.scenes import grain_mesh
+    from scene_builders import grain_mesh
 
     from nodes.simulation.clusters import element_cluster
 

@@ -18,7 +18,7 @@ runtime.configure()
 
 @pytest.fixture(scope="session")
 def scene_inputs():
-    from support.scenes import small_food_scene
+    from scene_builders import small_food_scene
 
     return small_food_scene()
 

@@ -126,7 +126,7 @@ def test_the_rendered_subject_keeps_room_around_it(tmp_path, elevation, bowl_siz
     backdrop), the bowl's rim stays off the frame's edges: about ``margin`` (10 %) of the half-frame is free on the
     tightest side, at any bowl size (as after ``--set bowl.size=…``) and elevation."""
     import mitsuba as mi
-    from support.scenes import small_food_scene
+    from scene_builders import small_food_scene
 
     from nodes.export.mitsuba_scene import Camera, scene_dict
     from nodes.material.cooked import cooked_material

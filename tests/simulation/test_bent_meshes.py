@@ -8,8 +8,8 @@ import zipfile
 
 import numpy as np
 import trimesh
+from scene_builders import long_grain
 from scipy.spatial.transform import Rotation
-from support.scenes import long_grain
 
 from nodegraph import codec
 from nodes.simulation.aggregate import DeformedAggregate
@@ -150,7 +150,7 @@ def test_codec_round_trips_bends_and_old_entries_without_the_field():
 
 def test_yolk_offsets_still_move_the_part_faces_of_a_bent_element():
     """DeformedAggregate (ikura yolk) adds its part offsets on top of the bent map."""
-    from support.scenes import ikura_mesh
+    from scene_builders import ikura_mesh
 
     egg = ikura_mesh()
     placement = Placement(ORIGIN[None], np.array([[0.0, 0.0, 1.0]]), ROTATION[None], kind_names=("ikura",))

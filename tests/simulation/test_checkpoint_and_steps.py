@@ -4,7 +4,7 @@ import datafusion
 import numpy as np
 import pytest
 from rerun.chunk import RrdReader
-from support.scenes import rice_bowl
+from scene_builders import rice_bowl
 
 from nodegraph.checkpoint import Checkpoint
 from nodegraph.context import Context

@@ -7,7 +7,7 @@ from __future__ import annotations
 import igl
 import numpy as np
 import pytest
-from support.scenes import grain_mesh, ikura_mesh, long_grain
+from scene_builders import grain_mesh, ikura_mesh, long_grain
 
 from nodes.placement.medial_spheres import distance_to_surface, union_fit
 from nodes.simulation.clusters import element_cluster

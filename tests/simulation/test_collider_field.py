@@ -9,7 +9,7 @@ import numba
 import numpy as np
 import pytest
 import trimesh
-from support.scenes import bowl_mesh
+from scene_builders import bowl_mesh
 
 from nodes.simulation import collider
 from nodes.simulation.collider import free_space_field, signed_distance_grid, signed_field, surface_band_rows

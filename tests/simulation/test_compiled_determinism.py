@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 SCRIPT = """
 import hashlib
-from support.scenes import rice_bowl
+from scene_builders import rice_bowl
 from nodes.simulation.xpbd import xpbd
 aggregate, colliders = rice_bowl(30, seed=1)
 effects = ("gravity", "contact", "friction", "adhesion", "collider", "moisture", "damping")
@@ -27,8 +27,10 @@ def test_fresh_and_cached_kernels_give_the_same_bits(tmp_path):
     env = {
         **os.environ,
         "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
-        # this tree's nodes, and tests/ for support.scenes
-        "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), str(ROOT / "tests"), os.environ.get("PYTHONPATH")])),
+        # this tree's nodes, and benchmarks/ for scene_builders
+        "PYTHONPATH": os.pathsep.join(
+            filter(None, [str(ROOT), str(ROOT / "benchmarks"), os.environ.get("PYTHONPATH")])
+        ),
     }
     runs = [
         subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True, check=True).stdout

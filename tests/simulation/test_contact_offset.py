@@ -20,7 +20,7 @@ DRY_BOWL = ["bowl.size=14.0", "bowl.depth=12.0", "bowl.mound=5.0", "cooked.water
 
 
 def test_the_offset_grows_every_particle_by_its_share_of_the_median_radius():
-    from support.scenes import rice_library
+    from scene_builders import rice_library
 
     from nodes.values import Aggregate, Placement
 

@@ -3,7 +3,7 @@ tears under a load it cannot carry; the glue runs only when asked for."""
 
 import numpy as np
 import pytest
-from support.scenes import GLUE_EFFECTS, block_heights, pressed_block
+from scene_builders import GLUE_EFFECTS, block_heights, pressed_block
 
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation

@@ -5,7 +5,7 @@ lists, ``glued_allowance`` each substep), at one thread and at two."""
 import numba
 import numpy as np
 import pytest
-from support.scenes import GLUE_EFFECTS, pressed_block
+from scene_builders import GLUE_EFFECTS, pressed_block
 
 from nodes.simulation import glue
 from nodes.simulation.settings import XpbdParams

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 import trimesh
+from scene_builders import rice_library
 from scipy.spatial.transform import Rotation
-from support.scenes import rice_library
 
 from nodegraph.values import Mesh
 from nodes.simulation.xpbd import xpbd

@@ -5,7 +5,7 @@ changes nothing."""
 import hashlib
 
 import numpy as np
-from support.scenes import box_mesh, solver_run
+from scene_builders import box_mesh, solver_run
 
 from nodes.simulation.collider import signed_distance_grid
 from nodes.simulation.settings import solver_settings_for

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support.scenes import long_grain, open_box
+from scene_builders import long_grain, open_box
 
 from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
 from nodes.contact_shaping.cull_crossing import crossing_depths

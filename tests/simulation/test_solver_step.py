@@ -4,7 +4,7 @@ between steps; ``dt`` is the solve the settings fix."""
 
 import numpy as np
 import pytest
-from support.scenes import stack_column
+from scene_builders import stack_column
 
 
 def test_step_into_another_state_matches_in_place():

@@ -5,7 +5,7 @@ near it, more substeps must land nearer, and the resting stack must not gain ene
 import hashlib
 
 import numpy as np
-from support.scenes import energy_drift, mechanical_energy, stack_column
+from scene_builders import energy_drift, mechanical_energy, stack_column
 
 FRAMES = 30  # 0.5 s: the stack is at rest after ≈ 10 frames (same errors as after 90)
 

@@ -8,7 +8,7 @@ import time
 
 import numba
 import pytest
-from support.scenes import rice_bowl
+from scene_builders import rice_bowl
 
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation

@@ -4,7 +4,7 @@ import hashlib
 
 import numpy as np
 import pytest
-from support.scenes import rice_bowl, solver_run
+from scene_builders import rice_bowl, solver_run
 
 from nodes.simulation.bending import bend_triples
 from nodes.simulation.settings import solver_settings_for

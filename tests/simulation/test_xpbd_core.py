@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
+from scene_builders import bowl_mesh, box_mesh, solver_run
 from scipy.spatial.transform import Rotation
-from support.scenes import bowl_mesh, box_mesh, solver_run
 
 from nodes.simulation.collider import signed_distance_grid
 from nodes.simulation.settings import solver_settings_for
@@ -108,7 +108,7 @@ def test_heavy_on_a_light_pyramid_launches_nothing(ratio, shock):
     from its drop (√(2·g·2.1 mm) = 203 mm/s; measured ≤ 59 at every ratio, shock propagation on or
     off), the elements < 0.5 r into each other (measured ≤ 0.31, was 0.79), and the total energy
     below the start + 0.05 M_heavy·g·r (gravity does the only work)."""
-    from support.scenes import mechanical_energy
+    from scene_builders import mechanical_energy
 
     settings = solver_settings_for(
         frozenset({"gravity", "contact", "friction", "collider"}),
@@ -136,7 +136,7 @@ def test_heavy_on_light_stack_holds():
     the heavy cube sank through the light one (ended a cube lower, 477 mm/s). Every frame: max speed
     < 40 mm/s (the 0.1 r drop gives ≈ 44 mm/s of free fall; measured 16), inter-element penetration
     < 0.15 r (measured 0.034); the rest within 0.1 r of the analytic stack (measured 0.075)."""
-    from support.scenes import stack_column
+    from scene_builders import stack_column
 
     s, rest, _ = stack_column(2)
     s.model.w[8:] /= 1000.0  # the upper cube 1000× heavier
@@ -204,7 +204,7 @@ def test_steps_the_solver_cannot_hold_are_refused(substeps, iterations):
     """Issue 11: 2 substeps × 2 iterations of 1/60 s passed the old check (g·h² ≤ clamp·r) and the
     two-cube stack of 1 mm particles sank to 1.2 r (3 × 1: 1.33 r, 2 × 1: 1.75 r). Refused now when
     g·h² > iterations/4·r, naming the parameter and the substeps or iterations that would do."""
-    from support.scenes import stack_column
+    from scene_builders import stack_column
 
     with pytest.raises(ValueError, match=r"^substeps: .* use substeps ≥ \d+ or iterations ≥ \d+, or a shorter dt"):
         stack_column(2, dt=1 / 60, substeps=substeps, iterations=iterations, stiffness=1000.0)
@@ -215,7 +215,7 @@ def test_steps_at_the_refusal_limit_hold_the_stack(substeps, iterations):
     """The allowed settings nearest the refusal (g·h² at 0.68 to 0.61 of the limit): the two-cube
     stack, the upper one 1000× heavier, dropped 0.1 r; every frame the inter-element penetration
     < 1 r, the collapse the refusal is set against (measured 0.61, 0.56, 0.45)."""
-    from support.scenes import stack_column
+    from scene_builders import stack_column
 
     s, _, _ = stack_column(2, dt=1 / 60, substeps=substeps, iterations=iterations, stiffness=1000.0)
     s.model.w[8:] /= 1000.0
@@ -304,7 +304,7 @@ def test_long_rest_comes_to_rest(sleep_speed):
     still moving, which bounced on them at up to 11 mm/s. Every frame: no energy gain (E ≤ E₀,
     gravity the only work); every frame of the last 2 s: kinetic energy < 1e-6 g·mm²/s² and max
     particle speed < 0.01 mm/s (measured 4e-23 and 0 without sleeping, 0 with), penetration < 0.1 r."""
-    from support.scenes import mechanical_energy
+    from scene_builders import mechanical_energy
 
     settings = solver_settings_for(
         frozenset({"gravity", "contact", "friction", "collider", "damping"}),
@@ -387,7 +387,7 @@ def test_bad_settings_are_rejected():
 
 def tall_pile(n, side, shock, frames, iterations=1):
     """n unit spheres dropped from a jittered grid into an open box of inner side ``side`` (mm)."""
-    from support.scenes import open_box
+    from scene_builders import open_box
 
     per_row = int(side / 2.1)
     k = np.arange(n)

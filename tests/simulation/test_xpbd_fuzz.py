@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from support.scenes import box_mesh, mechanical_energy, solver_run
+from scene_builders import box_mesh, mechanical_energy, solver_run
 
 from nodes.simulation.collider import sample_phi, signed_distance_grid
 from nodes.simulation.settings import solver_settings_for

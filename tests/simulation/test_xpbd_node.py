@@ -5,7 +5,7 @@ import hashlib
 
 import numpy as np
 import pytest
-from support.scenes import box_mesh, ikura_mesh, rice_bowl
+from scene_builders import box_mesh, ikura_mesh, rice_bowl
 
 from nodegraph.context import Context, EntityLogger
 from nodes.simulation.aggregate import DeformedAggregate

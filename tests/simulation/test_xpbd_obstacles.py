@@ -3,8 +3,8 @@ the bed never moves and is not in the outputs; unwired, nothing is appended or a
 
 import numpy as np
 import pytest
+from scene_builders import ikura_mesh, rice_bowl
 from scipy.spatial import cKDTree
-from support.scenes import ikura_mesh, rice_bowl
 
 from nodes.simulation.settings import XpbdParams
 from nodes.simulation.setup import build_simulation, finish_simulation

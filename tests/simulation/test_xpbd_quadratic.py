@@ -5,8 +5,8 @@ import hashlib
 
 import numpy as np
 import pytest
+from scene_builders import rice_bowl
 from scipy.spatial.transform import Rotation
-from support.scenes import rice_bowl
 
 from nodes.simulation.shape_matching import (
     LinearMoments,

@@ -1,6 +1,6 @@
 """Scenes for the solver's tests, benchmarks and scripts, built directly in Python (no placement nodes
 needed): ellipsoid rice grains, ikura eggs with a yolk, a bowl and a ground slab as watertight solids,
-grains on a jittered grid inside the bowl, and a small shaded-food scene. Dev-only (tests/support, not the
+grains on a jittered grid inside the bowl, and a small shaded-food scene. Dev-only (beside the benchmarks, not the
 shipped package): tests and benchmarks import it, nothing in ``nodes`` does."""
 
 from __future__ import annotations
