@@ -116,8 +116,15 @@ class GlueRegions:
         """The regions as ``glue.glue_match`` takes them."""
         return glue.RegionRows(self.region_start, self.link_own, self.link_start, self.member, self.rest)
 
-    def floor_args(self):
-        return self.floor_start, self.floor_partner, self.floor_depth, self.region_start, self.link_grain
+    def floors(self):
+        """The pressed partners as ``glue.glued_floors`` takes them."""
+        return glue.GlueFloors(
+            self.floor_start, self.floor_partner, self.floor_depth, self.region_start, self.link_grain
+        )
+
+    def members(self):
+        """Each particle's memberships as ``glue.glue_pull`` takes them."""
+        return glue.GlueMembers(self.pstart, self.pslot)
 
 
 class YolkRoom(NamedTuple):

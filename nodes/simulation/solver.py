@@ -199,6 +199,9 @@ class XpbdSolver:
         self.quadratic = model.quadratic.args() if model.quadratic is not None else ()
         self.bend_rows = model.bend.args() if model.bend is not None else None
         self.collider_grid = model.collider.args() if model.collider is not None else None
+        g = model.glue
+        self.glue_bundles = (g.rows(), g.members(), g.floors()) if g is not None else None
+        self.glue_rule = glue.GlueRule(ROTATION_ITERATIONS, settings.glue_tear, settings.glue)
         self.contacts = Contacts.allocate(model, settings)  # the contacts ``frame`` steps with
         self.default_control = self.control()  # the control ``frame`` steps with
         self.diagnostics = Diagnostics()
@@ -477,11 +480,13 @@ class XpbdSolver:
         if m.glue is None:
             return
         if self.glue_floors[0] is not lists:
-            link, depth = np.empty(len(lists.nbr), np.int64), np.empty(len(lists.nbr))
-            self.dispatch("glue", glue.glued_floors, m.elem, *lists.rows(), *m.glue.floor_args(), link, depth)
-            self.glue_floors = (lists, link, depth, np.zeros(len(lists.nbr), np.bool_))
-        _, link, depth, stuck = self.glue_floors
-        self.dispatch("glue", glue.glued_allowance, link, depth, st.glued, pairs.allowance, stuck)
+            n = len(lists.nbr)
+            entries = glue.GluedEntries(np.empty(n, np.int64), np.empty(n), np.zeros(n, np.bool_))
+            rows = contact_constraints.PairRows(*lists.sweep_rows())
+            self.dispatch("glue", glue.glued_floors, self.model_arrays, rows, self.glue_bundles[2], entries)
+            self.glue_floors = (lists, *entries)
+        entries = glue.GluedEntries(*self.glue_floors[1:])
+        self.dispatch("glue", glue.glued_allowance, entries, self._glue_arrays(st), pairs.allowance)
 
     def _stuck(self, lists) -> np.ndarray:
         """Per entry of ``lists``, whether its grains are still glued (``_pressed``): the sweep splits those pairs'
@@ -491,21 +496,13 @@ class XpbdSolver:
     def _glue(self, st: State, tear: bool) -> None:
         """Match the glued regions and pull each particle towards its regions' goals (``glue``); with
         ``tear`` (once per substep) the links left further than ``glue_tear`` from their goals tear."""
-        m, g = self.model, self.model.glue
-        self.dispatch(
-            "glue",
-            glue.glue_match,
-            st.x,
-            m.w,
-            g.rows(),
-            st.glued,
-            st.glue_quats,
-            ROTATION_ITERATIONS,
-            self.glue_goal,
-            tear,
-            self.settings.glue_tear,
-        )
-        self.dispatch("glue", glue.glue_pull, st.x, st.awake, g.pstart, g.pslot, self.glue_goal, self.settings.glue)
+        a, regions, members, arrays = st.arrays(), self.glue_bundles[0], self.glue_bundles[1], self._glue_arrays(st)
+        self.dispatch("glue", glue.glue_match, a, self.model_arrays, regions, arrays, self.glue_rule, tear)
+        self.dispatch("glue", glue.glue_pull, a, members, arrays, self.glue_rule)
+
+    def _glue_arrays(self, st: State):
+        """The glue's changing arrays of ``st`` (``glue.GlueArrays``)."""
+        return glue.GlueArrays(st.glued, st.glue_quats, self.glue_goal)
 
     # -- one frame --------------------------------------------------------------------------
     def frame(self, state: State) -> None:
