@@ -6,8 +6,11 @@ substep changes, ``state``), a ``Control`` (what a caller may change between ste
 ``Contacts`` (the neighbour lists and what each pair keeps across substeps, ``buffers``) and
 ``XpbdSolver.step(state_in, state_out, control, contacts, dt)``; ``SolverSettings`` (``settings``) are
 fixed per solver, which holds the kernels' scratch and the settings in the form the kernels take
-(``Coefficients``). Kernel arguments come in that order too: state arrays, model arrays, buffers,
-coefficients.
+(``Coefficients``). Kernel arguments come in that order too, each a named bundle (issue 45 §1; a NamedTuple
+numba takes as one argument): the state's arrays (``state.StateArrays``, built once per solve: the adhesion
+swaps the positions), the model's (``model.ModelArrays``, once per run), the family's own data and buffers,
+then its rule (``integrate.Motion``, ``shape_matching.MatchRule``, ``adhesion.AdhesionRule``, ``glue.GlueRule``,
+the contacts' ``ContactRule``, ``friction_models.FrictionRule``).
 
 Every kernel call goes through ``KernelDispatch``, which counts calls per constraint family: the
 effects-gating test and the effects-cost benchmark read those counters.
