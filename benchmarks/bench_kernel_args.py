@@ -155,12 +155,18 @@ def _clusters(count: int, size: int, seed: int):
 def case_shape(quick: bool):
     from nodes.simulation import model, shape_matching
 
+    try:
+        from nodes.simulation.state import StateArrays
+    except ImportError:  # before issue 45
+        StateArrays = None
+
     count, size = (500, 24) if quick else (4000, 24)
     x0, w, q_rest, start = _clusters(count, size, 5)
     moments = model.RestMoments(*shape_matching.rest_moments(q_rest, w, start))
     fit = model.QuadraticFit(*shape_matching.quadratic_moments(q_rest, w, start))
     awake = np.ones(len(w), np.bool_)
     goals_params = inspect.signature(shape_matching.shape_match_goals.py_func).parameters
+    project_params = inspect.signature(shape_matching.shape_match_project.py_func).parameters
 
     def goals(x, quats, out):
         if "aqq_pinv" in goals_params:  # positional arrays (before issue 23)
@@ -179,9 +185,15 @@ def case_shape(quick: bool):
             lam = np.zeros_like(x)
             worst = 0.0
             for _ in range(4):  # as the solver: the same call as solver.py writes it
-                worst = shape_matching.shape_match_project(
-                    x, quats, awake, w, q_rest, start, *moments.args(), lam, 1e-6, 0.3, 8, *quadratic
-                )
+                if "state" in project_params:  # named bundles (issue 45)
+                    state = StateArrays(x, x, x, x, quats, np.zeros(count, np.bool_), awake, awake, x)
+                    arrays = model.ModelArrays(w, w, np.zeros(len(w), np.int64), start, q_rest)
+                    rule = shape_matching.MatchRule(1e-6, 0.3, 8)
+                    worst = shape_matching.shape_match_project(state, arrays, *moments.args(), lam, rule, *quadratic)
+                else:
+                    worst = shape_matching.shape_match_project(
+                        x, quats, awake, w, q_rest, start, *moments.args(), lam, 1e-6, 0.3, 8, *quadratic
+                    )
             results += [x, quats, lam, np.array([worst])]
         out = np.empty_like(x0)
         goals(x0, np.tile([1.0, 0.0, 0.0, 0.0], (count, 1)), out)

@@ -272,11 +272,11 @@ def wall_gauge(particles: int, follow: bool = False):
                 self._follow(family, args)
             if family != "collider" or not self.on:
                 return super().__call__(family, kernel, *args)
-            x = args[0]
+            x = args[0].x  # the kernels take the state's arrays as one bundle (``state.StateArrays``)
             before = x.copy()
             out = super().__call__(family, kernel, *args)
             self.sum += x - before
-            if args[1] is not x:  # pre-stabilisation projects with x_prev = x and no friction
+            if args[0].x_prev is not x:  # pre-stabilisation projects with x_prev = x and no friction
                 self.solve += x - before
             return out
 
@@ -284,12 +284,13 @@ def wall_gauge(particles: int, follow: bool = False):
             """Shift the wall anchors by pre-stabilisation's moves (its contact sweep, wake_step inf, to its
             wall projection): what anchors would do if they followed those moves, a solver change tried
             from outside."""
-            if isinstance(family, tuple) and np.isinf(args[9].wake_step):
-                self.mark = args[0].copy()
-            elif family == "collider" and args[1] is args[0] and self.mark is not None:
-                anchor = args[2]
+            state = args[0]  # ``state.StateArrays``
+            if isinstance(family, tuple) and np.isinf(args[5].wake_step):  # the sweep's ``ContactRule``
+                self.mark = state.x.copy()
+            elif family == "collider" and state.x_prev is state.x and self.mark is not None:
+                anchor = state.wall_anchor
                 held = ~np.isnan(anchor[:, 0])
-                anchor[held] += (args[0] - self.mark)[held]  # before the wall's push: the sweep's moves
+                anchor[held] += (state.x - self.mark)[held]  # before the wall's push: the sweep's moves
                 self.mark = None
 
     return WallGauge(particles, follow)

@@ -12,18 +12,34 @@ eggs sideways across a static bed (measured: a lone egg reached the speed clamp,
 left the bed; with moving partners the recoil cancels it). Contact and friction do act on them.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
 from .contact_constraints import pair_normal
 
 
+class AdhesionRule(NamedTuple):
+    """What ``adhesion_project`` takes of the settings (once per run, ``solver.XpbdSolver``)."""
+
+    capture: float  # mm: bonds break beyond this gap
+    alpha_tilde: float  # compliance / h²
+    lift: float  # the contacts' mass scaling by height, 1/mm
+
+
 @njit(cache=True, parallel=True)
-def adhesion_project(x, awake, w, r, nbr_start, nbr, order, capture, alpha_tilde, lift, out):
+def adhesion_project(state, model, rows, rule, out):
     """One Jacobi sweep pulling near-touching pairs together; ``capture`` in length units,
     ``alpha_tilde`` = compliance / h² (larger is weaker), ``lift`` the contacts' mass scaling.
     Asleep particles (``awake``, ``integrate.wake_flags``) are not moved (an awake partner still
-    takes its own share of their bond). Writes to ``out`` (no aliasing)."""
+    takes its own share of their bond). Writes to ``out`` (no aliasing). ``state``: ``StateArrays`` (x, awake),
+    ``model``: ``ModelArrays`` (w, r), ``rows``: the neighbour lists' ``buffers.ListRows``, ``rule``:
+    ``AdhesionRule``. Per pair: Δx_i = −gap·w_i / (w_i + w_j·e^{lift·(z_j − z_i)} + α̃)·n, averaged."""
+    x, awake = state.x, state.awake
+    w, r = model.w, model.r
+    nbr_start, nbr, order = rows.nbr_start, rows.nbr, rows.order
+    capture, alpha_tilde, lift = rule.capture, rule.alpha_tilde, rule.lift
     n = x.shape[0]
     for p in prange(n):
         i = order[p]  # row p lists the partners of order[p] (``spatial_hash.neighbour_lists``)

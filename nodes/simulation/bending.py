@@ -10,10 +10,21 @@ triples were tried first: a sag's curvature changes a 1-particle-spacing midpoin
 ≈ κℓ²/8, so at the shape-matching compliance they changed the sag of an 11-particle beam by < 0.2 %.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
 from .shape_matching import quat_to_matrix
+
+
+class BendRows(NamedTuple):
+    """The bend constraints as ``bend_project`` takes them (``model.BendTriples.args()``)."""
+
+    triples: np.ndarray  # (t, 3) end a, interior b, end c
+    frac: np.ndarray  # (t,) chord fractions
+    rest: np.ndarray  # (t, 3) rest offsets
+    tstart: np.ndarray  # (m + 1,) per-cluster CSR
 
 
 def bend_triples(q_rest: np.ndarray, start: np.ndarray, elongation: float = 1.5):
@@ -48,9 +59,14 @@ def bend_triples(q_rest: np.ndarray, start: np.ndarray, elongation: float = 1.5)
 
 
 @njit(cache=True, parallel=True)
-def bend_project(x, quats, awake, w, triples, frac, rest, tstart, lam, alpha_tilde):
-    """One XPBD sweep of the bend constraints (λ accumulated in ``lam`` (t, 3)) of the clusters whose
-    particles are ``awake`` (``integrate.wake_flags``); returns max |C|."""
+def bend_project(state, model, bends, lam, alpha_tilde):
+    """One XPBD sweep of the bend constraints C = x_b − ((1 − t)·x_a + t·x_c) − R·d₀ (module docstring; λ
+    accumulated in ``lam`` (t, 3), Δλ = (−C − α̃λ)/(Σ w + α̃)) of the clusters whose particles are ``awake``
+    (``integrate.wake_flags``); returns max |C|. ``state``: ``StateArrays`` (x, quats, awake), ``model``:
+    ``ModelArrays`` (w), ``bends``: ``BendRows``."""
+    x, quats, awake = state.x, state.quats, state.awake
+    w = model.w
+    triples, frac, rest, tstart = bends.triples, bends.frac, bends.rest, bends.tstart
     m = tstart.shape[0] - 1
     worst = np.zeros(m)
     rots = np.empty((m, 3, 3))  # one allocation per sweep, not one per cluster inside the parallel loop

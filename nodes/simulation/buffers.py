@@ -9,11 +9,32 @@ anchors and loads, tolerated overlaps): they follow the particles of the ``State
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from .model import Model
 from .settings import PAIR_EFFECTS, SolverSettings
+
+
+class Tracking(NamedTuple):
+    """The Verlet-list displacement check folded into ``integrate.predict`` / ``update_velocity``: the positions
+    at the last build and per-particle scratch; both empty without neighbour lists (``NO_TRACKING``)."""
+
+    x_built: np.ndarray  # (n, 3), or (0, 3): no check
+    moved: np.ndarray  # (n,)
+
+
+NO_TRACKING = Tracking(np.empty((0, 3)), np.empty(0))
+
+
+class ListRows(NamedTuple):
+    """The neighbour lists' rows and whose they are (``NeighbourLists.csr``): row p lists the partners of
+    particle ``order[p]``."""
+
+    nbr_start: np.ndarray  # (n + 1,)
+    nbr: np.ndarray
+    order: np.ndarray  # (n,)
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,9 +78,9 @@ class NeighbourLists:
         none = np.zeros(0, np.int64)
         return cls(np.zeros(n + 1, np.int64), none, none, half, none, np.arange(n, dtype=np.int64), none)
 
-    def csr(self):
+    def csr(self) -> ListRows:
         """(nbr_start, nbr, order): the rows and whose they are."""
-        return self.nbr_start, self.nbr, self.order
+        return ListRows(self.nbr_start, self.nbr, self.order)
 
     def rows(self):
         """(nbr_start, nbr, half, order): what the pair kernels read of the lists."""
@@ -123,6 +144,6 @@ class Contacts:
         """Some particle moved more than half the skin since the last build (or none was built)."""
         return self.displacement > 0.5 * self.skin
 
-    def tracking(self):
+    def tracking(self) -> Tracking:
         """(x_built, moved): the displacement check folded into predict / update_velocity."""
-        return self.x_built, self.moved
+        return Tracking(self.x_built, self.moved)

@@ -7,15 +7,33 @@ that keeps it inside the membrane. Its reaction on the much heavier egg (≈ 15 
 neglected.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
 from .shape_matching import centre_of_mass, quat_to_matrix
 
 
+class YolkMotion(NamedTuple):
+    """What the yolk kernels take of one solve: the ``Control``'s buoyant acceleration, the solve h, the drag."""
+
+    accel: np.ndarray  # (3,) mm/s²
+    h: float  # s
+    drag: float  # 1/s (``settings.YOLK_DRAG``)
+
+
 @njit(cache=True, parallel=True)
-def yolk_predict(yx, yv, y_prev, x, v, w, start, owner, accel, h, drag_rate):
-    """Drag the yolk velocity towards its egg's mean velocity, add buoyant acceleration, move."""
+def yolk_predict(yolks, state, model, room, motion):
+    """Drag the yolk velocity towards its egg's mean velocity, add buoyant acceleration, move:
+    v_y ← v_egg + (v_y − v_egg)·e^{−drag·h} + h·a, x_y ← x_y + h·v_y. ``yolks``: ``state.YolkArrays``,
+    ``state``: ``StateArrays`` (v), ``model``: ``ModelArrays`` (w, start), ``room``: ``model.YolkRoom``
+    (owner), ``motion``: ``YolkMotion``."""
+    yx, yv, y_prev = yolks.x, yolks.v, yolks.x_prev
+    v = state.v
+    w, start = model.w, model.start
+    owner = room.owner
+    accel, h, drag_rate = motion.accel, motion.h, motion.drag
     k = yx.shape[0]
     relax = np.exp(-drag_rate * h)
     for y in prange(k):
@@ -28,8 +46,15 @@ def yolk_predict(yx, yv, y_prev, x, v, w, start, owner, accel, h, drag_rate):
 
 
 @njit(cache=True, parallel=True)
-def yolk_contain(yx, yv, y_prev, x, quats, w, start, owner, centre_local, room, h):
-    """Project each yolk back inside its egg (|x_y − c| ≤ room) and set v = Δx/h."""
+def yolk_contain(yolks, state, model, space, motion):
+    """Project each yolk back inside its egg (|x_y − c| ≤ room, c = c_egg + R·centre) and set v = Δx/h.
+    ``yolks``: ``state.YolkArrays``, ``state``: ``StateArrays`` (x, quats), ``model``: ``ModelArrays`` (w, start),
+    ``space``: ``model.YolkRoom``, ``motion``: ``YolkMotion`` (h)."""
+    yx, yv, y_prev = yolks.x, yolks.v, yolks.x_prev
+    x, quats = state.x, state.quats
+    w, start = model.w, model.start
+    owner, centre_local, room = space.owner, space.centre, space.room
+    h = motion.h
     k = yx.shape[0]
     for y in prange(k):
         c = owner[y]

@@ -10,6 +10,7 @@ thin bowl).
 """
 
 from concurrent.futures import ThreadPoolExecutor
+from typing import NamedTuple
 
 import numpy as np
 from numba import get_num_threads, njit, prange
@@ -259,6 +260,15 @@ def block_minimum(phi):
     return out
 
 
+class ColliderGrid(NamedTuple):
+    """φ of the free space as ``collider_project`` takes it (``model.ColliderField.args()``)."""
+
+    phi: np.ndarray  # (nx, ny, nz)
+    origin: np.ndarray  # (3,)
+    pitch: float
+    blocks: np.ndarray  # ``block_minimum`` of φ
+
+
 @njit(cache=True)  # called, not inlined: a rare path, and its three φ samples cost 3.4 of 17.8 s of compiling
 def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
     """Swept test for a centre that ended inside the solid (φ < 0) although it started the solve in
@@ -329,12 +339,16 @@ def _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i):
 
 
 @njit(cache=True, parallel=True)
-def collider_project(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule):
+def collider_project(state, model, grid, rule):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
     (``friction.friction_wall``, normal load = the penetration; ``rule``: a ``friction_models.FrictionRule``,
     ``anchor`` (n, 3) per particle; μs = 0 skips friction and leaves the anchors). In place; particles
     are independent. ``blocks``: the ``block_minimum`` of φ (particles far from every wall are skipped).
-    Returns max (r − φ)/r."""
+    ``state``: ``StateArrays`` (x, x_prev, wall_anchor; x_prev is x in pre-stabilisation: no swept test),
+    ``model``: ``ModelArrays`` (w, r), ``grid``: ``ColliderGrid``. Returns max (r − φ)/r."""
+    x, x_prev, anchor = state.x, state.x_prev, state.wall_anchor
+    w, r = model.w, model.r
+    phi, origin, pitch, blocks = grid.phi, grid.origin, grid.pitch, grid.blocks
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):

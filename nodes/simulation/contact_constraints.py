@@ -210,7 +210,7 @@ def _colour_chunks(cell_start, dims, colour, chunks, out):
 
 
 @njit(cache=True, parallel=True)
-def contact_sweep(x, x_prev, awake, pushed, w, r, rows, colouring, entries, rule, chunks):
+def contact_sweep(state, model, rows, colouring, entries, rule, chunks):
     """One Gauss–Seidel sweep over the touching pairs, in place: the non-penetration constraint
     C = |x_i − x_j| − r_i − r_j + allowance ≥ 0 (``entries.allowance`` per list entry;
     ``rule.normal``) with shock propagation ``rule.lift`` (1/length, 0 = off), and in the same pass
@@ -222,7 +222,10 @@ def contact_sweep(x, x_prev, awake, pushed, w, r, rows, colouring, entries, rule
     particle, so each colour runs as ``chunks`` parallel runs of slabs balanced by particle count.
     The result does not depend on ``chunks``. Sleeping: pairs of two asleep particles are skipped, an
     asleep one is held still and marked ``pushed`` by a fast awake partner (``sleeper_share``;
-    ``rule.wake_step`` = inf marks none)."""
+    ``rule.wake_step`` = inf marks none). ``state``: ``StateArrays`` (x, x_prev, awake, pushed), ``model``:
+    ``ModelArrays`` (w, r)."""
+    x, x_prev, awake, pushed = state.x, state.x_prev, state.awake, state.pushed
+    w, r = model.w, model.r
     cell_start, order, dims = colouring
     xs, xps, aw, pu, ws, rs = _sorted_copies(x, x_prev, awake, pushed, w, r, order)
     slab = dims[1] * dims[2]
@@ -278,10 +281,14 @@ def _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, p, i):
 
 
 @njit(cache=True, parallel=True)
-def overlap_allowance(x, awake, r, nbr_start, nbr, half, order, decay, out):
+def overlap_allowance(state, model, rows, decay, out):
     """Per list entry, the overlap r_i + r_j − d that remains less decay·min(r_i, r_j) (≥ 0):
     tolerated until the next pre-stabilisation. Entries the sweep skips (j < i in full rows, ``half``
-    false; pairs of two asleep particles, ``awake``) are not written."""
+    false; pairs of two asleep particles, ``awake``) are not written. ``state``: ``StateArrays`` (x, the
+    positions measured, and awake), ``model``: ``ModelArrays`` (r), ``rows``: ``PairRows``."""
+    x, awake = state.x, state.awake
+    r = model.r
+    nbr_start, nbr, half, order = rows.nbr_start, rows.nbr, rows.half, rows.order
     for p in prange(x.shape[0]):
         _allowance_row(x, awake, r, nbr_start, nbr, half, decay, out, p, order[p])
 

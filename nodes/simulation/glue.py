@@ -19,6 +19,7 @@ height at 30 substeps and 94–96 % at 10–20 (docs/validation.md).
 """
 
 from collections import namedtuple
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -28,6 +29,49 @@ from .shape_matching import extract_rotation
 
 # the regions as ``glue_match`` reads them (a named bundle: numba takes it as one argument)
 RegionRows = namedtuple("RegionRows", "region_start link_own link_start member rest")
+
+
+class GlueArrays(NamedTuple):
+    """What the glue changes as its kernels take it: which links hold (``State.glued``), the regions' warm-started
+    rotations (``State.glue_quats``) and each membership's goal (the solver's, NaN until matched)."""
+
+    intact: np.ndarray  # (L,) bool
+    quats: np.ndarray  # (m, 4)
+    goal: np.ndarray  # (M, 3)
+
+
+class GlueRule(NamedTuple):
+    """What the glue kernels take of the settings (once per run, ``solver.XpbdSolver``)."""
+
+    rot_iters: int  # iterations of the rotation extraction
+    limit: float  # mm: ``glue_tear``, the mean distance from the goals at which a link tears
+    stiffness: float  # share of the way to the goals per iteration (``SolverSettings.glue``)
+
+
+class GlueMembers(NamedTuple):
+    """Each particle's memberships (CSR ``pstart``, slots ``pslot``): what ``glue_pull`` reads."""
+
+    pstart: np.ndarray  # (n + 1,)
+    pslot: np.ndarray  # (M,)
+
+
+class GlueFloors(NamedTuple):
+    """Each particle's pressed glued partners and the regions' links: what ``glued_floors`` reads."""
+
+    floor_start: np.ndarray  # (n + 1,)
+    floor_partner: np.ndarray
+    floor_depth: np.ndarray  # mm
+    region_start: np.ndarray  # (m + 1,)
+    link_grain: np.ndarray  # (L,)
+
+
+class GluedEntries(NamedTuple):
+    """Per entry of the neighbour lists: the link gluing its grains (−1: none), the overlap the press left it, and
+    whether its grains are still glued (``glued_floors``, ``glued_allowance``)."""
+
+    link: np.ndarray  # int64
+    depth: np.ndarray
+    stuck: np.ndarray  # bool
 
 
 def glue_bonds(x, r, elem, n_moving: int, capture: float) -> np.ndarray:
@@ -201,13 +245,17 @@ def _match_region(x, w, regions, intact, quats, rot_iters, goal, torn_by, limit,
 
 
 @njit(cache=True, parallel=True)
-def glue_match(x, w, regions, intact, quats, rot_iters, goal, torn_by, limit):
+def glue_match(state, model, regions, glue, rule, torn_by):
     """Match every region with a grain still glued to it rigidly: ``goal`` (M, 3) of each membership
     (NaN where its link is torn or its region has no glued neighbour left). With ``torn_by`` set, then
     tear every link whose particles stand, on average, more than ``limit`` (mm) from their goals: the
     region's shape, not its motion, decides (goals of the last iteration against predicted positions
     tore a falling onigiri apart). Each region writes only its own memberships, links and quaternion:
-    race-free, the same at any thread count."""
+    race-free, the same at any thread count. ``state``: ``StateArrays`` (x), ``model``: ``ModelArrays`` (w),
+    ``regions``: ``RegionRows``, ``glue``: ``GlueArrays``, ``rule``: ``GlueRule`` (rotation iterations, limit)."""
+    x, w = state.x, model.w
+    intact, quats, goal = glue.intact, glue.quats, glue.goal
+    rot_iters, limit = rule.rot_iters, rule.limit
     m = len(regions.region_start) - 1
     for b in prange((m + BLOCK - 1) // BLOCK):
         a = np.empty((3, 3))
@@ -217,8 +265,13 @@ def glue_match(x, w, regions, intact, quats, rot_iters, goal, torn_by, limit):
 
 
 @njit(cache=True, parallel=True)
-def glue_pull(x, awake, pstart, pslot, goal, stiffness):
-    """Move each awake particle ``stiffness`` of the way to the mean of its regions' goals."""
+def glue_pull(state, members, glue, rule):
+    """Move each awake particle ``stiffness`` of the way to the mean of its regions' goals:
+    x_i += stiffness·(mean goal − x_i). ``state``: ``StateArrays`` (x, awake), ``members``: ``GlueMembers``,
+    ``glue``: ``GlueArrays`` (goal), ``rule``: ``GlueRule`` (stiffness)."""
+    x, awake = state.x, state.awake
+    pstart, pslot = members.pstart, members.pslot
+    goal, stiffness = glue.goal, rule.stiffness
     for i in prange(len(pstart) - 1):
         if not awake[i]:
             continue
@@ -249,14 +302,18 @@ def _link_of(a, b, region_start, link_grain):
 
 
 @njit(cache=True, parallel=True)
-def glued_floors(
-    elem, nbr_start, nbr, half, order, floor_start, floor_partner, floor_depth, region_start, link_grain, link, depth
-):
+def glued_floors(model, rows, floors, entries):
     """Per entry of the lists (row p: particle order[p]'s, ``spatial_hash.neighbour_lists``): the link that glues
     its two grains (``link``, −1 where none: never glued, the same grain, or a static particle) and the overlap the
     press left the pair (``depth``, 0 where it left none). Once per build of the lists: what ``glued_allowance``
     reads each substep (searching the floors and regions there took 3.2 ms of a 30 ms onigiri substep on one
-    thread)."""
+    thread). ``model``: ``ModelArrays`` (elem), ``rows``: the lists' ``contact_constraints.PairRows``, ``floors``:
+    ``GlueFloors``, ``entries``: ``GluedEntries`` (link, depth written)."""
+    elem = model.elem
+    nbr_start, nbr, half, order = rows.nbr_start, rows.nbr, rows.half, rows.order
+    floor_start, floor_partner, floor_depth = floors.floor_start, floors.floor_partner, floors.floor_depth
+    region_start, link_grain = floors.region_start, floors.link_grain
+    link, depth = entries.link, entries.depth
     m = len(region_start) - 1
     for p in prange(len(nbr_start) - 1):
         i = order[p]
@@ -276,14 +333,17 @@ def glued_floors(
 
 
 @njit(cache=True)
-def glued_allowance(link, depth, glued, allowance, stuck):
+def glued_allowance(entries, glue, allowance):
     """Raise each listed pair's tolerated overlap (``contact_constraints``' allowance) to the overlap the
     press left it with while its grains stay glued (``link``, ``depth``: ``glued_floors``): the glue keeps the
     pressed shape, so contacts that pushed those overlaps apart only fought it (with the contacts' mass
     scaling by height that fight lifted a glued onigiri off its plate at 17 mm/s); a deeper overlap is still
     resolved. ``stuck`` ← the entry's grains are still glued (their friction takes the true masses:
     ``contact_constraints.PairEntries``).
-    Serial: 0.2 ms for the onigiri's 286,000 entries, and a parallel loop costs ≈ 0.5 s more to compile."""
+    Serial: 0.2 ms for the onigiri's 286,000 entries, and a parallel loop costs ≈ 0.5 s more to compile.
+    ``entries``: ``GluedEntries`` (link, depth; stuck written), ``glue``: ``GlueArrays`` (intact)."""
+    link, depth, stuck = entries.link, entries.depth, entries.stuck
+    glued = glue.intact
     for a in range(len(link)):
         k = link[a]
         stuck[a] = k >= 0 and glued[k]

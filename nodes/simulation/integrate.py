@@ -11,8 +11,21 @@ static obstacle, so it stays where it fell asleep until a fast neighbour runs in
 substep finds it unsupported (``solver.XpbdSolver.substep``).
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
+
+
+class Motion(NamedTuple):
+    """What ``predict`` and ``update_velocity`` take of one solve (``solver.Coefficients.motion``, with the
+    ``Control``'s acceleration): a named bundle, one numba argument."""
+
+    accel: np.ndarray  # (1, 3) or (n, 3) mm/s²
+    h: float  # the solve, s
+    clamp: float  # speed clamp, radii per solve
+    damping: float  # velocity factor per solve (1 = none)
+    gain: float  # mm/s, the depenetration speed bound (inf = none)
 
 
 @njit(cache=True, inline="always")
@@ -53,12 +66,17 @@ def _predict_one(x, v, w, r, accel, h, clamp, x_prev, x_built, moved, awake, i):
 
 
 @njit(cache=True, parallel=True)
-def predict(x, v, x_prev, awake, w, r, x_built, moved, accel, h, clamp):
+def predict(state, model, tracking, motion):
     """x_prev ← x; v += h·a (a per particle, (n, 3), or one row for all); clamp; x ← x + h·v —
     for the ``awake`` particles; asleep ones only get x_prev ← x (no gravity: they stay put).
+    ``state``: ``StateArrays``, ``model``: ``ModelArrays`` (w, r), ``motion``: ``Motion`` (accel, h, clamp).
 
     Returns max_i |x_i − x_built_i| (the Verlet-list check, folded in to save a launch; 0 when
-    ``x_built`` is empty, i.e. no neighbour lists). ``moved`` (n,) is scratch."""
+    ``tracking.x_built`` is empty, i.e. no neighbour lists). ``tracking.moved`` (n,) is scratch."""
+    x, v, x_prev, awake = state.x, state.v, state.x_prev, state.awake
+    w, r = model.w, model.r
+    x_built, moved = tracking.x_built, tracking.moved
+    accel, h, clamp = motion.accel, motion.h, motion.clamp
     n = x.shape[0]
     track = x_built.shape[0] == n
     for i in prange(n):
@@ -83,7 +101,7 @@ def _velocity_one(x, x_prev, x_begin, v, r, h, clamp, damping_factor, gain, x_bu
 
 
 @njit(cache=True, parallel=True)
-def update_velocity(x, v, x_prev, x_begin, r, x_built, moved, h, clamp, damping_factor, gain):
+def update_velocity(state, model, x_begin, tracking, motion):
     """v = (x − x_prev)/h or (x − x_begin)/h, whichever is shorter, clamped, times the damping factor
     (1 = none); zero restitution. ``gain`` (mm/s; inf = none): the solve leaves a particle no faster than
     max(its predicted speed, gain) — the constraints may slow it or turn it, but speed it up beyond
@@ -95,7 +113,13 @@ def update_velocity(x, v, x_prev, x_begin, r, x_built, moved, h, clamp, damping_
     resting particle that pre-stabilisation lifts and the solve lets sink back has not moved, and
     (x − x_prev)/h would give it a velocity the next prediction turns into real motion (jitter that
     never settles without sleeping: 7 mm/s at rest in the long-rest test).
+    ``state``: ``StateArrays`` (x, v, x_prev), ``model``: ``ModelArrays`` (r), ``motion``: ``Motion`` (h, clamp,
+    damping, gain), ``tracking``: ``buffers.Tracking``.
     Returns max_i |x_i − x_built_i| like ``predict``: the next substep's Verlet-list check."""
+    x, v, x_prev = state.x, state.v, state.x_prev
+    r = model.r
+    x_built, moved = tracking.x_built, tracking.moved
+    h, clamp, damping_factor, gain = motion.h, motion.clamp, motion.damping, motion.gain
     n = x.shape[0]
     track = x_built.shape[0] == n
     for i in prange(n):
@@ -104,12 +128,14 @@ def update_velocity(x, v, x_prev, x_begin, r, x_built, moved, h, clamp, damping_
 
 
 @njit(cache=True, parallel=True)
-def wake_flags(x, x_start, asleep, awake, pushed, start, probe):
+def wake_flags(state, model, probe):
     """Per particle ``awake`` ← its element is awake (or ``probe``: every element is solved this
     substep), and for those particles x_start ← x, the sleep test's reference; ``pushed`` cleared;
     returns how many particles are awake. An asleep particle keeps the x_start of the substep it
     fell asleep in, so the test measures its drift since then. Particles outside ``start`` (static
-    obstacles) are never touched: they stay asleep."""
+    obstacles) are never touched: they stay asleep. ``state``: ``StateArrays``, ``model``: ``ModelArrays``."""
+    x, x_start, asleep, awake, pushed = state.x, state.x_start, state.asleep, state.awake, state.pushed
+    start = model.start
     m = start.shape[0] - 1
     count = 0
     for c in prange(m):
@@ -140,13 +166,14 @@ def _touching(x, r, i, j):
 
 
 @njit(cache=True, parallel=True)
-def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, contact_rows, still):
+def sleep_clusters(state, model, contact_rows, still):
     """Put to sleep (and zero the velocities of) every element whose particles all lie within
     ``still`` (sleep_speed·h: the drift a resting particle may make in one substep) of x_start, measured
     from before pre-stabilisation, none of which was ``pushed``
     (``contact_constraints.sleeper_share``) and none of which touches a particle of another awake
     element that moved farther (``contact_rows``: the contact lists' (nbr_start, nbr, order), half or
-    full, row p being particle order[p]'s; none without them). An element pinned in an overlap that
+    full, row p being particle order[p]'s: ``buffers.ListRows``; none without them). ``state``:
+    ``StateArrays``, ``model``: ``ModelArrays`` (r, elem, start). An element pinned in an overlap that
     pre-stabilisation and the solve undo in turn has a velocity but no motion, and sleeps. Every other
     element is awake: an asleep one that a fast neighbour ran into wakes here.
 
@@ -158,6 +185,8 @@ def sleep_clusters(x, v, x_start, asleep, awake, pushed, r, elem, start, contact
     skips asleep elements in prediction, shape matching, bending and adhesion, and pairs of two
     asleep particles in the contacts (``solver.XpbdSolver.substep``).
     """
+    x, v, x_start, asleep, awake, pushed = state.x, state.v, state.x_start, state.asleep, state.awake, state.pushed
+    r, elem, start = model.r, model.elem, model.start
     m = start.shape[0] - 1
     limit = still * still
     slow = np.empty(m, np.bool_)

@@ -12,12 +12,24 @@ constraints, the collider field with effect 'collider', the yolks with effect 'b
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from . import bending, collider, glue, shape_matching
 from .settings import SolverSettings
 from .state import State, YolkState
+
+
+class ModelArrays(NamedTuple):
+    """The ``Model``'s per-particle and per-cluster arrays as the kernels take them: one named bundle, built once
+    per run (``Model.arrays()``; numba takes it as one argument, a kernel reads the fields it uses)."""
+
+    w: np.ndarray  # (n,) inverse masses; 0 = static
+    r: np.ndarray  # (n,) radii
+    elem: np.ndarray  # (n,) element of each particle
+    start: np.ndarray  # (m + 1,) CSR of the clusters
+    q_rest: np.ndarray  # (n_moving, 3) rest offsets
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,7 +69,8 @@ class BendTriples:
     tstart: np.ndarray  # (m + 1,)
 
     def args(self):
-        return self.triples, self.frac, self.rest, self.tstart
+        """The kernels' argument: one ``bending.BendRows``."""
+        return bending.BendRows(self.triples, self.frac, self.rest, self.tstart)
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,7 +92,8 @@ class ColliderField:
         return self.phi, self.origin, self.pitch
 
     def args(self):
-        return self.phi, self.origin, self.pitch, self.blocks
+        """The kernels' argument: one ``collider.ColliderGrid``."""
+        return collider.ColliderGrid(self.phi, self.origin, self.pitch, self.blocks)
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,8 +116,23 @@ class GlueRegions:
         """The regions as ``glue.glue_match`` takes them."""
         return glue.RegionRows(self.region_start, self.link_own, self.link_start, self.member, self.rest)
 
-    def floor_args(self):
-        return self.floor_start, self.floor_partner, self.floor_depth, self.region_start, self.link_grain
+    def floors(self):
+        """The pressed partners as ``glue.glued_floors`` takes them."""
+        return glue.GlueFloors(
+            self.floor_start, self.floor_partner, self.floor_depth, self.region_start, self.link_grain
+        )
+
+    def members(self):
+        """Each particle's memberships as ``glue.glue_pull`` takes them."""
+        return glue.GlueMembers(self.pstart, self.pslot)
+
+
+class YolkRoom(NamedTuple):
+    """Where the yolks may be, as the buoyancy kernels take it (``Yolks.arrays()``, once per run)."""
+
+    owner: np.ndarray  # (k,) int64
+    centre: np.ndarray  # (k, 3)
+    room: np.ndarray  # (k,)
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,6 +144,9 @@ class Yolks:
     owner: np.ndarray  # (k,) int64
     centre: np.ndarray  # (k, 3)
     room: np.ndarray  # (k,)
+
+    def arrays(self) -> YolkRoom:
+        return YolkRoom(self.owner, self.centre, self.room)
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,6 +168,10 @@ class Model:
     collider: ColliderField | None
     yolks: Yolks | None
     glue: GlueRegions | None = None  # effect 'adhesion' with glue on (``SolverSettings.glue``)
+
+    def arrays(self) -> ModelArrays:
+        """The kernels' bundle of the model's arrays (``ModelArrays``)."""
+        return ModelArrays(self.w, self.r, self.elem, self.start, self.q_rest)
 
     @property
     def elements(self) -> int:

@@ -32,6 +32,14 @@ class QuadraticMoments(NamedTuple):
     flags: np.ndarray  # (m,) bool
 
 
+class MatchRule(NamedTuple):
+    """What ``shape_match_project`` takes of the settings (once per run, ``solver.XpbdSolver``)."""
+
+    alpha_tilde: float  # XPBD α̃ = compliance / h²
+    beta: float  # linear deformation share β of the goal (SPEC §5)
+    rot_iters: int  # iterations of the rotation extraction
+
+
 class GoalScratch(NamedTuple):
     """3×3 and 3×9 work matrices of one cluster's goal map: A_pq, R, the linear goal, Ã_pq, the quadratic goal."""
 
@@ -268,7 +276,7 @@ def _match_cluster_quadratic(x, w, q_rest, start, c, quats, quadratic, lam, alph
 
 
 @njit(cache=True, parallel=True)
-def shape_match_project(x, quats, awake, w, q_rest, start, moments, lam, alpha_tilde, beta, rot_iters, quadratic=None):
+def shape_match_project(state, model, moments, lam, rule, quadratic=None):
     """One XPBD sweep of C_i = x_i − g_i per particle, g_i = (β·A + (1−β)·R)·q_i + x_cm (SPEC §5);
     with ``quadratic`` (``QuadraticMoments``), the quadratic goal for the clusters whose flag is set (the
     others, too few or degenerate particles, keep the linear goal, from ``moments``: ``LinearMoments``).
@@ -277,7 +285,12 @@ def shape_match_project(x, quats, awake, w, q_rest, start, moments, lam, alpha_t
 
     Clusters are disjoint, so the loop over clusters is race-free and updates ``x`` in place.
     ``lam`` (n, 3) accumulates λ over the iterations of a substep; returns the max |C| seen.
+    ``state``: ``StateArrays`` (x, quats, awake), ``model``: ``ModelArrays`` (w, q_rest, start), ``rule``:
+    ``MatchRule`` (α̃, β, rotation iterations).
     """
+    x, quats, awake = state.x, state.quats, state.awake
+    w, q_rest, start = model.w, model.q_rest, model.start
+    alpha_tilde, beta, rot_iters = rule.alpha_tilde, rule.beta, rule.rot_iters
     m = start.shape[0] - 1
     worst = np.zeros(m)
     blocks = (m + BLOCK - 1) // BLOCK

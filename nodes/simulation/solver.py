@@ -6,8 +6,11 @@ substep changes, ``state``), a ``Control`` (what a caller may change between ste
 ``Contacts`` (the neighbour lists and what each pair keeps across substeps, ``buffers``) and
 ``XpbdSolver.step(state_in, state_out, control, contacts, dt)``; ``SolverSettings`` (``settings``) are
 fixed per solver, which holds the kernels' scratch and the settings in the form the kernels take
-(``Coefficients``). Kernel arguments come in that order too: state arrays, model arrays, buffers,
-coefficients.
+(``Coefficients``). Kernel arguments come in that order too, each a named bundle (issue 45 §1; a NamedTuple
+numba takes as one argument): the state's arrays (``state.StateArrays``, built once per solve: the adhesion
+swaps the positions), the model's (``model.ModelArrays``, once per run), the family's own data and buffers,
+then its rule (``integrate.Motion``, ``shape_matching.MatchRule``, ``adhesion.AdhesionRule``, ``glue.GlueRule``,
+the contacts' ``ContactRule``, ``friction_models.FrictionRule``).
 
 Every kernel call goes through ``KernelDispatch``, which counts calls per constraint family: the
 effects-gating test and the effects-cost benchmark read those counters.
@@ -32,7 +35,7 @@ from . import (
     shape_matching,
     spatial_hash,
 )
-from .buffers import ClusterBuffers, Contacts, NeighbourLists
+from .buffers import NO_TRACKING, ClusterBuffers, Contacts, ListRows, NeighbourLists, Tracking
 from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
 from .settings import ROTATION_ITERATIONS, SLEEP_PROBE, YOLK_DRAG, SolverSettings
@@ -42,7 +45,6 @@ from .threads import FreeCores, thread_count
 # below this many particles the kernels run on one thread: threads gain nothing there (ikura don,
 # 2,480 particles: equal times); above, on the cores other processes leave free (``threads``)
 PARALLEL_PARTICLES = 4096
-NO_TRACKING = (np.empty((0, 3)), np.empty(0))
 NO_GLUED = np.zeros(0, np.bool_)  # no list entry glued: every pair's friction mass-scaled (``XpbdSolver._stuck``)
 # the longest travel of a particle in one solve, in radii: a clamp above it runs each substep as
 # ceil(clamp / MAX_TRAVEL) solves (``Coefficients.pieces``); with one solve at clamp 2 (allowed by the
@@ -191,6 +193,18 @@ class XpbdSolver:
         self.coefficients = Coefficients.of(model, settings)
         self.steps = settings.substeps * self.coefficients.pieces  # solves per frame
         self.clusters = ClusterBuffers.allocate(model)
+        self.model_arrays = model.arrays()  # the kernels' bundle of the model's arrays, once per run
+        self.yolk_room = model.yolks.arrays() if model.yolks is not None else None
+        k = self.coefficients  # the kernels' rules, once per run
+        self.match_rule = shape_matching.MatchRule(k.alpha, settings.linear_deformation, ROTATION_ITERATIONS)
+        self.adhesion_rule = adhesion.AdhesionRule(settings.capture, k.adhesion_alpha, k.lift)
+        self.moments = model.moments.args() if model.moments is not None else ()
+        self.quadratic = model.quadratic.args() if model.quadratic is not None else ()
+        self.bend_rows = model.bend.args() if model.bend is not None else None
+        self.collider_grid = model.collider.args() if model.collider is not None else None
+        g = model.glue
+        self.glue_bundles = (g.rows(), g.members(), g.floors()) if g is not None else None
+        self.glue_rule = glue.GlueRule(ROTATION_ITERATIONS, settings.glue_tear, settings.glue)
         self.contacts = Contacts.allocate(model, settings)  # the contacts ``frame`` steps with
         self.default_control = self.control()  # the control ``frame`` steps with
         self.diagnostics = Diagnostics()
@@ -246,7 +260,7 @@ class XpbdSolver:
         awake = m.n_moving
         if s.sleep_speed > 0:
             probe = st.substeps_done % (self.steps * SLEEP_PROBE) == 0
-            awake = d("sleep", integrate.wake_flags, st.x, st.x_start, st.asleep, st.awake, st.pushed, m.start, probe)
+            awake = d("sleep", integrate.wake_flags, st.arrays(), self.model_arrays, probe)
         st.substeps_done += 1
         self.solved += awake
         if awake:
@@ -254,51 +268,17 @@ class XpbdSolver:
             self._prestabilise(st, contacts)
         y = st.yolks
         if y is not None:  # drag towards the egg velocity of the last substep
-            d(
-                "buoyancy",
-                buoyancy.yolk_predict,
-                y.x,
-                y.v,
-                y.x_prev,
-                st.x,
-                st.v,
-                m.w,
-                m.start,
-                m.yolks.owner,
-                control.yolk_accel,
-                k.h,
-                YOLK_DRAG,
-            )
+            yolks, motion = y.arrays(), buoyancy.YolkMotion(control.yolk_accel, k.h, YOLK_DRAG)
+            d("buoyancy", buoyancy.yolk_predict, yolks, st.arrays(), self.model_arrays, self.yolk_room, motion)
         residual = self._solve(st, control, contacts) if awake else 0.0
-        if y is not None:
-            d(
-                "buoyancy",
-                buoyancy.yolk_contain,
-                y.x,
-                y.v,
-                y.x_prev,
-                st.x,
-                st.quats,
-                m.w,
-                m.start,
-                m.yolks.owner,
-                m.yolks.centre,
-                m.yolks.room,
-                k.h,
-            )
+        if y is not None:  # after the solve: the adhesion may have swapped the positions
+            d("buoyancy", buoyancy.yolk_contain, yolks, st.arrays(), self.model_arrays, self.yolk_room, motion)
         if s.sleep_speed > 0:
             d(
                 "sleep",
                 integrate.sleep_clusters,
-                st.x,
-                st.v,
-                st.x_start,
-                st.asleep,
-                st.awake,
-                st.pushed,
-                m.r,
-                m.elem,
-                m.start,
+                st.arrays(),  # after the solve: the adhesion may have swapped the positions
+                self.model_arrays,
                 self._contact_rows(contacts),
                 s.sleep_speed * k.h,
             )
@@ -309,43 +289,33 @@ class XpbdSolver:
         """Predict, the constraint iterations, velocities from positions; returns the residual."""
         s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
         pairs, clusters = contacts, self.clusters
-        moved = d(
-            "integrate",
-            integrate.predict,
-            st.x,
-            st.v,
-            st.x_prev,
-            st.awake,
-            m.w,
-            m.r,
-            *self._tracking(pairs),
-            control.accel,
-            k.h,
-            k.clamp,
-        )
+        motion = integrate.Motion(control.accel, k.h, k.clamp, k.damping, s.depenetration_speed)
+        moved = d("integrate", integrate.predict, st.arrays(), self.model_arrays, self._tracking(pairs), motion)
         self._track(pairs, moved)
         refreshed = self._refresh_neighbours(st, pairs)
         if refreshed and "contact" in s.effects:  # overlap tolerated: as after pre-stabilisation
+            a = st.arrays()
+            rows = contact_constraints.PairRows(*pairs.lists.sweep_rows())
+            # the overlaps at x_prev, the positions before the prediction
             d(
                 "contact",
                 contact_constraints.overlap_allowance,
-                st.x_prev,
-                st.awake,
-                m.r,
-                *pairs.lists.rows(),
+                a._replace(x=a.x_prev),
+                self.model_arrays,
+                rows,
                 0.0,
                 pairs.allowance,
             )
             self._pressed(st, pairs)
         if clusters is not None:
             clusters.clear()
-        quadratic = m.quadratic.args() if m.quadratic is not None else ()
         residual = 0.0
         if "adhesion" in s.effects:
             # once per substep, not per iteration: bonds accumulate no λ, so repeating them per
             # iteration made them rigid as iterations grew, and at 32 × 8 they fought the contacts
             # and pumped energy into the pile (accuracy benchmark)
             self._adhesion(st, pairs)
+        a = st.arrays()  # after the adhesion, which swaps the positions: the iterations swap none
         first = True
         for _ in range(s.iterations):
             residual = 0.0
@@ -358,73 +328,43 @@ class XpbdSolver:
                 residual = d(
                     "shape_matching",
                     shape_matching.shape_match_project,
-                    st.x,
-                    st.quats,
-                    st.awake,
-                    m.w,
-                    m.q_rest,
-                    m.start,
-                    *m.moments.args(),
+                    a,
+                    self.model_arrays,
+                    *self.moments,
                     clusters.lam,
-                    k.alpha,
-                    s.linear_deformation,
-                    ROTATION_ITERATIONS,
-                    *quadratic,
+                    self.match_rule,
+                    *self.quadratic,
                 )
             if m.bend is not None:
+                bends = self.bend_rows
                 residual = max(
                     residual,
-                    d(
-                        "bending",
-                        bending.bend_project,
-                        st.x,
-                        st.quats,
-                        st.awake,
-                        m.w,
-                        *m.bend.args(),
-                        clusters.bend_lam,
-                        k.bend_alpha,
-                    ),
+                    d("bending", bending.bend_project, a, self.model_arrays, bends, clusters.bend_lam, k.bend_alpha),
                 )
             first = False
             if m.collider is not None:
-                d(
-                    "collider",
-                    collider.collider_project,
-                    st.x,
-                    st.x_prev,
-                    st.wall_anchor,
-                    m.w,
-                    m.r,
-                    *m.collider.args(),
-                    k.friction,
-                )
+                d("collider", collider.collider_project, a, self.model_arrays, self.collider_grid, k.friction)
         moved = d(
             "integrate",
             integrate.update_velocity,
-            st.x,
-            st.v,
-            st.x_prev,
+            a,
+            self.model_arrays,
             self.x_begin,
-            m.r,
-            *self._tracking(pairs),
-            k.h,
-            k.clamp,
-            k.damping,
-            s.depenetration_speed,
+            self._tracking(pairs),
+            motion,
         )
         self._track(pairs, moved)
         return residual
 
     @staticmethod
-    def _contact_rows(contacts: Contacts | None):
+    def _contact_rows(contacts: Contacts | None) -> ListRows:
         """(nbr_start, nbr, order) of the neighbour lists, or empty lists (no pair effects)."""
         if contacts is None:
-            return np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
+            return ListRows(np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
         return contacts.lists.csr()
 
     @staticmethod
-    def _tracking(contacts: Contacts | None):
+    def _tracking(contacts: Contacts | None) -> Tracking:
         """(x_built, moved) for the displacement check folded into predict / update_velocity."""
         return contacts.tracking() if contacts is not None else NO_TRACKING
 
@@ -475,18 +415,17 @@ class XpbdSolver:
             pairs.load[:] = 0.0
             self._pressed(st, pairs)
             self._contacts(st, pairs, friction=self.settings.friction.rubs_in_prestabilisation, wake_step=np.inf)
-            d("contact", allowance, st.x, st.awake, m.r, *pairs.lists.rows(), 0.0, pairs.allowance)
+            rows = contact_constraints.PairRows(*pairs.lists.sweep_rows())
+            d("contact", allowance, st.arrays(), self.model_arrays, rows, 0.0, pairs.allowance)
             self._pressed(st, pairs)
-        if m.collider is not None:
+        if m.collider is not None:  # x_prev = x: no swept test, no friction
+            a = st.arrays()
             d(
                 "collider",
                 collider.collider_project,
-                st.x,
-                st.x,
-                st.wall_anchor,
-                m.w,
-                m.r,
-                *m.collider.args(),
+                a._replace(x_prev=a.x),
+                self.model_arrays,
+                self.collider_grid,
                 NO_FRICTION,
             )
 
@@ -495,7 +434,7 @@ class XpbdSolver:
         friction on each pair just before its normal correction; one run of slabs per thread.
         ``wake_step``: ``Coefficients.wake_step`` unless given (pre-stabilisation passes inf: the
         overlaps it undoes are no impact)."""
-        s, k, m = self.settings, self.coefficients, self.model
+        s, k = self.settings, self.coefficients
         lists = pairs.lists
         normal = "contact" in s.effects
         rub = friction and "friction" in s.effects
@@ -505,12 +444,8 @@ class XpbdSolver:
         self.dispatch(
             family,
             cc.contact_sweep,
-            st.x,
-            st.x_prev,
-            st.awake,
-            st.pushed,
-            m.w,
-            m.r,
+            st.arrays(),
+            self.model_arrays,
             cc.PairRows(*lists.sweep_rows()),
             cc.Colouring(*lists.grid()),
             cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load, self._stuck(lists)),
@@ -529,19 +464,14 @@ class XpbdSolver:
 
     def _adhesion(self, st: State, pairs: Contacts) -> None:
         """One Jacobi sweep of the adhesion bonds into the scratch copy, which becomes the positions."""
-        k, m = self.coefficients, self.model
         out = pairs.scratch
         self.dispatch(
             "adhesion",
             adhesion.adhesion_project,
-            st.x,
-            st.awake,
-            m.w,
-            m.r,
-            *pairs.lists.csr(),
-            self.settings.capture,
-            k.adhesion_alpha,
-            k.lift,
+            st.arrays(),
+            self.model_arrays,
+            pairs.lists.csr(),
+            self.adhesion_rule,
             out,
         )
         st.x, pairs.scratch = out, st.x
@@ -553,11 +483,13 @@ class XpbdSolver:
         if m.glue is None:
             return
         if self.glue_floors[0] is not lists:
-            link, depth = np.empty(len(lists.nbr), np.int64), np.empty(len(lists.nbr))
-            self.dispatch("glue", glue.glued_floors, m.elem, *lists.rows(), *m.glue.floor_args(), link, depth)
-            self.glue_floors = (lists, link, depth, np.zeros(len(lists.nbr), np.bool_))
-        _, link, depth, stuck = self.glue_floors
-        self.dispatch("glue", glue.glued_allowance, link, depth, st.glued, pairs.allowance, stuck)
+            n = len(lists.nbr)
+            entries = glue.GluedEntries(np.empty(n, np.int64), np.empty(n), np.zeros(n, np.bool_))
+            rows = contact_constraints.PairRows(*lists.sweep_rows())
+            self.dispatch("glue", glue.glued_floors, self.model_arrays, rows, self.glue_bundles[2], entries)
+            self.glue_floors = (lists, *entries)
+        entries = glue.GluedEntries(*self.glue_floors[1:])
+        self.dispatch("glue", glue.glued_allowance, entries, self._glue_arrays(st), pairs.allowance)
 
     def _stuck(self, lists) -> np.ndarray:
         """Per entry of ``lists``, whether its grains are still glued (``_pressed``): the sweep splits those pairs'
@@ -567,21 +499,13 @@ class XpbdSolver:
     def _glue(self, st: State, tear: bool) -> None:
         """Match the glued regions and pull each particle towards its regions' goals (``glue``); with
         ``tear`` (once per substep) the links left further than ``glue_tear`` from their goals tear."""
-        m, g = self.model, self.model.glue
-        self.dispatch(
-            "glue",
-            glue.glue_match,
-            st.x,
-            m.w,
-            g.rows(),
-            st.glued,
-            st.glue_quats,
-            ROTATION_ITERATIONS,
-            self.glue_goal,
-            tear,
-            self.settings.glue_tear,
-        )
-        self.dispatch("glue", glue.glue_pull, st.x, st.awake, g.pstart, g.pslot, self.glue_goal, self.settings.glue)
+        a, regions, members, arrays = st.arrays(), self.glue_bundles[0], self.glue_bundles[1], self._glue_arrays(st)
+        self.dispatch("glue", glue.glue_match, a, self.model_arrays, regions, arrays, self.glue_rule, tear)
+        self.dispatch("glue", glue.glue_pull, a, members, arrays, self.glue_rule)
+
+    def _glue_arrays(self, st: State):
+        """The glue's changing arrays of ``st`` (``glue.GlueArrays``)."""
+        return glue.GlueArrays(st.glued, st.glue_quats, self.glue_goal)
 
     # -- one frame --------------------------------------------------------------------------
     def frame(self, state: State) -> None:

@@ -4,10 +4,35 @@ yolks, time (the ``State`` of Newton's Model / State split; ``Model.state()`` ma
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from .shape_matching import quat_to_matrix
+
+
+class StateArrays(NamedTuple):
+    """A ``State``'s arrays as the kernels take them: one named bundle (numba takes it as one argument; a kernel
+    reads the fields it uses). ``State.arrays()`` builds it; rebuilt after the solver swaps an array (the
+    adhesion's Jacobi copy becomes ``x``)."""
+
+    x: np.ndarray  # (n, 3)
+    v: np.ndarray  # (n, 3)
+    x_prev: np.ndarray  # (n, 3)
+    x_start: np.ndarray  # (n, 3)
+    quats: np.ndarray  # (m, 4)
+    asleep: np.ndarray  # (m,) bool
+    awake: np.ndarray  # (n,) bool
+    pushed: np.ndarray  # (n,) bool
+    wall_anchor: np.ndarray  # (n, 3)
+
+
+class YolkArrays(NamedTuple):
+    """A ``YolkState``'s arrays as the buoyancy kernels take them (``YolkState.arrays()``)."""
+
+    x: np.ndarray  # (k, 3)
+    v: np.ndarray
+    x_prev: np.ndarray
 
 
 @dataclass(eq=False)
@@ -17,6 +42,9 @@ class YolkState:
     x: np.ndarray  # (k, 3)
     v: np.ndarray
     x_prev: np.ndarray
+
+    def arrays(self) -> YolkArrays:
+        return YolkArrays(self.x, self.v, self.x_prev)
 
 
 @dataclass(eq=False)
@@ -57,6 +85,20 @@ class State:
             np.copyto(self.glued, other.glued)
             np.copyto(self.glue_quats, other.glue_quats)
         self.time, self.substeps_done = other.time, other.substeps_done
+
+    def arrays(self) -> StateArrays:
+        """The kernels' bundle of this state's arrays (``StateArrays``): build it again after swapping one."""
+        return StateArrays(
+            self.x,
+            self.v,
+            self.x_prev,
+            self.x_start,
+            self.quats,
+            self.asleep,
+            self.awake,
+            self.pushed,
+            self.wall_anchor,
+        )
 
     def rotations(self) -> np.ndarray:
         """Current cluster rotations (m, 3, 3) from the warm-started quaternions."""

@@ -23,6 +23,9 @@ from numba.core import event
 from nodes.elements.grid_kernels import mesh_distance_band
 from nodes.placement import refine_kernels as rk
 from nodes.simulation import collider, shape_matching as sm
+from nodes.simulation.friction_models import FrictionRule
+from nodes.simulation.model import ModelArrays
+from nodes.simulation.state import StateArrays
 
 compiled = []
 
@@ -49,11 +52,13 @@ neighbours = rk.Neighbours(np.zeros(3, np.int64), i)
 search = rk.SearchRange(np.zeros(2), np.zeros(2), np.zeros(2))
 rk.overlap_depths.compile(sig(frames, neighbours, np.ones(2, np.bool_), shapes, 0.1))
 rk.refine_offsets.compile(sig(frames, search, neighbours, i, i, shapes, rk.RefineCost(0, 1.0, 1.0, 0.1, 8), 2))
-v = np.zeros(4)
-collider.collider_project.compile(sig(f, f, f, v, v, np.zeros((2, 2, 2)), np.zeros(3), 1.0, np.zeros((1, 1, 1)),
-                                      (0.5, 0.5, True)))
+v, b = np.zeros(2), np.ones(2, np.bool_)
+state = StateArrays(f, f, f, f, np.zeros((1, 4)), np.zeros(1, np.bool_), b, b, f)
+model = ModelArrays(v, v, i, i, f)
+grid = collider.ColliderGrid(np.zeros((2, 2, 2)), np.zeros(3), 1.0, np.zeros((1, 1, 1)))
+collider.collider_project.compile(sig(state, model, grid, FrictionRule(0.5, 0.5, True)))
 moments = sm.LinearMoments(np.zeros((1, 3, 3)), np.zeros((1, 3, 3)))
-shape_args = sig(f, np.zeros((1, 4)), np.ones(2, np.bool_), np.ones(2), f, i, moments, np.zeros((2, 3)), 0.0, 0.5, 4)
+shape_args = sig(state, model, moments, np.zeros((2, 3)), sm.MatchRule(0.0, 0.5, 4))
 sm.shape_match_project.compile(shape_args + (types.Omitted(None),))
 mesh_distance_band.compile(sig(f, np.zeros((1, 3), np.int64), 1.0, (2, 2, 2), 2.0))
 helpers = (rk._depth_of, rk._depth_into, rk._refine_chunk, collider._swept_back, sm._match_cluster)

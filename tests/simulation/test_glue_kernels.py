@@ -52,7 +52,8 @@ def test_glue_match_fits_each_region_rigidly(torn, threads):
     quats = st.glue_quats.copy()
     with thread_count(min(threads, numba.config.NUMBA_NUM_THREADS)):
         for _ in range(10):  # the rotations converge over calls (each starts from the last quaternion)
-            glue.glue_match(st.x, sim.model.w, g.rows(), st.glued.copy(), quats, 30, goal, False, 1.0)
+            arrays = glue.GlueArrays(st.glued.copy(), quats, goal)
+            glue.glue_match(st.arrays(), sim.model.arrays(), g.rows(), arrays, glue.GlueRule(30, 1.0, 0.0), False)
     expected = reference_goals(st.x, sim.model.w, g, st.glued)
     assert np.array_equal(np.isnan(goal[:, 0]), np.isnan(expected[:, 0]))
     ok = ~np.isnan(expected[:, 0])

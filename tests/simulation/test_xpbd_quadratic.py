@@ -8,13 +8,16 @@ import pytest
 from scene_builders import rice_bowl
 from scipy.spatial.transform import Rotation
 
+from nodes.simulation.model import ModelArrays
 from nodes.simulation.shape_matching import (
     LinearMoments,
+    MatchRule,
     QuadraticMoments,
     quadratic_moments,
     rest_moments,
     shape_match_project,
 )
+from nodes.simulation.state import StateArrays
 from nodes.simulation.xpbd import xpbd
 
 ALL = ("gravity", "contact", "friction", "adhesion", "damping")  # no collider: its SDF grid costs seconds
@@ -49,7 +52,9 @@ def project(q, x, mode, beta=1.0, alpha=0.0, quats=None):
     moments = LinearMoments(*rest_moments(q_rest, w, start))
     awake = np.ones(len(xx), np.bool_)
     quadratic = (QuadraticMoments(*quadratic_moments(q_rest, w, start)),) if mode == "quadratic" else ()
-    res = shape_match_project(xx, quats, awake, w, q_rest, start, moments, lam, alpha, beta, 8, *quadratic)
+    state = StateArrays(xx, xx, xx, xx, quats, np.zeros(len(q), np.bool_), awake, awake, xx)
+    model = ModelArrays(w, np.ones(len(xx)), np.zeros(len(xx), np.int64), start, q_rest)
+    res = shape_match_project(state, model, moments, lam, MatchRule(alpha, beta, 8), *quadratic)
     return xx, res
 
 
