@@ -82,18 +82,28 @@ def supervise() -> int | None:
     os.close(fd)
     listing = Path(name)
     parent = os.getpid()
+    # the child's signals, as Python's C-level handler sees them (``signal.set_wakeup_fd``): written at once, even
+    # while a kernel holds the GIL, so a signal sent to the child alone (``kill PID`` of the process that computes)
+    # is held to GRACE seconds too; the child's own handler would run only after the kernel, or it may wait for ever
+    # in its clean-up
+    news, word = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
     pid = os.fork()
     if pid == 0:
         os.environ[ENV_VAR] = name
         _die_with(parent)
+        os.close(news)
+        os.set_blocking(word, False)
+        signal.set_wakeup_fd(word, warn_on_full_buffer=False)
         signal.signal(signal.SIGINT, stop)
         signal.signal(signal.SIGTERM, stop)
         return None
+    os.close(word)
     try:
-        return _wait(pid, listing)
+        return _wait(pid, listing, news)
     finally:
+        os.close(news)
         listing.unlink(missing_ok=True)
 
 
@@ -110,11 +120,14 @@ def _die_with(parent: int) -> None:
         os._exit(1)
 
 
-def _wait(pid: int, listing: Path) -> int:
-    received: list[float] = []  # when each signal came
+def _wait(pid: int, listing: Path, news: int) -> int:
+    received: list[float] = []  # when each signal to this process came
+    stops: list[float] = []  # when a stop began: a signal to this process or to the child
+    os.set_blocking(news, False)
 
     def forward(signum, frame) -> None:
         received.append(time.monotonic())
+        stops.append(received[-1])
         try:
             os.kill(pid, signum)
         except ProcessLookupError:
@@ -125,18 +138,23 @@ def _wait(pid: int, listing: Path) -> int:
     killed = False
     status = None
     while status is None:
+        try:
+            if {signal.SIGINT, signal.SIGTERM} & set(os.read(news, 64)):
+                stops.append(time.monotonic())
+        except BlockingIOError:
+            pass
         done, code = os.waitpid(pid, os.WNOHANG)
         if done:
             status = code
             break
         # a second Ctrl-C: at once
-        if received and not killed and (len(received) > 1 or time.monotonic() - received[0] > GRACE):
+        if stops and not killed and (len(received) > 1 or time.monotonic() - min(stops) > GRACE):
             os.kill(pid, signal.SIGKILL)
             killed = True
         time.sleep(0.02)
     # stopped or killed: what it left unfinished goes; a run that ended by itself (done, or failed: its partial
     # recording kept for what the failing node logged, as it says) cleaned up after itself
-    removed = remove_leftovers(listing) if received or os.WIFSIGNALED(status) else []
+    removed = remove_leftovers(listing) if stops or os.WIFSIGNALED(status) else []
     if killed:
         if sys.stderr.isatty():
             sys.stderr.write("\x1b[?25h\n")  # the progress bar hid the cursor

@@ -26,8 +26,16 @@ def leftovers(folder: Path) -> list[str]:
     return sorted(str(p) for p in folder.rglob("*") if ".partial" in p.name or p.name.endswith(".tmp"))
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["INT", "TERM"])
-def test_a_signal_stops_a_run_inside_a_numba_kernel_within_2_s_and_leaves_no_partial_files(tmp_path, sig, node_started):
+@pytest.mark.parametrize(
+    "sig, to_runner",
+    [(signal.SIGINT, False), (signal.SIGTERM, False), (signal.SIGINT, True), (signal.SIGTERM, True)],
+    ids=["INT", "TERM", "INT-to-the-computing-process", "TERM-to-the-computing-process"],
+)
+def test_a_signal_stops_a_run_inside_a_numba_kernel_within_2_s_and_leaves_no_partial_files(
+    tmp_path, sig, to_runner, node_started
+):
+    """``to_runner``: the signal goes to the process that computes, not to the command's (``kill PID`` of the
+    newest nodegraph process): it waited for ever in its clean-up, nobody holding it to the grace time."""
     started = tmp_path / "started"
     (tmp_path / "spin.yaml").write_text(RECIPE.replace("STEPS", str(10**12)).replace("STARTED", str(started)))
     command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "spin.yaml"), "--plugin", TOY]
@@ -43,7 +51,10 @@ def test_a_signal_stops_a_run_inside_a_numba_kernel_within_2_s_and_leaves_no_par
         runner = node_started(started, proc)
         time.sleep(0.2)  # inside the loop, which holds the GIL
         sent = time.monotonic()
-        proc.send_signal(sig)
+        if to_runner:
+            os.kill(runner, sig)
+        else:
+            proc.send_signal(sig)
         try:
             proc.wait(timeout=2.0)
         except subprocess.TimeoutExpired:
