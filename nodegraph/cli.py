@@ -794,7 +794,8 @@ def main(argv: list[str] | None = None) -> int:
     runtime.configure()  # numba's kernel cache, before any node imports a kernel module (and before the fork)
     if argv is None and args.command in ("run", "sweep", "watch"):
         # in a child that a signal stops within interrupt.GRACE seconds, whatever its node is doing
-        status = interrupt.supervise()
+        # (watch stops its own steps with SIGINT: only a signal to the supervisor is a stop there)
+        status = interrupt.supervise(child_signals=args.command != "watch")
         if status is not None:
             return status
     try:

@@ -72,10 +72,11 @@ def stop(signum, frame) -> None:
         raise KeyboardInterrupt
 
 
-def supervise() -> int | None:
+def supervise(child_signals: bool = True) -> int | None:
     """In the parent: fork, and return the child's exit status once it has ended (killed after ``GRACE`` seconds
     if a signal did not stop it). In the child: None, the command to be run by the caller. None, too, where there
-    is no ``fork`` (Windows: the command runs in this process, as before)."""
+    is no ``fork`` (Windows: the command runs in this process, as before). ``child_signals``: a SIGINT or SIGTERM
+    sent to the child alone is a stop too (False for a child that signals itself, as ``watch`` does)."""
     if not hasattr(os, "fork") or os.environ.get(ENV_VAR):
         return None
     fd, name = tempfile.mkstemp(prefix="nodegraph-leftovers-", suffix=".txt")
@@ -94,8 +95,11 @@ def supervise() -> int | None:
         os.environ[ENV_VAR] = name
         _die_with(parent)
         os.close(news)
-        os.set_blocking(word, False)
-        signal.set_wakeup_fd(word, warn_on_full_buffer=False)
+        if child_signals:
+            os.set_blocking(word, False)
+            signal.set_wakeup_fd(word, warn_on_full_buffer=False)
+        else:
+            os.close(word)
         signal.signal(signal.SIGINT, stop)
         signal.signal(signal.SIGTERM, stop)
         return None
