@@ -45,8 +45,8 @@ def _load_bench_scenes():
 
 
 bench_scenes = _load_bench_scenes()
-# --quick runs the reduced main job twice and the checkers: 226 CPU s measured (the numba cache partly cold:
-# compiling is ≈ 164 CPU s of the whole pipeline, docs/performance.md)
+# --quick runs the reduced main job with its own contact step and the checkers: up to 226 CPU s where the numba cache
+# is cold (compiling is ≈ 164 CPU s of the whole pipeline, docs/performance.md)
 QUICK_CPU_S = 360
 RECIPES = ("ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_bunny", "rice_chestnut")
 
@@ -197,12 +197,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("recipes", nargs="*", default=list(RECIPES))
     parser.add_argument("--full", action="store_true", help="full sizes (minutes per recipe on 2 cores)")
     parser.add_argument("--quick", action="store_true", help="the reduced main job only (a smoke run)")
-    parser.add_argument("--variants", default="before,after")
+    parser.add_argument("--variants", help="before,after (default; --quick: after, the recipes' own contact step)")
     parser.add_argument("--time", type=int, metavar="N", help="time each contact step as both nodes, N times in turn")
     parser.add_argument("--work", type=Path, help="keep the node caches and scenes here (re-runs reuse the simulation)")
     args = parser.parse_args(argv)
     if args.quick:
         args.recipes = ["ikura_don"]
+    variants = args.variants or ("after" if args.quick else "before,after")
     checkers = find_checkers(args.checkers)
     if checkers is None:
         where = args.checkers or os.environ.get(CHECKERS_ENV_VAR) or REPO.parent / "shared" / "tools"
@@ -222,7 +223,7 @@ def main(argv: list[str] | None = None) -> int:
                     print(json.dumps(row | {"cpu_s": round(row["cpu_s"], 2)}), flush=True)
             return 0
         for name in args.recipes:
-            for variant in args.variants.split(","):
+            for variant in variants.split(","):
                 print(json.dumps(measure(name, variant, args.full, checkers, work)), flush=True)
     return 0
 
