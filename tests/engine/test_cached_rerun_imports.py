@@ -4,6 +4,8 @@ geometry, kernel, recording or rendering library, and no sweep declarations for 
 import subprocess
 import sys
 
+from module_listing import RUN_AND_LIST
+
 from .test_cli_and_rerun import RECIPE, TOY
 
 # what a computation or a sweep brings in; each costs 0.1–2 s of a process start
@@ -19,15 +21,6 @@ NOT_FOR_A_CACHED_RUN = [
     "nodegraph.sweep_decl",
     "rich.progress",
 ]
-RUN_AND_LIST = """
-import runpy, sys
-sys.argv = ["nodegraph", "run", *sys.argv[1:]]
-try:
-    runpy.run_module("nodegraph.cli", run_name="__main__")
-except SystemExit as stop:
-    assert not stop.code, stop.code
-print(" ".join(sorted(sys.modules)))
-"""
 
 
 def test_a_cached_rerun_imports_no_library_a_computation_needs(tmp_path):

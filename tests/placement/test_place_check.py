@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from module_listing import RUN_AND_LIST
+
 from nodegraph.cli import main
 
 RICE_BOWL = str(Path(__file__).resolve().parents[2] / "graphs" / "rice_bowl.yaml")
@@ -43,15 +45,6 @@ nodes:
   ball: {type: shape, params: {kind: sphere, size: 4.0, resolution: 2}}
   place: {type: poisson_place, inputs: {shape: ball.mesh}, params: {mode: volume, r: 1.0}}
 """
-LIST_MODULES = """
-import runpy, sys
-sys.argv = ["nodegraph", "run", *sys.argv[1:]]
-try:
-    runpy.run_module("nodegraph.cli", run_name="__main__")
-except SystemExit as stop:
-    assert not stop.code, stop.code
-print(" ".join(sorted(sys.modules)))
-"""
 
 
 def test_a_cached_rerun_does_not_weigh_r_again(tmp_path):
@@ -59,7 +52,7 @@ def test_a_cached_rerun_does_not_weigh_r_again(tmp_path):
     re-run (issue 27: ≤ 1.5 s)."""
     (tmp_path / "small.yaml").write_text(SMALL)
     args = [str(tmp_path / "small.yaml"), "--cache-dir", str(tmp_path / "c"), "--no-rrd", "-q"]
-    command = [sys.executable, "-c", LIST_MODULES, *args]
+    command = [sys.executable, "-c", RUN_AND_LIST, *args]
     first = subprocess.run(command, cwd=tmp_path, check=True, capture_output=True, text=True).stdout.split()
     assert "trimesh" in first
     again = subprocess.run(command, cwd=tmp_path, check=True, capture_output=True, text=True).stdout.split()
