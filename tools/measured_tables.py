@@ -89,6 +89,17 @@ TABLES = {
             ("command", code("command")),
         ],
     ),
+    "test_suite": (
+        "test_suite.jsonl",
+        None,
+        [
+            ("run", field("what")),
+            ("tests", value("tests")),
+            ("wall s", value("wall")),
+            ("CPU s", value("cpu")),
+            ("command", code("command")),
+        ],
+    ),
     "compile_kernels": (
         "compile.jsonl",
         None,
