@@ -3,8 +3,6 @@ needed): ellipsoid rice grains, ikura eggs with a yolk, a bowl and a ground slab
 grains on a jittered grid inside the bowl, and a small shaded-food scene. Dev-only (beside the benchmarks, not the
 shipped package): tests and benchmarks import it, nothing in ``nodes`` does."""
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
