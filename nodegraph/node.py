@@ -25,7 +25,7 @@ from typing import Any
 
 from .context import Context
 from .errors import NodeDeclarationError
-from .params import Param, ParamValueError
+from .params import Param, ParamValueError, resolve
 
 # Keyword arguments of ``NodeSpec.call``; no port or parameter may take these names.
 CALL_ARGUMENTS = frozenset({"seed", "effects"})
@@ -139,15 +139,7 @@ class NodeSpec:
 
     def resolve_params(self, given: Mapping[str, Any]) -> dict[str, Any]:
         """Validated parameters with defaults filled in (raises ParamValueError / KeyError)."""
-        values = {}
-        for name, param in self.params.items():
-            if name in given:
-                values[name] = param.validate(given[name])
-            elif param.required:
-                raise KeyError(name)
-            else:
-                values[name] = param.default
-        return values
+        return resolve(self.params, given)
 
 
 def node(

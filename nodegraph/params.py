@@ -8,6 +8,7 @@ range and units in the message, not a pydantic error code.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -160,6 +161,20 @@ class Param:
             "units": self.units,
             "doc": self.doc,
         }
+
+
+def resolve(params: Mapping[str, Param], given: Mapping[str, Any]) -> dict[str, Any]:
+    """Validated parameters with defaults filled in, a value per declared parameter; names not declared are
+    ignored (raises ParamValueError / KeyError for a required parameter not given)."""
+    values = {}
+    for name, param in params.items():
+        if name in given:
+            values[name] = param.validate(given[name])
+        elif param.required:
+            raise KeyError(name)
+        else:
+            values[name] = param.default
+    return values
 
 
 def canonical(value: Any) -> Any:

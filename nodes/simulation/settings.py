@@ -17,7 +17,7 @@ from dataclasses import dataclass, make_dataclass
 
 import numpy as np
 
-from nodegraph.params import Param, ParamValueError
+from nodegraph.params import Param, ParamValueError, resolve
 
 from .friction_models import FRICTION_MODELS, AnchoredFriction, SubstepFriction
 from .moisture import WATER_CONTENT, moisture_factors
@@ -230,16 +230,12 @@ def xpbd_params(**given) -> XpbdParams:
     unknown = set(given) - set(PARAMS)
     if unknown:
         raise KeyError(f"xpbd has no parameter {', '.join(sorted(unknown))}; it has: {', '.join(PARAMS)}")
-    values = {}
-    for name, param in PARAMS.items():
-        if name not in given:
-            values[name] = param.default
-            continue
+    for name, value in given.items():  # the error names the parameter
         try:
-            values[name] = param.validate(given[name])
+            PARAMS[name].validate(value)
         except ParamValueError as error:
             raise ParamValueError(f"xpbd.{name}: {error}", error.allowed) from None
-    return XpbdParams(**values)
+    return XpbdParams(**resolve(PARAMS, given))
 
 
 @dataclass(frozen=True)
