@@ -116,6 +116,10 @@ class Contacts:
     anchor: np.ndarray
     # per list entry, the normal correction of this substep so far (anchored friction's load, ``friction``)
     load: np.ndarray
+    # per list entry, its contact's mean load over the last substep (``friction.group_means``), and its contact
+    group: np.ndarray
+    held: np.ndarray
+    groups: int = 0
     displacement: float = np.inf
 
     @classmethod
@@ -137,6 +141,8 @@ class Contacts:
             np.empty(0),
             np.zeros_like(x) if "adhesion" in effects else None,
             np.empty((0, 3)),
+            np.empty(0),
+            np.empty(0, np.int64),
             np.empty(0),
         )
 

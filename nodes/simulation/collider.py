@@ -301,7 +301,7 @@ def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
 
 
 @njit(cache=True, inline="always")
-def _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i):
+def _wall_one(x, x_prev, anchor, load, mean, w, r, phi, origin, pitch, blocks, rule, i):
     """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
     if w[i] <= 0.0:
         return 0.0
@@ -333,8 +333,9 @@ def _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i):
     x[i, 0] += pen * nx
     x[i, 1] += pen * ny
     x[i, 2] += pen * nz
+    load[i] += pen
     if mu_s > 0.0:
-        friction_wall(x, x_prev, anchor, i, nx, ny, nz, pen, rule)
+        friction_wall(x, x_prev, anchor, i, nx, ny, nz, mean[i] if mean[i] > 0.0 else load[i], rule)
     return pen / r[i]
 
 
@@ -346,13 +347,13 @@ def collider_project(state, model, grid, rule):
     are independent. ``blocks``: the ``block_minimum`` of φ (particles far from every wall are skipped).
     ``state``: ``StateArrays`` (x, x_prev, wall_anchor; x_prev is x in pre-stabilisation: no swept test),
     ``model``: ``ModelArrays`` (w, r), ``grid``: ``ColliderGrid``. Returns max (r − φ)/r."""
-    x, x_prev, anchor = state.x, state.x_prev, state.wall_anchor
+    x, x_prev, anchor, load, mean = state.x, state.x_prev, state.wall_anchor, state.wall_load, state.wall_mean
     w, r = model.w, model.r
     phi, origin, pitch, blocks = grid.phi, grid.origin, grid.pitch, grid.blocks
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):
-        worst[i] = _wall_one(x, x_prev, anchor, w, r, phi, origin, pitch, blocks, rule, i)
+        worst[i] = _wall_one(x, x_prev, anchor, load, mean, w, r, phi, origin, pitch, blocks, rule, i)
     return worst.max() if n > 0 else 0.0
 
 
@@ -425,3 +426,20 @@ def rigid_into_free_space(x, r, start, phi, origin, pitch):
             travel += step
         moved += travel > 0.0
     return moved
+
+
+@njit(cache=True, parallel=True)
+def wall_means(start, load, mean):
+    """Each element's mean wall load over its touching particles into ``mean`` (0 where none touches), and the
+    loads cleared for the next substep."""
+    m = start.shape[0] - 1
+    for e in prange(m):
+        total = 0.0
+        count = 0
+        for i in range(start[e], start[e + 1]):
+            if load[i] > 0.0:
+                total += load[i]
+                count += 1
+        for i in range(start[e], start[e + 1]):
+            mean[i] = total / count if count > 0 else 0.0
+            load[i] = 0.0

@@ -39,9 +39,9 @@ PairRows = namedtuple(
 )  # row p lists the partners (ids nbr, rows at) of order[p]
 Colouring = namedtuple("Colouring", "cell_start order dims")
 # per list entry: tolerated overlap, friction anchor, normal correction so far this substep (anchored friction's
-# load), and ``glued``: its grains are glued (``glue``), so its friction takes the true masses (``_project_slab``);
+# load), its contact's mean load over the last substep (``friction.group_means``), and ``glued``: its grains are glued (``glue``), so its friction takes the true masses (``_project_slab``);
 # empty: none is
-PairEntries = namedtuple("PairEntries", "allowance anchor load glued")
+PairEntries = namedtuple("PairEntries", "allowance anchor load held glued")
 ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion")
 
 
@@ -141,7 +141,7 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     The particle arrays are the sweep's sorted copies (``_sorted_copies``: row p holds particle order[p], a
     partner's row is ``rows.at``)."""
     nbr_start, nbr, half, order, at = rows
-    allowance, anchor, load, glued = entries
+    allowance, anchor, load, held_mean, glued = entries
     wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion = rule
     any_glued = glued.shape[0] > 0
     for p in range(p0, p1):
@@ -167,7 +167,11 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
                 continue
             pen = depth - allowance[a] if normal else 0.0
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
-                held = load[a] + max(pen, 0.0) + cohesion * (w[p] + w[q]) if anchored else depth
+                if anchored:  # the contact's pooled load, else (none touched last substep) the pair's own
+                    own = held_mean[a] if held_mean[a] > 0.0 else load[a] + max(pen, 0.0)
+                    held = own + cohesion * (w[p] + w[q])
+                else:
+                    held = depth
                 # glued grains rub with their true masses: their tangential pushes cancel
                 rub = w[p] / (w[p] + w[q]) if any_glued and glued[a] else share
                 friction_pair(x, x_prev, anchor, a, p, q, (nx, ny, nz), held, rub, (mu_s, mu_k, anchored))

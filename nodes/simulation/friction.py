@@ -139,3 +139,38 @@ def carry_anchors(old, old_anchor, new, new_anchor):
                     for k in range(3):
                         new_anchor[a, k] = old_anchor[b, k]
                     break
+
+
+def contact_groups(lists, elem) -> tuple[np.ndarray, int]:
+    """Per entry of the neighbour lists, the contact it belongs to: the pair of elements it joins (−1 for the
+    entries the sweep skips, a pair's second listing in full rows), and how many there are. A grain touches
+    another, or a wall, at several particles; ``group_means`` pools their loads."""
+    nbr_start, nbr, half, order = lists.rows()
+    i = np.repeat(order, np.diff(nbr_start))
+    j = nbr
+    kept = np.ones(len(j), bool) if half else i < j
+    lo, hi = np.minimum(elem[i], elem[j]), np.maximum(elem[i], elem[j])
+    key = lo * (int(elem.max(initial=0)) + 1) + hi
+    group = np.full(len(j), -1, np.int64)
+    ids, inverse = np.unique(key[kept], return_inverse=True)
+    group[kept] = inverse
+    return group, len(ids)
+
+
+@njit(cache=True)
+def group_means(group, count, load, mean):
+    """Each contact's mean load over its touching entries (load > 0) into ``mean`` per entry (0 where none
+    touches), from the substep's ``load``. Static friction then tests a rigid grain's contact as a whole:
+    shape matching spreads a grain's drift over its particles alike, while the normal load falls unevenly on
+    them, so the test per entry let the lightly loaded ones slide and the grain with them (a grain on a 26°
+    plane at μs 0.6); with the mean the test is Σ|t| < μs·Σ load, Coulomb's for the rigid contact."""
+    total = np.zeros(count)
+    touching = np.zeros(count, np.int64)
+    for a in range(group.shape[0]):
+        g = group[a]
+        if g >= 0 and load[a] > 0.0:
+            total[g] += load[a]
+            touching[g] += 1
+    for a in range(group.shape[0]):
+        g = group[a]
+        mean[a] = total[g] / touching[g] if g >= 0 and touching[g] > 0 else 0.0

@@ -42,8 +42,11 @@ class SubstepFriction:
         """Adhesion's pull as friction load (mm·g per unit of inverse mass): none, the load is the overlap."""
         return 0.0
 
-    def lists_rebuilt(self, dispatch, old_lists, pairs) -> None:
+    def lists_rebuilt(self, dispatch, old_lists, pairs, elem) -> None:
         """Nothing per pair to carry to the new neighbour lists."""
+
+    def pool_loads(self, dispatch, pairs) -> None:
+        """No loads kept."""
 
 
 class AnchoredFriction:
@@ -62,14 +65,22 @@ class AnchoredFriction:
         (mm·g): F·h², F = capture / adhesion compliance (``contact_constraints._project_slab``)."""
         return capture * h * h / adhesion_compliance if adhesion_compliance > 0 else 0.0
 
-    def lists_rebuilt(self, dispatch, old_lists, pairs) -> None:
+    def lists_rebuilt(self, dispatch, old_lists, pairs, elem) -> None:
         """Carry each pair's anchor to its entry in the rebuilt lists (``friction.carry_anchors``); loads restart."""
-        from .friction import carry_anchors
+        from .friction import carry_anchors, contact_groups
 
         anchor = np.empty((len(pairs.lists.nbr), 3))
         dispatch("friction", carry_anchors, old_lists.csr(), pairs.anchor, pairs.lists.csr(), anchor)
         pairs.anchor = anchor
         pairs.load = np.zeros(len(pairs.lists.nbr))
+        pairs.held = np.zeros(len(pairs.lists.nbr))
+        pairs.group, pairs.groups = contact_groups(pairs.lists, elem)
+
+    def pool_loads(self, dispatch, pairs) -> None:
+        """The last substep's loads pooled per contact (``friction.group_means``) into ``pairs.held``."""
+        from .friction import group_means
+
+        dispatch("friction", group_means, pairs.group, pairs.groups, pairs.load, pairs.held)
 
 
 # the node's ``friction_model`` choices, by name

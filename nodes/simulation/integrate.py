@@ -166,10 +166,12 @@ def _touching(x, r, i, j):
 
 
 @njit(cache=True, parallel=True)
-def sleep_clusters(state, model, contact_rows, still):
+def sleep_clusters(state, model, contact_rows, still, still_probed):
     """Put to sleep (and zero the velocities of) every element whose particles all lie within
     ``still`` (sleep_speed·h: the drift a resting particle may make in one substep) of x_start, measured
-    from before pre-stabilisation, none of which was ``pushed``
+    from before pre-stabilisation (an element asleep before this substep, solved by the probe from rest: within
+    ``still_probed``, a·h² for the net acceleration a that wakes it, so whether a sleeper on a slope wakes does
+    not depend on the substep count), none of which was ``pushed``
     (``contact_constraints.sleeper_share``) and none of which touches a particle of another awake
     element that moved farther (``contact_rows``: the contact lists' (nbr_start, nbr, order), half or
     full, row p being particle order[p]'s: ``buffers.ListRows``; none without them). ``state``:
@@ -189,6 +191,7 @@ def sleep_clusters(state, model, contact_rows, still):
     r, elem, start = model.r, model.elem, model.start
     m = start.shape[0] - 1
     limit = still * still
+    limit_probed = still_probed * still_probed
     slow = np.empty(m, np.bool_)
     falling = 0  # awake elements that would fall asleep now: without any, the touching rule has nothing to do
     for c in prange(m):
@@ -197,7 +200,7 @@ def sleep_clusters(state, model, contact_rows, still):
         for i in range(start[c], start[c + 1]):
             hit = hit or pushed[i]
             fastest = max(fastest, _moved_sq(x, x_start, i))
-        slow[c] = fastest < limit
+        slow[c] = fastest < (limit_probed if asleep[c] else limit)
         asleep[c] = slow[c] and not hit
         if asleep[c] and start[c + 1] > start[c] and awake[start[c]]:
             falling += 1

@@ -30,6 +30,9 @@ ADHESION_STIFFNESS = 10.0  # N/m at clumping 1: pulls a 25 mg grain with ≈ 40�
 # every this many frames one substep solves the asleep elements too (under gravity), so an element whose
 # support went away falls and wakes; between probes only a push wakes it
 SLEEP_PROBE = 1
+# mm/s²: a sleeper wakes when the probe's substep, solved from rest, moves it as this net acceleration would
+# (0.1 g: a rice grain on a plane at μs 0.6, μk 0.42 wakes above 28°, at any substep count)
+WAKE_ACCEL = 981.0
 YOLK_DRAG = 40.0  # 1/s: a yolk's drag towards its egg's velocity (``buoyancy.yolk_predict``)
 ROTATION_ITERATIONS = 8  # iterations of the rotation extraction in shape matching and glue (Müller 2016)
 

@@ -38,7 +38,7 @@ from . import (
 from .buffers import NO_TRACKING, ClusterBuffers, Contacts, ListRows, NeighbourLists, Tracking
 from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
-from .settings import ROTATION_ITERATIONS, SLEEP_PROBE, YOLK_DRAG, SolverSettings
+from .settings import WAKE_ACCEL, ROTATION_ITERATIONS, SLEEP_PROBE, YOLK_DRAG, SolverSettings
 from .state import Control, State
 from .threads import FreeCores, thread_count
 
@@ -264,6 +264,8 @@ class XpbdSolver:
         st.substeps_done += 1
         self.solved += awake
         if awake:
+            if m.collider is not None:
+                d("friction", collider.wall_means, m.start, st.wall_load, st.wall_mean)
             self.x_begin[:] = st.x  # before pre-stabilisation (``integrate.update_velocity``)
             self._prestabilise(st, contacts)
         y = st.yolks
@@ -281,6 +283,7 @@ class XpbdSolver:
                 self.model_arrays,
                 self._contact_rows(contacts),
                 s.sleep_speed * k.h,
+                WAKE_ACCEL * k.h * k.h,
             )
         st.time += k.h
         return residual
@@ -392,7 +395,7 @@ class XpbdSolver:
         old = pairs.lists
         pairs.lists = NeighbourLists(nbr_start, nbr, at, old.half, *grid)
         if "friction" in self.settings.effects:  # the model's per-pair data follows the pairs
-            self.settings.friction.lists_rebuilt(self.dispatch, old, pairs)
+            self.settings.friction.lists_rebuilt(self.dispatch, old, pairs, m.elem)
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
         if "contact" in self.settings.effects:
@@ -412,6 +415,8 @@ class XpbdSolver:
         if "contact" in self.settings.effects:
             allowance = contact_constraints.overlap_allowance
             pairs.allowance[:] = 0.0
+            if "friction" in self.settings.effects:
+                self.settings.friction.pool_loads(self.dispatch, pairs)
             pairs.load[:] = 0.0
             self._pressed(st, pairs)
             self._contacts(st, pairs, friction=self.settings.friction.rubs_in_prestabilisation, wake_step=np.inf)
@@ -448,7 +453,7 @@ class XpbdSolver:
             self.model_arrays,
             cc.PairRows(*lists.sweep_rows()),
             cc.Colouring(*lists.grid()),
-            cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load, self._stuck(lists)),
+            cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load, pairs.held, self._stuck(lists)),
             cc.ContactRule(
                 float(wake_step),
                 k.lift,

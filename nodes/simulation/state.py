@@ -25,6 +25,8 @@ class StateArrays(NamedTuple):
     awake: np.ndarray  # (n,) bool
     pushed: np.ndarray  # (n,) bool
     wall_anchor: np.ndarray  # (n, 3)
+    wall_load: np.ndarray  # (n,)
+    wall_mean: np.ndarray  # (n,)
 
 
 class YolkArrays(NamedTuple):
@@ -67,6 +69,8 @@ class State:
     awake: np.ndarray  # (n,) bool
     pushed: np.ndarray  # (n,) bool
     wall_anchor: np.ndarray  # (n, 3) where each particle began sticking to a wall, NaN = not (``friction``)
+    wall_load: np.ndarray  # (n,) the walls' normal pushes on each particle this substep (friction's load)
+    wall_mean: np.ndarray  # (n,) the last substep's mean wall load over its element's touching particles
     yolks: YolkState | None = None
     glued: np.ndarray | None = None  # (L,) bool: which glue links still hold (``glue``); None without glue
     glue_quats: np.ndarray | None = None  # (m, 4) warm-started rotations of the glued regions
@@ -76,7 +80,7 @@ class State:
     def assign(self, other: State) -> None:
         """Make this state a copy of ``other`` (same model), in place: ``XpbdSolver.step`` from one state into
         another."""
-        for name in ("x", "v", "x_prev", "quats", "x_start", "asleep", "awake", "pushed", "wall_anchor"):
+        for name in ("x", "v", "x_prev", "quats", "x_start", "asleep", "awake", "pushed", "wall_anchor", "wall_load", "wall_mean"):
             np.copyto(getattr(self, name), getattr(other, name))
         if other.yolks is not None:
             for name in ("x", "v", "x_prev"):
@@ -98,6 +102,8 @@ class State:
             self.awake,
             self.pushed,
             self.wall_anchor,
+            self.wall_load,
+            self.wall_mean,
         )
 
     def rotations(self) -> np.ndarray:
