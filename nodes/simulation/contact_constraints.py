@@ -167,8 +167,9 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
                 continue
             pen = depth - allowance[a] if normal else 0.0
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
-                if anchored:  # the contact's pooled load, else (none touched last substep) the pair's own
-                    own = held_mean[a] if held_mean[a] > 0.0 else load[a] + max(pen, 0.0)
+                if anchored:  # the contact's pooled load, else (none touched last substep, or glued) the pair's own
+                    pooled = held_mean[a] > 0.0 and not (any_glued and glued[a])
+                    own = held_mean[a] if pooled else load[a] + max(pen, 0.0)
                     held = own + cohesion * (w[p] + w[q])
                 else:
                     held = depth

@@ -71,10 +71,12 @@ def test_janssen_fit_recovers_the_saturation(validation):
 
 def test_silo_walls_carry_part_of_the_weight(validation):
     """The Janssen effect (quick case): 600 spheres (15 g) in a 12 mm silo with walls at μ 0.6: the floor carries
-    9.96 g (measured 0.66 M) and the walls' friction the rest; frictionless, the floor carries it all (0.999 M).
-    Fails on a solver that ignores friction (ratio 1) or a gauge that misses forces (sum ≠ M)."""
+    M_sat(1 − e^(−M/M_sat)) by Janssen (1895) with λ = D/(4 μ K) = 10 mm (Jaky's K = 0.5 at the sphere heap's 30°)
+    and the bed's ρ_b A = 0.447 g/mm: 4.3 g = 0.29 M (measured 5.0 g = 0.33 M; 0.66 M while the walls took
+    each particle's penetration alone as friction's load) and the walls' friction the rest; frictionless, the floor
+    carries it all (0.999 M). Fails on a solver that ignores friction (ratio 1) or a gauge that misses forces."""
     deep = validation.silo_fill(600, 0.6)
-    assert 0.5 < deep["apparent"] / deep["M"] < 0.8
+    assert 0.2 < deep["apparent"] / deep["M"] < 0.4
     assert abs(deep["apparent"] + deep["walls"] - deep["M"]) < 0.03 * deep["M"]
     smooth = validation.silo_fill(300, 0.0)
     assert abs(smooth["apparent"] / smooth["M"] - 1.0) < 0.02
