@@ -1,7 +1,8 @@
 """Validation against published granular figures — issue 24: does the XPBD aggregate behave like granular
 matter, and what does matching reality cost in time? Each case sets up an experiment, compares our figure
 with a published one and writes the set-up, the reference and its source, our figure and the error, the
-knobs the case needed, the seconds it took and a plot into docs/validation.md (plots: docs/images/validation/).
+knobs the case needed and the seconds it took into benchmarks/measured/validation.jsonl, rendered as a table in
+docs/validation.md by ``python tools/measured_tables.py`` (plots: docs/images/validation/).
 
     python benchmarks/validation.py            # full sizes (minutes on 2 cores)
     python benchmarks/validation.py --quick    # reduced sizes (≈ 1–2 min), what tests/simulation pins
@@ -26,6 +27,7 @@ runtime.configure()  # numba's kernel cache and locator, before a kernel module 
 REPO = Path(__file__).resolve().parents[1]
 
 DOC = REPO / "docs" / "validation.md"
+RECORD = REPO / "benchmarks" / "measured" / "validation.jsonl"
 IMAGES = REPO / "docs" / "images" / "validation"
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
 # the node's parameters but no sleeping: the measurements here read the settling itself (as measured before issue 45)
@@ -1074,117 +1076,25 @@ def _plot_curve(name, xs, series, xlabel, ylabel):
     return _saved(plt, fig, ax, IMAGES / f"{name}.png", legend=None)
 
 
-DIAGNOSIS = [
-    "## Why heaps crept flat, and what changed",
-    "",
-    "Measured on 900 rice-like grains dropped as a loose ball (the issue's set-up) with the substep rule: "
-    "H/R 14.5° at 0.5 s, 12.2° at 2.5 s, 10.1° at 7 s; 8 iterations or 40 substeps 15–16°; μs 1.0 no better than "
-    "0.6 (12.3°); damping 0 or 0.6, sleeping off, shape matching off: no cure. A lone sphere or grain on a "
-    "tilted wall holds as it should (sphere, μs 0.6: still at 28°, slides at 35°), so the rule is right for one "
-    "contact and wrong for a heap:",
-    "",
-    "1. **No memory.** Macklin's rule removes at most the substep's own tangential displacement. What the later "
-    "corrections of the same substep add (other contacts, shape matching, walls) is never undone, so a heap "
-    "creeps for ever (spheres, μ 0.6: 13.7° at 2.5 s, 6.2° at 5 s). Anchors (static friction restores the drift "
-    "since the contact began sticking; sliding re-anchors) stop the creep: 30.1° at 2.5 s and at 5 s.",
-    "2. **Frictionless pre-stabilisation.** Each substep starts with a contact sweep that pushes overlapping "
-    "pairs apart along their normals (Macklin et al. 2014 §4.2). Its push is ∝ h² per substep, so without "
-    "friction its spreading per second depends on the substep count (23.3° at 10 substeps, 30.6° at 40). With "
-    "friction in that sweep too: 30.1° and 30.2°.",
-    "3. **The load.** Rice-like grains (8-particle clusters) still crept with anchors (H/R 28.7° → 25.1° from "
-    "2.5 s to 7 s): the sticking test compared the drift with μs × the overlap as the sweep met it, which is "
-    "nearly 0 at a resting contact once pre-stabilisation has removed it, while shape matching hands a contact "
-    "particle back only part of each friction correction. The load is now the normal correction the pair (or a "
-    "particle against a wall) has received this substep plus the one it is about to get (Müller et al. 2020's "
-    "λ_n in position units). Variants measured on a 16-core machine, one process each (300 poured grains, H/R "
-    "at 2.5 s → 7 s; 600-grain ball): load + the whole overlap 36.2° → 33.9°, ball 20.4°, but 1,500 spheres "
-    "poured in a box jammed at φ 0.34 (a resting overlap fed the friction that kept it); load + this "
-    "correction, the default, 32.1° → 31.5°, ball 17.8°, φ 0.654; the walls' pushes summed as their load too "
-    "34.7° at 2.5 s, but a sleeping pile of bars never came to rest (walls keep the penetration as load); "
-    "contacts after shape matching 35.3° → 31.9°; the load without pre-stabilisation "
-    "30.1° → 25.8°; no friction in pre-stabilisation 22.1° → 19.8°; locking each grain's rotation per substep "
-    "21.4° → 18.0° (2.5 → 5 s): the creep was sliding, not rolling.",
-    "4. **Cohesion.** Moist rice (effect adhesion) adds the bonds' pull at the capture distance to the load, "
-    "so sticky grains hold against μs·(weight + adhesion). Not enough for the onigiri: set on its plate under "
-    "gravity it kept 63–78 % of its height at draft size and 75 % at 2,742 grains: it collapsed within 5 frames, "
-    "as a loose heap does, since adhesion pulls along the normal only and holds no shear.",
-    "5. **Glue** (xpbd `glue`, `nodes/simulation/glue.py`). Pressed sticky rice is glued at every contact by its "
-    "starch paste. Grains within the capture radius at the start of a run are glued: each grain's region (its "
-    "particles and those of the grains glued to it) is matched rigidly to its shape at the start every iteration "
-    "(lattice shape matching, Rivers & James 2007), and a neighbour torn a particle radius from its place leaves "
-    "for good. What was tried first, measured on the draft onigiri (64 grains) and at onigiri.size 24 (392): glued "
-    "particle pairs as distance constraints (Jacobi-averaged over ≈ 13 bonds a particle) kept 86 % at 2 iterations "
-    "and 99 % only at 8: the load travels one bond per iteration; regions with contacts pushing apart the overlaps "
-    "the press left lifted the onigiri off its plate at 17 mm/s (mass scaling by height makes those pushes favour "
-    "the upper grain), so glued pairs' contacts now tolerate their pressed overlap; regions without contacts "
-    "between glued grains let grains sink 1.5 r into each other; tearing at the capture radius (0.2 r) tore 68 % "
-    "of the paste when the onigiri settled 0.7 mm onto its plate, at one radius none. The stiffness is still "
-    "bounded by the iterations a substep has: the recipe's rest runs 30 substeps (the glue costs ≈ 27 % of a "
-    "substep: 0.75 s of 2.74 s for 10 frames of 392 grains at 20 substeps).",
-    "",
-    "**What the heap depends on.** The pour, as for real grains: a stream landing faster lowers the heap (at 40 "
-    "substeps the default speed clamp, 1 radius per substep, lets it land 4× faster than at 10: H/R 19°; at the "
-    "same top speed, 32–34°; measured before the final load rule). Iterations raise it a little (4 iterations: "
-    "36–38°, idem). Anchored friction leaves "
-    "resting overlaps near 0.1 r where grains lock in place (a tetrahedral pile: 0.114 r, against 0.014 r with "
-    "the substep rule), the price of piles that stand; the mesh contact hides them.",
-    "",
-    "## What the Janssen case says about the solver's forces",
-    "",
-    "The gauge reads the collider's corrections through the solver's dispatch hook (`wall_gauge`): a correction Δx of "
-    "a particle of mass m over k substeps is a force m·ΣΔx/(k·h²). Momentum balance holds only where the pair "
-    "corrections conserve momentum: with frictionless walls the floor carries 0.999 M without shock propagation and "
-    "0.13 M with the default 4 (mass scaling moves the upper particle more, by design), so forces inside a bed are "
-    "physical only with shock propagation off. A 50-layer column then needs 20 substeps × 4 iterations: at 10 × 2 "
-    "it sank 1.5–1.8 r into itself and particles escaped through the wall. With the default anchored friction the "
-    "walls pull the bed down (floor 2.5 M at 600 spheres): pre-stabilisation lifts each resting particle out of "
-    "the overlap the solve left, the wall's anchor stays where it was, and the next solve's static friction pulls "
-    "the particle back down, each substep. Shifting the anchors by pre-stabilisation's moves (tried from the "
-    "dispatch hook, `silo_fill(follow=True)`) removes the pull (0.92 M, the walls carry 7 %): a one-line change "
-    "for the solver's pre-stabilisation (move `state.wall_anchor` with the sweep's moves), left to its owner.",
-    "",
-    "## Cost",
-    "",
-    "The reduced rice bowl (benchmarks/bench_scenes.py QUICK sizes, `rice_sim.frames=30`, node time of "
-    "`rice_sim`, three runs each, load 1.2–1.3, before the load term): substep 2.41–2.46 s; anchored 2.58–2.73 s "
-    "(+5–10 %: the anchors' reads and writes, their carry over list rebuilds, friction in pre-stabilisation). "
-    "The load adds one float per pair entry.",
-    "",
-    "## Not done",
-    "",
-    "- Rolling resistance (not needed for the measured creep).",
-    "- Wall anchors that follow pre-stabilisation (the Janssen section): in the solver it removed the walls' pull "
-    "(silo 9.5 g of 10 on the floor with μ 0.6) but twelve bars dropped on the ground no longer came to rest "
-    "without sleeping (kinetic energy 0.04 against < 1e-6 g·mm²/s²): the anchors also followed pre-stabilisation's "
-    "sideways moves between grains, so static friction never held them. Left out.",
-    "- Glue scaled by water content (moisture scales adhesion, not yet the glue).",
-    "- The squeezed grain: a compressive fracture rule (the tearing effect breaks stretched edges only).",
-    "",
-]
+def write_record(cases: list[Case], quick: bool, total: float, ellipsoids: bool = False) -> None:
+    """One JSON line per case into benchmarks/measured/validation.jsonl (``tools/measured_tables.py`` renders the
+    table in docs/validation.md)."""
+    import json
+    import os
+    from datetime import datetime, timezone
 
-
-def write_doc(cases: list[Case], quick: bool, total: float, ellipsoids: bool = False) -> None:
+    command = f"python benchmarks/validation.py{' --quick' if quick else ''}{' --ellipsoids' if ellipsoids else ''}"
+    date = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    load = "%.1f" % os.getloadavg()[0]
     lines = [
-        "# Validation against published granular figures (issue 24)",
-        "",
-        f"Written by `python benchmarks/validation.py{' --quick' if quick else ''}"
-        f"{' --ellipsoids' if ellipsoids else ''}` "
-        f"({'quick sizes' if quick else 'full sizes'}; {total:.0f} s on this machine). Friction models: "
-        "**anchored** (the default, `xpbd.friction_model`) = static friction restores the drift since the contact "
-        "began sticking, against the normal load of the substep; **substep** = Macklin et al. 2014's rule on each "
-        "substep's displacement.",
-        "",
-        "| case | set-up | reference (source) | ours | error | knobs | s |",
-        "|---|---|---|---|---|---|---|",
+        json.dumps(
+            {"what": c.name, **{f: getattr(c, f) for f in ("setup", "reference", "ours", "error", "knobs")},
+             "values": {"seconds": round(c.seconds, 1)}, "command": command, "load": load, "date": date,
+             "machine": f"{os.cpu_count()} cores"}
+        )
+        for c in cases
     ]
-    for c in cases:
-        lines.append(f"| {c.name} | {c.setup} | {c.reference} | {c.ours} | {c.error} | {c.knobs} | {c.seconds:.0f} |")
-    lines.append("")
-    for c in cases:
-        if c.plot:
-            lines += [f"![{c.name}]({c.plot})", ""]
-    lines += DIAGNOSIS
-    DOC.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    RECORD.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
 def main(argv=None) -> None:
@@ -1198,8 +1108,8 @@ def main(argv=None) -> None:
     cases, figures = run_cases(args.quick, ellipsoids=True if args.ellipsoids else None)
     for c in cases:
         print(f"{c.name}: {c.ours}  [{c.error}]  {c.seconds:.1f} s")
-    write_doc(cases, args.quick, time.perf_counter() - start, ellipsoids=args.quick and args.ellipsoids)
-    print(f"wrote {DOC.relative_to(REPO)}")
+    write_record(cases, args.quick, time.perf_counter() - start, ellipsoids=args.quick and args.ellipsoids)
+    print(f"wrote {RECORD.relative_to(REPO)}; python tools/measured_tables.py renders {DOC.relative_to(REPO)}")
 
 
 if __name__ == "__main__":

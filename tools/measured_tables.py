@@ -122,6 +122,43 @@ TABLES = {
             ("ratio", ratio("ours", "newton")),
         ],
     ),
+    "physics_defaults": (
+        "physics_defaults.jsonl",
+        None,
+        [
+            ("case", field("case")),
+            ("set-up", field("setup")),
+            ("substeps", field("substeps")),
+            ("ours", field("ours")),
+            ("published", field("published")),
+        ],
+    ),
+    "validation_cases": (
+        "validation.jsonl",
+        None,
+        [
+            ("case", field("what")),
+            ("set-up", field("setup")),
+            ("reference (source)", field("reference")),
+            ("ours", field("ours")),
+            ("error", field("error")),
+            ("knobs", field("knobs")),
+            ("s", value("seconds")),
+        ],
+    ),
+    "silo_discharge": (
+        "silo_discharge.jsonl",
+        lambda r: r["what"] == "silo_discharge",
+        [
+            ("hole D, mm", field("D_mm")),
+            ("substeps", field("substeps")),
+            ("grains", field("grains")),
+            ("bulk density, g/cm³", field("rho_b_g_per_cm3")),
+            ("rate, grains/s", field("rate_grains_per_s")),
+            ("rate, g/s", field("rate_g_per_s")),
+            ("first / second half of the window, grains/s", lambda r: f"{number(r['first_half'])} / {number(r['second_half'])}"),
+        ],
+    ),
     "roofline": (
         "roofline.jsonl",
         None,
