@@ -6,6 +6,7 @@ from nodegraph import In, Moved, Out, Param, node
 from nodegraph.values import Mesh
 
 from ..values import RiceVariety
+from .element_room import element_fits
 
 SHAPES = ("rice", "ikura", "ice_flake", "file")
 DEFAULT_SIZE = {"rice": (5.0, 3.0, 2.0), "ice_flake": (4.0, 3.0, 0.4)}
@@ -81,6 +82,7 @@ def _check(p: dict) -> list[tuple[str, str]]:
         "subdivisions": Param(int, 2, "icosphere subdivisions of rice/ikura (2 → 320 faces per shell)", range=(0, 5)),
     },
     check=_check,
+    check_work=element_fits,
     moved={"variety": Moved("variety", "variety", "rice_variety")},
 )
 def base_mesh(
