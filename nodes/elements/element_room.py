@@ -87,7 +87,8 @@ def element_fits(node_id: str, nodes) -> list[tuple[str, str, bool]]:
         if param == "diameter":
             allowed = f"diameter ≤ {room:.3g} mm"
         elif factor != 1.0:
-            allowed = f"each side ≤ {room:.3g} mm, the length ≤ {room / factor:.3g} mm before the variety's factor {factor:g}"
+            before = f"the length ≤ {room / factor:.3g} mm before the variety's factor {factor:g}"
+            allowed = f"each side ≤ {room:.3g} mm, {before}"
         else:
             allowed = f"each side ≤ {room:.3g} mm"
         return [
