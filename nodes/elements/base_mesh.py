@@ -17,9 +17,9 @@ def _check(p: dict) -> list[tuple[str, str]]:
     if p["shape"] == "file" and not p["path"]:
         issues.append(("path", "shape 'file' needs a path to a mesh file"))
     if p["shape"] == "file" and p["path"]:
-        from ..mesh_io import suffix_problem
+        from ..mesh_io import file_problem
 
-        problem = suffix_problem(p["path"])
+        problem = file_problem(p["path"])
         if problem is not None:
             issues.append(("path", problem))
     if p["shape"] != "file" and p["path"]:
