@@ -255,9 +255,9 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
-    check_writable(out_dir, "outputs", "choose another folder with --out-dir")
+    made = check_writable(out_dir, "outputs", "choose another folder with --out-dir")
     if rrd is not None:
-        check_writable(rrd.parent, "Rerun recording", "choose another path with --rrd, or --no-rrd")
+        made += check_writable(rrd.parent, "Rerun recording", "choose another path with --rrd, or --no-rrd")
     if cache is not None:
         check_writable(cache.directory, "cache", "choose another with --cache-dir (or $NODEGRAPH_CACHE), or --no-cache")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
@@ -287,7 +287,11 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             )
         if session is not None:
             session.keep(result)
-    except (NodeFailure, KeyboardInterrupt):
+    except KeyboardInterrupt:
+        reporter.print_summary()
+        _remove_empty(made)  # stopped before any output was written: no empty folder is left
+        raise
+    except NodeFailure:
         reporter.print_summary()
         raise
     finally:
@@ -300,6 +304,13 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         if result.rrd is not None:
             print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
     return 0
+
+
+def _remove_empty(folders: list[Path]) -> None:
+    """Remove those of ``folders`` (as ``check_writable`` made them, outermost first) that are empty."""
+    for folder in reversed(folders):
+        with contextlib.suppress(OSError):
+            folder.rmdir()
 
 
 def _work_due(recipe: Recipe, outputs: list[str], cache_dir: Path | None) -> bool:
@@ -798,7 +809,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("interrupted; nodes that finished are cached", file=sys.stderr)
+        print("interrupted; nodes that finished are cached", file=sys.stderr, flush=True)
+        interrupt.said()  # a supervisor that ends this process during its clean-up says nothing more
         return 130
 
 
