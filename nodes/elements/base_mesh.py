@@ -7,9 +7,9 @@ from nodegraph.values import Mesh
 
 from ..values import RiceVariety
 from .element_room import element_fits
+from .grain_shapes import DEFAULT_SIZE
 
 SHAPES = ("rice", "ikura", "ice_flake", "file")
-DEFAULT_SIZE = {"rice": (5.0, 3.0, 2.0), "ice_flake": (4.0, 3.0, 0.4)}
 
 
 def _check(p: dict) -> list[tuple[str, str]]:

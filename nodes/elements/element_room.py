@@ -4,7 +4,7 @@ run said so only after its element modelling, or not at all. ``base_mesh``'s ``c
 
 from __future__ import annotations
 
-from .grain_shapes import RICE_VARIETIES
+from .grain_shapes import DEFAULT_SIZE, RICE_VARIETIES
 
 # the input a node's placement or region comes through, nearest first: a placement's own (rotate, mix_ratio), a
 # placer's shape (poisson_place), a boolean's first operand, a vessel_region's vessel
@@ -14,8 +14,6 @@ UPSTREAM = ("placement", "shape", "a", "vessel")
 def base_length(node_id: str, nodes) -> tuple[str, float, float] | None:
     """(parameter, the element's longest side in mm, the factor on that parameter's value) of a ``base_mesh``
     node from its parameters; None for a mesh file (only reading it would tell)."""
-    from .base_mesh import DEFAULT_SIZE
-
     entry = nodes[node_id]
     params = entry.params
     if params["shape"] == "ikura":
@@ -67,8 +65,6 @@ def element_fits(node_id: str, nodes) -> list[tuple[str, str, bool]]:
     parameters (milliseconds)."""
     import numpy as np
 
-    from ..shapes.shape import made_shape
-
     length = base_length(node_id, nodes)
     if length is None:
         return []
@@ -79,7 +75,7 @@ def element_fits(node_id: str, nodes) -> list[tuple[str, str, bool]]:
         shape_id = placed_in(reader, nodes)
         if shape_id is None:
             continue
-        spans = np.ptp(made_shape(nodes[shape_id]).vertices, axis=0)
+        spans = np.ptp(_made(nodes[shape_id]).vertices, axis=0)
         room = float(spans.min())
         if longest <= room:
             continue
@@ -100,3 +96,16 @@ def element_fits(node_id: str, nodes) -> list[tuple[str, str, bool]]:
             )
         ]
     return []
+
+
+def _made(source):
+    """The mesh of the ``shape`` node ``source`` (a recipe's ``NodeEntry``), made by its own node from its
+    parameters; the last one kept (a recipe's elements ask for the same shape)."""
+    key = tuple(sorted(source.params.items()))
+    if key not in _MADE:
+        _MADE.clear()
+        _MADE[key] = source.spec.call(**source.params)["mesh"]
+    return _MADE[key]
+
+
+_MADE: dict[tuple, object] = {}

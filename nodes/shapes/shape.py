@@ -65,16 +65,11 @@ def made_for_check(wires, nodes) -> tuple[str, Mesh] | None:
     source = nodes[wires[0].node]
     if source.spec.type_name != "shape" or wires[0].port not in ("", "mesh"):
         return None
-    return wires[0].node, made_shape(source)
-
-
-def made_shape(source) -> Mesh:
-    """The mesh output of the ``shape`` node ``source`` (a recipe's ``NodeEntry``), made from its parameters."""
     key = tuple(sorted(source.params.items()))
     if key not in _MADE:  # a recipe's props ask for the same shape
         _MADE.clear()
         _MADE[key] = source.spec.call(**source.params)["mesh"]
-    return _MADE[key]
+    return wires[0].node, _MADE[key]
 
 
 _MADE: dict[tuple, Mesh] = {}  # the last shape made for a check, by its parameters
