@@ -68,11 +68,15 @@ def default_cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "nodegraph" / "cache"
 
 
-def check_writable(directory: Path, what: str, fix: str) -> None:
+def check_writable(directory: Path, what: str, fix: str) -> list[Path]:
     """Fail before any compute when ``directory`` cannot be created or written (read-only disk, a file
-    in the way), naming the path and ``fix``."""
+    in the way), naming the path and ``fix``. Returns the folders it made, outermost first, each named to a
+    supervisor (``interrupt.note``), which removes those a stopped run left empty."""
+    made = [d for d in (directory, *directory.parents) if not d.exists()][::-1]
     try:
         directory.mkdir(parents=True, exist_ok=True)
+        for folder in made:
+            interrupt.note(folder.resolve())
         fd, probe = tempfile.mkstemp(prefix=".nodegraph-probe.", dir=directory)
         os.close(fd)
         os.unlink(probe)
@@ -83,6 +87,7 @@ def check_writable(directory: Path, what: str, fix: str) -> None:
             else (exc.strerror or str(exc)).lower()
         )
         raise NodegraphError(f"cannot write the {what} at {directory}: {reason}; {fix}") from None
+    return made
 
 
 def atomic_write(path: Path, data: bytes, durable: bool = True) -> None:

@@ -29,6 +29,7 @@ from .cache import (
 )
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
+from .output_folder import recipe_folder
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
@@ -250,16 +251,17 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     if _work_due(recipe, args.outputs, None if args.no_cache else (args.cache_dir or default_cache_dir())):
         # what takes a moment to check (a placement against its shape's mesh), said before any work
         load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
-    out_dir = args.out_dir or outputs_root(args.recipe) / (recipe.name + ("_draft" if args.draft else ""))
+    out_dir = args.out_dir or recipe_folder(args.recipe, recipe.name + ("_draft" if args.draft else ""))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
-    check_writable(out_dir, "outputs", "choose another folder with --out-dir")
+    made = check_writable(out_dir, "outputs", "choose another folder with --out-dir")
     if rrd is not None:
-        check_writable(rrd.parent, "Rerun recording", "choose another path with --rrd, or --no-rrd")
+        made += check_writable(rrd.parent, "Rerun recording", "choose another path with --rrd, or --no-rrd")
     if cache is not None:
         check_writable(cache.directory, "cache", "choose another with --cache-dir (or $NODEGRAPH_CACHE), or --no-cache")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
+    reporter.info(f"outputs go to {out_dir}{os.sep}")
     spawn = args.spawn
     if spawn and not has_display():  # said before anything is computed
         reporter.warn(
@@ -285,7 +287,11 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             )
         if session is not None:
             session.keep(result)
-    except (NodeFailure, KeyboardInterrupt):
+    except KeyboardInterrupt:
+        reporter.print_summary()
+        _remove_empty(made)  # stopped before any output was written: no empty folder is left
+        raise
+    except NodeFailure:
         reporter.print_summary()
         raise
     finally:
@@ -300,20 +306,11 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     return 0
 
 
-PROJECT_MARKERS = ("pyproject.toml", ".git")
-
-
-def outputs_root(recipe_path: Path) -> Path:
-    """Where a recipe's outputs go unless --out-dir says: ``outputs/`` of its project (the nearest folder above the
-    recipe holding a pyproject.toml or .git: this repository for graphs/*.yaml), else beside the recipe; whichever
-    folder the command runs in. Shown relative to the current folder where it lies below it."""
-    recipe_dir = Path(recipe_path).resolve().parent
-    root = next((d for d in (recipe_dir, *recipe_dir.parents) if any((d / m).exists() for m in PROJECT_MARKERS)), None)
-    folder = (root or recipe_dir) / "outputs"
-    try:
-        return folder.relative_to(Path.cwd().resolve())
-    except ValueError:
-        return folder
+def _remove_empty(folders: list[Path]) -> None:
+    """Remove those of ``folders`` (as ``check_writable`` made them, outermost first) that are empty."""
+    for folder in reversed(folders):
+        with contextlib.suppress(OSError):
+            folder.rmdir()
 
 
 def _work_due(recipe: Recipe, outputs: list[str], cache_dir: Path | None) -> bool:
@@ -472,7 +469,7 @@ def _cmd_sweep(args, registry) -> int:
 
     base = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
-    out_dir = args.out_dir or outputs_root(args.recipe) / base.name / "sweeps"
+    out_dir = args.out_dir or recipe_folder(args.recipe, base.name) / "sweeps"
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     check_writable(out_dir, "sweep table", "choose another folder with --out-dir")
     if cache is not None:
@@ -481,6 +478,7 @@ def _cmd_sweep(args, registry) -> int:
     if rrd is not None:
         check_writable(rrd.parent, "Rerun recording", "choose another path with --rrd")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
+    reporter.info(f"sweep tables go to {out_dir}{os.sep}")
     started = time.time() - 1.0
     with _pool(args, cache, reporter) as pool:
         result = run_sweep(
@@ -811,7 +809,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("interrupted; nodes that finished are cached", file=sys.stderr)
+        print("interrupted; nodes that finished are cached", file=sys.stderr, flush=True)
+        interrupt.said()  # a supervisor that ends this process during its clean-up says nothing more
         return 130
 
 

@@ -674,7 +674,7 @@ def run_recipe(
             result.files,
             {
                 "recipe": recipe.name,
-                "recipe_file": recipe.path,
+                "recipe_file": str(Path(recipe.path).resolve()),  # output_folder: the folder's recipe file
                 "digest": recipe.digest(),
                 "output_key": key,
                 "seed": recipe.seed,

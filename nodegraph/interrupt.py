@@ -14,6 +14,7 @@ child has ended is an unfinished one (a finished file was renamed into place), a
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
@@ -35,21 +36,47 @@ def note(path: str | os.PathLike) -> None:
             out.write(os.fspath(path) + "\n")
 
 
+SAID = "#said"  # a line of the listing, not a file: the child has said that it was interrupted
+
+
+def said() -> None:
+    """Note that this process has printed its 'interrupted' line, so that a supervisor that kills it during its
+    clean-up (a second Ctrl-C) does not print a second one."""
+    note(SAID)
+
+
 def remove_leftovers(listing: Path) -> list[Path]:
-    """Remove the files named in ``listing`` that still exist (what a killed run left unfinished); those removed."""
+    """Remove the files named in ``listing`` that still exist (what a killed run left unfinished), then the folders
+    named there that are left empty (made for outputs the stopped run never wrote); the files removed."""
     try:
         names = listing.read_text(encoding="utf-8").splitlines()
     except OSError:
         return []
-    removed = []
+    removed, folders = [], []
     for name in dict.fromkeys(names):
         path = Path(name)
+        if name == SAID:
+            continue
+        if path.is_dir():
+            folders.append(path)
+            continue
         try:
             path.unlink()
         except OSError:
             continue
         removed.append(path)
+    for folder in sorted(folders, key=lambda f: len(f.parts), reverse=True):
+        with contextlib.suppress(OSError):  # not empty: something was written there
+            folder.rmdir()
     return removed
+
+
+def was_said(listing: Path) -> bool:
+    """Whether the child noted that it printed its 'interrupted' line (``said``)."""
+    try:
+        return SAID in listing.read_text(encoding="utf-8").splitlines()
+    except OSError:
+        return False
 
 
 _stopped_at: float | None = None
@@ -158,7 +185,10 @@ def _wait(pid: int, listing: Path, news: int) -> int:
         time.sleep(0.02)
     # stopped or killed: what it left unfinished goes; a run that ended by itself (done, or failed: its partial
     # recording kept for what the failing node logged, as it says) cleaned up after itself
+    told = was_said(listing)
     removed = remove_leftovers(listing) if stops or os.WIFSIGNALED(status) else []
+    if killed and told:  # the child said it was interrupted before it was ended in its clean-up
+        return 130
     if killed:
         if sys.stderr.isatty():
             sys.stderr.write("\x1b[?25h\n")  # the progress bar hid the cursor

@@ -260,6 +260,17 @@ class _Validator:
                 self.raw["seed"] = value
                 self.override_at[("seed",)] = where
                 continue
+            if len(target) == 1 and (having := self._having(target[0], nodes)):
+                self.issues.append(
+                    Issue(
+                        where,
+                        f"'{target[0]}' names no node: a parameter is set on its node, as node.param=value",
+                        given=text,
+                        allowed="the nodes that have it: " + ", ".join(having),
+                        suggestion=f"{having[0]}={text.partition('=')[2]}" if len(having) == 1 else None,
+                    )
+                )
+                continue
             if len(target) != 2 or not all(target):
                 self.issues.append(Issue(where, f"cannot read '{text}'", allowed="node.param=value or seed=N"))
                 continue
@@ -280,6 +291,13 @@ class _Validator:
                 if isinstance(params, dict):
                     params[key] = value
                     self.override_at[("nodes", node_id, "params", key)] = where
+
+    def _having(self, param: str, nodes: dict) -> list[str]:
+        """``node.param`` for each node of the raw recipe whose type declares ``param``: what a bare
+        ``--set param=value`` may have meant."""
+        types = {node_id: body.get("type") for node_id, body in nodes.items() if isinstance(body, dict)}
+        specs = {node_id: self.registry.get(t) for node_id, t in types.items() if isinstance(t, str)}
+        return [f"{node_id}.{param}" for node_id, spec in specs.items() if spec is not None and param in spec.params]
 
     def build(self) -> Recipe | None:
         if not isinstance(self.raw, dict):

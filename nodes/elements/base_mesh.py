@@ -6,9 +6,10 @@ from nodegraph import In, Moved, Out, Param, node
 from nodegraph.values import Mesh
 
 from ..values import RiceVariety
+from .element_room import element_fits
+from .grain_shapes import DEFAULT_SIZE
 
 SHAPES = ("rice", "ikura", "ice_flake", "file")
-DEFAULT_SIZE = {"rice": (5.0, 3.0, 2.0), "ice_flake": (4.0, 3.0, 0.4)}
 
 
 def _check(p: dict) -> list[tuple[str, str]]:
@@ -16,9 +17,9 @@ def _check(p: dict) -> list[tuple[str, str]]:
     if p["shape"] == "file" and not p["path"]:
         issues.append(("path", "shape 'file' needs a path to a mesh file"))
     if p["shape"] == "file" and p["path"]:
-        from ..mesh_io import suffix_problem
+        from ..mesh_io import file_problem
 
-        problem = suffix_problem(p["path"])
+        problem = file_problem(p["path"])
         if problem is not None:
             issues.append(("path", problem))
     if p["shape"] != "file" and p["path"]:
@@ -81,6 +82,7 @@ def _check(p: dict) -> list[tuple[str, str]]:
         "subdivisions": Param(int, 2, "icosphere subdivisions of rice/ikura (2 → 320 faces per shell)", range=(0, 5)),
     },
     check=_check,
+    check_work=element_fits,
     moved={"variety": Moved("variety", "variety", "rice_variety")},
 )
 def base_mesh(

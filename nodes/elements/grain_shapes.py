@@ -11,6 +11,8 @@ import numpy as np
 
 from ..values import RiceVariety
 
+DEFAULT_SIZE = {"rice": (5.0, 3.0, 2.0), "ice_flake": (4.0, 3.0, 0.4)}  # base_mesh's size when none is given
+
 #: SPEC §1.1 table (G §3.1.1): indica 1.8 / 1.2, japonica 1.0 / 1.5, aromatic 0.7 / 1.5 (length factor / P).
 RICE_VARIETIES = {
     "indica": RiceVariety("indica", 1.8, 1.2),

@@ -8,9 +8,9 @@ from nodegraph.values import Mesh
 
 
 def _check(params: dict) -> list[tuple[str, str]]:
-    from ..mesh_io import suffix_problem
+    from ..mesh_io import file_problem
 
-    problem = suffix_problem(params["path"])
+    problem = file_problem(params["path"])
     return [] if problem is None else [("path", problem)]
 
 

@@ -95,3 +95,33 @@ def test_the_ikura_draft_is_the_final_at_fewer_elements():
     for entry in draft.nodes.values():  # the regions are derived from the bowl, so they follow it
         if entry.spec.type_name == "vessel_region":
             assert [w.node for w in entry.inputs["vessel"]] == ["bowl"]
+
+
+def test_the_kakigori_draft_keeps_the_final_proportions():
+    """Issue 47: the kakigori draft shrank the cup but kept the syrup's lengths, so a heap a third as tall was
+    soaked nearly to the cup. Every length of the cup and the syrup now scales by one factor; the flakes, their
+    spacing, the materials and the camera are the final's, the preview the final's aspect."""
+    from pathlib import Path
+
+    from nodegraph.registry import default_registry
+
+    path = Path(__file__).resolve().parents[2] / "graphs" / "kakigori.yaml"
+    final = load_recipe(path, default_registry())
+    draft = load_recipe(path, default_registry(), draft=True)
+    factor = draft.nodes["cup"].params["size"] / final.nodes["cup"].params["size"]
+    assert factor < 1
+    lengths = {"cup": ("size", "depth", "mound", "wall"), "shade": ("syrup_depth", "syrup_spread", "syrup_run_length")}
+    for node_id, names in lengths.items():
+        for name in names:
+            assert draft.nodes[node_id].params[name] == pytest.approx(factor * final.nodes[node_id].params[name]), name
+        rest = {k: v for k, v in final.nodes[node_id].params.items() if k not in names}
+        assert {k: draft.nodes[node_id].params[k] for k in rest} == rest, node_id
+    for node_id in ("place", "refine", "pile", "implicit", "flake0", "flake7"):
+        assert draft.nodes[node_id].params == final.nodes[node_id].params, node_id
+    look = {k: v for k, v in final.nodes["preview"].params.items() if k not in ("width", "height", "samples")}
+    assert {k: draft.nodes["preview"].params[k] for k in look} == look
+    width, height = (draft.nodes["preview"].params[k] for k in ("width", "height"))
+    assert (
+        width >= 480
+        and width * final.nodes["preview"].params["height"] == height * final.nodes["preview"].params["width"]
+    )

@@ -113,6 +113,42 @@ def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
     assert "interrupted; nodes that finished are cached" in err and "Traceback" not in err, err
     assert "did not stop within" not in err  # it stopped by itself, not killed
     assert not leftovers(tmp_path), leftovers(tmp_path)
+    assert not (tmp_path / "outputs").exists()  # made for outputs the stopped run never wrote (issue 47)
+
+
+def test_a_second_ctrl_c_during_the_clean_up_says_interrupted_once(tmp_path, node_started):
+    """Issue 47: Ctrl-C twice (the second as the run cleans up after the first) printed the run's 'interrupted'
+    line and then the supervisor's, which ended it; now one line, and no empty output folder is left."""
+    started = tmp_path / "started"
+    (tmp_path / "slow.yaml").write_text(SLOW.replace("STARTED", str(started)))
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slow.yaml"), "--plugin", TOY]
+    command += ["--cache-dir", str(tmp_path / "cache")]
+    proc = subprocess.Popen(
+        command,
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    lines = []
+    try:
+        node_started(started, proc)
+        os.killpg(proc.pid, signal.SIGINT)
+        for line in proc.stderr:
+            lines.append(line)
+            if line.startswith("interrupted"):
+                os.killpg(proc.pid, signal.SIGINT)  # at once: the run is still cleaning up
+                break
+        lines += proc.stderr.readlines()
+        proc.wait(timeout=5.0)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    said = [line for line in lines if "interrupted" in line]
+    assert len(said) == 1, "".join(lines)
+    assert not (tmp_path / "outputs").exists(), sorted(map(str, (tmp_path / "outputs").rglob("*")))
 
 
 def test_a_failed_run_keeps_the_partial_recording_it_names(tmp_path):

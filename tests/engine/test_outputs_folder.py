@@ -1,6 +1,8 @@
 """A recipe's outputs land in one place whichever folder the command runs in (issue 47, item 6): ``outputs/`` of
 its project (a pyproject.toml or .git above it), else beside the recipe; --out-dir as given."""
 
+import json
+
 from nodegraph.cli import main
 
 from .test_cli_and_rerun import RECIPE, TOY
@@ -32,3 +34,29 @@ def test_a_recipe_outside_a_project_writes_beside_itself(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert run_from(tmp_path, loose / "toyrun.yaml", tmp_path / "cache") == 0
     assert (loose / "outputs" / "toyrun" / "surf.ply").is_file() and not (tmp_path / "outputs").exists()
+
+
+def test_a_copy_with_the_same_name_gets_a_folder_of_its_own(tmp_path, monkeypatch, capsys):
+    """Issue 47: two recipe files of one name in one project wrote into the same outputs/<name>/, each run
+    overwriting the other's files. The folder's first recipe keeps outputs/<name>/, the copy gets
+    outputs/<name>-<hash of its path>/, the same on every run; the run says where in its first line."""
+    project = tmp_path / "project"
+    (project / "graphs").mkdir(parents=True)
+    (project / "mine").mkdir()
+    (project / "pyproject.toml").write_text("[project]\nname = 'mine'\n")
+    original, copy = project / "graphs" / "toyrun.yaml", project / "mine" / "toyrun.yaml"
+    original.write_text(RECIPE)
+    copy.write_text(RECIPE)
+    monkeypatch.chdir(project)
+    folders = []
+    for recipe in (original, copy, original, copy):
+        capsys.readouterr()
+        assert main(["run", str(recipe), "--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), "--no-rrd"]) == 0
+        first = capsys.readouterr().err.splitlines()[0]
+        assert first.startswith("outputs go to outputs/toyrun")
+        folders.append(project / first.removeprefix("outputs go to ").rstrip("/"))
+    assert folders[0] == folders[2] == project / "outputs" / "toyrun"
+    assert folders[1] == folders[3] != folders[0] and folders[1].name.startswith("toyrun-")
+    for folder, recipe in ((folders[0], original), (folders[1], copy)):
+        assert (folder / "surf.ply").is_file()
+        assert json.loads((folder / "manifest.json").read_text())["recipe_file"] == str(recipe.resolve())

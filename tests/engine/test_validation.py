@@ -170,6 +170,21 @@ def test_set_override_is_validated(registry):
     assert issues[1].suggestion == "dx" and issues[2].suggestion == "shifted"
 
 
+def test_a_parameter_set_without_its_node_lists_the_nodes_that_have_it(registry):
+    """Issue 47: ``--set water_content=22`` said only "cannot read"; now it names the nodes with that parameter,
+    and with one such node the setting meant."""
+    two = VALID.replace(
+        "      dx: 1.5\n", "      dx: 1.5\n  again:\n    type: toy_shift\n    inputs: {spheres: pts.spheres}\n"
+    )
+    (issue,) = issues_of(two, registry, overrides=["dx=2"])
+    assert str(issue.location) == "--set:1" and issue.allowed == "the nodes that have it: shifted.dx, again.dx"
+    assert issue.suggestion is None
+    (issue,) = issues_of(VALID, registry, overrides=["dx=2"])
+    assert issue.suggestion == "shifted.dx=2" and "did you mean 'shifted.dx=2'?" in str(issue)
+    (issue,) = issues_of(VALID, registry, overrides=["dz=2"])  # no node has it: the form is what is wrong
+    assert "cannot read 'dz=2'" in issue.message
+
+
 def test_load_recipe_from_file_names_file(registry, recipe_file):
     path = recipe_file(VALID.replace("dx: 1.5", "dx: 15"))
     with pytest.raises(RecipeError) as info:

@@ -1,0 +1,50 @@
+"""Where a recipe's outputs go unless --out-dir says: a folder of its own per recipe file, so that a copy of a
+recipe (another folder, the same name) never overwrites the outputs of the one it was copied from."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+PROJECT_MARKERS = ("pyproject.toml", ".git")
+MANIFEST = "manifest.json"  # output_files.MANIFEST: the run that wrote a folder names its recipe file there
+
+
+def outputs_root(recipe_path: Path) -> Path:
+    """``outputs/`` of the recipe's project (the nearest folder above the recipe holding a pyproject.toml or .git:
+    this repository for graphs/*.yaml), else beside the recipe; whichever folder the command runs in. Shown
+    relative to the current folder where it lies below it."""
+    recipe_dir = Path(recipe_path).resolve().parent
+    root = next((d for d in (recipe_dir, *recipe_dir.parents) if any((d / m).exists() for m in PROJECT_MARKERS)), None)
+    folder = (root or recipe_dir) / "outputs"
+    try:
+        return folder.relative_to(Path.cwd().resolve())
+    except ValueError:
+        return folder
+
+
+def recipe_folder(recipe_path: Path, name: str) -> Path:
+    """``outputs/<name>/`` of the recipe's project, unless a run of another recipe file wrote it (its manifest
+    names that file): then ``outputs/<name>-<hash>/``, the hash of this file's resolved path, the same on every
+    run, so each recipe file keeps one folder of its own."""
+    root = outputs_root(recipe_path)
+    plain = root / name
+    mine = Path(recipe_path).resolve()
+    owner = folder_owner(plain, root.resolve().parent)
+    if owner is None or owner == mine:
+        return plain
+    return root / f"{name}-{hashlib.sha256(str(mine).encode()).hexdigest()[:8]}"
+
+
+def folder_owner(folder: Path, project: Path) -> Path | None:
+    """The resolved recipe file whose run wrote ``folder`` (its manifest's ``recipe_file``; a relative one, as
+    runs before this rule wrote, taken from the project or the current folder, whichever exists); None when no
+    run wrote it or that file is gone."""
+    try:
+        given = json.loads((folder / MANIFEST).read_bytes())["recipe_file"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    path = Path(given)
+    candidates = [path] if path.is_absolute() else [project / path, Path.cwd() / path]
+    return next((p.resolve() for p in candidates if p.is_file()), None)
