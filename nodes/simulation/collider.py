@@ -301,10 +301,11 @@ def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
 
 
 @njit(cache=True, inline="always")
-def _wall_one(x, x_prev, anchor, load, mean, w, r, phi, origin, pitch, blocks, rule, i):
+def _wall_one(state, w, r, phi, origin, pitch, blocks, rule, i):
     """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
     if w[i] <= 0.0:
         return 0.0
+    x, x_prev, anchor, load, mean = state.x, state.x_prev, state.wall_anchor, state.wall_load, state.wall_mean
     mu_s, _, anchored = rule
     fx = (x[i, 0] - origin[0]) / pitch
     fy = (x[i, 1] - origin[1]) / pitch
@@ -342,18 +343,20 @@ def _wall_one(x, x_prev, anchor, load, mean, w, r, phi, origin, pitch, blocks, r
 @njit(cache=True, parallel=True)
 def collider_project(state, model, grid, rule):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
-    (``friction.friction_wall``, normal load = the penetration; ``rule``: a ``friction_models.FrictionRule``,
+    (``friction.friction_wall``; normal load: the mean over the element's touching particles of the walls' pushes
+    in the last substep, ``wall_means``, else the particle's own pushes this substep; ``rule``: a ``friction_models.FrictionRule``,
     ``anchor`` (n, 3) per particle; μs = 0 skips friction and leaves the anchors). In place; particles
     are independent. ``blocks``: the ``block_minimum`` of φ (particles far from every wall are skipped).
-    ``state``: ``StateArrays`` (x, x_prev, wall_anchor; x_prev is x in pre-stabilisation: no swept test),
+    ``state``: ``StateArrays`` (x, x_prev, wall_anchor, wall_load, wall_mean; x_prev is x in pre-stabilisation: no
+    swept test),
     ``model``: ``ModelArrays`` (w, r), ``grid``: ``ColliderGrid``. Returns max (r − φ)/r."""
-    x, x_prev, anchor, load, mean = state.x, state.x_prev, state.wall_anchor, state.wall_load, state.wall_mean
+    x = state.x
     w, r = model.w, model.r
     phi, origin, pitch, blocks = grid.phi, grid.origin, grid.pitch, grid.blocks
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):
-        worst[i] = _wall_one(x, x_prev, anchor, load, mean, w, r, phi, origin, pitch, blocks, rule, i)
+        worst[i] = _wall_one(state, w, r, phi, origin, pitch, blocks, rule, i)
     return worst.max() if n > 0 else 0.0
 
 
