@@ -4,14 +4,14 @@ writes one line to benchmarks/measured/physics_defaults.jsonl; ``python tools/me
 the table in docs/validation.md.
 
     python benchmarks/physics_at_defaults.py            # every case (≈ 6 min on 2 cores)
-    python benchmarks/physics_at_defaults.py --quick    # the inclined plane only (≈ 20 s), prints, writes nothing
+    python benchmarks/physics_at_defaults.py --quick    # the inclined planes only (≈ 1 min), prints, writes nothing
 """
 
 import argparse
 import json
 import os
 import time
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -22,13 +22,14 @@ runtime.configure()  # numba's kernel cache and locator, before a kernel module 
 
 RECORD = Path(__file__).resolve().parent / "measured" / "physics_defaults.jsonl"
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
-ANGLES = tuple(range(24, 37))  # degrees, the inclined plane's tilts
+ANGLES = tuple(range(24, 45))  # degrees, the inclined plane's tilts
 MU_S = 0.6  # the node's default static_threshold: atan 0.6 = 30.96°
 
 
-def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0) -> float:
-    """One japonica grain (``rice_library``, 8 particles) set flat on level ground at the node's defaults, settled
-    0.5 s; then gravity tilted by ``theta`` (an inclined plane) for ``seconds``: how far (mm) its centre slid."""
+def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0, on: str = "wall") -> float:
+    """One japonica grain (``rice_library``, 8 particles) set flat on level ground (``on`` "wall": a slab; "grains":
+    ``grain_bed``) at the node's defaults, settled 0.5 s; then gravity tilted by ``theta`` (an inclined plane) for
+    ``seconds``: how far (mm) its centre slid."""
     from scene_builders import box_mesh, rice_library
 
     from nodes.simulation.settings import XpbdParams
@@ -37,12 +38,19 @@ def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0) -> float:
     from nodes.values import Aggregate, Placement
 
     placement = Placement(
-        np.array([[0.0, 0.0, 1.3]]), np.array([[0, 0, 1.0]]), np.eye(3)[None], variants=np.zeros(1, np.int32),
+        np.array([[0.0, 0.0, 1.3]]),
+        np.array([[0, 0, 1.0]]),
+        np.eye(3)[None],
+        variants=np.zeros(1, np.int32),
         kind_names=("japonica",),
     )
     params = XpbdParams(**xpbd.resolve_params({"substeps": substeps, "log_every": 0, "log_meshes_every": 0}))
-    ground = box_mesh([-200, -200, -6], [200, 200, 0], "ground")
-    sim = build_simulation(Aggregate(placement, (rice_library(seed=0),)), [ground], EFFECTS, params)
+    aggregate = Aggregate(placement, (rice_library(seed=0),))
+    if on == "wall":
+        ground = box_mesh([-200, -200, -6], [200, 200, 0], "ground")
+        sim = build_simulation(aggregate, [ground], EFFECTS, params)
+    else:
+        sim = build_simulation(aggregate, [], EFFECTS - {"collider"}, params, obstacles=[grain_bed()])
     for _ in range(30):
         sim.frame()
     before = sim.model.centres(sim.state.x).copy()
@@ -50,21 +58,47 @@ def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0) -> float:
     sim.solver.default_control.accel[:] = [params.gravity * np.sin(t), 0.0, -params.gravity * np.cos(t)]
     for _ in range(int(round(seconds / params.dt))):
         sim.frame()
-    return float(np.linalg.norm((sim.model.centres(sim.state.x) - before)[0, :2]))
+    return float(np.linalg.norm((sim.model.centres(sim.state.x) - before)[0]))
 
 
-def plane_case(substeps: int) -> dict:
+def grain_bed(seed: int = 0):
+    """A bed of japonica grains lying flat side by side (``rice_library`` grains' particle clusters on a grid
+    5.2 × 3.1 mm, touching, random yaw within ±5°) as static obstacles with their top at z = 0: a plane of grains."""
+    from scene_builders import rice_library
+    from scipy.spatial.transform import Rotation
+
+    from nodes.simulation.clusters import element_cluster
+    from nodes.values import ParticleState
+
+    rng = np.random.default_rng(seed)
+    clusters = [element_cluster(m, 8) for m in rice_library(seed=seed).meshes]
+    xs, rs = [], []
+    for gx in np.arange(-60.0, 60.0, 5.2):
+        for gy in np.arange(-60.0, 60.0, 3.1):
+            c = clusters[rng.integers(len(clusters))]
+            turn = Rotation.from_euler("z", rng.uniform(-5, 5), degrees=True).as_matrix()
+            xs.append((c.centres - c.centres.mean(axis=0)) @ turn.T + [gx, gy, 0.0])
+            rs.append(c.radii)
+    x, r = np.concatenate(xs), np.concatenate(rs)
+    x[:, 2] -= (x[:, 2] + r).max()
+    n = len(x)
+    return ParticleState(x, np.zeros_like(x), r, np.zeros(n), np.zeros(n, np.int64))
+
+
+def plane_case(substeps: int, on: str = "wall") -> dict:
     """The largest tilt at which the grain moves < 1 mm in 1 s, and the smallest at which it slides."""
-    slid = {a: grain_on_plane(a, substeps) for a in ANGLES}
+    slid = {a: grain_on_plane(a, substeps, on=on) for a in ANGLES}
     holds = max([a for a in ANGLES if slid[a] < 1.0], default=None)
     slides = min([a for a in ANGLES if slid[a] >= 1.0], default=None)
+    plane = "a plane" if on == "wall" else "a bed of grains lying flat (static)"
     return {
-        "case": "grain on an inclined plane (grain–wall)",
-        "setup": "one japonica grain (8 particles) flat on a plane tilted 24–36° in 1° steps, μs 0.6, μk 0.42; "
+        "case": f"grain on an inclined plane ({'grain–wall' if on == 'wall' else 'grain–grain'})",
+        "setup": f"one japonica grain (8 particles) flat on {plane} tilted 24–44° in 1° steps, μs 0.6, μk 0.42; "
         "held = moved < 1 mm in 1 s",
         "substeps": substeps,
         "ours": f"holds to {holds}°, slides at {slides}°",
-        "published": "holds below atan μs = 31.0°, slides above (Coulomb)",
+        "published": "holds below atan μs = 31.0°, slides above (Coulomb)"
+        + ("" if on == "wall" else "; on grains the bed's bumps add to μs"),
         "values": {"holds": holds, "slides": slides, "slid_mm": {str(a): round(slid[a], 3) for a in ANGLES}},
     }
 
@@ -83,8 +117,13 @@ def heap_case(shape: str, n: int, substeps: int) -> dict:
         "substeps": substeps,
         "ours": f"H/R {hr25:.1f}° at 2.5 s → {hr7:.1f}° at 7 s (surface slope {s25:.1f}° → {s7:.1f}°)",
         "published": "at rest (≤ 3° change); rough rice piles 29.6–36.9°, paddy 35.7–44.4° (Zareiforoush et al. 2009)",
-        "values": {"hr_2_5": round(hr25, 1), "hr_7": round(hr7, 1), "surface_2_5": round(s25, 1),
-                   "surface_7": round(s7, 1), "seconds": round(time.perf_counter() - start, 1)},
+        "values": {
+            "hr_2_5": round(hr25, 1),
+            "hr_7": round(hr7, 1),
+            "surface_2_5": round(s25, 1),
+            "surface_7": round(s7, 1),
+            "seconds": round(time.perf_counter() - start, 1),
+        },
     }
 
 
@@ -92,7 +131,7 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the inclined plane only; print, write nothing")
     args = ap.parse_args(argv)
-    cases = [plane_case(10), plane_case(40)]
+    cases = [plane_case(10), plane_case(40), plane_case(10, on="grains"), plane_case(40, on="grains")]
     if not args.quick:
         for shape, n in (("ball", 890), ("stream", 300)):
             cases += [heap_case(shape, n, 10), heap_case(shape, n, 40)]
@@ -100,11 +139,19 @@ def main(argv=None) -> None:
         print(f"{c['case']:45s} {c['substeps']:>3} substeps  {c['ours']}")
     if args.quick:
         return
-    load = "%.1f" % os.getloadavg()[0]
-    date = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    load = f"{os.getloadavg()[0]:.1f}"
+    date = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     lines = [
-        json.dumps({"what": c["case"], **c, "command": "python benchmarks/physics_at_defaults.py", "load": load,
-                    "date": date, "machine": f"{os.cpu_count()} cores"})
+        json.dumps(
+            {
+                "what": c["case"],
+                **c,
+                "command": "python benchmarks/physics_at_defaults.py",
+                "load": load,
+                "date": date,
+                "machine": f"{os.cpu_count()} cores",
+            }
+        )
         for c in cases
     ]
     RECORD.write_text("\n".join(lines) + "\n")

@@ -15,6 +15,7 @@ et al. 2014's position-level rule applied to each substep's displacement.
 import argparse
 import dataclasses
 import time
+from datetime import UTC
 from pathlib import Path
 
 import numpy as np
@@ -1038,16 +1039,15 @@ def janssen_case(quick: bool, figures: dict) -> Case:
         f"({lam / SILO_D:.2f} D; ρ_b A {per_mm:.3f} g/mm); wall friction mobilised F_wall/F_N {mobilised:.3f} "
         f"({mobilised_solve:.2f} of the iterations' normal force) → K_eff = D/(4 μ_mob λ) {k_eff:.2f}; "
         f"frictionless: M_app/M {smooth['apparent'] / smooth['M']:.3f}",
-        f"λ {lam / lam_janssen:.1f}× Janssen's with μ_wall 0.6 and Jaky's K: the walls carry the weight, but their "
-        f"friction is mobilised only to F_wall/F_N = {mobilised:.2f}, not 0.6 (pre-stabilisation's wall pushes, half "
-        f"the normal force, carry no friction; the iterations' own mobilise {mobilised_solve:.2f}), and the bed's "
-        "K ≈ 1 is a "
-        "fluid's (the substep rule's heaps creep flat, case 2), so the saturation is slower; controls: the default "
-        f"anchored friction M_app/M {anchored['apparent'] / anchored['M']:.2f} at 600 spheres (the walls pull the "
-        "bed down: wall anchors do not follow pre-stabilisation's lift, a reverse Janssen effect; with anchors "
-        f"shifted by its moves {followed['apparent'] / followed['M']:.2f}); the default shock "
-        f"propagation 4: {scaled['apparent'] / scaled['M']:.2f} with frictionless walls (mass scaling does not "
-        "conserve momentum, so no force in the bed is physical)",
+        f"λ {lam / lam_janssen:.1f}× Janssen's with μ_wall 0.6 and Jaky's K: the walls carry the weight, their "
+        f"friction mobilised to F_wall/F_N = {mobilised:.2f} of 0.6 (pre-stabilisation's wall pushes carry no "
+        f"friction; the iterations' own mobilise {mobilised_solve:.2f}), K_eff {k_eff:.2f} against Jaky's "
+        f"{k_jaky:.2f}. At the node's defaults the gauge misreads: anchored friction gives M_app/M "
+        f"{anchored['apparent'] / anchored['M']:.2f} at 600 spheres (> 1: the walls pull the bed down, since wall "
+        "anchors do not follow pre-stabilisation's lift; with anchors shifted by its moves "
+        f"{followed['apparent'] / followed['M']:.2f}), and shock propagation 4 gives "
+        f"{scaled['apparent'] / scaled['M']:.2f} with frictionless walls (mass scaling does not conserve momentum, "
+        "so forces inside a bed are physical only without it)",
         "20 substeps × 4 iterations (a 50-layer column sinks 1.5–1.8 r into itself at 10 × 2), shock propagation "
         "off, substep friction (Macklin), 1 particle per grain",
         time.perf_counter() - t,
@@ -1081,16 +1081,22 @@ def write_record(cases: list[Case], quick: bool, total: float, ellipsoids: bool 
     table in docs/validation.md)."""
     import json
     import os
-    from datetime import datetime, timezone
+    from datetime import datetime
 
     command = f"python benchmarks/validation.py{' --quick' if quick else ''}{' --ellipsoids' if ellipsoids else ''}"
-    date = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    load = "%.1f" % os.getloadavg()[0]
+    date = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    load = f"{os.getloadavg()[0]:.1f}"
     lines = [
         json.dumps(
-            {"what": c.name, **{f: getattr(c, f) for f in ("setup", "reference", "ours", "error", "knobs")},
-             "values": {"seconds": round(c.seconds, 1)}, "command": command, "load": load, "date": date,
-             "machine": f"{os.cpu_count()} cores"}
+            {
+                "what": c.name,
+                **{f: getattr(c, f) for f in ("setup", "reference", "ours", "error", "knobs")},
+                "values": {"seconds": round(c.seconds, 1)},
+                "command": command,
+                "load": load,
+                "date": date,
+                "machine": f"{os.cpu_count()} cores",
+            }
         )
         for c in cases
     ]

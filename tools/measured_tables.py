@@ -156,7 +156,10 @@ TABLES = {
             ("bulk density, g/cm³", field("rho_b_g_per_cm3")),
             ("rate, grains/s", field("rate_grains_per_s")),
             ("rate, g/s", field("rate_g_per_s")),
-            ("first / second half of the window, grains/s", lambda r: f"{number(r['first_half'])} / {number(r['second_half'])}"),
+            (
+                "first / second half of the window, grains/s",
+                lambda r: f"{number(r['first_half'])} / {number(r['second_half'])}",
+            ),
         ],
     ),
     "roofline": (

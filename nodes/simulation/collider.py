@@ -344,12 +344,12 @@ def _wall_one(state, w, r, phi, origin, pitch, blocks, rule, i):
 def collider_project(state, model, grid, rule):
     """Push particles out to φ ≥ r along ∇φ, then apply static/dynamic friction against the wall
     (``friction.friction_wall``; normal load: the mean over the element's touching particles of the walls' pushes
-    in the last substep, ``wall_means``, else the particle's own pushes this substep; ``rule``: a ``friction_models.FrictionRule``,
-    ``anchor`` (n, 3) per particle; μs = 0 skips friction and leaves the anchors). In place; particles
-    are independent. ``blocks``: the ``block_minimum`` of φ (particles far from every wall are skipped).
-    ``state``: ``StateArrays`` (x, x_prev, wall_anchor, wall_load, wall_mean; x_prev is x in pre-stabilisation: no
-    swept test),
-    ``model``: ``ModelArrays`` (w, r), ``grid``: ``ColliderGrid``. Returns max (r − φ)/r."""
+    in the last substep, ``wall_means``, else the particle's own pushes this substep; ``rule``: a
+    ``friction_models.FrictionRule``, ``anchor`` (n, 3) per particle; μs = 0 skips friction and leaves the
+    anchors). In place; particles are independent. ``blocks``: the ``block_minimum`` of φ (particles far from
+    every wall are skipped). ``state``: ``StateArrays`` (x, x_prev, wall_anchor, wall_load, wall_mean; x_prev is x
+    in pre-stabilisation: no swept test), ``model``: ``ModelArrays`` (w, r), ``grid``: ``ColliderGrid``. Returns
+    max (r − φ)/r."""
     x = state.x
     w, r = model.w, model.r
     phi, origin, pitch, blocks = grid.phi, grid.origin, grid.pitch, grid.blocks
@@ -434,7 +434,8 @@ def rigid_into_free_space(x, r, start, phi, origin, pitch):
 @njit(cache=True, parallel=True)
 def wall_means(start, load, mean):
     """Each element's mean wall load over its touching particles into ``mean`` (0 where none touches), and the
-    loads cleared for the next substep."""
+    loads cleared for the next substep: static friction then tests a grain against a wall as one rigid contact,
+    Σ|t| < μs·Σ N (``friction.group_means`` does the same for grain on grain)."""
     m = start.shape[0] - 1
     for e in prange(m):
         total = 0.0

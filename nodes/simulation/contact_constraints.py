@@ -39,8 +39,8 @@ PairRows = namedtuple(
 )  # row p lists the partners (ids nbr, rows at) of order[p]
 Colouring = namedtuple("Colouring", "cell_start order dims")
 # per list entry: tolerated overlap, friction anchor, normal correction so far this substep (anchored friction's
-# load), its contact's mean load over the last substep (``friction.group_means``), and ``glued``: its grains are glued (``glue``), so its friction takes the true masses (``_project_slab``);
-# empty: none is
+# load), its contact's mean load over the last substep (``friction.group_means``), and ``glued``: its grains are
+# glued (``glue``), so its friction takes the true masses (``_project_slab``); empty: none is
 PairEntries = namedtuple("PairEntries", "allowance anchor load held glued")
 ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion")
 

@@ -23,6 +23,12 @@ substep's load they rest (docs/validation.md). The tolerated old overlap is no l
 overlaps fed friction that kept them, and poured spheres jammed at φ 0.34. Walls keep the penetration as
 their load: summing a wall's pushes too raised the heap 2.6° but kept a sleeping pile of bars from resting
 (kinetic energy 0.3–3 g·mm²/s² for ever, against 0 without).
+A rigid grain touches a wall or another grain at several particles, and the load falls on them unevenly (one
+particle of a grain lying on a plane carries ≈ 90 %), while shape matching spreads the grain's drift over them
+alike: tested per particle, the lightly loaded ones slid and took the grain along (it slid at 26° on a plane
+at μs 0.6). So the test takes each contact's mean load over its touching particles in the last substep
+(``group_means`` per pair of elements, ``collider.wall_means`` per element against the walls): Coulomb's
+Σ|t| < μs·Σ N for the rigid contact; a grain then holds to 29–30° and slides at 30–31° (docs/validation.md).
 G Table 3: μs = static threshold, μk = dynamic scale · μs.
 
 Anchors are NaN where no contact sticks. ``friction_pair`` runs per pair inside the contacts'

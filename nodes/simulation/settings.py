@@ -134,8 +134,9 @@ PARAMS = {
         str,
         "anchored",
         "anchored: static friction restores the slip since the contact began sticking, against the normal "
-        "load the contact carried this substep (rice heaps rest at 30–40°, docs/validation.md); substep: it "
-        "holds each substep's slip only (Macklin et al. 2014; heaps creep flat)",
+        "load the grain's contact carried in the last substep (heaps rest; a grain on a plane holds to within 1° of "
+        "atan μs, docs/validation.md); substep: it holds each substep's slip only (Macklin et al. 2014; heaps creep "
+        "flat)",
         choices=("substep", "anchored"),
     ),
     "capture_radius": Param(

@@ -38,7 +38,7 @@ from . import (
 from .buffers import NO_TRACKING, ClusterBuffers, Contacts, ListRows, NeighbourLists, Tracking
 from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
-from .settings import WAKE_ACCEL, ROTATION_ITERATIONS, SLEEP_PROBE, YOLK_DRAG, SolverSettings
+from .settings import ROTATION_ITERATIONS, SLEEP_PROBE, WAKE_ACCEL, YOLK_DRAG, SolverSettings
 from .state import Control, State
 from .threads import FreeCores, thread_count
 

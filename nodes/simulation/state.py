@@ -80,7 +80,19 @@ class State:
     def assign(self, other: State) -> None:
         """Make this state a copy of ``other`` (same model), in place: ``XpbdSolver.step`` from one state into
         another."""
-        for name in ("x", "v", "x_prev", "quats", "x_start", "asleep", "awake", "pushed", "wall_anchor", "wall_load", "wall_mean"):
+        for name in (
+            "x",
+            "v",
+            "x_prev",
+            "quats",
+            "x_start",
+            "asleep",
+            "awake",
+            "pushed",
+            "wall_anchor",
+            "wall_load",
+            "wall_mean",
+        ):
             np.copyto(getattr(self, name), getattr(other, name))
         if other.yolks is not None:
             for name in ("x", "v", "x_prev"):

@@ -305,7 +305,8 @@ def test_long_rest_comes_to_rest(sleep_speed):
     gravity the only work); every frame of the last 2 s: kinetic energy < 1e-6 g·mm²/s² and max
     particle speed < 0.01 mm/s (measured 4e-23 and 0 without sleeping, 0 with), penetration < 0.16 r: static
     friction that holds a grain on a plane to atan μs (each contact's load pooled, ``friction.group_means``) also
-    holds bars where they landed overlapping (0.142 r at rest, 0.156 r with sleeping; 0.094–0.097 r with each particle's own load)."""
+    holds bars where they landed overlapping (0.142 r at rest, 0.156 r with sleeping; 0.094–0.097 r with each
+    particle's own load)."""
     from scene_builders import mechanical_energy
 
     settings = solver_settings_for(
