@@ -96,7 +96,7 @@ def plane_case(substeps: int, on: str = "wall") -> dict:
         "setup": f"one japonica grain (8 particles) flat on {plane} tilted 24–44° in 1° steps, μs 0.6, μk 0.42; "
         "held = moved < 1 mm in 1 s",
         "substeps": substeps,
-        "ours": f"holds to {holds}°, slides at {slides}°",
+        "ours": f"holds to {holds}°, slides at {slides}°" if slides else f"holds at every tilt to {ANGLES[-1]}°",
         "published": "holds below atan μs = 31.0°, slides above (Coulomb)"
         + ("" if on == "wall" else "; on grains the bed's bumps add to μs"),
         "values": {"holds": holds, "slides": slides, "slid_mm": {str(a): round(slid[a], 3) for a in ANGLES}},
@@ -116,7 +116,8 @@ def heap_case(shape: str, n: int, substeps: int) -> dict:
         "setup": f"{n} ellipsoid grains 5 × 3 × 2.5 mm ±10 % (8 particles) {how} on flat ground, dry (no adhesion)",
         "substeps": substeps,
         "ours": f"H/R {hr25:.1f}° at 2.5 s → {hr7:.1f}° at 7 s (surface slope {s25:.1f}° → {s7:.1f}°)",
-        "published": "at rest (≤ 3° change); rough rice piles 29.6–36.9°, paddy 35.7–44.4° (Zareiforoush et al. 2009)",
+        "published": "at rest (≤ 3° change); piling angle of rough rice 29.6–36.9° (Appl. Eng. Agric., "
+        "doi:10.13031/aea.13156), paddy 35.7–44.4° (Zareiforoush et al. 2009)",
         "values": {
             "hr_2_5": round(hr25, 1),
             "hr_7": round(hr7, 1),
