@@ -62,7 +62,9 @@ def content_problem(path: str | Path) -> str | None:
         return None
     if problem is None:
         return None
-    return f"{path.name} is not a {suffix[1:].upper()} file: {problem}; found {_found(head)}"
+    kind = suffix[1:].upper()
+    article = "an" if kind[0] in "AEFHILMNORSX" else "a"  # as the letter is spoken: an OBJ, an STL, a PLY
+    return f"{path.name} is not {article} {kind} file: {problem}; found {_found(head)}"
 
 
 def _text_lines(head: bytes) -> list[bytes] | None:
