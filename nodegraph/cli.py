@@ -624,7 +624,11 @@ def _cmd_describe(args, registry) -> int:
         import difflib
 
         near = difflib.get_close_matches(args.type, registry.names(), n=1)
-        hint = f"; did you mean '{near[0]}'?" if near else ""
+        hint = (
+            f"; did you mean '{near[0]}'?"
+            if near
+            else "; if it is a step of a recipe, the step's `type:` line there names its node type"
+        )
         raise NodegraphError(f"unknown node type '{args.type}'{hint} (see `nodegraph nodes`)")
     print(describe_spec(spec))
     return 0

@@ -101,6 +101,8 @@ def test_nodes_describe_graph(recipe, capsys):
     assert "dx" in out and "mm" in out and "[-10.0, 10.0]" in out
     assert cli("describe", "toy_shfit") == 2
     assert "did you mean 'toy_shift'" in capsys.readouterr().err
+    assert cli("describe", "egg_base") == 2  # a step's name, not a type: the step's type line names it
+    assert "the step's `type:` line" in capsys.readouterr().err
     assert cli("graph", str(recipe)) == 0
     out = capsys.readouterr().out
     assert "pts (toy_points ×2)" in out and "parts ← phys.spheres" in out
