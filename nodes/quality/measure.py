@@ -161,8 +161,9 @@ def _outside_vessels(ctx, centres, vessels) -> int:
         v = bowls[0]
         message = (
             f"{ctx.node_id or 'measure'}: {count} of {len(centres)} elements ended outside their vessel (rim radius "
-            f"{v.radius:g} mm, depth {v.depth:g} mm): a region they were placed in does not fit the bowl; derive it "
-            "from the vessel (vessel_region)"
+            f"{v.radius:g} mm, depth {v.depth:g} mm): either they started inside one another and the contacts threw "
+            "them out (a placement's r below the elements' size: raise it with the elements), or a region they were "
+            "placed in does not fit the bowl (derive it from the vessel: vessel_region)"
         )
         if ctx.reporter is not None:
             ctx.reporter.warn(message)
