@@ -147,6 +147,7 @@ def main(argv=None) -> None:
             {
                 "what": c["case"],
                 **c,
+                "unit": "degrees (angles), mm (slid_mm), s (seconds)",
                 "command": "python benchmarks/physics_at_defaults.py",
                 "load": load,
                 "date": date,

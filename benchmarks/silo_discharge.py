@@ -250,7 +250,7 @@ def main():
     print(hdr, flush=True)
     for D, sub in plan:
         r = run(D, sub, grains, radius=args.silo / 2, seed=args.seed, d=d)
-        r.update(command=command, date=date, **stamp)
+        r.update(values={"rate": r["rate_grains_per_s"]}, unit="grains/s", command=command, date=date, **stamp)
         rows.append(r)
         print(
             f"{D:5.1f} {sub:4d} {grains:6d} {r['rate_grains_per_s']:9.1f} {r['rate_g_per_s']:7.2f} "
@@ -262,7 +262,11 @@ def main():
     base = [r for r in rows if r["substeps"] == 10 and not r["jam"]]
     if len(base) >= 2:
         fitted = fit(base, d)
-        rows.append({"what": "silo_discharge_fit", **fitted, "command": command, "date": date, **stamp})
+        values = {"n_k1.5": fitted["n_k1.5"], "C_n2.5_k1.5": fitted["C_n2.5_k1.5"]}
+        rows.append(
+            {"what": "silo_discharge_fit", **fitted, "values": values, "unit": "1", "command": command, "date": date}
+            | stamp
+        )
         print("fit (10 substeps):", json.dumps(fitted))
         print("Beverloo et al. 1961: n = 2.5, C ≈ 0.55–0.65, k ≈ 1.3–2.9")
     if not args.no_write:

@@ -1092,6 +1092,7 @@ def write_record(cases: list[Case], quick: bool, total: float, ellipsoids: bool 
                 "what": c.name,
                 **{f: getattr(c, f) for f in ("setup", "reference", "ours", "error", "knobs")},
                 "values": {"seconds": round(c.seconds, 1)},
+                "unit": "s",
                 "command": command,
                 "load": load,
                 "date": date,

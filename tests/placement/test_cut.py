@@ -171,8 +171,8 @@ def test_rice_bunny_recipe_has_the_cut_view():
 
 def test_rice_bunny_cut_preview_at_a_small_size(tmp_path):
     """The recipe end to end at a small size: the cut view keeps the pressed bunny's grains on the far side of its
-    plane, plus the one in front that joins a piece of two grains (10.8 mm above the floor; version 1 left it
-    floating, issue 26) back to the rest, so the kept grains form one piece; and it writes cut_preview.png beside
+    plane, plus at most two in front where they join a piece back to the rest (a piece of two grains 10.8 mm above
+    the floor once floated, issue 26), so the kept grains form one piece; and it writes cut_preview.png beside
     the whole bunny's preview."""
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial.distance import cdist
@@ -192,7 +192,7 @@ def test_rice_bunny_cut_preview_at_a_small_size(tmp_path):
     assert 0 < len(opened) < len(pressed) and len(pressed) > 20
     middle = 0.5 * (pressed.positions.min(axis=0) + pressed.positions.max(axis=0))
     far = pressed.positions[pressed.positions[:, 1] >= middle[1]]
-    assert {tuple(p) for p in far} < {tuple(p) for p in opened.positions} and len(opened) <= len(far) + 2
+    assert {tuple(p) for p in far} <= {tuple(p) for p in opened.positions} and len(opened) <= len(far) + 2
     # one piece: grains touch when vertices of their meshes come within 0.1 grain lengths (the cut's gap)
     aggregate = result.output("cut.aggregate")
     meshes = [aggregate.element_mesh(i).vertices for i in range(len(opened))]
