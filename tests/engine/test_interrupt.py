@@ -85,9 +85,9 @@ nodes:
 """
 
 
-def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
-    """Ctrl-C reaches every process of the terminal's group, the run's and the supervisor's, which passes it on:
-    the run stops once, by itself (a node in Python code stops at once), with its message and no traceback."""
+def slow_run_at_a_terminal(tmp_path):
+    """(process, its node's start marker): the slow recipe run in a process group of its own, as a terminal's job
+    (killpg is Ctrl-C), SIGINT at its default."""
     started = tmp_path / "started"
     (tmp_path / "slow.yaml").write_text(SLOW.replace("STARTED", str(started)))
     command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slow.yaml"), "--plugin", TOY]
@@ -97,9 +97,16 @@ def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
         cwd=tmp_path,
         stderr=subprocess.PIPE,
         text=True,
-        start_new_session=True,  # its own group, as a terminal's job: killpg is Ctrl-C
+        start_new_session=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
+    return proc, started
+
+
+def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
+    """Ctrl-C reaches every process of the terminal's group, the run's and the supervisor's, which passes it on:
+    the run stops once, by itself (a node in Python code stops at once), with its message and no traceback."""
+    proc, started = slow_run_at_a_terminal(tmp_path)
     try:
         node_started(started, proc)
         os.killpg(proc.pid, signal.SIGINT)
@@ -119,18 +126,7 @@ def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
 def test_a_second_ctrl_c_during_the_clean_up_says_interrupted_once(tmp_path, node_started):
     """Issue 47: Ctrl-C twice (the second as the run cleans up after the first) printed the run's 'interrupted'
     line and then the supervisor's, which ended it; now one line, and no empty output folder is left."""
-    started = tmp_path / "started"
-    (tmp_path / "slow.yaml").write_text(SLOW.replace("STARTED", str(started)))
-    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slow.yaml"), "--plugin", TOY]
-    command += ["--cache-dir", str(tmp_path / "cache")]
-    proc = subprocess.Popen(
-        command,
-        cwd=tmp_path,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
+    proc, started = slow_run_at_a_terminal(tmp_path)
     lines = []
     try:
         node_started(started, proc)
