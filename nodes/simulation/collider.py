@@ -301,7 +301,7 @@ def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
 
 
 @njit(cache=True, inline="always")
-def _wall_one(state, w, r, phi, origin, pitch, blocks, rule, i):
+def _wall_one(state, w, r, elem, phi, origin, pitch, blocks, rule, i):
     """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
     if w[i] <= 0.0:
         return 0.0
@@ -336,7 +336,8 @@ def _wall_one(state, w, r, phi, origin, pitch, blocks, rule, i):
     x[i, 2] += pen * nz
     load[i] += pen
     if mu_s > 0.0:
-        friction_wall(x, x_prev, anchor, i, nx, ny, nz, mean[i] if mean[i] > 0.0 else load[i], rule)
+        pooled = mean[elem[i]]  # the element's mean wall load over the last substep, 0 if it touched none
+        friction_wall(x, x_prev, anchor, i, nx, ny, nz, pooled if pooled > 0.0 else load[i], rule)
     return pen / r[i]
 
 
@@ -348,15 +349,15 @@ def collider_project(state, model, grid, rule):
     ``friction_models.FrictionRule``, ``anchor`` (n, 3) per particle; μs = 0 skips friction and leaves the
     anchors). In place; particles are independent. ``blocks``: the ``block_minimum`` of φ (particles far from
     every wall are skipped). ``state``: ``StateArrays`` (x, x_prev, wall_anchor, wall_load, wall_mean; x_prev is x
-    in pre-stabilisation: no swept test), ``model``: ``ModelArrays`` (w, r), ``grid``: ``ColliderGrid``. Returns
+    in pre-stabilisation: no swept test), ``model``: ``ModelArrays`` (w, r, elem), ``grid``: ``ColliderGrid``. Returns
     max (r − φ)/r."""
     x = state.x
-    w, r = model.w, model.r
+    w, r, elem = model.w, model.r, model.elem
     phi, origin, pitch, blocks = grid.phi, grid.origin, grid.pitch, grid.blocks
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):
-        worst[i] = _wall_one(state, w, r, phi, origin, pitch, blocks, rule, i)
+        worst[i] = _wall_one(state, w, r, elem, phi, origin, pitch, blocks, rule, i)
     return worst.max() if n > 0 else 0.0
 
 
@@ -433,9 +434,9 @@ def rigid_into_free_space(x, r, start, phi, origin, pitch):
 
 @njit(cache=True, parallel=True)
 def wall_means(start, load, mean):
-    """Each element's mean wall load over its touching particles into ``mean`` (0 where none touches), and the
-    loads cleared for the next substep: static friction then tests a grain against a wall as one rigid contact,
-    Σ|t| < μs·Σ N (``friction.group_means`` does the same for grain on grain)."""
+    """Each element's mean wall load over its touching particles into ``mean`` (per element, 0 where none
+    touches), and the particles' loads cleared for the next substep: static friction then tests a grain against a
+    wall as one rigid contact, Σ|t| < μs·Σ N (``friction.group_means`` does the same for grain on grain)."""
     m = start.shape[0] - 1
     for e in prange(m):
         total = 0.0
@@ -444,6 +445,5 @@ def wall_means(start, load, mean):
             if load[i] > 0.0:
                 total += load[i]
                 count += 1
-        for i in range(start[e], start[e + 1]):
-            mean[i] = total / count if count > 0 else 0.0
             load[i] = 0.0
+        mean[e] = total / count if count > 0 else 0.0

@@ -26,7 +26,7 @@ class StateArrays(NamedTuple):
     pushed: np.ndarray  # (n,) bool
     wall_anchor: np.ndarray  # (n, 3)
     wall_load: np.ndarray  # (n,)
-    wall_mean: np.ndarray  # (n,)
+    wall_mean: np.ndarray  # (m,)
 
 
 class YolkArrays(NamedTuple):
@@ -70,7 +70,7 @@ class State:
     pushed: np.ndarray  # (n,) bool
     wall_anchor: np.ndarray  # (n, 3) where each particle began sticking to a wall, NaN = not (``friction``)
     wall_load: np.ndarray  # (n,) the walls' normal pushes on each particle this substep (friction's load)
-    wall_mean: np.ndarray  # (n,) the last substep's mean wall load over its element's touching particles
+    wall_mean: np.ndarray  # (m,) each element's mean wall load over its touching particles, last substep
     yolks: YolkState | None = None
     glued: np.ndarray | None = None  # (L,) bool: which glue links still hold (``glue``); None without glue
     glue_quats: np.ndarray | None = None  # (m, 4) warm-started rotations of the glued regions
