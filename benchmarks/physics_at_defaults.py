@@ -26,10 +26,11 @@ ANGLES = tuple(range(24, 45))  # degrees, the inclined plane's tilts
 MU_S = 0.6  # the node's default static_threshold: atan 0.6 = 30.96°
 
 
-def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0, on: str = "wall") -> float:
+def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0, on: str = "wall", across: bool = False) -> float:
     """One japonica grain (``rice_library``, 8 particles) set flat on level ground (``on`` "wall": a slab; "grains":
     ``grain_bed``) at the node's defaults, settled 0.5 s; then gravity tilted by ``theta`` (an inclined plane) for
-    ``seconds``: how far (mm) its centre slid."""
+    ``seconds``: how far (mm) its centre slid. ``across``: the grain turned 90° about the vertical, so it slides
+    across its length instead of along it."""
     from scene_builders import box_mesh, rice_library
 
     from nodes.simulation.settings import XpbdParams
@@ -40,7 +41,7 @@ def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0, on: str = 
     placement = Placement(
         np.array([[0.0, 0.0, 1.3]]),
         np.array([[0, 0, 1.0]]),
-        np.eye(3)[None],
+        (np.eye(3) if not across else np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]))[None],
         variants=np.zeros(1, np.int32),
         kind_names=("japonica",),
     )
@@ -85,14 +86,15 @@ def grain_bed(seed: int = 0):
     return ParticleState(x, np.zeros_like(x), r, np.zeros(n), np.zeros(n, np.int64))
 
 
-def plane_case(substeps: int, on: str = "wall") -> dict:
+def plane_case(substeps: int, on: str = "wall", across: bool = False) -> dict:
     """The largest tilt at which the grain moves < 1 mm in 1 s, and the smallest at which it slides."""
-    slid = {a: grain_on_plane(a, substeps, on=on) for a in ANGLES}
+    slid = {a: grain_on_plane(a, substeps, on=on, across=across) for a in ANGLES}
     holds = max([a for a in ANGLES if slid[a] < 1.0], default=None)
     slides = min([a for a in ANGLES if slid[a] >= 1.0], default=None)
     plane = "a plane" if on == "wall" else "a bed of grains lying flat (static)"
     return {
-        "case": f"grain on an inclined plane ({'grain–wall' if on == 'wall' else 'grain–grain'})",
+        "case": f"grain on an inclined plane ({'grain–wall' if on == 'wall' else 'grain–grain'}"
+        + (", sliding across its length)" if across else ")"),
         "setup": f"one japonica grain (8 particles) flat on {plane} tilted 24–44° in 1° steps, μs 0.6, μk 0.42; "
         "held = moved < 1 mm in 1 s",
         "substeps": substeps,
@@ -132,7 +134,8 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the inclined plane only; print, write nothing")
     args = ap.parse_args(argv)
-    cases = [plane_case(10), plane_case(40), plane_case(10, on="grains"), plane_case(40, on="grains")]
+    cases = [plane_case(s) for s in (10, 40)] + [plane_case(s, across=True) for s in (10, 40)]
+    cases += [plane_case(s, on="grains") for s in (10, 40)]
     if not args.quick:
         for shape, n in (("ball", 890), ("stream", 300)):
             cases += [heap_case(shape, n, 10), heap_case(shape, n, 40)]

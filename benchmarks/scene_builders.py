@@ -42,8 +42,13 @@ def bowl_mesh(radius=60.0, wall=3.0, rim=0.35, segments=96) -> Mesh:
     import manifold3d as mf
 
     shell = mf.Manifold.sphere(radius, segments) - mf.Manifold.sphere(radius - wall, segments)
-    bowl = shell.trim_by_plane((0.0, 0.0, -1.0), -rim * radius).to_mesh()
-    return Mesh(np.asarray(bowl.vert_properties)[:, :3], np.asarray(bowl.tri_verts), name="bowl")
+    return manifold_mesh(shell.trim_by_plane((0.0, 0.0, -1.0), -rim * radius), "bowl")
+
+
+def manifold_mesh(manifold, name: str) -> Mesh:
+    """A manifold3d solid as a ``Mesh``."""
+    m = manifold.to_mesh()
+    return Mesh(np.asarray(m.vert_properties)[:, :3], np.asarray(m.tri_verts), name=name)
 
 
 def box_mesh(lo, hi, name="box") -> Mesh:

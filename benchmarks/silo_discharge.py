@@ -38,18 +38,11 @@ CATCH = 60.0  # mm below the floor's bottom: the catch slab's top
 WINDOW = (0.10, 0.50)  # steady window, as fractions of the grains discharged
 
 
-def mesh_of(manifold, name):
-    from nodegraph.values import Mesh
-
-    m = manifold.to_mesh()
-    return Mesh(np.asarray(m.vert_properties)[:, :3], np.asarray(m.tri_verts), name=name)
-
-
 def silo(radius, height, hole, wall=3.0, segments=96):
     """(closed colliders, open colliders): tube wall, floor slab (with a round hole of diameter ``hole``), catch
     slab."""
     import manifold3d as mf
-    from scene_builders import box_mesh
+    from scene_builders import box_mesh, manifold_mesh
 
     tube = mf.Manifold.cylinder(height, radius + wall, radius + wall, segments) - mf.Manifold.cylinder(
         height, radius, radius, segments
@@ -59,8 +52,8 @@ def silo(radius, height, hole, wall=3.0, segments=96):
     cut = mf.Manifold.cylinder(3 * FLOOR, hole / 2, hole / 2, segments).translate((0, 0, -2 * FLOOR))
     side = 2.0 * radius
     catch = box_mesh([-side, -side, -FLOOR - CATCH - 4.0], [side, side, -FLOOR - CATCH], "catch")
-    closed = [mesh_of(tube, "wall"), mesh_of(slab, "floor"), catch]
-    opened = [mesh_of(tube, "wall"), mesh_of(slab - cut, "floor_hole"), catch]
+    closed = [manifold_mesh(tube, "wall"), manifold_mesh(slab, "floor"), catch]
+    opened = [manifold_mesh(tube, "wall"), manifold_mesh(slab - cut, "floor_hole"), catch]
     return closed, opened
 
 

