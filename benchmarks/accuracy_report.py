@@ -29,6 +29,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "accuracy.md"
+GRANULAR_HEADING = "## Granular physics: substeps against the heap and the inclined plane"
 IMAGES = ROOT / "docs" / "images" / "accuracy"
 
 
@@ -803,6 +804,7 @@ def write_report(inputs: dict, results: Path) -> None:
         *sections["bench_xpbd"],
         *sweep_section(*solver_md_and_command, d, results),
         *sections["bench_solver_default"],
+        *granular_section(),
         *particles_section(*particles_md_and_command, d, results),
         *sections["bench_shading"],
         *sections["bench_preview"],
@@ -816,6 +818,18 @@ def write_report(inputs: dict, results: Path) -> None:
 
 
 CONTACT_RESULTS = ROOT / "benchmarks" / "measured" / "bench_contact_full.jsonl"  # tracked, unlike results/
+
+
+def granular_section() -> list[str]:
+    """The granular substep curve as the doc has it: its text and table are kept from docs/accuracy.md (the table is
+    rendered from ``benchmarks/measured/granular_convergence.jsonl`` by ``tools/measured_tables.py``; ``python
+    benchmarks/physics_at_defaults.py --convergence`` re-measures it, ≈ 8 min: not re-run by this report)."""
+    text = DOC.read_text() if DOC.is_file() else ""
+    start = text.find(GRANULAR_HEADING)
+    if start < 0:
+        return []
+    end = text.find("\n## ", start + 1)
+    return text[start:end].rstrip("\n").split("\n") + [""]
 
 
 def contact_section() -> list[str]:

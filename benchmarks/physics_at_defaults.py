@@ -5,6 +5,11 @@ the table in docs/validation.md.
 
     python benchmarks/physics_at_defaults.py            # every case (≈ 6 min on 2 cores)
     python benchmarks/physics_at_defaults.py --quick    # the inclined planes only (≈ 1 min), prints, writes nothing
+    python benchmarks/physics_at_defaults.py --convergence   # the substep curve (docs/accuracy.md), ≈ 8 min
+
+``--convergence`` runs the poured heap (two seeds) and the grain sliding across its length at 5–80 substeps and
+writes benchmarks/measured/granular_convergence.jsonl, with its plot docs/images/accuracy/granular_convergence.png:
+the curve the default substeps are read from.
 """
 
 import argparse
@@ -21,6 +26,9 @@ from nodegraph import runtime
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
 
 RECORD = Path(__file__).resolve().parent / "measured" / "physics_defaults.jsonl"
+CONVERGENCE = RECORD.with_name("granular_convergence.jsonl")
+PLOT = Path(__file__).resolve().parents[1] / "docs" / "images" / "accuracy" / "granular_convergence.png"
+SUBSTEPS = (5, 10, 20, 40, 80)  # the convergence curve's points; the node's default is 10
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
 ANGLES = tuple(range(24, 45))  # degrees, the inclined plane's tilts
 MU_S = 0.6  # the node's default static_threshold: atan 0.6 = 30.96°
@@ -105,12 +113,12 @@ def plane_case(substeps: int, on: str = "wall", across: bool = False) -> dict:
     }
 
 
-def heap_case(shape: str, n: int, substeps: int) -> dict:
+def heap_case(shape: str, n: int, substeps: int, seed: int = 0) -> dict:
     """A heap at the node's defaults: its H/R angle at 2.5 s and 7 s (``validation.rice_heap``)."""
     from validation import rice_heap
 
     start = time.perf_counter()
-    angles, _ = rice_heap(n, True, frames=(150, 420), substeps=substeps, shape=shape)
+    angles, _ = rice_heap(n, True, frames=(150, 420), substeps=substeps, shape=shape, seed=seed)
     (s25, hr25), (s7, hr7) = angles
     how = "dropped as a ball" if shape == "ball" else "poured as a stream"
     return {
@@ -130,10 +138,87 @@ def heap_case(shape: str, n: int, substeps: int) -> dict:
     }
 
 
+def convergence() -> list[dict]:
+    """The poured heap (seeds 0 and 1) and the grain sliding across its length at each of ``SUBSTEPS``: the
+    heap's surface slope and H/R at 7 s, the tilt the grain holds to, and the seconds each costs."""
+    rows = []
+    for substeps in SUBSTEPS:
+        heaps = [heap_case("stream", 300, substeps, seed) for seed in (0, 1)]
+        start = time.perf_counter()
+        plane = plane_case(substeps, across=True)
+        values = {
+            "surface_7": [h["values"]["surface_7"] for h in heaps],
+            "hr_7": [h["values"]["hr_7"] for h in heaps],
+            "heap_seconds": round(sum(h["values"]["seconds"] for h in heaps) / 2, 1),
+            "holds": plane["values"]["holds"],
+            "plane_seconds": round(time.perf_counter() - start, 1),
+        }
+        rows.append({"case": "granular convergence", "substeps": substeps, "values": values})
+        print(rows[-1])
+    return rows
+
+
+def plot_convergence(rows: list[dict]) -> None:
+    """The curve: the heap's slope and the plane's holding tilt against substeps, with what each costs."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    s = [r["substeps"] for r in rows]
+    rows = [r["values"] for r in rows]
+    fig, (ax, cost) = plt.subplots(1, 2, figsize=(9, 3.4))
+    for k, label in (("surface_7", "poured heap: surface slope"), ("hr_7", "poured heap: atan H/R")):
+        ax.errorbar(s, [np.mean(r[k]) for r in rows], yerr=[np.ptp(r[k]) / 2 for r in rows], marker="o", label=label)
+    ax.plot(s, [r["holds"] for r in rows], marker="s", label="grain across its length holds to")
+    ax.axhline(np.degrees(np.arctan(MU_S)), color="grey", ls=":", label="atan μs")
+    ax.axhspan(29.6, 36.9, color="tan", alpha=0.3, label="rough rice piling angle")
+    for a in (ax, cost):
+        a.set_xscale("log")
+        a.set_xticks(s, [str(v) for v in s])
+        a.minorticks_off()
+    ax.set(xlabel="substeps per frame", ylabel="degrees")
+    ax.legend(fontsize=7)
+    cost.plot(s, [r["heap_seconds"] for r in rows], marker="o", label="heap, 300 grains, 7 s")
+    cost.plot(s, [r["plane_seconds"] for r in rows], marker="s", label="plane, 21 tilts × 1.5 s")
+    cost.set(yscale="log", xlabel="substeps per frame", ylabel="wall seconds")
+    cost.legend(fontsize=7)
+    fig.tight_layout()
+    PLOT.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(PLOT, dpi=110)
+
+
+def record(case: dict, command: str) -> str:
+    """One measured line: the case and where, when and under what load it was measured."""
+    return json.dumps(
+        {
+            "what": case.get("case", "granular convergence"),
+            **case,
+            "unit": "degrees (angles), mm (slid_mm), s (seconds)",
+            "command": command,
+            "load": f"{os.getloadavg()[0]:.1f}",
+            "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
+            "machine": f"{os.cpu_count()} cores",
+        }
+    )
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the inclined plane only; print, write nothing")
+    ap.add_argument("--convergence", action="store_true", help="the substep curve only (docs/accuracy.md)")
+    ap.add_argument("--replot", action="store_true", help="redraw the substep curve's plot from its data")
     args = ap.parse_args(argv)
+    if args.replot:
+        plot_convergence([json.loads(line) for line in CONVERGENCE.read_text().splitlines()])
+        return
+    if args.convergence:
+        rows = convergence()
+        CONVERGENCE.write_text(
+            "".join(record(r, "python benchmarks/physics_at_defaults.py --convergence") + "\n" for r in rows)
+        )
+        plot_convergence(rows)
+        return
     cases = [plane_case(s) for s in (10, 40)] + [plane_case(s, across=True) for s in (10, 40)]
     cases += [plane_case(s, on="grains") for s in (10, 40)]
     if not args.quick:
@@ -143,23 +228,7 @@ def main(argv=None) -> None:
         print(f"{c['case']:45s} {c['substeps']:>3} substeps  {c['ours']}")
     if args.quick:
         return
-    load = f"{os.getloadavg()[0]:.1f}"
-    date = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
-    lines = [
-        json.dumps(
-            {
-                "what": c["case"],
-                **c,
-                "unit": "degrees (angles), mm (slid_mm), s (seconds)",
-                "command": "python benchmarks/physics_at_defaults.py",
-                "load": load,
-                "date": date,
-                "machine": f"{os.cpu_count()} cores",
-            }
-        )
-        for c in cases
-    ]
-    RECORD.write_text("\n".join(lines) + "\n")
+    RECORD.write_text("".join(record(c, "python benchmarks/physics_at_defaults.py") + "\n" for c in cases))
 
 
 if __name__ == "__main__":

@@ -61,6 +61,10 @@ def pair(*keys: str, digits: int | None = None):
     return lambda r: " / ".join(number(r["values"].get(k), digits) for k in keys)
 
 
+def listed(key: str):
+    return lambda r: " / ".join(number(v) for v in r["values"][key])
+
+
 def ratio(a: str, b: str, digits: int = 2):
     return lambda r: f"{r['values'][a] / r['values'][b]:.{digits}f}×"
 
@@ -131,6 +135,18 @@ TABLES = {
             ("substeps", field("substeps")),
             ("ours", field("ours")),
             ("published", field("published")),
+        ],
+    ),
+    "granular_convergence": (
+        "granular_convergence.jsonl",
+        None,
+        [
+            ("substeps", lambda r: f"**{r['substeps']}**" if r["substeps"] == 10 else str(r["substeps"])),
+            ("poured heap: surface slope at 7 s, seeds 0 / 1 (°)", listed("surface_7")),
+            ("poured heap: atan H/R at 7 s, seeds 0 / 1 (°)", listed("hr_7")),
+            ("heap s (each)", value("heap_seconds")),
+            ("grain across its length holds to (°)", value("holds")),
+            ("plane s (21 tilts)", value("plane_seconds")),
         ],
     ),
     "validation_cases": (

@@ -34,6 +34,13 @@ SLEEP_PROBE = 1
 # (0.1 g: a rice grain sliding at μk 0.42 has it above 28.3°, from g(sin θ − μk cos θ) = 0.1 g, at any substep count;
 # measured: a grain on a 36° plane woke at 40 substeps, where the speed test kept it asleep)
 WAKE_ACCEL = 981.0
+# a run without glue that starts from another run's rest (its aggregate carries deformations) inherits the overlaps
+# that run tolerated; at more substeps its solve separates them at overlap/h, a launch (150 grains settled at 10
+# substeps, run on at 40: the bed's top rose 0.82 mm in one frame at 23 mm/s mean speed). For its first frames the
+# depenetration speed is bounded, so the bed expands to the new settings' overlaps without being thrown (0.18 mm,
+# 8.6 mm/s: tests/simulation/test_handoff.py); after them the run's own depenetration_speed applies
+HANDOFF_FRAMES = 3
+HANDOFF_DEPENETRATION = 50.0  # mm/s
 YOLK_DRAG = 40.0  # 1/s: a yolk's drag towards its egg's velocity (``buoyancy.yolk_predict``)
 ROTATION_ITERATIONS = 8  # iterations of the rotation extraction in shape matching and glue (Müller 2016)
 
@@ -275,6 +282,8 @@ class SolverSettings:
     shock_propagation: float  # mass ratio of a contact particle to one a diameter above it (1 = off)
     # mm/s: the solve leaves a particle no faster than max(its predicted speed, this) (``integrate.update_velocity``)
     depenetration_speed: float
+    # s: until this time the depenetration speed is at most HANDOFF_DEPENETRATION (a state handed on by another run)
+    handoff_until: float
 
     def __post_init__(self):
         object.__setattr__(self, "effects", frozenset(self.effects))
@@ -290,12 +299,12 @@ class SolverSettings:
         return self.dt / self.substeps
 
 
-def solver_settings(params: XpbdParams, effects, radius: float, material=None) -> SolverSettings:
+def solver_settings(params: XpbdParams, effects, radius: float, material=None, handed: bool = False) -> SolverSettings:
     """Table-3 style parameters → solver settings (SPEC §3); 'moisture' rescales stiffness, friction
     and adhesion by the cooked ``material``'s factors (``CookedMaterial.stiffness_scale``, ``friction_scale``,
     ``adhesion_scale``: computed once, by ``cooked_material``, from its water content; None: the cooked_rice
     defaults, ``moisture_factors(WATER_CONTENT)``). ``radius``: the particles' median radius (mm), the unit of
-    the capture radius."""
+    the capture radius. ``handed``: the elements come from another run's rest (``HANDOFF_FRAMES``)."""
     p = params
     material = material if material is not None else moisture_factors(WATER_CONTENT)
     moist = "moisture" in effects
@@ -323,6 +332,7 @@ def solver_settings(params: XpbdParams, effects, radius: float, material=None) -
         sleep_speed=p.sleep_speed,
         speed_clamp=p.speed_clamp,
         depenetration_speed=p.depenetration_speed if p.depenetration_speed > 0 else np.inf,
+        handoff_until=HANDOFF_FRAMES * p.dt if handed else 0.0,
         shock_propagation=p.shock_propagation,
         yolk_accel=p.gravity * (p.white_density / p.part_density - 1.0) if "gravity" in effects else 0.0,
     )

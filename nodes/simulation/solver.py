@@ -38,7 +38,7 @@ from . import (
 from .buffers import NO_TRACKING, ClusterBuffers, Contacts, ListRows, NeighbourLists, Tracking
 from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
-from .settings import ROTATION_ITERATIONS, SLEEP_PROBE, WAKE_ACCEL, YOLK_DRAG, SolverSettings
+from .settings import HANDOFF_DEPENETRATION, ROTATION_ITERATIONS, SLEEP_PROBE, WAKE_ACCEL, YOLK_DRAG, SolverSettings
 from .state import Control, State
 from .threads import FreeCores, thread_count
 
@@ -292,7 +292,10 @@ class XpbdSolver:
         """Predict, the constraint iterations, velocities from positions; returns the residual."""
         s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
         pairs, clusters = contacts, self.clusters
-        motion = integrate.Motion(control.accel, k.h, k.clamp, k.damping, s.depenetration_speed)
+        gain = s.depenetration_speed
+        if st.time < s.handoff_until:  # a handed-on state's overlaps come apart without a launch (settings)
+            gain = min(gain, HANDOFF_DEPENETRATION)
+        motion = integrate.Motion(control.accel, k.h, k.clamp, k.damping, gain)
         moved = d("integrate", integrate.predict, st.arrays(), self.model_arrays, self._tracking(pairs), motion)
         self._track(pairs, moved)
         refreshed = self._refresh_neighbours(st, pairs)
