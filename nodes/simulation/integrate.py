@@ -165,13 +165,22 @@ def _touching(x, r, i, j):
     return (x[i, 0] - x[j, 0]) ** 2 + (x[i, 1] - x[j, 1]) ** 2 + (x[i, 2] - x[j, 2]) ** 2 < reach * reach
 
 
+class SleepRule(NamedTuple):
+    """When an element falls asleep (``sleep_clusters``): what the solver reads of the settings once per run."""
+
+    still: float  # mm: sleep_speed·h, the drift a resting particle may make in one substep
+    still_probed: float  # mm: a·h² for the net acceleration a that wakes a sleeper (``settings.WAKE_ACCEL``)
+    settle_steps: int  # substeps in a row an awake element must stay within ``still`` (``settings.SETTLE_TIME``)
+
+
 @njit(cache=True, parallel=True)
-def sleep_clusters(state, model, contact_rows, still, still_probed):
-    """Put to sleep (and zero the velocities of) every element whose particles all lie within
-    ``still`` (sleep_speed·h: the drift a resting particle may make in one substep) of x_start, measured
-    from before pre-stabilisation (an element asleep before this substep, solved by the probe from rest: within
-    ``still_probed``, a·h² for the net acceleration a that wakes it, so whether a sleeper on a slope wakes does
-    not depend on the substep count), none of which was ``pushed``
+def sleep_clusters(state, model, contact_rows, slow_steps, rule):
+    """Put to sleep (and zero the velocities of) every element whose particles have all lain within
+    ``rule.still`` (sleep_speed·h) of x_start for ``rule.settle_steps`` substeps in a row
+    (``settings.SETTLE_TIME``, counted in ``slow_steps``, so the test spans the same time at any substep count),
+    measured from before pre-stabilisation (an element asleep before this substep, solved by the probe from
+    rest: within ``rule.still_probed``, a·h² for the net acceleration a that wakes it, so whether a sleeper on a
+    slope wakes does not depend on the substep count), none of which was ``pushed``
     (``contact_constraints.sleeper_share``) and none of which touches a particle of another awake
     element that moved farther (``contact_rows``: the contact lists' (nbr_start, nbr, order), half or
     full, row p being particle order[p]'s: ``buffers.ListRows``; none without them). ``state``:
@@ -190,8 +199,8 @@ def sleep_clusters(state, model, contact_rows, still, still_probed):
     x, v, x_start, asleep, awake, pushed = state.x, state.v, state.x_start, state.asleep, state.awake, state.pushed
     r, elem, start = model.r, model.elem, model.start
     m = start.shape[0] - 1
-    limit = still * still
-    limit_probed = still_probed * still_probed
+    limit = rule.still * rule.still
+    limit_probed = rule.still_probed * rule.still_probed
     slow = np.empty(m, np.bool_)
     falling = 0  # awake elements that would fall asleep now: without any, the touching rule has nothing to do
     for c in prange(m):
@@ -200,7 +209,14 @@ def sleep_clusters(state, model, contact_rows, still, still_probed):
         for i in range(start[c], start[c + 1]):
             hit = hit or pushed[i]
             fastest = max(fastest, _moved_sq(x, x_start, i))
-        slow[c] = fastest < (limit_probed if asleep[c] else limit)
+        if asleep[c]:
+            slow[c] = fastest < limit_probed
+            if not slow[c] or hit:
+                slow_steps[c] = 0  # woken: it settles again for a whole frame before it sleeps
+        else:
+            still = fastest < limit
+            slow_steps[c] = slow_steps[c] + 1 if still else 0
+            slow[c] = still and slow_steps[c] >= rule.settle_steps
         asleep[c] = slow[c] and not hit
         if asleep[c] and start[c + 1] > start[c] and awake[start[c]]:
             falling += 1

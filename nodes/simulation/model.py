@@ -198,6 +198,7 @@ class Model:
             wall_anchor=np.full((n, 3), np.nan),
             wall_load=np.zeros(n),
             wall_mean=np.zeros(self.elements),
+            slow_steps=np.zeros(self.elements, np.int64),
             yolks=yolks,
             glued=np.ones(len(self.glue.link_grain), np.bool_) if self.glue is not None else None,
             glue_quats=np.tile([1.0, 0.0, 0.0, 0.0], (self.elements, 1)) if self.glue is not None else None,

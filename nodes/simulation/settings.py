@@ -34,6 +34,11 @@ SLEEP_PROBE = 1
 # (0.1 g: a rice grain sliding at μk 0.42 has it above 28.3°, from g(sin θ − μk cos θ) = 0.1 g, at any substep count;
 # measured: a grain on a 36° plane woke at 40 substeps, where the speed test kept it asleep)
 WAKE_ACCEL = 981.0
+# s: an awake element sleeps after staying still this long in a row: the default substep (1/600 s), so the defaults
+# test one substep, and 80 substeps test 8. Tested on one substep at any count, a grain set down from rest at 80
+# substeps slept at once (its first substep under gravity moves it g·h·h with g·h ≈ 2 mm/s, the sleep speed), landed
+# on one particle and never woke to 40°; a whole frame (1/60 s) left the long-rest pile awake (test_xpbd_core.py)
+SETTLE_TIME = 1.0 / 600.0
 # a run without glue that starts from another run's rest (its aggregate carries deformations) inherits the overlaps
 # that run tolerated; at more substeps its solve separates them at overlap/h, a launch (150 grains settled at 10
 # substeps, run on at 40: the bed's top rose 0.82 mm in one frame at 23 mm/s mean speed). For its first frames the

@@ -38,7 +38,15 @@ from . import (
 from .buffers import NO_TRACKING, ClusterBuffers, Contacts, ListRows, NeighbourLists, Tracking
 from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
-from .settings import HANDOFF_DEPENETRATION, ROTATION_ITERATIONS, SLEEP_PROBE, WAKE_ACCEL, YOLK_DRAG, SolverSettings
+from .settings import (
+    HANDOFF_DEPENETRATION,
+    ROTATION_ITERATIONS,
+    SETTLE_TIME,
+    SLEEP_PROBE,
+    WAKE_ACCEL,
+    YOLK_DRAG,
+    SolverSettings,
+)
 from .state import Control, State
 from .threads import FreeCores, thread_count
 
@@ -282,8 +290,8 @@ class XpbdSolver:
                 st.arrays(),  # after the solve: the adhesion may have swapped the positions
                 self.model_arrays,
                 self._contact_rows(contacts),
-                s.sleep_speed * k.h,
-                WAKE_ACCEL * k.h * k.h,
+                st.slow_steps,
+                integrate.SleepRule(s.sleep_speed * k.h, WAKE_ACCEL * k.h * k.h, max(1, round(SETTLE_TIME / k.h))),
             )
         st.time += k.h
         return residual

@@ -71,6 +71,7 @@ class State:
     wall_anchor: np.ndarray  # (n, 3) where each particle began sticking to a wall, NaN = not (``friction``)
     wall_load: np.ndarray  # (n,) the walls' normal pushes on each particle this substep (friction's load)
     wall_mean: np.ndarray  # (m,) each element's mean wall load over its touching particles, last substep
+    slow_steps: np.ndarray  # (m,) int: substeps each awake element has stayed still in a row (``sleep_clusters``)
     yolks: YolkState | None = None
     glued: np.ndarray | None = None  # (L,) bool: which glue links still hold (``glue``); None without glue
     glue_quats: np.ndarray | None = None  # (m, 4) warm-started rotations of the glued regions
@@ -92,6 +93,7 @@ class State:
             "wall_anchor",
             "wall_load",
             "wall_mean",
+            "slow_steps",
         ):
             np.copyto(getattr(self, name), getattr(other, name))
         if other.yolks is not None:
