@@ -792,6 +792,12 @@ def main(argv: list[str] | None = None) -> int:
         # SIGTERM (kill, a job scheduler) ends a run as Ctrl-C does: finished nodes stay cached and
         # the recording is closed as partial beside the last complete one
         signal.signal(signal.SIGTERM, _interrupt)
+        # kill -USR1 PID prints every thread's stack to stderr and the run goes on: what a run that seems to hang
+        # is doing, without a debugger (the forked child inherits it)
+        if hasattr(signal, "SIGUSR1"):
+            import faulthandler
+
+            faulthandler.register(signal.SIGUSR1, all_threads=True)
     args = build_parser().parse_args(argv)
     runtime.configure()  # numba's kernel cache, before any node imports a kernel module (and before the fork)
     if argv is None and args.command in ("run", "sweep", "watch"):
@@ -813,7 +819,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("interrupted; nodes that finished are cached", file=sys.stderr, flush=True)
+        print(interrupt.stopped_line(), file=sys.stderr, flush=True)
         interrupt.said()  # a supervisor that ends this process during its clean-up says nothing more
         return 130
 

@@ -294,6 +294,9 @@ class Executor:
         memory = PeakMemory() if not side else contextlib.nullcontext()
         # numba's compile events are the process's: the instances beside this one report their own
         watch = CompileWatch(self.reporter, inst.label) if beside is None else contextlib.nullcontext()
+        interrupt.step_started(inst.label, None if ctx.checkpoint is None else ctx.checkpoint.path)
+        self.reporter.step_started(inst.label)
+        ok = stopped = False
         try:
             with memory, watch:
                 result = (
@@ -302,10 +305,12 @@ class Executor:
                     else beside.run(lambda: spec.run(ctx, **kwargs), None if spec.overlap is True else spec.overlap)
                 )
             outputs = self._check_outputs(spec, result)
+            ok = True
         except BaseException as exc:
             if capture is not None:  # what the node logged before it stopped goes into the partial recording
                 self._append_unfinished(inst, capture)
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
+                stopped = True
                 raise
             elapsed = now() - start if beside is None or beside.elapsed is None else beside.elapsed
             self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", elapsed)
@@ -315,6 +320,10 @@ class Executor:
         finally:
             if ctx.rerun.enabled:
                 ctx.rerun.reset_time()
+            if not stopped:  # a stopped step stays named as running: the 'interrupted' line names it
+                interrupt.step_ended(inst.label)
+                took = beside.elapsed if beside is not None and beside.elapsed is not None else now() - start
+                self.reporter.step_ended(inst.label, took, ok)
         elapsed, cpu = now() - start, clock() - cpu_start
         if beside is not None:  # its own wall, not the wait for the instances beside it; the CPU they took, less
             elapsed, cpu = beside.elapsed, cpu - beside.cpu
@@ -623,6 +632,7 @@ def run_recipe(
     warn = reporter.warn if reporter is not None else None
     overlap = os.environ.get(OVERLAP_ENV, "on") != "off"
     executor = Executor(recipe, cache, reporter, None, max_seconds, session, overlap=overlap)
+    interrupt.run_began(cached=cache is not None)
     key = None if out_dir is None else executor.output_key(wires, rrd)
     if key is not None and not spawn:  # a viewer to stream to needs the run itself
         reused = executor.reuse(wires, out_dir, rrd, key)
