@@ -29,7 +29,7 @@ from .cache import (
 )
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
-from .output_folder import recipe_folder
+from .output_folder import recipe_folder, recipe_folder_name
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
@@ -178,7 +178,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]", help="also pull this output"
     )
     sweep.add_argument(
-        "--out-dir", type=Path, default=None, help="where the table and plot go (default outputs/<recipe>/sweeps)"
+        "--out-dir",
+        type=Path,
+        default=None,
+        help="where the table and plot go (default outputs/<recipe>/sweeps, --draft: outputs/<recipe>_draft/sweeps)",
     )
     sweep.add_argument(
         "--rrd",
@@ -251,7 +254,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     if _work_due(recipe, args.outputs, None if args.no_cache else (args.cache_dir or default_cache_dir())):
         # what takes a moment to check (a placement against its shape's mesh), said before any work
         load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
-    out_dir = args.out_dir or recipe_folder(args.recipe, recipe.name + ("_draft" if args.draft else ""))
+    out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
@@ -469,7 +472,7 @@ def _cmd_sweep(args, registry) -> int:
 
     base = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
-    out_dir = args.out_dir or recipe_folder(args.recipe, base.name) / "sweeps"
+    out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(base.name, args.draft)) / "sweeps"
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     check_writable(out_dir, "sweep table", "choose another folder with --out-dir")
     if cache is not None:
