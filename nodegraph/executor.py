@@ -113,6 +113,7 @@ class Executor:
         self.keys: dict[Instance, str] = self.planned.keys  # filled by ``plan``
         self.values: dict[Instance, dict[str, Any]] = {}
         self.status: dict[Instance, NodeRecord] = {}
+        self.sources: dict[Path, tuple[str, str]] = {}  # each file written: the step it came from and its key
         self.hits: set[str] = set()
         self.ran_elsewhere: dict[str, NodeRecord] = {}  # by cache key: instances a pool computed for this run
         self.logged: set[Instance] = set()  # instances whose logs are in the recording
@@ -536,11 +537,13 @@ class Executor:
             for inst in self.planned.instances(wire.node):
                 value = self.materialise(inst)[wire.port]
                 if inst.variant is None:
-                    written += write_output(value, directory, stem)
+                    paths = write_output(value, directory, stem)
                 else:
                     folder = directory / stem
                     folder.mkdir(exist_ok=True)
-                    written += write_output(value, folder, f"{inst.variant:03d}")
+                    paths = write_output(value, folder, f"{inst.variant:03d}")
+                written += paths
+                self.sources.update((path, (inst.label, self.keys[inst])) for path in paths)
         result.files = written
         return written
 
@@ -671,13 +674,14 @@ def run_recipe(
                 )
                 warn(f"the run did not complete: what it recorded is in {written}; {kept}")
     if out_dir is not None:
-        earlier, removed = settle_earlier(out_dir, result.files, recipe.digest())
+        writers = dispatch_digest(write_output)
+        earlier, removed = settle_earlier(out_dir, result.files, recipe.digest(), _current_key(recipe), writers)
         if removed and reporter is not None:
             names = sorted(str(p.relative_to(out_dir)) for p in removed)
             reporter.info(
-                f"removed {len(removed)} output(s) of an earlier run with other settings from {out_dir}: "
-                + ", ".join(names[:5])
-                + (" …" if len(names) > 5 else "")
+                f"removed {len(removed)} stale output(s) from {out_dir}, written from other settings than these: "
+                + ", ".join(names[:8])
+                + (" …" if len(names) > 8 else "")
             )
         write_manifest(
             out_dir,
@@ -691,13 +695,29 @@ def run_recipe(
                 "overrides": list(recipe.overrides),
                 "outputs": [str(w) for w in wires],
                 "engine": __version__,
+                "writers": writers,
                 "written": datetime.now(UTC).isoformat(timespec="seconds"),
             },
             recording=result.rrd,
             earlier=earlier,
+            sources=executor.sources,
         )
         _warn_others(out_dir, result.files, warn)
     return result
+
+
+def _current_key(recipe: Recipe) -> Callable[[str], str | None]:
+    """The cache key a step (``node`` or ``node[variant]``) has in ``recipe`` now; None where it has no such step."""
+    plan = Plan(recipe)
+
+    def key(label: str) -> str | None:
+        node, _, variant = label.partition("[")
+        if node not in recipe.nodes:
+            return None
+        plan.add({node})
+        return plan.keys.get(Instance(node, int(variant.rstrip("]")) if variant else None))
+
+    return key
 
 
 def _warn_others(out_dir: Path, files: list[Path], warn) -> None:
