@@ -143,6 +143,8 @@ class Executor:
         def visit(inst: Instance) -> None:
             if inst in self.status:
                 return
+            if not self.recipe.nodes[inst.node].spec.store and self.recording is None and inst.node not in output_nodes:
+                return  # never cached: computed when a step that runs pulls it (``materialise``), not for nothing
             if self.keys[inst] in self.hits and inst.node not in output_nodes:
                 if self.recording is not None:
                     later.append(inst)
@@ -207,7 +209,7 @@ class Executor:
         cached and the files (and recording) a run with the same ``output_key`` wrote are still there as it
         left them (``output_files.current_outputs``); None otherwise. Values load on demand (``output``)."""
         order = self.plan({w.node for w in outputs})
-        keys = {self.keys[inst] for inst in order}
+        keys = {self.keys[inst] for inst in order if self.recipe.nodes[inst.node].spec.store}  # the rest: never
         if self.cache is None or not all(self.cache.has(k) for k in keys):
             return None
         files = current_outputs(directory, key, rrd)
@@ -346,7 +348,8 @@ class Executor:
             if self.on_ran is not None:
                 self.on_ran(inst)
             if self.cache is not None:
-                self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
+                if spec.store:
+                    self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
                 ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
