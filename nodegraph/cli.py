@@ -598,6 +598,8 @@ def describe_spec(spec) -> str:
     lines += ["", f"random: {'yes (seeded per node and variant)' if spec.random else 'no'}"]
     if spec.effects:
         lines.append(f"effects: {', '.join(sorted(spec.effects))}")
+    if not spec.store:
+        lines.append("cached: no (cheaper to compute again than to store)")
     for title, ports in (("inputs", spec.inputs), ("outputs", spec.outputs)):
         lines += ["", f"{title}:"] + ([] if ports else ["  (none)"])
         for name, port in ports.items():
@@ -645,6 +647,8 @@ def markdown_reference(registry) -> str:
         facts = [f"module `{spec.module}`", "random" if spec.random else "deterministic"]
         if spec.effects:
             facts.append("effects: " + ", ".join(f"`{e}`" for e in sorted(spec.effects)))
+        if not spec.store:
+            facts.append("not cached (cheaper to compute again than to store)")
         lines += ["; ".join(facts), ""]
         for title, ports in (("Inputs", spec.inputs), ("Outputs", spec.outputs)):
             if ports:
