@@ -46,17 +46,20 @@ def said() -> None:
 
 
 RUNNING, ENDED = "#running ", "#ended "  # lines of the listing: a step began, a step ended (``step_started``)
+UNCACHED = "#uncached"  # a line of the listing: the run keeps nothing that finishes (--no-cache)
 
-# the steps running now in this process (label: (start, checkpoint file or None)) and what a re-run would find:
-# ``cached`` whether finished steps are kept (a run with a cache), ``finished`` how many steps ran or loaded
+# the steps running now in this process (label: (start, checkpoint file or None)), and whether the run keeps what
+# finishes (a cache): what a re-run would find
 _running: dict[str, tuple[float, Path | None]] = {}
-_run = {"cached": False, "finished": 0}
+_run: dict[str, bool | None] = {"cached": None}  # None: no run has begun in this process
 
 
 def run_began(cached: bool) -> None:
     """A run begins: whether it keeps what finishes (a cache) decides what its 'interrupted' line promises."""
     _running.clear()
-    _run.update(cached=cached, finished=0)
+    _run["cached"] = cached
+    if not cached:
+        note(UNCACHED)
 
 
 def step_started(label: str, checkpoint: Path | None = None) -> None:
@@ -67,8 +70,7 @@ def step_started(label: str, checkpoint: Path | None = None) -> None:
 
 def step_ended(label: str) -> None:
     """A step has ended (done, failed or stopped)."""
-    if _running.pop(label, None) is not None:
-        _run["finished"] += 1
+    _running.pop(label, None)
     note(ENDED + label)
 
 
@@ -77,6 +79,8 @@ def stopped_line() -> str:
     now = time.monotonic()
     where = ", ".join(f"{label} ({now - start:.0f} s in)" for label, (start, _) in _running.items())
     head = f"interrupted during {where}" if where else "interrupted"
+    if _run["cached"] is None:
+        return f"{head} before any step ran"
     if not _run["cached"]:
         return f"{head}; nothing was cached (--no-cache): a re-run starts over"
     resumes = [label for label, (_, checkpoint) in _running.items() if checkpoint is not None and checkpoint.exists()]
@@ -109,7 +113,7 @@ def remove_leftovers(listing: Path) -> list[Path]:
     removed, folders = [], []
     for name in dict.fromkeys(names):
         path = Path(name)
-        if name == SAID or name.startswith((RUNNING, ENDED)):
+        if name in (SAID, UNCACHED) or name.startswith((RUNNING, ENDED)):
             continue
         if path.is_dir():
             folders.append(path)
@@ -249,9 +253,14 @@ def _wait(pid: int, listing: Path, news: int) -> int:
         what = f"; removed {len(removed)} unfinished file(s)" if removed else ""
         steps = running_in(listing)
         during = f" during {', '.join(steps)}" if steps else ""
+        uncached = UNCACHED in listing.read_text(encoding="utf-8").splitlines() if listing.exists() else False
+        rerun = (
+            "nothing was cached (--no-cache): a re-run starts over"
+            if uncached
+            else "nodes that finished are cached: a re-run resumes from there"
+        )
         print(
-            f"interrupted{during}: the running node did not stop within {GRACE:g} s and was ended{what}; "
-            "nodes that finished are cached: a re-run resumes from there",
+            f"interrupted{during}: the running node did not stop within {GRACE:g} s and was ended{what}; {rerun}",
             file=sys.stderr,
         )
         return 130

@@ -165,6 +165,8 @@ def test_a_failed_run_keeps_the_partial_recording_it_names(tmp_path):
 def test_without_a_cache_the_stopped_line_says_a_rerun_starts_over():
     from nodegraph import interrupt
 
+    interrupt._run["cached"] = None
+    assert interrupt.stopped_line() == "interrupted before any step ran"  # in the recipe's checks, say
     interrupt.run_began(cached=False)
     interrupt.step_started("sim")
     assert interrupt.stopped_line().startswith("interrupted during sim (0 s in); nothing was cached")
