@@ -162,10 +162,10 @@ def _one_or_more(names: tuple[str, ...]) -> str | tuple[str, ...] | None:
 def nearest_params(node_id: str, key: str, params: dict[str, dict[str, str]]) -> tuple[str, ...]:
     """What an unknown parameter ``key`` of node ``node_id`` may have meant, among ``params`` (node: {parameter:
     doc}, the recipe's nodes): a typo of one of the node's own (``TYPO``); else those of any node whose name and doc
-    share the most of its words (``shade.rice_color``: the rice's colour follows ``cooked.water_content``, whose doc
-    names both, before ``shade.scenery_color``, which names one), each named ``node.param`` where one is not the
-    node's own; else the node's own closest by spelling. Edit distance alone suggested ``scenery_color`` for
-    ``rice_color``."""
+    share the most of its words (``shade.fruit_color``, when a fruit's colour follows ``ripen.days``, whose doc names
+    both: that before ``shade.scenery_color``, which names one), each named ``node.param`` where one is not the
+    node's own; else the node's own closest by spelling. Edit distance among the node's own names alone suggested
+    ``scenery_color`` for such a name."""
     own = params.get(node_id, {})
     typo = difflib.get_close_matches(key, list(own), n=1, cutoff=TYPO)
     if typo:
