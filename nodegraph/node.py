@@ -152,14 +152,14 @@ def node(
     effects: tuple[str, ...] | frozenset[str] = (),
     random: bool = False,
     check: Callable[[dict[str, Any]], list[tuple[str, str]]] | None = None,
-    doc: str | None = None,
     moved: Mapping[str, Moved] | None = None,
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None,
     overlap: bool | Callable[[], None] = False,
     check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None,
     store: bool = True,
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
-    """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
+    """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``, whose docstring is the node's
+    doc.
 
     The node's cache key covers the code it runs and the libraries' versions (``code_digest``), so nothing is
     bumped by hand when either changes. ``effects`` are the physical
@@ -208,7 +208,7 @@ def node(
         for port in list(inputs.values()) + list(outputs.values()):
             if not isinstance(port.type, type):
                 raise NodeDeclarationError(f"{type_name}: port type {port.type!r} is not a class")
-        text = doc or (inspect.getdoc(fn) or "").strip()
+        text = (inspect.getdoc(fn) or "").strip()
         return NodeSpec(
             type_name=type_name,
             doc=text,
