@@ -17,13 +17,22 @@ from .mitsuba_scene import load_renderer
 from .studio import AMBIENT
 
 
+def load_libraries() -> None:
+    """The preview's ``overlap``: every native library its render loads, loaded before a run starts the instances
+    beside it (``load_renderer``), SciPy's spatial module too, which the scene's hulls import
+    (``mitsuba_scene.hull_vertices``). Without it, a run whose upstream was cached hung for good: the preview
+    importing SciPy's libraries while the export beside it loaded USD's (the loader's lock against the GIL)."""
+    load_renderer()
+    import scipy.spatial  # noqa: F401 - loaded for its libraries
+
+
 @node(
     "preview",
     # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,
     # nogil, not parallel): the run computes what does not need the preview (export, measure) in a second thread
     # meanwhile (nodegraph.executor.Beside), started once every library the preview loads is loaded
-    # (load_renderer: USD's loading in the export beside deadlocked against Mitsuba loading a plugin)
-    overlap=load_renderer,
+    # (load_libraries: USD's loading in the export beside deadlocked against Mitsuba loading a plugin)
+    overlap=load_libraries,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={
