@@ -31,10 +31,6 @@ def _check(params):
 
 @node(
     "export",
-    # its files are written into the outputs folder, where a run finds them current (output_files); a second copy
-    # in the cache took up to 167 MB per setting (37 % of a 2.16 GB cache) to spare a 3.5 s export
-    # (benchmarks/measured/cache.jsonl)
-    store=False,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={
