@@ -29,7 +29,7 @@ from .cache import (
 )
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
-from .output_folder import recipe_folder
+from .output_folder import recipe_folder, recipe_folder_name
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
@@ -178,7 +178,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--output", dest="outputs", action="append", default=[], metavar="NODE[.PORT]", help="also pull this output"
     )
     sweep.add_argument(
-        "--out-dir", type=Path, default=None, help="where the table and plot go (default outputs/<recipe>/sweeps)"
+        "--out-dir",
+        type=Path,
+        default=None,
+        help="where the table and plot go (default outputs/<recipe>/sweeps, --draft: outputs/<recipe>_draft/sweeps)",
     )
     sweep.add_argument(
         "--rrd",
@@ -251,7 +254,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     if _work_due(recipe, args.outputs, None if args.no_cache else (args.cache_dir or default_cache_dir())):
         # what takes a moment to check (a placement against its shape's mesh), said before any work
         load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
-    out_dir = args.out_dir or recipe_folder(args.recipe, recipe.name + ("_draft" if args.draft else ""))
+    out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
@@ -469,7 +472,7 @@ def _cmd_sweep(args, registry) -> int:
 
     base = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
-    out_dir = args.out_dir or recipe_folder(args.recipe, base.name) / "sweeps"
+    out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(base.name, args.draft)) / "sweeps"
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     check_writable(out_dir, "sweep table", "choose another folder with --out-dir")
     if cache is not None:
@@ -595,6 +598,8 @@ def describe_spec(spec) -> str:
     lines += ["", f"random: {'yes (seeded per node and variant)' if spec.random else 'no'}"]
     if spec.effects:
         lines.append(f"effects: {', '.join(sorted(spec.effects))}")
+    if not spec.store:
+        lines.append("cached: no (cheaper to compute again than to store)")
     for title, ports in (("inputs", spec.inputs), ("outputs", spec.outputs)):
         lines += ["", f"{title}:"] + ([] if ports else ["  (none)"])
         for name, port in ports.items():
@@ -642,6 +647,8 @@ def markdown_reference(registry) -> str:
         facts = [f"module `{spec.module}`", "random" if spec.random else "deterministic"]
         if spec.effects:
             facts.append("effects: " + ", ".join(f"`{e}`" for e in sorted(spec.effects)))
+        if not spec.store:
+            facts.append("not cached (cheaper to compute again than to store)")
         lines += ["; ".join(facts), ""]
         for title, ports in (("Inputs", spec.inputs), ("Outputs", spec.outputs)):
             if ports:
@@ -792,6 +799,12 @@ def main(argv: list[str] | None = None) -> int:
         # SIGTERM (kill, a job scheduler) ends a run as Ctrl-C does: finished nodes stay cached and
         # the recording is closed as partial beside the last complete one
         signal.signal(signal.SIGTERM, _interrupt)
+        # kill -USR1 PID prints every thread's stack to stderr and the run goes on: what a run that seems to hang
+        # is doing, without a debugger (the forked child inherits it)
+        if hasattr(signal, "SIGUSR1"):
+            import faulthandler
+
+            faulthandler.register(signal.SIGUSR1, all_threads=True)
     args = build_parser().parse_args(argv)
     runtime.configure()  # numba's kernel cache, before any node imports a kernel module (and before the fork)
     if argv is None and args.command in ("run", "sweep", "watch"):
@@ -813,7 +826,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("interrupted; nodes that finished are cached", file=sys.stderr, flush=True)
+        print(interrupt.stopped_line(), file=sys.stderr, flush=True)
         interrupt.said()  # a supervisor that ends this process during its clean-up says nothing more
         return 130
 

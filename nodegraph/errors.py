@@ -34,7 +34,7 @@ class Issue:
     param: str | None = None
     given: object = None
     allowed: str | None = None
-    suggestion: str | None = None
+    suggestion: str | tuple[str, ...] | None = None  # several: "did you mean 'a' or 'b'?"
 
     def __str__(self) -> str:
         where = str(self.location)
@@ -52,7 +52,8 @@ class Issue:
         if self.allowed:
             text += f"; allowed: {self.allowed}"
         if self.suggestion:
-            text += f"; did you mean '{self.suggestion}'?"
+            names = (self.suggestion,) if isinstance(self.suggestion, str) else self.suggestion
+            text += f"; did you mean {' or '.join(f'{n!r}' for n in names)}?"
         return text
 
 

@@ -113,6 +113,7 @@ class Executor:
         self.keys: dict[Instance, str] = self.planned.keys  # filled by ``plan``
         self.values: dict[Instance, dict[str, Any]] = {}
         self.status: dict[Instance, NodeRecord] = {}
+        self.sources: dict[Path, tuple[str, str]] = {}  # each file written: the step it came from and its key
         self.hits: set[str] = set()
         self.ran_elsewhere: dict[str, NodeRecord] = {}  # by cache key: instances a pool computed for this run
         self.logged: set[Instance] = set()  # instances whose logs are in the recording
@@ -142,6 +143,8 @@ class Executor:
         def visit(inst: Instance) -> None:
             if inst in self.status:
                 return
+            if not self.recipe.nodes[inst.node].spec.store and self.recording is None and inst.node not in output_nodes:
+                return  # never cached: computed when a step that runs pulls it (``materialise``), not for nothing
             if self.keys[inst] in self.hits and inst.node not in output_nodes:
                 if self.recording is not None:
                     later.append(inst)
@@ -206,7 +209,7 @@ class Executor:
         cached and the files (and recording) a run with the same ``output_key`` wrote are still there as it
         left them (``output_files.current_outputs``); None otherwise. Values load on demand (``output``)."""
         order = self.plan({w.node for w in outputs})
-        keys = {self.keys[inst] for inst in order}
+        keys = {self.keys[inst] for inst in order if self.recipe.nodes[inst.node].spec.store}  # the rest: never
         if self.cache is None or not all(self.cache.has(k) for k in keys):
             return None
         files = current_outputs(directory, key, rrd)
@@ -294,6 +297,9 @@ class Executor:
         memory = PeakMemory() if not side else contextlib.nullcontext()
         # numba's compile events are the process's: the instances beside this one report their own
         watch = CompileWatch(self.reporter, inst.label) if beside is None else contextlib.nullcontext()
+        interrupt.step_started(inst.label, None if ctx.checkpoint is None else ctx.checkpoint.path)
+        self.reporter.step_started(inst.label)
+        ok = stopped = False
         try:
             with memory, watch:
                 result = (
@@ -302,10 +308,12 @@ class Executor:
                     else beside.run(lambda: spec.run(ctx, **kwargs), None if spec.overlap is True else spec.overlap)
                 )
             outputs = self._check_outputs(spec, result)
+            ok = True
         except BaseException as exc:
             if capture is not None:  # what the node logged before it stopped goes into the partial recording
                 self._append_unfinished(inst, capture)
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
+                stopped = True
                 raise
             elapsed = now() - start if beside is None or beside.elapsed is None else beside.elapsed
             self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", elapsed)
@@ -315,6 +323,10 @@ class Executor:
         finally:
             if ctx.rerun.enabled:
                 ctx.rerun.reset_time()
+            if not stopped:  # a stopped step stays named as running: the 'interrupted' line names it
+                interrupt.step_ended(inst.label)
+                took = beside.elapsed if beside is not None and beside.elapsed is not None else now() - start
+                self.reporter.step_ended(inst.label, took, ok)
         elapsed, cpu = now() - start, clock() - cpu_start
         if beside is not None:  # its own wall, not the wait for the instances beside it; the CPU they took, less
             elapsed, cpu = beside.elapsed, cpu - beside.cpu
@@ -336,7 +348,8 @@ class Executor:
             if self.on_ran is not None:
                 self.on_ran(inst)
             if self.cache is not None:
-                self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
+                if spec.store:
+                    self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
                 ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
@@ -527,11 +540,13 @@ class Executor:
             for inst in self.planned.instances(wire.node):
                 value = self.materialise(inst)[wire.port]
                 if inst.variant is None:
-                    written += write_output(value, directory, stem)
+                    paths = write_output(value, directory, stem)
                 else:
                     folder = directory / stem
                     folder.mkdir(exist_ok=True)
-                    written += write_output(value, folder, f"{inst.variant:03d}")
+                    paths = write_output(value, folder, f"{inst.variant:03d}")
+                written += paths
+                self.sources.update((path, (inst.label, self.keys[inst])) for path in paths)
         result.files = written
         return written
 
@@ -623,6 +638,7 @@ def run_recipe(
     warn = reporter.warn if reporter is not None else None
     overlap = os.environ.get(OVERLAP_ENV, "on") != "off"
     executor = Executor(recipe, cache, reporter, None, max_seconds, session, overlap=overlap)
+    interrupt.run_began(cached=cache is not None)
     key = None if out_dir is None else executor.output_key(wires, rrd)
     if key is not None and not spawn:  # a viewer to stream to needs the run itself
         reused = executor.reuse(wires, out_dir, rrd, key)
@@ -661,13 +677,14 @@ def run_recipe(
                 )
                 warn(f"the run did not complete: what it recorded is in {written}; {kept}")
     if out_dir is not None:
-        earlier, removed = settle_earlier(out_dir, result.files, recipe.digest())
+        writers = dispatch_digest(write_output)
+        earlier, removed = settle_earlier(out_dir, result.files, recipe.digest(), _current_key(recipe), writers)
         if removed and reporter is not None:
             names = sorted(str(p.relative_to(out_dir)) for p in removed)
             reporter.info(
-                f"removed {len(removed)} output(s) of an earlier run with other settings from {out_dir}: "
-                + ", ".join(names[:5])
-                + (" …" if len(names) > 5 else "")
+                f"removed {len(removed)} stale output(s) from {out_dir}, written from other settings than these: "
+                + ", ".join(names[:8])
+                + (" …" if len(names) > 8 else "")
             )
         write_manifest(
             out_dir,
@@ -681,13 +698,29 @@ def run_recipe(
                 "overrides": list(recipe.overrides),
                 "outputs": [str(w) for w in wires],
                 "engine": __version__,
+                "writers": writers,
                 "written": datetime.now(UTC).isoformat(timespec="seconds"),
             },
             recording=result.rrd,
             earlier=earlier,
+            sources=executor.sources,
         )
         _warn_others(out_dir, result.files, warn)
     return result
+
+
+def _current_key(recipe: Recipe) -> Callable[[str], str | None]:
+    """The cache key a step (``node`` or ``node[variant]``) has in ``recipe`` now; None where it has no such step."""
+    plan = Plan(recipe)
+
+    def key(label: str) -> str | None:
+        node, _, variant = label.partition("[")
+        if node not in recipe.nodes:
+            return None
+        plan.add({node})
+        return plan.keys.get(Instance(node, int(variant.rstrip("]")) if variant else None))
+
+    return key
 
 
 def _warn_others(out_dir: Path, files: list[Path], warn) -> None:

@@ -45,6 +45,64 @@ def said() -> None:
     note(SAID)
 
 
+RUNNING, ENDED = "#running ", "#ended "  # lines of the listing: a step began, a step ended (``step_started``)
+UNCACHED = "#uncached"  # a line of the listing: the run keeps nothing that finishes (--no-cache)
+
+# the steps running now in this process (label: (start, checkpoint file or None)), and whether the run keeps what
+# finishes (a cache): what a re-run would find
+_running: dict[str, tuple[float, Path | None]] = {}
+_run: dict[str, bool | None] = {"cached": None}  # None: no run has begun in this process
+
+
+def run_began(cached: bool) -> None:
+    """A run begins: whether it keeps what finishes (a cache) decides what its 'interrupted' line promises."""
+    _running.clear()
+    _run["cached"] = cached
+    if not cached:
+        note(UNCACHED)
+
+
+def step_started(label: str, checkpoint: Path | None = None) -> None:
+    """A step (node instance) starts computing; ``checkpoint``: the file it saves its progress to, if any."""
+    _running[label] = (time.monotonic(), checkpoint)
+    note(RUNNING + label)
+
+
+def step_ended(label: str) -> None:
+    """A step has ended (done, failed or stopped)."""
+    _running.pop(label, None)
+    note(ENDED + label)
+
+
+def stopped_line() -> str:
+    """The one line a stopped run prints: the step(s) it stopped in, and what a re-run starts from."""
+    now = time.monotonic()
+    where = ", ".join(f"{label} ({now - start:.0f} s in)" for label, (start, _) in _running.items())
+    head = f"interrupted during {where}" if where else "interrupted"
+    if _run["cached"] is None:
+        return f"{head} before any step ran"
+    if not _run["cached"]:
+        return f"{head}; nothing was cached (--no-cache): a re-run starts over"
+    resumes = [label for label, (_, checkpoint) in _running.items() if checkpoint is not None and checkpoint.exists()]
+    tail = f", {' and '.join(resumes)} from its saved progress" if resumes else ""
+    return f"{head}; nodes that finished are cached: a re-run resumes from there{tail}"
+
+
+def running_in(listing: Path) -> list[str]:
+    """The steps the listing shows started and not ended (what a killed child was running)."""
+    try:
+        lines = listing.read_text(encoding="utf-8").splitlines()
+    except OSError:
+        return []
+    running: dict[str, None] = {}
+    for line in lines:
+        if line.startswith(RUNNING):
+            running[line[len(RUNNING) :]] = None
+        elif line.startswith(ENDED):
+            running.pop(line[len(ENDED) :], None)
+    return list(running)
+
+
 def remove_leftovers(listing: Path) -> list[Path]:
     """Remove the files named in ``listing`` that still exist (what a killed run left unfinished), then the folders
     named there that are left empty (made for outputs the stopped run never wrote); the files removed."""
@@ -55,7 +113,7 @@ def remove_leftovers(listing: Path) -> list[Path]:
     removed, folders = [], []
     for name in dict.fromkeys(names):
         path = Path(name)
-        if name == SAID:
+        if name in (SAID, UNCACHED) or name.startswith((RUNNING, ENDED)):
             continue
         if path.is_dir():
             folders.append(path)
@@ -193,9 +251,16 @@ def _wait(pid: int, listing: Path, news: int) -> int:
         if sys.stderr.isatty():
             sys.stderr.write("\x1b[?25h\n")  # the progress bar hid the cursor
         what = f"; removed {len(removed)} unfinished file(s)" if removed else ""
+        steps = running_in(listing)
+        during = f" during {', '.join(steps)}" if steps else ""
+        uncached = UNCACHED in listing.read_text(encoding="utf-8").splitlines() if listing.exists() else False
+        rerun = (
+            "nothing was cached (--no-cache): a re-run starts over"
+            if uncached
+            else "nodes that finished are cached: a re-run resumes from there"
+        )
         print(
-            f"interrupted: the running node did not stop within {GRACE:g} s and was ended{what}; "
-            "nodes that finished are cached",
+            f"interrupted{during}: the running node did not stop within {GRACE:g} s and was ended{what}; {rerun}",
             file=sys.stderr,
         )
         return 130

@@ -92,6 +92,7 @@ class NodeSpec:
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None
     overlap: bool | Callable[[], None] = False
     check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None
+    store: bool = True  # False: its outputs never go into the cache; computed again where needed (``node``)
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
         """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
@@ -151,13 +152,14 @@ def node(
     effects: tuple[str, ...] | frozenset[str] = (),
     random: bool = False,
     check: Callable[[dict[str, Any]], list[tuple[str, str]]] | None = None,
-    doc: str | None = None,
     moved: Mapping[str, Moved] | None = None,
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None,
     overlap: bool | Callable[[], None] = False,
     check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None,
+    store: bool = True,
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
-    """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``.
+    """Declare a node type around its implementation ``fn(ctx, **inputs, **params)``, whose docstring is the node's
+    doc.
 
     The node's cache key covers the code it runs and the libraries' versions (``code_digest``), so nothing is
     bumped by hand when either changes. ``effects`` are the physical
@@ -177,6 +179,10 @@ def node(
     the main thread before that second thread starts: it loads every native library the node will load, so the node
     never calls ``dlopen`` while the other thread may be in one (the loader's lock against the GIL: a library whose
     initialiser drops and retakes the GIL, as USD's does, deadlocked against Mitsuba loading a plugin).
+    ``store=False``: the node's outputs are cheaper to compute again from its cached inputs than to store and load
+    (large values made in a moment: a scene description, files' bytes), so they never go into the cache, where they
+    would fill its limit and push out what is dear to compute; a run computes the node again where its outputs are
+    needed (an output asked for, a step downstream that runs, a recording to fill).
     """
     inputs = dict(inputs or {})
     params = dict(params or {})
@@ -202,7 +208,7 @@ def node(
         for port in list(inputs.values()) + list(outputs.values()):
             if not isinstance(port.type, type):
                 raise NodeDeclarationError(f"{type_name}: port type {port.type!r} is not a class")
-        text = doc or (inspect.getdoc(fn) or "").strip()
+        text = (inspect.getdoc(fn) or "").strip()
         return NodeSpec(
             type_name=type_name,
             doc=text,
@@ -218,6 +224,7 @@ def node(
             check_recipe=check_recipe,
             overlap=overlap,
             check_work=check_work,
+            store=store,
         )
 
     return wrap

@@ -14,6 +14,7 @@ import hashlib
 import io
 import json
 import zipfile
+from collections.abc import Callable
 from functools import singledispatch
 from pathlib import Path
 from typing import Any
@@ -130,13 +131,22 @@ def _(value: FileSet, directory: Path, stem: str) -> list[Path]:
 MANIFEST = "manifest.json"
 
 
-def settle_earlier(directory: Path, files: list[Path], digest: str) -> tuple[dict[str, Any], list[Path]]:
+def settle_earlier(
+    directory: Path,
+    files: list[Path],
+    digest: str,
+    current: Callable[[str], str | None] | None = None,
+    writers: str | None = None,
+) -> tuple[dict[str, Any], list[Path]]:
     """What the folder's last manifest lists that this run (recipe ``digest``, writing ``files``) did not write
-    again: with the same digest (the same settings, other outputs asked for: ``--output``) those still as written
-    are kept, returned to be listed as ``earlier`` in this run's manifest; with another digest those still as
-    written are removed, so no output of other settings sits beside this run's (their values stay in the cache:
-    running those settings again writes them in seconds). Returns (kept records by name, removed paths). A file
-    changed since it was written is someone's own: left, and said as not from this run (``executor``)."""
+    again, settled by what each file was written from: a file whose step (``from``: a node instance) has the same
+    cache key now (``current(label)``, None: no such step) and was written by the same ``writers`` is still this
+    recipe's: kept, returned to be listed as ``earlier`` in this run's manifest; one whose step's key changed is
+    stale: removed, so no output of other settings sits beside this run's (its value stays in the cache: running
+    those settings again writes it in seconds). A file listed without its step (a manifest from before this rule) is
+    kept when the whole recipe's ``digest`` is the same. Returns (kept records by name, removed paths). A file
+    changed since it was written is someone's own: left, and said as not from this run (``executor``); a file no
+    manifest lists is never touched."""
     try:
         manifest = json.loads((directory / MANIFEST).read_bytes())
         records = {**manifest.get("earlier", {}), **manifest["files"]}
@@ -154,7 +164,11 @@ def settle_earlier(directory: Path, files: list[Path], digest: str) -> tuple[dic
                 continue
         except (OSError, KeyError, TypeError):
             continue
-        if manifest.get("digest") == digest:
+        if current is not None and record.get("from") and manifest.get("writers"):
+            valid = current(record["from"]) == record.get("key") and manifest["writers"] == writers
+        else:
+            valid = manifest.get("digest") == digest
+        if valid:
             kept[name] = {"written": manifest.get("written"), **record}
         else:
             path.unlink()
@@ -178,11 +192,14 @@ def write_manifest(
     run: dict[str, Any],
     recording: Path | None = None,
     earlier: dict[str, Any] | None = None,
+    sources: dict[Path, tuple[str, str]] | None = None,
 ) -> Path:
     """``manifest.json`` beside the outputs: which run wrote them (``run``: recipe, digest, seed, overrides,
     time, the run's ``output_key``, ...) and the sha256, size and modification time of each file it wrote
     (and of its ``recording``); ``earlier``: files an earlier run of the same settings wrote that this one kept
-    (``settle_earlier``); files in the folder it lists in neither are not from this run's settings."""
+    (``settle_earlier``); files in the folder it lists in neither are not from this run's settings. ``sources``:
+    the step each file was written from and that step's cache key (``from``, ``key``: what ``settle_earlier``
+    judges a file by)."""
     listing = {}
     for path in files:
         data = path.read_bytes()
@@ -191,6 +208,8 @@ def write_manifest(
             "bytes": len(data),
             "mtime_ns": path.stat().st_mtime_ns,
         }
+        if sources and path in sources:
+            listing[str(path.relative_to(directory))].update(zip(("from", "key"), sources[path]))
     run = dict(run, files=listing)
     if earlier:
         run["earlier"] = earlier

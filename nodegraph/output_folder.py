@@ -11,6 +11,14 @@ PROJECT_MARKERS = ("pyproject.toml", ".git")
 MANIFEST = "manifest.json"  # output_files.MANIFEST: the run that wrote a folder names its recipe file there
 
 
+DRAFT_SUFFIX = "_draft"  # a --draft run's folder is its recipe's name and this: drafts never mix with the final
+
+
+def recipe_folder_name(name: str, draft: bool) -> str:
+    """The output folder's name of a run of recipe ``name`` (its sweeps go into a ``sweeps/`` folder inside)."""
+    return name + (DRAFT_SUFFIX if draft else "")
+
+
 def outputs_root(recipe_path: Path) -> Path:
     """``outputs/`` of the recipe's project (the nearest folder above the recipe holding a pyproject.toml or .git:
     this repository for graphs/*.yaml), else beside the recipe; whichever folder the command runs in. Shown

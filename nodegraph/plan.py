@@ -173,13 +173,20 @@ class Job:
 
 
 def plan_jobs(recipe: Recipe, wires: list[Wire], cache: Cache, ref: RecipeRef, max_seconds=None) -> list[Job]:
-    """Jobs for every instance the outputs need that the cache does not hold yet, in topological order."""
+    """Jobs for every instance the outputs need that the cache does not hold yet, in topological order; those of
+    nodes never cached (``NodeSpec.store``: a worker's result reaches the run only through the cache) and those that
+    need one are left to the run itself."""
     plan = Plan(recipe)
     order = plan.add({w.node for w in wires})
     missing = {inst for inst in order if not cache.has(plan.keys[inst])}
+    here: set[Instance] = set()
+    for inst in order:
+        sources = {src for pairs in plan.sources(inst).values() for src, _ in pairs}
+        if not recipe.nodes[inst.node].spec.store or sources & here:
+            here.add(inst)
     jobs = []
     for inst in order:
-        if inst not in missing:
+        if inst not in missing or inst in here:
             continue
         needs = sorted({plan.keys[src] for pairs in plan.sources(inst).values() for src, _ in pairs if src in missing})
         jobs.append(Job(plan.keys[inst], inst.label, ref, inst.node, inst.variant, tuple(needs), max_seconds))

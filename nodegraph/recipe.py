@@ -141,6 +141,54 @@ def _nearest(word: str, options) -> str | None:
     return matches[0] if matches else None
 
 
+TYPO = 0.8  # a parameter name this close to an existing one of its node (difflib's ratio) is a typo of it
+SUGGESTED = 2  # at most this many parameters of the recipe suggested for a name that is no typo
+_SPELLINGS = {"colour": "color", "grey": "gray", "centre": "center", "metre": "meter"}
+
+
+def _words(text: str) -> set[str]:
+    """The words of a parameter name or doc, for matching: lower case, one spelling, a plural's 's' dropped."""
+    words = set()
+    for word in re.findall(r"[a-z]{3,}", text.lower()):
+        word = _SPELLINGS.get(word, word)
+        words.add(word[:-1] if len(word) > 4 and word.endswith("s") and not word.endswith("ss") else word)
+    return words
+
+
+def _one_or_more(names: tuple[str, ...]) -> str | tuple[str, ...] | None:
+    return names[0] if len(names) == 1 else names or None
+
+
+def nearest_params(node_id: str, key: str, params: dict[str, dict[str, str]]) -> tuple[str, ...]:
+    """What an unknown parameter ``key`` of node ``node_id`` may have meant, among ``params`` (node: {parameter:
+    doc}, the recipe's nodes): a typo of one of the node's own (``TYPO``); else those of any node whose name and doc
+    share the most of its words (``shade.fruit_color``, when a fruit's colour follows ``ripen.days``, whose doc names
+    both: that before ``shade.scenery_color``, which names one), each named ``node.param`` where one is not the
+    node's own; else the node's own closest by spelling. Edit distance among the node's own names alone suggested
+    ``scenery_color`` for such a name."""
+    own = params.get(node_id, {})
+    typo = difflib.get_close_matches(key, list(own), n=1, cutoff=TYPO)
+    if typo:
+        return (typo[0],)
+    wanted = _words(key.replace("_", " "))
+    ranked = []
+    for node, docs in params.items():
+        for name, doc in docs.items():
+            in_name = wanted & _words(name.replace("_", " "))
+            covered = in_name | (wanted & _words(doc))
+            if covered:
+                ratio = difflib.SequenceMatcher(None, key, name).ratio()
+                ranked.append(((len(covered), len(in_name), node == node_id, ratio), node, name))
+    if ranked:
+        ranked.sort(key=lambda item: item[0], reverse=True)
+        chosen = [(node, name) for score, node, name in ranked[:SUGGESTED] if score[0] >= ranked[0][0][0] - 1]
+        if all(node == node_id for node, _ in chosen):
+            return tuple(name for _, name in chosen)
+        return tuple(f"{node}.{name}" for node, name in chosen)  # another node's among them: each says its node
+    near = _nearest(key, own)
+    return (near,) if near else ()
+
+
 def _parse_override(text: str) -> tuple[list[str], Any]:
     if "=" not in text:
         raise ValueError("expected node.param=value")
@@ -177,6 +225,16 @@ class _Validator:
         self.base_dir = recipe_file.resolve().parent if recipe_file.is_file() else None
         self.issues: list[Issue] = []
         self.override_at: dict[tuple, Location] = {}
+
+    def _param_docs(self) -> dict[str, dict[str, str]]:
+        """Every parameter of the recipe's nodes with its doc, by node (what ``nearest_params`` matches on)."""
+        nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
+        docs = {}
+        for node_id, entry in nodes.items():
+            spec = self.registry.get(entry.get("type")) if isinstance(entry, dict) else None
+            if spec is not None:
+                docs[str(node_id)] = {name: param.doc or "" for name, param in spec.params.items()}
+        return docs
 
     def issue(self, path: tuple, message: str, key: bool = False, **extra) -> None:
         location = self.override_at.get(tuple(path[:4])) or self.source.at(path, key=key)
@@ -488,7 +546,7 @@ class _Validator:
                     key=True,
                     node=node_id,
                     allowed=", ".join(spec.params) or "(none)",
-                    suggestion=_nearest(key, spec.params),
+                    suggestion=_one_or_more(nearest_params(node_id, key, self._param_docs())),
                 )
                 ok = False
                 continue

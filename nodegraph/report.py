@@ -91,6 +91,14 @@ class PeakMemory:
 
 
 _COLOUR = {"ran": "green", "cached": "cyan", "failed": "red"}
+HEARTBEAT_ENV = "NODEGRAPH_HEARTBEAT"  # seconds: sooner or later than HEARTBEAT_S (a CI log, a benchmark)
+# where no bar is drawn, a step running this long is said to be running, and again every HEARTBEAT_EVERY_S after:
+# a log shows that a long step is alive, without flooding
+try:
+    HEARTBEAT_S = float(os.environ.get(HEARTBEAT_ENV) or 10.0)
+except ValueError:  # not a number: the default, as where it is unset
+    HEARTBEAT_S = 10.0
+HEARTBEAT_EVERY_S = 30.0
 
 
 @dataclass
@@ -115,9 +123,51 @@ class Reporter:
         self.quiet = quiet
         self.records: list[NodeRecord] = []
         self._progress: Progress | None = None
+        # where no bar is drawn (a pipe, CI, ``| tee``): a plain line per step as it ends, a heartbeat per long one
+        self.plain = not quiet and not self.console.is_terminal
+        self._running: dict[str, tuple[float, float]] = {}  # label: (started, when to say it is still running)
+        self._lock = threading.Lock()
+        self._heart: threading.Thread | None = None
 
     def record(self, record: NodeRecord) -> None:
         self.records.append(record)
+
+    def _say(self, line: str) -> None:
+        self.console.print(line, soft_wrap=True, highlight=False, markup=False)
+
+    def step_started(self, label: str) -> None:
+        """A step (node instance) starts computing: in plain output, its heartbeat is due after ``HEARTBEAT_S``."""
+        if not self.plain:
+            return
+        with self._lock:
+            started = time.monotonic()
+            self._running[label] = (started, started + HEARTBEAT_S)
+            if self._heart is None:
+                self._heart = threading.Thread(target=self._beat, name="nodegraph-heartbeat", daemon=True)
+                self._heart.start()
+
+    def step_ended(self, label: str, seconds: float, ok: bool) -> None:
+        """A step has computed (``ok``) or failed: one plain line where no bar is drawn."""
+        if not self.plain:
+            return
+        with self._lock:
+            self._running.pop(label, None)
+        self._say(f"{label}: {'done' if ok else 'failed'} in {format_duration(seconds)}")
+
+    def _beat(self) -> None:
+        """Say every step running past its due time (``step_started``); ends when none is running."""
+        while True:
+            time.sleep(min(1.0, HEARTBEAT_S / 4))
+            now = time.monotonic()
+            with self._lock:
+                if not self._running:
+                    self._heart = None
+                    return
+                due = [(label, now - started) for label, (started, at) in self._running.items() if now >= at]
+                for label, _ in due:
+                    self._running[label] = (self._running[label][0], now + HEARTBEAT_EVERY_S)
+            for label, running in due:
+                self._say(f"{label}: running, {running:.0f} s so far")
 
     def warn(self, message: str) -> None:
         if not self.quiet:

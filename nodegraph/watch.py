@@ -128,7 +128,14 @@ class WatchSession:
         order = executor.plan({inst.node for inst in self.last.keys})
         keys = executor.keys
         executor.hits = {key for key in set(keys.values()) if cache.has(key)}
-        seconds = {inst: cache.recorded_seconds(keys[inst]) for inst in order}
+        # a node never cached (``NodeSpec.store``) has no entry to say how long it took: its last run says
+        ran = {record.node: record.seconds for record in self.last.records if record.status == "ran"}
+        seconds = {
+            inst: cache.recorded_seconds(keys[inst])
+            if self.last.recipe.nodes[inst.node].spec.store
+            else ran.get(inst.label)
+            for inst in order
+        }
         planned = executor.planned
         sources = {inst: {src for pairs in planned.sources(inst).values() for src, _ in pairs} for inst in order}
         dependants: dict[Instance, set[Instance]] = {inst: set() for inst in order}

@@ -338,6 +338,30 @@ TABLES = {
             ("fragment MB", value("fragment_mb")),
         ],
     ),
+    "interrupt": (
+        "interrupt.jsonl",
+        None,
+        [
+            ("what", field("what")),
+            ("SIGINT → exit s", value("sigint_s")),
+            ("SIGTERM → exit s", value("sigterm_s")),
+            ("left running", value("left")),
+            ("load", field("load")),
+            ("command", code("command")),
+        ],
+    ),
+    "cache_entries": (
+        "cache.jsonl",
+        None,
+        [
+            ("what", field("what")),
+            ("stored MB", value("stored_mb")),
+            ("computed in s", value("compute_s")),
+            ("loaded in s", value("load_s")),
+            ("share of the cache", value("share")),
+            ("load", field("load")),
+        ],
+    ),
     "cut_islands": (
         "cut.jsonl",
         None,

@@ -6,6 +6,8 @@ Name the node ``preview``: the engine writes an ``Image`` output as ``<node id>.
 
 from __future__ import annotations
 
+import functools
+
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Image
@@ -15,13 +17,22 @@ from .mitsuba_scene import load_renderer
 from .studio import AMBIENT
 
 
+def load_libraries() -> None:
+    """The preview's ``overlap``: every native library its render loads, loaded before a run starts the instances
+    beside it (``load_renderer``), SciPy's spatial module too, which the scene's hulls import
+    (``mitsuba_scene.hull_vertices``). Without it, a run whose upstream was cached hung for good: the preview
+    importing SciPy's libraries while the export beside it loaded USD's (the loader's lock against the GIL)."""
+    load_renderer()
+    import scipy.spatial  # noqa: F401 - loaded for its libraries
+
+
 @node(
     "preview",
     # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,
     # nogil, not parallel): the run computes what does not need the preview (export, measure) in a second thread
     # meanwhile (nodegraph.executor.Beside), started once every library the preview loads is loaded
-    # (load_renderer: USD's loading in the export beside deadlocked against Mitsuba loading a plugin)
-    overlap=load_renderer,
+    # (load_libraries: USD's loading in the export beside deadlocked against Mitsuba loading a plugin)
+    overlap=load_libraries,
     inputs={"scene": In(ShadedScene, "shaded meshes with materials and per-vertex CDRF σ")},
     outputs={"image": Out(Image, "8-bit sRGB render")},
     params={
@@ -106,6 +117,7 @@ def preview(
     if not np.linalg.norm(sun_direction) > 0:
         raise ValueError("sun_direction: a zero vector has no direction")
     camera = Camera(elevation, azimuth, fov, margin, f_stop, focus)
+    quiet_interrupt()
     return Image(
         render(
             scene,
@@ -119,3 +131,42 @@ def preview(
             ambient=ambient,
         )
     )
+
+
+INTERRUPT_NOTE = "Received interrupt signal"  # what Mitsuba logs as Ctrl-C cancels its render
+
+
+def quiet_interrupt() -> None:
+    """Keep Mitsuba's own note of a Ctrl-C (a red 'WARN … Received interrupt signal, winding down..' line) out of a
+    stopped run's output, which says it was interrupted in its one line; every other message of Mitsuba's logger
+    passes as before. Installed once per process, around the logger's appenders."""
+    import mitsuba as mi
+
+    quiet = _quiet_appender()
+    logger = mi.logger()
+    appenders = [logger.appender(i) for i in range(logger.appender_count())]
+    if any(isinstance(a, quiet) for a in appenders):
+        return
+    logger.clear_appenders()
+    for appender in appenders:
+        logger.add_appender(quiet(appender))
+
+
+@functools.cache
+def _quiet_appender() -> type:
+    """A Mitsuba appender that passes on what it gets to another, less ``INTERRUPT_NOTE``."""
+    import mitsuba as mi
+
+    class Quiet(mi.Appender):
+        def __init__(self, inner):
+            super().__init__()
+            self.inner = inner
+
+        def append(self, level, text):
+            if INTERRUPT_NOTE not in text:
+                self.inner.append(level, text)
+
+        def log_progress(self, progress, name, formatted, eta, ptr=None):
+            self.inner.log_progress(progress, name, formatted, eta, ptr)
+
+    return Quiet

@@ -23,7 +23,8 @@ from .cooked import SIGMA0_DRY, SIGMA0_WET, WATER_CONTENT
             float,
             WATER_CONTENT,
             "water absorbed by the grains (G rendered 0–24 %, water at 5 °C): the xpbd node's effect 'moisture' "
-            "scales stiffness, friction and adhesion by it; the shade node's σ₀ and rice material follow it",
+            "scales stiffness, friction and adhesion by it; the shade node's σ₀ and rice material (its colour, "
+            "translucency and gloss) follow it",
             range=(0.0, 24.0),
             units="%",
         ),

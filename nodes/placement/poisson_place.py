@@ -62,27 +62,69 @@ def estimate_placed(mode: str, area: float, volume: float, r: float) -> int:
     return int(VOLUME_DENSITY * volume / r**3)
 
 
+# shapes made at check time from their parameters and inputs (milliseconds each: a boolean of the ikura bowl 30 ms,
+# a vessel region 10 ms), so that a placement in a derived shape (a region of a bowl, a difference of two) is weighed
+# as one in a plain shape is
+MADE_AT_CHECK = ("shape", "vessel_region", "boolean")
+
+
 def _target(node_id: str, nodes):
-    """(source node id, its kind, trimesh) of the shape a placement fills, when a ``shape`` node's parameters make
-    it (made now, ≈ 0.1 s once its modules are loaded); None when only running the recipe would tell (a mesh file,
-    a boolean, r derived from the elements)."""
+    """(source node id, its kind, trimesh) of the shape a placement fills, when the nodes that make it are all of
+    ``MADE_AT_CHECK`` (made now, ≈ 0.1 s once their modules are loaded); None when only running the recipe would
+    tell (a mesh file, r derived from the elements)."""
     entry = nodes[node_id]
     wires = entry.inputs.get("shape") or []
     if entry.params["r"] is None or len(wires) != 1:
         return None
-    source = nodes[wires[0].node]
-    if source.spec.type_name != "shape" or wires[0].port not in ("", "mesh"):
+    made = _made(wires[0], nodes)
+    if made is None:
         return None
-    key = tuple(sorted(source.params.items()))
-    if key not in _SHAPES:  # a recipe asks twice (the size check), a watch on every save
-        from nodes.shapes.closed_mesh import as_trimesh
+    source = nodes[wires[0].node]
+    kind = source.params["kind"] if source.spec.type_name == "shape" else source.spec.type_name
+    from nodes.shapes.closed_mesh import as_trimesh
 
+    return wires[0].node, kind, as_trimesh(made, "shape")
+
+
+def _made(wire, nodes):
+    """The value a wire carries, made now when its node and every node before it are of ``MADE_AT_CHECK``; else
+    None. The last one made is kept, by what makes it (a recipe asks twice, a watch on every save)."""
+    key = _recipe_of(wire, nodes)
+    if key is None:
+        return None
+    if key not in _SHAPES:
         _SHAPES.clear()
-        _SHAPES[key] = as_trimesh(source.spec.call(**source.params)["mesh"], "shape")
-    return wires[0].node, source.params["kind"], _SHAPES[key]
+        _SHAPES[key] = _make(wire, nodes)
+    return _SHAPES[key]
 
 
-_SHAPES: dict[tuple, object] = {}  # the last shape made for a check, by its parameters
+def _recipe_of(wire, nodes):
+    """What makes a wire's value, as a hashable key (the node's type, parameters and inputs' keys); None when a
+    node on the way is not one of ``MADE_AT_CHECK`` or an input is not one wire."""
+    source = nodes.get(wire.node)
+    if source is None or source.spec.type_name not in MADE_AT_CHECK:
+        return None
+    inputs = []
+    for port, wires in sorted(source.inputs.items()):
+        if len(wires) != 1:
+            return None
+        upstream = _recipe_of(wires[0], nodes)
+        if upstream is None:
+            return None
+        inputs.append((port, upstream))
+    port = wire.port or next(iter(source.spec.outputs))
+    return (source.spec.type_name, repr(sorted(source.params.items())), tuple(inputs), port)
+
+
+_SHAPES: dict[tuple, object] = {}  # the last shape made for a check, by what makes it (``_recipe_of``)
+
+
+def _make(wire, nodes):
+    source = nodes[wire.node]
+    inputs = {port: _make(wires[0], nodes) for port, wires in source.inputs.items()}
+    result = source.spec.call(**source.params, **inputs)
+    port = wire.port or next(iter(source.spec.outputs))
+    return result[port] if isinstance(result, dict) else result
 
 
 def _weigh_r(node_id: str, nodes) -> list[tuple[str, str, bool]]:

@@ -26,6 +26,9 @@ def _check(params):
 @node(
     "shade",
     random=True,
+    # its scene is large and made in a moment: the ikura draft's 11.7 MB (and a 7.2 MB recording) in 0.35 s, loaded
+    # in 0.19 s; the full main job's up to 197 MB in 1.35 s, 48 % of a 2.16 GB cache (benchmarks/measured/cache.jsonl)
+    store=False,
     inputs={
         "aggregates": In(Aggregate, "placed or simulated aggregates (rice, ikura, ice)", many=True),
         "material": In(

@@ -3,6 +3,7 @@
 recording asked for or not) writes them again."""
 
 import os
+from pathlib import Path
 
 import pytest
 
@@ -99,5 +100,31 @@ def test_outputs_of_other_settings_never_sit_beside_a_run(recipe, tmp_path, caps
     assert cli("run", str(recipe), "--no-rrd", "--output", "surf", "--set", "pts.count=9") == 0
     err = capsys.readouterr().err
     assert not (out / "merge.spheres.npz").exists() and (out / "surf.ply").exists() and (out / "notes.txt").exists()
-    assert "removed 1 output(s) of an earlier run with other settings" in err and "merge.spheres.npz" in err
+    assert "removed 1 stale output(s)" in err and "merge.spheres.npz" in err
     assert "earlier" not in json.loads((out / "manifest.json").read_text())
+
+
+TWO = "name: two\noutputs: [a, b]\nnodes:\n  a: {type: toy_points, params: {count: 5}}\n  b: {type: toy_points}\n"
+
+
+def test_a_file_is_stale_only_when_the_step_it_came_from_changed(tmp_path, monkeypatch, capsys):
+    """Issue 47: ``--output`` with another setting removed every earlier file, those the setting does not touch
+    too; a file goes when the step it was written from has another key now, and the run names it."""
+    import json
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("NODEGRAPH_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "two.yaml").write_text(TWO)
+    out = tmp_path / "outputs" / "two"
+    assert cli("run", "two.yaml", "--no-rrd") == 0
+    (out / "notes.txt").write_text("mine")
+    a = stamps(out)["a.npz"]
+    capsys.readouterr()
+    assert cli("run", "two.yaml", "--no-rrd", "--output", "b", "--set", "b.count=7") == 0  # a's step unchanged
+    assert stamps(out)["a.npz"] == a and "stale" not in capsys.readouterr().err
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["files"]["b.npz"]["from"] == "b" and manifest["earlier"]["a.npz"]["from"] == "a"
+    assert cli("run", "two.yaml", "--no-rrd", "--output", "b", "--set", "a.count=9") == 0  # a's step changed
+    err = capsys.readouterr().err
+    assert not (out / "a.npz").exists() and (out / "b.npz").exists() and (out / "notes.txt").read_text() == "mine"
+    assert f"removed 1 stale output(s) from {Path('outputs') / 'two'}" in err and "a.npz" in err

@@ -67,7 +67,7 @@ def test_a_signal_stops_a_run_inside_a_numba_kernel_within_2_s_and_leaves_no_par
     err = proc.stderr.read()
     assert proc.returncode == 130, err
     assert took < 2.0
-    assert "interrupted" in err
+    assert "interrupted during spin" in err, err  # killed in its kernel or stopped: the step is named either way
     with pytest.raises(ProcessLookupError):  # the process that ran the node is gone too
         os.kill(runner, 0)
     assert not leftovers(tmp_path), leftovers(tmp_path)
@@ -117,7 +117,9 @@ def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
             proc.wait()
     err = proc.stderr.read()
     assert proc.returncode == 130, err
-    assert "interrupted; nodes that finished are cached" in err and "Traceback" not in err, err
+    assert "Traceback" not in err, err
+    # the step it stopped in is named, and what a re-run does (issue 47: the line named neither)
+    assert "interrupted during slow (" in err and "nodes that finished are cached: a re-run resumes" in err, err
     assert "did not stop within" not in err  # it stopped by itself, not killed
     assert not leftovers(tmp_path), leftovers(tmp_path)
     assert not (tmp_path / "outputs").exists()  # made for outputs the stopped run never wrote (issue 47)
@@ -158,3 +160,15 @@ def test_a_failed_run_keeps_the_partial_recording_it_names(tmp_path):
     assert done.returncode == 1, done.stderr
     partial = tmp_path / "outputs" / "failrun" / "failrun.partial.rrd"
     assert str(partial.name) in done.stderr and partial.is_file()
+
+
+def test_without_a_cache_the_stopped_line_says_a_rerun_starts_over():
+    from nodegraph import interrupt
+
+    interrupt._run["cached"] = None
+    assert interrupt.stopped_line() == "interrupted before any step ran"  # in the recipe's checks, say
+    interrupt.run_began(cached=False)
+    interrupt.step_started("sim")
+    assert interrupt.stopped_line().startswith("interrupted during sim (0 s in); nothing was cached")
+    interrupt.run_began(cached=True)
+    assert interrupt.stopped_line() == "interrupted; nodes that finished are cached: a re-run resumes from there"

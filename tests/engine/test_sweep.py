@@ -228,3 +228,12 @@ def test_a_sweep_without_matplotlib_says_it_drew_no_plot(sweep_file, tmp_path, c
     assert not (out / "grid.png").exists()
     assert "no plot: matplotlib is not installed" in capsys.readouterr().err
     assert "no plot: matplotlib is not installed" in (out / "grid.md").read_text()
+
+
+def test_a_draft_sweep_writes_beside_the_draft_runs_not_the_full_ones(sweep_file, tmp_path):
+    """Issue 47: ``--draft`` sweeps wrote into the full run's sweeps folder, mixing draft and full contact sheets."""
+    sweep_file.write_text(SWEEP_RECIPE.replace("sweeps:", "draft: {pts.count: 5}\nsweeps:", 1))
+    args = ["sweep", str(sweep_file), "--cache-dir", str(tmp_path / "cache"), "--plugin", TOY, "-q"]
+    assert main([*args, "--draft"]) == 0
+    assert (tmp_path / "outputs" / "toy_sweep_draft" / "sweeps" / "shift.csv").is_file()
+    assert not (tmp_path / "outputs" / "toy_sweep").exists()

@@ -239,3 +239,24 @@ def test_a_moved_parameter_names_where_it_lives_now_and_recipe_checks_see_every_
     parse_recipe(text, reg, file="r.yaml")
     (issue,) = issues_of(text, reg, ["s.dx=0.5"])
     assert (issue.node, issue.param, str(issue.location)) == ("m", "dx", "r.yaml:7:5")  # m itself: dx unset
+
+
+def test_an_unknown_parameter_is_matched_on_its_words_across_the_recipes_nodes():
+    """Issue 47: ``--set shade.rice_color=...`` suggested ``scenery_color`` (edit distance, the node's own names); the
+    rice's colour follows the cooked material's water content, whose doc names rice and colour both."""
+    from nodegraph.recipe import nearest_params
+
+    params = {
+        "shade": {"scenery_color": "glaze colour of scenery meshes (the bowl)", "presets": "preset per element kind"},
+        "cooked": {"water_content": "water absorbed: the rice material (its colour and gloss) follows it"},
+        "preview": {"samples": "samples per pixel"},
+    }
+    assert nearest_params("shade", "rice_color", params) == ("cooked.water_content", "shade.scenery_color")
+    assert nearest_params("shade", "scenery_colr", params) == ("scenery_color",)  # a typo stays a typo
+    assert nearest_params("preview", "sampels", params) == ("samples",)
+    assert nearest_params("preview", "zzz", params) == ()
+
+
+def test_several_suggestions_are_each_named(registry):
+    (issue,) = issues_of(VALID, registry, ["pts.counts_number=3"])
+    assert issue.suggestion == "count" and "did you mean 'count'?" in str(issue)

@@ -15,7 +15,7 @@ def _render(scene, **over):
     return preview.call(scene=scene, **{"width": 64, "height": 48, "samples": 2, **over}).pixels
 
 
-def test_a_preview_stopped_by_sigint_stops_at_once_and_the_process_renders_on(shaded):
+def test_a_preview_stopped_by_sigint_stops_at_once_and_the_process_renders_on(shaded, capfd):
     _render(shaded)  # loads Mitsuba and the scene's code: what follows times the render alone
     # the watch installs its own SIGINT handler; so does this test: a suite started in the background of a
     # non-interactive shell inherits SIGINT ignored, and Mitsuba then winds its render down without an exception
@@ -26,6 +26,12 @@ def test_a_preview_stopped_by_sigint_stops_at_once_and_the_process_renders_on(sh
         signal.signal(signal.SIGINT, previous)
     after = _render(shaded)
     assert after.shape == (48, 64, 3) and after.any()
+    # Mitsuba's own note of the interrupt stays out of the run's output (issue 47), its other messages do not
+    import mitsuba as mi
+
+    mi.Log(mi.LogLevel.Warn, "a warning of Mitsuba's own")
+    said = "".join(capfd.readouterr())
+    assert "Received interrupt signal" not in said and "a warning of Mitsuba's own" in said, said
 
 
 def _stop_a_render(shaded):
@@ -37,3 +43,43 @@ def _stop_a_render(shaded):
         _render(shaded, width=1280, height=720, samples=256)  # minutes of path tracing if not stopped
     stopped = time.perf_counter() - started
     assert stopped < 10.0, f"the render took {stopped:.1f} s to stop"
+
+
+LOADS_NOTHING = """
+import sys
+from pathlib import Path
+
+from nodegraph import codec
+from nodes.export import preview as node
+from nodes.export.preview import load_libraries
+
+scene = codec.decode(Path(sys.argv[1]).read_bytes())  # as a run with its upstream cached has it: nothing else loaded
+load_libraries()
+before = {n for n, m in sys.modules.items() if str(getattr(m, "__file__", "")).endswith(".so")}
+node.call(scene=scene, width=32, height=24, samples=1)
+print(sorted({n for n, m in sys.modules.items() if str(getattr(m, "__file__", "")).endswith(".so")} - before))
+"""
+
+
+def test_a_preview_loads_no_library_after_its_overlap_step(shaded, tmp_path):
+    """A run computes other steps (the export: USD) beside the preview once its ``overlap`` step has run; a native
+    library the render loaded after that could deadlock against the other thread's (the loader's lock against the
+    GIL): a run with its upstream cached hung for good, the preview importing SciPy's spatial module (issue 47)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from nodegraph import codec
+
+    (tmp_path / "scene.bin").write_bytes(codec.encode(shaded))
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run(
+        [sys.executable, "-c", LOADS_NOTHING, str(tmp_path / "scene.bin")],
+        cwd=root,
+        env={**os.environ, "PYTHONPATH": str(root)},
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout

@@ -28,6 +28,19 @@ def test_a_placement_too_large_is_refused_unless_yes(capsys):
     assert main(["check", RICE_BOWL, "--set", "rice_place.r=0.6"]) == 0  # the r it names passes
 
 
+def test_a_placement_in_a_derived_shape_is_weighed_too(capsys):
+    """Issue 47: a shape made by a boolean of a vessel region (the ikura don's rice layer) had no estimate, so check
+    passed an r that places far more than a run starts on unasked."""
+    ikura = str(Path(RICE_BOWL).with_name("ikura_don.yaml"))
+    assert main(["check", ikura, "--set", "rice_place.r=0.3"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        "node 'rice_place', r: 0.3 would place ≈ 63,3" in err and "elements in 'rice_layer' (boolean: 24,452 mm³" in err
+    )
+    assert main(["check", ikura, "--set", "egg_place.r=90"]) == 2
+    assert "r: 90 is larger than the shape 'egg_layer' (boolean) it fills" in capsys.readouterr().err
+
+
 def test_run_refuses_it_before_any_work(tmp_path):
     command = [sys.executable, "-m", "nodegraph.cli", "run", RICE_BOWL, "--set", "rice_place.r=0.4"]
     done = subprocess.run(  # the old code ran for minutes: the timeout fails it

@@ -1,0 +1,134 @@
+"""How long a run takes to exit after Ctrl-C or SIGTERM, and whether anything is left running.
+
+``random``: start ``nodegraph run RECIPE --no-cache`` in a process group of its own, wait a random 1–20 s (seeded),
+send SIGINT to the group (what Ctrl-C at a terminal does), and time the exit; repeated ``--tries`` times.
+``steps``: for each of ``--steps`` and each of SIGINT and SIGTERM, remove that step and every step after it from the
+cache ``--cache-dir`` (warmed by a first, complete run), run, and signal ``--delay`` s after the step has started
+(its heartbeat line, due 0.2 s in: ``NODEGRAPH_HEARTBEAT``). A run not gone ``HANG_S`` after the signal is a hang:
+every process of the group prints its threads' stacks (``kill -USR1``: faulthandler, registered by the command)
+before it is killed. One JSON line per try on stdout: the step(s) running (from the run's 'interrupted' line), the
+seconds to exit, the exit status, the processes left.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HANG_S = 30.0  # seconds after the signal before a run still there counts as hung
+
+
+def group_pids(pgid: int) -> list[int]:
+    """The live processes of a process group (from /proc)."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[2]) == pgid and fields[0] != "Z":
+                pids.append(int(entry.name))
+    return pids
+
+
+def one(command: list[str], signum: int, after: float | None, step: str | None, delay: float = 1.0) -> dict:
+    """Run ``command``; signal it ``after`` seconds in, or ``delay`` s after ``step`` has started; time the exit."""
+    log = tempfile.NamedTemporaryFile("w+b", suffix=".log", delete=False)
+    env = dict(os.environ, NODEGRAPH_HEARTBEAT="0.2")
+    proc = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, start_new_session=True, env=env)
+    start = time.monotonic()
+    ended = None
+    while proc.poll() is None:
+        if ended is None and step is not None and f"\n{step}: running" in Path(log.name).read_text(errors="replace"):
+            ended = time.monotonic()
+        if (after is not None and time.monotonic() - start >= after) or (
+            ended is not None and time.monotonic() - ended >= delay
+        ):
+            break
+        time.sleep(0.05)
+    if proc.poll() is not None:
+        return {"signal": None, "ended_by_itself_s": round(time.monotonic() - start, 1)}
+    signalled = time.monotonic()
+    os.killpg(proc.pid, signum)
+    try:
+        proc.wait(timeout=HANG_S)
+        hang = None
+    except subprocess.TimeoutExpired:
+        for pid in group_pids(proc.pid):
+            os.kill(pid, signal.SIGUSR1)
+        time.sleep(1.0)
+        hang = Path(log.name).read_text(errors="replace")[-8000:]
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    exit_s = time.monotonic() - signalled
+    time.sleep(0.2)
+    left = group_pids(proc.pid)
+    lines = Path(log.name).read_text(errors="replace").splitlines()
+    said = [line for line in lines if line.startswith("interrupted")]
+    running = said[-1].partition(" during ")[2].partition(";")[0].partition(":")[0] if said else None
+    os.unlink(log.name)
+    return {
+        "signal": signal.Signals(signum).name,
+        "at_s": round(signalled - start, 1),
+        "running": running,
+        "exit_s": round(exit_s, 2),
+        "status": proc.returncode,
+        "left": left,
+        "hang": hang,
+        "said": said,
+    }
+
+
+def forget(cache: Path, recipe: str, step: str, draft: bool) -> None:
+    """Remove ``step`` and every step that depends on it from ``cache``, and any saved progress: the next run
+    computes them (and only them)."""
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+
+    loaded = load_recipe(Path(recipe), default_registry(), draft=draft)
+    after = {n for n in loaded.nodes if step in loaded.graph.ancestors(n)} | {step}
+    for entry in (cache / "entries").glob("*/*.json"):
+        if json.loads(entry.read_text()).get("node") in after:
+            entry.unlink()
+    for saved in (cache / "checkpoints").glob("*"):
+        saved.unlink()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("mode", choices=["random", "steps"])
+    parser.add_argument("recipe")
+    parser.add_argument("--tries", type=int, default=10)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--steps", default="", help="steps mode: comma-separated step (node) names")
+    parser.add_argument("--delay", type=float, default=1.0, help="steps mode: seconds after the step started")
+    parser.add_argument("--cache-dir", type=Path, default=None, help="steps mode: a cache the recipe's run filled")
+    parser.add_argument("--set", dest="overrides", action="append", default=[])
+    parser.add_argument("--draft", action="store_true")
+    args = parser.parse_args()
+    out = tempfile.mkdtemp(prefix="bench-interrupt-")
+    command = [sys.executable, "-m", "nodegraph.cli", "run", args.recipe, "--out-dir", out, "--no-rrd"]
+    command += ["--no-cache"] if args.mode == "random" else ["--cache-dir", str(args.cache_dir)]
+    command += ["--draft"] * args.draft + [x for o in args.overrides for x in ("--set", o)]
+    if args.mode == "random":
+        rng = random.Random(args.seed)
+        for _ in range(args.tries):
+            print(json.dumps(one(command, signal.SIGINT, rng.uniform(1.0, 20.0), None)), flush=True)
+    else:
+        for step in args.steps.split(","):
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                forget(args.cache_dir, args.recipe, step, args.draft)
+                print(json.dumps({"step": step, **one(command, signum, None, step, args.delay)}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
