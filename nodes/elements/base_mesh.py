@@ -135,7 +135,8 @@ def base_mesh(
     Rice: a blunted, slightly bent ellipsoid; the variety (input) multiplies the length (SPEC §1.1), its
     expansion P is applied later by ``expand``. Ikura: parts 0 = outer membrane, 1 = yolk, both
     outward shells; with ``diameter_sd`` each variant draws its diameter from a normal law clipped at ±2 sd
-    (seeded: the same recipe and seed give the same eggs). Files are repaired (merge, drop degenerate faces, un-invert, recentre) or refused.
+    (seeded: the same recipe and seed give the same eggs). Files are repaired (merge, drop degenerate faces,
+    un-invert, recentre) or refused.
     """
     from . import grain_shapes, mesh_files
 
