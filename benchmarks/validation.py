@@ -765,7 +765,8 @@ def run_cases(quick: bool, ellipsoids: bool | None = None) -> tuple[list[Case], 
     cases.append(
         Case(
             "Rice-grain geometry",
-            "base_mesh shape rice, each variety preset (SPEC §1.1: length factors 1.8 / 1.0 / 0.7 on 5 × 3 × 2 mm)",
+            "base_mesh shape rice, each variety preset (SPEC §1.1: length factors 1.8 / 1.0 / 0.7 on "
+            "5.2 × 3.0 × 2.0 mm, docs/sizes.md)",
             "7.43 × 2.75 × 2.53 mm, 26.91 g per 1,000 grains, one milled variety (Jouki & Khazaei 2012); cooked "
             "grains are larger (expansion P, G eq. 6)",
             "; ".join(f"{v}: {a:.2f} × {b:.2f} × {c:.2f} mm, {vol:.1f} mm³" for v, a, b, c, vol in geo)

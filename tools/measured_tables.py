@@ -362,6 +362,27 @@ TABLES = {
             ("load", field("load")),
         ],
     ),
+    "sizes": (
+        "sizes.jsonl",
+        lambda r: r["table"] == "sizes",
+        [
+            ("element or prop", field("element")),
+            ("published", field("published")),
+            ("source", field("source")),
+            ("the exported file measures", field("measured")),
+        ],
+    ),
+    "servings": (
+        "sizes.jsonl",
+        lambda r: r["table"] == "servings",
+        [
+            ("dish", field("element")),
+            ("a real serving", field("published")),
+            ("source", field("source")),
+            ("it holds", field("holds")),
+            ("the scene holds", field("measured")),
+        ],
+    ),
     "cut_islands": (
         "cut.jsonl",
         None,

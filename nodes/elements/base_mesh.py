@@ -26,6 +26,17 @@ def _check(p: dict) -> list[tuple[str, str]]:
         issues.append(("path", f"path is only used with shape 'file' (shape is '{p['shape']}')"))
     if p["shape"] != "ice_flake" and p["curl"]:
         issues.append(("curl", f"curl is only used with shape 'ice_flake' (shape is '{p['shape']}')"))
+    if p["shape"] != "ikura" and p["diameter_sd"]:
+        issues.append(("diameter_sd", f"diameter_sd is only used with shape 'ikura' (shape is '{p['shape']}')"))
+    if p["diameter_sd"] > 0.25 * p["diameter"]:
+        issues.append(
+            (
+                "diameter_sd",
+                f"{p['diameter_sd']:g} mm is over a quarter of the diameter {p['diameter']:g} mm; allowed: "
+                f"diameter_sd ≤ {0.25 * p['diameter']:g} mm (draws are clipped at ±2 sd, so an egg keeps at least "
+                "half the mean diameter)",
+            )
+        )
     if p["shape"] in ("ikura", "file") and p["size"] is not None:
         issues.append(("size", f"size is not used by shape '{p['shape']}' (ikura: diameter; file: scale)"))
     return issues
@@ -46,8 +57,8 @@ def _check(p: dict) -> list[tuple[str, str]]:
         "size": Param(
             tuple[float, float, float],
             None,
-            "length, width, thickness before the variety factor; "
-            "default rice 5×3×2 (a raw short grain), ice flake 4×3×0.4",
+            "length, width, thickness before the variety factor; default rice 5.2×3.0×2.0 (a raw Japanese short "
+            "grain, docs/sizes.md), ice flake 4×3×0.4",
             range=(0.01, 1000.0),
             units="mm",
             nullable=True,
@@ -56,7 +67,21 @@ def _check(p: dict) -> list[tuple[str, str]]:
         "bend": Param(
             float, 0.05, "rice: dorsal bend, y offset at the tips as a fraction of the width", range=(0.0, 0.5)
         ),
-        "diameter": Param(float, 4.0, "ikura: egg diameter 2·r_i (ikura 3–5 mm)", range=(0.1, 100.0), units="mm"),
+        "diameter": Param(
+            float,
+            6.5,
+            "ikura: mean egg diameter 2·r_i (salted chum roe 6–7 mm, docs/sizes.md)",
+            range=(0.1, 100.0),
+            units="mm",
+        ),
+        "diameter_sd": Param(
+            float,
+            0.0,
+            "ikura: standard deviation of the diameter between eggs (each variant draws its own, clipped at ±2 sd); "
+            "0: every egg alike",
+            range=(0.0, 25.0),
+            units="mm",
+        ),
         # default: typical ikura lipid mass fraction, SPEC §1 (Shirai et al.): 14.5 ± 0.7 %
         "lipid_fraction": Param(
             float,
@@ -81,6 +106,7 @@ def _check(p: dict) -> list[tuple[str, str]]:
         "align": Param(bool, True, "file: turn the principal axes onto x ≥ y ≥ z (long axis x)"),
         "subdivisions": Param(int, 2, "icosphere subdivisions of rice/ikura (2 → 320 faces per shell)", range=(0, 5)),
     },
+    random=True,
     check=_check,
     check_work=element_fits,
     moved={"variety": Moved("variety", "variety", "rice_variety")},
@@ -94,6 +120,7 @@ def base_mesh(
     bluntness,
     bend,
     diameter,
+    diameter_sd,
     lipid_fraction,
     irregularity,
     curl,
@@ -107,7 +134,9 @@ def base_mesh(
 
     Rice: a blunted, slightly bent ellipsoid; the variety (input) multiplies the length (SPEC §1.1), its
     expansion P is applied later by ``expand``. Ikura: parts 0 = outer membrane, 1 = yolk, both
-    outward shells. Files are repaired (merge, drop degenerate faces, un-invert, recentre) or refused.
+    outward shells; with ``diameter_sd`` each variant draws its diameter from a normal law clipped at ±2 sd
+    (seeded: the same recipe and seed give the same eggs). Files are repaired (merge, drop degenerate faces,
+    un-invert, recentre) or refused.
     """
     from . import grain_shapes, mesh_files
 
@@ -120,6 +149,8 @@ def base_mesh(
         vertices, faces = grain_shapes.rice_grain(length, width, thickness, bluntness, bend, subdivisions)
         return Mesh(vertices, faces, name="rice" if variety is None else variety.name)
     if shape == "ikura":
+        if diameter_sd > 0:
+            diameter += diameter_sd * max(-2.0, min(2.0, float(ctx.rng.standard_normal())))
         vertices, faces, parts = grain_shapes.ikura_egg(diameter, lipid_fraction, subdivisions + 1)
         return Mesh(vertices, faces, parts=parts, name="ikura")
     if shape == "ice_flake":

@@ -10,7 +10,19 @@ from .element_values import ExpandedField
 
 def _check(p: dict) -> list[tuple[str, str]]:
     lo, hi = p["expansion"]
-    return [("expansion", f"low {lo} must not exceed high {hi}")] if lo > hi else []
+    issues = [("expansion", f"low {lo} must not exceed high {hi}")] if lo > hi else []
+    lo, hi = p["broken_length"]
+    if lo > hi:
+        issues.append(("broken_length", f"low {lo} must not exceed high {hi}"))
+    return issues
+
+
+def is_broken(variant: int | None, share: float) -> bool:
+    """Whether variant ``variant`` of a family is a broken grain, so that the first n variants hold
+    round-down(n·share) broken ones, evenly spread (variant v is broken when ⌊(v+1)·share⌋ > ⌊v·share⌋); a node
+    outside a family (no variant) counts as variant 0."""
+    v = variant or 0
+    return int((v + 1) * share + 1e-9) > int(v * share + 1e-9)
 
 
 @node(
@@ -32,17 +44,35 @@ def _check(p: dict) -> list[tuple[str, str]]:
             "P drawn uniformly per element in [low, high] (G: 1–1.5); low = high fixes P",
             range=(0.1, 10.0),
         ),
+        "broken": Param(
+            float,
+            0.0,
+            "share of the variants that are broken grains (variant v is broken when ⌊(v+1)·share⌋ > ⌊v·share⌋, so "
+            "16 variants realise shares in steps of 1/16); retail grades allow a few percent, docs/sizes.md",
+            range=(0.0, 1.0),
+        ),
+        "broken_length": Param(
+            tuple[float, float],
+            (0.5, 0.75),
+            "a broken grain keeps this share of its length, drawn uniformly (a broken kernel is one under 3/4 of a "
+            "whole one, USDA); cut square across its long axis x",
+            range=(0.05, 1.0),
+        ),
     },
     random=True,
     check=_check,
     moved={"variety": Moved("variety", "variety", "rice_variety")},
 )
-def expand(ctx, field, variety=None, *, expansion):
+def expand(ctx, field, variety=None, *, expansion, broken, broken_length):
     """Scale the grain by P about its centroid (G eq. 6); P per element from ``expansion`` or the variety.
 
-    The grid and the distances are scaled together, exactly: no resampling.
+    The grid and the distances are scaled together, exactly: no resampling. A broken variant (``broken``) is
+    then cut square across x, keeping a share of its length drawn from ``broken_length``: the field is
+    intersected with the half-space behind the cut (min of the two, positive inside), still a distance bound.
     """
-    from .level_set_mesh import expand_field
+    import numpy as np
+
+    from .level_set_mesh import break_field, expand_field
 
     if variety is not None:
         p = variety.expansion
@@ -50,4 +80,7 @@ def expand(ctx, field, variety=None, *, expansion):
         lo, hi = expansion
         p = float(ctx.rng.uniform(lo, hi)) if hi > lo else float(lo)
     data, origin, voxel_size = expand_field(field.data, field.origin, field.voxel_size, p)
+    if broken > 0 and is_broken(ctx.variant, broken):
+        keep = float(ctx.rng.uniform(*broken_length))
+        data = break_field(np.asarray(data), np.asarray(origin), voxel_size, keep)
     return ExpandedField(data, origin, voxel_size, metric=field.metric, signed=field.signed, expansion=p)

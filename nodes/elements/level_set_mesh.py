@@ -23,6 +23,16 @@ def expand_field(data: np.ndarray, origin: np.ndarray, voxel_size: float, expans
     return scaled, centroid + expansion * (origin - centroid), voxel_size * expansion
 
 
+def break_field(data: np.ndarray, origin: np.ndarray, voxel_size: float, keep: float) -> np.ndarray:
+    """A broken grain: the field (positive inside) cut square across x so that ``keep`` of its inside length
+    stays, the end at the highest x removed. Returns the new data (float32)."""
+    inside = np.argwhere(data > 0)
+    lo, hi = inside[:, 0].min(), inside[:, 0].max()
+    cut = origin[0] + (lo + keep * (hi - lo)) * voxel_size
+    x = origin[0] + np.arange(data.shape[0], dtype=np.float64) * voxel_size
+    return np.minimum(data, (cut - x)[:, None, None].astype(np.float32)).astype(np.float32)
+
+
 def field_surface(data: np.ndarray, origin: np.ndarray, voxel_size: float, level: float, step: int = 1):
     """Marching-cubes surface {field = level} as (vertices, faces), outward, in mm.
 

@@ -301,10 +301,23 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
 
 
 def _radius_from_elements(elements) -> float:
-    """S §3.1.2: r = half the radius of the largest sphere inscribed in the element (smallest over all meshes)."""
+    """S §3.1.2: r = half the radius of the largest sphere inscribed in the element (smallest over all meshes).
+
+    An element of several parts (an ikura egg: membrane 0 around its yolk 1) is measured by its outer part 0
+    alone: the yolk inside is not a wall the sphere must stay clear of."""
     from .medial_spheres import largest_inscribed_radius
 
     meshes = [mesh for library in (elements or ()) for mesh in library.meshes]
     if not meshes:
         raise ValueError("r: give r, or connect elements so r can be derived from them")
-    return 0.5 * min(largest_inscribed_radius(m.vertices, m.faces) for m in meshes)
+    return 0.5 * min(largest_inscribed_radius(*_outer_part(m)) for m in meshes)
+
+
+def _outer_part(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) of part 0 of a multi-part mesh, its unused vertices dropped; the mesh itself otherwise."""
+    parts = getattr(mesh, "parts", None)
+    if parts is None or not np.any(np.asarray(parts) != 0):
+        return mesh.vertices, mesh.faces
+    faces = np.asarray(mesh.faces)[np.asarray(parts) == 0]
+    used, inverse = np.unique(faces, return_inverse=True)
+    return np.asarray(mesh.vertices)[used], inverse.reshape(faces.shape)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from nodes.elements import base_mesh, element_library
-from nodes.elements.grain_shapes import RICE_VARIETIES, volume_centroid
+from nodes.elements.grain_shapes import DEFAULT_SIZE, RICE_VARIETIES, volume_centroid
 from nodes.elements.mesh_files import MeshFileError, load_element_mesh
 
 from .conftest import as_trimesh
@@ -22,9 +22,10 @@ def test_rice_presets_are_closed_centred_and_scaled(variety):
     _, centroid = volume_centroid(mesh.vertices, mesh.faces)
     assert np.allclose(centroid, 0.0, atol=1e-9)
     extent = np.ptp(mesh.vertices, axis=0)
-    assert extent[0] == pytest.approx(5.0 * RICE_VARIETIES[variety].length_factor, rel=1e-6)
+    length, _, thickness = DEFAULT_SIZE["rice"]  # a raw Japanese short grain, docs/sizes.md
+    assert extent[0] == pytest.approx(length * RICE_VARIETIES[variety].length_factor, rel=1e-6)
     assert extent[0] > extent[1] > extent[2]  # long axis x, thickness z
-    assert extent[2] == pytest.approx(2.0, rel=1e-6)
+    assert extent[2] == pytest.approx(thickness, rel=1e-6)
 
 
 def test_the_variety_is_an_input_a_recipe_states_once():
@@ -34,7 +35,8 @@ def test_the_variety_is_an_input_a_recipe_states_once():
     aromatic = rice_variety.call(variety="aromatic")
     assert aromatic is RICE_VARIETIES["aromatic"] and aromatic.name == "aromatic"
     assert base_mesh.call(variety=aromatic).name == "aromatic"
-    assert np.ptp(base_mesh.call().vertices, axis=0)[0] == pytest.approx(5.0, rel=1e-6)  # unwired: factor 1
+    unwired = np.ptp(base_mesh.call().vertices, axis=0)[0]
+    assert unwired == pytest.approx(DEFAULT_SIZE["rice"][0], rel=1e-6)  # unwired: factor 1
     with pytest.raises(ValueError, match="only read by shape 'rice'"):
         base_mesh.call(shape="ikura", variety=aromatic)
     library = element_library.call(meshes=[base_mesh.call(variety=aromatic)], variety=aromatic)

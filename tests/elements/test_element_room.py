@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[2]
     ("recipe_file", "override", "param", "allowed"),
     [
         ("rice_chestnut.yaml", "chestnut_base.size=[200,180,150]", "size", "each side ≤ 68.4 mm"),
-        ("ikura_don.yaml", "egg_base.diameter=80", "diameter", "diameter ≤ 34 mm"),
+        ("ikura_don.yaml", "egg_base.diameter=100", "diameter", "diameter ≤ 74.8 mm"),
     ],
 )
 def test_check_refuses_an_element_larger_than_its_shape(recipe_file, override, param, allowed):

@@ -43,14 +43,15 @@ def test_ikura_don_regions_follow_a_smaller_bowl(tmp_path):
     # egg_place reads the egg layer as a closed solid: a cut whose slivers trimesh merged open was refused there
     outputs = ["rice_layer.mesh", "egg_layer.mesh", "rice_core.mesh", "bowl.vessel", "egg_place.placement"]
     result = run_recipe(recipe, outputs=outputs)
-    assert len(result.output("egg_place.placement").positions) > 100
+    assert len(result.output("egg_place.placement").positions) > 50  # 96 eggs 6.5 mm across (docs/sizes.md)
     vessel = result.output("bowl.vessel")
     assert vessel.radius == 30.0
     for region in ("rice_layer.mesh", "egg_layer.mesh", "rice_core.mesh"):
         vertices = result.output(region).vertices
         assert not vessel.outside(vertices, margin=vessel.wall + 1e-3).any(), region
     eggs = result.output("egg_layer.mesh").vertices
-    assert np.hypot(eggs[:, 0], eggs[:, 1]).max() == pytest.approx(30.0 - 2.5, rel=1e-3)  # 2.5 mm in from the rim
+    inset = recipe.nodes["egg_outer"].params["inset"]
+    assert np.hypot(eggs[:, 0], eggs[:, 1]).max() == pytest.approx(30.0 - inset, rel=1e-3)  # in from the rim
 
 
 CONTRADICTION = """\
@@ -111,7 +112,8 @@ def test_ikura_don_eggs_start_above_the_settled_rice_and_stay_in_the_bowl():
         outputs=["egg_place.placement", "egg_sim.aggregate", "rice_sim.particles", "bowl.vessel", "egg_base.mesh"],
     )
     vessel, rice = result.output("bowl.vessel"), result.output("rice_sim.particles")
-    egg_radius = 0.5 * float(np.ptp(result.output("egg_base.mesh").vertices[:, 0]))
+    eggs = result.output("egg_base.mesh")  # its variants: eggs of varying diameter
+    egg_radius = 0.5 * float(np.mean([np.ptp(egg.vertices[:, 0]) for egg in eggs]))
     start = result.output("egg_place.placement").positions
     tree, radii = cKDTree(rice.positions), np.asarray(rice.radii)
     deepest = 0.0
