@@ -6,6 +6,7 @@ the table in docs/validation.md.
     python benchmarks/physics_at_defaults.py            # every case (≈ 6 min on 2 cores)
     python benchmarks/physics_at_defaults.py --quick    # the inclined planes only (≈ 1 min), prints, writes nothing
     python benchmarks/physics_at_defaults.py --convergence   # the substep curve (docs/accuracy.md), ≈ 8 min
+    python benchmarks/physics_at_defaults.py --funnel        # the fixed-funnel heap at 5–80 substeps, ≈ 5 min
 
 ``--convergence`` runs the poured heap (two seeds) and the grain sliding across its length at 5–80 substeps and
 writes benchmarks/measured/granular_convergence.jsonl, with its plot docs/images/accuracy/granular_convergence.png:
@@ -27,6 +28,7 @@ runtime.configure()  # numba's kernel cache and locator, before a kernel module 
 
 RECORD = Path(__file__).resolve().parent / "measured" / "physics_defaults.jsonl"
 CONVERGENCE = RECORD.with_name("granular_convergence.jsonl")
+FUNNEL = RECORD.with_name("funnel_heap.jsonl")
 PLOT = Path(__file__).resolve().parents[1] / "docs" / "images" / "accuracy" / "granular_convergence.png"
 SUBSTEPS = (5, 10, 20, 40, 80)  # the convergence curve's points; the node's default is 10
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
@@ -138,6 +140,62 @@ def heap_case(shape: str, n: int, substeps: int, seed: int = 0) -> dict:
     }
 
 
+def funnel_heap(substeps: int, seed: int = 0, grains: int = 400, hole: float = 18.0, drop: float = 15.0) -> dict:
+    """The fixed-funnel method (the funnel held at a fixed height; tan θ = H/R once the heap reaches it, as for
+    powders in ISO 4324): ``grains`` japonica grains fill a silo 24 mm across (``silo_discharge.fill``) whose floor
+    has a round outlet ``hole`` mm wide, ``drop`` mm above flat ground, and flow out onto it for 3 s at the node's
+    defaults. A grain leaves the outlet at about √(g·D) and lands at ≤ 0.7 m/s, under the speed clamp's cap from
+    10 substeps up, so unlike the stream the set-up does not depend on the clamp. Returns the heap's surface slope
+    and atan H/R at 3 s, its grains, its top (mm) and the seconds."""
+    import manifold3d as mf
+    from scene_builders import box_mesh, manifold_mesh, rice_library
+    from silo_discharge import fill
+    from validation import heap_angle, mound_angle
+
+    from nodes.simulation.settings import XpbdParams
+    from nodes.simulation.setup import build_simulation
+    from nodes.simulation.xpbd import xpbd
+    from nodes.values import Aggregate, Placement
+
+    radius, wall, floor = 12.0, 3.0, 3.0
+    filled = fill(grains, radius, seed)
+    x = filled.positions + [0.0, 0.0, drop + floor]
+    placement = Placement(x, filled.normals, filled.rotations, variants=filled.variants, kind_names=("japonica",))
+    tall = float(x[:, 2].max()) + 8.0 - drop
+    outer = mf.Manifold.cylinder(tall, radius + wall, radius + wall, 96)
+    tube = (outer - mf.Manifold.cylinder(tall, radius, radius, 96)).translate((0, 0, drop + floor))
+    base = mf.Manifold.cylinder(floor, radius + wall, radius + wall, 96)
+    outlet = (base - mf.Manifold.cylinder(floor, hole / 2, hole / 2, 96)).translate((0, 0, drop))
+    ground = box_mesh([-90, -90, -4], [90, 90, 0], "ground")
+    params = XpbdParams(**xpbd.resolve_params({"substeps": substeps, "log_every": 0, "log_meshes_every": 0}))
+    aggregate = Aggregate(placement, (rice_library(seed=seed),))
+    sim = build_simulation(aggregate, [manifold_mesh(tube + outlet, "funnel"), ground], EFFECTS, params)
+    start = time.perf_counter()
+    for _ in range(180):
+        sim.frame()
+    c = sim.model.centres(sim.state.x)
+    heap = c[c[:, 2] < drop]
+    return {
+        "surface": round(heap_angle(heap), 1),
+        "hr": round(mound_angle(heap), 1),
+        "grains": int(len(heap)),
+        "top_mm": round(float(np.percentile(heap[:, 2], 99)), 1),
+        "seconds": round(time.perf_counter() - start, 1),
+    }
+
+
+def funnel_curve() -> list[dict]:
+    """The fixed-funnel heap at each of ``SUBSTEPS``, seeds 0 and 1."""
+    rows = []
+    for substeps in SUBSTEPS:
+        runs = [funnel_heap(substeps, seed) for seed in (0, 1)]
+        values = {k: [r[k] for r in runs] for k in ("surface", "hr", "grains", "top_mm")}
+        values["seconds"] = round(sum(r["seconds"] for r in runs) / 2, 1)
+        rows.append({"case": "rice heap, fixed funnel", "substeps": substeps, "values": values})
+        print(rows[-1], flush=True)
+    return rows
+
+
 def convergence() -> list[dict]:
     """The poured heap (seeds 0 and 1) and the grain sliding across its length at each of ``SUBSTEPS``: the
     heap's surface slope and H/R at 7 s, the tilt the grain holds to, and the seconds each costs."""
@@ -208,9 +266,14 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true", help="the inclined plane only; print, write nothing")
     ap.add_argument("--convergence", action="store_true", help="the substep curve only (docs/accuracy.md)")
     ap.add_argument("--replot", action="store_true", help="redraw the substep curve's plot from its data")
+    ap.add_argument("--funnel", action="store_true", help="the fixed-funnel heap's substep curve only")
     args = ap.parse_args(argv)
     if args.replot:
         plot_convergence([json.loads(line) for line in CONVERGENCE.read_text().splitlines()])
+        return
+    if args.funnel:
+        rows = funnel_curve()
+        FUNNEL.write_text("".join(record(r, "python benchmarks/physics_at_defaults.py --funnel") + "\n" for r in rows))
         return
     if args.convergence:
         rows = convergence()

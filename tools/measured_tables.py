@@ -149,6 +149,18 @@ TABLES = {
             ("plane s (21 tilts)", value("plane_seconds")),
         ],
     ),
+    "funnel_heap": (
+        "funnel_heap.jsonl",
+        None,
+        [
+            ("substeps", lambda r: f"**{r['substeps']}**" if r["substeps"] == 10 else str(r["substeps"])),
+            ("surface slope at 3 s, seeds 0 / 1 (°)", listed("surface")),
+            ("atan H/R (°)", listed("hr")),
+            ("grains in the heap", listed("grains")),
+            ("heap top (mm; outlet at 15)", listed("top_mm")),
+            ("s (each)", value("seconds")),
+        ],
+    ),
     "validation_cases": (
         "validation.jsonl",
         None,
