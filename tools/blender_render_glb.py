@@ -147,7 +147,7 @@ def main() -> None:
     scene.cycles.transmission_bounces = s["max_depth"]
     scene.cycles.volume_bounces = s["max_depth"]
     # the preview's path depth counts every bounce alike: no smaller cap per kind (Cycles' default 4 diffuse and 4
-    # glossy ended the walks that reflect inside a grain: a grain-thick slab of rice under a white sky reflected 2 %
+    # glossy ended the walks that reflect inside a grain: a grain-thick slab of rice under a white sky reflected 2–3 %
     # less than without them and than a random walk at that depth; docs/look.md, "Side by side with Blender")
     scene.cycles.diffuse_bounces = scene.cycles.glossy_bounces = s["max_depth"]
     scene.cycles.transparent_max_bounces = s["max_depth"]
