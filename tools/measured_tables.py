@@ -270,7 +270,7 @@ TABLES = {
             ("Cycles", field("cycles")),
             ("FLIP mean / p95, before", value("before")),
             ("FLIP mean / p95, now", value("after")),
-            ("eggs' mean sRGB: preview · Cycles before · now", value("eggs")),
+            ("mean sRGB of the eggs (or rice): preview · Cycles before · now", value("eggs")),
         ],
     ),
     "blender_instancing": (
