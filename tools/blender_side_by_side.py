@@ -102,6 +102,9 @@ def main() -> None:
     pixels = grid_pixels([ours, theirs], 2, labels, 8, max(16, ours.shape[0] // 12))
     out = args.out or out_dir / "blender_side_by_side.png"
     write_output(Image(pixels), out.parent, out.stem)
+    # each render alone, at the preview's size, for an image metric (/work/shared/tools/flip_compare.py)
+    write_output(Image(ours), out.parent, f"{out.stem}_preview")
+    write_output(Image(theirs), out.parent, f"{out.stem}_cycles")
     print(f"wrote {out} (ours {ours_seconds:.0f} s incl. the recipe, Blender {blender_seconds:.0f} s)")
 
 

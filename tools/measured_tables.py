@@ -275,6 +275,32 @@ TABLES = {
             ("total s", value("total")),
         ],
     ),
+    "slab_optics": (
+        "slab_optics.jsonl",
+        None,
+        [
+            ("slab", field("slab")),
+            ("", field("quantity")),
+            ("reference, path depth 64", value("reference_depth64")),
+            ("reference, converged", value("reference")),
+            ("preview (Mitsuba)", value("mitsuba")),
+            ("Cycles, the add-on before", value("cycles_before")),
+            ("Cycles, the add-on", value("cycles")),
+        ],
+    ),
+    "flip": (
+        "flip.jsonl",
+        None,
+        [
+            ("scene", code("recipe")),
+            ("size", field("size")),
+            ("preview", field("preview")),
+            ("Cycles", field("cycles")),
+            ("FLIP mean / p95, before", value("before")),
+            ("FLIP mean / p95, now", value("after")),
+            ("mean sRGB of the eggs (or rice): preview · Cycles before · now", value("eggs")),
+        ],
+    ),
     "blender_instancing": (
         "blender_instancing.jsonl",
         None,

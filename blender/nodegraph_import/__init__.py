@@ -15,8 +15,11 @@ add-on sets the Principled BSDF from them:
 - transmission and IOR (alpha back to 1; an element inside another, the yolk in the egg's fluid, gets its IOR
   relative to it, ``exteriorIor``: Cycles has no stack of IORs); the colour light keeps through the element is
   the base colour both files carry (Cycles tints each crossing by its square root); where the coat is the
-  element's only reflecting skin (``coatIor``: the ikura membrane) the coat at the element's IOR over no specular
-  of its own;
+  element's only reflecting skin (``coatIor``: the ikura membrane) no coat, and the transmission lobe at the
+  element's IOR and transmission roughness is that one skin: Cycles' transmission lobe reflects by Fresnel at
+  the IOR whatever the Specular IOR Level (which scales only the opaque specular layer), so with the coat on
+  the membrane reflected twice (a slab of it under a white sky: 0.050 in green against Fresnel's 0.025;
+  docs/look.md, "Side by side with Blender");
 - otherwise subsurface weight and radius (radius in mm, the files' unit: Subsurface Scale 0.001, Blender's metres after
   both importers' default unit conversion);
 - sheen and specular level where the importer did not map them.
@@ -120,8 +123,9 @@ def apply_look(material) -> bool:
         inputs["Transmission Weight"].default_value = transmission
         inputs["Alpha"].default_value = 1.0  # the USD importer's reading of opacity = 1 − transmission
         material.surface_render_method = "DITHERED"
-        if "coatIor" in look:  # the coat is the only skin that reflects (its own specular is 0, below)
-            inputs["Coat IOR"].default_value = look["coatIor"]
+        if "coatIor" in look:  # one reflecting skin: the glass lobe's, as the preview's one dielectric
+            inputs["Coat Weight"].default_value = 0.0
+            inputs["Roughness"].default_value = look["transmissionRoughness"]
     elif look.get("subsurface", 0.0) > 0:
         inputs["Subsurface Weight"].default_value = look["subsurface"]
         inputs["Subsurface Radius"].default_value = look["subsurfaceRadius"]

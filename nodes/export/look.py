@@ -59,7 +59,9 @@ def coat_is_skin(material: Material) -> bool:
     medium inside (the ikura membrane). The preview renders one skin there: a dielectric at the material's IOR,
     whose sharp gloss is its clear coat (the glints' pass). A principled BSDF with both a coat (glTF: IOR 1.5) and
     its own specular reflects twice: in Blender the eggs came out pale orange under a whitish sheen. Both files
-    give it no specular of its own (``exported_specular``) and the coat at the material's IOR (``coatIor``)."""
+    give it no specular of its own (``exported_specular``) and the coat at the material's IOR (``coatIor``). Cycles'
+    transmission lobe reflects by Fresnel at the IOR whatever its specular level, so there the add-on drops the coat
+    and that lobe is the one skin (``blender/nodegraph_import``; docs/look.md, "Which renderer is wrong")."""
     return material.transmission >= TRANSMISSIVE and material.clearcoat > 0 and not is_volumetric(material)
 
 

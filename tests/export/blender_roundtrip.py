@@ -59,6 +59,7 @@ def material_report(material) -> dict:
         "scatters": any(n.type == "VOLUME_SCATTER" for n in material.node_tree.nodes),
         "specular_level": value("Specular IOR Level"),
         "coat_ior": value("Coat IOR"),
+        "coat_weight": value("Coat Weight"),
         "roughness": value("Roughness"),
     }
 

@@ -93,8 +93,10 @@ def test_blender_sees_the_whole_look(dish, tmp_path, fmt):
             assert seen["alpha"] == 1.0 and not seen["scatters"]
             # Cycles tints each crossing by √base colour: in and out keep the colour, as the preview's skin does
             assert seen["base_color"] == pytest.approx(material.subsurface_color, abs=1e-6)
-            # one reflecting skin: the coat at the membrane's IOR over no specular of its own (pale eggs before)
-            assert seen["specular_level"] == 0.0 and seen["coat_ior"] == pytest.approx(material.ior, abs=1e-6)
+            # one reflecting skin, as the preview's one dielectric: Cycles' transmission lobe reflects by Fresnel at
+            # the IOR whatever the Specular IOR Level, so no coat over it (with one, the eggs reflected twice)
+            assert seen["coat_weight"] == 0.0
+            assert seen["roughness"] == pytest.approx(material.transmission_roughness, abs=1e-6)
         elif material.subsurface > 0:  # scatters light
             assert seen["subsurface"] == pytest.approx(material.subsurface, abs=1e-6)
             assert seen["subsurface_radius"] == pytest.approx(material.subsurface_radius, abs=1e-6)
