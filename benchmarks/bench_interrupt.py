@@ -1,6 +1,7 @@
 """How long a run takes to exit after Ctrl-C or SIGTERM, and whether anything is left running.
 
-``random``: start ``nodegraph run RECIPE --no-cache`` in a process group of its own, wait a random 1–20 s (seeded),
+``--quick``: one SIGINT 1.5 s into ``rice_bowl.yaml --draft`` (CI's smoke run). ``random``: start ``nodegraph run
+RECIPE --no-cache`` in a process group of its own, wait a random 1–20 s (seeded),
 send SIGINT to the group (what Ctrl-C at a terminal does), and time the exit; repeated ``--tries`` times.
 ``steps``: for each of ``--steps`` and each of SIGINT and SIGTERM, remove that step and every step after it from the
 cache ``--cache-dir`` (warmed by a first, complete run), run, and signal ``--delay`` s after the step has started
@@ -105,8 +106,9 @@ def forget(cache: Path, recipe: str, step: str, draft: bool) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("mode", choices=["random", "steps"])
-    parser.add_argument("recipe")
+    parser.add_argument("mode", nargs="?", choices=["random", "steps"], default="random")
+    parser.add_argument("recipe", nargs="?", default=str(Path(__file__).resolve().parents[1] / "graphs/rice_bowl.yaml"))
+    parser.add_argument("--quick", action="store_true", help="one SIGINT 1.5 s into a draft run: seconds, for CI")
     parser.add_argument("--tries", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--steps", default="", help="steps mode: comma-separated step (node) names")
@@ -115,6 +117,8 @@ def main() -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=[])
     parser.add_argument("--draft", action="store_true")
     args = parser.parse_args()
+    if args.quick:
+        args.mode, args.tries, args.draft = "random", 1, True
     out = tempfile.mkdtemp(prefix="bench-interrupt-")
     command = [sys.executable, "-m", "nodegraph.cli", "run", args.recipe, "--out-dir", out, "--no-rrd"]
     command += ["--no-cache"] if args.mode == "random" else ["--cache-dir", str(args.cache_dir)]
@@ -122,7 +126,10 @@ def main() -> None:
     if args.mode == "random":
         rng = random.Random(args.seed)
         for _ in range(args.tries):
-            print(json.dumps(one(command, signal.SIGINT, rng.uniform(1.0, 20.0), None)), flush=True)
+            tried = one(command, signal.SIGINT, 1.5 if args.quick else rng.uniform(1.0, 20.0), None)
+            print(json.dumps(tried), flush=True)
+            if args.quick and (tried["hang"] or tried["left"]):
+                sys.exit("the run did not stop cleanly")
     else:
         for step in args.steps.split(","):
             for signum in (signal.SIGINT, signal.SIGTERM):

@@ -1,6 +1,7 @@
 """``nodegraph check`` (and run, before any work) weighs a placement's r against the shape it fills (issue 47,
 item 2a, 2b): too large for the shape, or so small it would place more elements than a run starts on unasked."""
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -34,9 +35,16 @@ def test_a_placement_in_a_derived_shape_is_weighed_too(capsys):
     ikura = str(Path(RICE_BOWL).with_name("ikura_don.yaml"))
     assert main(["check", ikura, "--set", "rice_place.r=0.3"]) == 2
     err = capsys.readouterr().err
-    assert (
-        "node 'rice_place', r: 0.3 would place ≈ 63,3" in err and "elements in 'rice_layer' (boolean: 24,452 mm³" in err
-    )
+    counts = []
+    for r in (0.3, 0.25):
+        if r != 0.3:
+            assert main(["check", ikura, "--set", f"rice_place.r={r}"]) == 2
+            err = capsys.readouterr().err
+        found = re.search(rf"r: {r} would place ≈ ([0-9,]+) elements in 'rice_layer' \(boolean: [0-9,]+ mm³", err)
+        assert found, err
+        counts.append(int(found.group(1).replace(",", "")))
+    # over the 50,000 a run places unasked, and as the layer's volume / r³
+    assert counts[0] > 50_000 and abs(counts[1] / counts[0] - (0.3 / 0.25) ** 3) < 0.01, counts
     assert main(["check", ikura, "--set", "egg_place.r=90"]) == 2
     assert "r: 90 is larger than the shape 'egg_layer' (boolean) it fills" in capsys.readouterr().err
 
