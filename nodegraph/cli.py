@@ -779,6 +779,7 @@ def _trim(cache: Cache | None, since: float | None, reporter: Reporter | None) -
 
 
 def _interrupt(signum, frame):
+    interrupt.stopping()
     raise KeyboardInterrupt
 
 

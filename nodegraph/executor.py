@@ -315,6 +315,9 @@ class Executor:
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
                 stopped = True
                 raise
+            if interrupt.stopped_by(exc):  # the stop's doing, come out of compiled code as another error
+                stopped = True
+                raise KeyboardInterrupt from exc
             elapsed = now() - start if beside is None or beside.elapsed is None else beside.elapsed
             self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", elapsed)
             if isinstance(exc, NodeFailure):

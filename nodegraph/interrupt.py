@@ -51,13 +51,14 @@ UNCACHED = "#uncached"  # a line of the listing: the run keeps nothing that fini
 # the steps running now in this process (label: (start, checkpoint file or None)), and whether the run keeps what
 # finishes (a cache): what a re-run would find
 _running: dict[str, tuple[float, Path | None]] = {}
-_run: dict[str, bool | None] = {"cached": None}  # None: no run has begun in this process
+_run: dict[str, bool | None] = {"cached": None, "stopping": False}  # cached None: no run has begun in this process
 
 
 def run_began(cached: bool) -> None:
     """A run begins: whether it keeps what finishes (a cache) decides what its 'interrupted' line promises."""
     _running.clear()
     _run["cached"] = cached
+    _run["stopping"] = False
     if not cached:
         note(UNCACHED)
 
@@ -151,8 +152,31 @@ def repeated() -> bool:
     return again
 
 
+def stopping() -> None:
+    """Note that a stop (SIGINT, SIGTERM) reached this process: an error a node raises from now on is the stop's
+    doing (``stopped_by``)."""
+    _run["stopping"] = True
+
+
+def stopped_by(exc: BaseException) -> bool:
+    """Whether ``exc``, raised by a node, is a stop rather than a failure: a stop reached this process while the
+    run went on, or a ``KeyboardInterrupt`` is in its chain. A signal's handler raises in whatever code runs: in a
+    call into compiled code (numba's dispatcher) it comes out as another error, as "SystemError: CPUDispatcher(...)
+    returned a result with an exception set", which is no failure of the node."""
+    if _run["stopping"]:
+        return True
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def stop(signum, frame) -> None:
     """The child's handler of SIGINT and SIGTERM: a ``KeyboardInterrupt``, once per stop (``repeated``)."""
+    stopping()
     if not repeated():
         raise KeyboardInterrupt
 

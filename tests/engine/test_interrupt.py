@@ -172,3 +172,30 @@ def test_without_a_cache_the_stopped_line_says_a_rerun_starts_over():
     assert interrupt.stopped_line().startswith("interrupted during sim (0 s in); nothing was cached")
     interrupt.run_began(cached=True)
     assert interrupt.stopped_line() == "interrupted; nodes that finished are cached: a re-run resumes from there"
+
+
+def test_a_node_that_raises_while_a_stop_is_pending_is_interrupted_not_failed(tmp_path, monkeypatch, capsys):
+    """Issue 47: SIGTERM inside a numba kernel came out as "SystemError: CPUDispatcher(...) returned a result with an
+    exception set": the run said the node failed and named a partial recording that was then removed. A stop is
+    reported as one, with the line Ctrl-C gives, and no partial recording is named or kept."""
+    from nodegraph import interrupt
+    from nodegraph.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "stop.yaml").write_text(
+        "name: stoprun\noutputs: [boom.spheres]\nnodes:\n  pts: {type: toy_points}\n"
+        "  boom: {type: toy_stopped, inputs: {spheres: pts.spheres}}\n"
+    )
+    code = main(["run", "stop.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "c")])
+    err = capsys.readouterr().err
+    assert code == 130, err
+    assert "failed" not in err and "partial" not in err and "error:" not in err, err
+    assert "interrupted during boom (" in err and "nodes that finished are cached" in err, err
+    assert not leftovers(tmp_path), leftovers(tmp_path)
+    # a stop noted by the signal's handler makes any error a node raises after it the stop's doing
+    interrupt.run_began(cached=True)
+    assert not interrupt.stopped_by(ValueError("a real failure"))
+    interrupt.stopping()
+    assert interrupt.stopped_by(ValueError("raised as the stop unwound"))
+    interrupt.run_began(cached=True)  # the next run starts with no stop pending
+    assert not interrupt.stopped_by(ValueError("a real failure"))
