@@ -1,5 +1,6 @@
 """Ctrl-C and SIGTERM stop a run within 2 s, whichever node is running, and leave nothing half-written (issue 47)."""
 
+import dataclasses
 import os
 import signal
 import subprocess
@@ -199,3 +200,42 @@ def test_a_node_that_raises_while_a_stop_is_pending_is_interrupted_not_failed(tm
     assert interrupt.stopped_by(ValueError("raised as the stop unwound"))
     interrupt.run_began(cached=True)  # the next run starts with no stop pending
     assert not interrupt.stopped_by(ValueError("a real failure"))
+
+
+@dataclasses.dataclass
+class Progress:
+    """A step's saved progress, as a simulation's: how many frames it has done."""
+
+    frames_done: int
+
+
+def test_the_killed_line_names_the_step_the_files_and_the_saved_checkpoint(tmp_path):
+    """Issue 47: "the running node did not stop within 1 s and was ended; removed 3 unfinished file(s)" named
+    neither the step, nor the files, nor the checkpoint a re-run resumes from."""
+    from nodegraph import interrupt
+    from nodegraph.checkpoint import Checkpoint
+
+    listing = tmp_path / "listing.txt"
+    checkpoint = tmp_path / "checkpoints" / "k.npz"
+    checkpoint.parent.mkdir()
+    monkey = pytest.MonkeyPatch()
+    monkey.setenv(interrupt.ENV_VAR, str(listing))
+    try:
+        interrupt.run_began(cached=True)
+        interrupt.step_started("pts")
+        interrupt.step_ended("pts")
+        interrupt.step_started("rice_sim", checkpoint)
+        Checkpoint(checkpoint).save(Progress(1200))
+        files = [tmp_path / f"f{k}.partial.rrd" for k in range(5)]
+        for f in files:
+            f.write_text("x")
+            interrupt.note(f)
+        assert "rice_sim from its saved checkpoint at frame 1,200" in interrupt.stopped_line()
+    finally:
+        monkey.undo()
+    removed = interrupt.remove_leftovers(listing)
+    assert sorted(removed) == files and checkpoint.exists()  # the checkpoint is kept: a re-run resumes from it
+    line = interrupt.killed_line(listing, removed)
+    assert line.startswith("interrupted during rice_sim: the step did not stop within 1 s and was ended"), line
+    assert f"removed 5 unfinished file(s): {', '.join(map(str, removed[:3]))} and 2 more" in line, line
+    assert line.endswith("a re-run resumes from there, rice_sim from its saved checkpoint at frame 1,200"), line
