@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from . import codec
+from . import codec, interrupt
 from .cache import atomic_write
 
 
@@ -29,8 +29,12 @@ class Checkpoint:
         return time.monotonic() - self._last >= self.interval
 
     def save(self, value: Any) -> None:
+        """Save ``value``; one with a ``frames_done`` count is named by it where a stopped run says what a re-run
+        resumes from."""
         atomic_write(self.path, codec.encode(value))
         self._last = time.monotonic()
+        done = getattr(value, "frames_done", None)
+        interrupt.progress_saved(self.path, f"frame {done:,}" if isinstance(done, int) else "")
 
     def load(self) -> Any | None:
         """The saved progress with writable arrays, or None (none saved, or unreadable: then removed)."""

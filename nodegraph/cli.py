@@ -762,11 +762,14 @@ def _trim(cache: Cache | None, since: float | None, reporter: Reporter | None) -
         return
     done = cache.evict(spare_since=since)
     if reporter is None and done.entries:
-        print(f"removed {done.entries} least recently used entries ({format_size(done.freed)})")
+        print(
+            f"removed {done.entries} least recently used entries ({format_size(done.freed)}); "
+            f"the cache now holds {format_size(done.left)} of its {format_size(cache.limit())} limit"
+        )
     elif reporter is not None and done.entries:
         reporter.info(
             f"cache: removed {done.entries} least recently used entries ({format_size(done.freed)}); "
-            f"{format_size(done.left)} of {format_size(cache.limit())} left"
+            f"the cache now holds {format_size(done.left)} of its {format_size(cache.limit())} limit"
         )
     if done.over and reporter is not None:
         reporter.warn(
@@ -776,6 +779,7 @@ def _trim(cache: Cache | None, since: float | None, reporter: Reporter | None) -
 
 
 def _interrupt(signum, frame):
+    interrupt.stopping()
     raise KeyboardInterrupt
 
 

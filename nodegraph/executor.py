@@ -34,7 +34,7 @@ from .output_files import (
     write_output,
 )
 from .plan import Instance, Plan, RecipeRef, plan_jobs
-from .recipe import Recipe, Wire
+from .recipe import Recipe, Wire, _nearest
 from .report import NodeRecord, PeakMemory, Reporter, now
 from .rerun_log import NodeCapture, RunRecording, dispatch_digest, log_value, logger_digest, partial_path
 
@@ -315,6 +315,9 @@ class Executor:
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
                 stopped = True
                 raise
+            if interrupt.stopped_by(exc):  # the stop's doing, come out of compiled code as another error
+                stopped = True
+                raise KeyboardInterrupt from exc
             elapsed = now() - start if beside is None or beside.elapsed is None else beside.elapsed
             self.status[inst] = NodeRecord(inst.label, spec.type_name, "failed", elapsed)
             if isinstance(exc, NodeFailure):
@@ -770,12 +773,18 @@ def resolve_outputs(recipe: Recipe, refs: list[str]) -> list[Wire]:
         node_id, _, port = ref.partition(".")
         entry = recipe.nodes.get(node_id)
         if entry is None:
+            near = _nearest(node_id, recipe.nodes)
+            hint = f"; did you mean '{near}'?" if near else ""
             raise NodegraphError(
-                f"--output {ref}: no node '{node_id}' in recipe {recipe.path}; nodes: {', '.join(sorted(recipe.nodes))}"
+                f"--output {ref}: no node '{node_id}' in recipe {recipe.path}{hint}; "
+                f"nodes: {', '.join(sorted(recipe.nodes))}"
             )
         if port and port not in entry.spec.outputs:
+            near = _nearest(port, entry.spec.outputs)
+            hint = f"; did you mean '{node_id}.{near}'?" if near else ""
             raise NodegraphError(
-                f"--output {ref}: node '{node_id}' has no output '{port}'; outputs: {', '.join(entry.spec.outputs)}"
+                f"--output {ref}: node '{node_id}' has no output '{port}'{hint}; "
+                f"outputs: {', '.join(entry.spec.outputs)}"
             )
         wires += [Wire(node_id, p) for p in ([port] if port else entry.spec.outputs)]
     return wires

@@ -46,18 +46,21 @@ def said() -> None:
 
 
 RUNNING, ENDED = "#running ", "#ended "  # lines of the listing: a step began, a step ended (``step_started``)
+SAVED = "#saved "  # a line of the listing: a step saved its progress (``progress_saved``): its file, and where it is
 UNCACHED = "#uncached"  # a line of the listing: the run keeps nothing that finishes (--no-cache)
 
 # the steps running now in this process (label: (start, checkpoint file or None)), and whether the run keeps what
 # finishes (a cache): what a re-run would find
 _running: dict[str, tuple[float, Path | None]] = {}
-_run: dict[str, bool | None] = {"cached": None}  # None: no run has begun in this process
+_saved: dict[Path, str] = {}  # checkpoint file: where its saved progress is ("frame 1,200"; "" where not known)
+_run: dict[str, bool | None] = {"cached": None, "stopping": False}  # cached None: no run has begun in this process
 
 
 def run_began(cached: bool) -> None:
     """A run begins: whether it keeps what finishes (a cache) decides what its 'interrupted' line promises."""
     _running.clear()
     _run["cached"] = cached
+    _run["stopping"] = False
     if not cached:
         note(UNCACHED)
 
@@ -65,7 +68,21 @@ def run_began(cached: bool) -> None:
 def step_started(label: str, checkpoint: Path | None = None) -> None:
     """A step (node instance) starts computing; ``checkpoint``: the file it saves its progress to, if any."""
     _running[label] = (time.monotonic(), checkpoint)
-    note(RUNNING + label)
+    note(RUNNING + label + ("" if checkpoint is None else f"\t{checkpoint}"))
+
+
+def progress_saved(checkpoint: Path, where: str = "") -> None:
+    """A step saved its progress to ``checkpoint``; ``where``: how far it was ("frame 1,200"), if known."""
+    _saved[Path(checkpoint)] = where
+    note(SAVED + f"{checkpoint}\t{where}")
+
+
+def _resumes(label: str, checkpoint: Path | None, saved: dict[Path, str]) -> str | None:
+    """What a re-run of a stopped step resumes from ("rice_sim from its checkpoint at frame 1,200"), or None."""
+    if checkpoint is None or not Path(checkpoint).exists():
+        return None
+    where = saved.get(Path(checkpoint), "")
+    return f"{label} from its saved checkpoint" + (f" at {where}" if where else "")
 
 
 def step_ended(label: str) -> None:
@@ -83,24 +100,63 @@ def stopped_line() -> str:
         return f"{head} before any step ran"
     if not _run["cached"]:
         return f"{head}; nothing was cached (--no-cache): a re-run starts over"
-    resumes = [label for label, (_, checkpoint) in _running.items() if checkpoint is not None and checkpoint.exists()]
-    tail = f", {' and '.join(resumes)} from its saved progress" if resumes else ""
+    resumes = [r for label, (_, checkpoint) in _running.items() if (r := _resumes(label, checkpoint, _saved))]
+    tail = f", {' and '.join(resumes)}" if resumes else ""
     return f"{head}; nodes that finished are cached: a re-run resumes from there{tail}"
 
 
 def running_in(listing: Path) -> list[str]:
     """The steps the listing shows started and not ended (what a killed child was running)."""
+    return list(_listed(listing)[0])
+
+
+def _listed(listing: Path) -> tuple[dict[str, Path | None], dict[Path, str]]:
+    """The steps the listing shows started and not ended, each with its checkpoint file (or None), and where each
+    checkpoint file's saved progress is (``progress_saved``)."""
     try:
         lines = listing.read_text(encoding="utf-8").splitlines()
     except OSError:
-        return []
-    running: dict[str, None] = {}
+        return {}, {}
+    running: dict[str, Path | None] = {}
+    saved: dict[Path, str] = {}
     for line in lines:
         if line.startswith(RUNNING):
-            running[line[len(RUNNING) :]] = None
+            label, _, checkpoint = line[len(RUNNING) :].partition("\t")
+            running[label] = Path(checkpoint) if checkpoint else None
         elif line.startswith(ENDED):
             running.pop(line[len(ENDED) :], None)
-    return list(running)
+        elif line.startswith(SAVED):
+            checkpoint, _, where = line[len(SAVED) :].partition("\t")
+            saved[Path(checkpoint)] = where
+    return running, saved
+
+
+NAMED = 3  # at most this many removed files are named in the line of a killed run; the rest are counted
+
+
+def killed_line(listing: Path, removed: list[Path]) -> str:
+    """The line of a run killed after ``GRACE`` seconds: the steps it was in, the unfinished files removed (the
+    first ``NAMED``), what a re-run resumes from (a step's saved checkpoint, with how far it was)."""
+    running, saved = _listed(listing)
+    during = f" during {', '.join(running)}" if running else ""
+    who = "the run" if not running else ("the step" if len(running) == 1 else "the steps")
+    what = ""
+    if removed:
+        names = ", ".join(str(p) for p in removed[:NAMED])
+        more = f" and {len(removed) - NAMED} more" if len(removed) > NAMED else ""
+        what = f"; removed {len(removed)} unfinished file(s): {names}{more}"
+    try:
+        uncached = UNCACHED in listing.read_text(encoding="utf-8").splitlines()
+    except OSError:
+        uncached = False
+    if uncached:
+        rerun = "nothing was cached (--no-cache): a re-run starts over"
+    else:
+        resumes = [r for label, checkpoint in running.items() if (r := _resumes(label, checkpoint, saved))]
+        rerun = "nodes that finished are cached: a re-run resumes from there" + (
+            f", {' and '.join(resumes)}" if resumes else ""
+        )
+    return f"interrupted{during}: {who} did not stop within {GRACE:g} s and was ended{what}; {rerun}"
 
 
 def remove_leftovers(listing: Path) -> list[Path]:
@@ -113,7 +169,7 @@ def remove_leftovers(listing: Path) -> list[Path]:
     removed, folders = [], []
     for name in dict.fromkeys(names):
         path = Path(name)
-        if name in (SAID, UNCACHED) or name.startswith((RUNNING, ENDED)):
+        if name in (SAID, UNCACHED) or name.startswith((RUNNING, ENDED, SAVED)):
             continue
         if path.is_dir():
             folders.append(path)
@@ -151,8 +207,31 @@ def repeated() -> bool:
     return again
 
 
+def stopping() -> None:
+    """Note that a stop (SIGINT, SIGTERM) reached this process: an error a node raises from now on is the stop's
+    doing (``stopped_by``)."""
+    _run["stopping"] = True
+
+
+def stopped_by(exc: BaseException) -> bool:
+    """Whether ``exc``, raised by a node, is a stop rather than a failure: a stop reached this process while the
+    run went on, or a ``KeyboardInterrupt`` is in its chain. A signal's handler raises in whatever code runs: in a
+    call into compiled code (numba's dispatcher) it comes out as another error, as "SystemError: CPUDispatcher(...)
+    returned a result with an exception set", which is no failure of the node."""
+    if _run["stopping"]:
+        return True
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def stop(signum, frame) -> None:
     """The child's handler of SIGINT and SIGTERM: a ``KeyboardInterrupt``, once per stop (``repeated``)."""
+    stopping()
     if not repeated():
         raise KeyboardInterrupt
 
@@ -250,18 +329,6 @@ def _wait(pid: int, listing: Path, news: int) -> int:
     if killed:
         if sys.stderr.isatty():
             sys.stderr.write("\x1b[?25h\n")  # the progress bar hid the cursor
-        what = f"; removed {len(removed)} unfinished file(s)" if removed else ""
-        steps = running_in(listing)
-        during = f" during {', '.join(steps)}" if steps else ""
-        uncached = UNCACHED in listing.read_text(encoding="utf-8").splitlines() if listing.exists() else False
-        rerun = (
-            "nothing was cached (--no-cache): a re-run starts over"
-            if uncached
-            else "nodes that finished are cached: a re-run resumes from there"
-        )
-        print(
-            f"interrupted{during}: the running node did not stop within {GRACE:g} s and was ended{what}; {rerun}",
-            file=sys.stderr,
-        )
+        print(killed_line(listing, removed), file=sys.stderr)
         return 130
     return os.WEXITSTATUS(status) if os.WIFEXITED(status) else 128 + os.WTERMSIG(status)

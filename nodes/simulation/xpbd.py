@@ -14,10 +14,13 @@ from nodegraph.values import Mesh
 from ..values import Aggregate, CookedMaterial, ParticleState
 from .settings import EFFECTS, PARAMS, XpbdParams
 
-# particle-iterations per second of a substep's work (10 substeps × 2 iterations of a 2,000-grain bowl,
-# 16,000 particles, 60 frames in 7.3 s on 2 cores: 2.6e6; ``frames: 100000`` of ikura don's rice took
-# 42 min, 2.4e6): what ``expect_cost`` tells before a long run starts, a rough figure by design
-PARTICLE_ITERATIONS_PER_SECOND = 2.0e6
+# particle-iterations per CPU second of a substep's work: what ``expect_cost`` tells before a long run starts (and
+# ``--max-minutes`` refuses above), in the node's CPU seconds. `nodegraph run graphs/rice_bowl.yaml --set
+# rice_sim.frames=N --output rice_sim --no-rrd --no-cache --yes` (15,424 particles × 10 substeps × 2 iterations,
+# kernels already compiled), rice_sim's CPU time from the closing table: N = 60 in 43.0 s (4.3e5), 120 in 88.2 s
+# (4.2e5), 240 in 158 s (4.7e5; frames 61–240 at 4.8e5: later frames cost less as grains come to rest); 2 cores,
+# load 3.0–5.8, 2026-12-06 17:40–17:49 UTC
+PARTICLE_ITERATIONS_PER_SECOND = 4.5e5
 
 
 def _check(params):

@@ -156,3 +156,26 @@ def test_the_cache_keeps_outputs_deflated(tmp_path):
     assert cache.info().bytes < 0.5 * len(codec.encode(mesh))
     again = cache.load("m" * 64, {"mesh": Mesh})["mesh"]
     assert np.array_equal(again.faces, faces) and np.array_equal(again.vertices, grid)
+
+
+def test_the_eviction_line_says_what_the_cache_holds_not_what_is_left(tmp_path):
+    """Issue 47: '2.0 GiB of 2.0 GiB left' read as free space; the line says what the cache holds of its limit."""
+    from nodegraph.cli import _trim
+
+    cache = Cache(tmp_path / "c")
+    for i, name in enumerate("abc"):
+        _store(cache, name, float(i), 1000.0 + i)
+    cache.set_limit(cache.info().bytes // 2)
+    said = []
+
+    class Reporter:
+        def info(self, message):
+            said.append(message)
+
+        def warn(self, message):
+            said.append(message)
+
+    _trim(cache, None, Reporter())
+    held = format_size(cache.info().bytes)
+    assert len(said) == 1 and " left" not in said[0]
+    assert f"the cache now holds {held} of its {format_size(cache.limit())} limit" in said[0]

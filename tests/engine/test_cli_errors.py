@@ -112,3 +112,15 @@ def test_a_failed_first_run_does_not_claim_an_older_recording(tmp_path, capsys, 
     rrd.write_bytes(b"an older complete recording")
     assert main([*args, "--out-dir", str(tmp_path / "out")]) == 1
     assert "left as it was" in capsys.readouterr().err
+
+
+def test_a_misspelt_output_suggests_the_nearest_node_and_port(registry):
+    """Issue 47: ``--output previw`` listed the nodes but, unlike every other error, did not say 'did you mean'."""
+    from nodegraph.errors import NodegraphError
+    from nodegraph.executor import resolve_outputs
+
+    recipe = parse_recipe(VALID, registry, file="r.yaml")
+    with pytest.raises(NodegraphError, match=r"no node 'shfted' in recipe r.yaml; did you mean 'shifted'\?; nodes: "):
+        resolve_outputs(recipe, ["shfted"])
+    with pytest.raises(NodegraphError, match=r"has no output 'sphere'; did you mean 'merge.spheres'\?; outputs: "):
+        resolve_outputs(recipe, ["merge.sphere"])

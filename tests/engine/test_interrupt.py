@@ -1,5 +1,6 @@
 """Ctrl-C and SIGTERM stop a run within 2 s, whichever node is running, and leave nothing half-written (issue 47)."""
 
+import dataclasses
 import os
 import signal
 import subprocess
@@ -172,3 +173,69 @@ def test_without_a_cache_the_stopped_line_says_a_rerun_starts_over():
     assert interrupt.stopped_line().startswith("interrupted during sim (0 s in); nothing was cached")
     interrupt.run_began(cached=True)
     assert interrupt.stopped_line() == "interrupted; nodes that finished are cached: a re-run resumes from there"
+
+
+def test_a_node_that_raises_while_a_stop_is_pending_is_interrupted_not_failed(tmp_path, monkeypatch, capsys):
+    """Issue 47: SIGTERM inside a numba kernel came out as "SystemError: CPUDispatcher(...) returned a result with an
+    exception set": the run said the node failed and named a partial recording that was then removed. A stop is
+    reported as one, with the line Ctrl-C gives, and no partial recording is named or kept."""
+    from nodegraph import interrupt
+    from nodegraph.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "stop.yaml").write_text(
+        "name: stoprun\noutputs: [boom.spheres]\nnodes:\n  pts: {type: toy_points}\n"
+        "  boom: {type: toy_stopped, inputs: {spheres: pts.spheres}}\n"
+    )
+    code = main(["run", "stop.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "c")])
+    err = capsys.readouterr().err
+    assert code == 130, err
+    assert "failed" not in err and "partial" not in err and "error:" not in err, err
+    assert "interrupted during boom (" in err and "nodes that finished are cached" in err, err
+    assert not leftovers(tmp_path), leftovers(tmp_path)
+    # a stop noted by the signal's handler makes any error a node raises after it the stop's doing
+    interrupt.run_began(cached=True)
+    assert not interrupt.stopped_by(ValueError("a real failure"))
+    interrupt.stopping()
+    assert interrupt.stopped_by(ValueError("raised as the stop unwound"))
+    interrupt.run_began(cached=True)  # the next run starts with no stop pending
+    assert not interrupt.stopped_by(ValueError("a real failure"))
+
+
+@dataclasses.dataclass
+class Progress:
+    """A step's saved progress, as a simulation's: how many frames it has done."""
+
+    frames_done: int
+
+
+def test_the_killed_line_names_the_step_the_files_and_the_saved_checkpoint(tmp_path):
+    """Issue 47: "the running node did not stop within 1 s and was ended; removed 3 unfinished file(s)" named
+    neither the step, nor the files, nor the checkpoint a re-run resumes from."""
+    from nodegraph import interrupt
+    from nodegraph.checkpoint import Checkpoint
+
+    listing = tmp_path / "listing.txt"
+    checkpoint = tmp_path / "checkpoints" / "k.npz"
+    checkpoint.parent.mkdir()
+    monkey = pytest.MonkeyPatch()
+    monkey.setenv(interrupt.ENV_VAR, str(listing))
+    try:
+        interrupt.run_began(cached=True)
+        interrupt.step_started("pts")
+        interrupt.step_ended("pts")
+        interrupt.step_started("rice_sim", checkpoint)
+        Checkpoint(checkpoint).save(Progress(1200))
+        files = [tmp_path / f"f{k}.partial.rrd" for k in range(5)]
+        for f in files:
+            f.write_text("x")
+            interrupt.note(f)
+        assert "rice_sim from its saved checkpoint at frame 1,200" in interrupt.stopped_line()
+    finally:
+        monkey.undo()
+    removed = interrupt.remove_leftovers(listing)
+    assert sorted(removed) == files and checkpoint.exists()  # the checkpoint is kept: a re-run resumes from it
+    line = interrupt.killed_line(listing, removed)
+    assert line.startswith("interrupted during rice_sim: the step did not stop within 1 s and was ended"), line
+    assert f"removed 5 unfinished file(s): {', '.join(map(str, removed[:3]))} and 2 more" in line, line
+    assert line.endswith("a re-run resumes from there, rice_sim from its saved checkpoint at frame 1,200"), line

@@ -124,6 +124,20 @@ def toy_fail(ctx, spheres):
     raise ValueError("toy failure: radius must be positive")
 
 
+@node("toy_stopped", inputs={"spheres": In(SphereSet, "anything")}, outputs={"spheres": Out(SphereSet, "never")})
+def toy_stopped(ctx, spheres):
+    """Logs a step, then is stopped inside compiled code: a signal's ``KeyboardInterrupt`` comes out of numba's
+    dispatcher as a ``SystemError`` ("returned a result with an exception set")."""
+    import rerun as rr
+
+    ctx.rerun.set_time("sim_step", 0)
+    ctx.rerun.log("energy", rr.Scalars(0.0))
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt as stop:
+        raise SystemError("CPUDispatcher(<function kernel>) returned a result with an exception set") from stop
+
+
 @node(
     "toy_slow",
     inputs={"spheres": In(SphereSet, "passed through")},
