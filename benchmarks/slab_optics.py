@@ -1,6 +1,6 @@
 """Which renderer carries light under a skin rightly: a slab of the main job's rice (15 % water) and of the ikura
 membrane, rendered by the preview's Mitsuba (``mitsuba_scene.medium``, ``boundary_bsdf``, ``material_bsdf``) and by
-Cycles through the Blender add-on (``benchmarks/slab_cycles.py``), against references that use neither renderer.
+Cycles through the Blender add-on (``tools/slab_cycles.py``), against references that use neither renderer.
 
     python benchmarks/slab_optics.py [--spp N] [--photons N] [--addon DIR]
 
@@ -131,7 +131,7 @@ def cycles(look: dict, kind: str, h: float, side: str, spp: int, addon: Path) ->
         done = subprocess.run(
             [
                 python,
-                str(REPO / "benchmarks" / "slab_cycles.py"),
+                str(REPO / "tools" / "slab_cycles.py"),
                 str(addon),
                 str(look_path),
                 kind,
@@ -156,7 +156,6 @@ def main() -> None:
         "--addon", type=Path, default=REPO / "blender", help="the folder holding the add-on (another version's)"
     )
     args = parser.parse_args()
-    sys.path.insert(0, str(REPO))
     from nodes.export import mitsuba_scene as ms
     from nodes.export.look import medium_coefficients, principled_attributes
     from nodes.shading.materials import ikura_materials, rice_material

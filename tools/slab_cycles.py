@@ -2,7 +2,7 @@
 H mm thick, under a white sky over the upper hemisphere and black below, seen straight on by an orthographic camera
 (2 × 2 px over 1 mm) from above (reflectance) or below (transmittance); Cycles without a denoiser.
 
-    python slab_cycles.py ADDON_DIR LOOK.json KIND H SIDE SPP OUT.json
+    python tools/slab_cycles.py ADDON_DIR LOOK.json KIND H SIDE SPP OUT.json
 
 ADDON_DIR: the folder that holds the add-on (``blender``; an older version's, to measure it).
 LOOK.json: the material's ``nodegraph:principled:*`` set (``nodes/export/look.py``), which the repository's add-on
