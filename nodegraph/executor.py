@@ -34,7 +34,7 @@ from .output_files import (
     write_output,
 )
 from .plan import Instance, Plan, RecipeRef, plan_jobs
-from .recipe import Recipe, Wire, _nearest
+from .recipe import Recipe, Wire, nearest
 from .report import NodeRecord, PeakMemory, Reporter, now
 from .rerun_log import NodeCapture, RunRecording, dispatch_digest, log_value, logger_digest, partial_path
 
@@ -773,14 +773,14 @@ def resolve_outputs(recipe: Recipe, refs: list[str]) -> list[Wire]:
         node_id, _, port = ref.partition(".")
         entry = recipe.nodes.get(node_id)
         if entry is None:
-            near = _nearest(node_id, recipe.nodes)
+            near = nearest(node_id, recipe.nodes)
             hint = f"; did you mean '{near}'?" if near else ""
             raise NodegraphError(
                 f"--output {ref}: no node '{node_id}' in recipe {recipe.path}{hint}; "
                 f"nodes: {', '.join(sorted(recipe.nodes))}"
             )
         if port and port not in entry.spec.outputs:
-            near = _nearest(port, entry.spec.outputs)
+            near = nearest(port, entry.spec.outputs)
             hint = f"; did you mean '{node_id}.{near}'?" if near else ""
             raise NodegraphError(
                 f"--output {ref}: node '{node_id}' has no output '{port}'{hint}; "

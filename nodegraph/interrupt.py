@@ -85,6 +85,17 @@ def _resumes(label: str, checkpoint: Path | None, saved: dict[Path, str]) -> str
     return f"{label} from its saved checkpoint" + (f" at {where}" if where else "")
 
 
+def _rerun(uncached: bool, running: dict[str, Path | None], saved: dict[Path, str]) -> str:
+    """What a re-run of a stopped run starts from: nothing without a cache, else the finished nodes and each
+    running step's saved checkpoint (``running``: label → its checkpoint file or None)."""
+    if uncached:
+        return "nothing was cached (--no-cache): a re-run starts over"
+    resumes = [r for label, checkpoint in running.items() if (r := _resumes(label, checkpoint, saved))]
+    return "nodes that finished are cached: a re-run resumes from there" + (
+        f", {' and '.join(resumes)}" if resumes else ""
+    )
+
+
 def step_ended(label: str) -> None:
     """A step has ended (done, failed or stopped)."""
     _running.pop(label, None)
@@ -98,11 +109,8 @@ def stopped_line() -> str:
     head = f"interrupted during {where}" if where else "interrupted"
     if _run["cached"] is None:
         return f"{head} before any step ran"
-    if not _run["cached"]:
-        return f"{head}; nothing was cached (--no-cache): a re-run starts over"
-    resumes = [r for label, (_, checkpoint) in _running.items() if (r := _resumes(label, checkpoint, _saved))]
-    tail = f", {' and '.join(resumes)}" if resumes else ""
-    return f"{head}; nodes that finished are cached: a re-run resumes from there{tail}"
+    checkpoints = {label: checkpoint for label, (_, checkpoint) in _running.items()}
+    return f"{head}; {_rerun(not _run['cached'], checkpoints, _saved)}"
 
 
 def running_in(listing: Path) -> list[str]:
@@ -149,13 +157,7 @@ def killed_line(listing: Path, removed: list[Path]) -> str:
         uncached = UNCACHED in listing.read_text(encoding="utf-8").splitlines()
     except OSError:
         uncached = False
-    if uncached:
-        rerun = "nothing was cached (--no-cache): a re-run starts over"
-    else:
-        resumes = [r for label, checkpoint in running.items() if (r := _resumes(label, checkpoint, saved))]
-        rerun = "nodes that finished are cached: a re-run resumes from there" + (
-            f", {' and '.join(resumes)}" if resumes else ""
-        )
+    rerun = _rerun(uncached, running, saved)
     return f"interrupted{during}: {who} did not stop within {GRACE:g} s and was ended{what}; {rerun}"
 
 

@@ -136,7 +136,7 @@ class Recipe:
         return self.graph.topological_order(node_ids)
 
 
-def _nearest(word: str, options) -> str | None:
+def nearest(word: str, options) -> str | None:
     matches = difflib.get_close_matches(str(word), [str(o) for o in options], n=1, cutoff=0.5)
     return matches[0] if matches else None
 
@@ -185,7 +185,7 @@ def nearest_params(node_id: str, key: str, params: dict[str, dict[str, str]]) ->
         if all(node == node_id for node, _ in chosen):
             return tuple(name for _, name in chosen)
         return tuple(f"{node}.{name}" for node, name in chosen)  # another node's among them: each says its node
-    near = _nearest(key, own)
+    near = nearest(key, own)
     return (near,) if near else ()
 
 
@@ -255,7 +255,7 @@ class _Validator:
                     key=True,
                     node=node,
                     allowed=", ".join(model.model_fields),
-                    suggestion=_nearest(field_name, model.model_fields),
+                    suggestion=nearest(field_name, model.model_fields),
                 )
             elif err["type"] == "missing":
                 self.issue(loc[:-1], f"missing required key '{field_name}'", node=node)
@@ -335,7 +335,7 @@ class _Validator:
             node_id, key = target
             if node_id not in nodes:
                 self.issues.append(
-                    Issue(where, f"no node '{node_id}' in the recipe", given=text, suggestion=_nearest(node_id, nodes))
+                    Issue(where, f"no node '{node_id}' in the recipe", given=text, suggestion=nearest(node_id, nodes))
                 )
                 continue
             entry = nodes[node_id]
@@ -508,7 +508,7 @@ class _Validator:
                     ("draft", key),
                     f"draft: no node '{node_id}' in the recipe",
                     key=True,
-                    suggestion=_nearest(node_id, entries),
+                    suggestion=nearest(node_id, entries),
                 )
             elif param not in (*entries[node_id].spec.params, "variants", "seed"):
                 self.issue(
@@ -517,7 +517,7 @@ class _Validator:
                     key=True,
                     node=node_id,
                     allowed=", ".join(entries[node_id].spec.params),
-                    suggestion=_nearest(param, entries[node_id].spec.params),
+                    suggestion=nearest(param, entries[node_id].spec.params),
                 )
 
     def _node(self, node_id: str, model: NodeModel, path: tuple, wire_sources) -> NodeEntry | None:
@@ -527,7 +527,7 @@ class _Validator:
                 path + ("type",),
                 f"unknown node type '{model.type}'",
                 node=node_id,
-                suggestion=_nearest(model.type, self.registry.names()),
+                suggestion=nearest(model.type, self.registry.names()),
                 allowed="see `nodegraph nodes`",
             )
             return None
@@ -591,7 +591,7 @@ class _Validator:
                     key=True,
                     node=node_id,
                     allowed=", ".join(spec.inputs) or "(none)",
-                    suggestion=_nearest(port_name, spec.inputs),
+                    suggestion=nearest(port_name, spec.inputs),
                 )
                 continue
             ref_list = refs if isinstance(refs, list) else [refs]
@@ -645,7 +645,7 @@ class _Validator:
                         f"input '{port_name}' refers to unknown node '{wire.node}'",
                         node=node_id,
                         given=str(wire) if wire.port else wire.node,
-                        suggestion=_nearest(wire.node, raw_nodes),
+                        suggestion=nearest(wire.node, raw_nodes),
                     )
                     continue
                 source_spec = entries[wire.node].spec
@@ -662,7 +662,7 @@ class _Validator:
                         node=node_id,
                         param=f"inputs.{port_name}",
                         allowed=", ".join(f"{wire.node}.{p}" for p in source_spec.outputs),
-                        suggestion=_nearest(wire.port, source_spec.outputs) if wire.port else None,
+                        suggestion=nearest(wire.port, source_spec.outputs) if wire.port else None,
                     )
                     continue
                 out = source_spec.outputs[port_ref]
@@ -722,7 +722,7 @@ class _Validator:
                         path,
                         f"output refers to unknown node '{node_ref}'",
                         given=ref,
-                        suggestion=_nearest(node_ref, raw_nodes),
+                        suggestion=nearest(node_ref, raw_nodes),
                     )
                 continue
             spec = entries[node_ref].spec
@@ -736,7 +736,7 @@ class _Validator:
                     f"'{node_ref}' has no output '{port_ref}'",
                     given=ref,
                     allowed=", ".join(f"{node_ref}.{p}" for p in spec.outputs),
-                    suggestion=_nearest(port_ref, spec.outputs),
+                    suggestion=nearest(port_ref, spec.outputs),
                 )
         return wires
 
@@ -751,7 +751,7 @@ class _Validator:
                     f"unknown effect '{effect}'",
                     given=effect,
                     allowed=", ".join(sorted(known)) or "(no node implements any effect)",
-                    suggestion=_nearest(effect, known),
+                    suggestion=nearest(effect, known),
                 )
             elif effect not in in_recipe:
                 implementers = sorted(s.type_name for s in self.registry.specs() if effect in s.effects)
