@@ -206,6 +206,8 @@ class XpbdSolver:
         k = self.coefficients  # the kernels' rules, once per run
         self.match_rule = shape_matching.MatchRule(k.alpha, settings.linear_deformation, ROTATION_ITERATIONS)
         self.adhesion_rule = adhesion.AdhesionRule(settings.capture, k.adhesion_alpha, k.lift)
+        steps = max(1, round(SETTLE_TIME / k.h))
+        self.sleep_rule = integrate.SleepRule(settings.sleep_speed * k.h, WAKE_ACCEL * k.h * k.h, steps)
         self.moments = model.moments.args() if model.moments is not None else ()
         self.quadratic = model.quadratic.args() if model.quadratic is not None else ()
         self.bend_rows = model.bend.args() if model.bend is not None else None
@@ -291,7 +293,7 @@ class XpbdSolver:
                 self.model_arrays,
                 self._contact_rows(contacts),
                 st.slow_steps,
-                integrate.SleepRule(s.sleep_speed * k.h, WAKE_ACCEL * k.h * k.h, max(1, round(SETTLE_TIME / k.h))),
+                self.sleep_rule,
             )
         st.time += k.h
         return residual
