@@ -314,10 +314,9 @@ def _radius_from_elements(elements) -> float:
 
 
 def _outer_part(mesh) -> tuple[np.ndarray, np.ndarray]:
-    """(vertices, faces) of part 0 of a multi-part mesh, its unused vertices dropped; the mesh itself otherwise."""
+    """(vertices, faces) of part 0 of a multi-part mesh (``mesh_overlap.outer_shell``); the mesh itself otherwise."""
+    from nodes.quality.mesh_overlap import outer_shell
+
     parts = getattr(mesh, "parts", None)
-    if parts is None or not np.any(np.asarray(parts) != 0):
-        return mesh.vertices, mesh.faces
-    faces = np.asarray(mesh.faces)[np.asarray(parts) == 0]
-    used, inverse = np.unique(faces, return_inverse=True)
-    return np.asarray(mesh.vertices)[used], inverse.reshape(faces.shape)
+    used, faces = outer_shell(np.asarray(mesh.faces), None if parts is None else np.asarray(parts))
+    return (mesh.vertices, mesh.faces) if used is None else (np.asarray(mesh.vertices)[used], faces)
