@@ -7,6 +7,7 @@ the table in docs/validation.md.
     python benchmarks/physics_at_defaults.py --quick    # the inclined planes only (≈ 1 min), prints, writes nothing
     python benchmarks/physics_at_defaults.py --convergence   # the substep curve (docs/accuracy.md), ≈ 8 min
     python benchmarks/physics_at_defaults.py --funnel        # the fixed-funnel heap at 5–80 substeps, ≈ 5 min
+    python benchmarks/physics_at_defaults.py --passes        # substeps against iterations; the stream's landing
 
 ``--convergence`` runs the poured heap (two seeds) and the grain sliding across its length at 5–80 substeps and
 writes benchmarks/measured/granular_convergence.jsonl, with its plot docs/images/accuracy/granular_convergence.png:
@@ -29,18 +30,23 @@ runtime.configure()  # numba's kernel cache and locator, before a kernel module 
 RECORD = Path(__file__).resolve().parent / "measured" / "physics_defaults.jsonl"
 CONVERGENCE = RECORD.with_name("granular_convergence.jsonl")
 FUNNEL = RECORD.with_name("funnel_heap.jsonl")
+PASSES_RECORD = RECORD.with_name("solver_passes.jsonl")
 PLOT = Path(__file__).resolve().parents[1] / "docs" / "images" / "accuracy" / "granular_convergence.png"
-SUBSTEPS = (5, 10, 20, 40, 80)  # the convergence curve's points; the node's default is 10
+SUBSTEPS = (5, 10, 20, 40, 80)  # the convergence curve's points; the node's default is 20
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
 ANGLES = tuple(range(24, 45))  # degrees, the inclined plane's tilts
+# (substeps, iterations): 20, 30 and 40 passes per frame, and 160 (40 × 4) as the reference
+PASSES = ((10, 2), (20, 1), (10, 3), (10, 4), (20, 2), (40, 4))
 MU_S = 0.6  # the node's default static_threshold: atan 0.6 = 30.96°
 
 
-def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0, on: str = "wall", across: bool = False) -> float:
+def grain_on_plane(
+    theta: float, substeps: int, seconds: float = 1.0, on: str = "wall", across: bool = False, **params
+) -> float:
     """One japonica grain (``rice_library``, 8 particles) set flat on level ground (``on`` "wall": a slab; "grains":
     ``grain_bed``) at the node's defaults, settled 0.5 s; then gravity tilted by ``theta`` (an inclined plane) for
     ``seconds``: how far (mm) its centre slid. ``across``: the grain turned 90° about the vertical, so it slides
-    across its length instead of along it."""
+    across its length instead of along it. ``params``: other node parameters (iterations)."""
     from scene_builders import box_mesh, rice_library
 
     from nodes.simulation.settings import XpbdParams
@@ -55,7 +61,7 @@ def grain_on_plane(theta: float, substeps: int, seconds: float = 1.0, on: str = 
         variants=np.zeros(1, np.int32),
         kind_names=("japonica",),
     )
-    params = XpbdParams(**xpbd.resolve_params({"substeps": substeps, "log_every": 0, "log_meshes_every": 0}))
+    params = XpbdParams(**xpbd.resolve_params({"substeps": substeps, "log_every": 0, "log_meshes_every": 0, **params}))
     aggregate = Aggregate(placement, (rice_library(seed=0),))
     if on == "wall":
         ground = box_mesh([-200, -200, -6], [200, 200, 0], "ground")
@@ -96,9 +102,9 @@ def grain_bed(seed: int = 0):
     return ParticleState(x, np.zeros_like(x), r, np.zeros(n), np.zeros(n, np.int64))
 
 
-def plane_case(substeps: int, on: str = "wall", across: bool = False) -> dict:
+def plane_case(substeps: int, on: str = "wall", across: bool = False, **params) -> dict:
     """The largest tilt at which the grain moves < 1 mm in 1 s, and the smallest at which it slides."""
-    slid = {a: grain_on_plane(a, substeps, on=on, across=across) for a in ANGLES}
+    slid = {a: grain_on_plane(a, substeps, on=on, across=across, **params) for a in ANGLES}
     holds = max([a for a in ANGLES if slid[a] < 1.0], default=None)
     slides = min([a for a in ANGLES if slid[a] >= 1.0], default=None)
     plane = "a plane" if on == "wall" else "a bed of grains lying flat (static)"
@@ -140,13 +146,15 @@ def heap_case(shape: str, n: int, substeps: int, seed: int = 0) -> dict:
     }
 
 
-def funnel_heap(substeps: int, seed: int = 0, grains: int = 400, hole: float = 18.0, drop: float = 15.0) -> dict:
+def funnel_heap(
+    substeps: int, seed: int = 0, grains: int = 400, hole: float = 18.0, drop: float = 15.0, **params
+) -> dict:
     """The fixed-funnel method (the funnel held at a fixed height; tan θ = H/R once the heap reaches it, as for
     powders in ISO 4324): ``grains`` japonica grains fill a silo 24 mm across (``silo_discharge.fill``) whose floor
     has a round outlet ``hole`` mm wide, ``drop`` mm above flat ground, and flow out onto it for 3 s at the node's
     defaults. A grain leaves the outlet at about √(g·D) and lands at ≤ 0.7 m/s, under the speed clamp's cap from
     10 substeps up, so unlike the stream the set-up does not depend on the clamp. Returns the heap's surface slope
-    and atan H/R at 3 s, its grains, its top (mm) and the seconds."""
+    and atan H/R at 3 s, its grains, its top (mm) and the seconds. ``params``: other node parameters (iterations)."""
     import manifold3d as mf
     from scene_builders import box_mesh, manifold_mesh, rice_library
     from silo_discharge import fill
@@ -167,7 +175,7 @@ def funnel_heap(substeps: int, seed: int = 0, grains: int = 400, hole: float = 1
     base = mf.Manifold.cylinder(floor, radius + wall, radius + wall, 96)
     outlet = (base - mf.Manifold.cylinder(floor, hole / 2, hole / 2, 96)).translate((0, 0, drop))
     ground = box_mesh([-90, -90, -4], [90, 90, 0], "ground")
-    params = XpbdParams(**xpbd.resolve_params({"substeps": substeps, "log_every": 0, "log_meshes_every": 0}))
+    params = XpbdParams(**xpbd.resolve_params({"substeps": substeps, "log_every": 0, "log_meshes_every": 0, **params}))
     aggregate = Aggregate(placement, (rice_library(seed=seed),))
     sim = build_simulation(aggregate, [manifold_mesh(tube + outlet, "funnel"), ground], EFFECTS, params)
     start = time.perf_counter()
@@ -194,6 +202,41 @@ def funnel_curve() -> list[dict]:
         rows.append({"case": "rice heap, fixed funnel", "substeps": substeps, "values": values})
         print(rows[-1], flush=True)
     return rows
+
+
+def passes() -> list[dict]:
+    """Substeps against iterations at about the same solver passes per frame: the fixed-funnel heap (seeds 0 and 1)
+    and the grain on a plane along and across its length, for each of ``PASSES``."""
+    rows = []
+    for substeps, iterations in PASSES:
+        runs = [funnel_heap(substeps, seed, iterations=iterations) for seed in (0, 1)]
+        values = {k: [r[k] for r in runs] for k in ("surface", "hr")}
+        values["seconds"] = round(sum(r["seconds"] for r in runs) / 2, 1)
+        for key, across in (("along", False), ("across", True)):
+            plane = plane_case(substeps, across=across, iterations=iterations)["values"]
+            values[f"holds_{key}"] = plane["holds"] if plane["slides"] else f">{ANGLES[-1]}"
+        rows.append({"case": "solver passes", "substeps": substeps, "iterations": iterations, "values": values})
+        print(rows[-1], flush=True)
+    return rows
+
+
+def landing() -> list[dict]:
+    """The poured stream (seed 0, surface slope and H/R at 2.5 s) at 10 and 80 substeps, and at 80 with the speed
+    clamp cut to 1/8 radius, so that its grains land no faster than at 10: what flattens the stream at 80."""
+    rows = []
+    for substeps, clamp in ((10, 1.0), (80, 1.0), (80, 0.125)):
+        (early,), seconds = rice_heap_at(substeps, speed_clamp=clamp)
+        values = {"surface_2_5": round(early[0], 1), "hr_2_5": round(early[1], 1), "seconds": round(seconds, 1)}
+        rows.append({"case": "stream landing", "substeps": substeps, "speed_clamp": clamp, "values": values})
+        print(rows[-1], flush=True)
+    return rows
+
+
+def rice_heap_at(substeps: int, **params):
+    """``validation.rice_heap``'s stream of 300 grains, read at 2.5 s."""
+    from validation import rice_heap
+
+    return rice_heap(300, True, frames=(150,), substeps=substeps, **params)
 
 
 def convergence() -> list[dict]:
@@ -267,9 +310,16 @@ def main(argv=None) -> None:
     ap.add_argument("--convergence", action="store_true", help="the substep curve only (docs/accuracy.md)")
     ap.add_argument("--replot", action="store_true", help="redraw the substep curve's plot from its data")
     ap.add_argument("--funnel", action="store_true", help="the fixed-funnel heap's substep curve only")
+    ap.add_argument("--passes", action="store_true", help="substeps against iterations, and the stream's landing")
     args = ap.parse_args(argv)
     if args.replot:
         plot_convergence([json.loads(line) for line in CONVERGENCE.read_text().splitlines()])
+        return
+    if args.passes:
+        rows = passes() + landing()
+        PASSES_RECORD.write_text(
+            "".join(record(r, "python benchmarks/physics_at_defaults.py --passes") + "\n" for r in rows)
+        )
         return
     if args.funnel:
         rows = funnel_curve()
@@ -282,11 +332,15 @@ def main(argv=None) -> None:
         )
         plot_convergence(rows)
         return
-    cases = [plane_case(s) for s in (10, 40)] + [plane_case(s, across=True) for s in (10, 40)]
-    cases += [plane_case(s, on="grains") for s in (10, 40)]
+    from nodes.simulation.settings import PARAMS
+
+    default = PARAMS["substeps"].default
+    pair = (default, 4 * default)  # the node's default and 4× it
+    cases = [plane_case(s) for s in pair] + [plane_case(s, across=True) for s in pair]
+    cases += [plane_case(s, on="grains") for s in pair]
     if not args.quick:
         for shape, n in (("ball", 890), ("stream", 300)):
-            cases += [heap_case(shape, n, 10), heap_case(shape, n, 40)]
+            cases += [heap_case(shape, n, s) for s in pair]
     for c in cases:
         print(f"{c['case']:45s} {c['substeps']:>3} substeps  {c['ours']}")
     if args.quick:

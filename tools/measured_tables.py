@@ -161,6 +161,30 @@ TABLES = {
             ("s (each)", value("seconds")),
         ],
     ),
+    "solver_passes": (
+        "solver_passes.jsonl",
+        lambda r: r["case"] == "solver passes",
+        [
+            ("substeps × iterations", lambda r: f"{r['substeps']} × {r['iterations']}"),
+            ("passes per frame", lambda r: str(r["substeps"] * r["iterations"])),
+            ("funnel heap: surface slope, seeds 0 / 1 (°)", listed("surface")),
+            ("atan H/R (°)", listed("hr")),
+            ("grain along the plane holds to (°)", value("holds_along")),
+            ("across (°)", value("holds_across")),
+            ("heap s (each)", value("seconds")),
+        ],
+    ),
+    "stream_landing": (
+        "solver_passes.jsonl",
+        lambda r: r["case"] == "stream landing",
+        [
+            ("substeps", field("substeps")),
+            ("speed clamp (radii per substep)", field("speed_clamp")),
+            ("surface slope at 2.5 s (°)", value("surface_2_5")),
+            ("atan H/R at 2.5 s (°)", value("hr_2_5")),
+            ("s", value("seconds")),
+        ],
+    ),
     "validation_cases": (
         "validation.jsonl",
         None,
