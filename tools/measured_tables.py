@@ -376,6 +376,20 @@ TABLES = {
             ("fragment MB", value("fragment_mb")),
         ],
     ),
+    "cost_estimate": (
+        "cost.jsonl",
+        None,
+        [
+            ("recipe", code("recipe")),
+            ("run", field("size")),
+            ("elements", pair("elements_estimate", "elements_measured")),
+            ("particles", pair("particles_estimate", "particles_measured")),
+            ("sim CPU s", pair("sim_cpu_s_estimate", "sim_cpu_s_measured")),
+            ("peak RSS MiB", pair("peak_rss_mib_estimate", "peak_rss_mib_measured")),
+            ("check s", value("check_s")),
+            ("load", field("load")),
+        ],
+    ),
     "interrupt": (
         "interrupt.jsonl",
         None,

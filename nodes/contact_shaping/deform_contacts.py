@@ -6,6 +6,7 @@ uncovered (issue 17), and without the folds, creases and lost volume of pressing
 
 from __future__ import annotations
 
+from nodegraph.cost import passes
 from nodegraph.node import Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
@@ -18,6 +19,7 @@ PLANE_HOLDS = ("everywhere", "near")
 
 @node(
     "deform_contacts",
+    cost=passes("aggregate"),
     inputs=CONTACT_INPUTS,
     outputs={
         "aggregate": Out(Aggregate, "the same elements, each mesh dented where it pressed into another"),

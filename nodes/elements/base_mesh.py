@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Moved, Out, Param, node
+from nodegraph.cost import Cost, CostQuery
 from nodegraph.values import Mesh
 
 from ..values import RiceVariety
@@ -42,8 +43,21 @@ def _check(p: dict) -> list[tuple[str, str]]:
     return issues
 
 
+def _cost(q: CostQuery) -> Cost:
+    """The smallest inscribed radius its meshes can have (what a placement whose r comes from the elements reads),
+    from the parameters alone: an egg's radius at its diameter's low clip (−2 sd), a grain's or flake's half
+    thickness; a file's is not known before it is read."""
+    p = q.params
+    if p["shape"] == "ikura":
+        return Cost(inscribed=0.5 * (p["diameter"] - 2.0 * p["diameter_sd"]))
+    if p["shape"] == "file":
+        return Cost()
+    return Cost(inscribed=0.5 * min(p["size"] or DEFAULT_SIZE[p["shape"]]))
+
+
 @node(
     "base_mesh",
+    cost=_cost,
     inputs={
         "variety": In(
             RiceVariety,

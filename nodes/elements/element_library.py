@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
+from nodegraph.cost import passes
 from nodegraph.values import Mesh
 
 from ..values import ElementLibrary, RiceVariety
@@ -10,6 +11,7 @@ from ..values import ElementLibrary, RiceVariety
 
 @node(
     "element_library",
+    cost=passes("meshes"),
     inputs={
         "meshes": In(Mesh, "element meshes (every variant of a family, or a list of wires)", many=True),
         "variety": In(RiceVariety, "rice: the variety, whose name is the element kind", optional=True),

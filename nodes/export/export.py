@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 
+from nodegraph.cost import passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import FileSet
@@ -31,6 +32,7 @@ def _check(params):
 
 @node(
     "export",
+    cost=passes("scene"),
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 
+from nodegraph.cost import Cost, CostQuery
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Image
@@ -26,8 +27,24 @@ def load_libraries() -> None:
     import scipy.spatial  # noqa: F401 - loaded for its libraries
 
 
+# the renderer's memory at its peak, for the cost estimate before any work (``nodegraph.cost``): Mitsuba and its
+# scene (per element shaded) and its film (per pixel: the image, the denoiser's albedo and normal guides);
+# benchmarks/bench_cost.py, "heavy_nodes_mib"
+RENDERER_BYTES = 300 * 2**20
+BYTES_PER_ELEMENT = 300_000
+BYTES_PER_PIXEL = 200
+
+
+def _cost(q: CostQuery) -> Cost:
+    elements = q.elements("scene")
+    pixels = q.params["width"] * q.params["height"]
+    held = RENDERER_BYTES + pixels * BYTES_PER_PIXEL + (elements or 0) * BYTES_PER_ELEMENT
+    return Cost(elements=elements, memory=held)
+
+
 @node(
     "preview",
+    cost=_cost,
     # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,
     # nogil, not parallel): the run computes what does not need the preview (export, measure) in a second thread
     # meanwhile (nodegraph.executor.Beside), started once every library the preview loads is loaded

@@ -6,15 +6,21 @@ import dataclasses
 
 import numpy as np
 
+from nodegraph.cost import passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
 from ..values import Aggregate, ElementLibrary, Placement
 from .element_templates import template_params
 
+# the share of the refined elements a cull keeps, for the cost estimate before any work (``nodegraph.cost``): the
+# rice bowl keeps 1,984 of 2,473 at D = 1 mm (0.80; graphs/rice_bowl.yaml)
+KEPT = 0.8
+
 
 @node(
     "cull",
+    cost=passes("placement", KEPT),
     inputs={
         "placement": In(Placement, "refined elements"),
         "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),

@@ -7,6 +7,7 @@ import dataclasses
 
 import numpy as np
 
+from nodegraph.cost import passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
@@ -15,6 +16,7 @@ from ..values import Aggregate, ElementLibrary, Placement
 
 @node(
     "mix_ratio",
+    cost=passes("placement"),
     inputs={
         "placement": In(Placement, "placed (and rotated) points"),
         "libraries": In(ElementLibrary, "one library per element kind", many=True),

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from nodegraph.cost import passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh, Table
@@ -21,6 +22,7 @@ def _check(params: dict) -> list[tuple[str, str]]:
 
 @node(
     "overlap_refine",
+    cost=passes("placement"),
     inputs={
         "placement": In(Placement, "placed, rotated, mixed elements"),
         "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),

@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 
+from nodegraph.cost import passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
@@ -18,6 +19,7 @@ FIELDS = ("none", "flow", "radial")
     "rotate",
     inputs={"placement": In(Placement, "placed points with normals")},
     outputs={"placement": Out(Placement, "the same points with rotations")},
+    cost=passes("placement"),
     params={
         "angles": Param(
             tuple[float, float, float],

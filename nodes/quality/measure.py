@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from functools import partial
 
+from nodegraph.cost import passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
@@ -17,6 +18,7 @@ from ..values import Aggregate, Vessel
 
 @node(
     "measure",
+    cost=passes("aggregates"),
     random=True,
     inputs={
         "aggregates": In(Aggregate, "the final aggregates (their element meshes are measured)", many=True),

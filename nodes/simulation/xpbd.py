@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from nodegraph.context import format_seconds
+from nodegraph.cost import Cost, CostQuery
 from nodegraph.node import In, Moved, Out, node
 from nodegraph.values import Mesh
 
@@ -21,6 +23,46 @@ from .settings import EFFECTS, PARAMS, XpbdParams
 # (4.2e5), 240 in 158 s (4.7e5; frames 61–240 at 4.8e5: later frames cost less as grains come to rest); 2 cores,
 # load 3.0–5.8, 2026-12-06 17:40–17:49 UTC
 PARTICLE_ITERATIONS_PER_SECOND = 4.5e5
+# bytes the node holds per simulated particle at its peak (model, state, neighbour lists, diagnostics), for the
+# cost estimate before any work (``nodegraph.cost``): benchmarks/bench_cost.py, "heavy_nodes_mib"
+BYTES_PER_PARTICLE = 16_000
+
+
+def _cost(q: CostQuery) -> Cost:
+    """Particles, CPU seconds and memory from the elements its aggregate carries and its parameters, before any work
+    (its run says the same from the particles it made, ``expect_cost``); over ``--max-minutes`` is refused unless
+    --yes, naming the frames that stay under."""
+    elements = q.elements("aggregate")
+    if elements is None:
+        return Cost()
+    p = q.params
+    particles = elements * p["particles_per_element"]
+    passes = p["frames"] * p["substeps"] * p["iterations"]
+    seconds = particles * passes / PARTICLE_ITERATIONS_PER_SECOND
+    what = (
+        f"{p['frames']:,} frames × {p['substeps']} substeps × {p['iterations']} iterations of ≈ {particles:,} particles"
+    )
+    over = []
+    limit = q.limits.max_seconds
+    if limit is not None and seconds > limit:
+        frames = int(p["frames"] * limit / seconds)
+        over.append(
+            (
+                "frames",
+                f"{what} would take ≈ {format_seconds(seconds)} of CPU, over a run's limit of "
+                f"{format_seconds(limit)} (--max-minutes); allowed: frames ≤ {frames:,} (or fewer elements, "
+                "substeps or iterations, or a larger --max-minutes)",
+                True,
+            )
+        )
+    return Cost(
+        elements=elements,
+        particles=particles,
+        seconds=seconds,
+        memory=particles * BYTES_PER_PARTICLE,
+        what=what,
+        over=tuple(over),
+    )
 
 
 def _check(params):
@@ -64,6 +106,7 @@ def _check(params):
     params=PARAMS,
     effects=EFFECTS,
     check=_check,
+    cost=_cost,
     moved={"water_content": Moved("material", "water_content", "cooked_rice")},
 )
 def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=None, **params):

@@ -1,0 +1,122 @@
+"""The cost estimate `nodegraph check` prints (``nodegraph.cost``) against real runs: elements, simulated particles,
+the simulations' CPU seconds and the run's peak resident memory, estimated from the recipe alone and measured by
+running it (each run a process of its own, an empty node cache, numba kernels already compiled).
+
+    python benchmarks/bench_cost.py                          # ikura_don, rice_bowl, onigiri: draft and full size
+    python benchmarks/bench_cost.py rice_bowl --draft-only   # some recipes, their --draft runs only
+    python benchmarks/bench_cost.py --record                 # and write benchmarks/measured/cost.jsonl
+
+A full run's time is also in benchmarks/measured/scenes.jsonl (bench_scenes.py); this one measures the same runs
+with the estimate beside.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+RECIPES = ("ikura_don", "rice_bowl", "onigiri")
+RECORD = REPO / "benchmarks" / "measured" / "cost.jsonl"
+
+
+def measure(name: str, draft: bool) -> dict:
+    """Estimate, then run, ``graphs/<name>.yaml`` in this process; the figures of both."""
+    from nodegraph.cache import Cache
+    from nodegraph.executor import run_recipe
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+    from nodegraph.report import Reporter
+
+    recipe = load_recipe(REPO / "graphs" / f"{name}.yaml", default_registry(), draft=draft, work=True, yes=True)
+    cost = recipe.cost
+    sims = [n for n, c in cost.costs.items() if c.particles]
+    estimate = {
+        "elements": cost.elements,
+        "particles": cost.particles,
+        "sim_cpu_s": round(sum(cost.costs[n].seconds for n in sims), 1),
+        "peak_rss_mib": round(cost.peak[0] / 2**20),
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        reporter = Reporter(quiet=True)
+        result = run_recipe(recipe, cache=Cache(Path(tmp) / "cache"), out_dir=Path(tmp) / "out", reporter=reporter)
+        records = {r.node: r for r in reporter.records}
+        # the elements of the scene: the aggregates the shade node shades, as the recipe's outputs carry them
+        shade = next(e for e in recipe.nodes.values() if e.spec.type_name == "shade")
+        elements = sum(len(result.output(f"{w.node}.{w.port}").placement) for w in shade.inputs["aggregates"])
+        particles = sum(len(result.output(f"{n}.particles")) for n in sims)
+        measured = {
+            "elements": elements,
+            "particles": particles,
+            "sim_cpu_s": round(sum(records[n].cpu_seconds or 0.0 for n in sims), 1),
+            "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024),
+        }
+    heavy = {
+        n: {"estimate_mib": round(cost.costs[n].memory / 2**20), "measured_mib": round((r.peak_bytes or 0) / 2**20)}
+        for n, r in records.items()
+        if n in cost.costs and cost.costs[n].memory
+    }
+    return {"estimate": estimate, "measured": measured, "heavy": heavy}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("recipes", nargs="*", default=list(RECIPES))
+    parser.add_argument("--draft-only", action="store_true")
+    parser.add_argument("--record", action="store_true", help=f"write {RECORD.relative_to(REPO)}")
+    parser.add_argument("--one", nargs=2, metavar=("RECIPE", "DRAFT"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.one:
+        print(json.dumps(measure(args.one[0], args.one[1] == "draft")))
+        return 0
+    rows = []
+    env = {**os.environ, "PYTHONPATH": f"{REPO}{os.pathsep}{REPO / 'benchmarks'}"}
+    for name in args.recipes:
+        for mode in ("draft",) if args.draft_only else ("draft", "full"):
+            # a first run compiles what numba's cache lacks; the second is the one measured
+            load = os.getloadavg()[0]
+            check = [sys.executable, "-m", "nodegraph.cli", "check", f"graphs/{name}.yaml"] + ["--draft"] * (
+                mode == "draft"
+            )
+            started = time.perf_counter()  # `nodegraph check`'s wall time, its estimate included
+            subprocess.run(check, env=env, capture_output=True, check=True, cwd=REPO)
+            check_s = round(time.perf_counter() - started, 2)
+            command = [sys.executable, __file__, "--one", name, mode]
+            done = subprocess.run(command, env=env, capture_output=True, text=True, cwd=REPO)
+            if done.returncode:
+                print(done.stderr, file=sys.stderr)
+                return 1
+            figures = json.loads(done.stdout.strip().splitlines()[-1]) | {"check_s": check_s}
+            load = f"{load:.1f}–{os.getloadavg()[0]:.1f}"
+            print(name, mode, json.dumps(figures), f"load {load}", flush=True)
+            rows.append(
+                {
+                    "what": "cost estimate / a run: elements, particles, sim CPU s, peak RSS MiB",
+                    "recipe": name,
+                    "size": "--draft" if mode == "draft" else "full size",
+                    "command": "python benchmarks/bench_cost.py --record",
+                    "values": {f"{k}_estimate": v for k, v in figures["estimate"].items()}
+                    | {f"{k}_measured": v for k, v in figures["measured"].items()}
+                    | {"check_s": figures["check_s"]},
+                    "heavy_nodes_mib": figures["heavy"],
+                    "unit": "elements, particles, CPU s, MiB",
+                    "load": load,
+                    "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                    "machine": "2 cores",
+                }
+            )
+    if args.record:
+        RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
+        print(f"wrote {RECORD}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
