@@ -199,7 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
     _distributed(sweep)
     _common(sweep)
 
-    check = sub.add_parser("check", help="validate a recipe; nothing runs")
+    check = sub.add_parser("check", help="validate a recipe and estimate its cost; nothing runs")
     check.add_argument("recipe", type=Path)
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
     check.add_argument("--yes", action="store_true", help="pass a request larger than a run starts on unasked")

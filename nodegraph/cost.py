@@ -3,7 +3,8 @@ its inputs' estimates (``NodeSpec.cost``), and the engine walks the graph in ord
 
 A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count
 reaches the simulation through the nodes that turn, mix and cull it; ``inscribed``: an element library's smallest
-inscribed radius, for a placement whose r comes from its elements) and what its work spends (``particles``
+inscribed radius, for a placement whose r comes from its elements; ``faces``: mesh faces per element, what a
+renderer holds) and what its work spends (``particles``
 simulated, ``seconds`` of CPU, ``memory`` held at its peak), and ``over``: the requests beyond a limit a run
 enforces, each naming the parameter to change and the value that stays under. A node type with no ``cost`` carries
 nothing on and spends nothing worth saying. ``nodegraph check`` prints the sum and refuses what is over (``--yes``
@@ -35,6 +36,7 @@ class Cost:
 
     elements: int | None = None  # elements its outputs carry on (None: not known from the recipe)
     inscribed: float | None = None  # mm: the smallest inscribed radius of the elements its outputs are made of
+    faces: float | None = None  # mesh faces per element its outputs carry (a mean over them)
     made: int = 0  # elements it makes (a placement)
     particles: int = 0  # particles it simulates
     seconds: float = 0.0  # CPU seconds of its work
@@ -59,19 +61,34 @@ class CostQuery:
         counts = [c.elements for c in self.inputs.get(port, [])]
         return None if not counts or None in counts else sum(counts)
 
+    def faces(self, port: str) -> float | None:
+        """Faces per element over the wires into ``port``: weighted by their elements where they carry some, else a
+        plain mean (a library's variants); None when none says."""
+        said = [c for c in self.inputs.get(port, []) if c.faces is not None]
+        if not said:
+            return None
+        if all(c.elements for c in said):
+            return sum(c.faces * c.elements for c in said) / sum(c.elements for c in said)
+        return sum(c.faces for c in said) / len(said)
+
     def inscribed(self, port: str) -> float | None:
         """The smallest inscribed radius among the wires into ``port`` (None when none says)."""
         radii = [c.inscribed for c in self.inputs.get(port, []) if c.inscribed is not None]
         return min(radii) if radii else None
 
 
-def passes(port: str, share: float = 1.0) -> Callable[[CostQuery], Cost]:
+def passes(port: str, share: float = 1.0, faces: str | None = None) -> Callable[[CostQuery], Cost]:
     """A ``cost`` for a node whose output carries the elements of input ``port`` (× ``share``: a cull's kept
-    share) and whose own work is small."""
+    share), with the faces per element of input ``faces`` (default ``port``: the meshes a placement gets from the
+    libraries it is mixed with), and whose own work is small."""
 
     def cost(q: CostQuery) -> Cost:
         count = q.elements(port)
-        return Cost(elements=None if count is None else int(round(count * share)), inscribed=q.inscribed(port))
+        return Cost(
+            elements=None if count is None else int(round(count * share)),
+            inscribed=q.inscribed(port),
+            faces=q.faces(faces or port),
+        )
 
     return cost
 
@@ -115,9 +132,9 @@ class Estimate:
         """The estimate in words, a line each: elements, the simulations, memory."""
         out = []
         elements = self.elements
-        made = ", ".join(f"{n} places {c.made:,}" for n, c in self.costs.items() if c.made)
+        made = ", ".join(f"{n} {c.made:,}" for n, c in self.costs.items() if c.made)
         known = f"≈ {elements:,}" if elements is not None else "not known from the recipe alone"
-        out.append(f"elements: {known}" + (f" ({made})" if made else ""))
+        out.append(f"elements: {known}" + (f" (placed: {made})" if made else ""))
         sims = [(n, c) for n, c in self.costs.items() if c.particles]
         for node_id, c in sims:
             out.append(f"{node_id}: {c.what or f'{c.particles:,} particles'}, ≈ {minutes(c.seconds)} CPU")

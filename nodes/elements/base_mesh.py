@@ -46,13 +46,14 @@ def _check(p: dict) -> list[tuple[str, str]]:
 def _cost(q: CostQuery) -> Cost:
     """The smallest inscribed radius its meshes can have (what a placement whose r comes from the elements reads),
     from the parameters alone: an egg's radius at its diameter's low clip (−2 sd), a grain's or flake's half
-    thickness; a file's is not known before it is read."""
+    thickness; and its faces; a file's are not known before it is read."""
     p = q.params
-    if p["shape"] == "ikura":
-        return Cost(inscribed=0.5 * (p["diameter"] - 2.0 * p["diameter_sd"]))
+    sphere = 20 * 4 ** p["subdivisions"]  # faces of the icosphere a grain or an egg's shell is made from
+    if p["shape"] == "ikura":  # membrane and yolk, each a sphere one subdivision finer
+        return Cost(inscribed=0.5 * (p["diameter"] - 2.0 * p["diameter_sd"]), faces=2 * 4 * sphere)
     if p["shape"] == "file":
         return Cost()
-    return Cost(inscribed=0.5 * min(p["size"] or DEFAULT_SIZE[p["shape"]]))
+    return Cost(inscribed=0.5 * min(p["size"] or DEFAULT_SIZE[p["shape"]]), faces=sphere)
 
 
 @node(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
+from nodegraph.cost import Cost
 from nodegraph.values import Mesh
 
 from ..values import DistanceField
@@ -11,6 +12,7 @@ from .element_values import GrainMesh
 
 @node(
     "remesh",
+    cost=lambda q: Cost(faces=q.params["target_faces"]),
     inputs={"field": In(DistanceField, "signed distance field (positive inside)")},
     outputs={"mesh": Out(Mesh, "watertight outward grain, centred at its volume centroid (GrainMesh)")},
     params={

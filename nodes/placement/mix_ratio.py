@@ -16,7 +16,7 @@ from ..values import Aggregate, ElementLibrary, Placement
 
 @node(
     "mix_ratio",
-    cost=passes("placement"),
+    cost=passes("placement", faces="libraries"),
     inputs={
         "placement": In(Placement, "placed (and rotated) points"),
         "libraries": In(ElementLibrary, "one library per element kind", many=True),

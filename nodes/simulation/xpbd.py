@@ -23,9 +23,12 @@ from .settings import EFFECTS, PARAMS, XpbdParams
 # (4.2e5), 240 in 158 s (4.7e5; frames 61–240 at 4.8e5: later frames cost less as grains come to rest); 2 cores,
 # load 3.0–5.8, 2026-12-06 17:40–17:49 UTC
 PARTICLE_ITERATIONS_PER_SECOND = 4.5e5
-# bytes the node holds per simulated particle at its peak (model, state, neighbour lists, diagnostics), for the
-# cost estimate before any work (``nodegraph.cost``): benchmarks/bench_cost.py, "heavy_nodes_mib"
-BYTES_PER_PARTICLE = 16_000
+# the node's memory at its peak, for the cost estimate before any work (``nodegraph.cost``): its colliders' fields
+# and the rest it holds whatever the size, and per simulated particle its model, state and neighbour lists. The
+# closing table's peak of rice_sim: 31 MiB at 624 particles (the rice bowl's draft), 117 MiB at 15,424 (full size);
+# the onigiri's press 74 MiB at 13,368 (benchmarks/bench_cost.py)
+FIXED_BYTES = 25 * 2**20
+BYTES_PER_PARTICLE = 6_000
 
 
 def _cost(q: CostQuery) -> Cost:
@@ -57,9 +60,10 @@ def _cost(q: CostQuery) -> Cost:
         )
     return Cost(
         elements=elements,
+        faces=q.faces("aggregate"),
         particles=particles,
         seconds=seconds,
-        memory=particles * BYTES_PER_PARTICLE,
+        memory=FIXED_BYTES + particles * BYTES_PER_PARTICLE,
         what=what,
         over=tuple(over),
     )

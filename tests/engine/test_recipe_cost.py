@@ -44,7 +44,7 @@ def test_the_elements_flow_through_the_graph_and_the_costs_sum(costed, tmp_path)
     assert cost.costs["half"].elements == 500 and cost.elements == 500  # made 1,000, half kept, stepped
     assert cost.particles == 500 and cost.seconds == pytest.approx(10.0)
     assert cost.peak == (PROCESS_BYTES + 1_000_000, "make")  # the node holding the most
-    assert "elements: ≈ 500 (make places 1,000)" in cost.lines()
+    assert "elements: ≈ 500 (placed: make 1,000)" in cost.lines()
     assert load_recipe(path, costed).cost is None  # weighed only with work (check, run before any work)
 
 
@@ -68,4 +68,4 @@ def test_check_prints_the_estimate_and_max_minutes_sets_the_limit(costed, tmp_pa
     assert "steps ≤ 1200" in capsys.readouterr().err
     assert main(["check", str(path), "--max-minutes", "20"]) == 0
     out = capsys.readouterr().out
-    assert "estimate: elements: ≈ 500 (make places 1,000)" in out and "estimate: step: 500 particles" in out
+    assert "estimate: elements: ≈ 500 (placed: make 1,000)" in out and "estimate: step: 500 particles" in out

@@ -20,8 +20,7 @@ def test_a_simulation_over_the_time_limit_is_refused_naming_frames(capsys):
     assert 200 < allowed < 3000
     assert main(["check", RICE_BOWL, "--set", f"rice_sim.frames={allowed}"]) == 0  # the value it names passes
     out = capsys.readouterr().out
-    assert f"estimate: rice_sim: {allowed:,} frames × 10 substeps" in out
-    assert main(["check", RICE_BOWL, "--set", "rice_sim.frames=3000", "--yes"]) == 0
+    assert f"estimate: rice_sim: {allowed:,} frames × 10 substeps" in out  # (--yes: tests/engine/test_recipe_cost.py)
 
 
 def test_check_prints_elements_particles_minutes_and_memory(capsys):
