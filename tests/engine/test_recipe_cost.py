@@ -69,3 +69,14 @@ def test_check_prints_the_estimate_and_max_minutes_sets_the_limit(costed, tmp_pa
     assert main(["check", str(path), "--max-minutes", "20"]) == 0
     out = capsys.readouterr().out
     assert "estimate: elements: ≈ 500 (placed: make 1,000)" in out and "estimate: step: 500 particles" in out
+
+
+def test_run_weighs_the_same_estimate_before_its_first_node(costed, tmp_path, capsys, monkeypatch):
+    path = tmp_path / "costed.yaml"
+    path.write_text(RECIPE.replace("steps: 20", "steps: 2000"))
+    monkeypatch.setattr("nodegraph.cli.default_registry", lambda plugins=(): costed)
+    common = ["--cache-dir", str(tmp_path / "c"), "--out-dir", str(tmp_path / "o"), "--no-rrd"]
+    assert main(["run", str(path), *common]) == 2  # refused before any node: nothing computed, nothing cached
+    assert "steps ≤ 1200" in capsys.readouterr().err and not (tmp_path / "c").exists()
+    assert main(["run", str(path), *common, "--max-minutes", "20"]) == 0
+    assert "estimate: elements: ≈ 500 (placed: make 1,000); step: 500 particles" in capsys.readouterr().err
