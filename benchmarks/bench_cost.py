@@ -5,6 +5,8 @@ running it (each run a process of its own, an empty node cache, numba kernels al
     python benchmarks/bench_cost.py                          # ikura_don, rice_bowl, onigiri: draft and full size
     python benchmarks/bench_cost.py rice_bowl --draft-only   # some recipes, their --draft runs only
     python benchmarks/bench_cost.py --record                 # and write benchmarks/measured/cost.jsonl
+    python benchmarks/bench_cost.py --re-estimate            # only the estimates of cost.jsonl's rows, from the
+                                                             # code as it is now (seconds; the measured side stays)
 
 A full run's time is also in benchmarks/measured/scenes.jsonl (bench_scenes.py); this one measures the same runs
 with the estimate beside.
@@ -27,23 +29,43 @@ RECIPES = ("ikura_don", "rice_bowl", "onigiri")
 RECORD = REPO / "benchmarks" / "measured" / "cost.jsonl"
 
 
+def estimated(name: str, draft: bool, registry=None):
+    """(recipe, its estimate's figures) of ``graphs/<name>.yaml``, nothing run."""
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+
+    path = REPO / "graphs" / f"{name}.yaml"
+    recipe = load_recipe(path, registry or default_registry(), draft=draft, work=True, yes=True)
+    cost = recipe.cost
+    return recipe, {
+        "elements": cost.elements,
+        "particles": cost.particles,
+        "sim_cpu_s": round(sum(c.seconds for c in cost.costs.values() if c.particles), 1),
+        "peak_rss_mib": round(cost.peak[0] / 2**20),
+    }
+
+
+def re_estimate() -> None:
+    """Replace the estimates of every row of ``RECORD`` by the code's as it is now."""
+    from nodegraph.registry import default_registry
+
+    registry = default_registry()
+    rows = [json.loads(line) for line in RECORD.read_text().splitlines() if line.strip()]
+    for row in rows:
+        _, figures = estimated(row["recipe"], row["size"] == "--draft", registry)
+        row["values"].update({f"{k}_estimate": v for k, v in figures.items()})
+    RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
+
+
 def measure(name: str, draft: bool) -> dict:
     """Estimate, then run, ``graphs/<name>.yaml`` in this process; the figures of both."""
     from nodegraph.cache import Cache
     from nodegraph.executor import run_recipe
-    from nodegraph.recipe import load_recipe
-    from nodegraph.registry import default_registry
     from nodegraph.report import Reporter
 
-    recipe = load_recipe(REPO / "graphs" / f"{name}.yaml", default_registry(), draft=draft, work=True, yes=True)
+    recipe, estimate = estimated(name, draft)
     cost = recipe.cost
     sims = [n for n, c in cost.costs.items() if c.particles]
-    estimate = {
-        "elements": cost.elements,
-        "particles": cost.particles,
-        "sim_cpu_s": round(sum(cost.costs[n].seconds for n in sims), 1),
-        "peak_rss_mib": round(cost.peak[0] / 2**20),
-    }
     with tempfile.TemporaryDirectory() as tmp:
         reporter = Reporter(quiet=True)
         result = run_recipe(recipe, cache=Cache(Path(tmp) / "cache"), out_dir=Path(tmp) / "out", reporter=reporter)
@@ -71,8 +93,12 @@ def main() -> int:
     parser.add_argument("recipes", nargs="*", default=list(RECIPES))
     parser.add_argument("--draft-only", action="store_true")
     parser.add_argument("--record", action="store_true", help=f"write {RECORD.relative_to(REPO)}")
+    parser.add_argument("--re-estimate", action="store_true", help="only the estimates of the recorded rows")
     parser.add_argument("--one", nargs=2, metavar=("RECIPE", "DRAFT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.re_estimate:
+        re_estimate()
+        return 0
     if args.one:
         print(json.dumps(measure(args.one[0], args.one[1] == "draft")))
         return 0

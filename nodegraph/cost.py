@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 # bytes a run's process holds before any node's work: Python with numpy and the engine loaded (each node's
-# ``memory`` is on top of it). `python -c "import nodegraph.cli, numpy, resource; print(resource.getrusage(
-# resource.RUSAGE_SELF).ru_maxrss)"`: 88,716 KiB (2 cores, load 3.0, 2026-12-06).
-PROCESS_BYTES = 90 * 2**20
+# ``memory`` is on top of it): `python -c "import nodegraph.cli, numpy, resource; print(resource.getrusage(
+# resource.RUSAGE_SELF).ru_maxrss)"` prints 48,564 KiB (2 cores, load 11, 2026-12-06)
+PROCESS_BYTES = 48 * 2**20
 
 
 @dataclass(frozen=True)

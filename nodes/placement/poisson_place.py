@@ -92,19 +92,18 @@ def _target(node_id: str, nodes):
 
 def _made(wire, nodes):
     """The value a wire carries, made now when its node and every node before it are of ``MADE_AT_CHECK``; else
-    None. The last one made is kept, by what makes it (a recipe asks twice, a watch on every save)."""
+    None. What each node made is kept, by what makes it (a recipe asks twice, a watch on every save; the ikura
+    don's two derived shapes read one bowl), the last ``KEPT_SHAPES`` of them."""
     key = _recipe_of(wire, nodes)
     if key is None:
         return None
-    if key not in _SHAPES:
-        _SHAPES.clear()
-        _SHAPES[key] = _make(wire, nodes)
-    return _SHAPES[key]
+    made = _make(key[:3], wire.node, nodes)
+    return made[key[3]] if isinstance(made, dict) else made
 
 
 def _recipe_of(wire, nodes):
-    """What makes a wire's value, as a hashable key (the node's type, parameters and inputs' keys); None when a
-    node on the way is not one of ``MADE_AT_CHECK`` or an input is not one wire."""
+    """What makes a wire's value, as a hashable key (the node's type, parameters and inputs' keys, and the port);
+    None when a node on the way is not one of ``MADE_AT_CHECK`` or an input is not one wire."""
     source = nodes.get(wire.node)
     if source is None or source.spec.type_name not in MADE_AT_CHECK:
         return None
@@ -120,15 +119,19 @@ def _recipe_of(wire, nodes):
     return (source.spec.type_name, repr(sorted(source.params.items())), tuple(inputs), port)
 
 
-_SHAPES: dict[tuple, object] = {}  # the last shape made for a check, by what makes it (``_recipe_of``)
+KEPT_SHAPES = 16
+_SHAPES: dict[tuple, object] = {}  # what a node made for a check, by what makes it (``_recipe_of`` less the port)
 
 
-def _make(wire, nodes):
-    source = nodes[wire.node]
-    inputs = {port: _make(wires[0], nodes) for port, wires in source.inputs.items()}
-    result = source.spec.call(**source.params, **inputs)
-    port = wire.port or next(iter(source.spec.outputs))
-    return result[port] if isinstance(result, dict) else result
+def _make(key, node_id, nodes):
+    """The node's outputs, made from its inputs' (each made once, ``_made``)."""
+    if key not in _SHAPES:
+        source = nodes[node_id]
+        inputs = {port: _made(wires[0], nodes) for port, wires in source.inputs.items()}
+        if len(_SHAPES) >= KEPT_SHAPES:
+            _SHAPES.clear()
+        _SHAPES[key] = source.spec.call(**source.params, **inputs)
+    return _SHAPES[key]
 
 
 def _fits_shape(node_id: str, nodes) -> list[tuple[str, str, bool]]:
