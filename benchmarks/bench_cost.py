@@ -5,6 +5,7 @@ running it (each run a process of its own, an empty node cache, numba kernels al
     python benchmarks/bench_cost.py                          # ikura_don, rice_bowl, onigiri: draft and full size
     python benchmarks/bench_cost.py rice_bowl --draft-only   # some recipes, their --draft runs only
     python benchmarks/bench_cost.py --record                 # and write benchmarks/measured/cost.jsonl
+    python benchmarks/bench_cost.py --check-time --record    # `nodegraph check graphs/ikura_don.yaml`'s time alone
     python benchmarks/bench_cost.py --re-estimate            # only the estimates of cost.jsonl's rows, from the
                                                              # code as it is now (seconds; the measured side stays)
 
@@ -88,16 +89,51 @@ def measure(name: str, draft: bool) -> dict:
     return {"estimate": estimate, "measured": measured, "heavy": heavy}
 
 
+def check_time(tries: int = 5) -> dict:
+    """``nodegraph check graphs/ikura_don.yaml`` (its estimate included), ``tries`` times: the median wall and CPU
+    (user + system) seconds."""
+    import statistics
+
+    walls, cpus = [], []
+    for _ in range(tries):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        started = time.perf_counter()
+        command = [sys.executable, "-m", "nodegraph.cli", "check", "graphs/ikura_don.yaml"]
+        subprocess.run(command, cwd=REPO, check=True, capture_output=True)
+        walls.append(time.perf_counter() - started)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpus.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+    return {"wall_s": round(statistics.median(walls), 2), "cpu_s": round(statistics.median(cpus), 2)}
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("recipes", nargs="*", default=list(RECIPES))
     parser.add_argument("--draft-only", action="store_true")
     parser.add_argument("--record", action="store_true", help=f"write {RECORD.relative_to(REPO)}")
+    parser.add_argument("--check-time", action="store_true", help="time `nodegraph check` on the ikura don alone")
     parser.add_argument("--re-estimate", action="store_true", help="only the estimates of the recorded rows")
     parser.add_argument("--one", nargs=2, metavar=("RECIPE", "DRAFT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.re_estimate:
         re_estimate()
+        return 0
+    if args.check_time:
+        load = os.getloadavg()[0]
+        figures = check_time()
+        print(json.dumps(figures), f"load {load:.1f}–{os.getloadavg()[0]:.1f}")
+        row = {
+            "what": "nodegraph check graphs/ikura_don.yaml, its estimate included: median of 5",
+            "command": "python benchmarks/bench_cost.py --check-time --record",
+            "values": figures,
+            "unit": "s",
+            "load": f"{load:.1f}–{os.getloadavg()[0]:.1f}",
+            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+            "machine": "2 cores",
+        }
+        if args.record:
+            kept = [line for line in RECORD.read_text().splitlines() if line.strip() and "--check-time" not in line]
+            RECORD.write_text("".join(line + "\n" for line in kept) + json.dumps(row, ensure_ascii=False) + "\n")
         return 0
     if args.one:
         print(json.dumps(measure(args.one[0], args.one[1] == "draft")))

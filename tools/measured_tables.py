@@ -378,7 +378,7 @@ TABLES = {
     ),
     "cost_estimate": (
         "cost.jsonl",
-        None,
+        lambda r: "size" in r,
         [
             ("recipe", code("recipe")),
             ("run", field("size")),
@@ -387,6 +387,16 @@ TABLES = {
             ("sim CPU s", pair("sim_cpu_s_estimate", "sim_cpu_s_measured")),
             ("peak RSS MiB", pair("peak_rss_mib_estimate", "peak_rss_mib_measured")),
             ("check s", value("check_s")),
+            ("load", field("load")),
+        ],
+    ),
+    "check_time": (
+        "cost.jsonl",
+        lambda r: "size" not in r,
+        [
+            ("what", field("what")),
+            ("wall s", value("wall_s")),
+            ("CPU s", value("cpu_s")),
             ("load", field("load")),
         ],
     ),

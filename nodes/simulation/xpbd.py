@@ -28,6 +28,11 @@ PARTICLE_ITERATIONS_PER_SECOND = 4.5e5
 # closing table's peak of rice_sim: 31 MiB at 624 particles (the rice bowl's draft), 117 MiB at 15,424 (full size);
 # the onigiri's press 74 MiB at 13,368 (benchmarks/bench_cost.py)
 FIXED_BYTES = 25 * 2**20
+# CPU seconds of a simulation's setup before its first frame (its colliders' fields, the elements' clusters), which
+# its run's own estimate does not count (it is made after them): fixed and per particle, fitted to the rice bowl's,
+# the ikura don's and the onigiri's simulations at full size and as drafts (benchmarks/bench_cost.py)
+SETUP_SECONDS = 0.5
+SETUP_SECONDS_PER_PARTICLE = 1e-4
 BYTES_PER_PARTICLE = 6_000
 
 
@@ -41,14 +46,15 @@ def _cost(q: CostQuery) -> Cost:
     p = q.params
     particles = elements * p["particles_per_element"]
     passes = p["frames"] * p["substeps"] * p["iterations"]
-    seconds = particles * passes / PARTICLE_ITERATIONS_PER_SECOND
+    setup = SETUP_SECONDS + particles * SETUP_SECONDS_PER_PARTICLE
+    seconds = setup + particles * passes / PARTICLE_ITERATIONS_PER_SECOND
     what = (
         f"{p['frames']:,} frames × {p['substeps']} substeps × {p['iterations']} iterations of ≈ {particles:,} particles"
     )
     over = []
     limit = q.limits.max_seconds
     if limit is not None and seconds > limit:
-        frames = int(p["frames"] * limit / seconds)
+        frames = max(1, int(p["frames"] * (limit - setup) / (seconds - setup)))
         over.append(
             (
                 "frames",
