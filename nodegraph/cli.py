@@ -261,8 +261,15 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     weighed = None
     if _work_due(recipe, args.outputs, None if args.no_cache else (args.cache_dir or default_cache_dir())):
         # what takes a moment to check (a placement against its shape's mesh) and the cost estimate, before any work
+        asked = tuple(w.node for w in resolve_outputs(recipe, args.outputs)) if args.outputs else None
         weighed = load_recipe(
-            args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes, limits=_limits(args)
+            args.recipe,
+            registry,
+            args.overrides,
+            draft=args.draft,
+            work=True,
+            yes=args.yes,
+            limits=_limits(args, asked),
         )
     out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
@@ -560,11 +567,12 @@ def _cmd_check(args, registry) -> int:
     return 0
 
 
-def _limits(args):
-    """The limits a run enforces, as its arguments set them (``--max-minutes``)."""
+def _limits(args, outputs: tuple[str, ...] | None = None):
+    """The limits a run enforces, as its arguments set them (``--max-minutes``), for the nodes ``outputs`` (None: the
+    recipe's outputs) and what they need."""
     from .cost import Limits
 
-    return Limits(max_seconds=60 * args.max_minutes)
+    return Limits(max_seconds=60 * args.max_minutes, outputs=outputs)
 
 
 def doc_summary(doc: str | None) -> str:

@@ -25,9 +25,11 @@ PROCESS_BYTES = 48 * 2**20
 
 @dataclass(frozen=True)
 class Limits:
-    """The limits a run enforces that a node's estimate is weighed against (``--max-minutes``)."""
+    """The limits a run enforces that a node's estimate is weighed against (``--max-minutes``), and what it runs."""
 
     max_seconds: float | None = 600.0  # a node's own CPU seconds above this is refused unless --yes
+    outputs: tuple[str, ...] | None = None  # the nodes a run asks for (``--output``): those and what they need are
+    # weighed (None: the recipe's outputs, as ``check`` weighs them)
 
 
 @dataclass(frozen=True)

@@ -491,11 +491,14 @@ class _Validator:
                 self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
 
     def _weigh_cost(self, entries: dict[str, NodeEntry], graph: Dag, outputs: list[Wire]):
-        """The recipe's cost estimate (``nodegraph.cost``); what is over a run's limits is an issue at the parameter
-        to change (with ``yes``, less what ``--yes`` passes)."""
+        """The cost estimate of the recipe's outputs (or those the limits name) and what they need
+        (``nodegraph.cost``); what is over a run's limits is an issue at the parameter to change (with ``yes``, less
+        what ``--yes`` passes)."""
         from .cost import estimate
 
-        result = estimate(MappingProxyType(entries), graph.topological_order(), [w.node for w in outputs], self.limits)
+        asked = list(self.limits.outputs or [w.node for w in outputs])
+        needed = set(asked).union(*(graph.ancestors(node_id) for node_id in asked))
+        result = estimate(MappingProxyType(entries), graph.topological_order(needed), asked, self.limits)
         for node_id, param, message, passes_with_yes in result.over():
             if passes_with_yes and self.yes:
                 continue

@@ -80,3 +80,12 @@ def test_run_weighs_the_same_estimate_before_its_first_node(costed, tmp_path, ca
     assert "steps ≤ 1200" in capsys.readouterr().err and not (tmp_path / "c").exists()
     assert main(["run", str(path), *common, "--max-minutes", "20"]) == 0
     assert "estimate: elements: ≈ 500 (placed: make 1,000); step: 500 particles" in capsys.readouterr().err
+
+
+def test_a_run_of_one_output_weighs_only_what_it_needs(costed, tmp_path, capsys, monkeypatch):
+    path = tmp_path / "costed.yaml"
+    path.write_text(RECIPE.replace("steps: 20", "steps: 2000"))  # the stepper is over the limit; --output half is not
+    monkeypatch.setattr("nodegraph.cli.default_registry", lambda plugins=(): costed)
+    common = ["--cache-dir", str(tmp_path / "c"), "--out-dir", str(tmp_path / "o"), "--no-rrd"]
+    assert main(["run", str(path), "--output", "half", *common]) == 0
+    assert "estimate: elements: ≈ 500 (placed: make 1,000); peak memory" in capsys.readouterr().err
