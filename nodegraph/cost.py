@@ -1,21 +1,26 @@
 """What a recipe will cost, known before any work: each node type estimates its own cost from its parameters and
-its inputs' estimates (``NodeSpec.cost``), and the engine walks the graph in order and sums.
+its inputs' estimates (``NodeSpec.cost``, declared with ``estimated_by``), and the engine walks the graph in order
+and sums.
 
 A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count
 reaches the simulation through the nodes that turn, mix and cull it; ``inscribed``: an element library's smallest
 inscribed radius, for a placement whose r comes from its elements; ``faces``: mesh faces per element, what a
-renderer holds) and what its work spends (``particles``
-simulated, ``seconds`` of CPU, ``memory`` held at its peak), and ``over``: the requests beyond a limit a run
-enforces, each naming the parameter to change and the value that stays under. A node type with no ``cost`` carries
-nothing on and spends nothing worth saying. ``nodegraph check`` prints the sum and refuses what is over (``--yes``
-passes what a run would start with ``--yes``); ``run`` does the same before its first node.
+renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its
+peak), and ``over``: the requests beyond a limit a run enforces, each naming the parameter to change and the value
+that stays under. The run's peak memory is the process's own (``PROCESS_BYTES``) and the largest node's. A node
+type with no ``cost`` carries nothing on and spends nothing worth saying. ``nodegraph check`` prints the sum and
+refuses what is over (``--yes`` passes what a run would start with ``--yes``); ``run`` does the same before its
+first node.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
+
+from .node import NodeSpec
 
 # bytes a run's process holds before any node's work: Python with numpy and the engine loaded (each node's
 # ``memory`` is on top of it): `python -c "import nodegraph.cli, numpy, resource; print(resource.getrusage(
@@ -77,6 +82,21 @@ class CostQuery:
         """The smallest inscribed radius among the wires into ``port`` (None when none says)."""
         radii = [c.inscribed for c in self.inputs.get(port, []) if c.inscribed is not None]
         return min(radii) if radii else None
+
+
+def estimated_by(cost: Callable[[CostQuery], Cost]) -> Callable[[NodeSpec], NodeSpec]:
+    """Declare a node type's estimate, above its ``@node``: ``cost(query)`` gives its ``Cost`` from its parameters
+    and its inputs' estimates (a ``CostQuery``), before any work::
+
+        @estimated_by(passes("placement"))
+        @node("rotate", ...)
+        def rotate(ctx, placement, ...): ...
+    """
+
+    def wrap(spec: NodeSpec) -> NodeSpec:
+        return dataclasses.replace(spec, cost=cost)
+
+    return wrap
 
 
 def passes(port: str, share: float = 1.0, faces: str | None = None) -> Callable[[CostQuery], Cost]:

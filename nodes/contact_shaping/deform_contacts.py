@@ -6,7 +6,7 @@ uncovered (issue 17), and without the folds, creases and lost volume of pressing
 
 from __future__ import annotations
 
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
@@ -17,9 +17,9 @@ from .flatten_contacts import CONTACT_INPUTS, CONTACT_PARAMS, dented_outputs, wa
 PLANE_HOLDS = ("everywhere", "near")
 
 
+@estimated_by(passes("aggregate"))
 @node(
     "deform_contacts",
-    cost=passes("aggregate"),
     inputs=CONTACT_INPUTS,
     outputs={
         "aggregate": Out(Aggregate, "the same elements, each mesh dented where it pressed into another"),

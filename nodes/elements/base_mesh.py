@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Moved, Out, Param, node
-from nodegraph.cost import Cost, CostQuery
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.values import Mesh
 
 from ..values import RiceVariety
@@ -56,9 +56,9 @@ def _cost(q: CostQuery) -> Cost:
     return Cost(inscribed=0.5 * min(p["size"] or DEFAULT_SIZE[p["shape"]]), faces=sphere)
 
 
+@estimated_by(_cost)
 @node(
     "base_mesh",
-    cost=_cost,
     inputs={
         "variety": In(
             RiceVariety,

@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.values import Mesh
 
 from ..values import ElementLibrary, RiceVariety
 
 
+@estimated_by(passes("meshes"))
 @node(
     "element_library",
-    cost=passes("meshes"),
     inputs={
         "meshes": In(Mesh, "element meshes (every variant of a family, or a list of wires)", many=True),
         "variety": In(RiceVariety, "rice: the variety, whose name is the element kind", optional=True),

@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
-from nodegraph.cost import Cost
+from nodegraph.cost import Cost, estimated_by
 from nodegraph.values import Mesh
 
 from ..values import DistanceField
 from .element_values import GrainMesh
 
 
+@estimated_by(lambda q: Cost(faces=q.params["target_faces"]))
 @node(
     "remesh",
-    cost=lambda q: Cost(faces=q.params["target_faces"]),
     inputs={"field": In(DistanceField, "signed distance field (positive inside)")},
     outputs={"mesh": Out(Mesh, "watertight outward grain, centred at its volume centroid (GrainMesh)")},
     params={

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import FileSet
@@ -30,9 +30,9 @@ def _check(params):
     return problems
 
 
+@estimated_by(passes("scene"))
 @node(
     "export",
-    cost=passes("scene"),
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import functools
 
-from nodegraph.cost import Cost, CostQuery
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Image
@@ -44,9 +44,9 @@ def _cost(q: CostQuery) -> Cost:
     return Cost(elements=elements, faces=faces, memory=held)
 
 
+@estimated_by(_cost)
 @node(
     "preview",
-    cost=_cost,
     # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,
     # nogil, not parallel): the run computes what does not need the preview (export, measure) in a second thread
     # meanwhile (nodegraph.executor.Beside), started once every library the preview loads is loaded

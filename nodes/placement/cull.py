@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
@@ -19,9 +19,9 @@ from .element_templates import template_params
 KEPT = 0.84
 
 
+@estimated_by(passes("placement", KEPT))
 @node(
     "cull",
-    cost=passes("placement", KEPT),
     inputs={
         "placement": In(Placement, "refined elements"),
         "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),

@@ -7,16 +7,16 @@ import dataclasses
 
 import numpy as np
 
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
 from ..values import Aggregate, ElementLibrary, Placement
 
 
+@estimated_by(passes("placement", faces="libraries"))
 @node(
     "mix_ratio",
-    cost=passes("placement", faces="libraries"),
     inputs={
         "placement": In(Placement, "placed (and rotated) points"),
         "libraries": In(ElementLibrary, "one library per element kind", many=True),

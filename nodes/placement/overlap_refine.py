@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh, Table
@@ -20,9 +20,9 @@ def _check(params: dict) -> list[tuple[str, str]]:
     return []
 
 
+@estimated_by(passes("placement"))
 @node(
     "overlap_refine",
-    cost=passes("placement"),
     inputs={
         "placement": In(Placement, "placed, rotated, mixed elements"),
         "libraries": In(ElementLibrary, "element libraries in the placement's kind order", many=True),

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodegraph.cost import Cost, CostQuery
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh, Table
@@ -217,6 +217,7 @@ def _cost(q: CostQuery) -> Cost:
     return Cost(elements=count, made=count, memory=candidates * BYTES_PER_CANDIDATE, over=tuple(over))
 
 
+@estimated_by(_cost)
 @node(
     "poisson_place",
     inputs={
@@ -278,7 +279,6 @@ def _cost(q: CostQuery) -> Cost:
     },
     random=True,
     check_work=_fits_shape,
-    cost=_cost,
 )
 def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, candidate_spacing, inset, max_candidates):
     """Dart throwing over dense candidates (random order, flags) until none is free; maximal over them."""

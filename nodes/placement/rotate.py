@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
@@ -15,11 +15,11 @@ from ..values import Placement
 FIELDS = ("none", "flow", "radial")
 
 
+@estimated_by(passes("placement"))
 @node(
     "rotate",
     inputs={"placement": In(Placement, "placed points with normals")},
     outputs={"placement": Out(Placement, "the same points with rotations")},
-    cost=passes("placement"),
     params={
         "angles": Param(
             tuple[float, float, float],

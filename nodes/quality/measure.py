@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from functools import partial
 
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
@@ -16,9 +16,9 @@ from nodegraph.values import Table
 from ..values import Aggregate, Vessel
 
 
+@estimated_by(passes("aggregates"))
 @node(
     "measure",
-    cost=passes("aggregates"),
     random=True,
     inputs={
         "aggregates": In(Aggregate, "the final aggregates (their element meshes are measured)", many=True),

@@ -5,7 +5,7 @@ Thin: checks parameters, builds the lights and the CDRF table, calls ``scene_sha
 
 from __future__ import annotations
 
-from nodegraph.cost import passes
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Moved, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
@@ -24,9 +24,9 @@ def _check(params):
     return problems
 
 
+@estimated_by(passes("aggregates"))
 @node(
     "shade",
-    cost=passes("aggregates"),
     random=True,
     # its scene is large and made in a moment: the ikura draft's 11.7 MB (and a 7.2 MB recording) in 0.35 s, loaded
     # in 0.19 s; the full main job's up to 197 MB in 1.35 s, 48 % of a 2.16 GB cache (benchmarks/measured/cache.jsonl)

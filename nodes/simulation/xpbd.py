@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from nodegraph.context import format_seconds
-from nodegraph.cost import Cost, CostQuery
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.node import In, Moved, Out, node
 from nodegraph.values import Mesh
 
@@ -82,6 +82,7 @@ def _check(params):
     return problems
 
 
+@estimated_by(_cost)
 @node(
     "xpbd",
     inputs={
@@ -116,7 +117,6 @@ def _check(params):
     params=PARAMS,
     effects=EFFECTS,
     check=_check,
-    cost=_cost,
     moved={"water_content": Moved("material", "water_content", "cooked_rice")},
 )
 def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=None, **params):
