@@ -6,6 +6,7 @@ running it (each run a process of its own, an empty node cache, numba kernels al
     python benchmarks/bench_cost.py rice_bowl --draft-only   # some recipes, their --draft runs only
     python benchmarks/bench_cost.py --record                 # and write benchmarks/measured/cost.jsonl
     python benchmarks/bench_cost.py --check-time --record    # `nodegraph check graphs/ikura_don.yaml`'s time alone
+    python benchmarks/bench_cost.py --placements --record    # each placement alone: placed against its estimate
     python benchmarks/bench_cost.py --re-estimate            # only the estimates of cost.jsonl's rows, from the
                                                              # code as it is now (seconds; the measured side stays)
 
@@ -106,17 +107,74 @@ def check_time(tries: int = 5) -> dict:
     return {"wall_s": round(statistics.median(walls), 2), "cpu_s": round(statistics.median(cpus), 2)}
 
 
+PLACEMENTS = (
+    ("rice_bowl", "rice_place"),
+    ("ikura_don", "rice_place"),
+    ("ikura_don", "egg_place"),
+    ("onigiri", "place"),
+)
+
+
+def placements() -> list[dict]:
+    """Each placement of ``PLACEMENTS`` run alone (its recipe's draft and full size): its shape's volume and area,
+    r, inset, the points placed and the estimate (``poisson_place.estimate_placed``: what its density is fitted to)."""
+    from nodegraph.executor import run_recipe
+    from nodegraph.registry import default_registry
+    from nodes.placement.poisson_place import _target
+
+    registry = default_registry()
+    rows = []
+    for name, node in PLACEMENTS:
+        for draft in (True, False):
+            recipe, _ = estimated(name, draft, registry)
+            _, _, solid = _target(node, recipe.nodes)
+            stats = run_recipe(recipe, outputs=[f"{node}.stats"]).output(f"{node}.stats").columns
+            rows.append(
+                {
+                    "recipe": name,
+                    "node": node,
+                    "size": "--draft" if draft else "full size",
+                    "volume_mm3": round(float(solid.volume)),
+                    "area_mm2": round(float(solid.area)),
+                    "inset_mm": recipe.nodes[node].params["inset"],
+                    "r_mm": round(float(stats["r"][0]), 3),
+                    "placed": int(stats["placed"][0]),
+                    "estimate": recipe.cost.costs[node].made,
+                }
+            )
+    return rows
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("recipes", nargs="*", default=list(RECIPES))
     parser.add_argument("--draft-only", action="store_true")
     parser.add_argument("--record", action="store_true", help=f"write {RECORD.relative_to(REPO)}")
     parser.add_argument("--check-time", action="store_true", help="time `nodegraph check` on the ikura don alone")
+    parser.add_argument("--placements", action="store_true", help="each placement alone against its estimate")
     parser.add_argument("--re-estimate", action="store_true", help="only the estimates of the recorded rows")
     parser.add_argument("--one", nargs=2, metavar=("RECIPE", "DRAFT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.re_estimate:
         re_estimate()
+        return 0
+    if args.placements:
+        load = os.getloadavg()[0]
+        found = placements()
+        for row in found:
+            print(json.dumps(row))
+        row = {
+            "what": "placements alone: points placed against the estimate (its volume density's fit)",
+            "command": "python benchmarks/bench_cost.py --placements --record",
+            "values": {"placements": found},
+            "unit": "mm, mm², mm³, points",
+            "load": f"{load:.1f}–{os.getloadavg()[0]:.1f}",
+            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+            "machine": "2 cores",
+        }
+        if args.record:
+            kept = [line for line in RECORD.read_text().splitlines() if line.strip() and "--placements" not in line]
+            RECORD.write_text("".join(line + "\n" for line in kept) + json.dumps(row, ensure_ascii=False) + "\n")
         return 0
     if args.check_time:
         load = os.getloadavg()[0]

@@ -49,8 +49,8 @@ def _fitting_r_hint(mode, vertices, faces, r_fails, candidate_spacing, inset) ->
 # Placed points per r³ of the filled volume, which a shell of 0.64 r round the surface widens (a point may lie on
 # it) and an inset narrows: count = 0.068 · (V + 0.64·A·r − A·inset) / r³, fitted to the placements of the rice bowl,
 # the ikura don's rice and eggs and the onigiri, each at full size and as its draft (8 shapes of 2,700–172,000 mm³;
-# each within 4 %: `python benchmarks/bench_cost.py`, benchmarks/measured/cost.jsonl); per r² of a surface: discs of
-# radius r jam at 0.547 of a plane (random sequential adsorption), 0.547 / π = 0.17.
+# each within 4 %: `python benchmarks/bench_cost.py --placements`, benchmarks/measured/cost.jsonl); per r² of a
+# surface: discs of radius r jam at 0.547 of a plane (random sequential adsorption), 0.547 / π = 0.17.
 VOLUME_DENSITY = 0.068
 SURFACE_SHELL = 0.64
 SURFACE_DENSITY = 0.17
