@@ -199,10 +199,17 @@ def build_parser() -> argparse.ArgumentParser:
     _distributed(sweep)
     _common(sweep)
 
-    check = sub.add_parser("check", help="validate a recipe; nothing runs")
+    check = sub.add_parser("check", help="validate a recipe and estimate its cost; nothing runs")
     check.add_argument("recipe", type=Path)
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")
     check.add_argument("--yes", action="store_true", help="pass a request larger than a run starts on unasked")
+    check.add_argument(
+        "--max-minutes",
+        type=float,
+        default=10.0,
+        metavar="M",
+        help="as for run: a node estimated to take longer is refused (default 10)",
+    )
     _draft(check)
     _common(check)
 
@@ -251,9 +258,19 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             f"--no-rrd contradicts {given}: a viewer and a recording file both need the recording; drop one of them"
         )
     recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
+    weighed = None
     if _work_due(recipe, args.outputs, None if args.no_cache else (args.cache_dir or default_cache_dir())):
-        # what takes a moment to check (a placement against its shape's mesh), said before any work
-        load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
+        # what takes a moment to check (a placement against its shape's mesh) and the cost estimate, before any work
+        asked = tuple(w.node for w in resolve_outputs(recipe, args.outputs)) if args.outputs else None
+        weighed = load_recipe(
+            args.recipe,
+            registry,
+            args.overrides,
+            draft=args.draft,
+            work=True,
+            yes=args.yes,
+            limits=_limits(args, asked),
+        )
     out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft))
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
@@ -265,6 +282,8 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         check_writable(cache.directory, "cache", "choose another with --cache-dir (or $NODEGRAPH_CACHE), or --no-cache")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
     reporter.info(f"outputs go to {out_dir}{os.sep}")
+    if weighed is not None:
+        reporter.info("estimate: " + "; ".join(weighed.cost.lines()))
     spawn = args.spawn
     if spawn and not has_display():  # said before anything is computed
         reporter.warn(
@@ -316,15 +335,19 @@ def _remove_empty(folders: list[Path]) -> None:
             folder.rmdir()
 
 
+def _weighs(spec) -> bool:
+    return spec.check_work is not None or spec.cost is not None
+
+
 def _work_due(recipe: Recipe, outputs: list[str], cache_dir: Path | None) -> bool:
-    """Whether a node with a ``check_work`` would run for ``outputs`` (its result not in the cache): a cached
-    re-run skips those checks and what they load (a shape's mesh: trimesh, 0.6 CPU s)."""
+    """Whether a node with a ``check_work`` or a ``cost`` would run for ``outputs`` (its result not in the cache): a
+    cached re-run skips those checks, the estimate and what they load (a shape's mesh: trimesh, 0.6 CPU s)."""
     from .plan import Plan
 
     wires = resolve_outputs(recipe, outputs) if outputs else list(recipe.outputs)
     plan = Plan(recipe)
     order = plan.add({w.node for w in wires})
-    checked = [inst for inst in order if recipe.nodes[inst.node].spec.check_work is not None]
+    checked = [inst for inst in order if _weighs(recipe.nodes[inst.node].spec)]
     if not checked:
         return False
     cache = Cache(cache_dir) if cache_dir is not None else None
@@ -526,7 +549,9 @@ def _cmd_inspect(args, registry) -> int:
 
 
 def _cmd_check(args, registry) -> int:
-    recipe = load_recipe(args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes)
+    recipe = load_recipe(
+        args.recipe, registry, args.overrides, draft=args.draft, work=True, yes=args.yes, limits=_limits(args)
+    )
     if recipe.draft and not args.draft:  # the draft's values are checked too, where they would apply
         load_recipe(args.recipe, registry, args.overrides, draft=True)
     instances = sum(entry.family or 1 for entry in recipe.nodes.values())
@@ -537,7 +562,17 @@ def _cmd_check(args, registry) -> int:
         + sweeps
         + (f", draft: {len(recipe.draft)} settings" if recipe.draft else "")
     )
+    for line in recipe.cost.lines():
+        print(f"  estimate: {line}")
     return 0
+
+
+def _limits(args, outputs: tuple[str, ...] | None = None):
+    """The limits a run enforces, as its arguments set them (``--max-minutes``), for the nodes ``outputs`` (None: the
+    recipe's outputs) and what they need."""
+    from .cost import Limits
+
+    return Limits(max_seconds=60 * args.max_minutes, outputs=outputs)
 
 
 def doc_summary(doc: str | None) -> str:

@@ -93,6 +93,7 @@ class NodeSpec:
     overlap: bool | Callable[[], None] = False
     check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None
     store: bool = True  # False: its outputs never go into the cache; computed again where needed (``node``)
+    cost: Callable[[Any], Any] | None = None  # its estimate from its parameters and inputs' (``cost.estimated_by``)
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
         """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
@@ -182,7 +183,8 @@ def node(
     ``store=False``: the node's outputs are cheaper to compute again from its cached inputs than to store and load
     (large values made in a moment: a scene description, files' bytes), so they never go into the cache, where they
     would fill its limit and push out what is dear to compute; a run computes the node again where its outputs are
-    needed (an output asked for, a step downstream that runs, a recording to fill).
+    needed (an output asked for, a step downstream that runs, a recording to fill). A node's estimate of what it
+    makes and spends is declared above its ``@node`` with ``@nodegraph.cost.estimated_by(cost)``.
     """
     inputs = dict(inputs or {})
     params = dict(params or {})

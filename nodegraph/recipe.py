@@ -27,6 +27,7 @@ from .registry import Registry
 from .yaml_source import SourceMap, load_yaml, load_yaml_file
 
 if TYPE_CHECKING:
+    from .cost import Estimate, Limits
     from .sweep_decl import SweepDecl
 
 NODE_ID = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -99,6 +100,7 @@ class Recipe:
     overrides: tuple[str, ...] = ()  # the --set texts applied on top of the file
     sweeps: dict[str, SweepDecl] = field(default_factory=dict)  # the recipe's own sweeps (``nodegraph sweep``)
     draft: tuple[str, ...] = ()  # the draft: block as node.param=value texts (what --draft applies)
+    cost: Estimate | None = None  # what it will cost (``nodegraph.cost``), weighed when loaded with ``work``
 
     def digest(self) -> str:
         """sha256 of what the recipe computes (name, seed, effects, outputs, every node's type, parameters,
@@ -213,9 +215,13 @@ class _Validator:
         draft=False,
         work=False,
         yes=False,
+        limits: Limits | None = None,
     ):
+        from .cost import Limits
+
         self.raw = raw
         self.work, self.yes = work, yes
+        self.limits = limits or Limits()
         self.source = source
         self.registry = registry
         self.draft = draft
@@ -428,8 +434,11 @@ class _Validator:
             self._check_families(entries, graph)
         outputs = self._check_outputs(model.outputs if model else [], entries, raw_nodes)
         effects = self._check_effects(model.effects if model else [], entries)
+        cost = None
         if not self.issues:  # the nodes' checks across the recipe read valid parameters and wires only
             self._check_recipe_rules(entries)
+            if self.work and not cyclic and not self.issues:
+                cost = self._weigh_cost(entries, graph, outputs)
         self._check_draft(entries)
         raw_sweeps = self.raw.get("sweeps")
         sweeps = {}
@@ -460,6 +469,7 @@ class _Validator:
             overrides=tuple(self.overrides),
             sweeps=sweeps,
             draft=tuple(f"{key}={json.dumps(value)}" for key, value in model.draft.items()),
+            cost=cost,
         )
 
     def _check_recipe_rules(self, entries: dict[str, NodeEntry]) -> None:
@@ -479,6 +489,22 @@ class _Validator:
                     continue
                 message += "; or run with --yes to go ahead" if passes_with_yes else ""
                 self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+
+    def _weigh_cost(self, entries: dict[str, NodeEntry], graph: Dag, outputs: list[Wire]):
+        """The cost estimate of the recipe's outputs (or those the limits name) and what they need
+        (``nodegraph.cost``); what is over a run's limits is an issue at the parameter to change (with ``yes``, less
+        what ``--yes`` passes)."""
+        from .cost import estimate
+
+        asked = list(self.limits.outputs or [w.node for w in outputs])
+        needed = set(asked).union(*(graph.ancestors(node_id) for node_id in asked))
+        result = estimate(MappingProxyType(entries), graph.topological_order(needed), asked, self.limits)
+        for node_id, param, message, passes_with_yes in result.over():
+            if passes_with_yes and self.yes:
+                continue
+            message += "; or run with --yes to go ahead" if passes_with_yes else ""
+            self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+        return result
 
     def _moved(self, node_id: str, model: NodeModel, path: tuple, moved, key: str) -> None:
         """A parameter the node type no longer has: say where it lives now (the node wired into the input
@@ -777,19 +803,21 @@ def load_recipe(
     draft: bool = False,
     work: bool = False,
     yes: bool = False,
+    limits: Limits | None = None,
 ) -> Recipe:
     """Load and validate a recipe file; raise RecipeError listing every problem with file:line:column.
 
     ``draft``: apply the recipe's ``draft:`` block (reduced counts to iterate on a look) before ``overrides``;
     the recipe's ``overrides`` then start with the draft's, so a worker that reloads it gets the same recipe.
     ``work``: the nodes' ``check_work`` too, what takes a moment to check (``nodegraph check``; ``run`` when there
-    is work to do); ``yes``: less the requests larger than a run starts on unasked (``--yes``)."""
+    is work to do), and the recipe's cost estimate (``Recipe.cost``) against ``limits``; ``yes``: less the requests
+    larger than a run starts on unasked (``--yes``)."""
     raw, source = load_yaml_file(path)
-    return _finish(raw, source, registry, list(overrides), Path(path).stem, draft, work, yes)
+    return _finish(raw, source, registry, list(overrides), Path(path).stem, draft, work, yes, limits)
 
 
-def _finish(raw, source, registry, overrides, name, draft=False, work=False, yes=False) -> Recipe:
-    validator = _Validator(raw, source, registry, overrides, name, draft, work, yes)
+def _finish(raw, source, registry, overrides, name, draft=False, work=False, yes=False, limits=None) -> Recipe:
+    validator = _Validator(raw, source, registry, overrides, name, draft, work, yes, limits)
     recipe = validator.build()
     if validator.issues or recipe is None:
         issues = sorted(

@@ -400,6 +400,30 @@ TABLES = {
             ("fragment MB", value("fragment_mb")),
         ],
     ),
+    "cost_estimate": (
+        "cost.jsonl",
+        lambda r: "size" in r,
+        [
+            ("recipe", code("recipe")),
+            ("run", field("size")),
+            ("elements", pair("elements_estimate", "elements_measured")),
+            ("particles", pair("particles_estimate", "particles_measured")),
+            ("sim CPU s", pair("sim_cpu_s_estimate", "sim_cpu_s_measured")),
+            ("peak RSS MiB", pair("peak_rss_mib_estimate", "peak_rss_mib_measured")),
+            ("check s", value("check_s")),
+            ("load", field("load")),
+        ],
+    ),
+    "check_time": (
+        "cost.jsonl",
+        lambda r: "wall_s" in r["values"],
+        [
+            ("what", field("what")),
+            ("wall s", value("wall_s")),
+            ("CPU s", value("cpu_s")),
+            ("load", field("load")),
+        ],
+    ),
     "interrupt": (
         "interrupt.jsonl",
         None,

@@ -6,6 +6,7 @@ uncovered (issue 17), and without the folds, creases and lost volume of pressing
 
 from __future__ import annotations
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
@@ -16,6 +17,7 @@ from .flatten_contacts import CONTACT_INPUTS, CONTACT_PARAMS, dented_outputs, wa
 PLANE_HOLDS = ("everywhere", "near")
 
 
+@estimated_by(passes("aggregate"))
 @node(
     "deform_contacts",
     inputs=CONTACT_INPUTS,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Moved, Out, Param, node
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.values import Mesh
 
 from ..values import RiceVariety
@@ -42,6 +43,20 @@ def _check(p: dict) -> list[tuple[str, str]]:
     return issues
 
 
+def _cost(q: CostQuery) -> Cost:
+    """The smallest inscribed radius its meshes can have (what a placement whose r comes from the elements reads),
+    from the parameters alone: an egg's radius at its diameter's low clip (−2 sd), a grain's or flake's half
+    thickness; and its faces; a file's are not known before it is read."""
+    p = q.params
+    sphere = 20 * 4 ** p["subdivisions"]  # faces of the icosphere a grain or an egg's shell is made from
+    if p["shape"] == "ikura":  # membrane and yolk, each a sphere one subdivision finer
+        return Cost(inscribed=0.5 * (p["diameter"] - 2.0 * p["diameter_sd"]), faces=2 * 4 * sphere)
+    if p["shape"] == "file":
+        return Cost()
+    return Cost(inscribed=0.5 * min(p["size"] or DEFAULT_SIZE[p["shape"]]), faces=sphere)
+
+
+@estimated_by(_cost)
 @node(
     "base_mesh",
     inputs={

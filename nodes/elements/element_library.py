@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
+from nodegraph.cost import estimated_by, passes
 from nodegraph.values import Mesh
 
 from ..values import ElementLibrary, RiceVariety
 
 
+@estimated_by(passes("meshes"))
 @node(
     "element_library",
     inputs={

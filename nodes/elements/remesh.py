@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
+from nodegraph.cost import Cost, estimated_by
 from nodegraph.values import Mesh
 
 from ..values import DistanceField
 from .element_values import GrainMesh
 
 
+@estimated_by(lambda q: Cost(faces=q.params["target_faces"]))
 @node(
     "remesh",
     inputs={"field": In(DistanceField, "signed distance field (positive inside)")},

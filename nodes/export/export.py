@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import FileSet
@@ -29,6 +30,7 @@ def _check(params):
     return problems
 
 
+@estimated_by(passes("scene"))
 @node(
     "export",
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},

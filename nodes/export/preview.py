@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Image
@@ -26,6 +27,24 @@ def load_libraries() -> None:
     import scipy.spatial  # noqa: F401 - loaded for its libraries
 
 
+# the process's memory while the preview renders, above Python and the engine (``nodegraph.cost.PROCESS_BYTES``),
+# for the cost estimate before any work: Mitsuba and the libraries the run has loaded by then, its scene (per mesh
+# face of the elements: the shaded meshes the run holds and the renderer's copy), its film and the denoiser's guides
+# (3 float RGBA buffers per pixel). The run's peak is here; fitted to the peaks of the rice bowl, the ikura don and the
+# onigiri, full size and drafts (18,000–3,500,000 faces): each within 10 % (benchmarks/bench_cost.py)
+RENDERER_BYTES = 490 * 2**20
+BYTES_PER_FACE = 480
+BYTES_PER_PIXEL = 48
+
+
+def _cost(q: CostQuery) -> Cost:
+    elements, faces = q.elements("scene"), q.faces("scene")
+    pixels = q.params["width"] * q.params["height"]
+    held = RENDERER_BYTES + pixels * BYTES_PER_PIXEL + int((elements or 0) * (faces or 0) * BYTES_PER_FACE)
+    return Cost(elements=elements, faces=faces, memory=held)
+
+
+@estimated_by(_cost)
 @node(
     "preview",
     # Mitsuba renders in its own threads with the GIL released, and so does the glints' blur (a numba kernel,

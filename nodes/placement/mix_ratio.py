@@ -7,12 +7,14 @@ import dataclasses
 
 import numpy as np
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
 from ..values import Aggregate, ElementLibrary, Placement
 
 
+@estimated_by(passes("placement", faces="libraries"))
 @node(
     "mix_ratio",
     inputs={

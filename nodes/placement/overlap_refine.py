@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh, Table
@@ -19,6 +20,7 @@ def _check(params: dict) -> list[tuple[str, str]]:
     return []
 
 
+@estimated_by(passes("placement"))
 @node(
     "overlap_refine",
     inputs={

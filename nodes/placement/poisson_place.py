@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh, Table
@@ -45,21 +46,25 @@ def _fitting_r_hint(mode, vertices, faces, r_fails, candidate_spacing, inset) ->
     return f"r ≤ {lo:.3g} finds candidate points in this shape (or lower candidate_spacing)"
 
 
-# Placed points per r³ of the filled volume: the rice bowl places 2,473 in 148,849 mm³ at r = 1.6 (0.068, its
-# 1 mm inset included); per r² of a surface: discs of radius r jam at 0.547 of a plane (random sequential
-# adsorption), 0.547 / π = 0.17.
-VOLUME_DENSITY = 0.07
+# Placed points per r³ of the filled volume, which a shell of 0.64 r round the surface widens (a point may lie on
+# it) and an inset narrows: count = 0.068 · (V + 0.64·A·r − A·inset) / r³, fitted to the placements of the rice bowl,
+# the ikura don's rice and eggs and the onigiri, each at full size and as its draft (8 shapes of 2,700–172,000 mm³;
+# each within 4 %: `python benchmarks/bench_cost.py --placements`, benchmarks/measured/cost.jsonl); per r² of a
+# surface: discs of radius r jam at 0.547 of a plane (random sequential adsorption), 0.547 / π = 0.17.
+VOLUME_DENSITY = 0.068
+SURFACE_SHELL = 0.64
 SURFACE_DENSITY = 0.17
 # Elements a run places without being asked (--yes): 20× the rice bowl's 2,473, whose cold run takes 36 s on two
 # cores; at r = 0.4 the bowl would get ≈ 160,000 and sit in the refine's neighbour search for many minutes.
 MAX_ELEMENTS = 50_000
 
 
-def estimate_placed(mode: str, area: float, volume: float, r: float) -> int:
-    """Points a placement at ``r`` puts on (surface) or in (volume) a shape of this area and volume."""
+def estimate_placed(mode: str, area: float, volume: float, r: float, inset: float = 0.0) -> int:
+    """Points a placement at ``r`` puts on (surface) or in (volume) a shape of this area and volume, ``inset`` off
+    its surface."""
     if mode == "surface":
         return int(SURFACE_DENSITY * area / r**2)
-    return int(VOLUME_DENSITY * volume / r**3)
+    return int(VOLUME_DENSITY * max(volume + (SURFACE_SHELL * r - inset) * area, 0.0) / r**3)
 
 
 # shapes made at check time from their parameters and inputs (milliseconds each: a boolean of the ikura bowl 30 ms,
@@ -71,10 +76,9 @@ MADE_AT_CHECK = ("shape", "vessel_region", "boolean")
 def _target(node_id: str, nodes):
     """(source node id, its kind, trimesh) of the shape a placement fills, when the nodes that make it are all of
     ``MADE_AT_CHECK`` (made now, ≈ 0.1 s once their modules are loaded); None when only running the recipe would
-    tell (a mesh file, r derived from the elements)."""
-    entry = nodes[node_id]
-    wires = entry.inputs.get("shape") or []
-    if entry.params["r"] is None or len(wires) != 1:
+    tell (a mesh file)."""
+    wires = nodes[node_id].inputs.get("shape") or []
+    if len(wires) != 1:
         return None
     made = _made(wires[0], nodes)
     if made is None:
@@ -88,19 +92,18 @@ def _target(node_id: str, nodes):
 
 def _made(wire, nodes):
     """The value a wire carries, made now when its node and every node before it are of ``MADE_AT_CHECK``; else
-    None. The last one made is kept, by what makes it (a recipe asks twice, a watch on every save)."""
+    None. What each node made is kept, by what makes it (a recipe asks twice, a watch on every save; the ikura
+    don's two derived shapes read one bowl), the last ``KEPT_SHAPES`` of them."""
     key = _recipe_of(wire, nodes)
     if key is None:
         return None
-    if key not in _SHAPES:
-        _SHAPES.clear()
-        _SHAPES[key] = _make(wire, nodes)
-    return _SHAPES[key]
+    made = _make(key[:3], wire.node, nodes)
+    return made[key[3]] if isinstance(made, dict) else made
 
 
 def _recipe_of(wire, nodes):
-    """What makes a wire's value, as a hashable key (the node's type, parameters and inputs' keys); None when a
-    node on the way is not one of ``MADE_AT_CHECK`` or an input is not one wire."""
+    """What makes a wire's value, as a hashable key (the node's type, parameters and inputs' keys, and the port);
+    None when a node on the way is not one of ``MADE_AT_CHECK`` or an input is not one wire."""
     source = nodes.get(wire.node)
     if source is None or source.spec.type_name not in MADE_AT_CHECK:
         return None
@@ -116,33 +119,29 @@ def _recipe_of(wire, nodes):
     return (source.spec.type_name, repr(sorted(source.params.items())), tuple(inputs), port)
 
 
-_SHAPES: dict[tuple, object] = {}  # the last shape made for a check, by what makes it (``_recipe_of``)
+KEPT_SHAPES = 16
+_SHAPES: dict[tuple, object] = {}  # what a node made for a check, by what makes it (``_recipe_of`` less the port)
 
 
-def _make(wire, nodes):
-    source = nodes[wire.node]
-    inputs = {port: _make(wires[0], nodes) for port, wires in source.inputs.items()}
-    result = source.spec.call(**source.params, **inputs)
-    port = wire.port or next(iter(source.spec.outputs))
-    return result[port] if isinstance(result, dict) else result
+def _make(key, node_id, nodes):
+    """The node's outputs, made from its inputs' (each made once, ``_made``)."""
+    if key not in _SHAPES:
+        source = nodes[node_id]
+        inputs = {port: _made(wires[0], nodes) for port, wires in source.inputs.items()}
+        if len(_SHAPES) >= KEPT_SHAPES:
+            _SHAPES.clear()
+        _SHAPES[key] = source.spec.call(**source.params, **inputs)
+    return _SHAPES[key]
 
 
-def _weigh_r(node_id: str, nodes) -> list[tuple[str, str, bool]]:
-    """r against the shape it fills: too large for it (refused), or placing more than ``MAX_ELEMENTS`` (refused
-    unless --yes)."""
-    return [(p, m, False) for p, m in _fits_shape(node_id, nodes)] or [
-        (p, m, True) for p, m in _not_too_many(node_id, nodes)
-    ]
-
-
-def _fits_shape(node_id: str, nodes) -> list[tuple[str, str]]:
+def _fits_shape(node_id: str, nodes) -> list[tuple[str, str, bool]]:
     """r against the shape it fills, before any work: points 2r apart in a shape narrower than 2r find none (the
-    run said so only after its search for an r that fits, minutes at a small shape)."""
-    target = _target(node_id, nodes)
+    run said so only after its search for an r that fits, minutes at a small shape). Refused, --yes or not."""
+    r = nodes[node_id].params["r"]
+    target = _target(node_id, nodes) if r is not None else None
     if target is None:
         return []
     source, kind, solid = target
-    r = nodes[node_id].params["r"]
     extent = float(np.ptp(solid.vertices, axis=0).max())
     if 2.0 * r <= extent:
         return []
@@ -152,32 +151,73 @@ def _fits_shape(node_id: str, nodes) -> list[tuple[str, str]]:
             f"{r:g} is larger than the shape '{source}' ({kind}) it fills: points are placed 2r = {2 * r:g} apart "
             f"and the shape spans {extent:.3g} mm; allowed: r < {extent / 2:.3g} (in volume mode a thin shape fits "
             "a smaller one still)",
+            False,
         )
     ]
 
 
-def _not_too_many(node_id: str, nodes) -> list[tuple[str, str]]:
-    """The elements the placement would make, estimated from the shape's size before any work (``MAX_ELEMENTS``)."""
-    target = _target(node_id, nodes)
+def _least(fits, given: float) -> float:
+    """The least value above ``given``, at 2 significant digits, for which ``fits`` holds (it holds for all larger)."""
+    lo, hi = given, 2.0 * given
+    while not fits(hi):
+        lo, hi = hi, 2.0 * hi
+    for _ in range(40):
+        mid = (lo + hi) / 2
+        lo, hi = (lo, mid) if fits(mid) else (mid, hi)
+    digits = 1 - int(np.floor(np.log10(hi)))
+    least = float(np.ceil(hi * 10**digits) / 10**digits)
+    return least if fits(least) else hi
+
+
+def _cost(q: CostQuery) -> Cost:
+    """The elements the placement makes and its candidates' memory, from the shape's size and r (given, or from the
+    elements' inscribed radius) before any work; more than ``MAX_ELEMENTS`` is refused unless --yes, more
+    candidates than ``max_candidates`` (which the run refuses) always."""
+    from .candidates import BYTES_PER_CANDIDATE, estimate_candidates
+
+    p = q.params
+    r, name = p["r"], "r"
+    if r is None:  # S §3.1.2: half the elements' smallest inscribed radius, × r_scale
+        inscribed = q.inscribed("elements")
+        r, name = (None, "") if inscribed is None else (p["r_scale"] * 0.5 * inscribed, "r_scale")
+    target = _target(q.node_id, q.nodes) if r is not None else None
     if target is None:
-        return []
+        return Cost()
     source, kind, solid = target
-    params = nodes[node_id].params
-    r, mode = params["r"], params["mode"]
-    count = estimate_placed(mode, float(solid.area), float(solid.volume), r)
-    if count <= MAX_ELEMENTS:
-        return []
-    least = r * (count / MAX_ELEMENTS) ** (1 / 2 if mode == "surface" else 1 / 3)
-    size = f"{solid.area:,.0f} mm² / r²" if mode == "surface" else f"{solid.volume:,.0f} mm³ / r³"
-    return [
-        (
-            "r",
-            f"{r:g} would place ≈ {count:,} elements in '{source}' ({kind}: {size}), over the {MAX_ELEMENTS:,} a "
-            f"run places unasked; r ≥ {least:.2g} stays under",
+    mode, area, volume = p["mode"], float(solid.area), float(solid.volume)
+    count = estimate_placed(mode, area, volume, r, p["inset"])
+    candidates = estimate_candidates(mode, area, volume, p["candidate_spacing"] * r)
+    given = p[name]  # the parameter to change: r, or r_scale where r comes from the elements
+    derived = "" if name == "r" else f" (r = {r:.3g} mm from the elements)"
+    size = f"{area:,.0f} mm² / r²" if mode == "surface" else f"{volume:,.0f} mm³ / r³"
+    over = []
+    if count > MAX_ELEMENTS:
+        scale = r / given  # r per unit of the parameter named (1, or half the inscribed radius)
+        least = _least(lambda x: estimate_placed(mode, area, volume, x * scale, p["inset"]) <= MAX_ELEMENTS, given)
+        over.append(
+            (
+                name,
+                f"{given:g}{derived} would place ≈ {count:,} elements in '{source}' ({kind}: {size}), over the "
+                f"{MAX_ELEMENTS:,} a run places unasked; {name} ≥ {least:g} stays under",
+                True,
+            )
         )
-    ]
+    if candidates > p["max_candidates"]:
+        least = given * (candidates / p["max_candidates"]) ** (1 / 3 if mode == "volume" else 1 / 2)
+        over.append(
+            (
+                name,
+                f"{given:g}{derived} would make ≈ {candidates:,} candidates in '{source}' "
+                f"(≈ {candidates * BYTES_PER_CANDIDATE / 2**20:,.0f} MiB), over max_candidates "
+                f"{p['max_candidates']:,}; allowed: {name} ≥ {least:.2g} (or a larger candidate_spacing, or "
+                "max_candidates if the memory is there)",
+                False,
+            )
+        )
+    return Cost(elements=count, made=count, memory=candidates * BYTES_PER_CANDIDATE, over=tuple(over))
 
 
+@estimated_by(_cost)
 @node(
     "poisson_place",
     inputs={
@@ -238,7 +278,7 @@ def _not_too_many(node_id: str, nodes) -> list[tuple[str, str]]:
         ),
     },
     random=True,
-    check_work=_weigh_r,
+    check_work=_fits_shape,
 )
 def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, candidate_spacing, inset, max_candidates):
     """Dart throwing over dense candidates (random order, flags) until none is free; maximal over them."""

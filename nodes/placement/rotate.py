@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
@@ -14,6 +15,7 @@ from ..values import Placement
 FIELDS = ("none", "flow", "radial")
 
 
+@estimated_by(passes("placement"))
 @node(
     "rotate",
     inputs={"placement": In(Placement, "placed points with normals")},

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from functools import partial
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Table
@@ -15,6 +16,7 @@ from nodegraph.values import Table
 from ..values import Aggregate, Vessel
 
 
+@estimated_by(passes("aggregates"))
 @node(
     "measure",
     random=True,

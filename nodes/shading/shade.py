@@ -5,6 +5,7 @@ Thin: checks parameters, builds the lights and the CDRF table, calls ``scene_sha
 
 from __future__ import annotations
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Moved, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
@@ -23,6 +24,7 @@ def _check(params):
     return problems
 
 
+@estimated_by(passes("aggregates"))
 @node(
     "shade",
     random=True,

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from nodegraph.context import format_seconds
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.node import In, Moved, Out, node
 from nodegraph.values import Mesh
 
@@ -21,6 +23,56 @@ from .settings import EFFECTS, PARAMS, XpbdParams
 # (4.2e5), 240 in 158 s (4.7e5; frames 61–240 at 4.8e5: later frames cost less as grains come to rest); 2 cores,
 # load 3.0–5.8, 2026-12-06 17:40–17:49 UTC
 PARTICLE_ITERATIONS_PER_SECOND = 4.5e5
+# the node's memory at its peak, for the cost estimate before any work (``nodegraph.cost``): its colliders' fields
+# and the rest it holds whatever the size, and per simulated particle its model, state and neighbour lists. The
+# closing table's peak of rice_sim: 31 MiB at 624 particles (the rice bowl's draft), 117 MiB at 15,424 (full size);
+# the onigiri's press 74 MiB at 13,368 (benchmarks/bench_cost.py)
+FIXED_BYTES = 25 * 2**20
+# CPU seconds of a simulation's setup before its first frame (its colliders' fields, the elements' clusters), which
+# its run's own estimate does not count (it is made after them): fixed and per particle, fitted to the rice bowl's,
+# the ikura don's and the onigiri's simulations at full size and as drafts (benchmarks/bench_cost.py)
+SETUP_SECONDS = 0.5
+SETUP_SECONDS_PER_PARTICLE = 1e-4
+BYTES_PER_PARTICLE = 6_000
+
+
+def _cost(q: CostQuery) -> Cost:
+    """Particles, CPU seconds and memory from the elements its aggregate carries and its parameters, before any work
+    (its run says the same from the particles it made, ``expect_cost``); over ``--max-minutes`` is refused unless
+    --yes, naming the frames that stay under."""
+    elements = q.elements("aggregate")
+    if elements is None:
+        return Cost()
+    p = q.params
+    particles = elements * p["particles_per_element"]
+    passes = p["frames"] * p["substeps"] * p["iterations"]
+    setup = SETUP_SECONDS + particles * SETUP_SECONDS_PER_PARTICLE
+    seconds = setup + particles * passes / PARTICLE_ITERATIONS_PER_SECOND
+    what = (
+        f"{p['frames']:,} frames × {p['substeps']} substeps × {p['iterations']} iterations of ≈ {particles:,} particles"
+    )
+    over = []
+    limit = q.limits.max_seconds
+    if limit is not None and seconds > limit:
+        frames = max(1, int(p["frames"] * (limit - setup) / (seconds - setup)))
+        over.append(
+            (
+                "frames",
+                f"{what} would take ≈ {format_seconds(seconds)} of CPU, over a run's limit of "
+                f"{format_seconds(limit)} (--max-minutes); allowed: frames ≤ {frames:,} (or fewer elements, "
+                "substeps or iterations, or a larger --max-minutes)",
+                True,
+            )
+        )
+    return Cost(
+        elements=elements,
+        faces=q.faces("aggregate"),
+        particles=particles,
+        seconds=seconds,
+        memory=FIXED_BYTES + particles * BYTES_PER_PARTICLE,
+        what=what,
+        over=tuple(over),
+    )
 
 
 def _check(params):
@@ -30,6 +82,7 @@ def _check(params):
     return problems
 
 
+@estimated_by(_cost)
 @node(
     "xpbd",
     inputs={

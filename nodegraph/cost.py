@@ -1,0 +1,191 @@
+"""What a recipe will cost, known before any work: each node type estimates its own cost from its parameters and
+its inputs' estimates (``NodeSpec.cost``, declared with ``estimated_by``), and the engine walks the graph in order
+and sums.
+
+A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count
+reaches the simulation through the nodes that turn, mix and cull it; ``inscribed``: an element library's smallest
+inscribed radius, for a placement whose r comes from its elements; ``faces``: mesh faces per element, what a
+renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its
+peak), and ``over``: the requests beyond a limit a run enforces, each naming the parameter to change and the value
+that stays under. The run's peak memory is the process's own (``PROCESS_BYTES``) and the largest node's. A node
+type with no ``cost`` carries nothing on and spends nothing worth saying. ``nodegraph check`` prints the sum and
+refuses what is over (``--yes`` passes what a run would start with ``--yes``); ``run`` does the same before its
+first node.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from .node import NodeSpec
+
+# bytes a run's process holds before any node's work: Python with numpy and the engine loaded (each node's
+# ``memory`` is on top of it): `python -c "import nodegraph.cli, numpy, resource; print(resource.getrusage(
+# resource.RUSAGE_SELF).ru_maxrss)"` prints 48,564 KiB (2 cores, load 11, 2026-12-06)
+PROCESS_BYTES = 48 * 2**20
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The limits a run enforces that a node's estimate is weighed against (``--max-minutes``), and what it runs."""
+
+    max_seconds: float | None = 600.0  # a node's own CPU seconds above this is refused unless --yes
+    outputs: tuple[str, ...] | None = None  # the nodes a run asks for (``--output``): those and what they need are
+    # weighed (None: the recipe's outputs, as ``check`` weighs them)
+
+
+@dataclass(frozen=True)
+class Cost:
+    """One node's estimate (every field optional: 0 or None where the node has nothing to say)."""
+
+    elements: int | None = None  # elements its outputs carry on (None: not known from the recipe)
+    inscribed: float | None = None  # mm: the smallest inscribed radius of the elements its outputs are made of
+    faces: float | None = None  # mesh faces per element its outputs carry (a mean over them)
+    made: int = 0  # elements it makes (a placement)
+    particles: int = 0  # particles it simulates
+    seconds: float = 0.0  # CPU seconds of its work
+    memory: int = 0  # bytes it holds at its peak, above ``PROCESS_BYTES``
+    what: str = ""  # its work in words ("15 frames × 10 substeps × 2 iterations of 15,424 particles")
+    over: tuple[tuple[str, str, bool], ...] = ()  # (parameter, message, passes with --yes) beyond a limit
+
+
+@dataclass(frozen=True)
+class CostQuery:
+    """What a node's ``cost`` function receives: its id and parameters, its inputs' estimates by port (one per wire),
+    every node of the recipe (``NodeEntry`` by id, to weigh a shape it fills), and the run's limits."""
+
+    node_id: str
+    params: Mapping[str, Any]
+    inputs: Mapping[str, list[Cost]]
+    nodes: Mapping[str, Any]
+    limits: Limits
+
+    def elements(self, port: str) -> int | None:
+        """The elements the wires into ``port`` carry, summed; None when one of them is not known."""
+        counts = [c.elements for c in self.inputs.get(port, [])]
+        return None if not counts or None in counts else sum(counts)
+
+    def faces(self, port: str) -> float | None:
+        """Faces per element over the wires into ``port``: weighted by their elements where they carry some, else a
+        plain mean (a library's variants); None when none says."""
+        said = [c for c in self.inputs.get(port, []) if c.faces is not None]
+        if not said:
+            return None
+        if all(c.elements for c in said):
+            return sum(c.faces * c.elements for c in said) / sum(c.elements for c in said)
+        return sum(c.faces for c in said) / len(said)
+
+    def inscribed(self, port: str) -> float | None:
+        """The smallest inscribed radius among the wires into ``port`` (None when none says)."""
+        radii = [c.inscribed for c in self.inputs.get(port, []) if c.inscribed is not None]
+        return min(radii) if radii else None
+
+
+def estimated_by(cost: Callable[[CostQuery], Cost]) -> Callable[[NodeSpec], NodeSpec]:
+    """Declare a node type's estimate, above its ``@node``: ``cost(query)`` gives its ``Cost`` from its parameters
+    and its inputs' estimates (a ``CostQuery``), before any work::
+
+        @estimated_by(passes("placement"))
+        @node("rotate", ...)
+        def rotate(ctx, placement, ...): ...
+    """
+
+    def wrap(spec: NodeSpec) -> NodeSpec:
+        return dataclasses.replace(spec, cost=cost)
+
+    return wrap
+
+
+def passes(port: str, share: float = 1.0, faces: str | None = None) -> Callable[[CostQuery], Cost]:
+    """A ``cost`` for a node whose output carries the elements of input ``port`` (× ``share``: a cull's kept
+    share), with the faces per element of input ``faces`` (default ``port``: the meshes a placement gets from the
+    libraries it is mixed with), and whose own work is small."""
+
+    def cost(q: CostQuery) -> Cost:
+        count = q.elements(port)
+        return Cost(
+            elements=None if count is None else int(round(count * share)),
+            inscribed=q.inscribed(port),
+            faces=q.faces(faces or port),
+        )
+
+    return cost
+
+
+@dataclass
+class Estimate:
+    """A recipe's estimate: each node's ``Cost`` and the sums ``check`` prints."""
+
+    costs: dict[str, Cost] = field(default_factory=dict)
+    family: dict[str, int] = field(default_factory=dict)  # instances of a variant family's node
+    outputs: tuple[str, ...] = ()  # the nodes whose outputs the recipe asks for
+
+    @property
+    def elements(self) -> int | None:
+        """The elements the recipe's outputs carry (the largest of them: a scene, its export and its preview
+        carry the same ones); None when none is known."""
+        counts = [self.costs[n].elements for n in self.outputs if self.costs[n].elements is not None]
+        return max(counts) if counts else None
+
+    @property
+    def particles(self) -> int:
+        return sum(c.particles for c in self.costs.values())
+
+    @property
+    def seconds(self) -> float:
+        """CPU seconds of the work the nodes estimate (each instance of a family once)."""
+        return sum(c.seconds * self.family.get(n, 1) for n, c in self.costs.items())
+
+    @property
+    def peak(self) -> tuple[int, str | None]:
+        """(bytes, node): the process's peak, at the node holding the most."""
+        node = max(self.costs, key=lambda n: self.costs[n].memory, default=None)
+        held = self.costs[node].memory if node is not None else 0
+        return PROCESS_BYTES + held, node if held else None
+
+    def over(self) -> list[tuple[str, str, str, bool]]:
+        """(node, parameter, message, passes with --yes) of every request beyond a limit."""
+        return [(n, p, m, yes) for n, c in self.costs.items() for p, m, yes in c.over]
+
+    def lines(self) -> list[str]:
+        """The estimate in words, a line each: elements, the simulations, memory."""
+        out = []
+        elements = self.elements
+        made = ", ".join(f"{n} {c.made:,}" for n, c in self.costs.items() if c.made)
+        known = f"≈ {elements:,}" if elements is not None else "not known from the recipe alone"
+        out.append(f"elements: {known}" + (f" (placed: {made})" if made else ""))
+        sims = [(n, c) for n, c in self.costs.items() if c.particles]
+        for node_id, c in sims:
+            out.append(f"{node_id}: {c.what or f'{c.particles:,} particles'}, ≈ {minutes(c.seconds)} CPU")
+        if len(sims) > 1:
+            out.append(f"simulations: {self.particles:,} particles, ≈ {minutes(sum(c.seconds for _, c in sims))} CPU")
+        peak, node = self.peak
+        at = f" (at {node}: {gib(self.costs[node].memory)} of it)" if node else ""
+        out.append(f"peak memory: ≈ {gib(peak)}{at}")
+        return out
+
+
+def minutes(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.1f} min"
+
+
+def gib(size: float) -> str:
+    return f"{size / 2**30:.2f} GiB" if size >= 2**30 else f"{size / 2**20:,.0f} MiB"
+
+
+def estimate(nodes: Mapping[str, Any], order: list[str], outputs: list[str], limits: Limits) -> Estimate:
+    """Walk ``order`` (every node after those it reads), asking each node type's ``cost`` with its inputs'
+    estimates; ``nodes``: ``NodeEntry`` by id, ``outputs``: the node ids the recipe asks for."""
+    result = Estimate(outputs=tuple(dict.fromkeys(outputs)))
+    for node_id in order:
+        entry = nodes[node_id]
+        inputs = {port: [result.costs[w.node] for w in wires] for port, wires in entry.inputs.items()}
+        spec_cost = entry.spec.cost
+        query = CostQuery(node_id, entry.params, inputs, nodes, limits)
+        result.costs[node_id] = spec_cost(query) if spec_cost is not None else Cost()
+        if entry.family:
+            result.family[node_id] = entry.family
+    return result
