@@ -85,8 +85,9 @@ PARAMS = {
         int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
     ),
     # 1 (particles in the mid-plane): a japonica grain squeezed under 0.2 N strains 1.7 % (only the contacts give);
-    # 2 gives way across the thickness but the give is the solve's, not the stiffness's: at 10 × 2 a 16-particle
-    # grain collapses under ≈ 1 mN (docs/validation.md, "Squeezed grain")
+    # 2 (16 particles) can flatten, but at 10 × 2 a 0.2 N plate passes through it at any stiffness, and with 8
+    # iterations at 100 N/m it flattens 6.4 % and springs back, where cooked rice strains ≈ 25 % (Tomita, via G);
+    # its stream heap does not rest (benchmarks/squeeze_candidates.py, docs/validation.md)
     "particle_layers": Param(
         int,
         1,
