@@ -198,6 +198,30 @@ TABLES = {
             ("s", value("seconds")),
         ],
     ),
+    "squeeze_candidates": (
+        "squeeze_candidates.jsonl",
+        None,
+        [
+            ("layout", field("what")),
+            ("knobs", field("knobs")),
+            ("particles per grain", value("particles")),
+            (
+                "plate strain at 0.05 / 0.2 / 1 N",
+                lambda r: " / ".join(f"{v * 100:.1f} %" for v in r["values"]["plate_strain"].values()),
+            ),
+            (
+                "grains off the plate (0.05 / 0.2 / 1 N)",
+                lambda r: " / ".join(map(str, r["values"]["escaped"].values())),
+            ),
+            ("grain flattened at 0.2 N", lambda r: f"{r['values']['flattening'] * 100:.1f} %"),
+            ("left 0.5 s after the lift", lambda r: f"{r['values']['left_after_lift'] * 100:.1f} %"),
+            (
+                "stream heap H/R 2.5 s → 7 s",
+                lambda r: f"{r['values']['hr_2_5']}° → {r['values']['hr_7']}°" if "hr_7" in r["values"] else "—",
+            ),
+            ("heap solver s", value("heap_seconds")),
+        ],
+    ),
     "silo_discharge": (
         "silo_discharge.jsonl",
         lambda r: r["what"] == "silo_discharge",

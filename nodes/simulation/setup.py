@@ -194,7 +194,10 @@ def build_simulation(
             m = slender_factor(lib.meshes[key[1]]) if params.slender else 1
             slender = max(slender, m)
             cache[key] = element_cluster(
-                lib.meshes[key[1]], m * m * params.particles_per_element, quadratic=params.deformation == "quadratic"
+                lib.meshes[key[1]],
+                m * m * params.particles_per_element,
+                quadratic=params.deformation == "quadratic",
+                layers=params.particle_layers,
             )
         cl = cache[key]
         c0 = cl.centres.mean(axis=0)

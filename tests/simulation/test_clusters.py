@@ -92,3 +92,23 @@ def test_egg_cluster_ignores_the_yolk():
     np.testing.assert_allclose(cluster.membrane_centre, 0.0, atol=1e-12)
     assert cluster.yolk_radius == pytest.approx(radius * lipid ** (1 / 3), rel=0.02)
     assert cluster.membrane_radius == pytest.approx(radius, rel=1e-9)
+
+
+def test_two_layers_split_a_grain_through_its_thickness():
+    """particle_layers 2: half the particles on each side of a japonica grain's mid-plane, each at least a quarter of
+    its thickness (2.5 mm) off it, so the cluster can flatten; one layer lies in the mid-plane."""
+    layered = element_cluster(grain_mesh(), 16, quadratic=False, layers=2)
+    z = layered.centres[:, 2] - 0.5 * (layered.centres[:, 2].max() + layered.centres[:, 2].min())
+    assert len(z) == 16 and (z > 0).sum() == 8
+    assert np.abs(z).min() >= 0.25 * 2.5 - 0.11  # a grid cell (0.21 mm) of slack on each side
+    flat = element_cluster(grain_mesh(), 16, quadratic=False)
+    assert np.ptp(flat.centres[:, 2]) < 0.01
+
+
+def test_two_layers_refuse_an_element_too_thin_for_them():
+    """A plate 10 × 10 × 1 mm has no grid point a quarter of its thickness off its mid-plane: a clear error naming
+    the mesh and the remedy."""
+    from scene_builders import box_mesh
+
+    with pytest.raises(ValueError, match=r"particle_layers 2: element mesh 'sheet' is too thin.*particle_layers 1"):
+        element_cluster(box_mesh([0, 0, 0], [10, 10, 1], "sheet"), 8, layers=2)

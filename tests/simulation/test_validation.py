@@ -95,6 +95,20 @@ def test_xpbd_grain_is_rigid_across_its_thickness(validation):
     assert 0.02 < heavy < 0.08
 
 
+def test_two_layer_grain_flattens_under_a_plate_and_springs_back(validation):
+    """The squeezed grain, (c): with particle_layers 2 (16 particles, 8 iterations, 100 N/m) the grain itself flattens
+    6.3 % under 0.2 N and keeps 1.5 % of it 1/6 s after the plate is lifted, where one layer of as many particles
+    does not flatten at all (its spheres lie in one plane). Fails if the layered cover falls back to one plane (the
+    grain rigid again) or the grain stays crushed."""
+    settings = dict(frames=20, after=10, iterations=8, stiffness=100.0)
+    layered = validation.squeeze_xpbd(0.2, particles=16, layers=2, **settings)
+    flat = validation.squeeze_xpbd(0.2, particles=16, layers=1, **settings)
+    assert layered["escaped"] == 0
+    assert 1 - layered["loaded"] / layered["thickness"] > 0.04
+    assert 1 - layered["after"] / layered["thickness"] < 0.03
+    assert abs(1 - flat["loaded"] / flat["thickness"]) < 0.01
+
+
 def test_elastic_grain_strains_linearly_and_does_not_tear_in_compression(validation):
     """The squeezed grain, (b): the elastic body at the fitted stiffness strains 25 % at 0.2 N (measured 25.1 %) and
     12.5 % at 0.1 N (linear), 50 % at 0.4 N, and never tears under compression (longest edge 2.08× at 0.8 N, the
