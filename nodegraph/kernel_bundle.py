@@ -131,15 +131,17 @@ def bundle_path() -> Path | None:
 
 
 def ensure_installed(cache_dir: Path) -> int:
-    """Unpack the bundle into ``cache_dir`` unless that was done for this bundle file (a marker in the cache folder
-    named by the bundle's path, size and modification time). Without a bundle: one ``stat``. Never raises: a
-    failure only means the kernels compile."""
+    """Unpack the bundle into ``cache_dir`` unless that was done for this bundle file and this installation (a
+    marker in the cache folder named by the bundle's path, size and modification time and the project's folders:
+    two checkouts sharing one cache each get their own unpacking). Without a bundle: one ``stat``. Never raises:
+    a failure only means the kernels compile."""
     bundle = bundle_path()
     if bundle is None or os.environ.get("NUMBA_CPU_NAME", CPU) != CPU:
         return 0
     try:
         stat = bundle.stat()
-        key = f"{bundle.resolve()}:{stat.st_size}:{stat.st_mtime_ns}"
+        roots = sorted(str(root) for root in project_roots().values())
+        key = json.dumps([str(bundle.resolve()), stat.st_size, stat.st_mtime_ns, roots])
         marker = cache_dir / "kernel_bundle" / f"{hashlib.sha256(key.encode()).hexdigest()[:32]}.installed"
         if marker.exists():
             return 0

@@ -43,6 +43,26 @@ def test_a_bundle_unpacks_where_another_installation_looks_and_keeps_what_is_the
     assert kernel_bundle.install(bundle, tmp_path / "other-numba") == 0
 
 
+def test_each_installation_sharing_a_cache_unpacks_the_bundle_once(tmp_path, monkeypatch):
+    """A run unpacks the bundle once per bundle file and installation: the next run finds its marker and reads
+    nothing; a second checkout using the same cache folder gets its own copy (numba's folders name the source
+    folder's absolute path)."""
+    here = kernel_bundle.project_roots()
+    _entry(tmp_path / "built", here["nodes"], "simulation", "integrate.predict-1.py311.nbi", b"index")
+    bundle = tmp_path / "kernels.tar.gz"
+    kernel_bundle.pack(tmp_path / "built", bundle)
+    monkeypatch.setenv(kernel_bundle.ENV_VAR, str(bundle))
+    monkeypatch.setenv("NUMBA_CPU_NAME", kernel_bundle.CPU)
+    shared = tmp_path / "shared"
+    assert kernel_bundle.ensure_installed(shared) == 1
+    assert kernel_bundle.ensure_installed(shared) == 0
+    other = {name: tmp_path / "checkout" / name for name in here}
+    monkeypatch.setattr(kernel_bundle, "project_roots", lambda: other)
+    assert kernel_bundle.ensure_installed(shared) == 1
+    monkeypatch.setenv(kernel_bundle.ENV_VAR, "off")
+    assert kernel_bundle.ensure_installed(tmp_path / "off") == 0
+
+
 # Runs in a fresh process: one project kernel from numba's cache (or compiled), and numba's count of each.
 PROBE = """
 import json, sys
