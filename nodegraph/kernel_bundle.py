@@ -10,15 +10,15 @@ numba checks on loading is the same on any machine: each index's stamp is the co
 the function's bytecode and the code generator (target triple, CPU name and features), and a file holds the numba
 version; a bundle entry that does not match any of these is not used and the kernel compiles as before.
 
-The CPU: numba compiles for the host's model by default (``znver3``, its feature list), which keys an entry to
-that model. Kernels compile for the ``generic`` x86-64 model (``NUMBA_CPU_NAME=generic``, numba's setting for
-cache files meant for other machines; ``numba_cache.configure`` sets it unless the user chose a CPU), so that an
-entry built on one machine is found on every other. What it costs at run time and that the outputs are the same
+The CPU: numba compiles for the host's model by default (its name and feature list), which keys an entry to that
+model. Kernels compile for the ``generic`` x86-64 model (``NUMBA_CPU_NAME=generic``, numba's setting for cache
+files meant for other machines; ``numba_cache.configure`` sets it unless the user chose a CPU), so that an entry
+built on one x86-64 machine is found on any other. What it costs at run time and that the outputs are the same
 bytes: docs/performance.md, "Shipped kernels".
 
 ``python tools/kernel_bundle.py build`` writes a bundle from a first run of the main job; a run unpacks
-``BUNDLE`` (or the file ``NODEGRAPH_KERNEL_BUNDLE`` names; ``off``: none) into an empty place once
-(``ensure_installed``). Bundles are build products, not kept in git.
+``BUNDLE`` (or the file ``NODEGRAPH_KERNEL_BUNDLE`` names; ``off``: none) into its numba cache once per bundle file
+and installation (``ensure_installed``). Bundles are build products, not kept in git.
 """
 
 from __future__ import annotations
