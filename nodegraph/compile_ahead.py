@@ -156,8 +156,8 @@ class CompileAhead:
     def _marker(self) -> Path | None:
         """The file that says the kernels of ``jobs`` are all in numba's cache, named by what their entries there
         depend on: each kernel and its argument types, the digest of its module's code (the entry's stamp,
-        ``numba_locator``), numba's and Python's versions; inside the cache folder, so that clearing it clears
-        this too. None where a module has no source file."""
+        ``numba_locator``), numba's and Python's versions, the CPU compiled for; inside the cache folder, so that
+        clearing it clears this too. None where a module has no source file."""
         import hashlib
         from importlib.metadata import version
 
@@ -173,7 +173,8 @@ class CompileAhead:
             if not digest:
                 return None
             rows.append([job.module, job.name, job.args, digest])
-        key = json.dumps([rows, version("numba"), sys.version], separators=(",", ":"))
+        cpu = os.environ.get("NUMBA_CPU_NAME", "")  # entries are keyed on the CPU compiled for (numba_cache)
+        key = json.dumps([rows, version("numba"), sys.version, cpu], separators=(",", ":"))
         name = hashlib.sha256(key.encode()).hexdigest()[:32]
         return Path(os.environ[numba_cache.ENV_VAR]) / "compile_ahead" / f"{name}.cached"
 

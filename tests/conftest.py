@@ -11,6 +11,9 @@ from nodegraph import runtime
 # the suite remembers code digests in a file of its own, not in the user's cache (``nodegraph.code_digest``);
 # processes it starts inherit the choice
 os.environ.setdefault("NODEGRAPH_CODE_DIGESTS", os.path.join(tempfile.mkdtemp(prefix="nodegraph-digests-"), "d.json"))
+# the suite compiles its kernels from the code it tests, never from a bundle built beside the package
+# (``nodegraph.kernel_bundle``; a test of the bundle names its own)
+os.environ.setdefault("NODEGRAPH_KERNEL_BUNDLE", "off")
 # numba's kernel cache and per-module locator, as a run has them (``import nodegraph`` sets nothing), before a test
 # imports a kernel module; processes the tests start inherit them
 runtime.configure()

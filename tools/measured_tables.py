@@ -104,9 +104,20 @@ TABLES = {
             ("command", code("command")),
         ],
     ),
+    "first_run": (
+        "compile.jsonl",
+        lambda r: "kernel" not in r,
+        [
+            ("run", field("what")),
+            ("wall s", value("wall")),
+            ("CPU s", value("cpu")),
+            ("kernels compiled", value("compiled")),
+            ("command", code("command")),
+        ],
+    ),
     "compile_kernels": (
         "compile.jsonl",
-        None,
+        lambda r: "kernel" in r,
         [
             ("kernel", code("kernel")),
             ("argument types", field("arguments")),

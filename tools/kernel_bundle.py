@@ -1,0 +1,66 @@
+"""Build or unpack a bundle of compiled kernels (``nodegraph/kernel_bundle.py``).
+
+    python tools/kernel_bundle.py build [--out nodegraph/kernels.tar.gz] [--recipe graphs/ikura_don.yaml ...]
+    python tools/kernel_bundle.py install BUNDLE      # into this installation's numba cache (a run does it itself)
+
+``build`` runs each recipe in a fresh process with an empty numba cache and an empty node cache (``--draft``:
+a kernel's argument types do not depend on the size, and a draft compiles the same kernels sooner), kernels for
+numba's ``generic`` CPU, then packs the cache files of the project's kernels. The bundle is a build product: the
+package's release step writes it beside ``nodegraph/``; it is not kept in git.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def build(recipes: list[str], out: Path) -> int:
+    from nodegraph import kernel_bundle
+
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(work / "numba"), NUMBA_CPU_NAME=kernel_bundle.CPU)
+        env[kernel_bundle.ENV_VAR] = "off"
+        env.pop("NUMBA_CPU_FEATURES", None)
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+        for recipe in recipes:
+            started = time.perf_counter()
+            command = [sys.executable, "-m", "nodegraph.cli", "run", recipe, "--draft", "--no-rrd", "--quiet"]
+            command += ["--cache-dir", str(work / "cache"), "--out-dir", str(work / "out")]
+            subprocess.run(command, env=env, cwd=ROOT, check=True)
+            print(f"{recipe}: {time.perf_counter() - started:.1f} s")
+        os.environ["NUMBA_CACHE_DIR"] = env["NUMBA_CACHE_DIR"]
+        count = kernel_bundle.pack(work / "numba", out)
+    print(f"wrote {count} cache files into {out} ({out.stat().st_size / 1e6:.1f} MB)")
+    return count
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    b = sub.add_parser("build")
+    b.add_argument("--out", type=Path, default=None)
+    b.add_argument("--recipe", action="append", default=None, help="default: graphs/ikura_don.yaml")
+    i = sub.add_parser("install")
+    i.add_argument("bundle", type=Path)
+    args = ap.parse_args()
+    from nodegraph import kernel_bundle, runtime
+
+    if args.command == "build":
+        build(args.recipe or ["graphs/ikura_don.yaml"], args.out or kernel_bundle.BUNDLE)
+    else:
+        runtime.configure()
+        written = kernel_bundle.install(args.bundle, Path(os.environ["NUMBA_CACHE_DIR"]))
+        print(f"unpacked {written} cache files into {os.environ['NUMBA_CACHE_DIR']}")
+
+
+if __name__ == "__main__":
+    main()
