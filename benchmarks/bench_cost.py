@@ -7,6 +7,7 @@ running it (each run a process of its own, an empty node cache, numba kernels al
     python benchmarks/bench_cost.py --record                 # and write benchmarks/measured/cost.jsonl
     python benchmarks/bench_cost.py --check-time --record    # `nodegraph check graphs/ikura_don.yaml`'s time alone
     python benchmarks/bench_cost.py --placements --record    # each placement alone: placed against its estimate
+    python benchmarks/bench_cost.py --quick                  # the recorded rows' estimates, printed (seconds)
     python benchmarks/bench_cost.py --re-estimate            # only the estimates of cost.jsonl's rows, from the
                                                              # code as it is now (seconds; the measured side stays)
 
@@ -47,16 +48,21 @@ def estimated(name: str, draft: bool, registry=None):
     }
 
 
-def re_estimate() -> None:
-    """Replace the estimates of every row of ``RECORD`` by the code's as it is now."""
+def re_estimate(write: bool = True) -> None:
+    """Replace the estimates of every run row of ``RECORD`` by the code's as it is now; print each beside what
+    was measured (``write`` False: print only, the ``--quick`` mode)."""
     from nodegraph.registry import default_registry
 
     registry = default_registry()
     rows = [json.loads(line) for line in RECORD.read_text().splitlines() if line.strip()]
     for row in rows:
+        if "recipe" not in row:  # the placements' and check's own rows
+            continue
         _, figures = estimated(row["recipe"], row["size"] == "--draft", registry)
         row["values"].update({f"{k}_estimate": v for k, v in figures.items()})
-    RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
+        print(row["recipe"], row["size"], json.dumps(row["values"]))
+    if write:
+        RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
 
 
 def measure(name: str, draft: bool) -> dict:
@@ -153,10 +159,11 @@ def main() -> int:
     parser.add_argument("--check-time", action="store_true", help="time `nodegraph check` on the ikura don alone")
     parser.add_argument("--placements", action="store_true", help="each placement alone against its estimate")
     parser.add_argument("--re-estimate", action="store_true", help="only the estimates of the recorded rows")
+    parser.add_argument("--quick", action="store_true", help="the recorded rows' estimates, printed; nothing written")
     parser.add_argument("--one", nargs=2, metavar=("RECIPE", "DRAFT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.re_estimate:
-        re_estimate()
+    if args.re_estimate or args.quick:
+        re_estimate(write=not args.quick)
         return 0
     if args.placements:
         load = os.getloadavg()[0]
