@@ -49,7 +49,7 @@ def project_roots() -> dict[str, Path]:
     """The folder of each top-level project package (the engine and the installed node packages) by name."""
     from importlib.util import find_spec
 
-    from .registry import node_package_names
+    from .node_packages import node_package_names
 
     roots = {}
     for name in sorted(set(node_package_names()) | {"nodegraph"}):

@@ -18,8 +18,9 @@ from types import ModuleType
 
 from .errors import NodeDeclarationError, NodegraphError
 from .node import NodeSpec
+from .node_packages import ENTRY_POINT_GROUP, node_package_names
 
-ENTRY_POINT_GROUP = "nodegraph.nodes"
+__all__ = ["ENTRY_POINT_GROUP", "Registry", "default_registry", "node_package_names"]
 
 
 class Registry:
@@ -94,11 +95,6 @@ class Registry:
 
     def effects(self) -> set[str]:
         return {e for spec in self._specs.values() for e in spec.effects}
-
-
-def node_package_names() -> list[str]:
-    """Top-level module names of the installed node packages (entry points; nothing is imported)."""
-    return sorted({ep.value.split(":")[0].split(".")[0] for ep in entry_points(group=ENTRY_POINT_GROUP)})
 
 
 def default_registry(plugins: Iterable[str | Path] = (), entry_point_modules: bool = True) -> Registry:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from nodegraph import code_digest
+from nodegraph import code_digest, node_packages
 from nodegraph import registry as registry_module
 from nodegraph.cache import Cache
 from nodegraph.code_digest import import_statements, project_modules
@@ -61,9 +61,10 @@ def kitchen(tmp_path, monkeypatch):
         (package / name).write_text(textwrap.dedent(text))
     monkeypatch.syspath_prepend(str(tmp_path))
     fake = [EntryPoint("kitchen", PACKAGE, registry_module.ENTRY_POINT_GROUP)]
-    monkeypatch.setattr(
-        registry_module, "entry_points", lambda group: fake if group == registry_module.ENTRY_POINT_GROUP else []
-    )
+    for module in (registry_module, node_packages):  # the registry loads them, node_package_names names them
+        monkeypatch.setattr(
+            module, "entry_points", lambda group: fake if group == node_packages.ENTRY_POINT_GROUP else []
+        )
 
     def forget():
         for name in [n for n in sys.modules if n == PACKAGE or n.startswith(PACKAGE + ".")]:

@@ -6,6 +6,7 @@ from importlib.metadata import EntryPoint
 
 import pytest
 
+from nodegraph import node_packages
 from nodegraph import registry as registry_module
 from nodegraph.errors import NodeDeclarationError
 from nodegraph.node import In, Out, node
@@ -36,9 +37,10 @@ def test_entry_point_package_is_scanned_through_its_init(tmp_path, monkeypatch):
     )
     monkeypatch.syspath_prepend(str(tmp_path))
     fake = [EntryPoint("mine", "my_food_nodes", registry_module.ENTRY_POINT_GROUP)]
-    monkeypatch.setattr(
-        registry_module, "entry_points", lambda group: fake if group == registry_module.ENTRY_POINT_GROUP else []
-    )
+    for module in (registry_module, node_packages):  # the registry loads them, node_package_names names them
+        monkeypatch.setattr(
+            module, "entry_points", lambda group: fake if group == node_packages.ENTRY_POINT_GROUP else []
+        )
     reg = registry_module.default_registry()
     assert "user_constant" in reg
     sys.modules.pop("my_food_nodes", None)
