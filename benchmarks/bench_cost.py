@@ -151,6 +151,22 @@ def placements() -> list[dict]:
     return rows
 
 
+def _replace_row(flag: str, what: str, values, unit: str, load: float, write: bool) -> None:
+    """The record of the run with ``flag`` (one per flag in ``RECORD``), replaced when ``write``."""
+    row = {
+        "what": what,
+        "command": f"python benchmarks/bench_cost.py {flag} --record",
+        "values": values,
+        "unit": unit,
+        "load": f"{load:.1f}–{os.getloadavg()[0]:.1f}",
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "machine": "2 cores",
+    }
+    if write:
+        kept = [line for line in RECORD.read_text().splitlines() if line.strip() and flag not in line]
+        RECORD.write_text("".join(line + "\n" for line in kept) + json.dumps(row, ensure_ascii=False) + "\n")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("recipes", nargs="*", default=list(RECIPES))
@@ -170,35 +186,15 @@ def main() -> int:
         found = placements()
         for row in found:
             print(json.dumps(row))
-        row = {
-            "what": "placements alone: points placed against the estimate (its volume density's fit)",
-            "command": "python benchmarks/bench_cost.py --placements --record",
-            "values": {"placements": found},
-            "unit": "mm, mm², mm³, points",
-            "load": f"{load:.1f}–{os.getloadavg()[0]:.1f}",
-            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-            "machine": "2 cores",
-        }
-        if args.record:
-            kept = [line for line in RECORD.read_text().splitlines() if line.strip() and "--placements" not in line]
-            RECORD.write_text("".join(line + "\n" for line in kept) + json.dumps(row, ensure_ascii=False) + "\n")
+        what = "placements alone: points placed against the estimate (its volume density's fit)"
+        _replace_row("--placements", what, {"placements": found}, "mm, mm², mm³, points", load, args.record)
         return 0
     if args.check_time:
         load = os.getloadavg()[0]
         figures = check_time()
         print(json.dumps(figures), f"load {load:.1f}–{os.getloadavg()[0]:.1f}")
-        row = {
-            "what": "nodegraph check graphs/ikura_don.yaml, its estimate included: median of 5",
-            "command": "python benchmarks/bench_cost.py --check-time --record",
-            "values": figures,
-            "unit": "s",
-            "load": f"{load:.1f}–{os.getloadavg()[0]:.1f}",
-            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-            "machine": "2 cores",
-        }
-        if args.record:
-            kept = [line for line in RECORD.read_text().splitlines() if line.strip() and "--check-time" not in line]
-            RECORD.write_text("".join(line + "\n" for line in kept) + json.dumps(row, ensure_ascii=False) + "\n")
+        what = "nodegraph check graphs/ikura_don.yaml, its estimate included: median of 5"
+        _replace_row("--check-time", what, figures, "s", load, args.record)
         return 0
     if args.one:
         print(json.dumps(measure(args.one[0], args.one[1] == "draft")))
