@@ -95,7 +95,7 @@ def module_libraries(name: str, packages: set[str] | None = None) -> tuple[str, 
 
 def _packages(packages: set[str] | None) -> set[str]:
     if packages is None:
-        from .registry import node_package_names
+        from .node_packages import node_package_names
 
         packages = set(node_package_names())
     return set(packages)
@@ -116,11 +116,7 @@ def _digest_and_libraries(name: str, packages: set[str] | None) -> tuple[str, tu
 def project_modules(name: str, packages: set[str] | None = None) -> dict[str, Path]:
     """``name`` and every project module it imports, transitively: module name → source file. The project
     is the top-level package of ``name`` plus ``packages`` (default: the installed node packages)."""
-    if packages is None:
-        from .registry import node_package_names
-
-        packages = set(node_package_names())
-    packages = packages | {name.partition(".")[0]}
+    packages = _packages(packages) | {name.partition(".")[0]}
     found: dict[str, Path] = {}
     pending = [name]
     while pending:

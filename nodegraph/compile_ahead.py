@@ -163,10 +163,10 @@ class CompileAhead:
 
         from . import numba_cache, runtime
         from .code_digest import module_digest
-        from .registry import node_package_names
+        from .node_packages import project_packages
 
         runtime.configure()
-        packages = set(node_package_names()) | {"nodegraph"}
+        packages = project_packages()
         rows = []
         for job in sorted(self.jobs, key=lambda job: (job.module, job.name, job.args)):
             digest = module_digest(job.module, packages)

@@ -49,10 +49,10 @@ def project_roots() -> dict[str, Path]:
     """The folder of each top-level project package (the engine and the installed node packages) by name."""
     from importlib.util import find_spec
 
-    from .node_packages import node_package_names
+    from .node_packages import project_packages
 
     roots = {}
-    for name in sorted(set(node_package_names()) | {"nodegraph"}):
+    for name in sorted(project_packages()):
         spec = find_spec(name)
         if spec is not None and spec.submodule_search_locations:
             roots[name] = Path(next(iter(spec.submodule_search_locations)))

@@ -12,3 +12,8 @@ ENTRY_POINT_GROUP = "nodegraph.nodes"
 def node_package_names() -> list[str]:
     """Top-level module names of the installed node packages (entry points; nothing is imported)."""
     return sorted({ep.value.split(":")[0].split(".")[0] for ep in entry_points(group=ENTRY_POINT_GROUP)})
+
+
+def project_packages() -> set[str]:
+    """The project's code: the installed node packages and the engine."""
+    return set(node_package_names()) | {"nodegraph"}

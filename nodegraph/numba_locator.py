@@ -24,9 +24,9 @@ def project_packages() -> set[str]:
     """The installed node packages and the engine (read once per process)."""
     global _PACKAGES
     if _PACKAGES is None:
-        from .registry import node_package_names
+        from .node_packages import project_packages as installed
 
-        _PACKAGES = set(node_package_names()) | {"nodegraph"}
+        _PACKAGES = installed()
     return _PACKAGES
 
 

@@ -20,9 +20,9 @@ from pathlib import Path
 from .cache import Cache
 from .code_digest import node_code_digest, node_libraries
 from .errors import NodegraphError
+from .node_packages import node_package_names
 from .params import canonical
 from .recipe import NodeEntry, Recipe, Wire
-from .registry import node_package_names
 
 # 2: the domain value types moved from nodegraph.values to nodes.values (stored type names); 3: keys cover the engine's
 # code and the libraries' versions, no declared node version

@@ -18,9 +18,7 @@ from types import ModuleType
 
 from .errors import NodeDeclarationError, NodegraphError
 from .node import NodeSpec
-from .node_packages import ENTRY_POINT_GROUP, node_package_names
-
-__all__ = ["ENTRY_POINT_GROUP", "Registry", "default_registry", "node_package_names"]
+from .node_packages import ENTRY_POINT_GROUP
 
 
 class Registry:
