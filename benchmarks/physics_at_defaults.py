@@ -223,20 +223,15 @@ def passes() -> list[dict]:
 def landing() -> list[dict]:
     """The poured stream (seed 0, surface slope and H/R at 2.5 s) at 10 and 80 substeps, and at 80 with the speed
     clamp cut to 1/8 radius, so that its grains land no faster than at 10: what flattens the stream at 80."""
+    from validation import rice_heap
+
     rows = []
     for substeps, clamp in ((10, 1.0), (80, 1.0), (80, 0.125)):
-        (early,), seconds = rice_heap_at(substeps, speed_clamp=clamp)
+        (early,), seconds = rice_heap(300, True, frames=(150,), substeps=substeps, speed_clamp=clamp)
         values = {"surface_2_5": round(early[0], 1), "hr_2_5": round(early[1], 1), "seconds": round(seconds, 1)}
         rows.append({"case": "stream landing", "substeps": substeps, "speed_clamp": clamp, "values": values})
         print(rows[-1], flush=True)
     return rows
-
-
-def rice_heap_at(substeps: int, **params):
-    """``validation.rice_heap``'s stream of 300 grains, read at 2.5 s."""
-    from validation import rice_heap
-
-    return rice_heap(300, True, frames=(150,), substeps=substeps, **params)
 
 
 def convergence() -> list[dict]:
