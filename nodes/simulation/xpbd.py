@@ -36,6 +36,13 @@ SETUP_SECONDS_PER_PARTICLE = 1e-4
 BYTES_PER_PARTICLE = 6_000
 
 
+def _solve(particles: int, frames: int, substeps: int, iterations: int, about: str = "") -> tuple[float, str]:
+    """The frames' CPU seconds (``PARTICLE_ITERATIONS_PER_SECOND``) and what they are, in words: one formula for the
+    estimate before any work and the run's own after its setup."""
+    what = f"{frames:,} frames × {substeps} substeps × {iterations} iterations of {about}{particles:,} particles"
+    return particles * frames * substeps * iterations / PARTICLE_ITERATIONS_PER_SECOND, what
+
+
 def _cost(q: CostQuery) -> Cost:
     """Particles, CPU seconds and memory from the elements its aggregate carries and its parameters, before any work
     (its run says the same from the particles it made, ``expect_cost``); over ``--max-minutes`` is refused unless
@@ -45,12 +52,9 @@ def _cost(q: CostQuery) -> Cost:
         return Cost()
     p = q.params
     particles = elements * p["particles_per_element"]
-    passes = p["frames"] * p["substeps"] * p["iterations"]
     setup = SETUP_SECONDS + particles * SETUP_SECONDS_PER_PARTICLE
-    seconds = setup + particles * passes / PARTICLE_ITERATIONS_PER_SECOND
-    what = (
-        f"{p['frames']:,} frames × {p['substeps']} substeps × {p['iterations']} iterations of ≈ {particles:,} particles"
-    )
+    solve, what = _solve(particles, p["frames"], p["substeps"], p["iterations"], about="≈ ")
+    seconds = setup + solve
     over = []
     limit = q.limits.max_seconds
     if limit is not None and seconds > limit:
@@ -131,11 +135,7 @@ def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=N
     )
     frames, every, meshes_every = p.frames, p.log_every, p.log_meshes_every
     substeps = sim.solver.settings.substeps  # ``slender``: more than p.substeps
-    moving = sim.model.n_moving
-    ctx.expect_cost(
-        moving * frames * substeps * p.iterations / PARTICLE_ITERATIONS_PER_SECOND,
-        f"{frames:,} frames × {substeps} substeps × {p.iterations} iterations of {moving:,} particles",
-    )
+    ctx.expect_cost(*_solve(sim.model.n_moving, frames, substeps, p.iterations))
     done = 0
     resumed = ctx.checkpoint.load() if ctx.checkpoint is not None else None
     if resumed is not None:
