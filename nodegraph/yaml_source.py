@@ -135,16 +135,81 @@ def indentation_hint(text: str, problem: str, mark) -> str:
     )
 
 
+FLOW_OPENERS = {"while parsing a flow mapping": ("{", "}"), "while parsing a flow sequence": ("[", "]")}
+QUOTED = "while scanning a quoted scalar"
+# what the parser calls what it found, in words
+TOKEN_WORDS = {
+    "'?'": "a new key",
+    "':'": "a ':'",
+    "'-'": "a '-' list item",
+    "'<stream end>'": "the end of the file",
+    "'<block end>'": "the end of an indented block",
+    "'<block mapping start>'": "an indented block",
+}
+
+
+def _closes_on_its_line(line: str, column: int, opener: str, closer: str) -> bool:
+    """Whether the bracket at ``column`` of ``line`` is matched later on that line (quotes and comments aside)."""
+    depth, quote = 0, None
+    for char in line[column:]:
+        if quote:
+            quote = None if char == quote else quote
+        elif char in "'\"":
+            quote = char
+        elif char == "#":
+            return False
+        elif char == opener:
+            depth += 1
+        elif char == closer:
+            depth -= 1
+            if depth == 0:
+                return True
+    return False
+
+
+def plain_syntax_error(text: str, exc: yaml.MarkedYAMLError, file: str) -> Issue:
+    """A parser's complaint in a recipe writer's words, at the place to fix: an unclosed ``{`` or ``[`` where it
+    was opened (the parser notices only lines later, at a token it names "'?'"), an unclosed quote where it
+    starts; else the parser's own message, its token names put in words, with an indentation hint."""
+    problem = exc.problem or str(exc)
+    opened = FLOW_OPENERS.get(exc.context or "")
+    start, mark = exc.context_mark, exc.problem_mark or exc.context_mark
+    lines = text.splitlines()
+    if opened and start is not None and mark is not None and problem.startswith("expected ','"):
+        opener, closer = opened
+        kind = "mapping" if opener == "{" else "list"
+        line = lines[start.line] if start.line < len(lines) else ""
+        if mark.line > start.line and not _closes_on_its_line(line, start.column, opener, closer):
+            return Issue(
+                Location(file, start.line + 1, start.column + 1),
+                f"YAML syntax error: the `{opener}` opened on line {start.line + 1} is never closed: add the "
+                f"`{closer}` that ends its {kind}",
+            )
+        return Issue(
+            Location(file, mark.line + 1, mark.column + 1),
+            f"YAML syntax error: inside the `{opener}…{closer}` {kind} opened on line {start.line + 1}, a `,` "
+            f"between entries or the closing `{closer}` is needed here",
+        )
+    if exc.context == QUOTED and start is not None:
+        return Issue(
+            Location(file, start.line + 1, start.column + 1),
+            f"YAML syntax error: the quote opened on line {start.line + 1} is never closed: end the text with the "
+            "same quote mark",
+        )
+    problem = problem.replace("expected <block end>", "expected the indented block to end")
+    for token, words in TOKEN_WORDS.items():
+        problem = problem.replace(f"got {token}", f"found {words}").replace(f"found {token}", f"found {words}")
+    loc = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
+    return Issue(loc, f"YAML syntax error: {problem}{indentation_hint(text, exc.problem or '', mark)}")
+
+
 def load_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     """Parse ``text`` (named ``file`` in messages) into plain values and their source map."""
     source = SourceMap(file)
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        loc = Location(file, mark.line + 1, mark.column + 1) if mark else Location(file)
-        hint = indentation_hint(text, exc.problem or "", mark)
-        raise RecipeError([Issue(loc, f"YAML syntax error: {exc.problem or exc}{hint}")]) from None
+        raise RecipeError([plain_syntax_error(text, exc, file)]) from None
     except yaml.reader.ReaderError as exc:  # a character YAML does not allow (e.g. a NUL byte)
         line = text.count("\n", 0, exc.position) + 1
         column = exc.position - (text.rfind("\n", 0, exc.position) + 1) + 1

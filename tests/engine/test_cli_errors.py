@@ -124,3 +124,24 @@ def test_a_misspelt_output_suggests_the_nearest_node_and_port(registry):
         resolve_outputs(recipe, ["shfted"])
     with pytest.raises(NodegraphError, match=r"has no output 'sphere'; did you mean 'merge.spheres'\?; outputs: "):
         resolve_outputs(recipe, ["merge.sphere"])
+
+
+@pytest.mark.parametrize(
+    "old, new, where, words",
+    [
+        ("{count: 20, scale: 2.0}", "{count: 20, scale: 2.0", "r.yaml:8:13", "`{` opened on line 8 is never closed"),
+        ("effects: [gravity]", "effects: [gravity", "r.yaml:3:10", "the `[` opened on line 3 is never closed"),
+        ("[pts.spheres, phys.spheres]", "[pts.spheres, phys.spheres", "r.yaml:19:47", "inside the `[…]` list opened"),
+        ("{count: 20, scale: 2.0}", "{count: 20 scale: 2.0}", "r.yaml:8:29", "inside the `{…}` mapping opened"),
+        ("name: toy", 'name: "toy', "r.yaml:1:7", "the quote opened on line 1 is never closed"),
+    ],
+)
+def test_a_yaml_syntax_error_points_where_the_bracket_or_quote_opened(registry, old, new, where, words):
+    """Issue 47: a `}` removed on line 28 was reported at 31:3 as "expected ',' or '}', but got '?'": the place to
+    fix is where the `{` opened, and the words are plain ones, not the parser's token names."""
+    assert old in VALID
+    with pytest.raises(RecipeError) as info:
+        parse_recipe(VALID.replace(old, new, 1), registry, file="r.yaml")
+    (issue,) = info.value.issues
+    assert str(issue.location) == where and words in issue.message, str(issue)
+    assert "'?'" not in issue.message and "got" not in issue.message
