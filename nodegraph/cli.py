@@ -89,8 +89,35 @@ def _distributed(parser: argparse.ArgumentParser) -> None:
     )
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument the command does not know is refused by that command (``nodegraph run``'s usage, not the top
+    level's), with the nearest of its options (``--drfat``: did you mean --draft?)."""
+
+    def parse_args(self, args=None, namespace=None):
+        parsed, extra = self.parse_known_args(args, namespace)
+        if extra:
+            commands = next((a.choices for a in self._actions if isinstance(a, argparse._SubParsersAction)), {})
+            owner = commands.get(getattr(parsed, "command", None), self)
+            owner.error(unknown_arguments(extra, owner))
+        return parsed
+
+
+def unknown_arguments(extra: list[str], parser: argparse.ArgumentParser) -> str:
+    """What argparse says of arguments it did not take, and for each misspelt option the nearest of ``parser``'s."""
+    import difflib
+
+    options = [o for action in parser._actions for o in action.option_strings if o.startswith("--")]
+    hints = []
+    for arg in extra:
+        if arg.startswith("-"):
+            near = difflib.get_close_matches(arg.partition("=")[0], options, n=1, cutoff=0.6)
+            if near:
+                hints.append(f"{arg}: did you mean {near[0]}?")
+    return f"unrecognized arguments: {' '.join(extra)}" + "".join(f"; {hint}" for hint in hints)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="nodegraph", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="nodegraph", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
     run = sub.add_parser("run", help="run a recipe and write its outputs")

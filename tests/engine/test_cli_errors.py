@@ -145,3 +145,13 @@ def test_a_yaml_syntax_error_points_where_the_bracket_or_quote_opened(registry, 
     (issue,) = info.value.issues
     assert str(issue.location) == where and words in issue.message, str(issue)
     assert "'?'" not in issue.message and "got" not in issue.message
+
+
+def test_a_misspelt_option_gets_its_commands_usage_and_the_nearest_option(capsys):
+    """Issue 47: ``run … --drfat`` printed the top-level usage, without a did-you-mean."""
+    with pytest.raises(SystemExit) as info:
+        main(["run", "graphs/ikura_don.yaml", "--drfat"])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("usage: nodegraph run ") and "--max-minutes" in err
+    assert "nodegraph run: error: unrecognized arguments: --drfat; --drfat: did you mean --draft?" in err
