@@ -8,6 +8,7 @@ range and units in the message, not a pydantic error code.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
@@ -138,11 +139,25 @@ class Param:
             if base is not None and not path.is_absolute():
                 path = base / path
                 coerced = str(path)
+            if path.is_dir():
+                raise ParamValueError(f"{path} is a folder, not a file", self._file_in(path))
             if not path.is_file():
                 raise ParamValueError(
                     f"no such file: {path}", f"an existing file (a relative path is taken from {base or Path.cwd()})"
                 )
         return coerced
+
+    def file_types(self) -> tuple[str, ...]:
+        """The file name endings the parameter's doc names (".stl, .obj, .ply"), in its order."""
+        return tuple(dict.fromkeys(re.findall(r"(?<![\w.])\.[A-Za-z][A-Za-z0-9]{0,5}\b", self.doc)))
+
+    def _file_in(self, folder: Path) -> str:
+        """What a file parameter given a folder accepts: a file of the types its doc names, and those in the
+        folder."""
+        types = self.file_types()
+        found = sorted(p.name for p in folder.iterdir() if p.is_file() and (not types or p.suffix.lower() in types))
+        accepted = f"a file of type {', '.join(types)}" if types else "a file"
+        return accepted + (f"; in that folder: {', '.join(found[:5])}" if found else "")
 
     def describe(self) -> dict[str, str]:
         """The declaration as strings, for ``nodegraph describe`` and generated docs."""

@@ -34,3 +34,13 @@ def test_a_missing_input_file_is_a_validation_error_at_its_line(tmp_path, regist
     assert len(issues) == 1
     assert issues[0].location.line == 6 and issues[0].param == "path" and "no such file" in issues[0].message
     assert "existing file" in issues[0].allowed
+
+
+def test_a_folder_given_as_a_file_is_named_a_folder_with_the_types_accepted(tmp_path, registry):
+    """Issue 47: a folder passed as a mesh path said "no such file"."""
+    (tmp_path / "lines.txt").write_text("a\n")
+    (tmp_path / "notes.md").write_text("b\n")
+    (issue,) = issues_of(RECIPE.format(path=tmp_path), registry)
+    assert issue.location.line == 6 and issue.param == "path"
+    assert issue.message == f"{tmp_path} is a folder, not a file"
+    assert issue.allowed == "a file of type .txt, .csv; in that folder: lines.txt"

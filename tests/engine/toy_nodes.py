@@ -208,7 +208,7 @@ def toy_sphere_mesh(ctx, spheres):
 @node(
     "toy_file_table",
     outputs={"table": Out(Table, "one row per line of the file")},
-    params={"path": Param(str, doc="text file", file=True)},
+    params={"path": Param(str, doc="text file (.txt, .csv)", file=True)},
 )
 def toy_file_table(ctx, *, path):
     """The lengths of a text file's lines."""
