@@ -202,6 +202,19 @@ def _parse_override(text: str) -> tuple[list[str], Any]:
     return target.strip().split("."), value
 
 
+def _valid_fields(raw: dict) -> RecipeModel:
+    """The top-level fields of ``raw`` that are valid on their own, the others at their defaults (outputs and
+    nodes empty): what a recipe whose top level has an error still gets checked against."""
+    model = RecipeModel.model_construct(outputs=[], nodes={})
+    for name in RecipeModel.model_fields:
+        if name in raw:
+            try:
+                RecipeModel.__pydantic_validator__.validate_assignment(model, name, raw[name])
+            except ValidationError:
+                pass
+    return model
+
+
 class _Validator:
     """Collects issues while building a Recipe."""
 
@@ -369,14 +382,15 @@ class _Validator:
             return None
         self.apply_overrides()
         try:
-            model = RecipeModel.model_validate(self.raw)
+            model = partial = RecipeModel.model_validate(self.raw)
         except ValidationError as exc:
             self.pydantic_issues(exc, (), None, RecipeModel)
-            model = None
+            model, partial = None, _valid_fields(self.raw)
         raw_nodes = self.raw.get("nodes") if isinstance(self.raw.get("nodes"), dict) else {}
 
         entries: dict[str, NodeEntry] = {}
         wire_sources: dict[tuple[str, str], list[tuple[Wire, tuple]]] = {}
+        before_nodes = len(self.issues)
         above = None  # the node before this one in the file
         for node_id, body in raw_nodes.items():
             path = ("nodes", node_id)
@@ -432,10 +446,13 @@ class _Validator:
         cyclic = self._check_cycles(graph)
         if not cyclic:
             self._check_families(entries, graph)
-        outputs = self._check_outputs(model.outputs if model else [], entries, raw_nodes)
-        effects = self._check_effects(model.effects if model else [], entries)
+        nodes_valid = len(self.issues) == before_nodes
+        # the outputs and effects as written are checked whatever else is wrong (an unknown top-level key, a bad
+        # --set): each error of a recipe is reported in one pass, not one per fix
+        outputs = self._check_outputs(partial.outputs, entries, raw_nodes)
+        effects = self._check_effects(partial.effects, entries)
         cost = None
-        if not self.issues:  # the nodes' checks across the recipe read valid parameters and wires only
+        if nodes_valid:  # the nodes' checks across the recipe read valid parameters and wires only
             self._check_recipe_rules(entries)
             if self.work and not cyclic and not self.issues:
                 cost = self._weigh_cost(entries, graph, outputs)
@@ -446,12 +463,12 @@ class _Validator:
             from .sweep_decl import check_sweeps
 
             sweeps = check_sweeps(self, raw_sweeps, entries, raw_nodes)
-        if model is not None and model.name is not None and not RECIPE_NAME.match(model.name):
+        if partial.name is not None and not RECIPE_NAME.match(partial.name):
             self.issue(
                 ("name",),
                 "the recipe name names its output folder and recording, so it must be a plain name",
                 param="name",
-                given=model.name,
+                given=partial.name,
                 allowed="letters, digits, _, - and . (not starting with '.'; no '/', '\\' or '..')",
             )
         if self.issues or model is None:

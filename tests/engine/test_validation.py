@@ -260,3 +260,21 @@ def test_an_unknown_parameter_is_matched_on_its_words_across_the_recipes_nodes()
 def test_several_suggestions_are_each_named(registry):
     (issue,) = issues_of(VALID, registry, ["pts.counts_number=3"])
     assert issue.suggestion == "count" and "did you mean 'count'?" in str(issue)
+
+
+def test_a_top_level_error_does_not_hide_the_others(registry):
+    """Issue 47: a misspelt top-level key (``efects:``) hid a bad output name until the next check; every
+    independent error is reported in one pass."""
+    text = (
+        VALID.replace("effects:", "efects:")
+        .replace("outputs: [merge.spheres]", "outputs: [merge.sphere]")
+        .replace("name: toy", "name: a/b")
+        .replace("seed: 3", "seed: three")
+    )
+    found = {(i.location.line, i.message.split(" (")[0].split(":")[0]) for i in issues_of(text, registry)}
+    assert found == {
+        (1, "the recipe name names its output folder and recording, so it must be a plain name"),
+        (2, "Input should be a valid integer, unable to parse string as an integer"),
+        (3, "unknown key 'efects'"),
+        (4, "'merge' has no output 'sphere'"),
+    }
