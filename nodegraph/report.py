@@ -87,10 +87,14 @@ class PeakMemory:
             self._stop.set()
             self._thread.join()
         end = _rss_bytes() or self._peak
-        self.peak_bytes = max(self._peak, end) - self._start
+        self.peak_bytes = max(0, self._peak - self._start, end - self._start)  # a node that freed more than it took: 0
 
 
 _COLOUR = {"ran": "green", "cached": "cyan", "failed": "red"}
+PIPE_WIDTH = 10_000  # columns a table may take where no terminal sets a width (a pipe, a log): no cell is cut
+# a node's peak memory below this is noise (the allocator's arenas, pages another thread frees while it runs: a node
+# that allocates nothing has shown -0.2 MiB): shown as "< 1 MiB"
+MEMORY_NOISE = 2**20
 HEARTBEAT_ENV = "NODEGRAPH_HEARTBEAT"  # seconds: sooner or later than HEARTBEAT_S (a CI log, a benchmark)
 # where no bar is drawn, a step running this long is said to be running, and again every HEARTBEAT_EVERY_S after:
 # a log shows that a long step is alive, without flooding
@@ -250,7 +254,7 @@ class Reporter:
                 status,
                 format_duration(sum(r.seconds for r in records)),
                 format_duration(sum(cpu)) if cpu else "",
-                format_bytes(max(peaks)) if peaks else "",
+                format_peak(max(peaks)) if peaks else "",
             ]
             if logged:
                 row.append(format_duration(sum(r.log_seconds or 0.0 for r in records)))
@@ -282,8 +286,23 @@ class Reporter:
         return table
 
     def print_summary(self) -> None:
-        if not self.quiet:
+        """The table: on a terminal, fitted to its width; in a pipe or a log, which have no width, whole (every
+        column, no cell cut: "wall ti…" told nothing)."""
+        if self.quiet:
+            return
+        if self.console.is_terminal:
             self.console.print(self.summary())
+            return
+        from rich.measure import Measurement
+
+        table = self.summary(width=PIPE_WIDTH)
+        needed = Measurement.get(self.console, self.console.options.update(width=PIPE_WIDTH), table).maximum
+        width = self.console.width
+        self.console.width = max(width, needed)  # rich cuts whatever is wider than its console
+        try:
+            self.console.print(table)
+        finally:
+            self.console.width = width
 
 
 def remaining_seconds(plan: list[float | None], started: int, since: float | None, now: float) -> tuple[float, bool]:
@@ -349,6 +368,12 @@ def parse_duration(text: str) -> float:
     if minutes is not None:
         return 60 * int(minutes) + int(seconds)
     return 3600 * int(hours) + 60 * int(hour_minutes)
+
+
+def format_peak(size: float) -> str:
+    """A node's peak memory above its start: ``format_bytes``, but "< 1 MiB" below ``MEMORY_NOISE`` (never a
+    negative size)."""
+    return f"< {MEMORY_NOISE // 2**20} MiB" if size < MEMORY_NOISE else format_bytes(size)
 
 
 def format_bytes(size: float) -> str:

@@ -1,4 +1,5 @@
-"""The closing table of a run fits an 80-column terminal: one line per node, no cell wrapped (issue 47)."""
+"""The closing table of a run fits an 80-column terminal: one line per node, no cell wrapped; in a pipe it is
+printed whole, nothing cut (issue 47)."""
 
 import io
 
@@ -19,9 +20,9 @@ NODES = [
 ]
 
 
-def table_lines(width: int) -> list[str]:
+def table_lines(width: int, terminal: bool = True) -> list[str]:
     out = io.StringIO()
-    reporter = Reporter(console=Console(file=out, width=width))
+    reporter = Reporter(console=Console(file=out, width=width, force_terminal=terminal, color_system=None))
     for i, (node, kind, count) in enumerate(NODES):
         for v in range(count):
             label = node if count == 1 else f"{node}[{v}]"
@@ -39,6 +40,22 @@ def test_the_run_table_fits_80_columns_one_line_per_node():
     assert rows[0].split("│")[1].strip() == "grain_spheres" and "cached ×16" in rows[0]
     wide = table_lines(160)
     assert "deform_contacts" in "\n".join(wide)  # the type column where there is room
+
+
+def test_in_a_pipe_the_table_is_whole_and_no_memory_is_negative():
+    """Issue 47: a table printed to a pipe was cut ("wall ti…"), and a node's peak memory read "-0.2 MiB"."""
+    lines = table_lines(80, terminal=False)
+    text = "\n".join(lines)
+    assert "…" not in text and "wall time" in text and "deform_contacts" in text  # every column, whole
+    assert len([line for line in lines if line.startswith("│")]) == len(NODES)
+    out = io.StringIO()
+    reporter = Reporter(console=Console(file=out, width=80))
+    for node, peak in (("frees", -0.2 * 2**20), ("tiny", 300 * 2**10), ("big", 5 * 2**20)):
+        reporter.record(NodeRecord(node, "toy", "ran", 1.0, peak, cpu_seconds=1.0))
+    reporter.print_summary()
+    rows = [line.split("│") for line in out.getvalue().splitlines() if line.startswith("│")]
+    cells = {row[1].strip(): row[-2].strip() for row in rows}
+    assert cells == {"frees": "< 1 MiB", "tiny": "< 1 MiB", "big": "5.0 MiB"}
 
 
 def test_durations_read_back():
