@@ -23,14 +23,15 @@ class Checkpoint:
         self.path = Path(path)
         self.interval = interval
         self._last = time.monotonic()
+        self.steps_done: int | None = None  # what ``load`` resumed from: the saved ``frames_done``, if any
 
     def due(self) -> bool:
         """True when ``interval`` seconds have passed since the last save (or since the node started)."""
         return time.monotonic() - self._last >= self.interval
 
     def save(self, value: Any) -> None:
-        """Save ``value``; one with a ``frames_done`` count is named by it where a stopped run says what a re-run
-        resumes from."""
+        """Save ``value``; one with a ``frames_done`` count (in the steps of the node's ``ctx.progress``) is named by
+        it where a stopped run says what a re-run resumes from, and a resumed run's estimate counts the steps left."""
         atomic_write(self.path, codec.encode(value))
         self._last = time.monotonic()
         done = getattr(value, "frames_done", None)
@@ -43,10 +44,13 @@ class Checkpoint:
         except OSError:
             return None
         try:
-            return codec.thaw(codec.decode(data))
+            value = codec.thaw(codec.decode(data))
         except codec.DecodeError:
             self.clear()
             return None
+        done = getattr(value, "frames_done", None)
+        self.steps_done = done if isinstance(done, int) else None  # the estimate said on resume counts the rest
+        return value
 
     def clear(self) -> None:
         self.path.unlink(missing_ok=True)

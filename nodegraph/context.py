@@ -98,6 +98,9 @@ class CostLimitExceeded(NodegraphError):
     """A node's own estimate of its run time is over the run's limit: refused before the work starts."""
 
 
+EXPECTED_SAID_S = 10.0  # a node's own estimate at least this long is said as it starts
+
+
 def format_seconds(seconds: float) -> str:
     if seconds < 120:
         return f"{seconds:.0f} s"
@@ -120,6 +123,7 @@ class Context:
     max_seconds: float | None = None  # a node expecting to run longer refuses to start (``expect_cost``)
     checkpoint: Any = None  # ``checkpoint.Checkpoint`` for resumable long nodes, None without a cache
     _rng: np.random.Generator | None = field(default=None, repr=False)
+    _estimate: tuple[float, str] | None = field(default=None, repr=False)  # said once the resumed frame is known
 
     @classmethod
     def standalone(cls, node_type: str = "test", seed: int | None = 0, effects=(), variant=None) -> Context:
@@ -149,7 +153,24 @@ class Context:
                 f"{format_seconds(self.max_seconds)}: run again with --yes to go ahead (or --max-minutes N); "
                 "the nodes before it are cached"
             )
-        if seconds >= 10.0 and self.reporter is not None:
+        if self.checkpoint is not None and self.checkpoint.path.exists():
+            # a resumed run: said as its progress starts (``progress``), for the steps left after the checkpoint's
+            self._estimate = (seconds, what)
+        elif seconds >= EXPECTED_SAID_S and self.reporter is not None:
+            self.reporter.info(f"{label}: {what}, ≈ {format_seconds(seconds)} expected")
+
+    def _say_estimate(self, total: int) -> None:
+        """The estimate ``expect_cost`` held back for a saved checkpoint: the share of the ``total`` steps that
+        the checkpoint (its ``frames_done``, in the steps of the node's progress) leaves, all of it where the
+        checkpoint could not be read."""
+        seconds, what = self._estimate
+        self._estimate = None
+        done = getattr(self.checkpoint, "steps_done", None)
+        label = self.node_id if self.variant is None else f"{self.node_id}[{self.variant}]"
+        if isinstance(done, int) and 0 < done <= total:
+            seconds *= (total - done) / total
+            what += f"; {total - done:,} of {total:,} left after the checkpoint"
+        if seconds >= EXPECTED_SAID_S and self.reporter is not None:
             self.reporter.info(f"{label}: {what}, ≈ {format_seconds(seconds)} expected")
 
     def wants(self, effect: str) -> bool:
@@ -159,6 +180,8 @@ class Context:
     @contextlib.contextmanager
     def progress(self, total: int, description: str = "") -> Iterator[ProgressTask]:
         """A progress bar of ``total`` steps for this node, shown while the block runs."""
+        if self._estimate is not None:
+            self._say_estimate(total)
         if self.reporter is None:
             yield ProgressTask()
             return

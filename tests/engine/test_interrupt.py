@@ -239,3 +239,31 @@ def test_the_killed_line_names_the_step_the_files_and_the_saved_checkpoint(tmp_p
     assert line.startswith("interrupted during rice_sim: the step did not stop within 1 s and was ended"), line
     assert f"removed 5 unfinished file(s): {', '.join(map(str, removed[:3]))} and 2 more" in line, line
     assert line.endswith("a re-run resumes from there, rice_sim from its saved checkpoint at frame 1,200"), line
+
+
+def test_a_resumed_steps_estimate_counts_only_the_steps_left(tmp_path):
+    """Issue 47: a simulation resumed from its checkpoint still said "≈ 44 s expected", its whole length."""
+    import io
+
+    from rich.console import Console
+
+    from nodegraph.checkpoint import Checkpoint
+    from nodegraph.context import Context
+    from nodegraph.report import Reporter
+
+    def said(saved: int | None) -> str:
+        out = io.StringIO()
+        checkpoint = Checkpoint(tmp_path / f"{saved}.npz")
+        if saved is not None:
+            checkpoint.save(Progress(saved))
+        reporter = Reporter(console=Console(file=out, width=200))
+        ctx = Context("rice_sim", "xpbd", reporter=reporter, checkpoint=checkpoint)
+        ctx.expect_cost(40.0, "1,000 frames")
+        checkpoint.load()
+        with ctx.progress(1000, "frames") as bar:
+            bar.advance(saved or 0)
+        return out.getvalue()
+
+    assert "rice_sim: 1,000 frames, ≈ 40 s expected" in said(None)
+    assert "rice_sim: 1,000 frames; 250 of 1,000 left after the checkpoint, ≈ 10 s expected" in said(750)
+    assert "expected" not in said(900)  # 4 s left: under the 10 s a node's estimate is said from
