@@ -17,3 +17,25 @@ def test_ci_runs_readme_test_command():
     assert "pytest" in command
     ci_lines = [line.strip() for line in (ROOT / ".ci" / "run").read_text().splitlines()]
     assert command in ci_lines
+
+
+def test_readme_starts_with_the_two_commands_and_stays_short():
+    """Issue 47: README was 8,266 words and the one command a newcomer needs was buried. It starts with the main
+    job's command and the test command, a code block each, before any section; the rest is in docs/."""
+    text = (ROOT / "README.md").read_text()
+    before_sections = text.split("\n## ")[0]
+    blocks = before_sections.split("```bash\n")[1:]
+    commands = [block.split("\n")[0] for block in blocks]
+    assert len(commands) == 2, before_sections
+    assert commands[0].endswith("pip install -e . && nodegraph run graphs/ikura_don.yaml")
+    assert commands[1] == readme_test_command()
+    assert len(text.split()) < 1500
+
+
+def test_the_readme_and_reference_links_resolve():
+    import re
+
+    for doc in (ROOT / "README.md", ROOT / "docs" / "reference.md"):
+        for target in re.findall(r"\]\(([^)#]+)\)", doc.read_text()):
+            if not target.startswith("http"):
+                assert (doc.parent / target).exists(), f"{doc.name}: {target}"

@@ -38,7 +38,8 @@ FACTOR = 1.25
 
 def test_the_estimate_is_within_a_factor_of_a_small_run():
     """The drafts' placements (the rice bowl's with its 1 mm inset, the onigiri's without), run: placed against the
-    estimate; the full-size runs against it are in benchmarks/measured/cost.jsonl (README, "Cost before the work")."""
+    estimate; the full-size runs against it are in benchmarks/measured/cost.jsonl (docs/reference.md, "Cost before
+    the work")."""
     from nodegraph.executor import run_recipe
     from nodegraph.recipe import load_recipe
     from nodegraph.registry import default_registry
