@@ -93,11 +93,12 @@ class _Parser(argparse.ArgumentParser):
     """An argument the command does not know is refused by that command (``nodegraph run``'s usage, not the top
     level's), with the nearest of its options (``--drfat``: did you mean --draft?)."""
 
+    commands: dict[str, argparse.ArgumentParser] = {}  # the top level's: each command's parser, by name
+
     def parse_args(self, args=None, namespace=None):
         parsed, extra = self.parse_known_args(args, namespace)
         if extra:
-            commands = next((a.choices for a in self._actions if isinstance(a, argparse._SubParsersAction)), {})
-            owner = commands.get(getattr(parsed, "command", None), self)
+            owner = self.commands.get(getattr(parsed, "command", None), self)
             owner.error(unknown_arguments(extra, owner))
         return parsed
 
@@ -106,7 +107,7 @@ def unknown_arguments(extra: list[str], parser: argparse.ArgumentParser) -> str:
     """What argparse says of arguments it did not take, and for each misspelt option the nearest of ``parser``'s."""
     import difflib
 
-    options = [o for action in parser._actions for o in action.option_strings if o.startswith("--")]
+    options = sorted(set(re.findall(r"--[a-z][a-z-]*", parser.format_usage())))
     hints = []
     for arg in extra:
         if arg.startswith("-"):
@@ -119,6 +120,7 @@ def unknown_arguments(extra: list[str], parser: argparse.ArgumentParser) -> str:
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="nodegraph", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
+    parser.commands = sub.choices
 
     run = sub.add_parser("run", help="run a recipe and write its outputs")
     run.add_argument("recipe", type=Path)
