@@ -13,6 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .friction import FORCE, NO_GROUPS, RUBBED, ContactGroups
 from .model import Model
 from .settings import PAIR_EFFECTS, SolverSettings
 
@@ -116,10 +117,14 @@ class Contacts:
     anchor: np.ndarray
     # per list entry, the normal correction of this substep so far (anchored friction's load, ``friction``)
     load: np.ndarray
-    # per list entry, its contact's mean load over the last substep (``friction.group_means``), and its contact
-    group: np.ndarray
+    # per list entry, its contact's mean load over the last substep and its friction mode
+    # (``friction.pool_contacts``), and what friction removed this substep (``friction.RUBBED`` columns)
     held: np.ndarray
-    groups: int = 0
+    mode: np.ndarray
+    rubbed: np.ndarray
+    force: np.ndarray  # per list entry, its contact's remembered force (``friction.FORCE`` columns)
+    # which contact each entry belongs to (``friction.contact_groups``)
+    groups: ContactGroups = NO_GROUPS
     displacement: float = np.inf
 
     @classmethod
@@ -142,8 +147,10 @@ class Contacts:
             np.zeros_like(x) if "adhesion" in effects else None,
             np.empty((0, 3)),
             np.empty(0),
-            np.empty(0, np.int64),
             np.empty(0),
+            np.empty(0, np.int8),
+            np.empty((0, RUBBED)),
+            np.empty((0, FORCE)),
         )
 
     def stale(self) -> bool:

@@ -16,7 +16,7 @@ import numpy as np
 from numba import get_num_threads, njit, prange
 
 from ..triangle_distance import point_triangle_offset
-from .friction import RELEASE, friction_wall
+from .friction import RELEASE, ROLLING, RUBBED, TESTED, contact_mode, friction_wall, remember
 
 
 @njit(cache=True, nogil=True)
@@ -300,13 +300,16 @@ def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
     return sample_phi(phi, origin, pitch, x[i, 0], x[i, 1], x[i, 2])
 
 
-@njit(cache=True, inline="always")
+# called, not inlined into ``collider_project``'s parallel loop: inlined, numba 0.68 lost the writes to the state
+# bundle's arrays it fetched (what friction removed stayed 0)
+@njit(cache=True)
 def _wall_one(state, w, r, elem, phi, origin, pitch, blocks, rule, i):
     """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
     if w[i] <= 0.0:
         return 0.0
     x, x_prev, anchor, load, mean = state.x, state.x_prev, state.wall_anchor, state.wall_load, state.wall_mean
-    mu_s, _, anchored = rule
+    rubbed, modes = state.wall_rubbed, state.wall_mode
+    mu_s, anchored = rule[0], rule[2]
     fx = (x[i, 0] - origin[0]) / pitch
     fy = (x[i, 1] - origin[1]) / pitch
     fz = (x[i, 2] - origin[2]) / pitch
@@ -336,8 +339,10 @@ def _wall_one(state, w, r, elem, phi, origin, pitch, blocks, rule, i):
     x[i, 2] += pen * nz
     load[i] += pen
     if mu_s > 0.0:
-        pooled = mean[elem[i]]  # the element's mean wall load over the last substep, 0 if it touched none
-        friction_wall(x, x_prev, anchor, i, nx, ny, nz, pooled if pooled > 0.0 else load[i], rule)
+        e = elem[i]  # the element's mean wall load over the last substep and its mode, 0 if it touched none
+        pooled = mean[e] > 0.0
+        held, mode = (mean[e], modes[e]) if pooled else (load[i], TESTED)
+        friction_wall(x, x_prev, anchor, rubbed, i, nx, ny, nz, held, rule, mode)
     return pen / r[i]
 
 
@@ -432,18 +437,44 @@ def rigid_into_free_space(x, r, start, phi, origin, pitch):
     return moved
 
 
-@njit(cache=True, parallel=True)
-def wall_means(start, load, mean):
-    """Each element's mean wall load over its touching particles into ``mean`` (per element, 0 where none
-    touches), and the particles' loads cleared for the next substep: static friction then tests a grain against a
-    wall as one rigid contact, Σ|t| < μs·Σ N (``friction.group_means`` does the same for grain on grain)."""
+@njit(cache=True)
+def wall_means(start, state, rule):
+    """Each element's mean wall load over its touching particles into ``state.wall_mean`` (per element, 0 where
+    none touches), its remembered force (``friction.remember``) into ``state.wall_force`` and its friction mode
+    for the next substep (``friction.contact_mode``; TESTED without anchors) into ``state.wall_mode``; the
+    particles' loads and what friction removed cleared for the next substep: static friction then tests a grain
+    against the walls as one rigid contact (``friction.pool_contacts`` does the same for grain on grain).
+    ``rule``: a ``friction_models.FrictionRule``."""
+    load, mean, rubbed, modes, force = (
+        state.wall_load,
+        state.wall_mean,
+        state.wall_rubbed,
+        state.wall_mode,
+        state.wall_force,
+    )
+    mu_s, anchored = rule[0], rule[2]
     m = start.shape[0] - 1
-    for e in prange(m):
+    for e in range(m):  # serial: one pass over the particles (a prange here lost its writes to ``mean``)
         total = 0.0
         count = 0
+        tx, ty, tz = 0.0, 0.0, 0.0
+        slid = False
         for i in range(start[e], start[e + 1]):
             if load[i] > 0.0:
                 total += load[i]
                 count += 1
+            tx += rubbed[i, 0]
+            ty += rubbed[i, 1]
+            tz += rubbed[i, 2]
+            slid |= rubbed[i, 4] > 0.0
             load[i] = 0.0
+            for k in range(RUBBED):
+                rubbed[i, k] = 0.0
         mean[e] = total / count if count > 0 else 0.0
+        remember(force, e, total, tx, ty, tz)
+        rolls = start[e + 1] - start[e] <= ROLLING
+        modes[e] = (
+            TESTED
+            if rolls or not anchored
+            else contact_mode(force[e, 3], force[e, 0], force[e, 1], force[e, 2], slid, mu_s)
+        )

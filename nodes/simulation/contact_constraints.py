@@ -30,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit, prange
 
-from .friction import RELEASE, friction_pair
+from .friction import RELEASE, ROLLS, TESTED, friction_pair
 
 # the sweep's arguments in bundles (a kernel takes at most 12): the neighbour lists' rows, the grid
 # that colours them, the per-entry arrays, and the scalars of one sweep
@@ -39,9 +39,10 @@ PairRows = namedtuple(
 )  # row p lists the partners (ids nbr, rows at) of order[p]
 Colouring = namedtuple("Colouring", "cell_start order dims")
 # per list entry: tolerated overlap, friction anchor, normal correction so far this substep (anchored friction's
-# load), its contact's mean load over the last substep (``friction.group_means``), and ``glued``: its grains are
-# glued (``glue``), so its friction takes the true masses (``_project_slab``); empty: none is
-PairEntries = namedtuple("PairEntries", "allowance anchor load held glued")
+# load), its contact's mean load over the last substep and its friction mode (``friction.pool_contacts``), what
+# friction removed this substep (``friction.RUBBED`` columns), and ``glued``: its grains are glued (``glue``), so
+# its friction takes the true masses and tests each entry alone (``_project_slab``); empty: none is
+PairEntries = namedtuple("PairEntries", "allowance anchor load held mode rubbed glued")
 ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion")
 
 
@@ -141,7 +142,7 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     The particle arrays are the sweep's sorted copies (``_sorted_copies``: row p holds particle order[p], a
     partner's row is ``rows.at``)."""
     nbr_start, nbr, half, order, at = rows
-    allowance, anchor, load, held_mean, glued = entries
+    allowance, anchor, load, held_mean, modes, rubbed, glued = entries
     wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion = rule
     any_glued = glued.shape[0] > 0
     for p in range(p0, p1):
@@ -167,15 +168,19 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
                 continue
             pen = depth - allowance[a] if normal else 0.0
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
-                if anchored:  # the contact's pooled load, else (none touched last substep, or glued) the pair's own
-                    pooled = held_mean[a] > 0.0 and not (any_glued and glued[a])
+                mode = TESTED
+                if anchored:  # the contact's pooled load and mode, else (none touched last substep, glued, or a
+                    # sphere's: ``friction.ROLLS``) its own
+                    pooled = held_mean[a] > 0.0 and not (any_glued and glued[a]) and modes[a] != ROLLS
                     own = held_mean[a] if pooled else load[a] + max(pen, 0.0)
                     held = own + cohesion * (w[p] + w[q])
+                    if pooled:
+                        mode = modes[a]
                 else:
                     held = depth
                 # glued grains rub with their true masses: their tangential pushes cancel
                 rub = w[p] / (w[p] + w[q]) if any_glued and glued[a] else share
-                friction_pair(x, x_prev, anchor, a, p, q, (nx, ny, nz), held, rub, (mu_s, mu_k, anchored))
+                friction_pair(x, x_prev, anchor, rubbed, a, p, q, (nx, ny, nz), held, rub, (mu_s, mu_k, anchored), mode)
             if pen > 0.0:
                 if anchored and mu_s > 0.0:
                     load[a] += pen

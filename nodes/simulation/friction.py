@@ -23,18 +23,24 @@ substep's load they rest (docs/validation.md). The tolerated old overlap is no l
 overlaps fed friction that kept them, and poured spheres jammed at φ 0.34. Walls keep the penetration as
 their load: summing a wall's pushes too raised the heap 2.6° but kept a sleeping pile of bars from resting
 (kinetic energy 0.3–3 g·mm²/s² for ever, against 0 without).
-A rigid grain touches a wall or another grain at several particles, and the load falls on them unevenly (one
-particle of a grain lying on a plane carries ≈ 90 %), while shape matching spreads the grain's drift over them
-alike: tested per particle, the lightly loaded ones slid and took the grain along (it slid at 26° on a plane
-at μs 0.6). So the test takes each contact's mean load over its touching particles in the last substep
-(``group_means`` per pair of elements, ``collider.wall_means`` per element against the walls): Coulomb's
-Σ|t| < μs·Σ N for the rigid contact; a grain then holds to 29–30° and slides at 30–31° (docs/validation.md).
-G Table 3: μs = static threshold, μk = dynamic scale · μs.
+A rigid grain touches a wall or another grain at several particles; the load falls on them unevenly (one
+particle of a grain lying on a plane carries ≈ 90 %) while shape matching spreads the grain's drift over them
+alike. Whether a contact sticks is therefore decided for the contact as a whole (the pair of elements, or an
+element against the walls) and once per substep, from the last (``pool_contacts``, ``collider.wall_means``):
+Coulomb's |Σ Δx_t| ≤ μs·Σ Δx_n with the tangential corrections summed as vectors and both summed over the
+contact's particles and all of the substep's passes (``contact_mode``). While a contact sticks, every pass
+restores its whole drift since the anchor; while it slides, the passes remove at most μk times its load over
+the substep. A test of each pass's drift against the load, as Macklin's, saw only what the passes before had
+left, so static friction grew with the iterations (a grain held on a plane to 24°, 29°, 34° and 37° at 1–4
+iterations, μs 0.6); the summed test holds it to 30° and lets it slide at 31° at 10 × 2, 40 × 2 and 10 × 4
+(tests/simulation/test_static_friction.py). G Table 3: μs = static threshold, μk = dynamic scale · μs.
 
 Anchors are NaN where no contact sticks. ``friction_pair`` runs per pair inside the contacts'
 Gauss–Seidel sweep (``contact_constraints.contact_sweep``) just before the pair's normal correction;
 ``friction_wall`` for a particle against a collider wall (a partner that never moves).
 """
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -44,29 +50,75 @@ from numba import njit, prange
 RELEASE = 0.05
 
 
+# a contact's friction mode in a substep, decided at the end of the last one from what its contact needed
+# (``pool_contact``): TESTED when it touched nothing (each entry tests its drift against its own load),
+# STICKING (restore the whole drift since the anchor), SLIDING (remove at most μk·load over the substep)
+TESTED, STICKING, SLIDING = 0, 1, 2
+ROLLS = 3  # a pair with a one-particle element (``ROLLING``): tested each pass against its own load
+# per entry, what friction removed this substep (``rubbed``): the drift vector (3), its length summed over
+# the passes, and whether it slid in one
+RUBBED = 5
+# the share of one substep's tangential and normal corrections in a contact's remembered force (``remember``);
+# the rest is what it remembered. A grain tilted on a plane at μs 1 (never sliding) reads |Σ Δx_t|/Σ Δx_n = tan θ
+# once at rest, but rings to 1.3 tan θ over the first 4–10 substeps (10 × 2, 40 × 2 and 10 × 4 alike): a test of
+# each substep alone let it slide at 28° (μs 0.6: 31°); the running mean at this share stays below tan θ
+RESPONSE = 0.25
+# a sticking contact restores at most this many times μs·load in one pass: two sticking contacts with other
+# normals lock a particle in place, and a plate pressed on two-layer grains (0.2 N, 8 iterations) passed through
+# them when the normal corrections could no longer move it; a grain on a plane needs at most 1.3 μs·load
+HOLD = 2.0
+# per contact, the remembered force: the tangential corrections' vector (3) and the normal corrections' sum
+FORCE = 4
+# a one-particle element (a sphere) has no rotation here: where a real sphere would roll off another, a sticking
+# contact welds them, and spheres poured on a lattice stood in columns (φ 0.34 against 0.65; so did the per-pass
+# test against the pooled load of the substep before). Its pairs are tested each pass against their own load of
+# this substep (ROLLS), which lets them slip as rolling would, and its walls each pass (TESTED)
+ROLLING = 1  # particles: an element this small rolls
+
+
 @njit(cache=True, inline="always")
-def tangential_slip(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k):
-    """(share, tx, ty, tz): the tangential part t of the drift r against the unit normal n, and the
-    share of it friction removes — 1 when |t| < μs·depth (static), else min(μk·depth/|t|, 1)
-    (dynamic); share −1 when there is no tangential drift (|t| ≤ 1e-12)."""
+def removed_share(t, mode, held, used, mu_s, mu_k):
+    """The share of a tangential drift of length t > 0 that friction removes in this pass: all of it when
+    sticking, up to ``HOLD``·μs·held; when sliding, what is left of the substep's budget μk·held after ``used``;
+    when tested, all of it below μs·held, else min(μk·held/t, 1) (Macklin et al. 2014 §6.1). Below 1 the
+    contact slid."""
+    if mode == STICKING:
+        return min(HOLD * mu_s * held / t, 1.0)
+    if mode == SLIDING:
+        return min(max(mu_k * held - used, 0.0) / t, 1.0)
+    return 1.0 if t < mu_s * held else min(mu_k * held / t, 1.0)
+
+
+@njit(cache=True, inline="always")
+def tangential_part(rx, ry, rz, nx, ny, nz):
+    """(t, tx, ty, tz): the tangential part of the drift r against the unit normal n and its length."""
     dn = rx * nx + ry * ny + rz * nz
     tx = rx - dn * nx
     ty = ry - dn * ny
     tz = rz - dn * nz
-    t = np.sqrt(tx * tx + ty * ty + tz * tz)
-    if t <= 1e-12:
-        return -1.0, tx, ty, tz
-    return (1.0 if t < mu_s * depth else min(mu_k * depth / t, 1.0)), tx, ty, tz
+    return np.sqrt(tx * tx + ty * ty + tz * tz), tx, ty, tz
 
 
 @njit(cache=True, inline="always")
-def friction_pair(x, x_prev, anchor, a, i, j, normal, depth, share, rule):
+def _rub(rubbed, a, scale, t, tx, ty, tz):
+    """Add what friction removed in this pass to entry ``a`` of ``rubbed`` (``RUBBED`` columns)."""
+    rubbed[a, 0] += scale * tx
+    rubbed[a, 1] += scale * ty
+    rubbed[a, 2] += scale * tz
+    rubbed[a, 3] += scale * t
+    if scale < 1.0:
+        rubbed[a, 4] = 1.0
+
+
+@njit(cache=True, inline="always")
+def friction_pair(x, x_prev, anchor, rubbed, a, i, j, normal, held, share, rule, mode):
     """Friction on the pair (i, j) of list entry ``a`` with unit normal ``normal`` = (nx, ny, nz)
-    (j → i) and overlap ``depth``, in place; i takes ``share`` of the correction, j the rest (the
-    contacts' mass scaling). ``rule``: a ``friction_models.FrictionRule`` (μs, μk, anchored); without
-    anchors the drift is the substep's (Macklin's rule); with them a pair without an anchor is anchored where
-    it stood at the substep's start (its first substep is Macklin's rule) and a sliding pair is re-anchored
-    after its step."""
+    (j → i) and normal load ``held``, in place; i takes ``share`` of the correction, j the rest (the
+    contacts' mass scaling). ``rule``: a ``friction_models.FrictionRule`` (μs, μk, anchored); ``mode``: the
+    contact's (``TESTED``, ``STICKING``, ``SLIDING``). Without anchors the drift is the substep's (Macklin's
+    rule); with them a pair without an anchor is anchored where it stood at the substep's start (its first
+    substep is Macklin's rule) and a sliding pair is re-anchored after its step. What is removed adds to
+    ``rubbed[a]``."""
     mu_s, mu_k, anchored = rule
     nx, ny, nz = normal
     if anchored:
@@ -80,9 +132,12 @@ def friction_pair(x, x_prev, anchor, a, i, j, normal, depth, share, rule):
         rx = (x[i, 0] - x_prev[i, 0]) - (x[j, 0] - x_prev[j, 0])
         ry = (x[i, 1] - x_prev[i, 1]) - (x[j, 1] - x_prev[j, 1])
         rz = (x[i, 2] - x_prev[i, 2]) - (x[j, 2] - x_prev[j, 2])
-    scale, tx, ty, tz = tangential_slip(rx, ry, rz, nx, ny, nz, depth, mu_s, mu_k)
-    if scale < 0.0:
+    t, tx, ty, tz = tangential_part(rx, ry, rz, nx, ny, nz)
+    if t <= 1e-12:
         return
+    scale = removed_share(t, mode, held, rubbed[a, 3] if anchored else 0.0, mu_s, mu_k)
+    if anchored:  # without anchors nothing is kept per pair: ``rubbed`` is empty
+        _rub(rubbed, a, scale, t, tx, ty, tz)
     si = scale * share
     sj = scale - si
     x[i, 0] -= si * tx
@@ -91,25 +146,25 @@ def friction_pair(x, x_prev, anchor, a, i, j, normal, depth, share, rule):
     x[j, 0] += sj * tx
     x[j, 1] += sj * ty
     x[j, 2] += sj * tz
-    if anchored and scale < 1.0:  # sliding: the contact sticks again, if at all, where it now is
+    if anchored and scale < 1.0:  # it slid: the contact sticks again, if at all, where it now is
         for k in range(3):
             anchor[a, k] = x[i, k] - x[j, k]
 
 
 @njit(cache=True, inline="always")
-def friction_wall(x, x_prev, anchor, i, nx, ny, nz, depth, rule):
-    """Friction of particle i against a static wall with unit normal n and penetration ``depth``,
-    in place: the pair rule with a partner that does not move and takes no share."""
+def friction_wall(x, x_prev, anchor, rubbed, i, nx, ny, nz, held, rule, mode):
+    """Friction of particle i against a static wall with unit normal n and normal load ``held``, in place:
+    the pair rule with a partner that does not move and takes no share; ``rubbed`` per particle."""
     mu_s, mu_k, anchored = rule
     ref = anchor if anchored else x_prev
     if anchored and np.isnan(anchor[i, 0]):
         for k in range(3):
             anchor[i, k] = x_prev[i, k]
-    scale, tx, ty, tz = tangential_slip(
-        x[i, 0] - ref[i, 0], x[i, 1] - ref[i, 1], x[i, 2] - ref[i, 2], nx, ny, nz, depth, mu_s, mu_k
-    )
-    if scale < 0.0:
+    t, tx, ty, tz = tangential_part(x[i, 0] - ref[i, 0], x[i, 1] - ref[i, 1], x[i, 2] - ref[i, 2], nx, ny, nz)
+    if t <= 1e-12:
         return
+    scale = removed_share(t, mode, held, rubbed[i, 3], mu_s, mu_k)
+    _rub(rubbed, i, scale, t, tx, ty, tz)
     x[i, 0] -= scale * tx
     x[i, 1] -= scale * ty
     x[i, 2] -= scale * tz
@@ -118,12 +173,43 @@ def friction_wall(x, x_prev, anchor, i, nx, ny, nz, depth, rule):
             anchor[i, k] = x[i, k]
 
 
+@njit(cache=True, inline="always")
+def remember(force, c, normal, tx, ty, tz):
+    """Fold one substep's summed corrections into row c of ``force`` (``FORCE`` columns): the running mean with
+    weight ``RESPONSE``; cleared when the contact carries no load."""
+    if normal <= 0.0:
+        for k in range(FORCE):
+            force[c, k] = 0.0
+        return
+    force[c, 0] += RESPONSE * (tx - force[c, 0])
+    force[c, 1] += RESPONSE * (ty - force[c, 1])
+    force[c, 2] += RESPONSE * (tz - force[c, 2])
+    force[c, 3] += RESPONSE * (normal - force[c, 3])
+
+
+@njit(cache=True, inline="always")
+def contact_mode(normal, tx, ty, tz, slid, mu_s):
+    """A contact's mode for the next substep from its remembered force (``remember``; Coulomb for the contact as
+    a whole: Müller et al. 2020 §3.5's λ_t < μs·λ_n with the multipliers summed over the substep): SLIDING if
+    friction let it slide in some pass of this substep (kinetic friction could not stop it) or holding it took
+    more than μs times its normal load, |Σ Δx_t| > μs·Σ Δx_n, both summed over its particles and the substep's
+    passes; STICKING otherwise; TESTED without load. Summed over the passes, the decision does not depend on how
+    the substep is split into iterations: each pass's own test saw only the drift since the pass before, and a
+    grain on a plane held to 24°, 29°, 34°, 37° at 1–4 iterations (μs 0.6: 31°)."""
+    if normal <= 0.0:
+        return TESTED
+    if slid or tx * tx + ty * ty + tz * tz > (mu_s * normal) ** 2:
+        return SLIDING
+    return STICKING
+
+
 @njit(cache=True, parallel=True)
-def carry_anchors(old, old_anchor, new, new_anchor):
-    """Copy each pair's anchor from the old neighbour lists to its entry in the rebuilt ones, found in the
-    same particle's row; pairs new to the lists get none (NaN). In half rows a pair sits in the row of the
-    partner that comes first in the grid's order, which can change between builds: such a pair is not
-    found and is anchored afresh where it stands (friction then holds from there, as for a new contact).
+def entry_sources(old, new, source):
+    """Per entry of the rebuilt neighbour lists, the entry of the old ones that lists the same pair, found in the
+    same particle's row, into ``source`` (−1: none, a pair new to the lists). What a contact keeps (its anchor,
+    loads, friction mode and remembered force) follows it through ``source``. In half rows a pair sits in the
+    row of the partner that comes first in the grid's order, which can change between builds: such a pair is
+    not found and starts afresh where it stands (friction then holds from there, as for a new contact).
     ``old``, ``new``: the lists' (nbr_start, nbr, order), row p being particle order[p]'s."""
     old_start, old_nbr, old_order = old
     new_start, new_nbr, new_order = new
@@ -137,46 +223,106 @@ def carry_anchors(old, old_anchor, new, new_anchor):
         q = old_row[i]
         for a in range(new_start[p], new_start[p + 1]):
             j = new_nbr[a]
-            new_anchor[a, 0] = np.nan
+            source[a] = -1
             if q < 0:
                 continue
             for b in range(old_start[q], old_start[q + 1]):
                 if old_nbr[b] == j:
-                    for k in range(3):
-                        new_anchor[a, k] = old_anchor[b, k]
+                    source[a] = b
                     break
 
 
-def contact_groups(lists, elem) -> tuple[np.ndarray, int]:
+def carried(old: np.ndarray, source: np.ndarray, fresh: float) -> np.ndarray:
+    """``old``'s rows taken through ``source`` (``entry_sources``); ``fresh`` where an entry has none."""
+    out = np.full((len(source), *old.shape[1:]), fresh, old.dtype)
+    found = source >= 0
+    out[found] = old[source[found]]
+    return out
+
+
+class ContactGroups(NamedTuple):
+    """Which contact each entry of the neighbour lists belongs to (``contact_groups``), as ``pool_contacts``
+    takes it."""
+
+    group: np.ndarray  # per entry, its contact (−1: none)
+    count: int  # contacts
+    sign: np.ndarray  # per entry, +1 when its first particle is in the contact's lower element, else −1
+    wsum: np.ndarray  # per entry, w_i + w_j
+    rolls: np.ndarray  # per entry, whether one of its elements is a sphere (``ROLLING``): always ROLLS
+
+
+NO_GROUPS = ContactGroups(
+    np.empty(0, np.int64), 0, np.empty(0), np.empty(0), np.empty(0, np.bool_)
+)  # lists not built yet
+
+
+def contact_groups(lists, elem, w) -> ContactGroups:
     """Per entry of the neighbour lists, the contact it belongs to: the pair of elements it joins (−1 for the
-    entries the sweep skips, a pair's second listing in full rows), and how many there are. A grain touches
-    another, or a wall, at several particles; ``group_means`` pools their loads."""
+    entries the sweep skips, a pair's second listing in full rows), and how many there are; with each entry's
+    orientation in its contact (+1 when its first particle is in the lower element: an entry's drift is i − j)
+    and its pair's w_i + w_j (adhesion's load scales with it). A grain touches another, or a wall, at several
+    particles; ``pool_contacts`` pools them."""
     nbr_start, nbr, half, order = lists.rows()
     i = np.repeat(order, np.diff(nbr_start))
     j = nbr
     kept = np.ones(len(j), bool) if half else i < j
+    sizes = np.bincount(elem)
     lo, hi = np.minimum(elem[i], elem[j]), np.maximum(elem[i], elem[j])
     key = lo * (int(elem.max(initial=0)) + 1) + hi
     group = np.full(len(j), -1, np.int64)
     ids, inverse = np.unique(key[kept], return_inverse=True)
     group[kept] = inverse
-    return group, len(ids)
+    sign = np.where(elem[i] <= elem[j], 1.0, -1.0)
+    rolls = (sizes[elem[i]] <= ROLLING) | (sizes[elem[j]] <= ROLLING)
+    return ContactGroups(group, len(ids), sign, w[i] + w[j], rolls)
 
 
 @njit(cache=True)
-def group_means(group, count, load, mean):
+def pool_contacts(contacts, cohesion, mu_s, load, rubbed, mean, mode, force):
     """Each contact's mean load over its touching entries (load > 0) into ``mean`` per entry (0 where none
-    touches), from the substep's ``load``. Static friction then tests a rigid grain's contact as a whole:
-    shape matching spreads a grain's drift over its particles alike, while the normal load falls unevenly on
-    them, so the test per entry let the lightly loaded ones slide and the grain with them (a grain on a 26°
-    plane at μs 0.6); with the mean the test is Σ|t| < μs·Σ load, Coulomb's for the rigid contact."""
+    touches), its remembered force (``remember``) into ``force`` and its mode for the next substep
+    (``contact_mode``) into ``mode``, from the substep's ``load`` and ``rubbed`` (then cleared). ``contacts``:
+    ``ContactGroups``. A rigid grain's contact is tested as a whole: shape matching
+    spreads a grain's drift over its particles alike, while the normal load falls unevenly on them, so the test
+    per entry let the lightly loaded ones slide and the grain with them (a grain on a 26° plane at μs 0.6).
+    Each entry keeps its contact's force (entries new to the lists have none: the contact's is the entry's
+    with the largest remembered load)."""
+    group, count, sign, wsum, rolls = contacts
     total = np.zeros(count)
+    normal = np.zeros(count)
     touching = np.zeros(count, np.int64)
+    drift = np.zeros((count, 3))
+    slid = np.zeros(count, np.bool_)
+    held = np.zeros((count, FORCE))
     for a in range(group.shape[0]):
         g = group[a]
-        if g >= 0 and load[a] > 0.0:
+        if g < 0:
+            continue
+        if load[a] > 0.0:
             total[g] += load[a]
+            normal[g] += load[a] + cohesion * wsum[a]
             touching[g] += 1
+        for k in range(3):
+            drift[g, k] += sign[a] * rubbed[a, k]
+        slid[g] |= rubbed[a, 4] > 0.0
+        if force[a, 3] > held[g, 3]:
+            for k in range(3):
+                held[g, k] = sign[a] * force[a, k]
+            held[g, 3] = force[a, 3]
+    for g in range(count):
+        remember(held, g, normal[g], drift[g, 0], drift[g, 1], drift[g, 2])
     for a in range(group.shape[0]):
         g = group[a]
-        mean[a] = total[g] / touching[g] if g >= 0 and touching[g] > 0 else 0.0
+        if g >= 0 and touching[g] > 0:
+            mean[a] = total[g] / touching[g]
+            mode[a] = ROLLS if rolls[a] else contact_mode(held[g, 3], held[g, 0], held[g, 1], held[g, 2], slid[g], mu_s)
+            for k in range(3):
+                force[a, k] = sign[a] * held[g, k]
+            force[a, 3] = held[g, 3]
+        else:
+            mean[a] = 0.0
+            mode[a] = ROLLS if g >= 0 and rolls[a] else TESTED
+            for k in range(FORCE):
+                force[a, k] = 0.0
+        for k in range(RUBBED):
+            rubbed[a, k] = 0.0

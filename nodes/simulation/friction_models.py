@@ -42,18 +42,18 @@ class SubstepFriction:
         """Adhesion's pull as friction load (mm·g per unit of inverse mass): none, the load is the overlap."""
         return 0.0
 
-    def lists_rebuilt(self, dispatch, old_lists, pairs, elem) -> None:
+    def lists_rebuilt(self, dispatch, old_lists, pairs, model) -> None:
         """Nothing per pair to carry to the new neighbour lists."""
 
-    def pool_loads(self, dispatch, pairs) -> None:
+    def pool_loads(self, dispatch, pairs, rule: FrictionRule, cohesion: float) -> None:
         """No loads kept."""
 
 
 class AnchoredFriction:
-    """Static friction restores the tangential drift since each contact began sticking (its anchor), against
-    the normal load its contact carried in the last substep, pooled over the contact's particles (``friction``,
-    Müller et al. 2020's λ_n test; ``friction.group_means``): slow slip cannot pile up, heaps rest and a grain on a
-    plane holds to within 1° of atan μs (docs/validation.md)."""
+    """Static friction restores the tangential drift since each contact began sticking (its anchor); whether a
+    contact sticks or slides is decided per contact of two elements (or element and walls) from the corrections
+    it needed over the substeps before (``friction.contact_mode``, Müller et al. 2020's λ_t < μs·λ_n): slow slip
+    cannot pile up, and a grain on a plane holds to within 1° of atan μs at any substeps and iterations."""
 
     name = "anchored"
     rubs_in_prestabilisation = True  # the drift pre-stabilisation adds counts against the anchors
@@ -66,22 +66,31 @@ class AnchoredFriction:
         (mm·g): F·h², F = capture / adhesion compliance (``contact_constraints._project_slab``)."""
         return capture * h * h / adhesion_compliance if adhesion_compliance > 0 else 0.0
 
-    def lists_rebuilt(self, dispatch, old_lists, pairs, elem) -> None:
-        """Carry each pair's anchor to its entry in the rebuilt lists (``friction.carry_anchors``); loads restart."""
-        from .friction import carry_anchors, contact_groups
+    def lists_rebuilt(self, dispatch, old_lists, pairs, model) -> None:
+        """Carry what each pair keeps across substeps (anchor, pooled load, mode, remembered force) to its entry in
+        the rebuilt lists (``friction.entry_sources``); pairs new to the lists start afresh."""
+        from .friction import ROLLS, RUBBED, carried, contact_groups, entry_sources
 
-        anchor = np.empty((len(pairs.lists.nbr), 3))
-        dispatch("friction", carry_anchors, old_lists.csr(), pairs.anchor, pairs.lists.csr(), anchor)
-        pairs.anchor = anchor
-        pairs.load = np.zeros(len(pairs.lists.nbr))
-        pairs.held = np.zeros(len(pairs.lists.nbr))
-        pairs.group, pairs.groups = contact_groups(pairs.lists, elem)
+        source = np.empty(len(pairs.lists.nbr), np.int64)
+        dispatch("friction", entry_sources, old_lists.csr(), pairs.lists.csr(), source)
+        pairs.anchor = carried(pairs.anchor, source, np.nan)
+        pairs.held = carried(pairs.held, source, 0.0)
+        pairs.mode = carried(pairs.mode, source, 0)
+        pairs.force = carried(pairs.force, source, 0.0)
+        # this substep's sums restart: carried, the normal pushes that part overlapping elements (pre-stabilisation's
+        # included) loaded a sticking contact that then restored a drift turned by them (fuzzed spheres gained 2 %)
+        pairs.load = np.zeros(len(source))
+        pairs.rubbed = np.zeros((len(source), RUBBED))
+        pairs.groups = contact_groups(pairs.lists, model.elem, model.w)
+        pairs.mode[pairs.groups.rolls] = ROLLS
 
-    def pool_loads(self, dispatch, pairs) -> None:
-        """The last substep's loads pooled per contact (``friction.group_means``) into ``pairs.held``."""
-        from .friction import group_means
+    def pool_loads(self, dispatch, pairs, rule: FrictionRule, cohesion: float) -> None:
+        """The last substep's loads and friction pooled per contact (``friction.pool_contacts``): ``pairs.held``
+        and ``pairs.mode`` for the next substep."""
+        from .friction import pool_contacts
 
-        dispatch("friction", group_means, pairs.group, pairs.groups, pairs.load, pairs.held)
+        args = (pairs.groups, cohesion, rule.mu_s, pairs.load, pairs.rubbed, pairs.held, pairs.mode, pairs.force)
+        dispatch("friction", pool_contacts, *args)
 
 
 # the node's ``friction_model`` choices, by name

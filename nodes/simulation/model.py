@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import bending, collider, glue, shape_matching
+from .friction import FORCE, RUBBED
 from .settings import SolverSettings
 from .state import State, YolkState
 
@@ -198,6 +199,9 @@ class Model:
             wall_anchor=np.full((n, 3), np.nan),
             wall_load=np.zeros(n),
             wall_mean=np.zeros(self.elements),
+            wall_mode=np.zeros(self.elements, np.int8),
+            wall_rubbed=np.zeros((n, RUBBED)),
+            wall_force=np.zeros((self.elements, FORCE)),
             slow_steps=np.zeros(self.elements, np.int64),
             yolks=yolks,
             glued=np.ones(len(self.glue.link_grain), np.bool_) if self.glue is not None else None,

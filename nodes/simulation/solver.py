@@ -156,7 +156,8 @@ class Coefficients:
             clamp=s.speed_clamp / pieces,
             accel=np.array([[0.0, 0.0, -s.gravity]]) if gravity else np.zeros((1, 3)),
             friction=s.friction.rule(
-                s.mu_s if "friction" in effects else 0.0, s.mu_k if "friction" in effects else 0.0
+                s.mu_s if "friction" in effects else 0.0,
+                s.mu_k if "friction" in effects else 0.0,
             ),
             damping=(1.0 - s.damping) ** (h * 60.0) if "damping" in effects else 1.0,
             lift=lift,
@@ -275,7 +276,7 @@ class XpbdSolver:
         self.solved += awake
         if awake:
             if m.collider is not None:
-                d("friction", collider.wall_means, m.start, st.wall_load, st.wall_mean)
+                d("friction", collider.wall_means, m.start, st.arrays(), k.friction)
             self.x_begin[:] = st.x  # before pre-stabilisation (``integrate.update_velocity``)
             self._prestabilise(st, contacts)
         y = st.yolks
@@ -408,7 +409,7 @@ class XpbdSolver:
         old = pairs.lists
         pairs.lists = NeighbourLists(nbr_start, nbr, at, old.half, *grid)
         if "friction" in self.settings.effects:  # the model's per-pair data follows the pairs
-            self.settings.friction.lists_rebuilt(self.dispatch, old, pairs, m.elem)
+            self.settings.friction.lists_rebuilt(self.dispatch, old, pairs, m)
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
         if "contact" in self.settings.effects:
@@ -429,7 +430,8 @@ class XpbdSolver:
             allowance = contact_constraints.overlap_allowance
             pairs.allowance[:] = 0.0
             if "friction" in self.settings.effects:
-                self.settings.friction.pool_loads(self.dispatch, pairs)
+                k = self.coefficients
+                self.settings.friction.pool_loads(self.dispatch, pairs, k.friction, k.cohesion)
             pairs.load[:] = 0.0
             self._pressed(st, pairs)
             self._contacts(st, pairs, friction=self.settings.friction.rubs_in_prestabilisation, wake_step=np.inf)
@@ -466,7 +468,9 @@ class XpbdSolver:
             self.model_arrays,
             cc.PairRows(*lists.sweep_rows()),
             cc.Colouring(*lists.grid()),
-            cc.PairEntries(pairs.allowance, pairs.anchor, pairs.load, pairs.held, self._stuck(lists)),
+            cc.PairEntries(
+                pairs.allowance, pairs.anchor, pairs.load, pairs.held, pairs.mode, pairs.rubbed, self._stuck(lists)
+            ),
             cc.ContactRule(
                 float(wake_step),
                 k.lift,

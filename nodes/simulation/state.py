@@ -27,6 +27,9 @@ class StateArrays(NamedTuple):
     wall_anchor: np.ndarray  # (n, 3)
     wall_load: np.ndarray  # (n,)
     wall_mean: np.ndarray  # (m,)
+    wall_mode: np.ndarray  # (m,) int8
+    wall_rubbed: np.ndarray  # (n, friction.RUBBED)
+    wall_force: np.ndarray  # (m, friction.FORCE)
 
 
 class YolkArrays(NamedTuple):
@@ -71,6 +74,9 @@ class State:
     wall_anchor: np.ndarray  # (n, 3) where each particle began sticking to a wall, NaN = not (``friction``)
     wall_load: np.ndarray  # (n,) the walls' normal pushes on each particle this substep (friction's load)
     wall_mean: np.ndarray  # (m,) each element's mean wall load over its touching particles, last substep
+    wall_mode: np.ndarray  # (m,) int8: each element's friction mode against the walls (``friction.contact_mode``)
+    wall_rubbed: np.ndarray  # (n, friction.RUBBED) what wall friction removed from each particle this substep
+    wall_force: np.ndarray  # (m, friction.FORCE) each element's remembered force against the walls
     slow_steps: np.ndarray  # (m,) int: substeps each awake element has stayed still in a row (``sleep_clusters``)
     yolks: YolkState | None = None
     glued: np.ndarray | None = None  # (L,) bool: which glue links still hold (``glue``); None without glue
@@ -93,6 +99,9 @@ class State:
             "wall_anchor",
             "wall_load",
             "wall_mean",
+            "wall_mode",
+            "wall_rubbed",
+            "wall_force",
             "slow_steps",
         ):
             np.copyto(getattr(self, name), getattr(other, name))
@@ -118,6 +127,9 @@ class State:
             self.wall_anchor,
             self.wall_load,
             self.wall_mean,
+            self.wall_mode,
+            self.wall_rubbed,
+            self.wall_force,
         )
 
     def rotations(self) -> np.ndarray:

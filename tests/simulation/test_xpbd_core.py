@@ -295,6 +295,12 @@ def test_fast_particles_do_not_pass_through_a_particle_plate(clamp, substeps):
     run_frames(s, 10, check)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 46: with Coulomb's static/kinetic hysteresis (friction.contact_mode) one bar keeps sliding at "
+    "0.4 mm/s (kinetic energy 1.3e-3 g·mm²/s² from 0.5 s to 8 s): a contact that slides stays sliding while kinetic "
+    "friction cannot stop it, and the damping holds its speed",
+)
 @pytest.mark.parametrize("sleep_speed", [0.0, 1.0])
 def test_long_rest_comes_to_rest(sleep_speed):
     """Twelve bars dropped on the ground, 4 s, sleeping off and on. Issue 11: without sleeping a bar

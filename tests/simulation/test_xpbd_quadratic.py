@@ -52,7 +52,9 @@ def project(q, x, mode, beta=1.0, alpha=0.0, quats=None):
     moments = LinearMoments(*rest_moments(q_rest, w, start))
     awake = np.ones(len(xx), np.bool_)
     quadratic = (QuadraticMoments(*quadratic_moments(q_rest, w, start)),) if mode == "quadratic" else ()
-    state = StateArrays(xx, xx, xx, xx, quats, np.zeros(len(q), np.bool_), awake, awake, xx, w, w)
+    m = len(q)
+    walls = (np.zeros(m, np.int8), np.zeros((len(xx), 5)), np.zeros((m, 4)))
+    state = StateArrays(xx, xx, xx, xx, quats, np.zeros(m, np.bool_), awake, awake, xx, w, w, *walls)
     model = ModelArrays(w, np.ones(len(xx)), np.zeros(len(xx), np.int64), start, q_rest)
     res = shape_match_project(state, model, moments, lam, MatchRule(alpha, beta, 8), *quadratic)
     return xx, res
