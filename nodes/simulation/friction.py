@@ -63,10 +63,12 @@ RUBBED = 5
 # once at rest, but rings to 1.3 tan θ over the first 4–10 substeps (10 × 2, 40 × 2 and 10 × 4 alike): a test of
 # each substep alone let it slide at 28° (μs 0.6: 31°); the running mean at this share stays below tan θ
 RESPONSE = 0.25
-# a sticking contact restores at most this many times μs·load in one pass: two sticking contacts with other
-# normals lock a particle in place, and a plate pressed on two-layer grains (0.2 N, 8 iterations) passed through
-# them when the normal corrections could no longer move it; a grain on a plane needs at most 1.3 μs·load
-HOLD = 2.0
+# a sticking contact restores at most this many times μs·load in one pass, and slides beyond: a grain tilted on a
+# plane needs up to 1.3 μs·load in a pass while it rings (held to 30°, slid at 31° from 1.25 up at 10 × 2, 40 × 2
+# and 10 × 4); without a bound two sticking contacts with other normals lock a particle against its normal
+# corrections (a plate pressed on two-layer grains passed through them), and a bar lying on the ground under
+# another kept rocking (kinetic energy 1.3e-3 g·mm²/s² at 2: 4.7e-9 at 1.25, 0.17 with sleeping at 1.5)
+HOLD = 1.25
 # per contact, the remembered force: the tangential corrections' vector (3) and the normal corrections' sum
 FORCE = 4
 # a one-particle element (a sphere) has no rotation here: where a real sphere would roll off another, a sticking
