@@ -531,13 +531,15 @@ def scene_dict(
     max_depth: int | None = None,
     subsurface: bool = False,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> dict:
     """The Mitsuba scene description; PLY files are written into ``folder``. ``max_depth``: the longest path
     (default ``path_depth``: by the scene's materials); ``subsurface``: media inside the volumetric elements, traced
-    by ``volpath``; ``ambient``: radiance of the studio's uniform ambient."""
-    return _described(scene, folder, camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient)[
-        0
-    ]
+    by ``volpath``; ``ambient``: radiance of the studio's uniform ambient; ``setting``: what the subject stands on
+    (``studio.SETTINGS``: the seamless sweep, or a table of oak boards)."""
+    return _described(
+        scene, folder, camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient, setting
+    )[0]
 
 
 def _described(
@@ -552,6 +554,7 @@ def _described(
     max_depth: int | None,
     subsurface: bool,
     ambient: float,
+    setting: str = "sweep",
 ) -> tuple[dict, Stage]:
     """``scene_dict`` and the ``Stage`` it set up."""
     import mitsuba as mi
@@ -598,8 +601,10 @@ def _described(
             "sampling_weight": float(np.pi * max(ambient, 1e-6)),
         },
         **{name: studio.light_dict(light, set_up.target) for name, light in set_up.lights.items()},
-        "backdrop": studio.backdrop_dict(
-            folder / "backdrop.ply", set_up.target, set_up.radius, set_up.floor, set_up.view
+        "backdrop": (
+            studio.table_dict(folder, set_up.target, set_up.radius, set_up.floor, set_up.view)
+            if setting == "table"
+            else studio.backdrop_dict(folder / "backdrop.ply", set_up.target, set_up.radius, set_up.floor, set_up.view)
         ),
         **shapes,
     }
@@ -641,13 +646,29 @@ def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) ->
 
 
 def studio_description(
-    scene: ShadedScene, camera: Camera, width: int, height: int, light_direction, ambient: float = studio.AMBIENT
+    scene: ShadedScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    light_direction,
+    ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> dict:
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
     points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
     set_up = stage(points, camera, width / height, light_direction)
     vertices, faces, _ = studio.backdrop_mesh(set_up.target, set_up.radius, set_up.floor, set_up.view)
+    backdrop = {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)}
+    if setting == "table":  # the texture itself: ``studio.wood_png``, written beside the description by its reader
+        corners = studio.table_corners(set_up.target, set_up.radius, set_up.floor, set_up.view)
+        backdrop = {
+            "vertices": corners.tolist(),
+            "faces": [[0, 1, 2, 3]],
+            "uv": studio.table_uv(set_up.radius).tolist(),
+            "texture": "table.png",
+            "roughness": studio.TABLE_ROUGHNESS,
+        }
     key = set_up.lights["key"]
     key_distance = float(np.linalg.norm(key.center - set_up.target))
     return {
@@ -672,7 +693,7 @@ def studio_description(
             "radius": key_distance * float(np.tan(HIGHLIGHT_ANGLE)),
             "radiance": HIGHLIGHT_RADIANCE,
         },
-        "backdrop": {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)},
+        "backdrop": backdrop,
         "exposure": EXPOSURE,
         "knee": KNEE,
         "max_depth": MAX_DEPTH_MEDIA,
@@ -710,6 +731,7 @@ def render_layers(
     max_depth: int | None = None,
     subsurface: bool = False,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> Layers:
     """Path-traced linear colour with albedo and normal AOVs and the glints' pass; same inputs and seed ⇒ the same
     bits."""
@@ -720,7 +742,18 @@ def render_layers(
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
         description, set_up = _described(
-            scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient
+            scene,
+            Path(folder),
+            camera,
+            width,
+            height,
+            spp,
+            light_direction,
+            crop,
+            max_depth,
+            subsurface,
+            ambient,
+            setting,
         )
         # optimize=False: Mitsuba's merging of identical objects made about one render in six differ from the
         # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
@@ -813,9 +846,10 @@ def render(
     subsurface: bool = False,
     max_depth: int | None = None,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> np.ndarray:
-    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` and ``ambient`` as
-    ``scene_dict``."""
+    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth``, ``ambient`` and
+    ``setting`` as ``scene_dict``."""
     from .mesh_files import linear_to_srgb8
 
     layers = render_layers(
@@ -829,5 +863,6 @@ def render(
         max_depth=max_depth,
         subsurface=subsurface,
         ambient=ambient,
+        setting=setting,
     )
     return linear_to_srgb8(tone_map(layers.denoised() if denoised else layers.noisy()))
