@@ -206,8 +206,8 @@ def _rice_heap(water=15.0):
 
 
 def shows(scene, camera, width, height, light, name):
-    """Which pixels of the preview's frame show material ``name``: the same scene with that material green and the
-    rest red, read from the albedo pass."""
+    """Which pixels of the preview's frame show material ``name`` (or its tints, ``<name>_<k>``): the same scene
+    with that material green and the rest red, read from the albedo pass."""
     import mitsuba as mi
 
     from nodes.export.mitsuba_scene import scene_dict
@@ -217,7 +217,8 @@ def shows(scene, camera, width, height, light, name):
         d = scene_dict(scene, Path(folder), camera, width, height, 2, light)
         for key, shape in d.items():
             if isinstance(shape, dict) and "bsdf" in shape:
-                wanted = key.startswith("shape_") and scene.materials[int(key.removeprefix("shape_"))].name == name
+                own = scene.materials[int(key.removeprefix("shape_"))].name if key.startswith("shape_") else ""
+                wanted = own == name or own.startswith(name + "_")
                 colour = [0.0, 1.0, 0.0] if wanted else [1.0, 0.0, 0.0]
                 shape["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": colour}}
         d["integrator"] = {"type": "aov", "aovs": "albedo:albedo"}
