@@ -319,8 +319,8 @@ def skin_partners(scene: ShadedScene) -> dict[int, int]:
     """Material index → the index of the shape that renders it, where that is another's: each egg's eye
     (``ikura_eye_<k>``, the membrane over its oil droplet) goes into the shape of its membrane
     (``ikura_membrane_<k>``), the same dielectric skin, its own colour per vertex (``_shapes``). As a shape of its
-    own, each small open cap beside its membrane made the main job's preview cost 2.1× the CPU (the same optics
-    in a separate shape: 11.1 against 7.5 CPU s at 320 × 180; docs/look.md, "Ikura colour")."""
+    own, the small open caps beside their membranes made the main job's preview cost 1.3–1.6× the CPU with the
+    same optics (benchmarks/bench_preview_staging.py --eyes-apart; docs/look.md, "Ikura colour")."""
     names = {material.name: index for index, material in enumerate(scene.materials)}
     out = {}
     for index, material in enumerate(scene.materials):
