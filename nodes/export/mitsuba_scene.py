@@ -315,17 +315,35 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
     return target + distance * view, target
 
 
+def skin_partners(scene: ShadedScene) -> dict[int, int]:
+    """Material index → the index of the shape that renders it, where that is another's: each egg's eye
+    (``ikura_eye_<k>``, the membrane over its oil droplet) goes into the shape of its membrane
+    (``ikura_membrane_<k>``), the same dielectric skin, its own colour per vertex (``_shapes``). As a shape of its
+    own, the small open caps beside their membranes made the main job's preview cost 1.3–1.6× the CPU with the
+    same optics (benchmarks/bench_preview_staging.py --eyes-apart; docs/look.md, "Ikura colour")."""
+    names = {material.name: index for index, material in enumerate(scene.materials)}
+    out = {}
+    for index, material in enumerate(scene.materials):
+        partner = names.get(material.name.replace("ikura_eye", "ikura_membrane"))
+        if material.name.startswith("ikura_eye") and partner is not None:
+            out[index] = partner
+    return out
+
+
 def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
     """One PLY shape per material (written into ``folder``; key ``shape_<material index>``) and the scene's
     vertices (what the camera frames and focuses on); with ``subsurface``, the volumetric materials' shapes carry their
-    medium inside a dielectric boundary."""
+    medium inside a dielectric boundary. An egg's eye is in its membrane's shape (``skin_partners``), whose
+    transmittance is then each vertex's own (``crossing_tint`` of its mesh's material, Mitsuba's ``vertex_color``)."""
     from ..shading.materials import is_ice
     from .mesh_files import stacked, write_ply
 
+    partners = skin_partners(scene)
+    renders = [partners.get(int(m), int(m)) for m in scene.material_of]  # the shape each mesh goes into
     shapes = {}
     seen = []
     for index, material in enumerate(scene.materials):
-        members = [k for k, m in enumerate(scene.material_of) if m == index and len(scene.meshes[k].faces)]
+        members = [k for k, m in enumerate(renders) if m == index and len(scene.meshes[k].faces)]
         if not members:
             continue
         meshes = [scene.meshes[k] for k in members]
@@ -334,6 +352,10 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
             [m.normals if m.normals is not None else np.zeros((len(m.vertices), 3)) for m in meshes]
         )
         colors = np.tile(material.base_color, (len(vertices), 1))
+        joined = any(scene.material_of[k] != index for k in members)
+        if joined:  # each vertex's own skin colour
+            tints = [crossing_tint(scene.materials[scene.material_of[k]]) * material.transmission for k in members]
+            colors = np.concatenate([np.tile(t, (len(m.vertices), 1)) for t, m in zip(tints, meshes)])
         volume = subsurface and is_volumetric(material)
         per_vertex = (
             not volume
@@ -348,12 +370,10 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
             trans = diffuse_transmission(material, sigma)
         path = folder / f"material_{index}.ply"
         write_ply(path, vertices, faces, normals, colors, trans)
-        shapes[f"shape_{index}"] = {
-            "type": "ply",
-            "filename": str(path),
-            "bsdf": boundary_bsdf(material) if volume else material_bsdf(material, per_vertex),
-            "face_normals": False,
-        }
+        bsdf = boundary_bsdf(material) if volume else material_bsdf(material, per_vertex)
+        if joined:
+            bsdf = {**bsdf, "specular_transmittance": {"type": "mesh_attribute", "name": "vertex_color"}}
+        shapes[f"shape_{index}"] = {"type": "ply", "filename": str(path), "bsdf": bsdf, "face_normals": False}
         if volume:
             shapes[f"shape_{index}"]["interior"] = medium(material)
         seen.append(vertices)
@@ -531,13 +551,15 @@ def scene_dict(
     max_depth: int | None = None,
     subsurface: bool = False,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> dict:
     """The Mitsuba scene description; PLY files are written into ``folder``. ``max_depth``: the longest path
     (default ``path_depth``: by the scene's materials); ``subsurface``: media inside the volumetric elements, traced
-    by ``volpath``; ``ambient``: radiance of the studio's uniform ambient."""
-    return _described(scene, folder, camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient)[
-        0
-    ]
+    by ``volpath``; ``ambient``: radiance of the studio's uniform ambient; ``setting``: what the subject stands on
+    (``studio.SETTINGS``: the seamless sweep, or a table of oak boards)."""
+    return _described(
+        scene, folder, camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient, setting
+    )[0]
 
 
 def _described(
@@ -552,6 +574,7 @@ def _described(
     max_depth: int | None,
     subsurface: bool,
     ambient: float,
+    setting: str = "sweep",
 ) -> tuple[dict, Stage]:
     """``scene_dict`` and the ``Stage`` it set up."""
     import mitsuba as mi
@@ -598,8 +621,10 @@ def _described(
             "sampling_weight": float(np.pi * max(ambient, 1e-6)),
         },
         **{name: studio.light_dict(light, set_up.target) for name, light in set_up.lights.items()},
-        "backdrop": studio.backdrop_dict(
-            folder / "backdrop.ply", set_up.target, set_up.radius, set_up.floor, set_up.view
+        "backdrop": (
+            studio.table_dict(folder, set_up.target, set_up.radius, set_up.floor, set_up.view)
+            if setting == "table"
+            else studio.backdrop_dict(folder / "backdrop.ply", set_up.target, set_up.radius, set_up.floor, set_up.view)
         ),
         **shapes,
     }
@@ -641,13 +666,29 @@ def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) ->
 
 
 def studio_description(
-    scene: ShadedScene, camera: Camera, width: int, height: int, light_direction, ambient: float = studio.AMBIENT
+    scene: ShadedScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    light_direction,
+    ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> dict:
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
     points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
     set_up = stage(points, camera, width / height, light_direction)
     vertices, faces, _ = studio.backdrop_mesh(set_up.target, set_up.radius, set_up.floor, set_up.view)
+    backdrop = {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)}
+    if setting == "table":  # the texture itself: ``studio.wood_png``, written beside the description by its reader
+        corners = studio.table_corners(set_up.target, set_up.radius, set_up.floor, set_up.view)
+        backdrop = {
+            "vertices": corners.tolist(),
+            "faces": [[0, 1, 2, 3]],
+            "uv": studio.table_uv(set_up.radius).tolist(),
+            "texture": "table.png",
+            "roughness": studio.TABLE_ROUGHNESS,
+        }
     key = set_up.lights["key"]
     key_distance = float(np.linalg.norm(key.center - set_up.target))
     return {
@@ -672,7 +713,7 @@ def studio_description(
             "radius": key_distance * float(np.tan(HIGHLIGHT_ANGLE)),
             "radiance": HIGHLIGHT_RADIANCE,
         },
-        "backdrop": {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)},
+        "backdrop": backdrop,
         "exposure": EXPOSURE,
         "knee": KNEE,
         "max_depth": MAX_DEPTH_MEDIA,
@@ -710,6 +751,7 @@ def render_layers(
     max_depth: int | None = None,
     subsurface: bool = False,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> Layers:
     """Path-traced linear colour with albedo and normal AOVs and the glints' pass; same inputs and seed ⇒ the same
     bits."""
@@ -720,7 +762,18 @@ def render_layers(
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
         description, set_up = _described(
-            scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient
+            scene,
+            Path(folder),
+            camera,
+            width,
+            height,
+            spp,
+            light_direction,
+            crop,
+            max_depth,
+            subsurface,
+            ambient,
+            setting,
         )
         # optimize=False: Mitsuba's merging of identical objects made about one render in six differ from the
         # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
@@ -813,9 +866,10 @@ def render(
     subsurface: bool = False,
     max_depth: int | None = None,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> np.ndarray:
-    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` and ``ambient`` as
-    ``scene_dict``."""
+    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth``, ``ambient`` and
+    ``setting`` as ``scene_dict``."""
     from .mesh_files import linear_to_srgb8
 
     layers = render_layers(
@@ -829,5 +883,6 @@ def render(
         max_depth=max_depth,
         subsurface=subsurface,
         ambient=ambient,
+        setting=setting,
     )
     return linear_to_srgb8(tone_map(layers.denoised() if denoised else layers.noisy()))

@@ -15,7 +15,7 @@ from nodegraph.values import Image
 
 from ..values import ShadedScene
 from .mitsuba_scene import load_renderer
-from .studio import AMBIENT
+from .studio import AMBIENT, SETTINGS
 
 
 def load_libraries() -> None:
@@ -101,6 +101,13 @@ def _cost(q: CostQuery) -> Cost:
             "baked_ambient lights only the exported vertex colours",
             range=(0.0, 10.0),
         ),
+        "setting": Param(
+            str,
+            "sweep",
+            "what the subject stands on: 'sweep', a seamless backdrop of warm paper (a packshot), or 'table', a table "
+            "top of oiled oak boards (studio.wood_texture) filling the frame behind the subject",
+            choices=SETTINGS,
+        ),
         "sun_direction": Param(
             tuple[float, float, float],
             (-0.45, -0.6, 0.75),
@@ -125,10 +132,11 @@ def preview(
     f_stop,
     focus,
     ambient,
+    setting,
     sun_direction,
 ):
-    """Mitsuba path tracing of the materials in a procedural studio (key, fill, rim, backdrop; ``studio``) through a
-    thin lens, denoised; the same scene and parameters give the same bytes."""
+    """Mitsuba path tracing of the materials in a procedural studio (key, fill, rim, a sweep or a table;
+    ``studio``) through a thin lens, denoised; the same scene and parameters give the same bytes."""
     import numpy as np
 
     from .mitsuba_scene import Camera, render
@@ -148,6 +156,7 @@ def preview(
             denoised=denoise,
             subsurface=subsurface,
             ambient=ambient,
+            setting=setting,
         )
     )
 

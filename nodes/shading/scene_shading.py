@@ -35,9 +35,10 @@ class ShadeSettings:
     syrup_levels: int
     syrup_runs: int
     syrup_run_length: float
-    seed: int  # draws the syrup's runs (``materials.syrup_runs``)
+    seed: int  # draws the syrup's runs (``materials.syrup_runs``) and each egg's tint (``egg_tints``)
     scenery_color: tuple[float, float, float]
     table: CdrfTable
+    egg_tints: int = mat.EGG_TINTS  # membrane tints the eggs are drawn from (``materials.ikura_tints``)
 
 
 @dataclass
@@ -53,6 +54,7 @@ def _materials(settings: ShadeSettings) -> dict[str, tuple[Material, ...]]:
         "rice": (settings.rice,),
         "chestnut": (mat.chestnut_material(),),
         "ikura": mat.ikura_materials(),
+        "ikura_tints": mat.ikura_tints(settings.egg_tints),
         "salmon": mat.fish_materials("salmon"),
         "tuna": mat.fish_materials("tuna"),
         "ice": mat.syrup_grades(ice, syrup, settings.syrup_levels),
@@ -80,6 +82,10 @@ def _element_pieces(
         rng = np.random.default_rng(settings.seed)
         limits = mat.syrup_runs(tops, settings.syrup_depth, settings.syrup_runs, settings.syrup_run_length, cell, rng)
         grade[is_ice] = mat.syrup_levels(depths, limits, settings.syrup_levels)
+    is_egg = np.array([presets[k] == "ikura" for k in p.kinds], bool)
+    tint = np.zeros(len(p), np.int64)
+    if is_egg.any():
+        tint[is_egg] = egg_tints(p.positions[is_egg], len(materials["ikura_tints"]), settings.seed)
     rice = [k for k in np.unique(p.kinds) if presets[k] == "rice"]
     if settings.rice is None and rice:
         kind = kinds[rice[0]]
@@ -103,10 +109,15 @@ def _element_pieces(
             key = (int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))
             if key not in splits:
                 splits[key] = _parts(mesh, names, f"element {i} ({kind})", preset)
+                if preset == "ikura":
+                    splits[key] = _with_eye(mesh, splits[key])
             for part, used, faces in splits[key]:
-                pieces.append(
-                    _Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{names[part]}"), materials[preset][part])
-                )
+                material = materials[preset][part] if part < len(names) else None
+                if preset == "ikura" and part != 1:  # the membrane and its eye: the egg's own tint
+                    material = materials["ikura_tints"][tint[i]]
+                    material = mat.ikura_eye(material) if part == EYE else material
+                name = names[part] if part < len(names) else "eye"
+                pieces.append(_Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{name}"), material))
     return pieces
 
 
@@ -114,6 +125,57 @@ def _element_shapes(aggregate: Aggregate) -> list[Mesh]:
     """Each element's world mesh without normals: the scene's normals come from ``normals_and_curvature``."""
     shapes = aggregate.without_normals()
     return [shapes.element_mesh(i) for i in range(len(aggregate.placement))]
+
+
+EYE = 2  # the membrane's faces over the oil droplet (``_with_eye``): a piece of their own, after membrane and yolk
+EGG_NEIGHBOURS = 1.3  # eggs nearer than this many median egg spacings are neighbours (``egg_tints``)
+
+
+def egg_tints(centres: np.ndarray, count: int, seed: int) -> np.ndarray:
+    """Each egg's membrane tint (0 … ``count`` − 1), drawn from ``seed`` so that no two touching eggs share one
+    where ``count`` allows: the eggs in a random order (seeded), each drawing among the tints its neighbours
+    (centres nearer than ``EGG_NEIGHBOURS`` median nearest-neighbour spacings) do not have yet."""
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng([seed, 48])  # its own stream: the syrup's runs draw from the seed alone
+    n = len(centres)
+    out = np.full(n, -1, np.int64)
+    if count <= 1 or n == 0:
+        return np.zeros(n, np.int64)
+    tree = cKDTree(centres)
+    spacing = float(np.median(tree.query(centres, k=2)[0][:, 1])) if n > 1 else 1.0
+    neighbours = tree.query_ball_point(centres, EGG_NEIGHBOURS * spacing)
+    for i in rng.permutation(n):
+        taken = {int(out[j]) for j in neighbours[i] if out[j] >= 0}
+        free = [t for t in range(count) if t not in taken] or list(range(count))
+        out[i] = free[int(rng.integers(len(free)))]
+    return out
+
+
+def _with_eye(mesh: Mesh, split: list[tuple[int, np.ndarray, np.ndarray]]) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """An egg's (membrane, yolk) pieces with the membrane's faces over the oil droplet as a third piece (``EYE``):
+    those whose centre lies within the droplet's radius of the axis from the egg's centre through the droplet's,
+    on the droplet's side (its silhouette seen down that axis). A concentric yolk has no eye (no axis)."""
+    by_part = {part: (used, faces) for part, used, faces in split}
+    if set(by_part) != {0, 1}:
+        return split
+    skin, yolk = (mesh.vertices[by_part[k][0]] for k in (0, 1))
+    centre, droplet = skin.mean(axis=0), yolk.mean(axis=0)
+    axis = droplet - centre
+    radius = float(np.linalg.norm(yolk - droplet, axis=1).mean())
+    if np.linalg.norm(axis) < 1e-3 * radius:
+        return split
+    axis /= np.linalg.norm(axis)
+    used, faces = by_part[0]
+    middle = skin[faces].mean(axis=1) - centre
+    along = middle @ axis
+    across = np.linalg.norm(middle - np.outer(along, axis), axis=1)
+    over = (along > 0) & (across < radius)
+    out = []
+    for part, keep in ((0, ~over), (EYE, over)):
+        kept, inverse = np.unique(faces[keep], return_inverse=True)
+        out.append((part, used[kept], inverse.reshape(-1, 3)))
+    return [*out, (1, *by_part[1])]
 
 
 def _parts(mesh: Mesh, names: tuple[str, ...], what: str, preset: str) -> list[tuple[int, np.ndarray, np.ndarray]]:

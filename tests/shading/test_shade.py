@@ -15,11 +15,15 @@ from nodes.shading.materials import is_ice
 
 def test_materials_per_kind_and_ikura_parts(shaded):
     names = [m.name for m in shaded.materials]
-    assert names == ["rice", "ikura_membrane", "ikura_yolk", "ceramic"]
-    membrane = shaded.materials[1]
-    assert membrane.transmission > 0 and membrane.base_color[0] > membrane.base_color[2]
-    assert len(shaded.meshes) == 16 + 3 * 2 + 1
+    assert names[0] == "rice" and names[-1] == "ceramic" and "ikura_yolk" in names
+    membranes = [m for m in shaded.materials if m.name.startswith("ikura_membrane_")]
+    assert len(membranes) == 3  # three eggs, each its own tint
+    assert all(m.transmission > 0 and m.base_color[0] > m.base_color[2] for m in membranes)
+    eyes = [m for m in shaded.materials if m.name.startswith("ikura_eye_")]
+    assert len(eyes) == 3 and all(e.subsurface_color[1] > m.subsurface_color[1] for e, m in zip(eyes, membranes))
+    assert len(shaded.meshes) == 16 + 3 * 3 + 1  # each egg: membrane, its eye, yolk
     assert sum(m.name.endswith("/yolk") for m in shaded.meshes) == 3
+    assert sum(m.name.endswith("/eye") for m in shaded.meshes) == 3
     for mesh in shaded.meshes:
         assert mesh.colors.shape == (len(mesh.vertices), 3)
         assert mesh.colors.min() >= 0 and mesh.colors.max() <= 1
@@ -254,3 +258,49 @@ def test_scene_carries_the_cdrf_sigma_per_vertex(scene_inputs):
     rice_wet, rice_dry = wet.materials[0], dry.materials[0]
     assert rice_wet.sheen > rice_dry.sheen and rice_wet.clearcoat > rice_dry.clearcoat
     assert rice_wet.roughness < rice_dry.roughness  # the water film glosses
+
+
+def test_egg_tints_span_orange_to_red_orange_and_touching_eggs_differ():
+    """The palette runs from orange to red-orange in CIELAB hue, lighter to deeper; eggs in a tight cluster draw
+    tints seeded, no two neighbours alike, the same for the same seed."""
+    from nodes.shading.materials import ikura_tints
+    from nodes.shading.scene_shading import egg_tints
+
+    def hue(rgb):  # CIELAB hue angle of a linear sRGB colour (D65)
+        xyz = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]) @ rgb
+        f = np.cbrt(xyz / np.array([0.9505, 1.0, 1.089]))
+        return np.degrees(np.arctan2(200 * (f[1] - f[2]), 500 * (f[0] - f[1])))
+
+    hues = [hue(np.array(m.subsurface_color)) for m in ikura_tints(12)]
+    assert min(hues) < 45 and max(hues) > 58 and len({round(h, 3) for h in hues}) == 12
+    grid = np.stack(np.meshgrid(*[np.arange(4) * 6.5] * 3), axis=-1).reshape(-1, 3)  # 64 touching eggs
+    tints = egg_tints(grid, 12, seed=3)
+    assert np.array_equal(tints, egg_tints(grid, 12, seed=3)) and not np.array_equal(tints, egg_tints(grid, 12, 4))
+    touching = np.linalg.norm(grid[:, None] - grid[None], axis=-1) < 6.6
+    np.fill_diagonal(touching, False)
+    assert not (touching & (tints[:, None] == tints[None])).any()
+    assert (egg_tints(grid, 1, seed=3) == 0).all()
+
+
+def test_the_eye_is_the_membrane_over_the_droplet_and_its_fluid_share_is_measured():
+    """The eye piece is the membrane's faces over the oil droplet's silhouette; the fluid light crosses there, in
+    and out, is EYE_FLUID_SHARE of the egg's diameter, as the default egg's mesh gives it."""
+    from nodes.elements import base_mesh
+    from nodes.shading.materials import EYE_FLUID_SHARE
+    from nodes.shading.scene_shading import _parts, _with_eye
+
+    mesh = base_mesh.call(shape="ikura", diameter=6.5, subdivisions=4)
+    pieces = {part: (used, faces) for part, used, faces in _with_eye(mesh, _parts(mesh, ("membrane", "yolk"), "", ""))}
+    assert set(pieces) == {0, 1, 2}
+    used, faces = pieces[2]
+    eye = mesh.vertices[used][faces].mean(axis=1)
+    yolk = mesh.vertices[pieces[1][0]]
+    r_o = np.linalg.norm(yolk - yolk.mean(axis=0), axis=1).mean()
+    assert (eye[:, 2] > 0).all() and np.hypot(eye[:, 0], eye[:, 1]).max() < r_o
+    # the fluid over the droplet, straight down from each eye face, area-weighted
+    rho = np.hypot(eye[:, 0], eye[:, 1])
+    depth = eye[:, 2] - (yolk.mean(axis=0)[2] + np.sqrt(r_o**2 - rho**2))
+    tri = mesh.vertices[used][faces]
+    area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    measured = 2 * float((depth * area).sum() / area.sum()) / 6.5
+    assert measured == pytest.approx(EYE_FLUID_SHARE, abs=0.01)
