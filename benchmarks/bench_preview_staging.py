@@ -1,12 +1,10 @@
-"""The main job's preview alone, priced in CPU seconds: the old packshot against the table (issue 48), and each egg's
-eye in its membrane's shape against in a shape of its own (``mitsuba_scene.skin_partners``; docs/look.md, "Ikura
-colour").
+"""The main job's preview alone, priced in CPU seconds: the old packshot against the table (issue 48).
 
-    python benchmarks/bench_preview_staging.py [--size W H] [--samples N] [--eyes-apart]
+    python benchmarks/bench_preview_staging.py [--size W H] [--samples N]
 
 Runs graphs/ikura_don.yaml to its shaded scene (from the cache where it can), then renders it, media on, twice: as
 the packshot (camera 50° up, fov 35°, the key (−0.45, −0.6, 0.75), the sweep) and as the recipe stages it (its
-preview's elevation, azimuth, fov, key and setting). ``--eyes-apart``: each eye cap as a shape of its own.
+preview's elevation, azimuth, fov, key and setting).
 """
 
 from __future__ import annotations
@@ -29,15 +27,12 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--size", type=int, nargs=2, default=(1280, 720))
     parser.add_argument("--samples", type=int, default=3)
-    parser.add_argument("--eyes-apart", action="store_true", help="each eye cap a shape of its own")
     args = parser.parse_args()
     from nodegraph.api import Cache, default_cache_dir, default_registry, load_recipe, run_recipe
     from nodes.export import mitsuba_scene as ms
 
     recipe = load_recipe("graphs/ikura_don.yaml", default_registry(), [])
     scene = run_recipe(recipe, outputs=["shade.scene"], cache=Cache(default_cache_dir())).output("shade.scene")
-    if args.eyes_apart:
-        ms.skin_partners = lambda scene: {}
     p = recipe.nodes["preview"].params
     stagings = {
         "packshot (50°, fov 35°, sweep)": (ms.Camera(50.0, 20.0, 35.0, 0.1, 5.6, 0.25), (-0.45, -0.6, 0.75), "sweep"),

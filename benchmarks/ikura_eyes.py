@@ -4,8 +4,8 @@ colour").
     python benchmarks/ikura_eyes.py [RECIPE.yaml]
 
 Runs the recipe to its shaded scene (from the cache where it can). Per egg: its eye axis, from the membrane's centre
-through the eye's, against the direction to the preview's camera (its elevation and azimuth); and the least
-distance from the yolk's vertices to the skin's (membrane and eye), negative where a yolk vertex lies outside the
+through the oil droplet's (the yolk), against the direction to the preview's camera (its elevation and azimuth);
+and the least distance from the yolk's vertices to the membrane's, negative where a yolk vertex lies outside the
 skin along its own direction from the egg's centre.
 """
 
@@ -37,8 +37,8 @@ def main() -> None:
             eggs.setdefault(parts[1], {})[parts[2]] = mesh
     gaps, facing = [], []
     for egg in eggs.values():
-        skin = np.concatenate([egg[k].vertices for k in ("membrane", "eye") if k in egg])
-        centre = egg["membrane"].vertices.mean(axis=0) if "eye" not in egg else skin.mean(axis=0)
+        skin = egg["membrane"].vertices
+        centre = skin.mean(axis=0)
         yolk = egg["yolk"].vertices - centre
         rim = skin - centre
         reach = np.linalg.norm(rim, axis=1)
@@ -46,8 +46,8 @@ def main() -> None:
         inside = np.linalg.norm(yolk, axis=1) < reach[nearest]
         least = float(np.linalg.norm(yolk[:, None, :] - rim[None, :, :], axis=-1).min())
         gaps.append(least if inside.all() else -least)
-        if "eye" in egg:
-            axis = egg["eye"].vertices.mean(axis=0) - egg["membrane"].vertices.mean(axis=0)
+        axis = egg["yolk"].vertices.mean(axis=0) - centre
+        if np.linalg.norm(axis) > 1e-6:  # a concentric droplet has no eye
             facing.append(float(axis @ view / np.linalg.norm(axis)))
     gaps, facing = np.array(gaps), np.array(facing)
     print(

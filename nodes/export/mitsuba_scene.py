@@ -315,35 +315,19 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
     return target + distance * view, target
 
 
-def skin_partners(scene: ShadedScene) -> dict[int, int]:
-    """Material index → the index of the shape that renders it, where that is another's: each egg's eye
-    (``ikura_eye_<k>``, the membrane over its oil droplet) goes into the shape of its membrane
-    (``ikura_membrane_<k>``), the same dielectric skin, its own colour per vertex (``_shapes``). As a shape of its
-    own, the small open caps beside their membranes made the main job's preview cost 1.3–1.6× the CPU with the
-    same optics (benchmarks/bench_preview_staging.py --eyes-apart; docs/look.md, "Ikura colour")."""
-    names = {material.name: index for index, material in enumerate(scene.materials)}
-    out = {}
-    for index, material in enumerate(scene.materials):
-        partner = names.get(material.name.replace("ikura_eye", "ikura_membrane"))
-        if material.name.startswith("ikura_eye") and partner is not None:
-            out[index] = partner
-    return out
-
-
 def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
     """One PLY shape per material (written into ``folder``; key ``shape_<material index>``) and the scene's
     vertices (what the camera frames and focuses on); with ``subsurface``, the volumetric materials' shapes carry their
-    medium inside a dielectric boundary. An egg's eye is in its membrane's shape (``skin_partners``), whose
-    transmittance is then each vertex's own (``crossing_tint`` of its mesh's material, Mitsuba's ``vertex_color``)."""
+    medium inside a dielectric boundary. Where a mesh carries its own transmittance per vertex
+    (``ShadedScene.transmittance``: an egg's membrane, paler over its eye), its shape's skin reads each vertex's
+    (√ per crossing, as ``crossing_tint``; Mitsuba's ``vertex_color``)."""
     from ..shading.materials import is_ice
     from .mesh_files import stacked, write_ply
 
-    partners = skin_partners(scene)
-    renders = [partners.get(int(m), int(m)) for m in scene.material_of]  # the shape each mesh goes into
     shapes = {}
     seen = []
     for index, material in enumerate(scene.materials):
-        members = [k for k, m in enumerate(renders) if m == index and len(scene.meshes[k].faces)]
+        members = [k for k, m in enumerate(scene.material_of) if m == index and len(scene.meshes[k].faces)]
         if not members:
             continue
         meshes = [scene.meshes[k] for k in members]
@@ -352,10 +336,16 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
             [m.normals if m.normals is not None else np.zeros((len(m.vertices), 3)) for m in meshes]
         )
         colors = np.tile(material.base_color, (len(vertices), 1))
-        joined = any(scene.material_of[k] != index for k in members)
+        own = [scene.vertex_transmittance(k) for k in members]
+        joined = material.transmission >= TRANSMISSIVE and any(t is not None for t in own)
         if joined:  # each vertex's own skin colour
-            tints = [crossing_tint(scene.materials[scene.material_of[k]]) * material.transmission for k in members]
-            colors = np.concatenate([np.tile(t, (len(m.vertices), 1)) for t, m in zip(tints, meshes)])
+            whole = crossing_tint(material) * material.transmission
+            colors = np.concatenate(
+                [
+                    np.tile(whole, (len(m.vertices), 1)) if t is None else np.sqrt(t) * material.transmission
+                    for t, m in zip(own, meshes)
+                ]
+            )
         volume = subsurface and is_volumetric(material)
         per_vertex = (
             not volume

@@ -100,11 +100,6 @@ EGG_TINTS = 12  # membrane tints the eggs of a scene are drawn from (the shade n
 EGG_HUE_SPREAD = (0.70, 1.30)
 EGG_PIGMENT_SPREAD = (0.80, 1.25)
 EGG_FLUID = (0.85, 0.10, 0.012)  # light through the whole egg (two crossings of the fluid): the palette's centre
-# the eye (``ikura_eye``): the fluid over the oil droplet, in and out, as a share of the egg's diameter. The droplet
-# (r_o = r_i·∛0.145 = 1.71 mm) sits base_mesh.eye_gap = 0.15 mm under the membrane of a 6.5 mm egg: over its
-# silhouette (the membrane within r_o of the eye's axis) the fluid is 0.48 mm deep on average, so light in and out
-# crosses 2 × 0.48 / 6.5 = 0.15 of the path that gives the egg its colour (tests/shading: measured on the mesh)
-EYE_FLUID_SHARE = 0.15
 
 
 def ikura_materials() -> tuple[Material, Material]:
@@ -184,21 +179,6 @@ def ikura_tints(count: int) -> tuple[Material, ...]:
             )
         )
     return tuple(tints)
-
-
-def ikura_eye(membrane: Material) -> Material:
-    """The membrane over the egg's oil droplet (its pale eye): the same skin, but light through it crosses only
-    the thin fluid over the droplet, ``EYE_FLUID_SHARE`` of the egg's path (Beer–Lambert: the egg's colour to
-    that power), so the droplet's honey-orange shows with little of the fluid's red."""
-    import dataclasses
-
-    share = EYE_FLUID_SHARE
-    return dataclasses.replace(
-        membrane,
-        name=membrane.name.replace("membrane", "eye"),
-        base_color=tuple(float(c) ** share for c in membrane.base_color),
-        subsurface_color=tuple(float(c) ** share for c in membrane.subsurface_color),
-    )
 
 
 def ice_materials(syrup_color) -> tuple[Material, Material]:

@@ -45,6 +45,7 @@ class ShadeSettings:
 class _Piece:
     mesh: Mesh  # world-space mesh of one element part (or one scenery mesh)
     material: Material
+    transmittance: np.ndarray | None = None  # per vertex, where it varies over the skin (``eye_transmittance``)
 
 
 def _materials(settings: ShadeSettings) -> dict[str, tuple[Material, ...]]:
@@ -109,15 +110,16 @@ def _element_pieces(
             key = (int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))
             if key not in splits:
                 splits[key] = _parts(mesh, names, f"element {i} ({kind})", preset)
-                if preset == "ikura":
-                    splits[key] = _with_eye(mesh, splits[key])
+            by_part = {part: mesh.vertices[used] for part, used, _ in splits[key]}
             for part, used, faces in splits[key]:
-                material = materials[preset][part] if part < len(names) else None
-                if preset == "ikura" and part != 1:  # the membrane and its eye: the egg's own tint
+                material, tint_of = materials[preset][part], None
+                if preset == "ikura" and part == 0:  # the membrane: the egg's own tint, paler over its eye
                     material = materials["ikura_tints"][tint[i]]
-                    material = mat.ikura_eye(material) if part == EYE else material
-                name = names[part] if part < len(names) else "eye"
-                pieces.append(_Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{name}"), material))
+                    if 1 in by_part:
+                        tint_of = eye_transmittance(by_part[0], by_part[1], material.subsurface_color)
+                pieces.append(
+                    _Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{names[part]}"), material, tint_of)
+                )
     return pieces
 
 
@@ -127,7 +129,6 @@ def _element_shapes(aggregate: Aggregate) -> list[Mesh]:
     return [shapes.element_mesh(i) for i in range(len(aggregate.placement))]
 
 
-EYE = 2  # the membrane's faces over the oil droplet (``_with_eye``): a piece of their own, after membrane and yolk
 EGG_NEIGHBOURS = 1.3  # eggs nearer than this many median egg spacings are neighbours (``egg_tints``)
 
 
@@ -152,30 +153,21 @@ def egg_tints(centres: np.ndarray, count: int, seed: int) -> np.ndarray:
     return out
 
 
-def _with_eye(mesh: Mesh, split: list[tuple[int, np.ndarray, np.ndarray]]) -> list[tuple[int, np.ndarray, np.ndarray]]:
-    """An egg's (membrane, yolk) pieces with the membrane's faces over the oil droplet as a third piece (``EYE``):
-    those whose centre lies within the droplet's radius of the axis from the egg's centre through the droplet's,
-    on the droplet's side (its silhouette seen down that axis). A concentric yolk has no eye (no axis)."""
-    by_part = {part: (used, faces) for part, used, faces in split}
-    if set(by_part) != {0, 1}:
-        return split
-    skin, yolk = (mesh.vertices[by_part[k][0]] for k in (0, 1))
-    centre, droplet = skin.mean(axis=0), yolk.mean(axis=0)
-    axis = droplet - centre
-    radius = float(np.linalg.norm(yolk - droplet, axis=1).mean())
-    if np.linalg.norm(axis) < 1e-3 * radius:
-        return split
-    axis /= np.linalg.norm(axis)
-    used, faces = by_part[0]
-    middle = skin[faces].mean(axis=1) - centre
-    along = middle @ axis
-    across = np.linalg.norm(middle - np.outer(along, axis), axis=1)
-    over = (along > 0) & (across < radius)
-    out = []
-    for part, keep in ((0, ~over), (EYE, over)):
-        kept, inverse = np.unique(faces[keep], return_inverse=True)
-        out.append((part, used[kept], inverse.reshape(-1, 3)))
-    return [*out, (1, *by_part[1])]
+def eye_transmittance(skin: np.ndarray, droplet: np.ndarray, color) -> np.ndarray:
+    """Per vertex of an egg's membrane (``skin``, around the oil droplet's vertices ``droplet``): the colour light
+    keeps through the egg there, in and out: ``color`` (the whole egg's) to the power of the fluid's depth under that
+    vertex, its distance to the droplet's surface, as a share of that depth with the droplet at the egg's centre
+    (Beer–Lambert over the fluid; 1 at most). The droplet floats ``base_mesh.eye_gap`` under the skin (G eq. 10's
+    yolk, lighter than the fluid), so the skin over it is paler, most at the eye's centre and fading to the egg's
+    colour about a droplet's radius away: the eye is the droplet seen through a thinning fluid, a soft paler patch,
+    with no edge of its own. A concentric droplet leaves the egg its colour everywhere."""
+    skin, droplet = np.asarray(skin, np.float64), np.asarray(droplet, np.float64)
+    centre, middle = skin.mean(axis=0), droplet.mean(axis=0)
+    radius = float(np.linalg.norm(skin - centre, axis=1).mean())
+    r_o = float(np.linalg.norm(droplet - middle, axis=1).mean())
+    depth = np.linalg.norm(skin - middle, axis=1) - r_o
+    share = np.clip(depth / max(radius - r_o, 1e-9), 0.0, 1.0)
+    return np.clip(np.asarray(color, np.float64), 0.0, 1.0)[None, :] ** share[:, None]
 
 
 def _parts(mesh: Mesh, names: tuple[str, ...], what: str, preset: str) -> list[tuple[int, np.ndarray, np.ndarray]]:
@@ -245,4 +237,9 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
             )
         )
     sigmas = tuple(sigma[starts[k] : starts[k + 1]] for k in range(len(pieces)))
-    return ShadedScene(tuple(meshes), tuple(materials), np.array(material_of, np.int32), cdrf_sigma=sigmas)
+    tints = ()
+    if any(piece.transmittance is not None for piece in pieces):
+        tints = tuple(np.zeros((0, 3)) if p.transmittance is None else p.transmittance for p in pieces)
+    return ShadedScene(
+        tuple(meshes), tuple(materials), np.array(material_of, np.int32), cdrf_sigma=sigmas, transmittance=tints
+    )

@@ -283,21 +283,20 @@ def test_the_blender_side_by_side_builds_the_previews_own_studio(shaded, tmp_pat
     assert described["exposure"] == ms.EXPOSURE and described["samples"] == 8
 
 
-def test_each_eye_is_rendered_in_its_membranes_shape_with_its_own_colour(shaded, tmp_path):
-    """The preview puts every egg's eye (``ikura_eye_<k>``) into the shape of its membrane (``ikura_membrane_<k>``):
-    no shape of its own; that shape's skin reads each vertex's transmittance, paler over the eye."""
-    from nodes.export.mitsuba_scene import _shapes, skin_partners
+def test_each_membrane_is_rendered_with_its_own_transmittance_per_vertex(shaded, tmp_path):
+    """The preview renders each egg's membrane, one closed mesh, with the transmittance each of its vertices keeps
+    (``ShadedScene.transmittance``, √ per crossing): paler over the eye."""
+    from nodes.export.mitsuba_scene import _shapes
 
-    partners = skin_partners(shaded)
-    names = [m.name for m in shaded.materials]
-    assert partners and all(names[e].replace("eye", "membrane") == names[m] for e, m in partners.items())
     shapes, _ = _shapes(shaded, tmp_path, subsurface=True)
-    assert not any(f"shape_{e}" in shapes for e in partners)
-    membrane = next(iter(partners.values()))
+    membrane = next(k for k, m in enumerate(shaded.materials) if m.name.startswith("ikura_membrane"))
     shape = shapes[f"shape_{membrane}"]
     assert shape["bsdf"]["specular_transmittance"] == {"type": "mesh_attribute", "name": "vertex_color"}
     data = Path(shape["filename"]).read_bytes()
     head, body = data.split(b"end_header\n", 1)
     count = int(head.split(b"element vertex ")[1].split(b"\n")[0])
-    green = np.frombuffer(body[: count * 36], "<f4").reshape(count, 9)[:, 7]  # x y z nx ny nz r g b
+    rows = np.frombuffer(body[: count * 36], "<f4").reshape(count, 9)  # x y z nx ny nz r g b
+    own = np.concatenate([shaded.transmittance[k] for k in np.flatnonzero(shaded.material_of == membrane)])
+    assert rows[:, 6:] == pytest.approx(np.sqrt(own), rel=1e-5)
+    green = rows[:, 7]
     assert green.max() > 1.5 * green.min()  # the eye's vertices pass more green than the membrane's

@@ -19,11 +19,16 @@ def test_materials_per_kind_and_ikura_parts(shaded):
     membranes = [m for m in shaded.materials if m.name.startswith("ikura_membrane_")]
     assert len(membranes) == 3  # three eggs, each its own tint
     assert all(m.transmission > 0 and m.base_color[0] > m.base_color[2] for m in membranes)
-    eyes = [m for m in shaded.materials if m.name.startswith("ikura_eye_")]
-    assert len(eyes) == 3 and all(e.subsurface_color[1] > m.subsurface_color[1] for e, m in zip(eyes, membranes))
-    assert len(shaded.meshes) == 16 + 3 * 3 + 1  # each egg: membrane, its eye, yolk
+    assert not any("eye" in m.name for m in shaded.materials)  # the eye is the membrane's own colour, no piece
+    assert len(shaded.meshes) == 16 + 3 * 2 + 1  # each egg: its membrane, one closed mesh, and its yolk
     assert sum(m.name.endswith("/yolk") for m in shaded.meshes) == 3
-    assert sum(m.name.endswith("/eye") for m in shaded.meshes) == 3
+    for k, mesh in enumerate(shaded.meshes):  # only the membranes carry their own transmittance
+        own = shaded.vertex_transmittance(k)
+        assert (own is not None) == mesh.name.endswith("/membrane")
+        if own is not None:
+            assert own.shape == (len(mesh.vertices), 3) and own.max() <= 1
+            edges = np.sort(mesh.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+            assert (np.unique(edges, axis=0, return_counts=True)[1] == 2).all()  # closed: every edge two faces
     for mesh in shaded.meshes:
         assert mesh.colors.shape == (len(mesh.vertices), 3)
         assert mesh.colors.min() >= 0 and mesh.colors.max() <= 1
@@ -282,25 +287,29 @@ def test_egg_tints_span_orange_to_red_orange_and_touching_eggs_differ():
     assert (egg_tints(grid, 1, seed=3) == 0).all()
 
 
-def test_the_eye_is_the_membrane_over_the_droplet_and_its_fluid_share_is_measured():
-    """The eye piece is the membrane's faces over the oil droplet's silhouette; the fluid light crosses there, in
-    and out, is EYE_FLUID_SHARE of the egg's diameter, as the default egg's mesh gives it."""
+def test_the_eye_is_the_droplet_seen_through_the_thinning_fluid_over_it():
+    """Each membrane vertex keeps the egg's colour to the power of the fluid's depth under it (its distance to the
+    oil droplet) over that depth with the droplet at the centre: palest at the eye's centre, fading with no edge to
+    the egg's own colour on the far side; a concentric droplet leaves the egg its colour everywhere."""
     from nodes.elements import base_mesh
-    from nodes.shading.materials import EYE_FLUID_SHARE
-    from nodes.shading.scene_shading import _parts, _with_eye
+    from nodes.shading.scene_shading import _parts, eye_transmittance
 
-    mesh = base_mesh.call(shape="ikura", diameter=6.5, subdivisions=4)
-    pieces = {part: (used, faces) for part, used, faces in _with_eye(mesh, _parts(mesh, ("membrane", "yolk"), "", ""))}
-    assert set(pieces) == {0, 1, 2}
-    used, faces = pieces[2]
-    eye = mesh.vertices[used][faces].mean(axis=1)
-    yolk = mesh.vertices[pieces[1][0]]
+    color = np.array([0.85, 0.10, 0.012])
+    mesh = base_mesh.call(shape="ikura", diameter=6.5, subdivisions=3, eye_gap=0.15)
+    (_, skin, _), (_, yolk, _) = _parts(mesh, ("membrane", "yolk"), "", "")
+    skin, yolk = mesh.vertices[skin], mesh.vertices[yolk]
+    own = eye_transmittance(skin, yolk, color)
+    top, bottom = np.argmax(skin[:, 2]), np.argmin(skin[:, 2])
     r_o = np.linalg.norm(yolk - yolk.mean(axis=0), axis=1).mean()
-    assert (eye[:, 2] > 0).all() and np.hypot(eye[:, 0], eye[:, 1]).max() < r_o
-    # the fluid over the droplet, straight down from each eye face, area-weighted
-    rho = np.hypot(eye[:, 0], eye[:, 1])
-    depth = eye[:, 2] - (yolk.mean(axis=0)[2] + np.sqrt(r_o**2 - rho**2))
-    tri = mesh.vertices[used][faces]
-    area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    measured = 2 * float((depth * area).sum() / area.sum()) / 6.5
-    assert measured == pytest.approx(EYE_FLUID_SHARE, abs=0.01)
+    share = np.log(own[top, 1]) / np.log(color[1])  # the fluid over the eye's centre: eye_gap / (R − r_o)
+    assert share == pytest.approx(0.15 / (3.25 - r_o), rel=0.05)
+    assert own[bottom] == pytest.approx(color)  # the far side: the egg's colour
+    angle = np.degrees(np.arccos(np.clip(skin[:, 2] / np.linalg.norm(skin, axis=1), -1, 1)))
+    green = own[:, 1]
+    for low, high in ((0, 20), (20, 40), (40, 60), (60, 90)):  # paler the nearer the eye's axis, no step
+        assert green[(angle >= high) & (angle < high + 20)].mean() < green[(angle >= low) & (angle < high)].mean()
+    concentric = base_mesh.call(shape="ikura", diameter=6.5, subdivisions=3, eye_gap=0.0)
+    (_, skin, _), (_, yolk, _) = _parts(concentric, ("membrane", "yolk"), "", "")
+    assert eye_transmittance(concentric.vertices[skin], concentric.vertices[yolk], color) == pytest.approx(
+        np.tile(color, (len(skin), 1)), rel=0.02
+    )
