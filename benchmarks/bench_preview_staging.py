@@ -37,7 +37,15 @@ def main() -> None:
     stagings = {
         "packshot (50°, fov 35°, sweep)": (ms.Camera(50.0, 20.0, 35.0, 0.1, 5.6, 0.25), (-0.45, -0.6, 0.75), "sweep"),
         f"the recipe's ({p['elevation']:g}°, fov {p['fov']:g}°, {p['setting']})": (
-            ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"]),
+            ms.Camera(
+                p["elevation"],
+                p["azimuth"],
+                p["fov"],
+                p["margin"],
+                p["f_stop"],
+                p["focus"],
+                tuple(p.get("offset", (0.0, 0.0))),
+            ),
             p["sun_direction"],
             p["setting"],
         ),

@@ -45,7 +45,9 @@ def settings(scene, preview_params: dict, samples: int) -> dict:
     from nodes.export import mitsuba_scene as ms
 
     p = preview_params
-    camera = ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
+    camera = ms.Camera(
+        p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"], tuple(p.get("offset", (0.0, 0.0)))
+    )
     return {
         **ms.studio_description(
             scene, camera, p["width"], p["height"], p["sun_direction"], p["ambient"], p.get("setting", "sweep")

@@ -127,6 +127,7 @@ class Camera:
     margin: float  # share of the half-frame left free around the subject on its tightest side
     f_stop: float = 0.0  # the thin lens's f-number (full-frame equivalent, ``studio.aperture_radius``); 0: pinhole
     focus: float = 0.25  # the plane in focus: this quantile of the subject's depths (``studio.focus_distance``)
+    offset: tuple[float, float] = (0.0, 0.0)  # where the subject's centre sits, in half-frames right and up
 
 
 @dataclass(frozen=True)
@@ -287,7 +288,9 @@ def hull_vertices(points: np.ndarray) -> np.ndarray:
 def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """(origin, target): seen from the camera's elevation and azimuth, the subject's ``points`` centred in the frame
     and as large as leaves ``camera.margin`` of the half-frame free on its tightest side (``aspect`` = width /
-    height). Derived from the points, so the framing follows any change of the scene (a bigger bowl, a --set). Only
+    height), then, with ``camera.offset``, the camera moved parallel to the film so that the subject's centre sits
+    that many half-frames right and up (−1/3, 0: on the left third line); the fit leaves room for the move.
+    Derived from the points, so the framing follows any change of the scene (a bigger bowl, a --set). Only
     the convex hull's vertices matter (a projected coordinate x / depth is linear-fractional, so its extremes over
     the points are hull vertices): a subsample could miss the rim's outermost vertex and put it past the margin."""
     points = hull_vertices(np.asarray(points, np.float64))
@@ -296,14 +299,16 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
     right = np.cross(-view, [0.0, 0.0, 1.0])
     right = right / np.linalg.norm(right) if np.linalg.norm(right) > 1e-9 else np.array([1.0, 0.0, 0.0])
     up = np.cross(right, -view)
-    free = 1.0 - camera.margin
+    shift_x, shift_y = (float(c) for c in camera.offset)
     tan_x = np.tan(np.radians(camera.fov) / 2)
     tan_y = tan_x / aspect
+    free_x = max(1.0 - camera.margin - abs(shift_x), 1e-3)
+    free_y = max(1.0 - camera.margin - abs(shift_y), 1e-3)
     target = 0.5 * (points.min(axis=0) + points.max(axis=0))
     for _ in range(4):  # recentre on the projected extent, then fit again
         rel = points - target
         x, y, z = rel @ right, rel @ up, rel @ view
-        distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
+        distance = float(np.max(z + np.maximum(np.abs(x) / (free_x * tan_x), np.abs(y) / (free_y * tan_y))))
         distance = max(distance, float(z.max()) + 1e-6 * float(np.ptp(points, axis=0).max() + 1.0))
         depth = distance - z
         u, v = x / (depth * tan_x), y / (depth * tan_y)
@@ -311,7 +316,8 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
         target = target + distance * shift
     rel = points - target
     x, y, z = rel @ right, rel @ up, rel @ view
-    distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
+    distance = float(np.max(z + np.maximum(np.abs(x) / (free_x * tan_x), np.abs(y) / (free_y * tan_y))))
+    target = target - distance * (shift_x * tan_x * right + shift_y * tan_y * up)
     return target + distance * view, target
 
 

@@ -80,6 +80,13 @@ def _cost(q: CostQuery) -> Cost:
             "scene's vertices as seen by the camera, so it follows any change of the scene)",
             range=(0.0, 0.9),
         ),
+        "offset": Param(
+            tuple[float, float],
+            (0.0, 0.0),
+            "framing: where the scene's centre sits, in half-frames right and up from the frame's centre (−0.33, 0: "
+            "on the left third line, as a photographer composes by the rule of thirds); the fit leaves it room",
+            range=(-0.8, 0.8),
+        ),
         "f_stop": Param(
             float,
             5.6,
@@ -129,6 +136,7 @@ def preview(
     azimuth,
     fov,
     margin,
+    offset,
     f_stop,
     focus,
     ambient,
@@ -143,7 +151,7 @@ def preview(
 
     if not np.linalg.norm(sun_direction) > 0:
         raise ValueError("sun_direction: a zero vector has no direction")
-    camera = Camera(elevation, azimuth, fov, margin, f_stop, focus)
+    camera = Camera(elevation, azimuth, fov, margin, f_stop, focus, tuple(offset))
     quiet_interrupt()
     return Image(
         render(

@@ -49,12 +49,16 @@ SETTINGS = ("sweep", "table")  # what the subject stands on (the preview's ``set
 # CIELAB (Hălălișan et al. 2023, "Wood colour variations of Quercus species in Romania", Forests 14:230: seven oak
 # species, differing mostly in L* and b*), and a clear coat or oil darkens wood and deepens its latewood (Tashiro
 # and Nakamura, "Characterization of colors distributed on lumber surface by imaging spectroscopy", J. Soc. Mat.
-# Sci. Japan 62(4)): an oiled board here averages L* 50, a* 9, b* 24 = linear (0.29, 0.16, 0.077), its latewood
-# bands TABLE_LATEWOOD of that and its earlywood TABLE_EARLYWOOD, each board ± TABLE_BOARD_SPREAD in brightness
+# Sci. Japan 62(4)): an oiled board here averages L* 50, a* 9, b* 24 = linear (0.29, 0.16, 0.077). Its latewood
+# bands are TABLE_LATEWOOD of that and its earlywood TABLE_EARLYWOOD: ΔL* ≈ 6 between them, within the spread one
+# species shows (the figure above), so the grain reads at arm's length and not as stripes; each board differs by
+# ± TABLE_BOARD_SPREAD in brightness. Oak's rings are 1–4 mm a year: each ring's width is drawn around TABLE_RING
+# with TABLE_RING_SPREAD (a log-normal share), so no two bands repeat
 TABLE_COLOR = (0.29, 0.16, 0.077)
-TABLE_LATEWOOD = 0.62
-TABLE_EARLYWOOD = 1.18
-TABLE_BOARD_SPREAD = 0.12
+TABLE_LATEWOOD = 0.84
+TABLE_EARLYWOOD = 1.06
+TABLE_BOARD_SPREAD = 0.08
+TABLE_RING_SPREAD = 0.45
 TABLE_BOARD = 110.0  # mm: a board's width (oak table tops and floor boards: 90–140 mm)
 TABLE_RING = 2.5  # mm: the mean spacing of the growth rings seen on a flat-sawn face (oak: 1–4 mm a year)
 TABLE_TILE = 440.0  # mm: the texture's side (4 boards), repeated over the table
@@ -212,11 +216,14 @@ def focus_distance(points: np.ndarray, origin: np.ndarray, target: np.ndarray, f
 
 
 @functools.cache
+@functools.cache
 def wood_texture(pixels: int = TABLE_PIXELS) -> np.ndarray:
     """The table's boards as a (pixels, pixels, 3) float32 linear-RGB tile of ``TABLE_TILE`` mm, repeating on both
-    axes: ``TABLE_TILE / TABLE_BOARD`` boards side by side along x (a dark seam between), each a flat-sawn face
-    whose growth rings run along y, wavering, latewood dark and earlywood light (``TABLE_LATEWOOD``,
-    ``TABLE_EARLYWOOD``), with fine pores along the grain. Fixed (its own seed): the same table for every scene."""
+    axes: ``TABLE_TILE / TABLE_BOARD`` boards side by side along x (a thin dark joint between), each a flat-sawn
+    face whose growth rings run along y, wavering, each ring its own width (``TABLE_RING``, ``TABLE_RING_SPREAD``),
+    latewood a little darker than earlywood (``TABLE_LATEWOOD``, ``TABLE_EARLYWOOD``), with the fine open pores of
+    oak as short dark streaks along the grain. Fixed (its own seed): the same table for every scene, made once a
+    process (read-only)."""
     rng = np.random.default_rng(20261206)
     boards = max(1, int(round(TABLE_TILE / TABLE_BOARD)))
     mm = TABLE_TILE / pixels
@@ -236,16 +243,31 @@ def wood_texture(pixels: int = TABLE_PIXELS) -> np.ndarray:
         amplitude = rng.uniform(0.5, 2.0, len(periods)) / periods
         waver = (amplitude[:, None] * np.sin(2 * np.pi * periods[:, None] * y / TABLE_TILE + phase[:, None])).sum(0)
         radius = np.sqrt((u - centre - waver[:, None]) ** 2 + depth**2)
-        ring = 0.5 + 0.5 * np.cos(2 * np.pi * radius / TABLE_RING)
-        late = ring**6  # a narrow dark band of latewood in each ring
+        # the rings' outer radii: each its own width, so a radius's place in its ring is found by interpolation
+        widths = TABLE_RING * rng.lognormal(-0.5 * TABLE_RING_SPREAD**2, TABLE_RING_SPREAD, 400)
+        edges = np.concatenate([[0.0], np.cumsum(widths)])
+        place = np.interp(radius, edges, np.arange(len(edges)))  # ring number + the share of the ring crossed
+        within = place - np.floor(place)
+        late = np.clip((within - 0.7) / 0.3, 0.0, 1.0) ** 1.5  # latewood: the ring's outer 30 %, darkening outwards
         shade = TABLE_EARLYWOOD + (TABLE_LATEWOOD - TABLE_EARLYWOOD) * late
         shade = shade * (1.0 + TABLE_BOARD_SPREAD * rng.uniform(-1, 1))
-        pores = rng.standard_normal((1, int(columns.sum())))  # fine streaks along the grain
-        streak = 1.0 + 0.05 * pores * (0.6 + 0.4 * np.cos(2 * np.pi * y[:, None] / (TABLE_TILE / 8) + b))
-        out[:, columns] = (shade * streak)[..., None] * np.asarray(TABLE_COLOR, np.float32)
-    seam = np.minimum(across, width - across) < 0.6  # the joint between boards, 1.2 mm dark
-    out[:, seam] *= 0.35
-    return np.clip(out, 0.0, 1.0)
+        # oak's open pores: short dark streaks along the grain, 2–12 mm long, scattered across the face
+        n_cols = int(columns.sum())
+        pores = np.ones((pixels, n_cols), np.float32)
+        count = int(n_cols * pixels * mm * mm / 6.0)  # about one a 6 mm²
+        cx = rng.integers(0, n_cols, count)
+        cy = rng.integers(0, pixels, count)
+        length = (rng.uniform(2.0, 12.0, count) / mm).astype(np.int64)
+        depth_of = rng.uniform(0.80, 0.93, count).astype(np.float32)
+        for k in range(count):
+            rows = np.arange(cy[k], cy[k] + length[k]) % pixels
+            pores[rows, cx[k]] = np.minimum(pores[rows, cx[k]], depth_of[k])
+        out[:, columns] = (shade * pores)[..., None] * np.asarray(TABLE_COLOR, np.float32)
+    seam = np.minimum(across, width - across) < 0.4  # the joint between boards, 0.8 mm, in shadow
+    out[:, seam] *= 0.45
+    out = np.clip(out, 0.0, 1.0)
+    out.flags.writeable = False
+    return out
 
 
 def wood_png(path: Path) -> Path:

@@ -100,8 +100,9 @@ def test_the_table_is_oak_boards_under_the_subject_in_both_renderers(shaded, tmp
     texture = np.asarray(PILImage.open(table["bsdf"]["base_color"]["filename"]), np.float64) / 255
     linear = np.where(texture <= 0.04045, texture / 12.92, ((texture + 0.055) / 1.055) ** 2.4)
     assert np.allclose(linear.reshape(-1, 3).mean(axis=0), studio.TABLE_COLOR, rtol=0.2)
-    rows = linear[..., 1].mean(axis=0)  # across the boards: rings and joints make it vary
-    assert rows.std() > 0.1 * rows.mean()
+    green = linear[..., 1]
+    rows = green.mean(axis=0)  # across the boards: the joints dark, the grain a low contrast
+    assert rows.min() < 0.6 * rows.mean() and 0.03 < green.std() / green.mean() < 0.15
     described = studio_description(shaded, camera, 64, 48, (-0.8, 0.15, 0.58), setting="table")["backdrop"]
     corners = np.array(described["vertices"]) - m[:3, 3]
     assert np.allclose(np.abs(corners @ m[:3, 0]) / np.linalg.norm(m[:3, 0]) ** 2, 1.0)
