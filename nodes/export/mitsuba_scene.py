@@ -260,7 +260,14 @@ def coat_share(material: Material) -> float:
     return float(np.clip(material.clearcoat, 0.0, COAT_SHARE_MAX))
 
 
+DISNEY_COAT = 0.25  # Mitsuba's principled coat lobe is Disney's: clearcoat × 0.25 × Schlick(F0 0.04) (principled.cpp)
+
+
 def _principled(material: Material) -> dict:
+    """Mitsuba's principled BSDF for a material's parameters. Its coat follows Disney (Burley 2012), whose lobe is
+    scaled by ``DISNEY_COAT``: a coat of weight 1 reflected a quarter of a glaze's Fresnel (F0 0.04 at IOR 1.5),
+    where Cycles' coat and glTF's KHR_materials_clearcoat reflect all of it. The weight passed is the material's
+    over ``DISNEY_COAT``, so a glaze reflects the studio as Fresnel says in both renderers (docs/look.md)."""
     return {
         "type": "principled",
         "base_color": _rgb(material.base_color),
@@ -268,7 +275,7 @@ def _principled(material: Material) -> dict:
         "metallic": float(material.metallic),
         "sheen": float(material.sheen),
         "sheen_tint": float(material.sheen_tint),
-        "clearcoat": float(material.clearcoat),
+        "clearcoat": float(material.clearcoat) / DISNEY_COAT,
         "clearcoat_gloss": float(1.0 - material.clearcoat_roughness),
         "spec_trans": float(material.transmission),
         "eta": float(material.ior),

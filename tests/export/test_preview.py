@@ -64,6 +64,17 @@ def test_the_yolk_shows_through_the_membrane(shaded):
     assert np.abs(with_yolk - without)[orange].mean() > 5
 
 
+def test_a_glaze_reflects_fresnel_in_the_preview_as_in_cycles():
+    """Mitsuba's principled coat is Disney's, a quarter of Fresnel at weight 1: the glaze's weight is passed over
+    DISNEY_COAT, so it reflects F0 0.04 as Cycles' coat and glTF's clearcoat do (the bowl's rim and the studio's
+    lights in it were fainter in the preview than in Cycles)."""
+    from nodes.export.mitsuba_scene import DISNEY_COAT, material_bsdf
+    from nodes.shading import materials as mat
+
+    glaze = mat.ceramic_material((0.03, 0.021, 0.015))
+    assert DISNEY_COAT == 0.25 and material_bsdf(glaze, False)["clearcoat"] == pytest.approx(glaze.clearcoat / 0.25)
+
+
 def test_material_mapping():
     from nodes.export.mitsuba_scene import diffuse_transmission, material_bsdf
     from nodes.shading import materials as mat
