@@ -49,7 +49,9 @@ def main_job_scene(cache_dir: Path | None):
     recipe = load_recipe(ROOT / "graphs" / "ikura_don.yaml", default_registry(), [])
     result = run_recipe(recipe, outputs=["shade.scene"], cache=Cache(cache_dir or default_cache_dir()))
     p = recipe.nodes["preview"].params
-    camera = Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
+    camera = Camera(
+        p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"], tuple(p.get("offset", (0.0, 0.0)))
+    )
     return result.output("shade.scene"), camera, p
 
 

@@ -32,7 +32,9 @@ def main() -> None:
     cache = Cache(args.cache_dir or default_cache_dir())
     scene = run_recipe(recipe, outputs=["shade.scene"], cache=cache).output("shade.scene")
     p = recipe.nodes["preview"].params
-    camera = ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
+    camera = ms.Camera(
+        p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"], tuple(p.get("offset", (0.0, 0.0)))
+    )
     ms.render(scene, camera, 640, 480, 8, p["sun_direction"], subsurface=args.media == "on", ambient=p["ambient"])
 
 

@@ -347,12 +347,17 @@ class ShadedScene:
     ``cdrf_sigma[i]`` holds mesh i's per-vertex CDRF kernel width σ = σ₀·|κ| (rad, SPEC §4 eq. 9): what a
     renderer needs to evaluate the curvature-dependent translucency itself instead of the baked colours
     (the preview turns it into diffuse transmission, ``nodes.shading.cdrf.translucency``). Empty: none.
+
+    ``transmittance[i]`` holds, where light through mesh i's element keeps a colour that varies over its skin, that
+    colour (linear RGB, in and out) at each vertex: an egg's membrane, paler over its oil droplet (its eye,
+    ``scene_shading.eye_transmittance``); an empty array: the material's own. Empty tuple: none anywhere.
     """
 
     meshes: tuple[Mesh, ...]
     materials: tuple[Material, ...]
     material_of: np.ndarray
     cdrf_sigma: tuple[np.ndarray, ...] = ()
+    transmittance: tuple[np.ndarray, ...] = ()
 
     def __post_init__(self):
         object.__setattr__(self, "meshes", tuple(self.meshes))
@@ -362,3 +367,16 @@ class ShadedScene:
         if sigma and [len(s) for s in sigma] != [len(m.vertices) for m in self.meshes]:
             raise ValueError("cdrf_sigma: one array per mesh, one value per vertex")
         object.__setattr__(self, "cdrf_sigma", sigma)
+        tints = tuple(np.asarray(t, dtype=np.float32).reshape(-1, 3) for t in self.transmittance)
+        if tints and (
+            len(tints) != len(self.meshes)
+            or any(len(t) not in (0, len(m.vertices)) for t, m in zip(tints, self.meshes))
+        ):
+            raise ValueError("transmittance: one array per mesh, empty or one RGB row per vertex")
+        object.__setattr__(self, "transmittance", tints)
+
+    def vertex_transmittance(self, k: int) -> np.ndarray | None:
+        """Mesh k's per-vertex transmittance (``transmittance``), None where it has none of its own."""
+        if not self.transmittance or not len(self.transmittance[k]):
+            return None
+        return self.transmittance[k]

@@ -133,9 +133,20 @@ def main() -> None:
     material = bpy.data.materials.new("backdrop")
     material.use_nodes = True
     principled = material.node_tree.nodes["Principled BSDF"]
-    principled.inputs["Base Color"].default_value = (*b["color"], 1.0)
-    principled.inputs["Roughness"].default_value = 1.0
-    principled.inputs["Specular IOR Level"].default_value = 0.0
+    if "texture" in b:  # the table: oak boards (the preview's own texture), oiled, its tile repeated by the UVs
+        layer = mesh.uv_layers.new(name="UVMap")
+        for loop in mesh.loops:
+            layer.data[loop.index].uv = b["uv"][loop.vertex_index]
+        image = material.node_tree.nodes.new("ShaderNodeTexImage")
+        image.image = bpy.data.images.load(b["texture"])
+        image.extension = "REPEAT"
+        material.node_tree.links.new(image.outputs["Color"], principled.inputs["Base Color"])
+        principled.inputs["Roughness"].default_value = b["roughness"]
+        principled.inputs["Specular IOR Level"].default_value = 0.5
+    else:  # the seamless sweep: matte paper
+        principled.inputs["Base Color"].default_value = (*b["color"], 1.0)
+        principled.inputs["Roughness"].default_value = 1.0
+        principled.inputs["Specular IOR Level"].default_value = 0.0
     mesh.materials.append(material)
     scene.collection.objects.link(bpy.data.objects.new("backdrop", mesh))
 

@@ -45,9 +45,13 @@ def settings(scene, preview_params: dict, samples: int) -> dict:
     from nodes.export import mitsuba_scene as ms
 
     p = preview_params
-    camera = ms.Camera(p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
+    camera = ms.Camera(
+        p["elevation"], p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"], tuple(p.get("offset", (0.0, 0.0)))
+    )
     return {
-        **ms.studio_description(scene, camera, p["width"], p["height"], p["sun_direction"], p["ambient"]),
+        **ms.studio_description(
+            scene, camera, p["width"], p["height"], p["sun_direction"], p["ambient"], p.get("setting", "sweep")
+        ),
         "samples": samples,
     }
 
@@ -84,6 +88,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="blender-side-") as tmp:
         settings_path, render = Path(tmp) / "settings.json", Path(tmp) / "cycles.png"
         description = settings(result.output("shade.scene"), recipe.nodes["preview"].params, args.samples)
+        if "texture" in description["backdrop"]:  # the table's boards, as the preview renders them
+            from nodes.export.studio import wood_png
+
+            description["backdrop"]["texture"] = str(wood_png(Path(tmp) / description["backdrop"]["texture"]))
         settings_path.write_text(json.dumps(description))
         start = time.perf_counter()
         done = subprocess.run(

@@ -38,6 +38,17 @@ def _check(p: dict) -> list[tuple[str, str]]:
                 "half the mean diameter)",
             )
         )
+    if p["shape"] == "ikura" and p["eye_gap"] > 0:
+        r_i = (p["diameter"] - 2 * p["diameter_sd"]) / 2  # the smallest egg a variant draws (±2 sd)
+        free = r_i * (1 - p["lipid_fraction"] ** (1 / 3))
+        if p["eye_gap"] >= free:
+            issues.append(
+                (
+                    "eye_gap",
+                    f"{p['eye_gap']:g} mm leaves the yolk no room to move up: allowed 0 ≤ eye_gap < {free:.3g} mm "
+                    "(the membrane's radius less the yolk's, on the smallest egg)",
+                )
+            )
     if p["shape"] in ("ikura", "file") and p["size"] is not None:
         issues.append(("size", f"size is not used by shape '{p['shape']}' (ikura: diameter; file: scale)"))
     return issues
@@ -104,6 +115,16 @@ def _cost(q: CostQuery) -> Cost:
             "ikura: lipid (yolk) fraction L; yolk radius r_o = r_i·∛L (G eq. 10, SPEC Reading)",
             range=(0.001, 0.95),
         ),
+        # the egg's oil (its yolk here, G eq. 10), lighter than the fluid, floats up against the membrane: what a
+        # photograph shows as each egg's pale eye (docs/look.md, "Ikura colour")
+        "eye_gap": Param(
+            float,
+            0.15,
+            "ikura: the yolk (oil droplet) sits off-centre, along the egg's own +z, its surface this far under the "
+            "membrane (the pale eye seen through the thin fluid over it); 0: concentric, as G eq. 10",
+            range=(0.0, 10.0),
+            units="mm",
+        ),
         "irregularity": Param(float, 0.25, "ice flake: outline radius variation (fraction)", range=(0.0, 0.6)),
         "curl": Param(
             float,
@@ -137,6 +158,7 @@ def base_mesh(
     diameter,
     diameter_sd,
     lipid_fraction,
+    eye_gap,
     irregularity,
     curl,
     shape_seed,
@@ -149,7 +171,8 @@ def base_mesh(
 
     Rice: a blunted, slightly bent ellipsoid; the variety (input) multiplies the length (SPEC §1.1), its
     expansion P is applied later by ``expand``. Ikura: parts 0 = outer membrane, 1 = yolk, both
-    outward shells; with ``diameter_sd`` each variant draws its diameter from a normal law clipped at ±2 sd
+    outward shells, the yolk ``eye_gap`` under the membrane along +z (the eye); with ``diameter_sd`` each variant
+    draws its diameter from a normal law clipped at ±2 sd
     (seeded: the same recipe and seed give the same eggs). Files are repaired (merge, drop degenerate faces,
     un-invert, recentre) or refused.
     """
@@ -166,7 +189,7 @@ def base_mesh(
     if shape == "ikura":
         if diameter_sd > 0:
             diameter += diameter_sd * max(-2.0, min(2.0, float(ctx.rng.standard_normal())))
-        vertices, faces, parts = grain_shapes.ikura_egg(diameter, lipid_fraction, subdivisions + 1)
+        vertices, faces, parts = grain_shapes.ikura_egg(diameter, lipid_fraction, subdivisions + 1, eye_gap)
         return Mesh(vertices, faces, parts=parts, name="ikura")
     if shape == "ice_flake":
         length, width, thickness = size or DEFAULT_SIZE["ice_flake"]

@@ -121,16 +121,19 @@ def rice_grain(
     return vertices - centroid, faces
 
 
-def ikura_egg(diameter: float, lipid_fraction: float, subdivisions: int = 3):
-    """Ikura egg: membrane sphere r_i and concentric yolk sphere r_o = r_i·∛L — SPEC §1 (G eq. 10, Reading).
+def ikura_egg(diameter: float, lipid_fraction: float, subdivisions: int = 3, eye_gap: float = 0.0):
+    """Ikura egg: membrane sphere r_i around a yolk sphere r_o = r_i·∛L — SPEC §1 (G eq. 10, Reading).
 
+    The yolk is the egg's oil, which floats up against the membrane: with ``eye_gap`` > 0 its centre moves along
+    +z until its surface is ``eye_gap`` under the membrane (the eye a photograph shows; 0: concentric, as G).
     Returns vertices, faces and per-face parts (0 = outer membrane, 1 = yolk). Both shells face
     outward, each the boundary of its own solid; the white is the space between them.
     """
     unit, unit_faces = icosphere(subdivisions)
     r_i = diameter / 2.0
     r_o = r_i * lipid_fraction ** (1.0 / 3.0)
-    vertices = np.concatenate([unit * r_i, unit * r_o])
+    lift = max(0.0, r_i - r_o - eye_gap) if eye_gap > 0 else 0.0
+    vertices = np.concatenate([unit * r_i, unit * r_o + np.array([0.0, 0.0, lift])])
     faces = np.concatenate([unit_faces, unit_faces + len(unit)])
     parts = np.repeat(np.array([0, 1], np.int32), len(unit_faces))
     return vertices, faces, parts

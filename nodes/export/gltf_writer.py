@@ -8,8 +8,12 @@ as transmission + volume (IOR; the colour light keeps through the element as the
 diffuse transmission (the CDRF's translucency at the material's median curvature) with sheen and clearcoat,
 shaved ice as diffuse transmission of its ``subsurface`` (syrup-soaked ice part transmission too, and a coat),
 the bowl's glaze as clearcoat.
-No ``COLOR_0``: the CDRF vertex colours hold lighting, which a viewer multiplying them into the base colour
-would light again; the CDRF's per-vertex σ travels as the custom attribute ``_CDRF_SIGMA`` (rad). Each material's
+The CDRF vertex colours are not written (they hold lighting, which a viewer multiplying them into the base colour
+would light again); the CDRF's per-vertex σ travels as the custom attribute ``_CDRF_SIGMA`` (rad). ``COLOR_0``
+carries only a skin's own transmittance per vertex where it varies (``ShadedScene.transmittance``: an egg's
+membrane, paler over its eye): the material's base colour is then the palest it reaches per channel
+(``vertex_tints``) and ``COLOR_0`` the share of it each vertex keeps, so that base colour × ``COLOR_0``, what glTF
+and Blender's importer make of it, is the vertex's transmittance. Each material's
 ``extras`` carry its whole principled look (``look.principled_attributes``), which Blender keeps as custom
 properties for the add-on in ``blender/nodegraph_import``.
 """
@@ -33,9 +37,10 @@ INSTANCING = "EXT_mesh_gpu_instancing"
 SHEEN_ROUGHNESS = 0.5  # a water film's soft rim (glTF's sheen roughness; Blender principled v1 has none)
 
 
-def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, set[str]]:
+def material_json(material: Material, translucency: float = 0.0, base=None) -> tuple[dict, set[str]]:
     """Principled parameters → glTF PBR plus the KHR extensions that carry the rest; ``translucency`` is the
-    material's diffuse-transmission weight (``subsurface × cdrf.translucency(σ)`` at its median σ)."""
+    material's diffuse-transmission weight (``subsurface × cdrf.translucency(σ)`` at its median σ); ``base``: the
+    base colour where its meshes carry their own per vertex (``vertex_tints``)."""
     ext: dict[str, dict] = {}
     thickness = float(np.mean(material.subsurface_radius))  # mm, the mesh's units
     volume = {
@@ -79,7 +84,7 @@ def material_json(material: Material, translucency: float = 0.0) -> tuple[dict, 
     out = {
         "name": material.name,
         "pbrMetallicRoughness": {
-            "baseColorFactor": [*exported_base_color(material), 1.0],
+            "baseColorFactor": [*(exported_base_color(material) if base is None else map(float, base)), 1.0],
             "metallicFactor": material.metallic,
             "roughnessFactor": material.roughness,
         },
@@ -116,6 +121,23 @@ def material_translucency(scene: ShadedScene) -> list[float]:
         median = float(np.median(np.concatenate(sigmas)))
         out.append(round(float(material.subsurface * translucency(median)), 4))
     return out
+
+
+def vertex_tints(scene: ShadedScene) -> dict[int, np.ndarray]:
+    """Material index → its base colour where its meshes carry their own transmittance per vertex: per channel the
+    largest any of its vertices keeps (the material's own for meshes without), so that ``COLOR_0`` = transmittance /
+    base colour stays within 0–1, as glTF requires."""
+    out: dict[int, np.ndarray] = {}
+    for k, index in enumerate(scene.material_of):
+        own = scene.vertex_transmittance(k)
+        if own is None:
+            continue
+        peak = np.max(own, axis=0).astype(np.float64)
+        out[int(index)] = np.maximum(out.get(int(index), peak), peak)
+    for k, index in enumerate(scene.material_of):
+        if int(index) in out and scene.vertex_transmittance(k) is None:
+            out[int(index)] = np.maximum(out[int(index)], exported_base_color(scene.materials[index]))
+    return {index: np.maximum(color, 1e-6) for index, color in out.items()}
 
 
 class _Buffer:
@@ -155,10 +177,17 @@ def unit_normals(normals: np.ndarray) -> np.ndarray:
 
 
 def _mesh_json(
-    buffer: _Buffer, scene: ShadedScene, k: int, positions: np.ndarray, bounds, normals: np.ndarray | None, name: str
+    buffer: _Buffer,
+    scene: ShadedScene,
+    k: int,
+    positions: np.ndarray,
+    bounds,
+    normals: np.ndarray | None,
+    name: str,
+    tints: dict[int, np.ndarray],
 ) -> dict:
     """glTF mesh k of the scene with the given float32 vertex positions (its own, or a prototype's centred ones)
-    and their (min, max), and float32 unit normals (None: none)."""
+    and their (min, max), and float32 unit normals (None: none); ``tints``: ``vertex_tints``."""
     mesh = scene.meshes[k]
     attributes = {"POSITION": buffer.add(positions, FLOAT, "VEC3", ARRAY_BUFFER, bounds=bounds)}
     if normals is not None:
@@ -166,6 +195,17 @@ def _mesh_json(
     if scene.cdrf_sigma:
         sigma = np.asarray(scene.cdrf_sigma[k], np.float32)
         attributes["_CDRF_SIGMA"] = buffer.add(sigma, FLOAT, "SCALAR", ARRAY_BUFFER)
+    base = tints.get(int(scene.material_of[k]))
+    if base is not None:
+        own = scene.vertex_transmittance(k)
+        own = (
+            np.tile(exported_base_color(scene.materials[scene.material_of[k]]), (len(mesh.vertices), 1))
+            if own is None
+            else own
+        )
+        attributes["COLOR_0"] = buffer.add(
+            np.clip(own / base, 0.0, 1.0).astype(np.float32), FLOAT, "VEC3", ARRAY_BUFFER
+        )
     indices = buffer.add(np.asarray(mesh.faces, np.uint32).reshape(-1), UINT, "SCALAR", ELEMENT_ARRAY_BUFFER)
     primitive = {"attributes": attributes, "indices": indices, "material": int(scene.material_of[k]), "mode": 4}
     return {"name": name, "primitives": [primitive]}
@@ -181,8 +221,11 @@ def glb_bytes(scene: ShadedScene, instancing: bool = True, groups=None, weights=
 
     buffer = _Buffer()
     materials, used = [], set()
-    for material, weight in zip(scene.materials, material_translucency(scene) if weights is None else weights):
-        entry, ext = material_json(material, weight)
+    tints = vertex_tints(scene)
+    for index, (material, weight) in enumerate(
+        zip(scene.materials, material_translucency(scene) if weights is None else weights)
+    ):
+        entry, ext = material_json(material, weight, tints.get(index))
         materials.append(entry)
         used |= ext
     out = written_meshes(scene, instancing, groups)
@@ -194,7 +237,7 @@ def glb_bytes(scene: ShadedScene, instancing: bool = True, groups=None, weights=
     meshes, nodes = [], []
     for k, points, low, high in zip(written, out.positions, out.lows, out.highs):
         name = scene.meshes[k].name or f"mesh_{k}"
-        meshes.append(_mesh_json(buffer, scene, k, points, (low, high), normals.get(k), name))
+        meshes.append(_mesh_json(buffer, scene, k, points, (low, high), normals.get(k), name, tints))
         group = groups.get(k)
         if group is None:
             nodes.append({"name": name, "mesh": len(meshes) - 1})

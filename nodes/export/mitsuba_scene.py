@@ -127,6 +127,7 @@ class Camera:
     margin: float  # share of the half-frame left free around the subject on its tightest side
     f_stop: float = 0.0  # the thin lens's f-number (full-frame equivalent, ``studio.aperture_radius``); 0: pinhole
     focus: float = 0.25  # the plane in focus: this quantile of the subject's depths (``studio.focus_distance``)
+    offset: tuple[float, float] = (0.0, 0.0)  # where the subject's centre sits, in half-frames right and up
 
 
 @dataclass(frozen=True)
@@ -259,7 +260,14 @@ def coat_share(material: Material) -> float:
     return float(np.clip(material.clearcoat, 0.0, COAT_SHARE_MAX))
 
 
+DISNEY_COAT = 0.25  # Mitsuba's principled coat lobe is Disney's: clearcoat × 0.25 × Schlick(F0 0.04) (principled.cpp)
+
+
 def _principled(material: Material) -> dict:
+    """Mitsuba's principled BSDF for a material's parameters. Its coat follows Disney (Burley 2012), whose lobe is
+    scaled by ``DISNEY_COAT``: a coat of weight 1 reflected a quarter of a glaze's Fresnel (F0 0.04 at IOR 1.5),
+    where Cycles' coat and glTF's KHR_materials_clearcoat reflect all of it. The weight passed is the material's
+    over ``DISNEY_COAT``, so a glaze reflects the studio as Fresnel says in both renderers (docs/look.md)."""
     return {
         "type": "principled",
         "base_color": _rgb(material.base_color),
@@ -267,7 +275,7 @@ def _principled(material: Material) -> dict:
         "metallic": float(material.metallic),
         "sheen": float(material.sheen),
         "sheen_tint": float(material.sheen_tint),
-        "clearcoat": float(material.clearcoat),
+        "clearcoat": float(material.clearcoat) / DISNEY_COAT,
         "clearcoat_gloss": float(1.0 - material.clearcoat_roughness),
         "spec_trans": float(material.transmission),
         "eta": float(material.ior),
@@ -287,7 +295,9 @@ def hull_vertices(points: np.ndarray) -> np.ndarray:
 def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """(origin, target): seen from the camera's elevation and azimuth, the subject's ``points`` centred in the frame
     and as large as leaves ``camera.margin`` of the half-frame free on its tightest side (``aspect`` = width /
-    height). Derived from the points, so the framing follows any change of the scene (a bigger bowl, a --set). Only
+    height), then, with ``camera.offset``, the camera moved parallel to the film so that the subject's centre sits
+    that many half-frames right and up (−1/3, 0: on the left third line); the fit leaves room for the move.
+    Derived from the points, so the framing follows any change of the scene (a bigger bowl, a --set). Only
     the convex hull's vertices matter (a projected coordinate x / depth is linear-fractional, so its extremes over
     the points are hull vertices): a subsample could miss the rim's outermost vertex and put it past the margin."""
     points = hull_vertices(np.asarray(points, np.float64))
@@ -296,14 +306,16 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
     right = np.cross(-view, [0.0, 0.0, 1.0])
     right = right / np.linalg.norm(right) if np.linalg.norm(right) > 1e-9 else np.array([1.0, 0.0, 0.0])
     up = np.cross(right, -view)
-    free = 1.0 - camera.margin
+    shift_x, shift_y = (float(c) for c in camera.offset)
     tan_x = np.tan(np.radians(camera.fov) / 2)
     tan_y = tan_x / aspect
+    free_x = max(1.0 - camera.margin - abs(shift_x), 1e-3)
+    free_y = max(1.0 - camera.margin - abs(shift_y), 1e-3)
     target = 0.5 * (points.min(axis=0) + points.max(axis=0))
     for _ in range(4):  # recentre on the projected extent, then fit again
         rel = points - target
         x, y, z = rel @ right, rel @ up, rel @ view
-        distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
+        distance = float(np.max(z + np.maximum(np.abs(x) / (free_x * tan_x), np.abs(y) / (free_y * tan_y))))
         distance = max(distance, float(z.max()) + 1e-6 * float(np.ptp(points, axis=0).max() + 1.0))
         depth = distance - z
         u, v = x / (depth * tan_x), y / (depth * tan_y)
@@ -311,14 +323,17 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
         target = target + distance * shift
     rel = points - target
     x, y, z = rel @ right, rel @ up, rel @ view
-    distance = float(np.max(z + np.maximum(np.abs(x) / (free * tan_x), np.abs(y) / (free * tan_y))))
+    distance = float(np.max(z + np.maximum(np.abs(x) / (free_x * tan_x), np.abs(y) / (free_y * tan_y))))
+    target = target - distance * (shift_x * tan_x * right + shift_y * tan_y * up)
     return target + distance * view, target
 
 
 def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
     """One PLY shape per material (written into ``folder``; key ``shape_<material index>``) and the scene's
     vertices (what the camera frames and focuses on); with ``subsurface``, the volumetric materials' shapes carry their
-    medium inside a dielectric boundary."""
+    medium inside a dielectric boundary. Where a mesh carries its own transmittance per vertex
+    (``ShadedScene.transmittance``: an egg's membrane, paler over its eye), its shape's skin reads each vertex's
+    (√ per crossing, as ``crossing_tint``; Mitsuba's ``vertex_color``)."""
     from ..shading.materials import is_ice
     from .mesh_files import stacked, write_ply
 
@@ -334,6 +349,16 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
             [m.normals if m.normals is not None else np.zeros((len(m.vertices), 3)) for m in meshes]
         )
         colors = np.tile(material.base_color, (len(vertices), 1))
+        own = [scene.vertex_transmittance(k) for k in members]
+        joined = material.transmission >= TRANSMISSIVE and any(t is not None for t in own)
+        if joined:  # each vertex's own skin colour
+            whole = crossing_tint(material) * material.transmission
+            colors = np.concatenate(
+                [
+                    np.tile(whole, (len(m.vertices), 1)) if t is None else np.sqrt(t) * material.transmission
+                    for t, m in zip(own, meshes)
+                ]
+            )
         volume = subsurface and is_volumetric(material)
         per_vertex = (
             not volume
@@ -348,12 +373,10 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
             trans = diffuse_transmission(material, sigma)
         path = folder / f"material_{index}.ply"
         write_ply(path, vertices, faces, normals, colors, trans)
-        shapes[f"shape_{index}"] = {
-            "type": "ply",
-            "filename": str(path),
-            "bsdf": boundary_bsdf(material) if volume else material_bsdf(material, per_vertex),
-            "face_normals": False,
-        }
+        bsdf = boundary_bsdf(material) if volume else material_bsdf(material, per_vertex)
+        if joined:
+            bsdf = {**bsdf, "specular_transmittance": {"type": "mesh_attribute", "name": "vertex_color"}}
+        shapes[f"shape_{index}"] = {"type": "ply", "filename": str(path), "bsdf": bsdf, "face_normals": False}
         if volume:
             shapes[f"shape_{index}"]["interior"] = medium(material)
         seen.append(vertices)
@@ -531,13 +554,15 @@ def scene_dict(
     max_depth: int | None = None,
     subsurface: bool = False,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> dict:
     """The Mitsuba scene description; PLY files are written into ``folder``. ``max_depth``: the longest path
     (default ``path_depth``: by the scene's materials); ``subsurface``: media inside the volumetric elements, traced
-    by ``volpath``; ``ambient``: radiance of the studio's uniform ambient."""
-    return _described(scene, folder, camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient)[
-        0
-    ]
+    by ``volpath``; ``ambient``: radiance of the studio's uniform ambient; ``setting``: what the subject stands on
+    (``studio.SETTINGS``: the seamless sweep, or a table of oak boards)."""
+    return _described(
+        scene, folder, camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient, setting
+    )[0]
 
 
 def _described(
@@ -552,6 +577,7 @@ def _described(
     max_depth: int | None,
     subsurface: bool,
     ambient: float,
+    setting: str = "sweep",
 ) -> tuple[dict, Stage]:
     """``scene_dict`` and the ``Stage`` it set up."""
     import mitsuba as mi
@@ -598,8 +624,10 @@ def _described(
             "sampling_weight": float(np.pi * max(ambient, 1e-6)),
         },
         **{name: studio.light_dict(light, set_up.target) for name, light in set_up.lights.items()},
-        "backdrop": studio.backdrop_dict(
-            folder / "backdrop.ply", set_up.target, set_up.radius, set_up.floor, set_up.view
+        "backdrop": (
+            studio.table_dict(folder, set_up.target, set_up.radius, set_up.floor, set_up.view)
+            if setting == "table"
+            else studio.backdrop_dict(folder / "backdrop.ply", set_up.target, set_up.radius, set_up.floor, set_up.view)
         ),
         **shapes,
     }
@@ -641,13 +669,29 @@ def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) ->
 
 
 def studio_description(
-    scene: ShadedScene, camera: Camera, width: int, height: int, light_direction, ambient: float = studio.AMBIENT
+    scene: ShadedScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    light_direction,
+    ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> dict:
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
     points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
     set_up = stage(points, camera, width / height, light_direction)
     vertices, faces, _ = studio.backdrop_mesh(set_up.target, set_up.radius, set_up.floor, set_up.view)
+    backdrop = {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)}
+    if setting == "table":  # the texture itself: ``studio.wood_png``, written beside the description by its reader
+        corners = studio.table_corners(set_up.target, set_up.radius, set_up.floor, set_up.view)
+        backdrop = {
+            "vertices": corners.tolist(),
+            "faces": [[0, 1, 2, 3]],
+            "uv": studio.table_uv(set_up.radius).tolist(),
+            "texture": "table.png",
+            "roughness": studio.TABLE_ROUGHNESS,
+        }
     key = set_up.lights["key"]
     key_distance = float(np.linalg.norm(key.center - set_up.target))
     return {
@@ -672,7 +716,7 @@ def studio_description(
             "radius": key_distance * float(np.tan(HIGHLIGHT_ANGLE)),
             "radiance": HIGHLIGHT_RADIANCE,
         },
-        "backdrop": {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)},
+        "backdrop": backdrop,
         "exposure": EXPOSURE,
         "knee": KNEE,
         "max_depth": MAX_DEPTH_MEDIA,
@@ -710,6 +754,7 @@ def render_layers(
     max_depth: int | None = None,
     subsurface: bool = False,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> Layers:
     """Path-traced linear colour with albedo and normal AOVs and the glints' pass; same inputs and seed ⇒ the same
     bits."""
@@ -720,7 +765,18 @@ def render_layers(
     mi.set_variant("scalar_rgb")
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
         description, set_up = _described(
-            scene, Path(folder), camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient
+            scene,
+            Path(folder),
+            camera,
+            width,
+            height,
+            spp,
+            light_direction,
+            crop,
+            max_depth,
+            subsurface,
+            ambient,
+            setting,
         )
         # optimize=False: Mitsuba's merging of identical objects made about one render in six differ from the
         # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
@@ -813,9 +869,10 @@ def render(
     subsurface: bool = False,
     max_depth: int | None = None,
     ambient: float = studio.AMBIENT,
+    setting: str = "sweep",
 ) -> np.ndarray:
-    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth`` and ``ambient`` as
-    ``scene_dict``."""
+    """Path-traced (and denoised) preview, 8-bit sRGB (height, width, 3); ``max_depth``, ``ambient`` and
+    ``setting`` as ``scene_dict``."""
     from .mesh_files import linear_to_srgb8
 
     layers = render_layers(
@@ -829,5 +886,6 @@ def render(
         max_depth=max_depth,
         subsurface=subsurface,
         ambient=ambient,
+        setting=setting,
     )
     return linear_to_srgb8(tone_map(layers.denoised() if denoised else layers.noisy()))

@@ -15,7 +15,7 @@ from nodegraph.values import Image
 
 from ..values import ShadedScene
 from .mitsuba_scene import load_renderer
-from .studio import AMBIENT
+from .studio import AMBIENT, SETTINGS
 
 
 def load_libraries() -> None:
@@ -80,6 +80,13 @@ def _cost(q: CostQuery) -> Cost:
             "scene's vertices as seen by the camera, so it follows any change of the scene)",
             range=(0.0, 0.9),
         ),
+        "offset": Param(
+            tuple[float, float],
+            (0.0, 0.0),
+            "framing: where the scene's centre sits, in half-frames right and up from the frame's centre (−0.33, 0: "
+            "on the left third line, as a photographer composes by the rule of thirds); the fit leaves it room",
+            range=(-0.8, 0.8),
+        ),
         "f_stop": Param(
             float,
             5.6,
@@ -100,6 +107,13 @@ def _cost(q: CostQuery) -> Cost:
             "radiance of the studio's uniform ambient (its walls): lights what the softboxes miss; the shade node's "
             "baked_ambient lights only the exported vertex colours",
             range=(0.0, 10.0),
+        ),
+        "setting": Param(
+            str,
+            "sweep",
+            "what the subject stands on: 'sweep', a seamless backdrop of warm paper (a packshot), or 'table', a table "
+            "top of oiled oak boards (studio.wood_texture) filling the frame behind the subject",
+            choices=SETTINGS,
         ),
         "sun_direction": Param(
             tuple[float, float, float],
@@ -122,20 +136,22 @@ def preview(
     azimuth,
     fov,
     margin,
+    offset,
     f_stop,
     focus,
     ambient,
+    setting,
     sun_direction,
 ):
-    """Mitsuba path tracing of the materials in a procedural studio (key, fill, rim, backdrop; ``studio``) through a
-    thin lens, denoised; the same scene and parameters give the same bytes."""
+    """Mitsuba path tracing of the materials in a procedural studio (key, fill, rim, a sweep or a table;
+    ``studio``) through a thin lens, denoised; the same scene and parameters give the same bytes."""
     import numpy as np
 
     from .mitsuba_scene import Camera, render
 
     if not np.linalg.norm(sun_direction) > 0:
         raise ValueError("sun_direction: a zero vector has no direction")
-    camera = Camera(elevation, azimuth, fov, margin, f_stop, focus)
+    camera = Camera(elevation, azimuth, fov, margin, f_stop, focus, tuple(offset))
     quiet_interrupt()
     return Image(
         render(
@@ -148,6 +164,7 @@ def preview(
             denoised=denoise,
             subsurface=subsurface,
             ambient=ambient,
+            setting=setting,
         )
     )
 

@@ -23,6 +23,7 @@ backlight), at an exposure that puts lit white rice near the tone curve's knee a
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -43,6 +44,27 @@ BACKDROP_BEHIND = 4.0  # subject radii from the subject's centre (away from the 
 BACKDROP_COVE = 4.0  # subject radii: the radius of the sweep's curve
 BACKDROP_EXTENT = 30.0  # subject radii: the sweep's half-width, its depth in front and its height
 FILM_WIDTH = 36.0  # mm, full-frame: the focal length that gives the preview's field of view
+SETTINGS = ("sweep", "table")  # what the subject stands on (the preview's ``setting``)
+# the table (``setting`` 'table'): oiled oak boards. Oak heartwood measures L* ≈ 55–70, a* ≈ 5–9, b* ≈ 18–25 in
+# CIELAB (Hălălișan et al. 2023, "Wood colour variations of Quercus species in Romania", Forests 14:230: seven oak
+# species, differing mostly in L* and b*), and a clear coat or oil darkens wood and deepens its latewood (Tashiro
+# and Nakamura, "Characterization of colors distributed on lumber surface by imaging spectroscopy", J. Soc. Mat.
+# Sci. Japan 62(4)): an oiled board here averages L* 50, a* 9, b* 24 = linear (0.29, 0.16, 0.077). Its latewood
+# bands are TABLE_LATEWOOD of that and its earlywood TABLE_EARLYWOOD: ΔL* ≈ 6 between them, within the spread one
+# species shows (the figure above), so the grain reads at arm's length and not as stripes; each board differs by
+# ± TABLE_BOARD_SPREAD in brightness. Oak's rings are 1–4 mm a year: each ring's width is drawn around TABLE_RING
+# with TABLE_RING_SPREAD (a log-normal share), so no two bands repeat
+TABLE_COLOR = (0.29, 0.16, 0.077)
+TABLE_LATEWOOD = 0.84
+TABLE_EARLYWOOD = 1.06
+TABLE_BOARD_SPREAD = 0.08
+TABLE_RING_SPREAD = 0.45
+TABLE_BOARD = 110.0  # mm: a board's width (oak table tops and floor boards: 90–140 mm)
+TABLE_RING = 2.5  # mm: the mean spacing of the growth rings seen on a flat-sawn face (oak: 1–4 mm a year)
+TABLE_TILE = 440.0  # mm: the texture's side (4 boards), repeated over the table
+TABLE_PIXELS = 2048  # the texture's side: 0.21 mm a pixel
+TABLE_EXTENT = 30.0  # subject radii: the table top's half-side (it fills the frame behind the subject)
+TABLE_ROUGHNESS = 0.45  # an oiled, not varnished, face: a broad sheen, no mirror
 
 
 @dataclass(frozen=True)
@@ -191,3 +213,110 @@ def focus_distance(points: np.ndarray, origin: np.ndarray, target: np.ndarray, f
     subject's depths (0 its nearest point, 1 its farthest)."""
     forward = (target - origin) / np.linalg.norm(target - origin)
     return float(np.quantile((np.asarray(points) - origin) @ forward, focus))
+
+
+@functools.cache
+@functools.cache
+def wood_texture(pixels: int = TABLE_PIXELS) -> np.ndarray:
+    """The table's boards as a (pixels, pixels, 3) float32 linear-RGB tile of ``TABLE_TILE`` mm, repeating on both
+    axes: ``TABLE_TILE / TABLE_BOARD`` boards side by side along x (a thin dark joint between), each a flat-sawn
+    face whose growth rings run along y, wavering, each ring its own width (``TABLE_RING``, ``TABLE_RING_SPREAD``),
+    latewood a little darker than earlywood (``TABLE_LATEWOOD``, ``TABLE_EARLYWOOD``), with the fine open pores of
+    oak as short dark streaks along the grain. Fixed (its own seed): the same table for every scene, made once a
+    process (read-only)."""
+    rng = np.random.default_rng(20261206)
+    boards = max(1, int(round(TABLE_TILE / TABLE_BOARD)))
+    mm = TABLE_TILE / pixels
+    x = (np.arange(pixels) + 0.5) * mm
+    y = x.copy()
+    width = TABLE_TILE / boards
+    board = np.minimum((x // width).astype(np.int64), boards - 1)
+    across = x - board * width  # mm from the board's left edge
+    out = np.empty((pixels, pixels, 3), np.float32)
+    periods = np.arange(1, 6)  # the waver repeats with the tile: whole periods along y
+    for b in range(boards):
+        columns = board == b
+        u = across[columns][None, :]
+        centre = rng.uniform(-0.6, 1.6) * width  # the pith, off the face: the rings cross it as arcs
+        depth = rng.uniform(20.0, 60.0)  # mm from the face to the pith
+        phase = rng.uniform(0, 2 * np.pi, len(periods))
+        amplitude = rng.uniform(0.5, 2.0, len(periods)) / periods
+        waver = (amplitude[:, None] * np.sin(2 * np.pi * periods[:, None] * y / TABLE_TILE + phase[:, None])).sum(0)
+        radius = np.sqrt((u - centre - waver[:, None]) ** 2 + depth**2)
+        # the rings' outer radii: each its own width, so a radius's place in its ring is found by interpolation
+        widths = TABLE_RING * rng.lognormal(-0.5 * TABLE_RING_SPREAD**2, TABLE_RING_SPREAD, 400)
+        edges = np.concatenate([[0.0], np.cumsum(widths)])
+        place = np.interp(radius, edges, np.arange(len(edges)))  # ring number + the share of the ring crossed
+        within = place - np.floor(place)
+        late = np.clip((within - 0.7) / 0.3, 0.0, 1.0) ** 1.5  # latewood: the ring's outer 30 %, darkening outwards
+        shade = TABLE_EARLYWOOD + (TABLE_LATEWOOD - TABLE_EARLYWOOD) * late
+        shade = shade * (1.0 + TABLE_BOARD_SPREAD * rng.uniform(-1, 1))
+        # oak's open pores: short dark streaks along the grain, 2–12 mm long, scattered across the face
+        n_cols = int(columns.sum())
+        pores = np.ones((pixels, n_cols), np.float32)
+        count = int(n_cols * pixels * mm * mm / 6.0)  # about one a 6 mm²
+        cx = rng.integers(0, n_cols, count)
+        cy = rng.integers(0, pixels, count)
+        length = (rng.uniform(2.0, 12.0, count) / mm).astype(np.int64)
+        depth_of = rng.uniform(0.80, 0.93, count).astype(np.float32)
+        for k in range(count):
+            rows = np.arange(cy[k], cy[k] + length[k]) % pixels
+            pores[rows, cx[k]] = np.minimum(pores[rows, cx[k]], depth_of[k])
+        out[:, columns] = (shade * pores)[..., None] * np.asarray(TABLE_COLOR, np.float32)
+    seam = np.minimum(across, width - across) < 0.4  # the joint between boards, 0.8 mm, in shadow
+    out[:, seam] *= 0.45
+    out = np.clip(out, 0.0, 1.0)
+    out.flags.writeable = False
+    return out
+
+
+def wood_png(path: Path) -> Path:
+    """``wood_texture`` written as an 8-bit sRGB PNG at ``path`` (for Mitsuba's and Blender's image textures)."""
+    from PIL import Image as PILImage
+
+    from .mesh_files import linear_to_srgb8
+
+    PILImage.fromarray(linear_to_srgb8(wood_texture())).save(path)
+    return path
+
+
+def table_corners(target: np.ndarray, radius: float, floor: float, view: np.ndarray) -> np.ndarray:
+    """The table top's four corners (counter-clockwise seen from above), ``TABLE_EXTENT`` radii from the subject's
+    centre at height ``floor``, its boards running away from the camera (their texture's y along the view)."""
+    front = camera_side(view)
+    across = np.array([-front[1], front[0], 0.0])
+    half = TABLE_EXTENT * radius
+    centre = np.array([target[0], target[1], floor])
+    signs = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+    return np.array([centre + half * (a * across + b * front) for a, b in signs])
+
+
+def table_uv(radius: float) -> np.ndarray:
+    """Texture coordinates of ``table_corners``: the tile repeats every ``TABLE_TILE`` mm."""
+    repeats = 2 * TABLE_EXTENT * radius / TABLE_TILE
+    return np.array([[0.0, 0.0], [repeats, 0.0], [repeats, repeats], [0.0, repeats]])
+
+
+def table_dict(folder: Path, target: np.ndarray, radius: float, floor: float, view: np.ndarray) -> dict:
+    """The table top: a Mitsuba rectangle under the subject with the boards' texture (``wood_png``, written into
+    ``folder``), oiled (``TABLE_ROUGHNESS``)."""
+    import mitsuba as mi
+
+    corners = table_corners(target, radius, floor, view)
+    centre = corners.mean(axis=0)
+    x_axis = (corners[1] - corners[0]) / 2  # the rectangle's local x: across the view
+    y_axis = (corners[3] - corners[0]) / 2  # its local y: away from the camera
+    frame = np.eye(4)
+    frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = x_axis, y_axis, [0.0, 0.0, 1.0], centre
+    repeats = float(table_uv(radius)[2, 0])
+    texture = {
+        "type": "bitmap",
+        "filename": str(wood_png(folder / "table.png")),
+        "wrap_mode": "repeat",
+        "to_uv": mi.ScalarTransform4f().scale([repeats, repeats, 1.0]),
+    }
+    return {
+        "type": "rectangle",
+        "to_world": mi.ScalarTransform4f(frame.tolist()),
+        "bsdf": {"type": "principled", "base_color": texture, "roughness": TABLE_ROUGHNESS, "specular": 0.5},
+    }

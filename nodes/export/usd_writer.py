@@ -1,7 +1,8 @@
 """A shaded scene as USD (usd-core): UsdGeom meshes, UsdPreviewSurface and MaterialX materials — SPEC §4 output.
 
 Z-up, millimetres (``metersPerUnit`` 0.001). Per-vertex CDRF colours go to ``primvars:displayColor`` (the
-fallback colour of viewers without materials) and the CDRF's per-vertex σ to ``primvars:cdrf_sigma``;
+fallback colour of viewers without materials), the CDRF's per-vertex σ to ``primvars:cdrf_sigma`` and a skin's own
+per-vertex transmittance, where it has one (an egg's membrane, paler over its eye), to ``primvars:transmittance``;
 each material's principled parameters map onto UsdPreviewSurface. Transmission has no input there: a
 transmissive material (egg, syrup-soaked ice) gets ``opacity`` = 1 − transmission with its ``ior``, which the
 UsdPreviewSurface specification reads as a translucent surface that still reflects (clear glass at 0), and which
@@ -251,6 +252,9 @@ def _mesh_prim(layer, path: str, scene: ShadedScene, k: int, points: np.ndarray,
         _primvar(
             prim, "cdrf_sigma", types.FloatArray, Vt.FloatArray.FromNumpy(np.asarray(scene.cdrf_sigma[k], np.float32))
         )
+    own = scene.vertex_transmittance(k)
+    if own is not None:
+        _primvar(prim, "transmittance", types.Float3Array, Vt.Vec3fArray.FromNumpy(np.asarray(own, np.float32)))
     prim.SetInfo("apiSchemas", Sdf.TokenListOp.Create(prependedItems=["MaterialBindingAPI"]))
     binding = Sdf.RelationshipSpec(prim, "material:binding", False, Sdf.VariabilityUniform)
     binding.targetPathList.explicitItems = [looks[scene.material_of[k]]]

@@ -91,6 +91,17 @@ def rice_material(water: float, name: str = "rice") -> Material:
     )
 
 
+EGG_TINTS = 12  # membrane tints the eggs of a scene are drawn from (the shade node's ``egg_tints``)
+# the spread of the eggs' colour (``ikura_tints``): salmon roe is graded "light orange, orange, reddish-orange, red ...
+# shiny, slightly transparent" (caviar quality assessment checklist, table 6-1, markys.com/beluga/tab6-1.htm): the green
+# absorbance of the fluid scaled over EGG_HUE_SPREAD moves the hue of light through an egg from CIELAB h 59° (orange)
+# to 42° (red-orange); its pigment (astaxanthin) concentration over EGG_PIGMENT_SPREAD makes an egg lighter and
+# more translucent or deeper: L* 53–65 (docs/look.md, "Ikura colour")
+EGG_HUE_SPREAD = (0.70, 1.30)
+EGG_PIGMENT_SPREAD = (0.80, 1.25)
+EGG_FLUID = (0.85, 0.10, 0.012)  # light through the whole egg (two crossings of the fluid): the palette's centre
+
+
 def ikura_materials() -> tuple[Material, Material]:
     """(membrane, yolk): a clear dielectric skin (IOR 1.36) holding a deep orange-red fluid, around an oil yolk.
 
@@ -103,15 +114,17 @@ def ikura_materials() -> tuple[Material, Material]:
     light through an egg keeps its red, a little of its green and almost no blue. No measured spectrum of ikura is
     at hand: the fluid's colour is chosen to read as ikura's deep orange-red, linear (0.80, 0.07, 0.01) = sRGB
     (231, 75, 25), CIELAB hue 45° and chroma 83 (it was (0.90, 0.20, 0.02) = sRGB (243, 124, 39), hue 57° and
-    chroma 75: amber), and light through the whole egg (two crossings of the fluid) keeps (0.85, 0.10, 0.012);
-    the yolk's oil is orange.
+    chroma 75: amber), and light through the whole egg (two crossings of the fluid) keeps ``EGG_FLUID``
+    (0.85, 0.10, 0.012); the yolk's oil is orange, the colour of honey at the egg's centre that graders look for
+    (Alaska Seafood Marketing Institute: "a center the color and consistency of honey"). Each egg of a scene
+    takes one of ``ikura_tints`` of this membrane.
     """
     membrane = Material(
         name="ikura_membrane",
         base_color=(0.80, 0.07, 0.01),
         subsurface=0.0,
         subsurface_radius=(4.0, 1.2, 0.5),
-        subsurface_color=(0.85, 0.10, 0.012),
+        subsurface_color=EGG_FLUID,
         specular=0.5,
         roughness=0.2,
         clearcoat=1.0,
@@ -133,6 +146,39 @@ def ikura_materials() -> tuple[Material, Material]:
         transmission_roughness=0.3,
     )
     return membrane, yolk
+
+
+def _absorbed(color, hue: float, pigment: float) -> tuple[float, float, float]:
+    """``color`` (a transmittance) with its absorbance scaled by ``pigment`` in every channel and by ``hue`` more
+    in green (Beer–Lambert: more astaxanthin absorbs more; less green absorbed is more orange)."""
+    absorbance = -np.log(np.clip(np.asarray(color, np.float64), 1e-6, 1.0)) * pigment * np.array([1.0, hue, 1.0])
+    return tuple(float(c) for c in np.exp(-absorbance))
+
+
+def ikura_tints(count: int) -> tuple[Material, ...]:
+    """``count`` membranes (``ikura_materials``' first) from orange to red-orange, lighter to deeper: tint k has
+    the green absorbance ``EGG_HUE_SPREAD`` at (k + ½)/count and the pigment ``EGG_PIGMENT_SPREAD`` at the golden
+    ratio's k-th step (a low-discrepancy pair: every hue with its own depth). Named ``ikura_membrane_<k>``; one
+    tint is the membrane itself, named ``ikura_membrane``."""
+    import dataclasses
+
+    membrane = ikura_materials()[0]
+    if count == 1:
+        return (membrane,)
+    golden = (np.sqrt(5.0) - 1.0) / 2.0
+    tints = []
+    for k in range(count):
+        hue = float(np.interp((k + 0.5) / count, [0.0, 1.0], EGG_HUE_SPREAD))
+        pigment = float(np.interp((0.5 + k * golden) % 1.0, [0.0, 1.0], EGG_PIGMENT_SPREAD))
+        tints.append(
+            dataclasses.replace(
+                membrane,
+                name=f"ikura_membrane_{k:02d}",
+                base_color=_absorbed(membrane.base_color, hue, pigment),
+                subsurface_color=_absorbed(membrane.subsurface_color, hue, pigment),
+            )
+        )
+    return tuple(tints)
 
 
 def ice_materials(syrup_color) -> tuple[Material, Material]:

@@ -35,15 +35,17 @@ class ShadeSettings:
     syrup_levels: int
     syrup_runs: int
     syrup_run_length: float
-    seed: int  # draws the syrup's runs (``materials.syrup_runs``)
+    seed: int  # draws the syrup's runs (``materials.syrup_runs``) and each egg's tint (``egg_tints``)
     scenery_color: tuple[float, float, float]
     table: CdrfTable
+    egg_tints: int = mat.EGG_TINTS  # membrane tints the eggs are drawn from (``materials.ikura_tints``)
 
 
 @dataclass
 class _Piece:
     mesh: Mesh  # world-space mesh of one element part (or one scenery mesh)
     material: Material
+    transmittance: np.ndarray | None = None  # per vertex, where it varies over the skin (``eye_transmittance``)
 
 
 def _materials(settings: ShadeSettings) -> dict[str, tuple[Material, ...]]:
@@ -53,6 +55,7 @@ def _materials(settings: ShadeSettings) -> dict[str, tuple[Material, ...]]:
         "rice": (settings.rice,),
         "chestnut": (mat.chestnut_material(),),
         "ikura": mat.ikura_materials(),
+        "ikura_tints": mat.ikura_tints(settings.egg_tints),
         "salmon": mat.fish_materials("salmon"),
         "tuna": mat.fish_materials("tuna"),
         "ice": mat.syrup_grades(ice, syrup, settings.syrup_levels),
@@ -80,6 +83,10 @@ def _element_pieces(
         rng = np.random.default_rng(settings.seed)
         limits = mat.syrup_runs(tops, settings.syrup_depth, settings.syrup_runs, settings.syrup_run_length, cell, rng)
         grade[is_ice] = mat.syrup_levels(depths, limits, settings.syrup_levels)
+    is_egg = np.array([presets[k] == "ikura" for k in p.kinds], bool)
+    tint = np.zeros(len(p), np.int64)
+    if is_egg.any():
+        tint[is_egg] = egg_tints(p.positions[is_egg], len(materials["ikura_tints"]), settings.seed)
     rice = [k for k in np.unique(p.kinds) if presets[k] == "rice"]
     if settings.rice is None and rice:
         kind = kinds[rice[0]]
@@ -103,9 +110,15 @@ def _element_pieces(
             key = (int(p.kinds[i]), int(p.variants[i]) % len(aggregate.libraries[p.kinds[i]]))
             if key not in splits:
                 splits[key] = _parts(mesh, names, f"element {i} ({kind})", preset)
+            by_part = {part: mesh.vertices[used] for part, used, _ in splits[key]}
             for part, used, faces in splits[key]:
+                material, tint_of = materials[preset][part], None
+                if preset == "ikura" and part == 0:  # the membrane: the egg's own tint, paler over its eye
+                    material = materials["ikura_tints"][tint[i]]
+                    if 1 in by_part:
+                        tint_of = eye_transmittance(by_part[0], by_part[1], material.subsurface_color)
                 pieces.append(
-                    _Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{names[part]}"), materials[preset][part])
+                    _Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{names[part]}"), material, tint_of)
                 )
     return pieces
 
@@ -114,6 +127,47 @@ def _element_shapes(aggregate: Aggregate) -> list[Mesh]:
     """Each element's world mesh without normals: the scene's normals come from ``normals_and_curvature``."""
     shapes = aggregate.without_normals()
     return [shapes.element_mesh(i) for i in range(len(aggregate.placement))]
+
+
+EGG_NEIGHBOURS = 1.3  # eggs nearer than this many median egg spacings are neighbours (``egg_tints``)
+
+
+def egg_tints(centres: np.ndarray, count: int, seed: int) -> np.ndarray:
+    """Each egg's membrane tint (0 … ``count`` − 1), drawn from ``seed`` so that no two touching eggs share one
+    where ``count`` allows: the eggs in a random order (seeded), each drawing among the tints its neighbours
+    (centres nearer than ``EGG_NEIGHBOURS`` median nearest-neighbour spacings) do not have yet."""
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng([seed, 48])  # its own stream: the syrup's runs draw from the seed alone
+    n = len(centres)
+    out = np.full(n, -1, np.int64)
+    if count <= 1 or n == 0:
+        return np.zeros(n, np.int64)
+    tree = cKDTree(centres)
+    spacing = float(np.median(tree.query(centres, k=2)[0][:, 1])) if n > 1 else 1.0
+    neighbours = tree.query_ball_point(centres, EGG_NEIGHBOURS * spacing)
+    for i in rng.permutation(n):
+        taken = {int(out[j]) for j in neighbours[i] if out[j] >= 0}
+        free = [t for t in range(count) if t not in taken] or list(range(count))
+        out[i] = free[int(rng.integers(len(free)))]
+    return out
+
+
+def eye_transmittance(skin: np.ndarray, droplet: np.ndarray, color) -> np.ndarray:
+    """Per vertex of an egg's membrane (``skin``, around the oil droplet's vertices ``droplet``): the colour light
+    keeps through the egg there, in and out: ``color`` (the whole egg's) to the power of the fluid's depth under that
+    vertex, its distance to the droplet's surface, as a share of that depth with the droplet at the egg's centre
+    (Beer–Lambert over the fluid; 1 at most). The droplet floats ``base_mesh.eye_gap`` under the skin (G eq. 10's
+    yolk, lighter than the fluid), so the skin over it is paler, most at the eye's centre and fading to the egg's
+    colour about a droplet's radius away: the eye is the droplet seen through a thinning fluid, a soft paler patch,
+    with no edge of its own. A concentric droplet leaves the egg its colour everywhere."""
+    skin, droplet = np.asarray(skin, np.float64), np.asarray(droplet, np.float64)
+    centre, middle = skin.mean(axis=0), droplet.mean(axis=0)
+    radius = float(np.linalg.norm(skin - centre, axis=1).mean())
+    r_o = float(np.linalg.norm(droplet - middle, axis=1).mean())
+    depth = np.linalg.norm(skin - middle, axis=1) - r_o
+    share = np.clip(depth / max(radius - r_o, 1e-9), 0.0, 1.0)
+    return np.clip(np.asarray(color, np.float64), 0.0, 1.0)[None, :] ** share[:, None]
 
 
 def _parts(mesh: Mesh, names: tuple[str, ...], what: str, preset: str) -> list[tuple[int, np.ndarray, np.ndarray]]:
@@ -183,4 +237,9 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
             )
         )
     sigmas = tuple(sigma[starts[k] : starts[k + 1]] for k in range(len(pieces)))
-    return ShadedScene(tuple(meshes), tuple(materials), np.array(material_of, np.int32), cdrf_sigma=sigmas)
+    tints = ()
+    if any(piece.transmittance is not None for piece in pieces):
+        tints = tuple(np.zeros((0, 3)) if p.transmittance is None else p.transmittance for p in pieces)
+    return ShadedScene(
+        tuple(meshes), tuple(materials), np.array(material_of, np.int32), cdrf_sigma=sigmas, transmittance=tints
+    )

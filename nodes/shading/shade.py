@@ -11,6 +11,7 @@ from nodegraph.params import Param
 from nodegraph.values import Mesh
 
 from ..values import Aggregate, CookedMaterial, ShadedScene
+from .materials import EGG_TINTS
 
 RGB = tuple[float, float, float]
 
@@ -110,6 +111,13 @@ def _check(params):
             range=(0.0, 1e4),
             units="mm",
         ),
+        "egg_tints": Param(
+            int,
+            EGG_TINTS,
+            "ikura: membrane tints (orange to red-orange, lighter to deeper; shading.materials.ikura_tints) each egg "
+            "draws one of, seeded, no two touching eggs alike; 1: every egg alike",
+            range=(1, 64),
+        ),
         "scenery_color": Param(RGB, (0.05, 0.07, 0.16), "glaze colour of scenery meshes (the bowl)", range=(0.0, 1.0)),
         "table_size": Param(
             tuple[int, int],
@@ -138,6 +146,7 @@ def shade(
     syrup_levels,
     syrup_runs,
     syrup_run_length,
+    egg_tints,
     scenery_color,
     table_size,
 ):
@@ -166,5 +175,6 @@ def shade(
         seed=ctx.seed,
         scenery_color=tuple(scenery_color),
         table=CdrfTable.build(*table_size),
+        egg_tints=egg_tints,
     )
     return shade_scene(list(aggregates), list(scenery or []), settings)

@@ -94,6 +94,10 @@ def _quarter_ellipse(a: float, b: float, z_from: float, z_to: float, n: int) -> 
     return np.stack([r, z], axis=1)
 
 
+FOOT_HEIGHT = 0.1  # the foot ring's height, a share of the bowl's (8.5 mm on the 85 mm donburi: a 63 mm ring)
+FOOT_WIDTH = 0.06  # the ring's width, a share of the bowl's height (5 mm)
+
+
 def bowl(
     radius: float, depth: float, wall: float, fill: float, mound: float, segments: int = 96, rings: int = 32
 ) -> tuple[trimesh.Trimesh, trimesh.Trimesh]:
@@ -101,7 +105,9 @@ def bowl(
 
     The cavity is the lower half of an ellipsoid (rim radius ``radius``, depth ``depth``, rim at
     z = 0); the region is the cavity filled to ``fill``·depth from the bottom plus a half-ellipsoid
-    mound of height ``mound`` over the fill plane. The container wall has thickness ``wall``.
+    mound of height ``mound`` over the fill plane. The container wall has thickness ``wall``; the bowl stands on a
+    foot ring (kōdai) ``FOOT_HEIGHT`` of its height tall and ``FOOT_WIDTH`` of it wide, its underside inside the
+    ring raised half the wall, as a thrown and turned bowl's is; the ring's outer radius is the outer wall's there.
     """
     fill_z = -depth + fill * depth
     fill_r = radius * np.sqrt(max(1.0 - (fill_z / depth) ** 2, 0.0))
@@ -113,8 +119,13 @@ def bowl(
     region = _revolve(region_profile, segments)
 
     inner = _quarter_ellipse(radius, depth, 0.0, -depth, rings)
-    outer = _quarter_ellipse(radius + wall, depth + wall, -(depth + wall), 0.0, rings)
-    wall_profile = _dedupe(np.vstack([outer, inner]))
+    bottom = -(depth + wall)
+    outer = _quarter_ellipse(radius + wall, depth + wall, bottom + FOOT_HEIGHT * (depth + wall), 0.0, rings)
+    foot_r = float(outer[0, 0])  # the foot ring's outer radius: where the outer wall meets its top
+    ring_in = foot_r - min(FOOT_WIDTH * (depth + wall), 0.5 * foot_r)
+    recess = 0.5 * wall  # the underside inside the ring, raised half the wall: the bowl stands on its ring
+    foot = np.array([[0.0, bottom + recess], [ring_in, bottom + recess], [ring_in, bottom], [foot_r, bottom]])
+    wall_profile = _dedupe(np.vstack([foot, outer, inner]))
     container = _revolve(wall_profile, segments)
     return region, container
 

@@ -51,9 +51,16 @@ SURFACES = ("cavity", "outer")
         "inset": Param(
             float, 0.0, "rim radius pulled in by this much (keeps elements off the rim)", range=(0.0, 1e4), units="mm"
         ),
+        "inset_share": Param(
+            float,
+            0.0,
+            "rim radius pulled in further by this share of the vessel's own (a heap in the middle that keeps its "
+            "proportion in a bigger or smaller bowl: the rice showing round a donburi's ikura)",
+            range=(0.0, 0.95),
+        ),
     },
 )
-def vessel_region(ctx, vessel, *, surface, fill, lower, mound, inset):
+def vessel_region(ctx, vessel, *, surface, fill, lower, mound, inset, inset_share):
     """A region derived from a bowl (fill plane, mound, rim and wall as offsets of it), so it follows the bowl
     (``solids.bowl``)."""
     from . import solids
@@ -61,9 +68,12 @@ def vessel_region(ctx, vessel, *, surface, fill, lower, mound, inset):
     if vessel.kind != "bowl":
         raise ValueError(f"vessel: a region is derived from a bowl, got a shape of kind '{vessel.kind}'")
     grow = vessel.wall if surface == "outer" else 0.0
-    radius, depth = vessel.radius + grow - inset, vessel.depth + grow
+    radius, depth = vessel.radius + grow - inset - inset_share * vessel.radius, vessel.depth + grow
     if radius <= 0:
-        raise ValueError(f"inset: {inset} mm leaves no rim (the {surface}'s rim radius is {vessel.radius + grow} mm)")
+        raise ValueError(
+            f"inset: {inset} mm and inset_share {inset_share:g} leave no rim (the {surface}'s rim radius is "
+            f"{vessel.radius + grow} mm)"
+        )
     fill_z = -vessel.depth + (vessel.fill if fill is None else fill) * vessel.depth - lower  # below the rim
     share = (fill_z + depth) / depth
     if not 0.0 < share <= 1.0:

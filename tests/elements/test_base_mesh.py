@@ -47,7 +47,7 @@ def test_the_variety_is_an_input_a_recipe_states_once():
 
 
 def test_ikura_parts_and_yolk_radius():
-    mesh = base_mesh.call(shape="ikura", diameter=4.0, lipid_fraction=0.145)
+    mesh = base_mesh.call(shape="ikura", diameter=4.0, lipid_fraction=0.145, eye_gap=0.0)
     assert set(np.unique(mesh.parts)) == {0, 1}
     outer = mesh.vertices[np.unique(mesh.faces[mesh.parts == 0])]
     yolk = mesh.vertices[np.unique(mesh.faces[mesh.parts == 1])]
@@ -59,6 +59,19 @@ def test_ikura_parts_and_yolk_radius():
         shell = as_trimesh(type(mesh)(mesh.vertices, mesh.faces[mesh.parts == part]))
         shell.remove_unreferenced_vertices()
         assert shell.is_watertight and shell.volume > 0
+
+
+def test_the_ikura_yolk_floats_up_under_the_membrane_as_its_eye():
+    """The oil droplet sits off-centre along +z, its top ``eye_gap`` under the membrane; too large a gap is refused
+    with what is allowed."""
+    mesh = base_mesh.call(shape="ikura", diameter=6.5, lipid_fraction=0.145, eye_gap=0.15)
+    yolk = mesh.vertices[np.unique(mesh.faces[mesh.parts == 1])]
+    centre = yolk.mean(axis=0)
+    assert np.allclose(centre[:2], 0.0, atol=1e-9) and centre[2] > 1.0
+    assert 3.25 - yolk[:, 2].max() == pytest.approx(0.15, abs=1e-9)  # the droplet's top under the skin
+    assert np.linalg.norm(yolk - centre, axis=1).max() == pytest.approx(3.25 * 0.145 ** (1 / 3))
+    problems = base_mesh.check(base_mesh.resolve_params({"shape": "ikura", "eye_gap": 2.0}))
+    assert [name for name, _ in problems] == ["eye_gap"] and "allowed 0 ≤ eye_gap <" in problems[0][1]
 
 
 def test_ice_flake_is_thin_irregular_and_depends_on_shape_seed():

@@ -39,6 +39,16 @@ def import_file(path: Path) -> float:
     return time.perf_counter() - start
 
 
+def base_factor(bsdf):
+    """The base colour, or where the importer multiplies a vertex colour into it (glTF ``COLOR_0``), its factor:
+    the 'Color Factor' mix node's second colour."""
+    socket = bsdf.inputs["Base Color"]
+    if not socket.is_linked:
+        return socket.default_value
+    node = socket.links[0].from_node
+    return node.inputs[7].default_value if node.type == "MIX" else socket.default_value
+
+
 def material_report(material) -> dict:
     bsdf = (
         next((n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None) if material.use_nodes else None
@@ -55,7 +65,8 @@ def material_report(material) -> dict:
         "subsurface_radius": list(value("Subsurface Radius")),
         "subsurface_scale": value("Subsurface Scale"),
         "volume": output.inputs["Volume"].is_linked,
-        "base_color": list(value("Base Color"))[:3],
+        "base_color": list(base_factor(bsdf))[:3],
+        "vertex_color": any(n.type == "VERTEX_COLOR" for n in material.node_tree.nodes),
         "scatters": any(n.type == "VOLUME_SCATTER" for n in material.node_tree.nodes),
         "specular_level": value("Specular IOR Level"),
         "coat_ior": value("Coat IOR"),

@@ -75,7 +75,9 @@ def test_blender_sees_the_whole_look(dish, tmp_path, fmt):
     exported = [m for m in dish.meshes if len(m.faces)]
     assert got["meshes"] == len(exported)
     assert got["vertices"] == sum(len(m.vertices) for m in exported)
-    assert got["mesh_data"] == 5  # instanced: a grain, a membrane, a yolk, an ice flake, the bowl
+    skins = {dish.materials[k].name for k in dish.material_of if dish.materials[k].name.startswith("ikura_")}
+    skins.discard("ikura_yolk")  # each egg's tint: its membrane, one mesh (its eye in its COLOR_0)
+    assert got["mesh_data"] == 4 + len(skins)  # instanced: a grain, a yolk, an ice flake, the bowl, and the skins
     materials = got["materials"]
     assert set(materials) == {m.name for m in dish.materials}  # clean names, no m0000N_ prefix
     for material in dish.materials:
@@ -91,8 +93,16 @@ def test_blender_sees_the_whole_look(dish, tmp_path, fmt):
             assert seen["transmission"] == pytest.approx(material.transmission, abs=1e-6)
             assert seen["ior"] == pytest.approx(material.ior, abs=1e-6)
             assert seen["alpha"] == 1.0 and not seen["scatters"]
-            # Cycles tints each crossing by √base colour: in and out keep the colour, as the preview's skin does
-            assert seen["base_color"] == pytest.approx(material.subsurface_color, abs=1e-6)
+            # Cycles tints each crossing by √base colour: in and out keep the colour, as the preview's skin does; the
+            # .glb's membranes carry it per vertex (their eye): base colour × COLOR_0, the base the palest it reaches
+            index = [m.name for m in dish.materials].index(material.name)
+            own = [dish.vertex_transmittance(k) for k in np.flatnonzero(dish.material_of == index)]
+            if fmt == "glb" and any(t is not None for t in own):
+                assert seen["vertex_color"]
+                peak = np.concatenate([t for t in own if t is not None]).max(axis=0)
+                assert seen["base_color"] == pytest.approx(peak, abs=1e-5)
+            else:
+                assert seen["base_color"] == pytest.approx(material.subsurface_color, abs=1e-6)
             # one reflecting skin, as the preview's one dielectric: Cycles' transmission lobe reflects by Fresnel at
             # the IOR whatever the Specular IOR Level, so no coat over it (with one, the eggs reflected twice)
             assert seen["coat_weight"] == 0.0

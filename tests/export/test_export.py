@@ -43,18 +43,28 @@ def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
         for n in doc["nodes"][1:]
     ]
     assert sum(drawn) == len(shaded.meshes) and len(doc["meshes"]) < len(shaded.meshes)  # the grains are instanced
-    attributes = [m["primitives"][0]["attributes"] for m in doc["meshes"]]
-    assert all("_CDRF_SIGMA" in a and "COLOR_0" not in a for a in attributes)  # σ travels; baked light does not
+    primitives = [m["primitives"][0] for m in doc["meshes"]]
+    assert all("_CDRF_SIGMA" in p["attributes"] for p in primitives)  # σ travels; baked light does not
+    names = [m.name for m in shaded.materials]
+    skins = [p for p in primitives if names[p["material"]].startswith("ikura_membrane")]
+    assert skins and all("COLOR_0" in p["attributes"] for p in skins)  # each egg's own transmittance, its eye
+    assert all("COLOR_0" not in p["attributes"] for p in primitives if p not in skins)
     materials = {m["name"]: m["extensions"] for m in doc["materials"]}
-    membrane = materials["ikura_membrane"]
+    tint = next(m.name for m in shaded.materials if m.name.startswith("ikura_membrane"))  # one egg's tint
+    membrane = materials[tint]
     assert membrane["KHR_materials_ior"]["ior"] == pytest.approx(1.36)
     assert membrane["KHR_materials_transmission"]["transmissionFactor"] == 1.0  # the yolk shows through
-    egg = next(m for m in doc["materials"] if m["name"] == "ikura_membrane")
+    egg = next(m for m in doc["materials"] if m["name"] == tint)
     red, green, blue, _ = egg["pbrMetallicRoughness"]["baseColorFactor"]
     assert red > green > blue  # an orange-red egg
-    membrane_material = next(m for m in shaded.materials if m.name == "ikura_membrane")
-    # what light keeps in and out, of which Cycles applies √ at each crossing, as the preview's skin does
-    assert [red, green, blue] == pytest.approx(membrane_material.subsurface_color)
+    index = names.index(tint)
+    own = np.concatenate([shaded.transmittance[k] for k in np.flatnonzero(shaded.material_of == index)])
+    # base colour × COLOR_0 is what light keeps in and out at each vertex (Cycles applies √ at each crossing, as
+    # the preview's skin does): the base colour the palest, the eye's, and no vertex's COLOR_0 above 1
+    assert [red, green, blue] == pytest.approx(own.max(axis=0), rel=1e-5)
+    skin = next(p for p in skins if p["material"] == index)
+    accessor = doc["accessors"][skin["attributes"]["COLOR_0"]]
+    assert accessor["type"] == "VEC3" and accessor["componentType"] == 5126
     # one reflecting skin, as the preview's: the coat, with no specular of the transmissive base under it
     assert membrane["KHR_materials_specular"]["specularFactor"] == 0.0 and "KHR_materials_clearcoat" in membrane
     assert egg["extras"]["nodegraph:principled:coatIor"] == pytest.approx(1.36)
@@ -145,7 +155,8 @@ def test_transmissive_materials_are_translucent_with_their_ior_in_usd(shaded):
     """UsdPreviewSurface: opacity 1 − transmission with the ior (what renderers translate to refraction)."""
     from pxr import UsdShade
 
-    path = "/Scene/Looks/ikura_membrane/PreviewSurface"
+    tint = next(m.name for m in shaded.materials if m.name.startswith("ikura_membrane"))  # one egg's tint
+    path = f"/Scene/Looks/{tint}/PreviewSurface"
     stage = _stage(shaded)
     shader = UsdShade.Shader(stage.GetPrimAtPath(path))
     assert shader.GetInput("opacity").Get() == pytest.approx(0.0)
@@ -178,7 +189,8 @@ def test_materialx_standard_surface_beside_the_preview_surface(shaded):
         assert values["subsurface"] == pytest.approx(material.subsurface)
         assert tuple(values["subsurface_radius"]) == pytest.approx(material.subsurface_radius)
         assert tuple(values["base_color"]) == pytest.approx(material.base_color)
-    membrane = UsdShade.Shader(stage.GetPrimAtPath("/Scene/Looks/ikura_membrane/StandardSurface"))
+    tint = next(m.name for m in shaded.materials if m.name.startswith("ikura_membrane"))  # one egg's tint
+    membrane = UsdShade.Shader(stage.GetPrimAtPath(f"/Scene/Looks/{tint}/StandardSurface"))
     assert membrane.GetInput("transmission").Get() == pytest.approx(1.0)
     red, green, blue = membrane.GetInput("transmission_color").Get()
     assert red > green > blue  # an orange egg, tinted at each crossing as the glTF's base colour says

@@ -144,6 +144,10 @@ def _usdgeom_elements(stage, scene, instancing: bool) -> None:
             color.Set(Vt.Vec3fArray.FromNumpy(np.asarray(mesh.colors, np.float32)[:, :3]))
         sigma = UsdGeom.PrimvarsAPI(geom).CreatePrimvar("cdrf_sigma", Sdf.ValueTypeNames.FloatArray, "vertex")
         sigma.Set(Vt.FloatArray.FromNumpy(np.asarray(scene.cdrf_sigma[k], np.float32)))
+        own = scene.vertex_transmittance(k)
+        if own is not None:  # an egg's membrane: its eye
+            tint = UsdGeom.PrimvarsAPI(geom).CreatePrimvar("transmittance", Sdf.ValueTypeNames.Float3Array, "vertex")
+            tint.Set(Vt.Vec3fArray.FromNumpy(np.asarray(own, np.float32)))
         UsdShade.MaterialBindingAPI.Apply(geom.GetPrim()).Bind(looks[scene.material_of[k]])
         return geom
 

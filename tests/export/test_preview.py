@@ -57,10 +57,22 @@ def test_the_yolk_shows_through_the_membrane(shaded):
         meshes=tuple(shaded.meshes[k] for k in keep),
         material_of=shaded.material_of[keep],
         cdrf_sigma=tuple(shaded.cdrf_sigma[k] for k in keep),
+        transmittance=tuple(shaded.transmittance[k] for k in keep),
     )
     with_yolk, without = _render(shaded, samples=8).astype(int), _render(hollow, samples=8).astype(int)
     orange = (with_yolk[..., 0] - with_yolk[..., 2]) > 80
     assert np.abs(with_yolk - without)[orange].mean() > 5
+
+
+def test_a_glaze_reflects_fresnel_in_the_preview_as_in_cycles():
+    """Mitsuba's principled coat is Disney's, a quarter of Fresnel at weight 1: the glaze's weight is passed over
+    DISNEY_COAT, so it reflects F0 0.04 as Cycles' coat and glTF's clearcoat do (the bowl's rim and the studio's
+    lights in it were fainter in the preview than in Cycles)."""
+    from nodes.export.mitsuba_scene import DISNEY_COAT, material_bsdf
+    from nodes.shading import materials as mat
+
+    glaze = mat.ceramic_material((0.03, 0.021, 0.015))
+    assert DISNEY_COAT == 0.25 and material_bsdf(glaze, False)["clearcoat"] == pytest.approx(glaze.clearcoat / 0.25)
 
 
 def test_material_mapping():
@@ -247,6 +259,32 @@ def test_framing_leaves_room_around_the_subject(elevation, aspect):
         extent = max(np.abs(u).max(), np.abs(v).max())
         assert extent == pytest.approx(0.9, abs=1e-6)  # 10 % of the half-frame free on the tightest side
         assert abs(u.max() + u.min()) < 1e-3 and abs(v.max() + v.min()) < 1e-3  # centred
+
+
+def test_an_offset_moves_the_subject_to_a_third_of_the_frame_and_keeps_it_in():
+    """With ``offset`` (−1/3, 0) the subject's projected extent is centred on the left third line, inside the frame
+    with the margin free, as large as that leaves room for."""
+    from nodes.export.mitsuba_scene import Camera, look_at
+    from nodes.shapes import shape
+
+    bowl = shape.call(kind="bowl", size=42.0, depth=34.0, wall=3.0, resolution=3)["mesh"]
+
+    def projected(camera):
+        origin, target = look_at(bowl.vertices, camera, 16 / 9)
+        forward = (target - origin) / np.linalg.norm(target - origin)
+        right = np.cross(forward, [0.0, 0.0, 1.0])
+        right /= np.linalg.norm(right)
+        up = np.cross(right, forward)
+        d = bowl.vertices - origin
+        tan_x = np.tan(np.radians(camera.fov) / 2)
+        return (d @ right) / ((d @ forward) * tan_x), (d @ up) / ((d @ forward) * tan_x * 9 / 16)
+
+    u, v = projected(Camera(40.0, 20.0, 20.0, 0.1, offset=(-1 / 3, 0.0)))
+    assert 0.5 * (u.max() + u.min()) == pytest.approx(-1 / 3, abs=0.01)  # centred on the left third line
+    # the margin free on every side, but for the move's parallax (the nearer points shift a little more)
+    assert u.min() > -0.92 and abs(v).max() <= 0.92
+    # as large as the room allows: on its tightest side (here the left, 1/3 nearer the frame's edge) it touches
+    assert max(-u.min(), abs(v).max()) == pytest.approx(0.9, abs=0.02)
 
 
 def test_the_denoiser_keeps_the_key_lights_glints(shaded):

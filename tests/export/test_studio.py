@@ -78,6 +78,38 @@ def test_the_studio_has_a_key_a_fill_a_rim_light_and_a_backdrop(shaded, tmp_path
     assert d["sky"]["radiance"]["value"] * np.pi < 0.1 * irradiance["key"]  # a dim studio, not a bright sky
 
 
+def test_the_table_is_oak_boards_under_the_subject_in_both_renderers(shaded, tmp_path):
+    """Setting 'table': a flat rectangle at the subject's lowest point, up-facing, far wider than the subject,
+    textured with the oak boards (dark latewood bands in lighter earlywood, averaging the oiled oak's colour); the
+    Blender side-by-side gets the same corners, UVs and texture."""
+    import mitsuba as mi
+    from PIL import Image as PILImage
+
+    from nodes.export import studio
+    from nodes.export.mitsuba_scene import Camera, scene_dict, studio_description
+
+    mi.set_variant("scalar_rgb")
+    camera = Camera(35.0, 20.0, 20.0, 0.1, 5.6, 0.25)
+    d = scene_dict(shaded, tmp_path, camera, 64, 48, 2, (-0.8, 0.15, 0.58), setting="table")
+    table = d["backdrop"]
+    assert table["type"] == "rectangle" and table["bsdf"]["base_color"]["type"] == "bitmap"
+    m = np.array(table["to_world"].matrix, np.float64)
+    points = np.concatenate([mesh.vertices for mesh in shaded.meshes])
+    assert m[2, 3] <= points[:, 2].min() and np.allclose(m[:3, 2], [0, 0, 1])  # under everything, facing up
+    assert min(np.linalg.norm(m[:3, 0]), np.linalg.norm(m[:3, 1])) > 10 * np.ptp(points[:, :2], axis=0).max()
+    texture = np.asarray(PILImage.open(table["bsdf"]["base_color"]["filename"]), np.float64) / 255
+    linear = np.where(texture <= 0.04045, texture / 12.92, ((texture + 0.055) / 1.055) ** 2.4)
+    assert np.allclose(linear.reshape(-1, 3).mean(axis=0), studio.TABLE_COLOR, rtol=0.2)
+    green = linear[..., 1]
+    rows = green.mean(axis=0)  # across the boards: the joints dark, the grain a low contrast
+    assert rows.min() < 0.6 * rows.mean() and 0.03 < green.std() / green.mean() < 0.15
+    described = studio_description(shaded, camera, 64, 48, (-0.8, 0.15, 0.58), setting="table")["backdrop"]
+    corners = np.array(described["vertices"]) - m[:3, 3]
+    assert np.allclose(np.abs(corners @ m[:3, 0]) / np.linalg.norm(m[:3, 0]) ** 2, 1.0)
+    assert described["texture"] == "table.png" and described["uv"][2][0] > 1  # the tile repeats
+    assert "table" not in scene_dict(shaded, tmp_path, camera, 64, 48, 2, (-0.8, 0.15, 0.58))["backdrop"]["type"]
+
+
 def test_the_backdrop_sweeps_up_behind_the_subject():
     """The sweep is flat under and in front of the subject, curves up only behind it (seen from the camera),
     with no step (seamless), and every face turns its lit side to the subject."""
@@ -175,8 +207,8 @@ def _rice_heap(water=15.0):
 
 
 def shows(scene, camera, width, height, light, name):
-    """Which pixels of the preview's frame show material ``name``: the same scene with that material green and the
-    rest red, read from the albedo pass."""
+    """Which pixels of the preview's frame show material ``name`` (or its tints, ``<name>_<k>``): the same scene
+    with that material green and the rest red, read from the albedo pass."""
     import mitsuba as mi
 
     from nodes.export.mitsuba_scene import scene_dict
@@ -186,7 +218,8 @@ def shows(scene, camera, width, height, light, name):
         d = scene_dict(scene, Path(folder), camera, width, height, 2, light)
         for key, shape in d.items():
             if isinstance(shape, dict) and "bsdf" in shape:
-                wanted = key.startswith("shape_") and scene.materials[int(key.removeprefix("shape_"))].name == name
+                own = scene.materials[int(key.removeprefix("shape_"))].name if key.startswith("shape_") else ""
+                wanted = own == name or own.startswith(name + "_")
                 colour = [0.0, 1.0, 0.0] if wanted else [1.0, 0.0, 0.0]
                 shape["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": colour}}
         d["integrator"] = {"type": "aov", "aovs": "albedo:albedo"}
@@ -249,3 +282,22 @@ def test_the_blender_side_by_side_builds_the_previews_own_studio(shaded, tmp_pat
         assert light["radiance"] == pytest.approx(radiance)
     assert described["ambient"] == studio.AMBIENT and described["backdrop"]["color"] == list(studio.BACKDROP_COLOR)
     assert described["exposure"] == ms.EXPOSURE and described["samples"] == 8
+
+
+def test_each_membrane_is_rendered_with_its_own_transmittance_per_vertex(shaded, tmp_path):
+    """The preview renders each egg's membrane, one closed mesh, with the transmittance each of its vertices keeps
+    (``ShadedScene.transmittance``, √ per crossing): paler over the eye."""
+    from nodes.export.mitsuba_scene import _shapes
+
+    shapes, _ = _shapes(shaded, tmp_path, subsurface=True)
+    membrane = next(k for k, m in enumerate(shaded.materials) if m.name.startswith("ikura_membrane"))
+    shape = shapes[f"shape_{membrane}"]
+    assert shape["bsdf"]["specular_transmittance"] == {"type": "mesh_attribute", "name": "vertex_color"}
+    data = Path(shape["filename"]).read_bytes()
+    head, body = data.split(b"end_header\n", 1)
+    count = int(head.split(b"element vertex ")[1].split(b"\n")[0])
+    rows = np.frombuffer(body[: count * 36], "<f4").reshape(count, 9)  # x y z nx ny nz r g b
+    own = np.concatenate([shaded.transmittance[k] for k in np.flatnonzero(shaded.material_of == membrane)])
+    assert rows[:, 6:] == pytest.approx(np.sqrt(own), rel=1e-5)
+    green = rows[:, 7]
+    assert green.max() > 1.5 * green.min()  # the eye's vertices pass more green than the membrane's

@@ -15,11 +15,20 @@ from nodes.shading.materials import is_ice
 
 def test_materials_per_kind_and_ikura_parts(shaded):
     names = [m.name for m in shaded.materials]
-    assert names == ["rice", "ikura_membrane", "ikura_yolk", "ceramic"]
-    membrane = shaded.materials[1]
-    assert membrane.transmission > 0 and membrane.base_color[0] > membrane.base_color[2]
-    assert len(shaded.meshes) == 16 + 3 * 2 + 1
+    assert names[0] == "rice" and names[-1] == "ceramic" and "ikura_yolk" in names
+    membranes = [m for m in shaded.materials if m.name.startswith("ikura_membrane_")]
+    assert len(membranes) == 3  # three eggs, each its own tint
+    assert all(m.transmission > 0 and m.base_color[0] > m.base_color[2] for m in membranes)
+    assert not any("eye" in m.name for m in shaded.materials)  # the eye is the membrane's own colour, no piece
+    assert len(shaded.meshes) == 16 + 3 * 2 + 1  # each egg: its membrane, one closed mesh, and its yolk
     assert sum(m.name.endswith("/yolk") for m in shaded.meshes) == 3
+    for k, mesh in enumerate(shaded.meshes):  # only the membranes carry their own transmittance
+        own = shaded.vertex_transmittance(k)
+        assert (own is not None) == mesh.name.endswith("/membrane")
+        if own is not None:
+            assert own.shape == (len(mesh.vertices), 3) and own.max() <= 1
+            edges = np.sort(mesh.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+            assert (np.unique(edges, axis=0, return_counts=True)[1] == 2).all()  # closed: every edge two faces
     for mesh in shaded.meshes:
         assert mesh.colors.shape == (len(mesh.vertices), 3)
         assert mesh.colors.min() >= 0 and mesh.colors.max() <= 1
@@ -254,3 +263,53 @@ def test_scene_carries_the_cdrf_sigma_per_vertex(scene_inputs):
     rice_wet, rice_dry = wet.materials[0], dry.materials[0]
     assert rice_wet.sheen > rice_dry.sheen and rice_wet.clearcoat > rice_dry.clearcoat
     assert rice_wet.roughness < rice_dry.roughness  # the water film glosses
+
+
+def test_egg_tints_span_orange_to_red_orange_and_touching_eggs_differ():
+    """The palette runs from orange to red-orange in CIELAB hue, lighter to deeper; eggs in a tight cluster draw
+    tints seeded, no two neighbours alike, the same for the same seed."""
+    from nodes.shading.materials import ikura_tints
+    from nodes.shading.scene_shading import egg_tints
+
+    def hue(rgb):  # CIELAB hue angle of a linear sRGB colour (D65)
+        xyz = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]) @ rgb
+        f = np.cbrt(xyz / np.array([0.9505, 1.0, 1.089]))
+        return np.degrees(np.arctan2(200 * (f[1] - f[2]), 500 * (f[0] - f[1])))
+
+    hues = [hue(np.array(m.subsurface_color)) for m in ikura_tints(12)]
+    assert min(hues) < 45 and max(hues) > 58 and len({round(h, 3) for h in hues}) == 12
+    grid = np.stack(np.meshgrid(*[np.arange(4) * 6.5] * 3), axis=-1).reshape(-1, 3)  # 64 touching eggs
+    tints = egg_tints(grid, 12, seed=3)
+    assert np.array_equal(tints, egg_tints(grid, 12, seed=3)) and not np.array_equal(tints, egg_tints(grid, 12, 4))
+    touching = np.linalg.norm(grid[:, None] - grid[None], axis=-1) < 6.6
+    np.fill_diagonal(touching, False)
+    assert not (touching & (tints[:, None] == tints[None])).any()
+    assert (egg_tints(grid, 1, seed=3) == 0).all()
+
+
+def test_the_eye_is_the_droplet_seen_through_the_thinning_fluid_over_it():
+    """Each membrane vertex keeps the egg's colour to the power of the fluid's depth under it (its distance to the
+    oil droplet) over that depth with the droplet at the centre: palest at the eye's centre, fading with no edge to
+    the egg's own colour on the far side; a concentric droplet leaves the egg its colour everywhere."""
+    from nodes.elements import base_mesh
+    from nodes.shading.scene_shading import _parts, eye_transmittance
+
+    color = np.array([0.85, 0.10, 0.012])
+    mesh = base_mesh.call(shape="ikura", diameter=6.5, subdivisions=3, eye_gap=0.15)
+    (_, skin, _), (_, yolk, _) = _parts(mesh, ("membrane", "yolk"), "", "")
+    skin, yolk = mesh.vertices[skin], mesh.vertices[yolk]
+    own = eye_transmittance(skin, yolk, color)
+    top, bottom = np.argmax(skin[:, 2]), np.argmin(skin[:, 2])
+    r_o = np.linalg.norm(yolk - yolk.mean(axis=0), axis=1).mean()
+    share = np.log(own[top, 1]) / np.log(color[1])  # the fluid over the eye's centre: eye_gap / (R − r_o)
+    assert share == pytest.approx(0.15 / (3.25 - r_o), rel=0.05)
+    assert own[bottom] == pytest.approx(color)  # the far side: the egg's colour
+    angle = np.degrees(np.arccos(np.clip(skin[:, 2] / np.linalg.norm(skin, axis=1), -1, 1)))
+    green = own[:, 1]
+    for low, high in ((0, 20), (20, 40), (40, 60), (60, 90)):  # paler the nearer the eye's axis, no step
+        assert green[(angle >= high) & (angle < high + 20)].mean() < green[(angle >= low) & (angle < high)].mean()
+    concentric = base_mesh.call(shape="ikura", diameter=6.5, subdivisions=3, eye_gap=0.0)
+    (_, skin, _), (_, yolk, _) = _parts(concentric, ("membrane", "yolk"), "", "")
+    assert eye_transmittance(concentric.vertices[skin], concentric.vertices[yolk], color) == pytest.approx(
+        np.tile(color, (len(skin), 1)), rel=0.02
+    )

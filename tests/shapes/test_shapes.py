@@ -58,6 +58,24 @@ def test_bowl_region_sits_in_the_cavity_with_a_mound():
     assert inside_points(container.vertices, container.faces, inner * 1.1).any()  # …but lies against it
 
 
+def test_the_bowl_stands_on_a_foot_ring():
+    """The container's lowest vertices form a ring (the kōdai), FOOT_HEIGHT of the bowl's height tall, with the
+    underside inside it raised: the bowl stands on the ring, not on a point, and keeps its height."""
+    from nodes.shapes.solids import FOOT_HEIGHT
+
+    container = shape.call(kind="bowl", size=68.5, depth=81.0, wall=4.0)["container"]
+    v = container.vertices
+    radius = np.hypot(v[:, 0], v[:, 1])
+    bottom = v[:, 2].min()
+    assert bottom == pytest.approx(-85.0) and v[:, 2].max() == pytest.approx(0.0)
+    lowest = radius[v[:, 2] < bottom + 1e-6]
+    assert lowest.min() > 20.0  # nothing of the underside's middle touches the table
+    centre = v[radius < 1e-6, 2]
+    assert centre.min() == pytest.approx(bottom + 2.0)  # the underside inside the ring: half the wall up
+    outside = radius.max() * np.sqrt(1 - (1 - FOOT_HEIGHT) ** 2)  # the outer wall's radius at the ring's top
+    assert lowest.max() == pytest.approx(outside, rel=0.02)
+
+
 def test_boolean_difference_removes_the_intersection():
     a = shape.call(kind="sphere", size=10.0)["mesh"]
     b = shape.call(kind="box", extents=(10.0, 10.0, 10.0))["mesh"]
