@@ -16,7 +16,7 @@ import numpy as np
 from numba import get_num_threads, njit, prange
 
 from ..triangle_distance import point_triangle_offset
-from .friction import RELEASE, ROLLING, RUBBED, TESTED, contact_mode, friction_wall, remember
+from .friction import RELEASE, ROLLING, RUBBED, TESTED, friction_wall, next_mode
 
 
 @njit(cache=True, nogil=True)
@@ -471,10 +471,5 @@ def wall_means(start, state, rule):
             for k in range(RUBBED):
                 rubbed[i, k] = 0.0
         mean[e] = total / count if count > 0 else 0.0
-        remember(force, e, total, tx, ty, tz)
-        rolls = start[e + 1] - start[e] <= ROLLING
-        modes[e] = (
-            TESTED
-            if rolls or not anchored
-            else contact_mode(force[e, 3], force[e, 0], force[e, 1], force[e, 2], slid, mu_s)
-        )
+        mode = next_mode(force, e, total, tx, ty, tz, slid, mu_s)
+        modes[e] = TESTED if start[e + 1] - start[e] <= ROLLING or not anchored else mode

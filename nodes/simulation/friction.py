@@ -51,7 +51,7 @@ RELEASE = 0.05
 
 
 # a contact's friction mode in a substep, decided at the end of the last one from what its contact needed
-# (``pool_contact``): TESTED when it touched nothing (each entry tests its drift against its own load),
+# (``pool_contacts``): TESTED when it touched nothing (each entry tests its drift against its own load),
 # STICKING (restore the whole drift since the anchor), SLIDING (remove at most μk·load over the substep)
 TESTED, STICKING, SLIDING = 0, 1, 2
 ROLLS = 3  # a pair with a one-particle element (``ROLLING``): tested each pass against its own load
@@ -205,6 +205,14 @@ def contact_mode(normal, tx, ty, tz, slid, mu_s):
     return STICKING
 
 
+@njit(cache=True, inline="always")
+def next_mode(force, c, normal, tx, ty, tz, slid, mu_s):
+    """Fold a contact's summed corrections of this substep into its remembered force (row c of ``force``,
+    ``remember``) and return its mode for the next substep (``contact_mode``): what walls and pairs both do."""
+    remember(force, c, normal, tx, ty, tz)
+    return contact_mode(force[c, 3], force[c, 0], force[c, 1], force[c, 2], slid, mu_s)
+
+
 @njit(cache=True, parallel=True)
 def entry_sources(old, new, source):
     """Per entry of the rebuilt neighbour lists, the entry of the old ones that lists the same pair, found in the
@@ -311,13 +319,14 @@ def pool_contacts(contacts, cohesion, mu_s, load, rubbed, mean, mode, force):
             for k in range(3):
                 held[g, k] = sign[a] * force[a, k]
             held[g, 3] = force[a, 3]
+    decided = np.empty(count, np.int8)
     for g in range(count):
-        remember(held, g, normal[g], drift[g, 0], drift[g, 1], drift[g, 2])
+        decided[g] = next_mode(held, g, normal[g], drift[g, 0], drift[g, 1], drift[g, 2], slid[g], mu_s)
     for a in range(group.shape[0]):
         g = group[a]
         if g >= 0 and touching[g] > 0:
             mean[a] = total[g] / touching[g]
-            mode[a] = ROLLS if rolls[a] else contact_mode(held[g, 3], held[g, 0], held[g, 1], held[g, 2], slid[g], mu_s)
+            mode[a] = ROLLS if rolls[a] else decided[g]
             for k in range(3):
                 force[a, k] = sign[a] * held[g, k]
             force[a, 3] = held[g, 3]

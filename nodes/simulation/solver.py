@@ -156,8 +156,7 @@ class Coefficients:
             clamp=s.speed_clamp / pieces,
             accel=np.array([[0.0, 0.0, -s.gravity]]) if gravity else np.zeros((1, 3)),
             friction=s.friction.rule(
-                s.mu_s if "friction" in effects else 0.0,
-                s.mu_k if "friction" in effects else 0.0,
+                s.mu_s if "friction" in effects else 0.0, s.mu_k if "friction" in effects else 0.0
             ),
             damping=(1.0 - s.damping) ** (h * 60.0) if "damping" in effects else 1.0,
             lift=lift,
