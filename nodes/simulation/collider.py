@@ -16,7 +16,7 @@ import numpy as np
 from numba import get_num_threads, njit, prange
 
 from ..triangle_distance import point_triangle_offset
-from .friction import RELEASE, ROLLING, RUBBED, TESTED, friction_wall, next_mode
+from .friction import RELEASE, ROLLING, RUBBED, TESTED, friction_wall, next_mode, pooled_load
 
 
 @njit(cache=True, nogil=True)
@@ -177,14 +177,20 @@ def signed_distance_grid(meshes, lo, hi, pitch: float, band_cells: float = 3.0, 
     return signed_field(dist, inside, far, sign), origin, float(pitch)
 
 
-def free_space_field(colliders, moulds, lo, hi, pitch: float):
+def free_space_field(colliders, moulds, lo, hi, pitch: float, reach: float = 0.0):
     """φ of the free space on one grid: outside every collider solid and inside the moulds
     (onigiri mould, bunny), φ = min(φ_colliders, −φ_moulds); a mould's inside is where elements may
-    be. Returns (phi, origin, pitch) as ``signed_distance_grid``."""
+    be. Returns (phi, origin, pitch) as ``signed_distance_grid``.
+
+    φ is exact (the band) up to ``reach`` (the largest particle radius) and two cells beyond: a particle is tested
+    at its centre, one radius from the wall, where the trilinear φ reads its cell's corners up to √3 cells farther.
+    Past the band the distance transform is off by up to half a cell; read there, a flat slab was bumpy by 0.14 mm
+    at a 0.29 mm pitch, its normals tilted by up to 20°, and a grain set down on it tilted 28° slid at μs 0.6."""
+    band_cells = max(3.0, reach / pitch + 2.0)
     phi = None
     for meshes, sign in ((colliders, 1.0), (moulds, -1.0)):
         if meshes:
-            part, origin, pitch = signed_distance_grid(meshes, lo, hi, pitch, sign=sign)
+            part, origin, pitch = signed_distance_grid(meshes, lo, hi, pitch, band_cells, sign=sign)
             phi = part if phi is None else np.minimum(phi, part)
     return phi, origin, pitch
 
@@ -341,8 +347,8 @@ def _wall_one(state, w, r, elem, phi, origin, pitch, blocks, rule, i):
     if mu_s > 0.0:
         e = elem[i]  # the element's mean wall load over the last substep and its mode, 0 if it touched none
         pooled = mean[e] > 0.0
-        held, mode = (mean[e], modes[e]) if pooled else (load[i], TESTED)
-        friction_wall(x, x_prev, anchor, rubbed, i, nx, ny, nz, held, rule, mode)
+        held, mode = (pooled_load(modes[e], mean[e], load[i]), modes[e]) if pooled else (load[i], TESTED)
+        friction_wall(x, x_prev, anchor, rubbed, i, nx, ny, nz, pen, held, rule, mode)
     return pen / r[i]
 
 
@@ -471,5 +477,5 @@ def wall_means(start, state, rule):
             for k in range(RUBBED):
                 rubbed[i, k] = 0.0
         mean[e] = total / count if count > 0 else 0.0
-        mode = next_mode(force, e, total, tx, ty, tz, slid, mu_s)
+        mode = next_mode(force, e, total, tx, ty, tz, slid, mu_s, modes[e])
         modes[e] = TESTED if start[e + 1] - start[e] <= ROLLING or not anchored else mode

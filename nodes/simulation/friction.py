@@ -92,6 +92,29 @@ def removed_share(t, mode, held, used, mu_s, mu_k):
 
 
 @njit(cache=True, inline="always")
+def pooled_load(mode, mean, own):
+    """The normal load a particle against the walls is held against in ``mode``: its grain's mean over the touching
+    particles (``collider.wall_means``), or while it sticks the larger of that and the particle's ``own`` of this
+    substep: the load falls unevenly on a grain's particles, and a grain landing tip first on a slab tilted 25°
+    slid (μs 0.6) in the pass where that tip took three times the mean. Pairs keep the mean: with the larger, bars
+    resting on one another kept moving (kinetic energy 0.83 g·mm²/s² after 2 s, where it falls below 1e-6)."""
+    return max(mean, own) if mode == STICKING else mean
+
+
+@njit(cache=True, inline="always")
+def touched_at(gap, approach):
+    """The share of a substep's motion so far that passed before a contact began to touch: it closed ``approach``
+    along the normal from ``gap`` (0 when it touched at the substep's start). A fresh anchor sits there, so that
+    the tangential drift friction holds is the one made while touching, as the normal load is the push made
+    while touching: anchored at the substep's start, a grain landing on a slab tilted 25° counted the tangential
+    motion of its fall against the load of its landing alone, needed 0.69 of it where tan 25° = 0.47, and slid
+    away at μs 0.6."""
+    if gap <= 0.0 or approach <= gap:
+        return 0.0 if gap <= 0.0 else 1.0
+    return gap / approach
+
+
+@njit(cache=True, inline="always")
 def tangential_part(rx, ry, rz, nx, ny, nz):
     """(t, tx, ty, tz): the tangential part of the drift r against the unit normal n and its length."""
     dn = rx * nx + ry * ny + rz * nz
@@ -115,8 +138,8 @@ def _rub(rubbed, a, scale, t, tx, ty, tz):
 @njit(cache=True, inline="always")
 def friction_pair(x, x_prev, anchor, rubbed, a, i, j, normal, held, share, rule, mode):
     """Friction on the pair (i, j) of list entry ``a`` with unit normal ``normal`` = (nx, ny, nz)
-    (j → i) and normal load ``held``, in place; i takes ``share`` of the correction, j the rest (the
-    contacts' mass scaling). ``rule``: a ``friction_models.FrictionRule`` (μs, μk, anchored); ``mode``: the
+    (j → i) and normal load ``held``, in place; i takes ``share`` of the correction, j the
+    rest (the contacts' mass scaling). ``rule``: a ``friction_models.FrictionRule`` (μs, μk, anchored); ``mode``: the
     contact's (``TESTED``, ``STICKING``, ``SLIDING``). Without anchors the drift is the substep's (Macklin's
     rule); with them a pair without an anchor is anchored where it stood at the substep's start (its first
     substep is Macklin's rule) and a sliding pair is re-anchored after its step. What is removed adds to
@@ -154,14 +177,18 @@ def friction_pair(x, x_prev, anchor, rubbed, a, i, j, normal, held, share, rule,
 
 
 @njit(cache=True, inline="always")
-def friction_wall(x, x_prev, anchor, rubbed, i, nx, ny, nz, held, rule, mode):
-    """Friction of particle i against a static wall with unit normal n and normal load ``held``, in place:
-    the pair rule with a partner that does not move and takes no share; ``rubbed`` per particle."""
+def friction_wall(x, x_prev, anchor, rubbed, i, nx, ny, nz, pen, held, rule, mode):
+    """Friction of particle i against a static wall with unit normal n and normal load ``held``, just pushed out
+    by ``pen`` along n, in place: the pair rule with a partner that does not move and takes no share; ``rubbed``
+    per particle."""
     mu_s, mu_k, anchored = rule
     ref = anchor if anchored else x_prev
     if anchored and np.isnan(anchor[i, 0]):
+        # before the push: x − pen·n, which approached the wall by (x_prev − that)·n from a gap of that less pen
+        approach = (x_prev[i, 0] - x[i, 0]) * nx + (x_prev[i, 1] - x[i, 1]) * ny + (x_prev[i, 2] - x[i, 2]) * nz + pen
+        f = touched_at(approach - pen, approach)
         for k in range(3):
-            anchor[i, k] = x_prev[i, k]
+            anchor[i, k] = x_prev[i, k] + f * (x[i, k] - pen * (nx, ny, nz)[k] - x_prev[i, k])
     t, tx, ty, tz = tangential_part(x[i, 0] - ref[i, 0], x[i, 1] - ref[i, 1], x[i, 2] - ref[i, 2], nx, ny, nz)
     if t <= 1e-12:
         return
@@ -190,27 +217,35 @@ def remember(force, c, normal, tx, ty, tz):
 
 
 @njit(cache=True, inline="always")
-def contact_mode(normal, tx, ty, tz, slid, mu_s):
+def contact_mode(normal, tx, ty, tz, slid, mu_s, mode):
     """A contact's mode for the next substep from its remembered force (``remember``; Coulomb for the contact as
-    a whole: Müller et al. 2020 §3.5's λ_t < μs·λ_n with the multipliers summed over the substep): SLIDING if
-    friction let it slide in some pass of this substep (kinetic friction could not stop it) or holding it took
-    more than μs times its normal load, |Σ Δx_t| > μs·Σ Δx_n, both summed over its particles and the substep's
-    passes; STICKING otherwise; TESTED without load. Summed over the passes, the decision does not depend on how
-    the substep is split into iterations: each pass's own test saw only the drift since the pass before, and a
-    grain on a plane held to 24°, 29°, 34°, 37° at 1–4 iterations (μs 0.6: 31°)."""
+    a whole: Müller et al. 2020 §3.5's λ_t < μs·λ_n with the multipliers summed over the substep) and ``mode``, this
+    substep's; TESTED without load.
+    - STICKING slides when friction let it slide in some pass or holding it took more than μs times its normal
+      load, |Σ Δx_t| > μs·Σ Δx_n, both summed over its particles and the substep's passes. Summed over the passes,
+      the decision does not depend on how the substep is split into iterations: each pass's own test saw only the
+      drift since the pass before, and a grain on a plane held to 24°, 29°, 34°, 37° at 1–4 iterations (31°).
+    - SLIDING sticks again once kinetic friction stopped it in the substep (Coulomb: static friction holds a
+      contact at rest). The remembered force, which still held the slip's, kept a grain that rocked as it was set
+      down on a slab sliding away at 28°, μs 0.6, where kinetic friction alone (μk 0.42) cannot stop it.
+    - TESTED (a contact's first substep) is judged by the summed test alone: its passes test each particle against
+      its own load, and a grain landing tip first slid in one of them."""
     if normal <= 0.0:
         return TESTED
-    if slid or tx * tx + ty * ty + tz * tz > (mu_s * normal) ** 2:
+    if mode == SLIDING:
+        return SLIDING if slid else STICKING
+    if (slid and mode != TESTED) or tx * tx + ty * ty + tz * tz > (mu_s * normal) ** 2:
         return SLIDING
     return STICKING
 
 
 @njit(cache=True, inline="always")
-def next_mode(force, c, normal, tx, ty, tz, slid, mu_s):
+def next_mode(force, c, normal, tx, ty, tz, slid, mu_s, mode):
     """Fold a contact's summed corrections of this substep into its remembered force (row c of ``force``,
-    ``remember``) and return its mode for the next substep (``contact_mode``): what walls and pairs both do."""
+    ``remember``) and return its mode for the next substep (``contact_mode``) from ``mode``, this substep's: what
+    walls and pairs both do."""
     remember(force, c, normal, tx, ty, tz)
-    return contact_mode(force[c, 3], force[c, 0], force[c, 1], force[c, 2], slid, mu_s)
+    return contact_mode(force[c, 3], force[c, 0], force[c, 1], force[c, 2], slid, mu_s, mode)
 
 
 @njit(cache=True, parallel=True)
@@ -303,6 +338,7 @@ def pool_contacts(contacts, cohesion, mu_s, load, rubbed, mean, mode, force):
     touching = np.zeros(count, np.int64)
     drift = np.zeros((count, 3))
     slid = np.zeros(count, np.bool_)
+    was = np.zeros(count, np.int8)  # the contact's mode this substep (TESTED: all its entries new or tested)
     held = np.zeros((count, FORCE))
     for a in range(group.shape[0]):
         g = group[a]
@@ -315,13 +351,15 @@ def pool_contacts(contacts, cohesion, mu_s, load, rubbed, mean, mode, force):
         for k in range(3):
             drift[g, k] += sign[a] * rubbed[a, k]
         slid[g] |= rubbed[a, 4] > 0.0
+        if mode[a] == STICKING or mode[a] == SLIDING:
+            was[g] = mode[a]
         if force[a, 3] > held[g, 3]:
             for k in range(3):
                 held[g, k] = sign[a] * force[a, k]
             held[g, 3] = force[a, 3]
     decided = np.empty(count, np.int8)
     for g in range(count):
-        decided[g] = next_mode(held, g, normal[g], drift[g, 0], drift[g, 1], drift[g, 2], slid[g], mu_s)
+        decided[g] = next_mode(held, g, normal[g], drift[g, 0], drift[g, 1], drift[g, 2], slid[g], mu_s, was[g])
     for a in range(group.shape[0]):
         g = group[a]
         if g >= 0 and touching[g] > 0:

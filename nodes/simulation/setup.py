@@ -228,7 +228,7 @@ def build_simulation(
         lo = np.min([c.bounds[0] for c in shapes] + [x.min(axis=0)], axis=0) - 4 * r.max()
         hi = np.max([c.bounds[1] for c in shapes] + [x.max(axis=0)], axis=0) + 4 * r.max()
         pitch = max(0.5 * r.min(), float((hi - lo).max()) / 192)
-        sdf = free_space_field(colliders, moulds, lo, hi, pitch)
+        sdf = free_space_field(colliders, moulds, lo, hi, pitch, float(r.max()))
         if params.rigid_start:
             rigid_into_free_space(x, r, start, *sdf)
     yolk_local = np.array(yolk_local)
