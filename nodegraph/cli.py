@@ -29,7 +29,7 @@ from .cache import (
 )
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
-from .output_folder import recipe_folder, recipe_folder_name
+from .output_folder import recipe_folder, recipe_folder_name, settings_folder
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
@@ -300,7 +300,9 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             yes=args.yes,
             limits=_limits(args, asked),
         )
-    out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft))
+    out_dir = args.out_dir or settings_folder(
+        recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft)), args.overrides
+    )
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
