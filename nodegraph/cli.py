@@ -595,7 +595,25 @@ def _cmd_check(args, registry) -> int:
     )
     for line in recipe.cost.lines():
         print(f"  estimate: {line}")
+    for decl in recipe.sweeps.values():
+        print(f"  estimate: {_sweep_time(args, registry, decl)}")
     return 0
+
+
+def _sweep_time(args, registry, decl) -> str:
+    """A sweep's CPU time: each point's estimate (the recipe with that point's values), summed."""
+    from .cost import minutes
+    from .sweep_decl import override_text
+
+    seconds = []
+    for values in decl.points():
+        texts = [*decl.fixed, *args.overrides, *(override_text(t, v) for t, v in values.items())]
+        point = load_recipe(args.recipe, registry, texts, draft=args.draft, work=True, yes=True, limits=_limits(args))
+        seconds.append(point.cost.cpu_seconds)
+    return (
+        f"sweep {decl.name}: {len(seconds)} points, ≈ {minutes(sum(seconds))} CPU in all "
+        f"({minutes(min(seconds))} to {minutes(max(seconds))} each; cached steps are shared)"
+    )
 
 
 def _limits(args, outputs: tuple[str, ...] | None = None):
