@@ -367,7 +367,10 @@ def _remove_empty(folders: list[Path]) -> None:
 
 
 def _weighs(spec) -> bool:
-    return spec.check_work is not None or spec.cost is not None
+    """Whether a node's run is weighed first (its ``check_work``, its ``cost``): not a node that is never stored
+    (``store=False``: made again from its cached inputs in a moment, it is never in the cache, and weighing it made
+    every cached re-run of a scene load trimesh for its shapes, ≈ 0.7 s)."""
+    return spec.store and (spec.check_work is not None or spec.cost is not None)
 
 
 def _work_due(recipe: Recipe, outputs: list[str], cache_dir: Path | None) -> bool:
