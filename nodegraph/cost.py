@@ -28,9 +28,9 @@ from .node import NodeSpec
 PROCESS_BYTES = 48 * 2**20
 # CPU seconds per mesh face of the elements (faces per element × elements) of the steps that say nothing of their own
 # time (placing, refining, the contact dents, measuring, exporting): what the scene table's runs spent outside their
-# simulations and pictures, 4.7–9.5 µs a face for the rice bowl, the ikura don, both onigiri, kakigori, rice +
-# chestnut and the bunny (22 µs for sushi, whose salmon is draped too; benchmarks/measured/scenes.jsonl); where the
-# faces are not known, OTHER_CPU_PER_ELEMENT (their 3–13 ms an element): the estimate's ``time`` line
+# simulations and pictures, 4.7–9.5 µs a face in seven of its eight recipes (22 µs in the one with a draped slab on
+# top; benchmarks/measured/scenes.jsonl); where the faces are not known, OTHER_CPU_PER_ELEMENT (their 3–13 ms an
+# element): the estimate's ``time`` line
 OTHER_CPU_PER_FACE = 6e-6
 OTHER_CPU_PER_ELEMENT = 0.010
 
@@ -190,7 +190,7 @@ class Estimate:
 
     def time_line(self) -> str:
         """The run's CPU time in words, by simulations, pictures (the other nodes that estimate their seconds) and
-        the rest (``OTHER_CPU_PER_ELEMENT``)."""
+        the rest (``other_seconds``)."""
         family = lambda n: self.family.get(n, 1)
         sims = sum(c.seconds * family(n) for n, c in self.costs.items() if c.particles)
         pictures = self.seconds - sims
