@@ -29,7 +29,7 @@ from .cache import (
 )
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
-from .output_folder import recipe_folder, recipe_folder_name
+from .output_folder import recipe_folder, recipe_folder_name, settings_folder
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
@@ -300,7 +300,9 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             yes=args.yes,
             limits=_limits(args, asked),
         )
-    out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft))
+    out_dir = args.out_dir or settings_folder(
+        recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft)), args.overrides
+    )
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
@@ -365,7 +367,10 @@ def _remove_empty(folders: list[Path]) -> None:
 
 
 def _weighs(spec) -> bool:
-    return spec.check_work is not None or spec.cost is not None
+    """Whether a node's run is weighed first (its ``check_work``, its ``cost``): not a node that is never stored
+    (``store=False``: made again from its cached inputs in a moment, it is never in the cache, and weighing it made
+    every cached re-run of a scene load trimesh for its shapes, ≈ 0.7 s)."""
+    return spec.store and (spec.check_work is not None or spec.cost is not None)
 
 
 def _work_due(recipe: Recipe, outputs: list[str], cache_dir: Path | None) -> bool:
@@ -593,7 +598,25 @@ def _cmd_check(args, registry) -> int:
     )
     for line in recipe.cost.lines():
         print(f"  estimate: {line}")
+    for decl in recipe.sweeps.values():
+        print(f"  estimate: {_sweep_time(args, registry, decl)}")
     return 0
+
+
+def _sweep_time(args, registry, decl) -> str:
+    """A sweep's CPU time: each point's estimate (the recipe with that point's values), summed."""
+    from .cost import minutes
+    from .sweep_decl import override_text
+
+    seconds = []
+    for values in decl.points():
+        texts = [*decl.fixed, *args.overrides, *(override_text(t, v) for t, v in values.items())]
+        point = load_recipe(args.recipe, registry, texts, draft=args.draft, work=True, yes=True, limits=_limits(args))
+        seconds.append(point.cost.cpu_seconds)
+    return (
+        f"sweep {decl.name}: {len(seconds)} points, ≈ {minutes(sum(seconds))} CPU in all "
+        f"({minutes(min(seconds))} to {minutes(max(seconds))} each; cached steps are shared)"
+    )
 
 
 def _limits(args, outputs: tuple[str, ...] | None = None):

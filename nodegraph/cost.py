@@ -26,6 +26,13 @@ from .node import NodeSpec
 # ``memory`` is on top of it): `python -c "import nodegraph.cli, numpy, resource; print(resource.getrusage(
 # resource.RUSAGE_SELF).ru_maxrss)"` prints 48,564 KiB (2 cores, load 11, 2026-12-06)
 PROCESS_BYTES = 48 * 2**20
+# CPU seconds per mesh face of the elements (faces per element × elements) of the steps that say nothing of their own
+# time (placing, refining, the contact dents, measuring, exporting): what the scene table's runs spent outside their
+# simulations and pictures, 4.7–9.5 µs a face in seven of its eight recipes (22 µs in the one with a draped slab on
+# top; benchmarks/measured/scenes.jsonl); where the faces are not known, OTHER_CPU_PER_ELEMENT (their 3–13 ms an
+# element): the estimate's ``time`` line
+OTHER_CPU_PER_FACE = 6e-6
+OTHER_CPU_PER_ELEMENT = 0.010
 
 
 @dataclass(frozen=True)
@@ -140,6 +147,19 @@ class Estimate:
         return sum(c.seconds * self.family.get(n, 1) for n, c in self.costs.items())
 
     @property
+    def other_seconds(self) -> float:
+        """CPU seconds of the steps that do not estimate their own: ``OTHER_CPU_PER_FACE`` for each face of the
+        elements of the recipe's outputs (``OTHER_CPU_PER_ELEMENT`` an element where their faces are not known)."""
+        elements = self.elements or 0
+        faces = [c.faces for c in (self.costs[n] for n in self.outputs) if c.elements == elements and c.faces]
+        return elements * (OTHER_CPU_PER_FACE * max(faces) if faces else OTHER_CPU_PER_ELEMENT)
+
+    @property
+    def cpu_seconds(self) -> float:
+        """CPU seconds of the whole run: what the nodes estimate (``seconds``) and ``other_seconds``."""
+        return self.seconds + self.other_seconds
+
+    @property
     def peak(self) -> tuple[int, str | None]:
         """(bytes, node): the process's peak, at the node holding the most."""
         node = max(self.costs, key=lambda n: self.costs[n].memory, default=None)
@@ -165,10 +185,24 @@ class Estimate:
         peak, node = self.peak
         at = f" (at {node}: {gib(self.costs[node].memory)} of it)" if node else ""
         out.append(f"peak memory: ≈ {gib(peak)}{at}")
+        out.append(self.time_line())
         return out
+
+    def time_line(self) -> str:
+        """The run's CPU time in words, by simulations, pictures (the other nodes that estimate their seconds) and
+        the rest (``other_seconds``)."""
+        family = lambda n: self.family.get(n, 1)
+        sims = sum(c.seconds * family(n) for n, c in self.costs.items() if c.particles)
+        pictures = self.seconds - sims
+        other = self.other_seconds
+        parts = [f"{what} {minutes(s)}" for what, s in (("simulations", sims), ("pictures", pictures)) if s >= 0.5]
+        parts.append(f"other steps {minutes(other)}")
+        return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)}); a first run compiles kernels too"
 
 
 def minutes(seconds: float) -> str:
+    if seconds < 0.5:
+        return "< 1 s"
     return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.1f} min"
 
 

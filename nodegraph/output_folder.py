@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 from pathlib import Path
 
 PROJECT_MARKERS = ("pyproject.toml", ".git")
@@ -17,6 +18,27 @@ DRAFT_SUFFIX = "_draft"  # a --draft run's folder is its recipe's name and this:
 def recipe_folder_name(name: str, draft: bool) -> str:
     """The output folder's name of a run of recipe ``name`` (its sweeps go into a ``sweeps/`` folder inside)."""
     return name + (DRAFT_SUFFIX if draft else "")
+
+
+SETTINGS_PREFIX = "set_"  # a --set run's folder, inside its recipe's: set_<its settings>
+SETTINGS_NAME_MAX = 80  # characters of a settings folder's name; a longer one is cut and ends with a hash
+
+
+def settings_folder(folder: Path, overrides) -> Path:
+    """Where a run with the ``--set`` texts ``overrides`` writes: ``folder`` (the recipe's own) when there are none,
+    else a folder inside it named from them (``set_cooked.water_content=22``; several joined by ``+``; characters a
+    file name may not hold dropped; a name longer than ``SETTINGS_NAME_MAX`` cut and ended with a hash of the texts),
+    so that runs with other settings never replace or remove each other's files: each set of settings keeps its own
+    folder, the recipe as written ``folder`` itself, and a run replaces only what an earlier run of the same
+    settings wrote there (``output_files.settle_earlier``)."""
+    if not overrides:
+        return folder
+    texts = [re.sub(r"[^A-Za-z0-9._=,+-]", "", text.replace(" ", "")) for text in overrides]
+    name = SETTINGS_PREFIX + "+".join(texts)
+    if len(name) > SETTINGS_NAME_MAX:
+        digest = hashlib.sha256("\n".join(overrides).encode()).hexdigest()[:8]
+        name = name[: SETTINGS_NAME_MAX - 9] + "-" + digest
+    return folder / name
 
 
 def outputs_root(recipe_path: Path) -> Path:

@@ -351,6 +351,10 @@ class ShadedScene:
     ``transmittance[i]`` holds, where light through mesh i's element keeps a colour that varies over its skin, that
     colour (linear RGB, in and out) at each vertex: an egg's membrane, paler over its oil droplet (its eye,
     ``scene_shading.eye_transmittance``); an empty array: the material's own. Empty tuple: none anywhere.
+
+    ``key_gain`` scales the preview's key softbox and its glints (``nodes.export.studio.lights``): the shade node's
+    first light intensity over its default, so that a brighter key in the recipe is a brighter key in the preview
+    and in the Blender side-by-side (which reads the same studio), not only in the baked vertex colours.
     """
 
     meshes: tuple[Mesh, ...]
@@ -358,8 +362,12 @@ class ShadedScene:
     material_of: np.ndarray
     cdrf_sigma: tuple[np.ndarray, ...] = ()
     transmittance: tuple[np.ndarray, ...] = ()
+    key_gain: float = 1.0
 
     def __post_init__(self):
+        if not (np.isfinite(self.key_gain) and self.key_gain > 0):
+            raise ValueError(f"key_gain = {self.key_gain}: the key light's gain must be > 0")
+        object.__setattr__(self, "key_gain", float(self.key_gain))
         object.__setattr__(self, "meshes", tuple(self.meshes))
         object.__setattr__(self, "materials", tuple(self.materials))
         object.__setattr__(self, "material_of", np.asarray(self.material_of, dtype=np.int32))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh, Table
@@ -115,6 +116,8 @@ def _subset(aggregate, keep: np.ndarray):
     return dataclasses.replace(aggregate, placement=aggregate.placement.subset(keep), **per_element)
 
 
+# at most the elements it is given (those crossing deeper than the threshold go)
+@estimated_by(passes("aggregate"))
 @node(
     "cull_crossing",
     inputs={

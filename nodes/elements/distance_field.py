@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
+from nodegraph.cost import estimated_by, passes
 from nodegraph.values import Mesh
 
 from ..values import DistanceField, SphereSet, Volume
@@ -10,6 +11,8 @@ from ..values import DistanceField, SphereSet, Volume
 METHODS = ("exact", "euclidean", "manhattan")
 
 
+# the shape it carries on: its input's smallest inscribed radius (the spheres sink into the skin, no deeper)
+@estimated_by(passes("volume"))
 @node(
     "distance_field",
     inputs={

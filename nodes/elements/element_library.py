@@ -3,13 +3,24 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
-from nodegraph.cost import estimated_by, passes
+from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.values import Mesh
 
 from ..values import ElementLibrary, RiceVariety
 
 
-@estimated_by(passes("meshes"))
+def _cost(q: CostQuery) -> Cost:
+    """The library's meshes (one per variant of each node wired in: what ``check`` counts as the elements of a
+    recipe that makes only libraries), their smallest inscribed radius and faces."""
+    wires = q.nodes[q.node_id].inputs.get("meshes") or []
+    return Cost(
+        elements=sum(q.nodes[w.node].family or 1 for w in wires) or None,
+        inscribed=q.inscribed("meshes"),
+        faces=q.faces("meshes"),
+    )
+
+
+@estimated_by(_cost)
 @node(
     "element_library",
     inputs={

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Moved, Out, Param, node
+from nodegraph.cost import Cost, CostQuery, estimated_by
 
 from ..values import DistanceField, RiceVariety
 from .element_values import ExpandedField
@@ -25,6 +26,25 @@ def is_broken(variant: int | None, share: float) -> bool:
     return int((v + 1) * share + 1e-9) > int(v * share + 1e-9)
 
 
+def _cost(q: CostQuery) -> Cost:
+    """The field's smallest inscribed radius × the smallest P: the wired rice variety's (``RICE_VARIETIES``, when the
+    wire comes straight from a rice_variety node), else ``expansion``'s low end (a broken grain is cut across its
+    length, not its thickness); nothing when a variety is wired from elsewhere."""
+    from .grain_shapes import RICE_VARIETIES
+
+    inscribed = q.inscribed("field")
+    wires = [w for w in q.nodes[q.node_id].inputs.get("variety") or []]
+    if inscribed is None:
+        return Cost()
+    if not wires:
+        return Cost(inscribed=inscribed * q.params["expansion"][0])
+    source = q.nodes.get(wires[0].node)
+    if source is None or source.spec.type_name != "rice_variety":
+        return Cost()
+    return Cost(inscribed=inscribed * RICE_VARIETIES[source.params["variety"]].expansion)
+
+
+@estimated_by(_cost)
 @node(
     "expand",
     inputs={

@@ -10,7 +10,16 @@ from ..values import DistanceField
 from .element_values import GrainMesh
 
 
-@estimated_by(lambda q: Cost(faces=q.params["target_faces"]))
+def _cost(q) -> Cost:
+    """Its faces, and the field's smallest inscribed radius less ``level`` (what a placement whose r comes from the
+    elements reads; None where the field's is not known)."""
+    inscribed = q.inscribed("field")
+    return Cost(
+        faces=q.params["target_faces"], inscribed=None if inscribed is None else max(inscribed - q.params["level"], 0.0)
+    )
+
+
+@estimated_by(_cost)
 @node(
     "remesh",
     inputs={"field": In(DistanceField, "signed distance field (positive inside)")},

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from nodegraph import In, Out, Param, node
+from nodegraph.cost import estimated_by, passes
 from nodegraph.values import Mesh
 
 from ..values import SphereSet
@@ -13,6 +14,8 @@ def _check(p: dict) -> list[tuple[str, str]]:
     return [("radius_range", f"low {lo} must not exceed high {hi}")] if lo > hi else []
 
 
+# the shape it carries on: its input's smallest inscribed radius (the spheres sink into the skin, no deeper)
+@estimated_by(passes("mesh"))
 @node(
     "sphere_scatter",
     inputs={"mesh": In(Mesh, "closed base mesh (mm)")},

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from nodegraph import In, Out, Param, node
+from nodegraph.cost import estimated_by, passes
 from nodegraph.values import Mesh
 
 from ..values import SphereSet, Volume
@@ -15,6 +16,8 @@ from ..values import SphereSet, Volume
 DEFAULT_RESOLUTION = 64
 
 
+# the shape it carries on: its input's smallest inscribed radius (the spheres sink into the skin, no deeper)
+@estimated_by(passes("mesh"))
 @node(
     "voxelise",
     inputs={

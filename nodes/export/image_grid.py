@@ -7,11 +7,20 @@ The engine writes an ``Image`` output as ``<node id>.png``.
 from __future__ import annotations
 
 from nodegraph.contact_sheet import grid_pixels
+from nodegraph.cost import Cost, estimated_by
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Image
 
 
+def _cost(q) -> Cost:
+    """The most elements a tile shows (tiles of one scene shaded otherwise show the same ones); None when one is not
+    known."""
+    counts = [c.elements for c in q.inputs.get("images", [])]
+    return Cost(elements=None if not counts or None in counts else max(counts))
+
+
+@estimated_by(_cost)
 @node(
     "image_grid",
     inputs={"images": In(Image, "tiles of one size, in order (e.g. previews)", many=True)},

@@ -485,7 +485,7 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
             "type": "sphere",
             "center": centre.tolist(),
             "radius": radius,
-            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": HIGHLIGHT_RADIANCE}},
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": scene.key_gain * HIGHLIGHT_RADIANCE}},
         },
         "backdrop": {**description["backdrop"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
         **shapes,
@@ -584,7 +584,7 @@ def _described(
 
     shapes, points = _shapes(scene, folder, subsurface)
     media = any("interior" in shape for shape in shapes.values())
-    set_up = stage(points, camera, width / height, light_direction)
+    set_up = stage(points, camera, width / height, light_direction, scene.key_gain)
     film = {
         "type": "hdrfilm",
         "width": width,
@@ -649,8 +649,9 @@ class Stage:
     hull: np.ndarray | None = None  # the subject's points on its convex hull (``hull_vertices``)
 
 
-def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) -> Stage:
-    """The camera fitted to the subject's ``points`` (``look_at``) and the studio's lights and backdrop around it."""
+def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction, key_gain: float = 1.0) -> Stage:
+    """The camera fitted to the subject's ``points`` (``look_at``) and the studio's lights and backdrop around it;
+    ``key_gain`` scales the key softbox (``ShadedScene.key_gain``)."""
     lo, hi = points.min(axis=0), points.max(axis=0)
     hull = hull_vertices(np.asarray(points, np.float64))
     origin, target = look_at(hull, camera, aspect)
@@ -663,7 +664,7 @@ def stage(points: np.ndarray, camera: Camera, aspect: float, light_direction) ->
         view,
         float(lo[2]) - 1e-3 * radius,
         studio.focus_distance(points, origin, target, camera.focus),
-        studio.lights(target, radius, view, light_direction),
+        studio.lights(target, radius, view, light_direction, key_gain),
         hull,
     )
 
@@ -680,7 +681,7 @@ def studio_description(
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
     points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
-    set_up = stage(points, camera, width / height, light_direction)
+    set_up = stage(points, camera, width / height, light_direction, scene.key_gain)
     vertices, faces, _ = studio.backdrop_mesh(set_up.target, set_up.radius, set_up.floor, set_up.view)
     backdrop = {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)}
     if setting == "table":  # the texture itself: ``studio.wood_png``, written beside the description by its reader
@@ -714,7 +715,7 @@ def studio_description(
         "glints": {
             "center": key.center.tolist(),
             "radius": key_distance * float(np.tan(HIGHLIGHT_ANGLE)),
-            "radiance": HIGHLIGHT_RADIANCE,
+            "radiance": scene.key_gain * HIGHLIGHT_RADIANCE,
         },
         "backdrop": backdrop,
         "exposure": EXPOSURE,

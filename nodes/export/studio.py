@@ -104,9 +104,12 @@ def camera_side(view: np.ndarray) -> np.ndarray:
     return h / np.linalg.norm(h) if np.linalg.norm(h) > 1e-6 else np.array([0.0, -1.0, 0.0])
 
 
-def lights(target: np.ndarray, radius: float, view: np.ndarray, key_direction) -> dict[str, Light]:
+def lights(
+    target: np.ndarray, radius: float, view: np.ndarray, key_direction, key_gain: float = 1.0
+) -> dict[str, Light]:
     """Key, fill and rim around a subject of ``radius`` centred at ``target``; ``view`` points towards the camera,
-    ``key_direction`` towards the key (the shade node's key light)."""
+    ``key_direction`` towards the key (the shade node's key light); ``key_gain`` scales the key's irradiance (the
+    shade node's key intensity over its default, ``ShadedScene.key_gain``)."""
     key = np.asarray(key_direction, np.float64) / np.linalg.norm(key_direction)
     front = camera_side(view)
     key_h = np.array([key[0], key[1], 0.0])
@@ -115,7 +118,7 @@ def lights(target: np.ndarray, radius: float, view: np.ndarray, key_direction) -
     fill_h = fill_h / np.linalg.norm(fill_h)
     key_angles = (KEY_ANGLE, 0.75 * KEY_ANGLE)
     return {
-        "key": _light(target, radius, key, KEY_DISTANCE, key_angles, KEY_IRRADIANCE),
+        "key": _light(target, radius, key, KEY_DISTANCE, key_angles, key_gain * KEY_IRRADIANCE),
         "fill": _light(
             target, radius, _direction(fill_h, FILL_ELEVATION), KEY_DISTANCE, (FILL_ANGLE,) * 2, FILL_IRRADIANCE
         ),

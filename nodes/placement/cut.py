@@ -21,6 +21,7 @@ import dataclasses
 
 import numpy as np
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 
@@ -48,6 +49,8 @@ def cut_mask(positions: np.ndarray, kind: str, normal, offset: float, center, ra
     raise ValueError(f"kind: '{kind}' is not a cut; allowed: {', '.join(KINDS)}")
 
 
+# at most the elements it is given (the cut takes some away)
+@estimated_by(passes("aggregate"))
 @node(
     "cut",
     inputs={"aggregate": In(Aggregate, "placed or simulated elements (a volume fill)")},

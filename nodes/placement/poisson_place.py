@@ -70,13 +70,13 @@ def estimate_placed(mode: str, area: float, volume: float, r: float, inset: floa
 # shapes made at check time from their parameters and inputs (milliseconds each: a boolean of the ikura bowl 30 ms,
 # a vessel region 10 ms), so that a placement in a derived shape (a region of a bowl, a difference of two) is weighed
 # as one in a plain shape is
-MADE_AT_CHECK = ("shape", "vessel_region", "boolean")
+MADE_AT_CHECK = ("shape", "vessel_region", "boolean", "mesh_file")  # a mesh file: read (the bunny: ≈ 0.1 s)
 
 
 def _target(node_id: str, nodes):
     """(source node id, its kind, trimesh) of the shape a placement fills, when the nodes that make it are all of
     ``MADE_AT_CHECK`` (made now, ≈ 0.1 s once their modules are loaded); None when only running the recipe would
-    tell (a mesh file)."""
+    tell."""
     wires = nodes[node_id].inputs.get("shape") or []
     if len(wires) != 1:
         return None

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, node
 from nodegraph.values import Table
 
@@ -29,6 +30,8 @@ def contact_depths(positions: np.ndarray, radii: np.ndarray, element: np.ndarray
     return depth[depth > 0.0]
 
 
+# the elements of the simulation it measures
+@estimated_by(passes("particles"))
 @node(
     "particle_contacts",
     inputs={"particles": In(ParticleState, "the simulation's particles (xpbd.particles)")},

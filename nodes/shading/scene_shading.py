@@ -39,6 +39,7 @@ class ShadeSettings:
     scenery_color: tuple[float, float, float]
     table: CdrfTable
     egg_tints: int = mat.EGG_TINTS  # membrane tints the eggs are drawn from (``materials.ikura_tints``)
+    key_gain: float = 1.0  # the preview's key softbox over its default (``ShadedScene.key_gain``)
 
 
 @dataclass
@@ -241,5 +242,10 @@ def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: Shad
     if any(piece.transmittance is not None for piece in pieces):
         tints = tuple(np.zeros((0, 3)) if p.transmittance is None else p.transmittance for p in pieces)
     return ShadedScene(
-        tuple(meshes), tuple(materials), np.array(material_of, np.int32), cdrf_sigma=sigmas, transmittance=tints
+        tuple(meshes),
+        tuple(materials),
+        np.array(material_of, np.int32),
+        cdrf_sigma=sigmas,
+        transmittance=tints,
+        key_gain=settings.key_gain,
     )

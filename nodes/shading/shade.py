@@ -14,6 +14,9 @@ from ..values import Aggregate, CookedMaterial, ShadedScene
 from .materials import EGG_TINTS
 
 RGB = tuple[float, float, float]
+# the key light's intensity by default: the baked vertex colours' key, and the intensity at which the preview's key
+# softbox gives its studio irradiance (``nodes.export.studio.KEY_IRRADIANCE``); another value scales both alike
+KEY_INTENSITY = 1.2
 
 
 def _check(params):
@@ -59,10 +62,19 @@ def _check(params):
             list[RGB], [(-0.45, -0.6, 0.75)], "directions towards each distant light (normalised)", range=(-1.0, 1.0)
         ),
         "light_colors": Param(
-            list[RGB], [(1.0, 0.97, 0.92)], "linear RGB per light (or one for all)", range=(0.0, 1.0)
+            list[RGB],
+            [(1.0, 0.97, 0.92)],
+            "linear RGB per light (or one for all): the baked vertex colours' (.ply, the recording); the preview's "
+            "studio lights are white",
+            range=(0.0, 1.0),
         ),
         "light_intensities": Param(
-            list[float], [1.2], "intensity per light (or one for all); must be > 0", range=(0.0, 100.0)
+            list[float],
+            [KEY_INTENSITY],
+            "intensity per light (or one for all); must be > 0. The first light is the key: the preview's key "
+            f"softbox and its glints scale with it ({KEY_INTENSITY}: the studio's own; 2.4: twice as bright), in the "
+            "preview and the Blender side-by-side alike; the others light only the baked vertex colours",
+            range=(0.0, 100.0),
         ),
         "baked_ambient": Param(
             float,
@@ -176,5 +188,6 @@ def shade(
         scenery_color=tuple(scenery_color),
         table=CdrfTable.build(*table_size),
         egg_tints=egg_tints,
+        key_gain=float(light_intensities[0]) / KEY_INTENSITY,
     )
     return shade_scene(list(aggregates), list(scenery or []), settings)

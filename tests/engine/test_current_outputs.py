@@ -97,7 +97,7 @@ def test_outputs_of_other_settings_never_sit_beside_a_run(recipe, tmp_path, caps
     manifest = json.loads((out / "manifest.json").read_text())
     assert set(manifest["files"]) == {"surf.ply"} and set(manifest["earlier"]) == {"merge.spheres.npz"}
     # other settings: the earlier outputs go, and the run says so
-    assert cli("run", str(recipe), "--no-rrd", "--output", "surf", "--set", "pts.count=9") == 0
+    assert cli("run", str(recipe), "--no-rrd", "--output", "surf", "--set", "pts.count=9", "--out-dir", str(out)) == 0
     err = capsys.readouterr().err
     assert not (out / "merge.spheres.npz").exists() and (out / "surf.ply").exists() and (out / "notes.txt").exists()
     assert "removed 1 stale output(s)" in err and "merge.spheres.npz" in err
@@ -120,11 +120,15 @@ def test_a_file_is_stale_only_when_the_step_it_came_from_changed(tmp_path, monke
     (out / "notes.txt").write_text("mine")
     a = stamps(out)["a.npz"]
     capsys.readouterr()
-    assert cli("run", "two.yaml", "--no-rrd", "--output", "b", "--set", "b.count=7") == 0  # a's step unchanged
+    same = (
+        "--out-dir",
+        str(Path("outputs") / "two"),
+    )  # one folder for every setting (without it, each --set has its own)
+    assert cli("run", "two.yaml", "--no-rrd", "--output", "b", "--set", "b.count=7", *same) == 0  # a's step unchanged
     assert stamps(out)["a.npz"] == a and "stale" not in capsys.readouterr().err
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["files"]["b.npz"]["from"] == "b" and manifest["earlier"]["a.npz"]["from"] == "a"
-    assert cli("run", "two.yaml", "--no-rrd", "--output", "b", "--set", "a.count=9") == 0  # a's step changed
+    assert cli("run", "two.yaml", "--no-rrd", "--output", "b", "--set", "a.count=9", *same) == 0  # a's step changed
     err = capsys.readouterr().err
     assert not (out / "a.npz").exists() and (out / "b.npz").exists() and (out / "notes.txt").read_text() == "mine"
     assert f"removed 1 stale output(s) from {Path('outputs') / 'two'}" in err and "a.npz" in err

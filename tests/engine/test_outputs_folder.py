@@ -60,3 +60,37 @@ def test_a_copy_with_the_same_name_gets_a_folder_of_its_own(tmp_path, monkeypatc
     for folder, recipe in ((folders[0], original), (folders[1], copy)):
         assert (folder / "surf.ply").is_file()
         assert json.loads((folder / "manifest.json").read_text())["recipe_file"] == str(recipe.resolve())
+
+
+def test_a_plain_run_never_removes_what_a_set_run_wrote(tmp_path, monkeypatch, capsys):
+    """Issue 47: a plain run deleted the files an earlier ``--set`` run had written into the same folder. Each set
+    of settings has a folder of its own inside the recipe's (``set_<settings>``), said in the run's first line; a
+    plain run, before and after, leaves it as it was; the same settings again find their own files current."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "toyrun.yaml").write_text(RECIPE)
+    cache = ("--cache-dir", str(tmp_path / "cache"))
+    plain, other = tmp_path / "outputs" / "toyrun", tmp_path / "outputs" / "toyrun" / "set_pts.count=9+phys.dt=0.5"
+    assert main(["run", "toyrun.yaml", "--plugin", TOY, *cache, "--no-rrd"]) == 0
+    capsys.readouterr()
+    settings = ["--set", "pts.count=9", "--set", "phys.dt = 0.5"]
+    assert main(["run", "toyrun.yaml", "--plugin", TOY, *cache, "--no-rrd", *settings]) == 0
+    assert capsys.readouterr().err.splitlines()[0] == f"outputs go to {other.relative_to(tmp_path)}/"
+    theirs = {p.name: p.read_bytes() for p in other.iterdir()}
+    assert {"surf.ply", "merge.spheres.npz", "manifest.json"} <= set(theirs)
+    assert json.loads((other / "manifest.json").read_text())["overrides"] == ["pts.count=9", "phys.dt = 0.5"]
+    assert (plain / "surf.ply").read_bytes() != theirs["surf.ply"]
+    assert main(["run", "toyrun.yaml", "--plugin", TOY, *cache, "--no-rrd", "--output", "surf"]) == 0
+    assert "stale" not in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in other.iterdir()} == theirs
+
+
+def test_a_long_setting_gets_a_short_folder_name_of_its_own():
+    from pathlib import Path
+
+    from nodegraph.output_folder import SETTINGS_NAME_MAX, settings_folder
+
+    assert settings_folder(Path("o"), []) == Path("o")
+    assert settings_folder(Path("o"), ["shade.syrup_color=[0.1, 0.3, 0.9]"]).name == "set_shade.syrup_color=0.1,0.3,0.9"
+    long = [f"node.param_{k}={k}" for k in range(12)]
+    names = {settings_folder(Path("o"), s).name for s in (long, long[:-1] + ["node.param_11=12"])}
+    assert len(names) == 2 and all(len(n) <= SETTINGS_NAME_MAX for n in names)

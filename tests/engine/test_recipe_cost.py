@@ -89,3 +89,20 @@ def test_a_run_of_one_output_weighs_only_what_it_needs(costed, tmp_path, capsys,
     common = ["--cache-dir", str(tmp_path / "c"), "--out-dir", str(tmp_path / "o"), "--no-rrd"]
     assert main(["run", str(path), "--output", "half", *common]) == 0
     assert "estimate: elements: ≈ 500 (placed: make 1,000); peak memory" in capsys.readouterr().err
+
+
+def test_a_cached_rerun_through_a_node_never_stored_weighs_nothing(costed, tmp_path, capsys, monkeypatch):
+    """Issue 47: a no-op re-run of a scene took 3–5 s: its shade node is never stored, so it was never in the cache,
+    so every re-run weighed the recipe (its shapes made with trimesh, ≈ 0.7 s). A node never stored is not weighed:
+    a re-run whose stored nodes are all cached prints no estimate."""
+    path = tmp_path / "costed.yaml"
+    path.write_text(
+        RECIPE.replace("outputs: [step.table]", "outputs: [again.table]")
+        + "  again:\n    type: cost_unstored\n    inputs: {table: step.table}\n"
+    )
+    monkeypatch.setattr("nodegraph.cli.default_registry", lambda plugins=(): costed)
+    common = ["--cache-dir", str(tmp_path / "c"), "--out-dir", str(tmp_path / "o"), "--no-rrd"]
+    assert main(["run", str(path), *common]) == 0
+    assert "estimate: elements" in capsys.readouterr().err  # the first run weighs
+    assert main(["run", str(path), *common]) == 0
+    assert "estimate:" not in capsys.readouterr().err

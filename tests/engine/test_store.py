@@ -57,4 +57,4 @@ def test_a_node_declared_not_stored_is_computed_not_cached(tmp_path, monkeypatch
     assert main([*args, "--output", "big"]) == 0  # computed again; total, not asked for, is not
     assert (out / "big.csv").read_text().startswith("x\n0.0") and cached_nodes(cache) == ["total"]
     assert main([*args, "--set", "big.n=2", "-q"]) == 0  # total runs and pulls big
-    assert (out / "total.csv").read_text() == "sum\n1.0\n" and cached_nodes(cache) == ["total", "total"]
+    assert (out / "set_big.n=2" / "total.csv").read_text() == "sum\n1.0\n" and cached_nodes(cache) == ["total", "total"]

@@ -52,3 +52,15 @@ def cost_half(ctx, table):
 def cost_step(ctx, table, *, steps):
     """Step the items."""
     return table
+
+
+@estimated_by(passes("table"))
+@node(
+    "cost_unstored",
+    store=False,
+    inputs={"table": In(Table, "items")},
+    outputs={"table": Out(Table, "the items again")},
+)
+def cost_unstored(ctx, table):
+    """Hand the items on, never stored (made again from the cache in a moment, as the shade node)."""
+    return table

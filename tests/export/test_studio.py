@@ -301,3 +301,26 @@ def test_each_membrane_is_rendered_with_its_own_transmittance_per_vertex(shaded,
     assert rows[:, 6:] == pytest.approx(np.sqrt(own), rel=1e-5)
     green = rows[:, 7]
     assert green.max() > 1.5 * green.min()  # the eye's vertices pass more green than the membrane's
+
+
+def test_the_shade_nodes_key_intensity_reaches_the_preview_and_the_blender_studio(scene_inputs, shaded, tmp_path):
+    """``shade.light_intensities`` is the key of the preview too: twice the intensity, twice the key softbox's
+    radiance and its glints' in the Mitsuba scene and in the studio the Blender side-by-side builds; the fill, the
+    rim and the ambient stay; the default intensity is the studio's own key."""
+    from nodes.export.mitsuba_scene import Camera, highlight_dict, studio_description
+    from nodes.material.cooked import cooked_material
+    from nodes.shading import shade
+    from nodes.shading.shade import KEY_INTENSITY
+
+    brighter = shade.call(**scene_inputs, material=cooked_material(), light_intensities=[2 * KEY_INTENSITY])
+    assert shaded.key_gain == 1.0 and brighter.key_gain == pytest.approx(2.0)
+    base, bright = _description(shaded, tmp_path), _description(brighter, tmp_path)
+    assert _light(bright, "key")[2] == pytest.approx(2 * _light(base, "key")[2])
+    for name in ("fill", "rim"):
+        assert _light(bright, name)[2] == pytest.approx(_light(base, name)[2])
+    glint = lambda scene, d: highlight_dict(scene, d)["key"]["emitter"]["radiance"]["value"]
+    assert glint(brighter, bright) == pytest.approx(2 * glint(shaded, base))
+    camera = Camera(50.0, 20.0, 35.0, 0.1, 5.6, 0.35)
+    blender = [studio_description(s, camera, 64, 48, (-0.45, -0.6, 0.75)) for s in (shaded, brighter)]
+    assert blender[1]["lights"]["key"]["radiance"] == pytest.approx(2 * blender[0]["lights"]["key"]["radiance"])
+    assert blender[1]["glints"]["radiance"] == pytest.approx(2 * blender[0]["glints"]["radiance"])
