@@ -6,7 +6,7 @@ the iterations move the angle; a sleeper wakes by net acceleration (``settings.W
 not hold what friction cannot."""
 
 import pytest
-from physics_at_defaults import grain_on_plane
+from physics_at_defaults import grain_on_plane, grain_set_on_slab
 
 HOLD, SLIDE = 30.0, 32.0  # atan 0.6 = 31.0°, ± 1° (measured: holds to 30°, slides at 31° at each setting)
 
@@ -15,3 +15,14 @@ HOLD, SLIDE = 30.0, 32.0  # atan 0.6 = 31.0°, ± 1° (measured: holds to 30°, 
 def test_a_grain_holds_below_atan_mu_and_slides_above(substeps, iterations):
     assert grain_on_plane(HOLD, substeps, iterations=iterations) < 0.1  # mm in 1 s
     assert grain_on_plane(SLIDE, substeps, iterations=iterations) > 50.0  # sliding: ≈ 200 mm in 1 s
+
+
+@pytest.mark.parametrize(("shift", "yaw"), [(0.0, 0.0), (0.6, 45.0)])
+def test_a_grain_set_down_on_a_tilted_slab_holds_below_atan_mu(shift, yaw):
+    """The held-out case: a grain set down touching a tilted slab lands on it (no settling on level ground first).
+    It slid from 26–28° or held to 32°, by where it stood: the slab's distance field was exact only 3 cells out and
+    read by the trilinear sample one particle radius out (``collider.free_space_field``), and the landing's slip
+    counted the fall's tangential motion (``friction.touched_at``) against the tip's share of the load
+    (``friction.pooled_load``). Measured at 10 × 2: holds at 28–30°, slides at 31°."""
+    assert grain_set_on_slab(HOLD - 1.0, 10, shift, yaw) < 1.0  # mm in 1.5 s, the landing included
+    assert grain_set_on_slab(SLIDE, 10, shift, yaw) > 50.0
