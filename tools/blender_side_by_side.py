@@ -23,10 +23,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+from PIL import Image as PILImage  # here, not in a thread: see below
 
 from nodegraph import runtime
 
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+# the recipe's export (USD: pxr) and preview (the table's texture: PIL) run in threads side by side, each importing
+# its extension module the first time; two such first imports at once hung the tool (every thread waiting, no CPU)
+from pxr import Usd  # noqa: E402, F401
 
 REPO = Path(__file__).resolve().parents[1]
 SCRIPT = REPO / "tools" / "blender_render_glb.py"
@@ -100,8 +104,6 @@ def main() -> None:
         blender_seconds = time.perf_counter() - start
         if done.returncode or not render.exists():
             sys.exit(f"{glb}: Blender failed:\n{done.stderr[-3000:]}")
-        from PIL import Image as PILImage
-
         theirs = np.asarray(PILImage.open(render).convert("RGB"))
     labels = [
         f"nodegraph preview (Mitsuba, {recipe.nodes['preview'].params['samples']} spp + OIDN)",

@@ -267,7 +267,10 @@ def _principled(material: Material) -> dict:
     """Mitsuba's principled BSDF for a material's parameters. Its coat follows Disney (Burley 2012), whose lobe is
     scaled by ``DISNEY_COAT``: a coat of weight 1 reflected a quarter of a glaze's Fresnel (F0 0.04 at IOR 1.5),
     where Cycles' coat and glTF's KHR_materials_clearcoat reflect all of it. The weight passed is the material's
-    over ``DISNEY_COAT``, so a glaze reflects the studio as Fresnel says in both renderers (docs/look.md)."""
+    over ``DISNEY_COAT``, so a glaze reflects the studio as Fresnel says in both renderers (docs/look.md). A
+    material with no specular of its own (``specular`` 0: a glaze's body, under its coat) gets Mitsuba's
+    ``specular`` 0 in place of its IOR (Fresnel 0: Blender's Specular IOR Level 0, glTF's specularFactor 0)."""
+    own = {"eta": float(material.ior)} if material.specular > 0 else {"specular": 0.0}
     return {
         "type": "principled",
         "base_color": _rgb(material.base_color),
@@ -278,7 +281,7 @@ def _principled(material: Material) -> dict:
         "clearcoat": float(material.clearcoat) / DISNEY_COAT,
         "clearcoat_gloss": float(1.0 - material.clearcoat_roughness),
         "spec_trans": float(material.transmission),
-        "eta": float(material.ior),
+        **own,
     }
 
 
@@ -530,16 +533,34 @@ def guides_with_albedo(aov: np.ndarray, loaded, scene: ShadedScene) -> np.ndarra
     the backdrop keeps its own. One sample a pixel (``GUIDE_SPP``) through the film's box filter, so each pixel's
     index names one shape; the same as rendering a matte copy of the scene, without loading its meshes again
     (3 s of the onigiri's preview)."""
-    keys = [shape.id() for shape in loaded.shapes()]  # Mitsuba's shape_index is 1 + the position here; 0 a miss
+    shapes = list(loaded.shapes())
+    keys = [shape.id() for shape in shapes]  # Mitsuba's shape_index is 1 + the position here; 0 a miss
     table = np.full((len(keys) + 1, 3), np.nan, np.float32)
     for position, key in enumerate(keys):
         if key.startswith("shape_"):
             table[position + 1] = guide_albedo(scene.materials[int(key.removeprefix("shape_"))])
     index = np.clip(np.rint(aov[..., 6]).astype(np.int64), 0, len(keys))
     albedo = table[index]
+    for position, (shape, key) in enumerate(zip(shapes, keys)):
+        if key.startswith("shape_") and shape.has_attribute("vertex_color"):
+            material = scene.materials[int(key.removeprefix("shape_"))]
+            if material.transmission >= TRANSMISSIVE:  # a skin with its own colour per vertex: an egg's eye
+                hit = index == position + 1
+                faces = np.asarray(shape.faces_buffer(), np.int64).reshape(-1, 3)
+                skin = np.asarray(shape.attribute_buffer("vertex_color"), np.float32).reshape(-1, 3)
+                triangle = np.clip(np.rint(aov[..., 7][hit]).astype(np.int64), 0, len(faces) - 1)
+                albedo[hit] = eye_albedo(skin[faces[triangle]].mean(axis=1), material)
     own = np.isnan(albedo[..., 0])
     albedo[own] = aov[..., 0:3][own]
     return np.concatenate([albedo, aov[..., 3:6]], axis=-1)
+
+
+def eye_albedo(skin: np.ndarray, material: Material) -> np.ndarray:
+    """The albedo guide of a skin whose transmittance varies per vertex (``_shapes``: √ of the egg's colour there,
+    times its transmission), as ``guide_albedo`` gives a whole egg: the colour light keeps through it, in and out.
+    With the material's one colour the guide had no edge where the eye is, and OIDN at 3 spp smeared each egg's
+    pale eye into the egg's own red (docs/look.md, "The eye")."""
+    return np.clip((skin / max(material.transmission, 1e-6)) ** 2, 0.0, 1.0).astype(np.float32)
 
 
 def scene_dict(
@@ -782,7 +803,7 @@ def render_layers(
         # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
         loaded = mi.load_dict(description, optimize=False)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
-        guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV + ",si:shape_index"})
+        guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV + ",si:shape_index,pi:prim_index"})
         aov = guides_with_albedo(
             np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=GUIDE_SPP), np.float32), loaded, scene
         )

@@ -352,11 +352,17 @@ CERAMIC = "ceramic"
 
 
 def ceramic_material(color) -> Material:
-    """The bowl (scenery): a glazed ceramic — a coloured body under a glossy clear glaze."""
+    """The bowl (scenery): a glazed ceramic — a coloured body under a glossy glaze. A glaze is a glass, a
+    dielectric (metallic 0): the one surface that reflects is the glaze's smooth top (the clear coat, F0 0.04 at IOR
+    1.5, roughness 0.04); the colour lies in and under the glass, seen only diffusely (roughness 1, no specular
+    of its own: the glass over the body is index-matched, and a glaze has no second, satin surface). With a
+    specular lobe of its own at roughness 0.35 the dark glaze reflected the studio as a broad grey sheen, and the
+    bowl read grey, its rim as brushed metal (issue 48; docs/look.md, "The bowl's glaze")."""
     return Material(
         name=CERAMIC,
         base_color=tuple(float(c) for c in color),
-        roughness=0.35,
+        specular=0.0,
+        roughness=1.0,
         clearcoat=1.0,
         clearcoat_roughness=0.04,
         ior=1.5,

@@ -46,6 +46,13 @@ def _check(params):
             optional=True,
             many=True,
         ),
+        "filling": In(
+            Mesh,
+            "the rice under the simulated top layer (a vessel_region's mesh, the rice's static collider), shown in "
+            "the cooked rice's material: what gaps between the top grains show (without it, the bowl's dark floor)",
+            optional=True,
+            many=True,
+        ),
     },
     outputs={
         "scene": Out(
@@ -134,6 +141,7 @@ def shade(
     aggregates,
     material=None,
     scenery=None,
+    filling=None,
     *,
     light_directions,
     light_colors,
@@ -177,4 +185,4 @@ def shade(
         table=CdrfTable.build(*table_size),
         egg_tints=egg_tints,
     )
-    return shade_scene(list(aggregates), list(scenery or []), settings)
+    return shade_scene(list(aggregates), list(scenery or []), settings, list(filling or []))
