@@ -51,6 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..shading.materials import PROPS
 from ..values import Material, ShadedScene
 from . import studio
 from .look import (
@@ -331,6 +332,18 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
     return target + distance * view, target
 
 
+def framed_points(scene: ShadedScene) -> np.ndarray:
+    """The vertices the camera frames and focuses on: every mesh's but a prop's (``materials.PROPS``: chopsticks on
+    the table reach past the frame as they would in a food photograph, and do not shrink the dish in it)."""
+    return np.concatenate(
+        [
+            m.vertices
+            for m, k in zip(scene.meshes, scene.material_of)
+            if len(m.faces) and scene.materials[k].name not in PROPS
+        ]
+    )
+
+
 def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
     """One PLY shape per material (written into ``folder``; key ``shape_<material index>``) and the scene's
     vertices (what the camera frames and focuses on); with ``subsurface``, the volumetric materials' shapes carry their
@@ -382,7 +395,8 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
         shapes[f"shape_{index}"] = {"type": "ply", "filename": str(path), "bsdf": bsdf, "face_normals": False}
         if volume:
             shapes[f"shape_{index}"]["interior"] = medium(material)
-        seen.append(vertices)
+        if material.name not in PROPS:  # a prop beside the dish is not what the camera frames and focuses on
+            seen.append(vertices)
     if not shapes:
         raise ValueError("scene: no mesh with faces to render")
     return shapes, np.concatenate(seen)
@@ -700,7 +714,7 @@ def studio_description(
 ) -> dict:
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
-    points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
+    points = framed_points(scene)
     set_up = stage(points, camera, width / height, light_direction)
     vertices, faces, _ = studio.backdrop_mesh(set_up.target, set_up.radius, set_up.floor, set_up.view)
     backdrop = {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)}

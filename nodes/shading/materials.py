@@ -369,6 +369,28 @@ def ceramic_material(color) -> Material:
     )
 
 
+LACQUER = "lacquer"  # a scenery mesh named ``chopsticks.NAME`` gets ``lacquer_material``
+PROPS = (LACQUER,)  # materials of props: on the table beside the dish, not part of what the camera frames
+
+
+def lacquer_material() -> Material:
+    """Lacquered chopsticks (urushi over wood): like a glaze, a dielectric (metallic 0) whose one reflecting
+    surface is the lacquer's smooth top (the clear coat, F0 0.04, roughness 0.08: polished, not a mirror), the
+    colour seen diffusely under it (no specular of its own). Black lacquer (kuro-urushi), linear (0.025, 0.020,
+    0.018) = sRGB (44, 39, 37): chosen, not measured (lacquer runs from black through tame-nuri brown to vermilion);
+    a deep red-brown (sRGB (89, 44, 28)) read on the oak as a groove between its boards, black with the key's
+    glint along it reads as a glossy stick."""
+    return Material(
+        name=LACQUER,
+        base_color=(0.025, 0.020, 0.018),
+        specular=0.0,
+        roughness=1.0,
+        clearcoat=1.0,
+        clearcoat_roughness=0.08,
+        ior=1.5,
+    )
+
+
 def soak_depths(vertices: list[np.ndarray], cell: float, spread: float) -> np.ndarray:
     """Each element's depth below the aggregate's top surface as the syrup sees it (mm). The top is the upper
     envelope of all element vertices over a horizontal grid of ``cell`` mm (the highest vertex per column),

@@ -235,9 +235,12 @@ def shade_scene(
     pieces = [piece for a in aggregates for piece in _element_pieces(a, settings, materials, numbers)]
     if not pieces:
         raise ValueError("aggregates: no elements to shade (every aggregate is empty)")
-    ceramic, nori = mat.ceramic_material(settings.scenery_color), mat.nori_material()
+    from ..shapes.chopsticks import NAME as CHOPSTICKS
+
+    looks = {mat.NORI: mat.nori_material(), CHOPSTICKS: mat.lacquer_material()}
+    ceramic = mat.ceramic_material(settings.scenery_color)
     pieces += [
-        _Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), nori if m.name == mat.NORI else ceramic)
+        _Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), looks.get(m.name, ceramic))
         for k, m in enumerate(scenery)
         if len(m.faces)
     ]

@@ -42,7 +42,7 @@ def _check(params):
         ),
         "scenery": In(
             Mesh,
-            "other meshes to show, e.g. the bowl (glazed ceramic; one named 'nori': nori)",
+            "other meshes to show, e.g. the bowl (glazed ceramic; one named 'nori': nori; 'chopsticks': lacquer)",
             optional=True,
             many=True,
         ),
