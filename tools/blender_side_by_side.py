@@ -25,10 +25,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+from PIL import Image as PILImage  # here, not in a thread: see below
 
 from nodegraph import runtime
 
 runtime.configure()  # numba's kernel cache and locator, before a kernel module is imported
+# the recipe's export (USD: pxr) and preview (the table's texture: PIL) run in threads side by side, each importing
+# its extension module the first time; two such first imports at once hung the tool (every thread waiting, no CPU)
+from pxr import Usd  # noqa: E402, F401
 
 REPO = Path(__file__).resolve().parents[1]
 SCRIPT = REPO / "tools" / "blender_render_glb.py"
@@ -155,7 +159,6 @@ def main() -> None:
             description["backdrop"]["texture"] = str(wood_png(Path(tmp) / description["backdrop"]["texture"]))
         settings_path.write_text(json.dumps(description))
         blender_seconds = render_with_blender(python, glb, settings_path, render)
-        from PIL import Image as PILImage
 
         theirs = np.asarray(PILImage.open(render).convert("RGB"))
     labels = [

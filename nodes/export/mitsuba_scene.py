@@ -51,6 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..shading.materials import PROPS
 from ..values import Material, ShadedScene
 from . import studio
 from .look import (
@@ -267,7 +268,10 @@ def _principled(material: Material) -> dict:
     """Mitsuba's principled BSDF for a material's parameters. Its coat follows Disney (Burley 2012), whose lobe is
     scaled by ``DISNEY_COAT``: a coat of weight 1 reflected a quarter of a glaze's Fresnel (F0 0.04 at IOR 1.5),
     where Cycles' coat and glTF's KHR_materials_clearcoat reflect all of it. The weight passed is the material's
-    over ``DISNEY_COAT``, so a glaze reflects the studio as Fresnel says in both renderers (docs/look.md)."""
+    over ``DISNEY_COAT``, so a glaze reflects the studio as Fresnel says in both renderers (docs/look.md). A
+    material with no specular of its own (``specular`` 0: a glaze's body, under its coat) gets Mitsuba's
+    ``specular`` 0 in place of its IOR (Fresnel 0: Blender's Specular IOR Level 0, glTF's specularFactor 0)."""
+    own = {"eta": float(material.ior)} if material.specular > 0 else {"specular": 0.0}
     return {
         "type": "principled",
         "base_color": _rgb(material.base_color),
@@ -278,7 +282,7 @@ def _principled(material: Material) -> dict:
         "clearcoat": float(material.clearcoat) / DISNEY_COAT,
         "clearcoat_gloss": float(1.0 - material.clearcoat_roughness),
         "spec_trans": float(material.transmission),
-        "eta": float(material.ior),
+        **own,
     }
 
 
@@ -326,6 +330,18 @@ def look_at(points: np.ndarray, camera: Camera, aspect: float = 1.0) -> tuple[np
     distance = float(np.max(z + np.maximum(np.abs(x) / (free_x * tan_x), np.abs(y) / (free_y * tan_y))))
     target = target - distance * (shift_x * tan_x * right + shift_y * tan_y * up)
     return target + distance * view, target
+
+
+def framed_points(scene: ShadedScene) -> np.ndarray:
+    """The vertices the camera frames and focuses on: every mesh's but a prop's (``materials.PROPS``: chopsticks on
+    the table reach past the frame as they would in a food photograph, and do not shrink the dish in it)."""
+    return np.concatenate(
+        [
+            m.vertices
+            for m, k in zip(scene.meshes, scene.material_of)
+            if len(m.faces) and scene.materials[k].name not in PROPS
+        ]
+    )
 
 
 def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple[dict, np.ndarray]:
@@ -379,7 +395,8 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
         shapes[f"shape_{index}"] = {"type": "ply", "filename": str(path), "bsdf": bsdf, "face_normals": False}
         if volume:
             shapes[f"shape_{index}"]["interior"] = medium(material)
-        seen.append(vertices)
+        if material.name not in PROPS:  # a prop beside the dish is not what the camera frames and focuses on
+            seen.append(vertices)
     if not shapes:
         raise ValueError("scene: no mesh with faces to render")
     return shapes, np.concatenate(seen)
@@ -530,16 +547,34 @@ def guides_with_albedo(aov: np.ndarray, loaded, scene: ShadedScene) -> np.ndarra
     the backdrop keeps its own. One sample a pixel (``GUIDE_SPP``) through the film's box filter, so each pixel's
     index names one shape; the same as rendering a matte copy of the scene, without loading its meshes again
     (3 s of the onigiri's preview)."""
-    keys = [shape.id() for shape in loaded.shapes()]  # Mitsuba's shape_index is 1 + the position here; 0 a miss
+    shapes = list(loaded.shapes())
+    keys = [shape.id() for shape in shapes]  # Mitsuba's shape_index is 1 + the position here; 0 a miss
     table = np.full((len(keys) + 1, 3), np.nan, np.float32)
     for position, key in enumerate(keys):
         if key.startswith("shape_"):
             table[position + 1] = guide_albedo(scene.materials[int(key.removeprefix("shape_"))])
     index = np.clip(np.rint(aov[..., 6]).astype(np.int64), 0, len(keys))
     albedo = table[index]
+    for position, (shape, key) in enumerate(zip(shapes, keys)):
+        if key.startswith("shape_") and shape.has_attribute("vertex_color"):
+            material = scene.materials[int(key.removeprefix("shape_"))]
+            if material.transmission >= TRANSMISSIVE:  # a skin with its own colour per vertex: an egg's eye
+                hit = index == position + 1
+                faces = np.asarray(shape.faces_buffer(), np.int64).reshape(-1, 3)
+                skin = np.asarray(shape.attribute_buffer("vertex_color"), np.float32).reshape(-1, 3)
+                triangle = np.clip(np.rint(aov[..., 7][hit]).astype(np.int64), 0, len(faces) - 1)
+                albedo[hit] = eye_albedo(skin[faces[triangle]].mean(axis=1), material)
     own = np.isnan(albedo[..., 0])
     albedo[own] = aov[..., 0:3][own]
     return np.concatenate([albedo, aov[..., 3:6]], axis=-1)
+
+
+def eye_albedo(skin: np.ndarray, material: Material) -> np.ndarray:
+    """The albedo guide of a skin whose transmittance varies per vertex (``_shapes``: √ of the egg's colour there,
+    times its transmission), as ``guide_albedo`` gives a whole egg: the colour light keeps through it, in and out.
+    With the material's one colour the guide had no edge where the eye is, and OIDN at 3 spp smeared each egg's
+    pale eye into the egg's own red (docs/look.md, "The eye")."""
+    return np.clip((skin / max(material.transmission, 1e-6)) ** 2, 0.0, 1.0).astype(np.float32)
 
 
 def scene_dict(
@@ -680,8 +715,13 @@ def studio_description(
 ) -> dict:
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
+<<<<<<< HEAD
     points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
     set_up = stage(points, camera, width / height, light_direction, scene.key_gain)
+=======
+    points = framed_points(scene)
+    set_up = stage(points, camera, width / height, light_direction)
+>>>>>>> look4
     vertices, faces, _ = studio.backdrop_mesh(set_up.target, set_up.radius, set_up.floor, set_up.view)
     backdrop = {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)}
     if setting == "table":  # the texture itself: ``studio.wood_png``, written beside the description by its reader
@@ -783,7 +823,7 @@ def render_layers(
         # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
         loaded = mi.load_dict(description, optimize=False)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
-        guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV + ",si:shape_index"})
+        guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV + ",si:shape_index,pi:prim_index"})
         aov = guides_with_albedo(
             np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=GUIDE_SPP), np.float32), loaded, scene
         )

@@ -352,13 +352,41 @@ CERAMIC = "ceramic"
 
 
 def ceramic_material(color) -> Material:
-    """The bowl (scenery): a glazed ceramic — a coloured body under a glossy clear glaze."""
+    """The bowl (scenery): a glazed ceramic — a coloured body under a glossy glaze. A glaze is a glass, a
+    dielectric (metallic 0): the one surface that reflects is the glaze's smooth top (the clear coat, F0 0.04 at IOR
+    1.5, roughness 0.04); the colour lies in and under the glass, seen only diffusely (roughness 1, no specular
+    of its own: the glass over the body is index-matched, and a glaze has no second, satin surface). With a
+    specular lobe of its own at roughness 0.35 the dark glaze reflected the studio as a broad grey sheen, and the
+    bowl read grey, its rim as brushed metal (issue 48; docs/look.md, "The bowl's glaze")."""
     return Material(
         name=CERAMIC,
         base_color=tuple(float(c) for c in color),
-        roughness=0.35,
+        specular=0.0,
+        roughness=1.0,
         clearcoat=1.0,
         clearcoat_roughness=0.04,
+        ior=1.5,
+    )
+
+
+LACQUER = "lacquer"  # a scenery mesh named ``chopsticks.NAME`` gets ``lacquer_material``
+PROPS = (LACQUER,)  # materials of props: on the table beside the dish, not part of what the camera frames
+
+
+def lacquer_material() -> Material:
+    """Lacquered chopsticks (urushi over wood): like a glaze, a dielectric (metallic 0) whose one reflecting
+    surface is the lacquer's smooth top (the clear coat, F0 0.04, roughness 0.08: polished, not a mirror), the
+    colour seen diffusely under it (no specular of its own). Black lacquer (kuro-urushi), linear (0.025, 0.020,
+    0.018) = sRGB (44, 39, 37): chosen, not measured (lacquer runs from black through tame-nuri brown to vermilion);
+    a deep red-brown (sRGB (89, 44, 28)) read on the oak as a groove between its boards, black with the key's
+    glint along it reads as a glossy stick."""
+    return Material(
+        name=LACQUER,
+        base_color=(0.025, 0.020, 0.018),
+        specular=0.0,
+        roughness=1.0,
+        clearcoat=1.0,
+        clearcoat_roughness=0.08,
         ior=1.5,
     )
 

@@ -112,15 +112,15 @@ def _element_pieces(
             if key not in splits:
                 splits[key] = _parts(mesh, names, f"element {i} ({kind})", preset)
             by_part = {part: mesh.vertices[used] for part, used, _ in splits[key]}
-            for part, used, faces in splits[key]:
+            if preset == "ikura" and 0 in by_part and 1 in by_part:  # the oil floats up, whatever the egg's turn
+                by_part[1] = floated_droplet(by_part[0], by_part[1])
+            for part, _, faces in splits[key]:
                 material, tint_of = materials[preset][part], None
                 if preset == "ikura" and part == 0:  # the membrane: the egg's own tint, paler over its eye
                     material = materials["ikura_tints"][tint[i]]
                     if 1 in by_part:
                         tint_of = eye_transmittance(by_part[0], by_part[1], material.subsurface_color)
-                pieces.append(
-                    _Piece(Mesh(mesh.vertices[used], faces, name=f"{mesh.name}/{names[part]}"), material, tint_of)
-                )
+                pieces.append(_Piece(Mesh(by_part[part], faces, name=f"{mesh.name}/{names[part]}"), material, tint_of))
     return pieces
 
 
@@ -154,6 +154,45 @@ def egg_tints(centres: np.ndarray, count: int, seed: int) -> np.ndarray:
     return out
 
 
+DROPLET_CLEARANCE = 0.05  # mm: the floated droplet keeps at least this much fluid under every part of the membrane
+
+
+def floated_droplet(skin: np.ndarray, droplet: np.ndarray) -> np.ndarray:
+    """An egg's oil droplet (``droplet``, its vertices inside the membrane ``skin``) moved, without turning, so that
+    it sits as far from the egg's centre as before but straight above it (world +z). The droplet is the egg's
+    oil, lighter than the fluid around it (fish oil: specific gravity 0.928, FAO; the egg 1.03 g/cm³, docs/sizes.md),
+    so it floats to the top of the egg however the egg came to rest: the library places it along the egg's own
+    +z (``base_mesh.eye_gap``) and the placement turns each egg at random, which pointed half the eyes into the
+    rice, away from the camera (issue 48: "the egg eye is not visible"). Where an egg is dented (a neighbour
+    pressed on its top, ``deform_contacts``) the lift shrinks until the droplet keeps ``DROPLET_CLEARANCE`` of
+    fluid under the skin everywhere (the skin as a star-shaped surface about its centre)."""
+    from scipy.spatial import cKDTree
+
+    skin, droplet = np.asarray(skin, np.float64), np.asarray(droplet, np.float64)
+    centre, middle = skin.mean(axis=0), droplet.mean(axis=0)
+    lift = float(np.linalg.norm(middle - centre))
+    if lift <= 1e-9:
+        return droplet
+    rel = skin - centre
+    reach = np.linalg.norm(rel, axis=1)
+    tree = cKDTree(rel / np.maximum(reach, 1e-12)[:, None])
+
+    def fits(height: float) -> bool:
+        moved = droplet - middle + centre + np.array([0.0, 0.0, height])
+        out = moved - centre
+        distance = np.linalg.norm(out, axis=1)
+        _, nearest = tree.query(out / np.maximum(distance, 1e-12)[:, None])
+        return bool((distance <= reach[nearest] - DROPLET_CLEARANCE).all())
+
+    low, high = 0.0, lift
+    if not fits(high):
+        for _ in range(12):  # bisect for the highest lift that fits
+            mid = 0.5 * (low + high)
+            low, high = (mid, high) if fits(mid) else (low, mid)
+        high = low
+    return droplet - middle + centre + np.array([0.0, 0.0, high])
+
+
 def eye_transmittance(skin: np.ndarray, droplet: np.ndarray, color) -> np.ndarray:
     """Per vertex of an egg's membrane (``skin``, around the oil droplet's vertices ``droplet``): the colour light
     keeps through the egg there, in and out: ``color`` (the whole egg's) to the power of the fluid's depth under that
@@ -185,17 +224,35 @@ def _parts(mesh: Mesh, names: tuple[str, ...], what: str, preset: str) -> list[t
     return out
 
 
-def shade_scene(aggregates: list[Aggregate], scenery: list[Mesh], settings: ShadeSettings) -> ShadedScene:
-    """CDRF-shaded meshes, one per element part and scenery mesh, with their materials."""
+def shade_scene(
+    aggregates: list[Aggregate], scenery: list[Mesh], settings: ShadeSettings, filling: list[Mesh] | None = None
+) -> ShadedScene:
+    """CDRF-shaded meshes, one per element part and scenery mesh, with their materials. ``filling``: closed meshes
+    of rice under the simulated grains (the shade node's input), in the cooked rice's material: a bowl of rice is
+    rice to its floor, and where the top layer (two grains deep) leaves a gap, the gap shows more rice, lit through
+    the grains round it; without it the gaps showed the dark glaze of the bowl's floor as black holes (issue 48)."""
     numbers: dict[str, int] = {}
     materials = _materials(settings)
     pieces = [piece for a in aggregates for piece in _element_pieces(a, settings, materials, numbers)]
     if not pieces:
         raise ValueError("aggregates: no elements to shade (every aggregate is empty)")
-    ceramic, nori = mat.ceramic_material(settings.scenery_color), mat.nori_material()
+    from ..shapes.chopsticks import NAME as CHOPSTICKS
+
+    looks = {mat.NORI: mat.nori_material(), CHOPSTICKS: mat.lacquer_material()}
+    ceramic = mat.ceramic_material(settings.scenery_color)
     pieces += [
-        _Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), nori if m.name == mat.NORI else ceramic)
+        _Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), looks.get(m.name, ceramic))
         for k, m in enumerate(scenery)
+        if len(m.faces)
+    ]
+    rice = materials["rice"][0]
+    if filling and rice is None:
+        raise ValueError(
+            "shade: input 'filling' is shown in the cooked rice's material: wire a cooked_rice node into 'material'"
+        )
+    pieces += [
+        _Piece(Mesh(m.vertices, m.faces, name=f"rice_fill_{k}"), rice)
+        for k, m in enumerate(filling or [])
         if len(m.faces)
     ]
 

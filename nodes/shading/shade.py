@@ -45,7 +45,14 @@ def _check(params):
         ),
         "scenery": In(
             Mesh,
-            "other meshes to show, e.g. the bowl (glazed ceramic; one named 'nori': nori)",
+            "other meshes to show, e.g. the bowl (glazed ceramic; one named 'nori': nori; 'chopsticks': lacquer)",
+            optional=True,
+            many=True,
+        ),
+        "filling": In(
+            Mesh,
+            "the rice under the simulated top layer (a vessel_region's mesh, the rice's static collider), shown in "
+            "the cooked rice's material: what gaps between the top grains show (without it, the bowl's dark floor)",
             optional=True,
             many=True,
         ),
@@ -146,6 +153,7 @@ def shade(
     aggregates,
     material=None,
     scenery=None,
+    filling=None,
     *,
     light_directions,
     light_colors,
@@ -190,4 +198,4 @@ def shade(
         egg_tints=egg_tints,
         key_gain=float(light_intensities[0]) / KEY_INTENSITY,
     )
-    return shade_scene(list(aggregates), list(scenery or []), settings)
+    return shade_scene(list(aggregates), list(scenery or []), settings, list(filling or []))

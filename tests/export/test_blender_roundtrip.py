@@ -107,6 +107,8 @@ def test_blender_sees_the_whole_look(dish, tmp_path, fmt):
             # the IOR whatever the Specular IOR Level, so no coat over it (with one, the eggs reflected twice)
             assert seen["coat_weight"] == 0.0
             assert seen["roughness"] == pytest.approx(material.transmission_roughness, abs=1e-6)
+        elif material.name == "ceramic":  # a glaze reflects only at its coat: no satin lobe of its own (issue 48)
+            assert seen["specular_level"] == 0.0 and seen["coat_weight"] == 1.0 and seen["roughness"] == 1.0
         elif material.subsurface > 0:  # scatters light
             assert seen["subsurface"] == pytest.approx(material.subsurface, abs=1e-6)
             assert seen["subsurface_radius"] == pytest.approx(material.subsurface_radius, abs=1e-6)

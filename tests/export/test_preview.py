@@ -512,3 +512,25 @@ def test_the_glints_blur_keeps_a_glints_light_unless_a_sharper_nearer_object_cov
         covered[2, 2] = 0.0
         assert covered[:, :20, 0].sum() == pytest.approx(0.0 if blur == 0.0 else disc[:, :20, 0].sum(), abs=1e-6)
         assert covered[..., 0].sum() == pytest.approx(3.0 * kept, rel=0.1)
+
+
+def test_the_denoisers_albedo_guide_shows_each_eggs_eye(shaded):
+    """Issue 48: at 3 spp OIDN smeared each egg's pale eye into its red: the guide gave the whole membrane one
+    colour. It now gives each hit the colour of its triangle's own transmittance (paler over the eye), so the
+    guide varies across an egg; with no per-vertex transmittance it is one colour per tint."""
+    from nodes.export import mitsuba_scene as ms
+
+    camera = ms.Camera(elevation=60.0, azimuth=20.0, fov=35.0, margin=0.05)
+
+    def guide(scene):
+        layers = ms.render_layers(scene, camera, 64, 48, 1, (-0.8, 0.15, 0.58))
+        return layers.albedo
+
+    eyes = guide(shaded)
+    flat = guide(dataclasses.replace(shaded, transmittance=()))
+    eggs = (flat[..., 0] > 2 * flat[..., 1] + 0.1) & (flat[..., 0] > 0.3)  # a red guide: an egg's membrane
+    assert eggs.sum() > 20
+    distinct = lambda albedo: len(np.unique(np.round(albedo[eggs], 4), axis=0))  # noqa: E731
+    assert distinct(flat) <= len([m for m in shaded.materials if m.name.startswith("ikura_membrane")])
+    assert distinct(eyes) > 3 * distinct(flat)
+    assert eyes[eggs][:, 1].max() > flat[eggs][:, 1].max() + 0.05  # paler (more green kept) over an eye

@@ -313,3 +313,47 @@ def test_the_eye_is_the_droplet_seen_through_the_thinning_fluid_over_it():
     assert eye_transmittance(concentric.vertices[skin], concentric.vertices[yolk], color) == pytest.approx(
         np.tile(color, (len(skin), 1)), rel=0.02
     )
+
+
+def test_the_oil_droplet_floats_to_the_top_of_a_turned_egg():
+    """Issue 48: the eye pointed wherever the placement turned the egg (half into the rice). The droplet moves,
+    unturned, straight above the egg's centre at its own distance, inside the skin; where the top is dented the
+    lift shrinks until it fits."""
+    from nodes.elements import base_mesh
+    from nodes.shading.scene_shading import DROPLET_CLEARANCE, _parts, floated_droplet
+
+    mesh = base_mesh.call(shape="ikura", diameter=7.0, subdivisions=2, eye_gap=0.15)
+    (_, skin, _), (_, yolk, _) = _parts(mesh, ("membrane", "yolk"), "", "")
+    turn = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])  # upside down: the eye at the bottom
+    skin, yolk = mesh.vertices[skin] @ turn.T + 10.0, mesh.vertices[yolk] @ turn.T + 10.0
+    lift = np.linalg.norm(yolk.mean(axis=0) - skin.mean(axis=0))
+    up = floated_droplet(skin, yolk)
+    assert up.mean(axis=0) - skin.mean(axis=0) == pytest.approx([0.0, 0.0, lift], abs=1e-6)
+    assert np.ptp(up - yolk, axis=0) == pytest.approx(np.zeros(3), abs=1e-9)  # moved, not turned
+    dented = skin.copy()
+    top = dented[:, 2] > skin.mean(axis=0)[2] + 2.5
+    dented[top, 2] = skin.mean(axis=0)[2] + 2.5  # a neighbour pressed the top flat
+    fitted = floated_droplet(dented, yolk)
+    height = fitted.mean(axis=0)[2] - skin.mean(axis=0)[2]
+    assert 0.0 < height < lift
+    assert fitted[:, 2].max() <= skin.mean(axis=0)[2] + 2.5 - DROPLET_CLEARANCE + 1e-6
+
+
+def test_the_rice_filling_is_rice_and_the_glaze_has_no_satin_sheen(scene_inputs):
+    """The rice under the top layer shows in the cooked rice's material (the gaps showed the bowl's dark floor);
+    the bowl's glaze reflects only at its coat (a satin specular lobe of its own made it read grey and metallic)."""
+    from nodes.material.cooked import cooked_material
+    from nodes.shading import shade
+
+    bowl = scene_inputs["scenery"][0]
+    material = cooked_material()
+    filled = shade.call(**scene_inputs, material=material, filling=[bowl])
+    rice = [filled.materials[m] for k, m in enumerate(filled.material_of) if filled.meshes[k].name == "rice_fill_0"]
+    assert len(rice) == 1 and rice[0] is material.optics
+    glaze = [m for m in filled.materials if m.name == "ceramic"][0]
+    assert glaze.metallic == 0.0 and glaze.specular == 0.0 and glaze.clearcoat == 1.0
+    from nodes.export.mitsuba_scene import material_bsdf
+
+    assert material_bsdf(glaze, False)["specular"] == 0.0 and "eta" not in material_bsdf(glaze, False)
+    with pytest.raises(ValueError, match="filling"):  # eggs alone, no cooked rice wired
+        shade.call(aggregates=scene_inputs["aggregates"][1:], scenery=[bowl], filling=[bowl])
