@@ -715,13 +715,8 @@ def studio_description(
 ) -> dict:
     """The preview's camera, lens, lights, backdrop, exposure and path depth as plain numbers (JSON), for another
     renderer to build the same studio around the same scene (``tools/blender_side_by_side.py``)."""
-<<<<<<< HEAD
-    points = np.concatenate([m.vertices for m in scene.meshes if len(m.faces)])
-    set_up = stage(points, camera, width / height, light_direction, scene.key_gain)
-=======
     points = framed_points(scene)
-    set_up = stage(points, camera, width / height, light_direction)
->>>>>>> look4
+    set_up = stage(points, camera, width / height, light_direction, scene.key_gain)
     vertices, faces, _ = studio.backdrop_mesh(set_up.target, set_up.radius, set_up.floor, set_up.view)
     backdrop = {"vertices": vertices.tolist(), "faces": faces.tolist(), "color": list(studio.BACKDROP_COLOR)}
     if setting == "table":  # the texture itself: ``studio.wood_png``, written beside the description by its reader
