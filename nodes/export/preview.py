@@ -21,9 +21,12 @@ from .studio import AMBIENT, SETTINGS
 def load_libraries() -> None:
     """The preview's ``overlap``: every native library its render loads, loaded before a run starts the instances
     beside it (``load_renderer``), SciPy's spatial module too, which the scene's hulls import
-    (``mitsuba_scene.hull_vertices``). Without it, a run whose upstream was cached hung for good: the preview
-    importing SciPy's libraries while the export beside it loaded USD's (the loader's lock against the GIL)."""
+    (``mitsuba_scene.hull_vertices``), and Pillow's, which writes the table's texture (``studio.wood_png``).
+    Without them, a run whose upstream was cached hung for good: the preview importing SciPy's (or Pillow's)
+    libraries while the export beside it loaded USD's (the loader's lock against the GIL)."""
     load_renderer()
+    import PIL.Image  # noqa: F401 - loaded for its libraries
+    import PIL.PngImagePlugin  # noqa: F401
     import scipy.spatial  # noqa: F401 - loaded for its libraries
 
 
