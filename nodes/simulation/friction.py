@@ -93,12 +93,14 @@ def removed_share(t, mode, held, used, mu_s, mu_k):
 
 @njit(cache=True, inline="always")
 def pooled_load(mode, mean, own):
-    """The normal load a particle against the walls is held against in ``mode``: its grain's mean over the touching
-    particles (``collider.wall_means``), or while it sticks the larger of that and the particle's ``own`` of this
-    substep: the load falls unevenly on a grain's particles, and a grain landing tip first on a slab tilted 25°
-    slid (μs 0.6) in the pass where that tip took three times the mean. Pairs keep the mean: with the larger, bars
-    resting on one another kept moving (kinetic energy 0.83 g·mm²/s² after 2 s, where it falls below 1e-6)."""
-    return max(mean, own) if mode == STICKING else mean
+    """The normal load a particle against the walls is held against in ``mode``: while it sticks its ``own`` of this
+    substep (each particle within its own Coulomb cone; whether the grain slides is the contact's summed test,
+    ``contact_mode``), else its grain's mean over the touching particles (``collider.wall_means``). Held against
+    the mean, a grain landing tip first on a slab tilted 25° slid (μs 0.6) in the pass where the tip took three
+    times the mean, and a lightly loaded particle landing sideways held the whole grain's share. Pairs keep the
+    mean: with their own, bars resting on one another kept moving (kinetic energy 0.83 g·mm²/s² after 2 s, where
+    it falls below 1e-6)."""
+    return own if mode == STICKING else mean
 
 
 @njit(cache=True, inline="always")
@@ -221,20 +223,21 @@ def contact_mode(normal, tx, ty, tz, slid, mu_s, mode):
     """A contact's mode for the next substep from its remembered force (``remember``; Coulomb for the contact as
     a whole: Müller et al. 2020 §3.5's λ_t < μs·λ_n with the multipliers summed over the substep) and ``mode``, this
     substep's; TESTED without load.
-    - STICKING slides when friction let it slide in some pass or holding it took more than μs times its normal
+    - STICKING (or TESTED, a contact's first substep) slides when holding it took more than μs times its normal
       load, |Σ Δx_t| > μs·Σ Δx_n, both summed over its particles and the substep's passes. Summed over the passes,
       the decision does not depend on how the substep is split into iterations: each pass's own test saw only the
       drift since the pass before, and a grain on a plane held to 24°, 29°, 34°, 37° at 1–4 iterations (31°).
+      Where one of its particles slipped (``slid``: a lightly loaded one, ``pooled_load``) the contact still
+      sticks: a grain set down tip first on a slab swings about the tip until a second particle lands moving
+      sideways, and that particle's slip slid the whole grain away from 24° at 40 substeps (μs 0.6).
     - SLIDING sticks again once kinetic friction stopped it in the substep (Coulomb: static friction holds a
       contact at rest). The remembered force, which still held the slip's, kept a grain that rocked as it was set
-      down on a slab sliding away at 28°, μs 0.6, where kinetic friction alone (μk 0.42) cannot stop it.
-    - TESTED (a contact's first substep) is judged by the summed test alone: its passes test each particle against
-      its own load, and a grain landing tip first slid in one of them."""
+      down on a slab sliding away at 28°, where kinetic friction alone (μk 0.42) cannot stop it."""
     if normal <= 0.0:
         return TESTED
     if mode == SLIDING:
         return SLIDING if slid else STICKING
-    if (slid and mode != TESTED) or tx * tx + ty * ty + tz * tz > (mu_s * normal) ** 2:
+    if tx * tx + ty * ty + tz * tz > (mu_s * normal) ** 2:
         return SLIDING
     return STICKING
 
