@@ -358,13 +358,19 @@ def ceramic_material(color) -> Material:
     of its own: the glass over the body is index-matched, and a glaze has no second, satin surface). With a
     specular lobe of its own at roughness 0.35 the dark glaze reflected the studio as a broad grey sheen, and the
     bowl read grey, its rim as brushed metal (issue 48; docs/look.md, "The bowl's glaze")."""
+    return coated(CERAMIC, tuple(float(c) for c in color), 0.04)
+
+
+def coated(name: str, color, coat_roughness: float) -> Material:
+    """A colour seen only diffusely under one smooth dielectric coat (F0 0.04 at IOR 1.5): a glaze or a lacquer,
+    with no specular lobe of its own."""
     return Material(
-        name=CERAMIC,
-        base_color=tuple(float(c) for c in color),
+        name=name,
+        base_color=color,
         specular=0.0,
         roughness=1.0,
         clearcoat=1.0,
-        clearcoat_roughness=0.04,
+        clearcoat_roughness=coat_roughness,
         ior=1.5,
     )
 
@@ -380,15 +386,7 @@ def lacquer_material() -> Material:
     0.018) = sRGB (44, 39, 37): chosen, not measured (lacquer runs from black through tame-nuri brown to vermilion);
     a deep red-brown (sRGB (89, 44, 28)) read on the oak as a groove between its boards, black with the key's
     glint along it reads as a glossy stick."""
-    return Material(
-        name=LACQUER,
-        base_color=(0.025, 0.020, 0.018),
-        specular=0.0,
-        roughness=1.0,
-        clearcoat=1.0,
-        clearcoat_roughness=0.08,
-        ior=1.5,
-    )
+    return coated(LACQUER, (0.025, 0.020, 0.018), 0.08)
 
 
 def soak_depths(vertices: list[np.ndarray], cell: float, spread: float) -> np.ndarray:
