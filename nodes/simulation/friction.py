@@ -29,11 +29,13 @@ alike. Whether a contact sticks is therefore decided for the contact as a whole 
 element against the walls) and once per substep, from the last (``pool_contacts``, ``collider.wall_means``):
 Coulomb's |Σ Δx_t| ≤ μs·Σ Δx_n with the tangential corrections summed as vectors and both summed over the
 contact's particles and all of the substep's passes (``contact_mode``). While a contact sticks, every pass
-restores its whole drift since the anchor; while it slides, the passes remove at most μk times its load over
-the substep. A test of each pass's drift against the load, as Macklin's, saw only what the passes before had
+restores its drift since the anchor, each particle against a wall within its own cone (``pooled_load``); while
+it slides, the passes remove at most μk times its load over the substep, and once kinetic friction stops it, it
+sticks again. A test of each pass's drift against the load, as Macklin's, saw only what the passes before had
 left, so static friction grew with the iterations (a grain held on a plane to 24°, 29°, 34° and 37° at 1–4
-iterations, μs 0.6); the summed test holds it to 30° and lets it slide at 31° at 10 × 2, 40 × 2 and 10 × 4
-(tests/simulation/test_static_friction.py). G Table 3: μs = static threshold, μk = dynamic scale · μs.
+iterations, μs 0.6); the summed test holds it to 29–30° and lets it slide at 30–31° at 10 × 2, 40 × 2 and
+10 × 4, laid on the plane or set down on it (tests/simulation/test_static_friction.py). G Table 3: μs = static
+threshold, μk = dynamic scale · μs.
 
 Anchors are NaN where no contact sticks. ``friction_pair`` runs per pair inside the contacts'
 Gauss–Seidel sweep (``contact_constraints.contact_sweep``) just before the pair's normal correction;
@@ -63,9 +65,10 @@ RUBBED = 5
 # once at rest, but rings to 1.3 tan θ over the first 4–10 substeps (10 × 2, 40 × 2 and 10 × 4 alike): a test of
 # each substep alone let it slide at 28° (μs 0.6: 31°); the running mean at this share stays below tan θ
 RESPONSE = 0.25
-# a sticking contact restores at most this many times μs·load in one pass, and slides beyond: a grain tilted on a
-# plane needs up to 1.3 μs·load in a pass while it rings (held to 30°, slid at 31° from 1.25 up at 10 × 2, 40 × 2
-# and 10 × 4); without a bound two sticking contacts with other normals lock a particle against its normal
+# a sticking contact restores at most this many times μs·load in one pass (the particle slips beyond, and the
+# contact's summed test decides whether the grain slides): a grain tilted on a plane needs up to 1.3 μs·load in a
+# pass while it rings (held to 30°, slid at 31° from 1.25 up at 10 × 2, 40 × 2 and 10 × 4); without a bound two
+# sticking contacts with other normals lock a particle against its normal
 # corrections (a plate pressed on two-layer grains passed through them), and a bar lying on the ground under
 # another kept rocking (kinetic energy 1.3e-3 g·mm²/s² at 2: 4.7e-9 at 1.25, 0.17 with sleeping at 1.5)
 HOLD = 1.25
