@@ -22,7 +22,7 @@ material's principled subsurface radius and colour (G Table 3) by the random-wal
 Burley 2016, the one Blender's Cycles uses for the same parameters, so both renderers read the same numbers.
 Rice's radius and colour follow its water content (``shading.materials.rice_material``; G fig. 3.1.2.1: wetter
 is whiter and more translucent); no measured values for cooked rice are published: at 24 % water its mean free
-path (≈ 1.2 mm in red) and albedo (≥ 0.99) match the starchy stand-in, potato (Jensen et al. 2001, table 2:
+path (≈ 1.65 mm in red) and albedo (≥ 0.99) match the starchy stand-in, potato (Jensen et al. 2001, table 2:
 σ′s = 0.68, 0.70, 0.55 mm⁻¹, σa = 0.0024, 0.0090, 0.12 mm⁻¹). The CDRF stays on the surface: in the baked
 vertex colours of the exported files and, with ``subsurface`` off, as the per-vertex diffuse transmission.
 

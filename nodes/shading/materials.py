@@ -62,12 +62,12 @@ def _absorb(clear, dyed, t):
     return tuple(float(a ** (1.0 - t) * max(b, 1e-6) ** t) for a, b in zip(clear, dyed))
 
 
-# the subsurface radius (mm) of rice at the wettest (24 %): with it the medium's mean free path is 1.16 mm at 24 %
-# and 0.87 mm at 15 % (σt 0.86 and 1.16 mm⁻¹), towards the starchy stand-in, potato (Jensen et al. 2001, table 2:
-# σ′s 0.68, 0.70, 0.55 mm⁻¹, 1.4–1.8 mm), and bounded by the grain's optical thickness (σt × 2.0 mm ≥ 2 up to 18 %,
-# tests/scenes/test_grain_optics.py: thinner, light crosses a grain unscattered and rice reads as glass). It was
-# (1.2, 0.9, 0.6), 0.67 mm at 15 %: walks of 64 bounces, the preview's and Cycles' path depth, ended inside the heap
-# and took the rice's multiply scattered, warm light with them (docs/look.md, "Cooked rice: wet, milky, warm")
+# the subsurface radius (mm) of rice at the wettest (24 %): its medium's mean free path in red is then 1.65 mm at 24 %
+# and 1.15 mm at 15 % (one σt for every channel: 0.86 and 1.16 mm⁻¹), the wet end at the starchy stand-in's, potato
+# (Jensen et al. 2001, table 2: 1/σ′s = 1.47, 1.43, 1.82 mm); it was (1.2, 0.9, 0.6): 1.24 and 0.89 mm, grains that
+# read as opaque pebbles. Bounded by the grain's optical thickness (σt × 2.0 mm ≥ 2 up to 18 % water,
+# tests/scenes/test_grain_optics.py: thinner, light crosses a grain unscattered and rice reads as glass; docs/look.md,
+# "Cooked rice: wet, milky, warm")
 RICE_RADIUS_WET = (1.6, 1.2, 0.8)
 
 
