@@ -399,7 +399,10 @@ TABLES = {
             ("OIDN clean_aux", lambda r: "on" if r["config"]["clean_aux"] else "off"),
             ("FLIP against 64 spp + OIDN: frame / rice", pair("flip_denoised", "flip_denoised_rice")),
             ("FLIP against 64 spp, no denoiser: frame / rice", pair("flip_noisy", "flip_noisy_rice")),
-            ("rice sRGB: preview · 64 spp + OIDN", lambda r: f"{r['values']['rice']} · " + r["values"]["rice_reference"]),
+            (
+                "rice sRGB: preview · 64 spp + OIDN",
+                lambda r: " · ".join((r["values"]["rice"], r["values"]["rice_reference"])),
+            ),
             ("3-spp passes, wall s", value("layers_wall")),
         ],
     ),
