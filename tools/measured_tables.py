@@ -390,6 +390,27 @@ TABLES = {
         None,
         [("variant", field("variant")), ("CPU s", value("cpu")), ("eggs' red (linear)", value("eggs_red"))],
     ),
+    "rice_denoise": (
+        "rice_denoise.jsonl",
+        lambda r: "flip_denoised" in r["values"],
+        [
+            ("rice", field("rice")),
+            ("guide passes", lambda r: str(r["config"]["guide_passes"])),
+            ("OIDN clean_aux", lambda r: "on" if r["config"]["clean_aux"] else "off"),
+            ("FLIP against 64 spp + OIDN: frame / rice", pair("flip_denoised", "flip_denoised_rice")),
+            ("FLIP against 64 spp, no denoiser: frame / rice", pair("flip_noisy", "flip_noisy_rice")),
+            (
+                "rice sRGB: preview · 64 spp + OIDN",
+                lambda r: " · ".join((r["values"]["rice"], r["values"]["rice_reference"])),
+            ),
+            ("3-spp passes, wall s", value("layers_wall")),
+        ],
+    ),
+    "rice_look": (
+        "rice_denoise.jsonl",
+        lambda r: "quantity" in r,
+        [("", field("quantity")), ("before", value("before")), ("now", value("after"))],
+    ),
     "preview_guides": (
         "preview_guides.jsonl",
         None,

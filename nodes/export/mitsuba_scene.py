@@ -22,7 +22,7 @@ material's principled subsurface radius and colour (G Table 3) by the random-wal
 Burley 2016, the one Blender's Cycles uses for the same parameters, so both renderers read the same numbers.
 Rice's radius and colour follow its water content (``shading.materials.rice_material``; G fig. 3.1.2.1: wetter
 is whiter and more translucent); no measured values for cooked rice are published: at 24 % water its mean free
-path (≈ 1.2 mm in red) and albedo (≥ 0.99) match the starchy stand-in, potato (Jensen et al. 2001, table 2:
+path (≈ 1.65 mm in red) and albedo (≥ 0.99) match the starchy stand-in, potato (Jensen et al. 2001, table 2:
 σ′s = 0.68, 0.70, 0.55 mm⁻¹, σa = 0.0024, 0.0090, 0.12 mm⁻¹). The CDRF stays on the surface: in the baked
 vertex colours of the exported files and, with ``subsurface`` off, as the per-vertex diffuse transmission.
 
@@ -107,6 +107,8 @@ DENOISE_QUALITY = "high"
 # docs/accuracy.md, "Preview cost"). Mitsuba's aov integrator around the volpath one (colour and guides in one
 # pass) cost more, not less: 32.7 CPU s against 22.4 + 1.9 for the two passes, and other colour bits
 GUIDE_SPP = 1
+GUIDE_PASSES = 1  # guide passes averaged into the denoiser's albedo and normals (``guide_layers``)
+CLEAN_AUX = False  # tell OIDN its guides are noise-free (``denoise``)
 # path length with media: every scattering event inside a grain is a vertex of the path, and light that lights a
 # heap of grains crosses many of them (and reflects inside them). A 3 mm grain at 15 % water is 3–6 mean free
 # paths thick with albedo ≈ 0.99; at 32 the walks through the heap were cut off and the rice darkened (rice bowl
@@ -402,9 +404,17 @@ def _shapes(scene: ShadedScene, folder: Path, subsurface: bool = False) -> tuple
     return shapes, np.concatenate(seen)
 
 
-def gloss(material: Material) -> tuple[float, float]:
-    """(weight, roughness) of a surface's glossy reflection, which the glints' pass renders: its clear coat, else
-    the skin of a transmissive element (weight 1 at its transmission roughness), else none (weight 0)."""
+def gloss(material: Material, skin: bool = False) -> tuple[float, float]:
+    """(weight, roughness) of a surface's glossy reflection, which the glints' pass renders: the dielectric skin
+    over a medium where the preview renders one (``skin``: weight 1 at ``boundary_roughness``), else its clear
+    coat, else the skin of a transmissive element (weight 1 at its transmission roughness), else none (weight 0).
+
+    A skin over a medium is an interface: it reflects Fresnel's share of the key's core, as it reflects the rest of
+    the studio in the path-traced pass and as Cycles' transmission lobe does (the add-on's skin). At the coat's
+    weight (0.31 for rice at 15 % water) the rice's glints were a third of what the same skin reflects
+    (docs/look.md, "Cooked rice: wet, milky, warm")."""
+    if skin:
+        return 1.0, boundary_roughness(material)
     if material.clearcoat > 0:
         return float(material.clearcoat), float(material.clearcoat_roughness)
     if material.transmission >= TRANSMISSIVE:
@@ -412,10 +422,11 @@ def gloss(material: Material) -> tuple[float, float]:
     return 0.0, 1.0
 
 
-def specular_bsdf(material: Material) -> dict:
+def specular_bsdf(material: Material, skin: bool = False) -> dict:
     """Reflection only, as the glints' pass sees a surface: Fresnel at the material's IOR times its gloss weight,
-    a microfacet lobe at the gloss roughness (Mitsuba's (rough)plastic with no diffuse part); black when matte."""
-    weight, rough = gloss(material)
+    a microfacet lobe at the gloss roughness (Mitsuba's (rough)plastic with no diffuse part); black when matte.
+    ``skin``: the surface is a dielectric skin over a medium (``gloss``)."""
+    weight, rough = gloss(material, skin)
     if weight <= 0:
         return {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
     bsdf = {
@@ -481,7 +492,8 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
     shapes = {}
     for key, shape in description.items():
         if key.startswith("shape_"):
-            bsdf = specular_bsdf(scene.materials[int(key.removeprefix("shape_"))])
+            material = scene.materials[int(key.removeprefix("shape_"))]
+            bsdf = specular_bsdf(material, "interior" in shape and has_skin(material))
             shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
     centre, radius = glints_core(description)
     sensor = {k: v for k, v in description["sensor"].items() if k not in ("aperture_radius", "focus_distance")}
@@ -567,6 +579,20 @@ def guides_with_albedo(aov: np.ndarray, loaded, scene: ShadedScene) -> np.ndarra
     own = np.isnan(albedo[..., 0])
     albedo[own] = aov[..., 0:3][own]
     return np.concatenate([albedo, aov[..., 3:6]], axis=-1)
+
+
+def guide_layers(loaded, scene: ShadedScene, seed: int) -> np.ndarray:
+    """The denoiser's guides (albedo, normal; ``guides_with_albedo``), the mean of ``GUIDE_PASSES`` one-sample
+    passes, each with its own seed (``seed`` × ``GUIDE_PASSES`` + pass)."""
+    import mitsuba as mi
+
+    guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV + ",si:shape_index,pi:prim_index"})
+    total = None
+    for index in range(GUIDE_PASSES):
+        aov = np.asarray(mi.render(loaded, integrator=guides, seed=seed * GUIDE_PASSES + index, spp=GUIDE_SPP))
+        layer = guides_with_albedo(np.asarray(aov, np.float32), loaded, scene)
+        total = layer if total is None else total + layer
+    return total / np.float32(GUIDE_PASSES)
 
 
 def eye_albedo(skin: np.ndarray, material: Material) -> np.ndarray:
@@ -818,10 +844,7 @@ def render_layers(
         # others in the same process (tests/export/test_preview.py); merging saves memory only (shared materials)
         loaded = mi.load_dict(description, optimize=False)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
-        guides = mi.load_dict({"type": "aov", "aovs": ALBEDO_AOV + ",si:shape_index,pi:prim_index"})
-        aov = guides_with_albedo(
-            np.asarray(mi.render(loaded, integrator=guides, seed=seed, spp=GUIDE_SPP), np.float32), loaded, scene
-        )
+        aov = guide_layers(loaded, scene, seed)
         window = glints_window(set_up, camera, width, height, glints_core(description), crop)
         pinhole = mi.load_dict(highlight_dict(scene, description, window), optimize=False)
         part = np.asarray(mi.render(pinhole, seed=seed), np.float32)[..., 0:3]
@@ -879,6 +902,7 @@ def denoise(layers: Layers) -> np.ndarray:
         albedo=np.ascontiguousarray(layers.albedo),
         normal=np.ascontiguousarray(layers.normal),
         hdr=True,
+        clean_aux=CLEAN_AUX,
         quality=DENOISE_QUALITY,
     )
     return np.maximum(np.asarray(out, np.float32), 0.0)

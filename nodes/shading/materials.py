@@ -62,6 +62,15 @@ def _absorb(clear, dyed, t):
     return tuple(float(a ** (1.0 - t) * max(b, 1e-6) ** t) for a, b in zip(clear, dyed))
 
 
+# the subsurface radius (mm) of rice at the wettest (24 %): its medium's mean free path in red is then 1.65 mm at 24 %
+# and 1.15 mm at 15 % (one σt for every channel: 0.86 and 1.16 mm⁻¹), the wet end at the starchy stand-in's, potato
+# (Jensen et al. 2001, table 2: 1/σ′s = 1.47, 1.43, 1.82 mm); it was (1.2, 0.9, 0.6): 1.24 and 0.89 mm, grains that
+# read as opaque pebbles. Bounded by the grain's optical thickness (σt × 2.0 mm ≥ 2 up to 18 % water,
+# tests/scenes/test_grain_optics.py: thinner, light crosses a grain unscattered and rice reads as glass; docs/look.md,
+# "Cooked rice: wet, milky, warm")
+RICE_RADIUS_WET = (1.6, 1.2, 0.8)
+
+
 def rice_material(water: float, name: str = "rice") -> Material:
     """Cooked (or raw) rice at a water content in % — translucency, whiteness, gloss grow with water.
 
@@ -79,7 +88,7 @@ def rice_material(water: float, name: str = "rice") -> Material:
         name=name,
         base_color=_mix((0.66, 0.60, 0.47), (0.90, 0.89, 0.84), t),
         subsurface=0.3 + 0.6 * t,
-        subsurface_radius=_mix((0.3, 0.2, 0.1), (1.2, 0.9, 0.6), t),
+        subsurface_radius=_mix((0.3, 0.2, 0.1), RICE_RADIUS_WET, t),
         subsurface_color=_mix((0.80, 0.65, 0.44), (0.96, 0.92, 0.835), t),
         specular=0.5,
         roughness=0.7 - 0.35 * t,
