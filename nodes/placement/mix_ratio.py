@@ -14,6 +14,15 @@ from nodegraph.params import Param
 from ..values import Aggregate, ElementLibrary, Placement
 
 
+def _ratios_per_library(node_id: str, nodes) -> list[tuple[str, str]]:
+    """One ratio per library wired, before any work (a ratio short failed the run after its elements were built)."""
+    me = nodes[node_id]
+    ratios, wired = me.params.get("ratios"), len(me.inputs.get("libraries", ()))
+    if ratios is None or not wired or len(ratios) == wired:
+        return []
+    return [("ratios", f"{len(ratios)} value(s) for the {wired} libraries wired; allowed: {wired} values, or none")]
+
+
 @estimated_by(passes("placement", faces="libraries"))
 @node(
     "mix_ratio",
@@ -35,6 +44,7 @@ from ..values import Aggregate, ElementLibrary, Placement
         )
     },
     random=True,
+    check_recipe=_ratios_per_library,
 )
 def mix_ratio(ctx, placement, libraries, *, ratios):
     """Kind by the cumulative ratios of a uniform draw per P_num; variant uniform within the kind's library."""
