@@ -99,16 +99,20 @@ class _Parser(argparse.ArgumentParser):
         parsed, extra = self.parse_known_args(args, namespace)
         if extra:
             owner = self.commands.get(getattr(parsed, "command", None), self)
-            owner.error(unknown_arguments(extra, owner))
+            owner.error(unknown_arguments(extra, owner, getattr(parsed, "overrides", None) or []))
         return parsed
 
 
-def unknown_arguments(extra: list[str], parser: argparse.ArgumentParser) -> str:
-    """What argparse says of arguments it did not take, and for each misspelt option the nearest of ``parser``'s."""
+def unknown_arguments(extra: list[str], parser: argparse.ArgumentParser, overrides: list[str] = ()) -> str:
+    """What argparse says of arguments it did not take, and for each misspelt option the nearest of ``parser``'s;
+    a value left after a ``--set`` without ``=`` (``--set rice_sim.frames 3``) is shown joined."""
     import difflib
 
     options = sorted(set(re.findall(r"--[a-z][a-z-]*", parser.format_usage())))
     hints = []
+    bare = [text for text in overrides if "=" not in text]
+    for text, arg in zip(bare, [a for a in extra if not a.startswith("-")]):
+        hints.append(f"{arg}: did you mean --set {text}={arg}?")
     for arg in extra:
         if arg.startswith("-"):
             near = difflib.get_close_matches(arg.partition("=")[0], options, n=1, cutoff=0.6)

@@ -155,3 +155,11 @@ def test_a_misspelt_option_gets_its_commands_usage_and_the_nearest_option(capsys
     err = capsys.readouterr().err
     assert err.startswith("usage: nodegraph run ") and "--max-minutes" in err
     assert "nodegraph run: error: unrecognized arguments: --drfat; --drfat: did you mean --draft?" in err
+
+
+def test_a_set_without_equals_is_shown_joined(capsys):
+    """Issue 47: ``--set rice_sim.frames 3`` said only "unrecognized arguments: 3"."""
+    with pytest.raises(SystemExit) as info:
+        main(["run", "graphs/ikura_don.yaml", "--set", "rice_sim.frames", "3"])
+    assert info.value.code == 2
+    assert "unrecognized arguments: 3; 3: did you mean --set rice_sim.frames=3?" in capsys.readouterr().err
