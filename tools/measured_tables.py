@@ -241,7 +241,13 @@ TABLES = {
             ("substeps", field("substeps")),
             ("grains", field("grains")),
             ("bulk density, g/cm³", field("rho_b_g_per_cm3")),
-            ("rate, grains/s", field("rate_grains_per_s")),
+            (
+                "rate, grains/s",
+                lambda r: (
+                    number(r["rate_grains_per_s"])
+                    + (f" (jammed: {r['discharged']:,} of {r['grains']:,} out)" if r.get("jam") else "")
+                ),
+            ),
             ("rate, g/s", field("rate_g_per_s")),
             (
                 "first / second half of the window, grains/s",
