@@ -36,7 +36,9 @@ def _measure(recipe_name: str, tmp_path, extra=()) -> dict[str, float]:
 
 
 # Per recipe at its reduced size: (fewest, most) elements and the most overlap (p95, max, in element lengths)
-# measured today with some room, after the covering clusters and flatten_contacts (issue 17).
+# measured today with some room, after the covering clusters and flatten_contacts (issue 17). The rice scenes are
+# held to issue 17's target after relaxation, p95 ≤ 3 %, max ≤ 10 % of the element length (without
+# flatten_contacts the reduced bowl, then 118 grains before the inset, measured p95 0.134, max 0.205).
 EXPECTED = {
     "rice_bowl": ((60, 110), 0.03, 0.10),  # 81 grains: p95 0.014, max 0.062
     "ikura_don": ((280, 420), 0.03, 0.10),  # 386 elements (the donburi's draft; 347 in the 84 mm bowl): max 0.016
@@ -65,15 +67,6 @@ def test_scene_at_reduced_size_counts_and_quality(recipe_name, tmp_path_factory)
     assert row["overlap_p95"] <= p95 and row["overlap_max"] <= deepest
     assert row["contacts_per_element"] > 0.5 and 0.05 < row["packing_fraction"] < 1.0
     assert row["outside_vessel"] == 0  # the bowl scenes give measure their vessel (issue 23)
-
-
-# issue 17's target after relaxation, p95 ≤ 3 %, max ≤ 10 % of the element length: the rice scenes meet it
-# (without flatten_contacts the reduced bowl, then 118 grains before the inset, measured p95 0.134, max 0.205;
-# with the former clusters 0.149 / 0.198)
-@pytest.mark.parametrize("recipe_name", ["rice_bowl", "ikura_don", "onigiri"])
-def test_rice_scenes_meet_the_overlap_target(recipe_name, tmp_path_factory):
-    row = _quick_row(recipe_name, tmp_path_factory)
-    assert row["overlap_p95"] <= 0.03 and row["overlap_max"] <= 0.10
 
 
 @pytest.mark.slow
