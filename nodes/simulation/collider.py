@@ -185,7 +185,7 @@ def free_space_field(colliders, moulds, lo, hi, pitch: float, reach: float = 0.0
     φ is exact (the band) up to ``reach`` (the largest particle radius) and two cells beyond: a particle is tested
     at its centre, one radius from the wall, where the trilinear φ reads its cell's corners up to √3 cells farther.
     Past the band the distance transform is off by up to half a cell; read there, a flat slab was bumpy by 0.14 mm
-    at a 0.29 mm pitch, its normals tilted by up to 20°, and a grain set down on it tilted 28° slid at μs 0.6."""
+    at a 0.29 mm pitch, and a grain set down on it tilted 28° slid or held at μs 0.6 by where it stood."""
     band_cells = max(3.0, reach / pitch + 2.0)
     phi = None
     for meshes, sign in ((colliders, 1.0), (moulds, -1.0)):
