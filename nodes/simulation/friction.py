@@ -143,8 +143,8 @@ def _rub(rubbed, a, scale, t, tx, ty, tz):
 @njit(cache=True, inline="always")
 def friction_pair(x, x_prev, anchor, rubbed, a, i, j, normal, held, share, rule, mode):
     """Friction on the pair (i, j) of list entry ``a`` with unit normal ``normal`` = (nx, ny, nz)
-    (j → i) and normal load ``held``, in place; i takes ``share`` of the correction, j the
-    rest (the contacts' mass scaling). ``rule``: a ``friction_models.FrictionRule`` (μs, μk, anchored); ``mode``: the
+    (j → i) and normal load ``held``, in place; i takes ``share`` of the correction, j the rest (the
+    contacts' mass scaling). ``rule``: a ``friction_models.FrictionRule`` (μs, μk, anchored); ``mode``: the
     contact's (``TESTED``, ``STICKING``, ``SLIDING``). Without anchors the drift is the substep's (Macklin's
     rule); with them a pair without an anchor is anchored where it stood at the substep's start (its first
     substep is Macklin's rule) and a sliding pair is re-anchored after its step. What is removed adds to
@@ -189,11 +189,15 @@ def friction_wall(x, x_prev, anchor, rubbed, i, nx, ny, nz, pen, held, rule, mod
     mu_s, mu_k, anchored = rule
     ref = anchor if anchored else x_prev
     if anchored and np.isnan(anchor[i, 0]):
-        # before the push: x − pen·n, which approached the wall by (x_prev − that)·n from a gap of that less pen
-        approach = (x_prev[i, 0] - x[i, 0]) * nx + (x_prev[i, 1] - x[i, 1]) * ny + (x_prev[i, 2] - x[i, 2]) * nz + pen
-        f = touched_at(approach - pen, approach)
-        for k in range(3):
-            anchor[i, k] = x_prev[i, k] + f * (x[i, k] - pen * (nx, ny, nz)[k] - x_prev[i, k])
+        # the move since the substep's start up to the push (x − pen·n), and how far along n it closed on the wall
+        mx = x[i, 0] - pen * nx - x_prev[i, 0]
+        my = x[i, 1] - pen * ny - x_prev[i, 1]
+        mz = x[i, 2] - pen * nz - x_prev[i, 2]
+        approach = -(mx * nx + my * ny + mz * nz)
+        f = touched_at(approach - pen, approach)  # the gap at the start was the approach less the penetration
+        anchor[i, 0] = x_prev[i, 0] + f * mx
+        anchor[i, 1] = x_prev[i, 1] + f * my
+        anchor[i, 2] = x_prev[i, 2] + f * mz
     t, tx, ty, tz = tangential_part(x[i, 0] - ref[i, 0], x[i, 1] - ref[i, 1], x[i, 2] - ref[i, 2], nx, ny, nz)
     if t <= 1e-12:
         return
