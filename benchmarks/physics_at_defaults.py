@@ -1,5 +1,6 @@
 """The held-out granular cases at the xpbd node's defaults and at 4× its substeps (issue 46): a rice grain on
-an inclined plane, and rice heaps dropped as a ball and poured as a stream, read at 2.5 s and 7 s. Each case
+an inclined plane, and rice heaps, dry and sticky, dropped as a ball and poured as a stream (and the stream with
+the speed clamp at 4, so that a fall keeps its speed: ``solver.solve_pieces``), read at 2.5 s and 7 s. Each case
 writes one line to benchmarks/measured/physics_defaults.jsonl; ``python tools/measured_tables.py`` renders
 the table in docs/validation.md.
 
@@ -188,17 +189,27 @@ def plane_case(substeps: int, on: str = "wall", across: bool = False, **params) 
     }
 
 
-def heap_case(shape: str, n: int, substeps: int, seed: int = 0) -> dict:
-    """A heap at the node's defaults: its H/R angle at 2.5 s and 7 s (``validation.rice_heap``)."""
-    from validation import rice_heap
+# cooked rice: the rice recipes' effects, adhesion at the node's clumping and the moisture's factors
+STICKY = frozenset({"gravity", "contact", "friction", "adhesion", "collider", "moisture", "damping"})
+
+
+def heap_case(shape: str, n: int, substeps: int, seed: int = 0, sticky: bool = False, **params) -> dict:
+    """A heap at the node's defaults (but ``params``): its H/R angle at 2.5 s and 7 s (``validation.rice_heap``);
+    ``sticky``: cooked rice (``STICKY``), else dry."""
+    from validation import EFFECTS, rice_heap
 
     start = time.perf_counter()
-    angles, _ = rice_heap(n, True, frames=(150, 420), substeps=substeps, shape=shape, seed=seed)
+    effects = STICKY if sticky else EFFECTS
+    angles, _ = rice_heap(
+        n, True, frames=(150, 420), substeps=substeps, shape=shape, seed=seed, effects=effects, **params
+    )
     (s25, hr25), (s7, hr7) = angles
     how = "dropped as a ball" if shape == "ball" else "poured as a stream"
+    kind = "sticky (adhesion at clumping 0.3, moisture)" if sticky else "dry (no adhesion)"
+    given = "".join(f", {k} {v}" for k, v in params.items())
     return {
-        "case": f"rice heap, {n} grains {how}",
-        "setup": f"{n} ellipsoid grains 5 × 3 × 2.5 mm ±10 % (8 particles) {how} on flat ground, dry (no adhesion)",
+        "case": f"rice heap, {n} {'sticky ' if sticky else ''}grains {how}{given}",
+        "setup": f"{n} ellipsoid grains 5 × 3 × 2.5 mm ±10 % (8 particles) {how} on flat ground, {kind}{given}",
         "substeps": substeps,
         "ours": f"H/R {hr25:.1f}° at 2.5 s → {hr7:.1f}° at 7 s (surface slope {s25:.1f}° → {s7:.1f}°)",
         "published": "at rest (≤ 3° change); piling angle of rough rice 29.6–36.9° (Appl. Eng. Agric., "
@@ -404,6 +415,9 @@ def main(argv=None) -> None:
     if not args.quick:
         for shape, n in (("ball", 890), ("stream", 300)):
             cases += [heap_case(shape, n, s) for s in pair]
+        cases += [heap_case("stream", 300, s, speed_clamp=4.0) for s in pair]  # falls keep their speed
+        for shape in ("ball", "stream"):
+            cases += [heap_case(shape, 300, s, sticky=True) for s in pair]
     for c in cases:
         print(f"{c['case']:45s} {c['substeps']:>3} substeps  {c['ours']}")
     if args.quick:

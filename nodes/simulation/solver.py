@@ -54,10 +54,10 @@ from .threads import FreeCores, thread_count
 # 2,480 particles: equal times); above, on the cores other processes leave free (``threads``)
 PARALLEL_PARTICLES = 4096
 NO_GLUED = np.zeros(0, np.bool_)  # no list entry glued: every pair's friction mass-scaled (``XpbdSolver._stuck``)
-# the longest travel of a particle in one solve, in radii: a clamp above it runs each substep as
-# ceil(clamp / MAX_TRAVEL) solves (``Coefficients.pieces``); with one solve at clamp 2 (allowed by the
-# node) 47 of 200 fast particles tunnelled through a 0.8 mm bowl wall, at 4 all 200
-MAX_TRAVEL = 1.0  # (x_built, moved) without neighbour lists: no displacement check
+# the longest travel of a particle in one solve, in radii: a substep in which the fastest awake particle would
+# travel further runs as ceil(travel / MAX_TRAVEL) solves, up to ceil(clamp / MAX_TRAVEL) (``solve_pieces``);
+# with one solve at clamp 2, 47 of 200 fast particles tunnelled through a 0.8 mm bowl wall, at 4 all 200
+MAX_TRAVEL = 1.0
 
 
 class KernelDispatch:
@@ -79,6 +79,19 @@ SINK = 4.0
 HOLD = 1.0  # resting overlap, radii, beyond which a stack has collapsed (centres past the contact): refused
 
 
+def most_pieces(settings: SolverSettings) -> int:
+    """The most solves a substep splits into: ceil(speed_clamp / MAX_TRAVEL)."""
+    return max(1, int(np.ceil(settings.speed_clamp / MAX_TRAVEL - 1e-12)))
+
+
+def solve_pieces(travel: float, most: int) -> int:
+    """Solves for a substep in which the fastest awake particle would travel ``travel`` radii (|v|·h + g·h²): as
+    many as keep each solve's travel ≤ MAX_TRAVEL, at most ``most`` (beyond, the speed clamp holds it). A CFL
+    condition: a fall keeps its speed at any substep count (at 10 substeps one solve caps a 1 mm particle at
+    0.6 m/s, the speed of a 18 mm fall), and the solver pays for it only while something moves that fast."""
+    return int(min(most, max(1, np.ceil(travel / MAX_TRAVEL - 1e-9))))
+
+
 def check_gravity_step(settings: SolverSettings, pieces: int, r_min: float, r_typical: float) -> None:
     """Refuse a step in which gravity alone sinks resting particles deeper than the solver holds:
     g·h² ≤ HOLD·iterations/SINK·r, r the median radius (the particles that carry a pile; stacks then
@@ -90,7 +103,7 @@ def check_gravity_step(settings: SolverSettings, pieces: int, r_min: float, r_ty
     h = s.h / pieces
     step = s.gravity * h * h  # mm
     hold = HOLD * s.iterations / SINK * r_typical
-    clamped = s.speed_clamp / pieces * r_min
+    clamped = min(MAX_TRAVEL, s.speed_clamp / pieces) * r_min
     if step <= min(hold, clamped):
         return
     need = int(np.ceil(s.dt / pieces * np.sqrt(s.gravity / min(hold, clamped)) - 1e-9))
@@ -99,7 +112,7 @@ def check_gravity_step(settings: SolverSettings, pieces: int, r_min: float, r_ty
     if step <= clamped and iterations <= 64:
         options.append(f"iterations ≥ {iterations}")
     why = (
-        f"the speed clamp ({s.speed_clamp / pieces:.3g} r per solve: {clamped:.3g} mm)"
+        f"the speed clamp ({clamped / r_min:.3g} r per solve: {clamped:.3g} mm)"
         if clamped < hold
         else f"what {s.iterations} iterations hold ({hold:.3g} mm: ≈ {SINK:g}·g·h²/iterations of overlap, "
         f"at most {HOLD:g} r of the median r = {r_typical:.3g} mm)"
@@ -116,8 +129,8 @@ class Coefficients:
     """The settings as the kernels take them, derived once per run; effects that are off give the
     neutral value (no gravity, μ = 0, damping factor 1, no height scaling)."""
 
-    h: float  # one solve, s: the substep, or its share when the speed clamp splits it (``pieces``)
-    pieces: int  # solves per substep: ceil(speed_clamp / MAX_TRAVEL)
+    h: float  # one solve, s: the substep, or its share when a fast particle splits it (``pieces``)
+    pieces: int  # solves per substep (``solve_pieces``)
     clamp: float  # speed clamp per solve, radii (≤ MAX_TRAVEL)
     accel: np.ndarray  # (1, 3) gravity, mm/s²: the default ``Control``'s
     friction: FrictionRule  # μs, μk (0 without 'friction') and where the slip is measured from
@@ -137,14 +150,12 @@ class Coefficients:
     cohesion: float
 
     @classmethod
-    def of(cls, model: Model, settings: SolverSettings) -> Coefficients:
+    def of(cls, model: Model, settings: SolverSettings, pieces: int = 1) -> Coefficients:
+        """The coefficients of a substep run as ``pieces`` solves."""
         s, effects = settings, settings.effects
-        pieces = max(1, int(np.ceil(s.speed_clamp / MAX_TRAVEL - 1e-12)))
         h = settings.h / pieces
         gravity = "gravity" in effects
         radii = model.r[: model.n_moving]
-        if gravity:
-            check_gravity_step(s, pieces, float(radii.min()), float(np.median(radii)))
         lift = (
             np.log(s.shock_propagation) / (2.0 * float(np.median(radii)))
             if gravity and s.shock_propagation > 1.0
@@ -153,7 +164,7 @@ class Coefficients:
         return cls(
             h=h,
             pieces=pieces,
-            clamp=s.speed_clamp / pieces,
+            clamp=min(MAX_TRAVEL, s.speed_clamp / pieces),
             accel=np.array([[0.0, 0.0, -s.gravity]]) if gravity else np.zeros((1, 3)),
             friction=s.friction.rule(
                 s.mu_s if "friction" in effects else 0.0, s.mu_k if "friction" in effects else 0.0
@@ -170,17 +181,41 @@ class Coefficients:
         )
 
 
+@dataclass(frozen=True)
+class SolveRules:
+    """What the kernels take of a substep run as ``pieces`` solves: the ``Coefficients`` and the rules derived
+    from them (shape matching, adhesion, sleeping)."""
+
+    coefficients: Coefficients
+    match: shape_matching.MatchRule
+    adhesion: adhesion.AdhesionRule
+    sleep: integrate.SleepRule
+
+    @classmethod
+    def of(cls, model: Model, settings: SolverSettings, pieces: int) -> SolveRules:
+        k = Coefficients.of(model, settings, pieces)
+        steps = max(1, round(SETTLE_TIME / k.h))
+        return cls(
+            k,
+            shape_matching.MatchRule(k.alpha, settings.linear_deformation, ROTATION_ITERATIONS),
+            adhesion.AdhesionRule(settings.capture, k.adhesion_alpha, k.lift),
+            integrate.SleepRule(settings.sleep_speed * k.h, WAKE_ACCEL * k.h * k.h, steps),
+        )
+
+
 @dataclass
 class Diagnostics:
     """Per-frame scalars (SPEC §3 log): max penetration / radius, residual, kinetic energy, sleeping
-    share; and ``solved``, the share of the moving particles solved per substep (awake, 1 without
-    sleeping): the work sleeping leaves."""
+    share; ``solved``, the share of the moving particles solved per solve (awake, 1 without sleeping): the
+    work sleeping leaves; and ``solves``, the solves the frame took (substeps, more where a fast particle
+    split one: ``XpbdSolver._pieces``)."""
 
     penetration: list[float] = field(default_factory=list)
     residual: list[float] = field(default_factory=list)
     kinetic_energy: list[float] = field(default_factory=list)
     sleeping: list[float] = field(default_factory=list)
     solved: list[float] = field(default_factory=list)
+    solves: list[int] = field(default_factory=list)
 
 
 class XpbdSolver:
@@ -198,16 +233,18 @@ class XpbdSolver:
         self.model = model
         self.settings = settings
         self.dispatch = dispatch or KernelDispatch()
-        self.coefficients = Coefficients.of(model, settings)
-        self.steps = settings.substeps * self.coefficients.pieces  # solves per frame
+        radii = model.r[: model.n_moving]
+        self.r_min = float(radii.min()) if len(radii) else 1.0
+        self.most = most_pieces(settings)
+        if "gravity" in settings.effects and len(radii):  # at the solves a resting particle gets
+            rest = solve_pieces(settings.gravity * settings.h**2 / self.r_min, self.most)
+            check_gravity_step(settings, rest, self.r_min, float(np.median(radii)))
+        self._rules: dict[int, SolveRules] = {}  # per solves per substep, derived when first needed
+        self._use(1)  # one solve per substep, until a frame finds a particle too fast for it
+        self.steps = settings.substeps  # substeps per frame
         self.clusters = ClusterBuffers.allocate(model)
         self.model_arrays = model.arrays()  # the kernels' bundle of the model's arrays, once per run
         self.yolk_room = model.yolks.arrays() if model.yolks is not None else None
-        k = self.coefficients  # the kernels' rules, once per run
-        self.match_rule = shape_matching.MatchRule(k.alpha, settings.linear_deformation, ROTATION_ITERATIONS)
-        self.adhesion_rule = adhesion.AdhesionRule(settings.capture, k.adhesion_alpha, k.lift)
-        steps = max(1, round(SETTLE_TIME / k.h))
-        self.sleep_rule = integrate.SleepRule(settings.sleep_speed * k.h, WAKE_ACCEL * k.h * k.h, steps)
         self.moments = model.moments.args() if model.moments is not None else ()
         self.quadratic = model.quadratic.args() if model.quadratic is not None else ()
         self.bend_rows = model.bend.args() if model.bend is not None else None
@@ -235,6 +272,27 @@ class XpbdSolver:
         self.cores = FreeCores(most) if threads is None else None
         self.threads = most
 
+    def _use(self, pieces: int) -> None:
+        """Make the rules of a substep run as ``pieces`` solves the current ones (``coefficients``, the shape
+        matching's, adhesion's and sleeping's rules), deriving them the first time."""
+        rules = self._rules.get(pieces)
+        if rules is None:
+            rules = self._rules[pieces] = SolveRules.of(self.model, self.settings, pieces)
+        self.coefficients = rules.coefficients
+        self.match_rule, self.adhesion_rule, self.sleep_rule = rules.match, rules.adhesion, rules.sleep
+
+    def _pieces(self, st: State) -> int:
+        """Solves for the next substep: by the furthest an awake particle would travel in it, in its own
+        radii, |v|·h + g·h² (``solve_pieces``)."""
+        if self.most == 1:
+            return 1
+        h, n = self.settings.h, self.model.n_moving
+        speed = np.sqrt(np.einsum("ij,ij->i", st.v[:n], st.v[:n]))
+        step = float(np.linalg.norm(self.default_control.accel[0])) * h * h
+        travel = (speed * h + step) / self.model.r[:n]
+        awake = st.awake[:n]
+        return solve_pieces(float(travel[awake].max()) if awake.any() else 0.0, self.most)
+
     def control(self) -> Control:
         """A ``Control`` with the settings' accelerations (fresh arrays a caller may change between steps)."""
         k = self.coefficients
@@ -255,23 +313,22 @@ class XpbdSolver:
         (the impact is taken by the awake one alone for that substep). With every element asleep the
         substep solves nothing; every ``SLEEP_PROBE`` frames one substep solves all, under gravity,
         and re-tests them: a sleeper whose support went away falls and wakes."""
-        h = self.coefficients.h
+        h = self.settings.h
         if not abs(dt - h) <= 1e-12 * h:
-            raise ValueError(
-                f"dt: this solver steps by h = {h:.6g} s (dt / substeps / pieces of its settings), not {dt:.6g} s"
-            )
+            raise ValueError(f"dt: this solver steps by h = {h:.6g} s (dt / substeps of its settings), not {dt:.6g} s")
         if state_out is not state_in:
             state_out.assign(state_in)
         with thread_count(self.threads):
             return self._substep(state_out, control, contacts)
 
-    def _substep(self, st: State, control: Control, contacts: Contacts | None) -> float:
+    def _substep(self, st: State, control: Control, contacts: Contacts | None, first: bool = True) -> float:
+        """One solve under the current rules (``_use``); ``first``: the substep's first solve."""
         s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
         awake = m.n_moving
         if s.sleep_speed > 0:
-            probe = st.substeps_done % (self.steps * SLEEP_PROBE) == 0
+            probe = first and st.substeps_done % (self.steps * SLEEP_PROBE) == 0
             awake = d("sleep", integrate.wake_flags, st.arrays(), self.model_arrays, probe)
-        st.substeps_done += 1
+        st.substeps_done += first
         self.solved += awake
         if awake:
             if m.collider is not None:
@@ -530,20 +587,25 @@ class XpbdSolver:
 
     # -- one frame --------------------------------------------------------------------------
     def frame(self, state: State) -> None:
-        """``substeps`` substeps (``steps`` solves) of ``state`` in place, with the solver's own ``contacts`` and
-        ``default_control``, then the per-frame diagnostics."""
+        """``substeps`` substeps of ``state`` in place, with the solver's own ``contacts`` and ``default_control``,
+        each as the solves its fastest particle needs (``_pieces``), then the per-frame diagnostics."""
         if self.cores is not None:
             self.threads = self.cores.threads()
         residual = 0.0
-        h = self.coefficients.h
-        for i in range(self.steps):
-            if i == self.steps - 1:
-                self.x_mark[:] = state.x
-            residual = self.step(state, state, self.default_control, self.contacts, h)
+        solves = 0
         with thread_count(self.threads):
-            self._diagnose(state, residual)
+            for i in range(self.steps):
+                pieces = self._pieces(state)
+                self._use(pieces)
+                for j in range(pieces):
+                    if i == self.steps - 1 and j == pieces - 1:
+                        self.x_mark[:] = state.x
+                    residual = self._substep(state, self.default_control, self.contacts, first=j == 0)
+                solves += pieces
+            self._diagnose(state, residual, solves)
+        self._use(1)
 
-    def _diagnose(self, st: State, residual: float) -> None:
+    def _diagnose(self, st: State, residual: float, solves: int) -> None:
         s, m = self.settings, self.model
         pen = 0.0
         if "contact" in s.effects:
@@ -557,5 +619,6 @@ class XpbdSolver:
         # lifts out of its tolerated overlap and the solve lets sink back has v = −Δ/h but stands still
         dg.kinetic_energy.append(float(integrate.kinetic_energy((st.x - self.x_mark) / self.coefficients.h, m.w)))
         dg.sleeping.append(float(st.asleep.mean()) if s.sleep_speed > 0 else 0.0)
-        dg.solved.append(self.solved / (self.steps * m.n_moving))
+        dg.solved.append(self.solved / (solves * m.n_moving))
+        dg.solves.append(solves)
         self.solved = 0
