@@ -341,6 +341,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
                 pool=pool,
                 plugins=args.plugin,
                 session=session,
+                estimate=None if weighed is None else weighed.cost,
             )
         if session is not None:
             session.keep(result)

@@ -335,6 +335,8 @@ class _PlannedRemaining:
         if plan is None:
             return self.fallback(task)
         seconds, known = remaining_seconds(plan, int(task.completed), task.fields.get("since"), time.monotonic())
+        if not known and seconds == 0.0:  # nothing ahead is known: no figure (a count's would mislead)
+            return Text("-:--:--", style="progress.remaining")
         minutes, rest = divmod(int(round(seconds)), 60)
         text = f"{minutes // 60}:{minutes % 60:02d}:{rest:02d}"
         return Text(text if known else f"≥ {text}", style="progress.remaining")
