@@ -697,6 +697,8 @@ def describe_spec(spec) -> str:
         for name, port in ports.items():
             flags = " (optional)" if getattr(port, "optional", False) else ""
             lines.append(f"  {name:<16} {port.type_name + flags:<24} {port.doc}")
+            if getattr(port, "columns", ()):
+                lines.append(f"  {'':<16} {'':<24} columns: {', '.join(port.columns)}")
     lines += ["", "parameters:"] + ([] if spec.params else ["  (none)"])
     for name, param in spec.params.items():
         d = param.describe()
@@ -747,6 +749,7 @@ def markdown_reference(registry) -> str:
                 lines += [f"**{title}**", ""]
                 lines += [
                     f"- `{n}`: {p.type_name}{' (optional)' if getattr(p, 'optional', False) else ''} — {p.doc}"
+                    + (f" (columns: {', '.join(f'`{c}`' for c in p.columns)})" if getattr(p, "columns", ()) else "")
                     for n, p in ports.items()
                 ]
                 lines.append("")
