@@ -27,6 +27,7 @@ from .cache import (
     format_size,
     parse_size,
 )
+from .compile_ahead import kernels_due
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
 from .output_folder import recipe_folder, recipe_folder_name, settings_folder
@@ -318,6 +319,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
     reporter.info(f"outputs go to {out_dir}{os.sep}")
     if weighed is not None:
+        weighed.cost.compiles = kernels_due(weighed)
         reporter.info("estimate: " + "; ".join(weighed.cost.lines()))
     spawn = args.spawn
     if spawn and not has_display():  # said before anything is computed
@@ -601,6 +603,7 @@ def _cmd_check(args, registry) -> int:
         + sweeps
         + (f", draft: {len(recipe.draft)} settings" if recipe.draft else "")
     )
+    recipe.cost.compiles = kernels_due(recipe)
     for line in recipe.cost.lines():
         print(f"  estimate: {line}")
     for decl in recipe.sweeps.values():

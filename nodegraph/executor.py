@@ -21,7 +21,7 @@ from . import __version__, codec, interrupt, node_times, runtime
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
-from .compile_ahead import CompileAhead
+from .compile_ahead import CompileAhead, mark_compiled
 from .compile_progress import CompileWatch
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
@@ -201,6 +201,8 @@ class Executor:
         if self.cache is not None:  # used now, whole: what it had no need to load too (the upstream of a cached
             for key in {self.keys[inst] for inst in order} & self.hits:  # output), so the cache keeps the run whole
                 self.cache.touch(key)
+        if ahead is None and any(s.status == "ran" for s in self.status.values()):
+            mark_compiled(self.recipe)  # every kernel in hand: the next estimate says none is left to compile
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
 
     def reuse(self, outputs: list[Wire], directory: Path, rrd: Path | None, key: str) -> RunResult | None:
