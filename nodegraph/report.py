@@ -291,7 +291,13 @@ class Reporter:
         if hidden:
             records = [r for records in hidden.values() for r in records]
             took = format_duration(sum(r.seconds for r in records))
-            table.caption = f"and {len(hidden)} more steps under {shown_s:g} s each ({took} in all)"
+            statuses: dict[str, int] = {}
+            for rec in records:
+                statuses[rec.status] = statuses.get(rec.status, 0) + 1
+            how = ", ".join(f"{n} {status}" for status, n in statuses.items())
+            table.caption = (
+                f"and {len(hidden)} more steps under {shown_s:g} s each: {how} ({took} in all): {', '.join(hidden)}"
+            )
         for i in keep:
             table.add_column(columns[i][0], justify=columns[i][1], no_wrap=True)
         for row in cells:
