@@ -317,6 +317,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     if cache is not None:
         check_writable(cache.directory, "cache", "choose another with --cache-dir (or $NODEGRAPH_CACHE), or --no-cache")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
+    reporter.fold = session is None  # a watch's log lists every step of each run: what the save re-ran
     reporter.info(f"outputs go to {out_dir}{os.sep}")
     if weighed is not None:
         weighed.cost.compiles = kernels_due(weighed)

@@ -61,8 +61,7 @@ class CompileWatch:
                 self.reporter.info(f"compiling kernels for {self.node} ({why})…")
             self.kernels += 1
             elapsed = f", {self.seconds:.0f} s so far" if self.kernels > 1 else ""
-            if not getattr(self.reporter, "plain", False):  # a pipe or a log: the first line and the total only
-                self.reporter.info(f"  {self.node}: compiling {kernel} (kernel {self.kernels}{elapsed})…")
+            self.reporter.info(f"  {self.node}: compiling {kernel} (kernel {self.kernels}{elapsed})…")
             self._started = time.perf_counter()
         self._depth += 1
 

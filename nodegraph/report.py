@@ -105,7 +105,7 @@ except ValueError:  # not a number: the default, as where it is unset
 HEARTBEAT_EVERY_S = 30.0
 # where no bar is drawn (a pipe, a log), a step is said as it ends, and listed in the closing table, only when it
 # took this long or failed: a cold run of the main job printed ≈ 200 lines, its 97 steps mostly milliseconds each;
-# the others are counted in one line under the table
+# the others are named in one line under the table
 PLAIN_SHOWN_S = 1.0
 
 
@@ -133,6 +133,9 @@ class Reporter:
         self._progress: Progress | None = None
         # where no bar is drawn (a pipe, CI, ``| tee``): a plain line per step as it ends, a heartbeat per long one
         self.plain = not quiet and not self.console.is_terminal
+        # in plain output, the closing table lists only the steps that took ``PLAIN_SHOWN_S`` or more and names the
+        # rest under it (a watch lists every step: what each save re-ran)
+        self.fold = True
         self._running: dict[str, tuple[float, float]] = {}  # label: (started, when to say it is still running)
         self._lock = threading.Lock()
         self._heart: threading.Thread | None = None
@@ -319,7 +322,7 @@ class Reporter:
             return
         from rich.measure import Measurement
 
-        table = self.summary(width=PIPE_WIDTH, shown_s=PLAIN_SHOWN_S)
+        table = self.summary(width=PIPE_WIDTH, shown_s=PLAIN_SHOWN_S if self.fold else 0.0)
         needed = Measurement.get(self.console, self.console.options.update(width=PIPE_WIDTH), table).maximum
         width = self.console.width
         self.console.width = max(width, needed)  # rich cuts whatever is wider than its console

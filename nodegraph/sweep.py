@@ -194,7 +194,7 @@ def grid_name(grids) -> str:
 
 def constant_metrics(result) -> list[str]:
     """The metrics that read the same at every point of a sweep of two or more points: they cannot tell the points
-    apart (the ikura don's measure.table.overlap_p95 is 0 after its contact dents, whatever the settings)."""
+    apart (an overlap measured after the contact dents is 0 whatever the settings)."""
     names = list(getattr(result, "metric_names", []) or [])
     if len(result.points) < 2:
         return []
