@@ -82,6 +82,17 @@ TABLES = {
             ("load", field("load")),
         ],
     ),
+    "lift_apart": (
+        "lift_apart.jsonl",
+        None,
+        [
+            ("egg_apart.overlap", field("overlap")),
+            ("eggs outside the bowl, seeds 3 / 4 / 5", listed("outside")),
+            ("eggs", listed("eggs")),
+            ("eggs lifted", listed("lifted")),
+            ("load", field("load")),
+        ],
+    ),
     "scene_times": (
         "scenes.jsonl",
         None,
