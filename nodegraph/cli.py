@@ -27,6 +27,7 @@ from .cache import (
     format_size,
     parse_size,
 )
+from .compile_ahead import kernels_due
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
 from .output_folder import recipe_folder, recipe_folder_name, settings_folder
@@ -316,8 +317,10 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     if cache is not None:
         check_writable(cache.directory, "cache", "choose another with --cache-dir (or $NODEGRAPH_CACHE), or --no-cache")
     reporter = Reporter(console=Console(stderr=True, highlight=False), quiet=args.quiet)
+    reporter.fold = session is None  # a watch's log lists every step of each run: what the save re-ran
     reporter.info(f"outputs go to {out_dir}{os.sep}")
     if weighed is not None:
+        weighed.cost.compiles = kernels_due(weighed)
         reporter.info("estimate: " + "; ".join(weighed.cost.lines()))
     spawn = args.spawn
     if spawn and not has_display():  # said before anything is computed
@@ -341,6 +344,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
                 pool=pool,
                 plugins=args.plugin,
                 session=session,
+                estimate=None if weighed is None else weighed.cost,
             )
         if session is not None:
             session.keep(result)
@@ -600,6 +604,7 @@ def _cmd_check(args, registry) -> int:
         + sweeps
         + (f", draft: {len(recipe.draft)} settings" if recipe.draft else "")
     )
+    recipe.cost.compiles = kernels_due(recipe)
     for line in recipe.cost.lines():
         print(f"  estimate: {line}")
     for decl in recipe.sweeps.values():
@@ -696,6 +701,8 @@ def describe_spec(spec) -> str:
         for name, port in ports.items():
             flags = " (optional)" if getattr(port, "optional", False) else ""
             lines.append(f"  {name:<16} {port.type_name + flags:<24} {port.doc}")
+            if getattr(port, "columns", ()):
+                lines.append(f"  {'':<16} {'':<24} columns: {', '.join(port.columns)}")
     lines += ["", "parameters:"] + ([] if spec.params else ["  (none)"])
     for name, param in spec.params.items():
         d = param.describe()
@@ -746,6 +753,7 @@ def markdown_reference(registry) -> str:
                 lines += [f"**{title}**", ""]
                 lines += [
                     f"- `{n}`: {p.type_name}{' (optional)' if getattr(p, 'optional', False) else ''} — {p.doc}"
+                    + (f" (columns: {', '.join(f'`{c}`' for c in p.columns)})" if getattr(p, "columns", ()) else "")
                     for n, p in ports.items()
                 ]
                 lines.append("")

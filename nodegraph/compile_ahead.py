@@ -100,11 +100,11 @@ def _loaded(module: str, name: str) -> bool:
         return False
 
 
-def plan_jobs(recipe, order: Iterable, to_run: set) -> list[Job]:
+def plan_jobs(recipe, order: Iterable, to_run: set, loaded_too: bool = False) -> list[Job]:
     """The kernels recorded for the instances in ``order`` that will run, each at the position of the first
     instance that needs it: per node type, the entry recorded for exactly the effects the node receives
     (``spec.effects & recipe.effects``; none recorded: nothing). Functions recorded with several signatures are
-    left out (see the module's docstring)."""
+    left out (see the module's docstring); so are those this process has already, unless ``loaded_too``."""
     seen: dict[Path, dict] = {}
     jobs: dict[tuple[str, str, str], Job] = {}
     for position, inst in enumerate(order):
@@ -116,7 +116,7 @@ def plan_jobs(recipe, order: Iterable, to_run: set) -> list[Job]:
             if entry.get("effects") != effects:
                 continue
             for module, name, args in entry["kernels"]:
-                if _loaded(module, name):
+                if not loaded_too and _loaded(module, name):
                     continue
                 plugin = getattr(sys.modules.get(module), "__file__", None) if module.startswith(PLUGIN) else None
                 jobs.setdefault((module, name, args), Job(position, module, name, args, plugin))
@@ -234,6 +234,45 @@ class CompileAhead:
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait()
+
+
+class _Node:
+    """A node of a recipe as ``plan_jobs`` reads an instance: by its id."""
+
+    def __init__(self, node: str):
+        self.node = node
+
+
+def _every_job(recipe) -> list[Job]:
+    """The kernels recorded for every node of ``recipe``, whether or not this process has them."""
+    nodes = [_Node(node) for node in recipe.nodes]
+    return plan_jobs(recipe, nodes, set(nodes), loaded_too=True)
+
+
+def kernels_due(recipe) -> bool:
+    """Whether a run of ``recipe`` may have kernels to compile: not once a run of it has ended with every kernel
+    recorded for its nodes in numba's cache (``mark_compiled``: a clean clone's first run, or one after a change to
+    a kernel's code, compiles; later runs load them), nor where none is recorded. What ``check`` and ``run`` say
+    beside their estimate of the time."""
+    try:
+        jobs = _every_job(recipe)
+        return bool(jobs) and not CompileAhead(jobs).cached()
+    except Exception:  # a record or a module that cannot be read: as if they were due
+        return True
+
+
+def mark_compiled(recipe) -> None:
+    """At the end of a run: where this process has every kernel recorded for the recipe's nodes (compiled or loaded:
+    numba's cache has them), mark them so (``CompileAhead.cached``), whether or not a worker compiled ahead."""
+    try:
+        jobs = _every_job(recipe)
+        if jobs and all(_loaded(job.module, job.name) for job in jobs):
+            marker = CompileAhead(jobs)._marker()
+            if marker is not None and not marker.is_file():
+                marker.parent.mkdir(parents=True, exist_ok=True)
+                marker.touch()
+    except Exception:  # a read-only cache folder, a module that went: said as due next time, nothing else lost
+        pass
 
 
 def core_free() -> bool:

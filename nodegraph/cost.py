@@ -129,6 +129,7 @@ class Estimate:
     costs: dict[str, Cost] = field(default_factory=dict)
     family: dict[str, int] = field(default_factory=dict)  # instances of a variant family's node
     outputs: tuple[str, ...] = ()  # the nodes whose outputs the recipe asks for
+    compiles: bool = True  # whether a run may compile kernels (``compile_ahead.kernels_due``), said beside the time
 
     @property
     def elements(self) -> int | None:
@@ -197,7 +198,8 @@ class Estimate:
         other = self.other_seconds
         parts = [f"{what} {minutes(s)}" for what, s in (("simulations", sims), ("pictures", pictures)) if s >= 0.5]
         parts.append(f"other steps {minutes(other)}")
-        return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)}); a first run compiles kernels too"
+        compiling = "; its kernels are not compiled yet: a run compiles them first" if self.compiles else ""
+        return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)})" + compiling
 
 
 def minutes(seconds: float) -> str:

@@ -21,7 +21,7 @@ from . import __version__, codec, interrupt, node_times, runtime
 from .blueprint import LOG, build_blueprint
 from .cache import Cache, Fragment
 from .checkpoint import Checkpoint
-from .compile_ahead import CompileAhead
+from .compile_ahead import CompileAhead, mark_compiled
 from .compile_progress import CompileWatch
 from .context import Context, EntityLogger
 from .errors import CacheCorruption, NodeFailure, NodegraphError
@@ -120,6 +120,7 @@ class Executor:
         self.overlap = overlap
         self._beside: Beside | None = None
         self.lane = threading.local()  # ``side``: this thread computes the instances beside a node (``Beside``)
+        self.estimate = None  # the recipe's cost estimate (``cost.Estimate``): the bar's ETA where no time is kept
 
     # planning ---------------------------------------------------------------------------------
     def plan(self, node_ids) -> list[Instance]:
@@ -162,10 +163,8 @@ class Executor:
         if not self.ran_elsewhere:  # kernels of the later instances compile in a second process meanwhile
             to_run = {inst for inst in order if self.keys[inst] not in self.hits}
             ahead = CompileAhead.start(self.recipe, order, to_run)
-        times = None if self.cache is None else node_times.load(self.cache.directory, self.recipe.name)
-        plan = (
-            None if times is None else [node_times.expected(times, i.label, self.keys[i] in self.hits) for i in order]
-        )
+        times = {} if self.cache is None else node_times.load(self.cache.directory, self.recipe.name)
+        plan = node_times.planned([(i.node, i.label, self.keys[i] in self.hits) for i in order], times, self.estimate)
         try:
             with self.reporter.task(self.recipe.name, len(order), plan=plan) as tick:
                 for position, inst in enumerate(order):
@@ -202,6 +201,8 @@ class Executor:
         if self.cache is not None:  # used now, whole: what it had no need to load too (the upstream of a cached
             for key in {self.keys[inst] for inst in order} & self.hits:  # output), so the cache keeps the run whole
                 self.cache.touch(key)
+        if ahead is None and any(s.status == "ran" for s in self.status.values()):
+            mark_compiled(self.recipe)  # every kernel in hand: the next estimate says none is left to compile
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
 
     def reuse(self, outputs: list[Wire], directory: Path, rrd: Path | None, key: str) -> RunResult | None:
@@ -624,10 +625,12 @@ def run_recipe(
     pool=None,
     plugins=(),
     session: LiveSession | None = None,
+    estimate=None,
 ) -> RunResult:
     """Run a validated recipe: pull the outputs, log to ``rrd``, write files under ``out_dir``; a node
     that expects to run longer than ``max_seconds`` refuses to start (``Context.expect_cost``).
-    ``session``: see ``LiveSession``.
+    ``session``: see ``LiveSession``; ``estimate``: the recipe's cost estimate (``cost.Estimate``), what the
+    progress bar expects of a node that has not run before (``node_times.planned``).
 
     With a ``pool`` (``pool.InstancePool``, e.g. ``dask_pool.DaskPool``) the node instances missing from
     the cache are computed by its workers first (``plugins``: the plugin files they load); the run then
@@ -641,6 +644,7 @@ def run_recipe(
     warn = reporter.warn if reporter is not None else None
     overlap = os.environ.get(OVERLAP_ENV, "on") != "off"
     executor = Executor(recipe, cache, reporter, None, max_seconds, session, overlap=overlap)
+    executor.estimate = estimate
     interrupt.run_began(cached=cache is not None)
     key = None if out_dir is None else executor.output_key(wires, rrd)
     if key is not None and not spawn:  # a viewer to stream to needs the run itself

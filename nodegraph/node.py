@@ -48,10 +48,12 @@ class In:
 
 @dataclass(frozen=True)
 class Out:
-    """An output port."""
+    """An output port; ``columns``: a Table output's columns, where they are known before it runs (a sweep's metric
+    naming one is checked against them before any work)."""
 
     type: type
     doc: str = ""
+    columns: tuple[str, ...] = ()
 
     @property
     def type_name(self) -> str:

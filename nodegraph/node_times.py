@@ -1,6 +1,7 @@
 """How long each node of a recipe took when it last ran (and when it was last loaded from the cache), kept in the
 cache folder: a run's progress bar expects each instance to take that long again, so its ETA comes from time, not
-from the count of instances done (``report.remaining_seconds``)."""
+from the count of instances done (``report.remaining_seconds``); a node that never ran is expected to take what the
+recipe's cost estimate says (``planned``), and where nothing says, the bar shows no ETA rather than a count's."""
 
 from __future__ import annotations
 
@@ -48,3 +49,20 @@ def expected(times: dict[str, dict[str, float]], label: str, cached: bool) -> fl
     if cached:
         return kept.get("cached", LOADED)
     return kept.get("ran")
+
+
+def planned(instances, times: dict[str, dict[str, float]], estimate=None) -> list[float | None]:
+    """Seconds each of ``instances`` ((node id, label, cached) in run order) is expected to take: its last time
+    (``expected``), else the estimate's (``cost.Estimate``): a node's own seconds where it estimates them, and an
+    even share of the rest (``Estimate.other_seconds``) among the instances to run that do not; None where neither
+    says (no estimate: a recipe run without ``check``'s weighing)."""
+    plan = [expected(times, label, cached) for _, label, cached in instances]
+    if estimate is None:
+        return plan
+    own = {node: cost.seconds for node, cost in estimate.costs.items() if cost.seconds > 0}
+    rest = [i for i, (node, _, cached) in enumerate(instances) if plan[i] is None and node not in own]
+    share = estimate.other_seconds / len(rest) if rest else 0.0
+    for i, (node, _, _) in enumerate(instances):
+        if plan[i] is None:
+            plan[i] = own.get(node, share)
+    return plan

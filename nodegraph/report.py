@@ -103,6 +103,10 @@ try:
 except ValueError:  # not a number: the default, as where it is unset
     HEARTBEAT_S = 10.0
 HEARTBEAT_EVERY_S = 30.0
+# where no bar is drawn (a pipe, a log), a step is said as it ends, and listed in the closing table, only when it
+# took this long or failed: a cold run of the main job printed ≈ 200 lines, its 97 steps mostly milliseconds each;
+# the others are named in one line under the table
+PLAIN_SHOWN_S = 1.0
 
 
 @dataclass
@@ -129,6 +133,9 @@ class Reporter:
         self._progress: Progress | None = None
         # where no bar is drawn (a pipe, CI, ``| tee``): a plain line per step as it ends, a heartbeat per long one
         self.plain = not quiet and not self.console.is_terminal
+        # in plain output, the closing table lists only the steps that took ``PLAIN_SHOWN_S`` or more and names the
+        # rest under it (a watch lists every step: what each save re-ran)
+        self.fold = True
         self._running: dict[str, tuple[float, float]] = {}  # label: (started, when to say it is still running)
         self._lock = threading.Lock()
         self._heart: threading.Thread | None = None
@@ -156,6 +163,8 @@ class Reporter:
             return
         with self._lock:
             self._running.pop(label, None)
+        if ok and seconds < PLAIN_SHOWN_S:
+            return
         self._say(f"{label}: {'done' if ok else 'failed'} in {format_duration(seconds)}")
 
     def _beat(self) -> None:
@@ -230,16 +239,23 @@ class Reporter:
                 progress.stop()
                 self._progress = None
 
-    def summary(self, per_instance: bool = False, width: int | None = None) -> Table:
+    def summary(self, per_instance: bool = False, width: int | None = None, shown_s: float = 0.0) -> Table:
         """One row per node (variant families folded into one row, times summed) or per instance, in ``width``
         columns (default: the console's; 80 in a pipe): the type column goes where the table would not fit
-        (``nodegraph graph`` names each node's type), and no cell wraps."""
+        (``nodegraph graph`` names each node's type), and no cell wraps. ``shown_s``: only the rows that took at
+        least this long or failed, the rest counted in the caption."""
         from rich.table import Table
 
         logged = any(r.log_seconds is not None for r in self.records)
         rows: dict[str, list[NodeRecord]] = {}
         for rec in self.records:
             rows.setdefault(rec.node if per_instance else rec.node.split("[")[0], []).append(rec)
+        hidden = {
+            node: records
+            for node, records in rows.items()
+            if sum(r.seconds for r in records) < shown_s and all(r.status != "failed" for r in records)
+        }
+        rows = {node: records for node, records in rows.items() if node not in hidden}
         cells = []
         for node, records in rows.items():
             counts: dict[str, int] = {}
@@ -275,6 +291,16 @@ class Reporter:
         room = self.console.width if width is None else width
         keep = [i for i in range(len(columns)) if i != 1 or sum(widths) + 3 * len(columns) + 1 <= room]
         table = Table(title="nodegraph run")
+        if hidden:
+            records = [r for records in hidden.values() for r in records]
+            took = format_duration(sum(r.seconds for r in records))
+            statuses: dict[str, int] = {}
+            for rec in records:
+                statuses[rec.status] = statuses.get(rec.status, 0) + 1
+            how = ", ".join(f"{n} {status}" for status, n in statuses.items())
+            table.caption = (
+                f"and {len(hidden)} more steps under {shown_s:g} s each: {how} ({took} in all): {', '.join(hidden)}"
+            )
         for i in keep:
             table.add_column(columns[i][0], justify=columns[i][1], no_wrap=True)
         for row in cells:
@@ -287,7 +313,8 @@ class Reporter:
 
     def print_summary(self) -> None:
         """The table: on a terminal, fitted to its width; in a pipe or a log, which have no width, whole (every
-        column, no cell cut: "wall ti…" told nothing)."""
+        column, no cell cut: "wall ti…" told nothing) but short, the steps under ``PLAIN_SHOWN_S`` counted in a
+        line."""
         if self.quiet:
             return
         if self.console.is_terminal:
@@ -295,7 +322,7 @@ class Reporter:
             return
         from rich.measure import Measurement
 
-        table = self.summary(width=PIPE_WIDTH)
+        table = self.summary(width=PIPE_WIDTH, shown_s=PLAIN_SHOWN_S if self.fold else 0.0)
         needed = Measurement.get(self.console, self.console.options.update(width=PIPE_WIDTH), table).maximum
         width = self.console.width
         self.console.width = max(width, needed)  # rich cuts whatever is wider than its console
@@ -335,6 +362,8 @@ class _PlannedRemaining:
         if plan is None:
             return self.fallback(task)
         seconds, known = remaining_seconds(plan, int(task.completed), task.fields.get("since"), time.monotonic())
+        if not known and seconds == 0.0:  # nothing ahead is known: no figure (a count's would mislead)
+            return Text("-:--:--", style="progress.remaining")
         minutes, rest = divmod(int(round(seconds)), 60)
         text = f"{minutes // 60}:{minutes % 60:02d}:{rest:02d}"
         return Text(text if known else f"≥ {text}", style="progress.remaining")

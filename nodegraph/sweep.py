@@ -183,6 +183,24 @@ def output_hash(value) -> str:
     return hashlib.sha256(codec.encode(value)).hexdigest()
 
 
+def grid_name(grids) -> str:
+    """The name of a sweep given by ``--grid`` texts, and of its files: ``grid_`` and the grid
+    (``grid_rice_sim.frames=5,10,20``, as a settings folder is named: ``output_folder.settings_folder``), so that a
+    sweep over another grid never replaces the files of the first; the same grid again replaces its own."""
+    from .output_folder import SETTINGS_PREFIX, settings_folder
+
+    return "grid_" + settings_folder(Path("."), list(grids)).name.removeprefix(SETTINGS_PREFIX)
+
+
+def constant_metrics(result) -> list[str]:
+    """The metrics that read the same at every point of a sweep of two or more points: they cannot tell the points
+    apart (an overlap measured after the contact dents is 0 whatever the settings)."""
+    names = list(getattr(result, "metric_names", []) or [])
+    if len(result.points) < 2:
+        return []
+    return [n for n in names if len({p.metrics.get(n) for p in result.points}) == 1]
+
+
 def sweep_from_args(recipe: Recipe, name: str | None, grids, metrics, outputs) -> SweepDecl:
     """The sweep to run: ``--grid``/``--metric`` given on the command line, else the recipe's own
     (the one named by ``--sweep``, or its only one)."""
@@ -205,7 +223,8 @@ def sweep_from_args(recipe: Recipe, name: str | None, grids, metrics, outputs) -
                 issues.append(Issue(Location("--grid", i), f"cannot read '{text}': {exc}"))
         if issues:
             raise RecipeError(issues)
-        return SweepDecl(name or "grid", tuple((t, tuple(v)) for t, v in axes), (), tuple(refs), tuple(outputs))
+        grid = tuple((t, tuple(v)) for t, v in axes)
+        return SweepDecl(name or grid_name(grids), grid, (), tuple(refs), tuple(outputs))
     if not recipe.sweeps:
         raise NodegraphError(
             f"{recipe.path} declares no sweeps: give --grid node.param=v1,v2,... (or add a sweeps: block)"
@@ -545,7 +564,7 @@ NO_MATPLOTLIB = "no plot: matplotlib is not installed (pip install matplotlib dr
 def write_sweep(result: SweepResult, directory: Path, warn=None) -> list[Path]:
     """``<directory>/<sweep>.md``, ``.csv`` and ``.png`` (the plot only with matplotlib and metrics), and a
     contact sheet per pulled Image output. Without matplotlib the plot is missing and said so (``warn``, and a line
-    in the .md), never silently."""
+    in the .md), never silently; a metric that reads the same at every point is said too (``constant_metrics``)."""
     directory.mkdir(parents=True, exist_ok=True)
     stem = result.sweep.name
     image = plot_sweep(result, directory / f"{stem}.png")
@@ -555,6 +574,11 @@ def write_sweep(result: SweepResult, directory: Path, warn=None) -> list[Path]:
         markdown += f"\n({NO_MATPLOTLIB})\n"
         if warn is not None:
             warn(f"{NO_MATPLOTLIB}; the table is in {directory / f'{stem}.md'}")
+    for name in constant_metrics(result):  # said, in the table and on the terminal: it cannot tell points apart
+        line = f"{name} is {_fmt(result.points[0].metrics[name])} at every point: it does not vary with this grid"
+        markdown += f"\n({line})\n"
+        if warn is not None:
+            warn(f"{line}; pick a metric that does (the columns of a Table output: `nodegraph describe TYPE`)")
     atomic_write(directory / f"{stem}.md", markdown.encode())
     atomic_write(directory / f"{stem}.csv", sweep_csv(result).encode())
     return [directory / f"{stem}.md", directory / f"{stem}.csv"] + ([image] if image else []) + sheets

@@ -241,6 +241,12 @@ def metric_problem(text: str, entries: dict, raw_nodes: dict = ()) -> tuple[str,
         )
         allowed = ", ".join(f"{ref.node}.{p}" for p in tables) or "none: that node has no Table output"
         return f"{what}; metrics are read from Table outputs ({allowed})", _nearest(ref.port, tables)
+    columns = outputs[ref.port].columns  # where declared: the column too, before the sweep's work
+    if ref.column is not None and columns and ref.column not in columns:
+        return (
+            f"'{ref.node}.{ref.port}' has no column '{ref.column}'; its columns: {', '.join(columns)}",
+            _nearest(ref.column, columns),
+        )
     return None
 
 

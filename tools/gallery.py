@@ -2,15 +2,15 @@
 
     python tools/gallery.py --run            # run every recipe cold (fresh cache), then write the gallery
     python tools/gallery.py --run sushi kakigori     # some recipes only
-    python tools/gallery.py                  # from outputs/<recipe>/ as the last runs left them (count from
-                                             # measure.csv; the time only if gallery.py --run timed it)
+    python tools/gallery.py                  # from outputs/<recipe>/ as the last runs left them
 
 Each recipe runs at full size into ``outputs/<recipe>/`` with an empty node cache (numba's compiled kernels
 are kept, so the time is the recipe's, not the compiler's); its wall time, the load average it ran under
 and the element count of its ``measure`` table are kept in ``outputs/<recipe>/gallery.json``. Each preview
 (``preview.png``; the rice bunny's cut view ``cut_preview.png``; the water series' ``series.png``) is then
 scaled to at most ``--width`` pixels (Lanczos) and written as an optimised PNG to ``docs/images/``, and
-``docs/images/gallery.md`` gets the Markdown table (picture, recipe, count, cold time) for the README.
+``docs/images/gallery.md`` gets the Markdown table (picture, recipe) for the README; the counts and cold times are
+the scene table's (``docs/performance.md``, from ``benchmarks/measured/scenes.jsonl``), not written twice.
 """
 
 from __future__ import annotations
@@ -71,14 +71,8 @@ def publish(recipe: str, width: int, series_width: int) -> list[str]:
     """Scaled previews into docs/images/; the Markdown rows for them (empty if the recipe has not run)."""
     from PIL import Image
 
-    images, noun = RECIPES[recipe]
+    images, _ = RECIPES[recipe]
     folder = REPO / "outputs" / recipe
-    info_path, measured = folder / "gallery.json", folder / "measure.csv"
-    info = json.loads(info_path.read_text()) if info_path.exists() else {}
-    if not info.get("count") and measured.exists():  # the last run's count, untimed
-        header, row = measured.read_text().splitlines()[:2]
-        info_count = dict(zip(header.split(","), row.split(",")))["elements"]
-        info = {**info, "count": int(float(info_count))}
     rows = []
     for name in images:
         source = folder / name
@@ -93,11 +87,17 @@ def publish(recipe: str, width: int, series_width: int) -> list[str]:
         target = REPO / "docs" / "images" / f"{stem}.png"
         image.save(target, optimize=True)
         print(f"wrote {target.relative_to(REPO)} ({image.width}×{image.height}, {target.stat().st_size // 1024} KiB)")
-        count = f"{info['count']:,} {noun}" if info.get("count") else "—"
-        cold = f"{info['cold_s']:.0f} s (load {info['load']:.1f})" if "cold_s" in info else "not timed (run with --run)"
         view = "" if name in ("preview.png", "series.png") else f" ({Path(name).stem.replace('_', ' ')})"
-        rows.append(f"| ![{recipe}{view}](images/{stem}.png) | `{recipe}.yaml`{view} | {count} | {cold} |")
+        rows.append(f"| ![{recipe}{view}](images/{stem}.png) | `{recipe}.yaml`{view} |")
     return rows
+
+
+# the counts and times are not written here: they are the scene table's (docs/performance.md), measured with their
+# load and kept in benchmarks/measured/scenes.jsonl, so that the README, this gallery and the docs say one figure
+SOURCE = (
+    "Each recipe's elements and cold time, with the load they were measured under: "
+    '[`docs/performance.md`](../performance.md), "Scene table" (`benchmarks/measured/scenes.jsonl`).'
+)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -118,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
             info = run_cold(recipe)
             print(f"{recipe}: {info['cold_s']:.1f} s cold, load {info['load']:.1f}, count {info['count']}", flush=True)
         rows += publish(recipe, args.width, args.series_width)
-    table = "\n".join(["| preview | recipe | count | cold time (2 cores) |", "|---|---|---|---|", *rows])
+    table = "\n".join(["| preview | recipe |", "|---|---|", *rows, "", SOURCE])
     (REPO / "docs" / "images" / "gallery.md").write_text(table + "\n")
     print(f"\n{table}\n\nwrote docs/images/gallery.md")
     return 0

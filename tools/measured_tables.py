@@ -71,6 +71,28 @@ def ratio(a: str, b: str, digits: int = 2):
 
 # name: (file, record filter, [(column header, cell)])
 TABLES = {
+    # the README's first lines: what a first hour meets, each row a record marked "readme" (its label)
+    "first_hour": (
+        ("compile.jsonl", "scenes.jsonl", "main_job.jsonl"),
+        lambda r: "readme" in r,
+        [
+            ("the main job", field("readme")),
+            ("wall s", value("wall")),
+            ("CPU s", lambda r: number(r["values"].get("cpu", r["values"].get("nodes_cpu")))),
+            ("load", field("load")),
+        ],
+    ),
+    "lift_apart": (
+        "lift_apart.jsonl",
+        None,
+        [
+            ("egg_apart.overlap", field("overlap")),
+            ("eggs outside the bowl, seeds 3 / 4 / 5", listed("outside")),
+            ("eggs", listed("eggs")),
+            ("eggs lifted", listed("lifted")),
+            ("load", field("load")),
+        ],
+    ),
     "scene_times": (
         "scenes.jsonl",
         None,
@@ -544,21 +566,29 @@ TABLES = {
 }
 
 
+# tables whose source line names only the data (a README table, kept short: the load is one of its columns)
+BRIEF = {"first_hour"}
+
+
 def render(name: str) -> str:
     """One table in Markdown, with a line saying where, how and when its figures were measured."""
     file, keep, columns = TABLES[name]
-    rows = [r for r in records(file) if keep is None or keep(r)]
+    files = (file,) if isinstance(file, str) else file
+    rows = [r for f in files for r in records(f) if keep is None or keep(r)]
     lines = ["| " + " | ".join(h for h, _ in columns) + " |", "|" + "---|" * len(columns)]
     lines += ["| " + " | ".join(cell(r) for _, cell in columns) + " |" for r in rows]
 
     def distinct(key):
         return list(dict.fromkeys(str(r.get(key, "")) for r in rows if r.get(key)))
 
+    data = ", ".join(f"`benchmarks/measured/{f}`" for f in files)
+    if name in BRIEF:  # the load is a column; the commands and dates are in the data
+        return "\n".join(lines) + f"\n\nMeasured on {', '.join(distinct('machine'))}; commands and dates: {data}.\n"
     shown = any(h == "command" for h, _ in columns)
     commands = "" if shown else " by " + " · ".join(f"`{c}`" for c in distinct("command"))
     source = (
         f"Measured on {', '.join(distinct('machine'))}{commands}; load {', '.join(distinct('load'))}; "
-        f"{', '.join(distinct('date'))}. Data: `benchmarks/measured/{file}`."
+        f"{', '.join(distinct('date'))}. Data: {data}."
     )
     return "\n".join(lines) + "\n\n" + source + "\n"
 

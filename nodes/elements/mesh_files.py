@@ -4,7 +4,8 @@ Documented repairs: duplicate vertices are merged, degenerate (zero-area) and du
 dropped, an inside-out mesh is inverted, the mesh is moved to its volume centroid and (optionally)
 turned so its principal axes are x ≥ y ≥ z in extent. Refused: unreadable file, non-finite
 coordinates, no faces, not closed (holes or non-manifold edges), inconsistent orientation,
-zero volume. trimesh is imported inside the functions (node modules must import cheaply).
+zero volume; ``nodegraph check`` reads the file and says the same before any work (``base_mesh``). trimesh is
+imported inside the functions (node modules must import cheaply).
 """
 
 from __future__ import annotations
@@ -54,7 +55,8 @@ def repair_element_mesh(
         open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
         raise MeshFileError(
             f"{source}: mesh is not closed ({open_edges} boundary edges, or edges shared by "
-            "more than two faces); an element must be a closed (watertight) surface"
+            "more than two faces); an element must be a closed (watertight) surface: fill its holes and export it "
+            "again (Blender: Select All, then Mesh > Clean Up > Fill Holes; or trimesh: trimesh.repair.fill_holes)"
         )
     if not mesh.is_winding_consistent:
         raise MeshFileError(

@@ -1,5 +1,6 @@
 """Aperiodic space filling — SPEC §2 (S §3, G §3.2.2):
-poisson_place → rotate → mix_ratio → (medial_spheres) → overlap_refine → cull; ``cut`` removes a
+poisson_place → rotate → mix_ratio → (medial_spheres) → overlap_refine → cull, or → lift_apart (round elements
+of different sizes: each lifted clear of those below it by its own size); ``cut`` removes a
 half-space or a ball from a result so a volume fill's inside shows (G's cut rice bunny).
 
 Declaration modules (one node each, imported here for the registry) import only numpy and
@@ -10,9 +11,19 @@ nodegraph at top level; the kernels (``candidates``, ``dart_throw``, ``frames``,
 from .cull import cull
 from .cut import cut
 from .implicit_function import carry_medial_spheres
+from .lift_apart import lift_apart
 from .mix_ratio import mix_ratio
 from .overlap_refine import overlap_refine
 from .poisson_place import poisson_place
 from .rotate import rotate
 
-__all__ = ["carry_medial_spheres", "cull", "cut", "mix_ratio", "overlap_refine", "poisson_place", "rotate"]
+__all__ = [
+    "carry_medial_spheres",
+    "cull",
+    "cut",
+    "lift_apart",
+    "mix_ratio",
+    "overlap_refine",
+    "poisson_place",
+    "rotate",
+]

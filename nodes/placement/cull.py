@@ -18,6 +18,43 @@ from .element_templates import template_params
 # rice 1,327 of 1,585 (0.84), of the onigiri 1,671 of 1,879 (0.89): 0.84 is each within 8 % (benchmarks/bench_cost.py,
 # a placement's stats and the scene's elements)
 KEPT = 0.84
+# a cull that keeps under this share of KEPT says why (the count fell further than the estimate said: rice_chestnut at
+# ratios [10, 1] kept 94 of 203, its chestnut pieces each taking the room of several grains)
+SAID = 0.8
+
+
+def _why_so_few(node_id, placement, keep, libraries, threshold, priority) -> str:
+    """Why a cull kept far fewer than the estimate's share: what went of each kind, which kind gives way, and how
+    much larger than the smallest kind each kind is (a piece of a larger kind takes the room of several)."""
+    from nodes.elements.grain_shapes import volume_centroid
+
+    volumes = [
+        float(np.mean([abs(volume_centroid(np.asarray(m.vertices), np.asarray(m.faces))[0]) for m in lib.meshes]))
+        for lib in libraries
+    ]
+    names = [lib.kind for lib in libraries]
+    went = [
+        f"{int((~keep & (placement.kinds == k)).sum()):,} of {int((placement.kinds == k).sum()):,} {name}"
+        for k, name in enumerate(names)
+    ]
+    message = (
+        f"{node_id}: kept {int(keep.sum()):,} of {len(keep):,} elements ({keep.mean():.0%}; the estimate assumes "
+        f"{KEPT:.0%}): {', '.join(went)} overlapped deeper than threshold {threshold:g} mm and went"
+    )
+    if len(libraries) > 1:
+        smallest = min(volumes)
+        least = names[volumes.index(smallest)]
+        larger = [
+            f"a {n} is {v / smallest:.0f}× a {least}'s volume" for n, v in zip(names, volumes) if v > 1.5 * smallest
+        ]
+        order = "deepest first" if priority is None else f"by priority {list(priority)}, the lower first"
+        message += f" ({order})"
+        if larger:
+            message += (
+                f"; every element is placed at the smallest kind's spacing and {', '.join(larger)}: the larger the "
+                "share of the larger kinds (ratios), the fewer elements fit"
+            )
+    return message
 
 
 @estimated_by(passes("placement", KEPT))
@@ -73,6 +110,8 @@ def cull(ctx, placement, libraries, *, threshold, offset, priority, sphere_toler
     keep, depth = cull_placement(placement, templates, threshold, offset, ranks)
     with_depth = dataclasses.replace(placement, overlap=depth)
     kept, culled = with_depth.subset(keep), with_depth.subset(~keep)
+    if ctx.reporter is not None and len(placement) and len(kept) < SAID * KEPT * len(placement):
+        ctx.reporter.info(_why_so_few(ctx.node_id or "cull", placement, keep, libraries, threshold, priority))
     if ctx.rerun.enabled:
         import rerun as rr
 

@@ -15,6 +15,22 @@ from nodegraph.values import Table
 
 from ..values import Aggregate, Vessel
 
+# the table's columns, in its order (a sweep's metric naming one is checked before any work)
+COLUMNS = (
+    "elements",
+    "sampled",
+    "overlap_p50",
+    "overlap_p95",
+    "overlap_max",
+    "touching_pairs",
+    "deeper_than_1pct",
+    "contacts_per_element",
+    "packing_fraction",
+    "fill_height",
+    "outside_vessel",
+    "skin",
+)
+
 
 @estimated_by(passes("aggregates"))
 @node(
@@ -37,6 +53,7 @@ from ..values import Aggregate, Vessel
             "contacts per element, packing fraction (element volume / hull), fill height, elements outside the "
             "vessels (0 without vessels), skin: mean skin score of the sampled elements (concave share of edge "
             "curvature, nodes/quality/skin.py: 0 convex, ≤ 0.10 cooked rice)",
+            columns=COLUMNS,
         )
     },
     params={

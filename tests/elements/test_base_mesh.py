@@ -151,8 +151,12 @@ def test_open_mesh_is_refused(tmp_path):
     box = trimesh.creation.box()
     path = tmp_path / "open.stl"
     trimesh.Trimesh(box.vertices, box.faces[:-2], process=False).export(path)
-    with pytest.raises(MeshFileError, match="not closed"):
+    with pytest.raises(ValueError, match="not closed"):  # refused by its check, before the file is loaded again
         base_mesh.call(shape="file", path=str(path))
+    # refused before any work too (`nodegraph check`), naming the file and how to close it
+    problems = base_mesh.check(base_mesh.resolve_params({"shape": "file", "path": str(path)}))
+    assert [p for p, _ in problems] == ["path"]
+    assert "open.stl" in problems[0][1] and "not closed" in problems[0][1] and "Fill Holes" in problems[0][1]
 
 
 def test_flat_mesh_is_refused(tmp_path):

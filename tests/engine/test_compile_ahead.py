@@ -235,9 +235,10 @@ def test_kernels_this_process_has_are_not_compiled_ahead(tmp_path, monkeypatch):
 
 
 def test_a_run_whose_kernels_are_all_cached_starts_no_worker(tmp_path, monkeypatch):
-    """A run that had every kernel of its worker's jobs (compiled or loaded) leaves a mark in numba's cache folder:
-    the next run with the same kernels starts no worker (it would only load them, 1.6 CPU s of the main job's run);
-    a change to a kernel's module, or a cleared cache, starts it again."""
+    """A run that had every kernel of its worker's jobs (compiled or loaded; with a worker or without) leaves a mark
+    in numba's cache folder: the next run with the same kernels starts no worker (it would only load them, 1.6 CPU s
+    of the main job's run), and its estimate says no kernel is left to compile; a change to a kernel's module, or a
+    cleared cache, starts it again."""
     from nodegraph.plan import Instance
     from nodegraph.recipe import load_recipe
     from nodegraph.registry import default_registry
@@ -251,8 +252,10 @@ def test_a_run_whose_kernels_are_all_cached_starts_no_worker(tmp_path, monkeypat
     spawned = []
     monkeypatch.setattr(CompileAhead, "spawn", lambda self: spawned.append(self.jobs))
     assert CompileAhead.start(recipe, order, set(order)) is not None and len(spawned) == 1  # nothing cached yet
-    _run(tmp_path)  # compiles them, and marks them cached
+    assert compile_ahead.kernels_due(recipe)  # what check and run say beside the estimate
+    _run(tmp_path, **{compile_ahead.ENV_VAR: "off"})  # compiles them, no worker, and marks them cached
     assert CompileAhead.start(recipe, order, set(order)) is None and len(spawned) == 1
+    assert not compile_ahead.kernels_due(recipe)  # issue 47: "a first run compiles kernels" was said every time
     (tmp_path / "ahead_kernels.py").write_text(KERNELS + "\n# edited\n")
     assert CompileAhead.start(recipe, order, set(order)) is not None and len(spawned) == 2
 

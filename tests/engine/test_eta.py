@@ -39,6 +39,26 @@ def test_the_plan_expects_each_node_to_take_as_long_as_it_last_did(registry, cac
     assert pts is not None and slow is not None and slow >= 0.4 and slow > pts
 
 
+def test_a_node_that_never_ran_is_expected_to_take_what_the_estimate_says_or_nothing_is_claimed(registry, cache):
+    """A first run kept no times: its bar counted nodes ("89/97 … eta 0:00:01" for minutes); now the estimate's
+    seconds, and where there is none, no ETA at all."""
+    from nodegraph.cost import Cost, Estimate
+
+    seen = PlanSeen()
+    estimate = Estimate(costs={"pts": Cost(), "slow": Cost(seconds=30.0)}, outputs=("slow",))
+    run_recipe(parse_recipe(RECIPE.replace("COUNT", "7"), registry), cache=cache, reporter=seen, estimate=estimate)
+    assert seen.plans[0] == [pytest.approx(estimate.other_seconds), 30.0]
+    seen = PlanSeen()
+    run_recipe(parse_recipe(RECIPE.replace("COUNT", "8"), registry), cache=None, reporter=seen)
+    assert seen.plans[0] == [None, None]
+    out = io.StringIO()
+    reporter = Reporter(console=Console(file=out, force_terminal=True, width=120))
+    with reporter.task("etarun", 2, plan=[None, None]) as tick:
+        tick()
+        reporter._progress.refresh()
+    assert "-:--:--" in out.getvalue() and "≥" not in out.getvalue()  # not "≥ 0:00:00"
+
+
 def test_remaining_seconds_counts_what_is_ahead_and_what_is_left_of_the_running_step():
     from nodegraph.report import remaining_seconds
 

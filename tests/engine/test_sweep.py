@@ -133,15 +133,20 @@ def test_cli_sweep_grid_writes_table_csv_and_plot(sweep_file, tmp_path, capsys):
     )
     assert code == 0
     out = tmp_path / "outputs" / "toy_sweep" / "sweeps"
-    rows = list(csv.DictReader((out / "grid.csv").open()))
+    grid = "grid_shift.dx=0,0.5,1"  # named by its grid: another grid's sweep keeps its own files
+    rows = list(csv.DictReader((out / f"{grid}.csv").open()))
     assert [r["shift.dx"] for r in rows] == ["0", "0.5", "1"]
     assert [r["recipe setting"] for r in rows] == ["yes", "", ""]
     assert all(r["merge.stats.count:sum"] == "80" for r in rows)
     assert int(rows[1]["ran"]) == 5 and int(rows[1]["cached"]) == 0  # shift, slow ×2, merge; pts is common
-    text = (out / "grid.md").read_text()
+    text = (out / f"{grid}.md").read_text()
     assert "2 node instances common to every point" in text and "| **1** | **0** |" in text
+    assert "merge.stats.count:sum is 80 at every point: it does not vary with this grid" in text  # said, not hidden
+    assert main(["sweep", str(sweep_file), "--grid", "shift.dx=0,1", "--set", "slow.seconds=0", "-q", "--cache-dir",
+                 str(tmp_path / "cache"), "--plugin", TOY]) == 0  # fmt: skip
+    assert (out / f"{grid}.csv").exists() and (out / "grid_shift.dx=0,1.csv").exists()  # the first one kept
     pytest.importorskip("matplotlib")
-    assert (out / "grid.png").read_bytes()[:4] == b"\x89PNG"
+    assert (out / f"{grid}.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_cli_sweep_errors_exit_2(sweep_file, tmp_path, capsys):
@@ -153,6 +158,11 @@ def test_cli_sweep_errors_exit_2(sweep_file, tmp_path, capsys):
     assert "sweep point 2 (shift.dx=50): node 'shift', dx: out of range" in err
     assert main(["sweep", str(sweep_file), "--grid", "shift.dx=0", "--metric", "shift.spheres", *args]) == 2
     assert "--metric:1" in capsys.readouterr().err
+    # a column a Table output declares is checked before any work too (it was found missing after every point ran)
+    rice = str(Path(__file__).resolve().parents[2] / "graphs" / "rice_bowl.yaml")
+    assert main(["sweep", rice, "--grid", "rice_sim.frames=1,2", "--metric", "measure.table.overlap_p9", *args]) == 2
+    err = capsys.readouterr().err
+    assert "--metric:1" in err and "has no column 'overlap_p9'" in err and "overlap_p95" in err
     assert main(["sweep", str(sweep_file), "--sweep", "nope", *args]) == 2
     assert "declares shift" in capsys.readouterr().err
 
@@ -210,12 +220,13 @@ def test_cli_sweep_lays_the_previews_out_on_a_contact_sheet(sweep_file, tmp_path
     args += ["--metric", "merge.stats.count:sum:higher", "--cache-dir", str(tmp_path / "cache"), "--plugin", TOY]
     assert main(args) == 0
     out = tmp_path / "outputs" / "toy_sweep" / "sweeps"
-    sheet = np.asarray(PILImage.open(out / "grid_picture_image.png"))
+    sheet = np.asarray(PILImage.open(out / "grid_shift.dx=0,1,2_picture_image.png"))
     assert sheet.shape[1] > 3 * 2 * 32 and sheet.shape[0] > 24  # three tiles (two variants each), captions
     reds = sorted({int(v) for v in sheet[8 + 12, :, 0]} - {255})  # the tiles' middle row, white gaps left out
     assert len(reds) == 6  # each point's own pictures (two variants each), not one repeated
-    text = (out / "grid.md").read_text()
-    assert "![grid_picture_image.png](grid_picture_image.png)" in text and "merge.stats.count:sum ↑" in text
+    text = (out / "grid_shift.dx=0,1,2.md").read_text()
+    sheet_name = "grid_shift.dx=0,1,2_picture_image.png"
+    assert f"![{sheet_name}]({sheet_name})" in text and "merge.stats.count:sum ↑" in text
 
 
 def test_a_sweep_without_matplotlib_says_it_drew_no_plot(sweep_file, tmp_path, capsys, monkeypatch):
@@ -225,9 +236,9 @@ def test_a_sweep_without_matplotlib_says_it_drew_no_plot(sweep_file, tmp_path, c
     args += ["--set", "slow.seconds=0", "--cache-dir", str(tmp_path / "cache"), "--plugin", TOY]
     assert main(args) == 0
     out = tmp_path / "outputs" / "toy_sweep" / "sweeps"
-    assert not (out / "grid.png").exists()
+    assert not (out / "grid_shift.dx=0,1.png").exists()
     assert "no plot: matplotlib is not installed" in capsys.readouterr().err
-    assert "no plot: matplotlib is not installed" in (out / "grid.md").read_text()
+    assert "no plot: matplotlib is not installed" in (out / "grid_shift.dx=0,1.md").read_text()
 
 
 def test_a_draft_sweep_writes_beside_the_draft_runs_not_the_full_ones(sweep_file, tmp_path):

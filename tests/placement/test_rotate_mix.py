@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from nodes.placement import mix_ratio, rotate
-from nodes.values import Placement
+from nodes.values import ElementLibrary, ParticleState, Placement
 
-from .conftest import digest, rice_library
+from .conftest import digest, ellipsoid, rice_library
 
 
 def _points(n=400, seed=0):
@@ -85,3 +87,31 @@ def test_bad_ratio_lists_are_refused():
         mix_ratio.call(placement=placement, libraries=libs, ratios=[0.0, 0.0])
     with pytest.raises(ValueError, match="must differ"):
         mix_ratio.call(placement=placement, libraries=[libs[0], libs[0]])
+
+
+def test_lift_apart_lifts_an_element_clear_by_its_own_size_and_leaves_a_clear_one_as_it_was():
+    """Eggs spaced by the smallest and drawn large side by side start deep inside one another, and the drop threw
+    them out of the bowl (issue 47): the upper is lifted until the overlap is at most the share of the smaller."""
+    from nodes.placement import lift_apart
+
+    eggs = ElementLibrary("ikura", (ellipsoid((5.0, 5.0, 5.0), 1), ellipsoid((3.0, 3.0, 3.0), 1)))
+    positions = np.array([[0.0, 0.0, 0.0], [5.0, 0.0, 0.2], [20.0, 0.0, 0.0], [26.5, 0.0, 0.0]])
+    placement = Placement(positions, np.tile([0.0, 0.0, 1.0], (4, 1)), variants=[0, 0, 1, 0])
+    out = lift_apart.call(placement=placement, libraries=[eggs], overlap=0.25)
+    moved = out["placement"].positions
+    least = 10.0 - 0.25 * 5.0  # the two large ones: R + R less a quarter of R
+    assert np.isclose(np.linalg.norm(moved[1] - moved[0]), least)  # the higher one lifted just clear, straight up
+    assert np.array_equal(moved[[0, 2]], positions[[0, 2]]) and np.array_equal(moved[:, :2], positions[:, :2])
+    assert np.isclose(np.linalg.norm(moved[3] - moved[2]), 8.0 - 0.25 * 3.0)  # large over small: the small's share
+    clear = Placement(positions[[0, 2]], np.tile([0.0, 0.0, 1.0], (2, 1)))
+    assert lift_apart.call(placement=clear, libraries=[eggs])["placement"] is clear  # the same values, bit for bit
+    pile = ParticleState(np.array([[0.0, 0.0, -5.5]]), np.zeros((1, 3)), np.array([1.0]), np.zeros(1), np.zeros(1, int))
+    on_pile = lift_apart.call(placement=clear, libraries=[eggs], below=[pile], overlap=0.25)["placement"].positions
+    assert np.isclose(on_pile[0, 2], -5.5 + 6.0 - 0.25 * 1.0) and on_pile[1, 2] == 0.0  # clear of the pile below
+    # the main job's eggs go through it, clear of the settled rice, before they are dropped
+    from nodegraph.api import default_registry, load_recipe
+
+    recipe = load_recipe(Path(__file__).resolve().parents[2] / "graphs" / "ikura_don.yaml", default_registry())
+    (wire,) = recipe.nodes["egg_sim"].inputs["aggregate"]
+    apart = recipe.nodes[wire.node]
+    assert apart.spec.type_name == "lift_apart" and [w.node for w in apart.inputs["below"]] == ["rice_sim"]

@@ -26,6 +26,7 @@ def column(table, name):
 def test_known_overlap_depth_in_element_lengths():
     table = measure.call(aggregates=[balls(0.0, 1.8)])
     assert column(table, "elements") == 2
+    assert tuple(table.columns) == measure.outputs["table"].columns  # as declared: a sweep checks a metric by it
     assert np.isclose(column(table, "overlap_max"), 0.2 / 2.0, atol=0.003)  # 0.2 mm deep in balls 2 mm across
     assert np.isclose(column(table, "contacts_per_element"), 1.0)
 
