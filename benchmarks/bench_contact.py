@@ -4,7 +4,7 @@ watertight share), each element's volume against its volume before the contact s
 
     python benchmarks/bench_contact.py CHECKERS_DIR                      # every food recipe, reduced sizes
     python benchmarks/bench_contact.py CHECKERS_DIR ikura_don --full     # the main job at full size
-    python benchmarks/bench_contact.py --quick                           # the reduced main job (CI smoke run)
+    python benchmarks/bench_contact.py --quick                           # the reduced rice bowl (CI smoke run)
     python benchmarks/bench_contact.py ../shared/tools ikura_don --full --time 2 --work DIR  # CPU s of each step
 
 CHECKERS_DIR holds ``overlap_check.py`` and ``mesh_quality.py`` (they need trimesh, scipy and libigl): the argument,
@@ -45,8 +45,9 @@ def _load_bench_scenes():
 
 
 bench_scenes = _load_bench_scenes()
-# --quick runs the reduced main job with its own contact step and the checkers: up to 226 CPU s where the numba cache
-# is cold (compiling is ≈ 164 CPU s of the whole pipeline, docs/performance.md)
+# --quick runs the reduced rice bowl (the cheapest food recipe; the reduced main job is tests/scenes' work) with its own
+# contact step and the checkers: the main job took up to 226 CPU s where the numba cache is cold (compiling is ≈ 164
+# CPU s of the whole pipeline, docs/performance.md)
 QUICK_CPU_S = 360
 RECIPES = ("ikura_don", "rice_bowl", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_bunny", "rice_chestnut")
 
@@ -196,13 +197,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("recipes", nargs="*", default=list(RECIPES))
     parser.add_argument("--full", action="store_true", help="full sizes (minutes per recipe on 2 cores)")
-    parser.add_argument("--quick", action="store_true", help="the reduced main job only (a smoke run)")
+    parser.add_argument("--quick", action="store_true", help="the reduced rice bowl only (a smoke run)")
     parser.add_argument("--variants", help="before,after (default; --quick: after, the recipes' own contact step)")
     parser.add_argument("--time", type=int, metavar="N", help="time each contact step as both nodes, N times in turn")
     parser.add_argument("--work", type=Path, help="keep the node caches and scenes here (re-runs reuse the simulation)")
     args = parser.parse_args(argv)
     if args.quick:
-        args.recipes = ["ikura_don"]
+        args.recipes = ["rice_bowl"]
     variants = args.variants or ("after" if args.quick else "before,after")
     checkers = find_checkers(args.checkers)
     if checkers is None:

@@ -2,7 +2,7 @@
 cold on 2 cores) — timed on their cached inputs, with a digest of what each returns to compare two checkouts.
 
     python benchmarks/bench_output_nodes.py onigiri CACHE_DIR [--nodes measure,shade,export]
-    python benchmarks/bench_output_nodes.py --quick     # the reduced main job in a temporary cache (CI smoke run)
+    python benchmarks/bench_output_nodes.py --quick     # the reduced rice bowl in a temporary cache (CI smoke run)
 
 CACHE_DIR holds the recipe's node cache (a copy of a full cold run's, e.g. /work/main/exp/gal_cache/onigiri: the
 inputs are read from it, nothing is written). Each node function runs once in this process, in the order given,
@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-# --quick computes the reduced main job's inputs first (the numba cache may be cold in CI: its compiling counts)
+# --quick computes the reduced rice bowl's inputs first, the cheapest food recipe with all three nodes (the reduced
+# main job is tests/scenes' work; the numba cache may be cold in CI: its compiling counts)
 QUICK_CPU_S = 300
 
 
@@ -50,13 +51,13 @@ def main() -> None:
     parser.add_argument("recipe", nargs="?", help="a recipe name in graphs/")
     parser.add_argument("cache", nargs="?", type=Path, help="the recipe's node cache (read only)")
     parser.add_argument("--nodes", default="measure,shade,export", help="node types to time, in order")
-    parser.add_argument("--quick", action="store_true", help="the reduced main job, its inputs computed here")
+    parser.add_argument("--quick", action="store_true", help="the reduced rice bowl, its inputs computed here")
     args = parser.parse_args()
     if args.quick:
         import bench_scenes
 
         with tempfile.TemporaryDirectory(prefix="bench-output-nodes-") as tmp:
-            time_nodes("ikura_don", Path(tmp), args.nodes.split(","), bench_scenes.QUICK["ikura_don"])
+            time_nodes("rice_bowl", Path(tmp), args.nodes.split(","), bench_scenes.QUICK["rice_bowl"])
         return
     if args.recipe is None or args.cache is None:
         parser.error("give a recipe and its node cache, or --quick")

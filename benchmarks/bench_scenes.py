@@ -4,7 +4,7 @@ of the ``measure`` node (overlap p50 / p95 / max of touching pairs in element le
 element, packing fraction), with G table 2's times and counts beside (SPEC §6).
 
     python benchmarks/bench_scenes.py                 # every recipe at full size (minutes on 2 cores)
-    python benchmarks/bench_scenes.py --quick         # the main job at its reduced size: a smoke run of this harness
+    python benchmarks/bench_scenes.py --quick         # the rice bowl at its reduced size: a smoke run of this harness
     python benchmarks/bench_scenes.py --quick rice_bowl sushi  # other recipes at their reduced sizes
     python benchmarks/bench_scenes.py rice_bowl ikura_don     # some recipes only
     python benchmarks/bench_scenes.py --gallery && python tools/gallery.py   # the README pictures from these runs
@@ -46,8 +46,8 @@ REFERENCE = {
 # Reduced sizes (seconds each): each recipe's own draft: block (what `nodegraph run --draft` applies: a smaller
 # shape, fewer variants and frames), with a still smaller preview on top.
 PREVIEW = ["preview.width=64", "preview.height=48", "preview.samples=1", "measure.sample=60"]
-# --quick runs the main job small, in a process of its own: the harness's smoke run (every recipe at its reduced size
-# is tests/scenes' work; all of them here took 199 CPU s with compiled kernels, load 2.5)
+# --quick runs the rice bowl small (its cheapest food recipe), in a process of its own: the harness's smoke run (every
+# recipe at its reduced size is tests/scenes' work; all of them here took 199 CPU s with compiled kernels, load 2.5)
 QUICK_CPU_S = 120
 SCENES = ("rice_bowl", "ikura_don", "onigiri", "onigiri_cylinder", "sushi", "kakigori", "rice_chestnut")
 
@@ -140,7 +140,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     from machine import conditions
 
-    names = args.recipes or (["ikura_don"] if args.quick else [n for n in QUICK if recipe_path(n).exists()])
+    names = args.recipes or (["rice_bowl"] if args.quick else [n for n in QUICK if recipe_path(n).exists()])
     rows = []
     for name in names:
         quick = QUICK.get(name, PREVIEW)

@@ -3,13 +3,14 @@ changing one shade parameter (``shade.baked_ambient``), everything upstream serv
 is the cooked material's: changing it re-runs the simulation too, as it should.)
 
     python benchmarks/bench_shade_rerun.py            # graphs/ikura_don.yaml at full size (minutes on 2 cores)
-    python benchmarks/bench_shade_rerun.py --quick    # the reduced main job of tests/shading/test_recipes.py
+    python benchmarks/bench_shade_rerun.py --quick    # the reduced rice bowl: a smoke run of this harness (seconds)
 
 The re-run recomputes shade, export and preview (and only those: ``tests/shading/test_recipes.py``); the table
 also shows the run's total (cache loads, output files, the Rerun recording) and that total without the preview,
 which is path tracing at 1280 × 720, 12 spp, by design several seconds on 2 cores (benchmarks/bench_preview.py).
-Kernels are compiled by a first run; the load average is printed beside (times on a shared machine compare only
-under the same line). Writes benchmarks/results/bench_shade_rerun{_quick}.md.
+Kernels are compiled by a first run (not in --quick, a smoke run of the harness: its cold time includes them); the
+load average is printed beside (times on a shared machine compare only under the same line). Writes
+benchmarks/results/bench_shade_rerun{_quick}.md.
 """
 
 from __future__ import annotations
@@ -25,11 +26,11 @@ ROOT = Path(__file__).resolve().parents[1]
 RERUN_NODES = ("shade", "export", "preview")
 
 
-def timed_run(overrides: list[str], cache_dir: Path, out_dir: Path) -> tuple[float, dict[str, float]]:
-    """One run of the main job: its wall seconds and each node's."""
+def timed_run(name: str, overrides: list[str], cache_dir: Path, out_dir: Path) -> tuple[float, dict[str, float]]:
+    """One run of recipe ``name``: its wall seconds and each node's."""
     from nodegraph.api import Cache, default_registry, load_recipe, run_recipe
 
-    recipe = load_recipe(ROOT / "graphs" / "ikura_don.yaml", default_registry(), overrides)
+    recipe = load_recipe(ROOT / "graphs" / f"{name}.yaml", default_registry(), overrides)
     start = time.perf_counter()
     result = run_recipe(recipe, cache=Cache(cache_dir), out_dir=out_dir)
     total = time.perf_counter() - start
@@ -42,7 +43,7 @@ def timed_run(overrides: list[str], cache_dir: Path, out_dir: Path) -> tuple[flo
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="the reduced main job (seconds)")
+    parser.add_argument("--quick", action="store_true", help="the reduced rice bowl (seconds)")
     parser.add_argument(
         "--ambient", type=float, default=0.5, help="the changed shade.baked_ambient (share of the base colour)"
     )
@@ -50,21 +51,25 @@ def main(argv: list[str] | None = None) -> int:
     from bench_scenes import QUICK as SIZES
     from machine import conditions
 
-    quick = [o for o in SIZES["ikura_don"] if not o.startswith("measure.")]  # the reduced main job, as the tests
+    # --quick: the reduced rice bowl, a smoke run of the harness (the reduced main job's shade-only re-run is
+    # tests/shading/test_recipes.py's)
+    name = "rice_bowl" if args.quick else "ikura_don"
+    quick = [o for o in SIZES[name] if not o.startswith("measure.")]
     base = quick if args.quick else []
     with tempfile.TemporaryDirectory(prefix="bench-shade-rerun-") as tmp:
-        timed_run(quick, Path(tmp) / "compile", Path(tmp) / "out")  # numba kernels compiled (same graph), not timed
-        cold_total, cold = timed_run(base, Path(tmp) / "cache", Path(tmp) / "out")
+        if not args.quick:  # numba kernels compiled (same graph), not timed
+            timed_run(name, quick, Path(tmp) / "compile", Path(tmp) / "out")
+        cold_total, cold = timed_run(name, base, Path(tmp) / "cache", Path(tmp) / "out")
         load_cold = os.getloadavg()[0]
         rerun_total, rerun = timed_run(
-            base + [f"shade.baked_ambient={args.ambient:g}"], Path(tmp) / "cache", Path(tmp) / "out"
+            name, base + [f"shade.baked_ambient={args.ambient:g}"], Path(tmp) / "cache", Path(tmp) / "out"
         )
     load_rerun = os.getloadavg()[0]
     if set(rerun) != set(RERUN_NODES):
         raise SystemExit(f"the shade-only re-run ran {sorted(rerun)}, expected {list(RERUN_NODES)}")
 
     lines = [
-        f"ikura_don ({'reduced' if args.quick else 'full size'}): cold run vs re-run after shade.baked_ambient → "
+        f"{name} ({'reduced' if args.quick else 'full size'}): cold run vs re-run after shade.baked_ambient → "
         f"{args.ambient:g} (s; load average {load_cold:.1f} after the cold run, {load_rerun:.1f} after the re-run)",
         "",
         "| node | cold (s) | shade-only re-run (s) |",

@@ -307,7 +307,7 @@ def bench_accuracy(quick):
         sorted({*((s, i) for s in stack_s for i in stack_i), (10, 2)}),
         stack_ref,
         analytic,
-        repeats=5,
+        repeats=1 if quick else 5,  # --quick: a smoke run of the sweep, its times not compared
     )
     scenes.append(
         (

@@ -98,34 +98,6 @@ def test_a_region_that_does_not_fit_its_vessel_is_refused_at_its_line():
         )
 
 
-@pytest.mark.slow  # the main job's two simulations at full size (≈ 25 s on 2 cores): the fault needs the full heap
-def test_ikura_don_eggs_start_above_the_settled_rice_and_stay_in_the_bowl():
-    """The egg layer starts where the rice top layer settles, not where it was placed (the layer rises ≈ 3 mm):
-    before, 113 of 310 eggs started inside the settled rice, up to 3.2 mm deep, the contacts threw them and one came
-    to rest on the bowl's rim (1.42 r deep). Now no egg starts deeper than its own radius in the rice (the deepest
-    egg depends on where the placement puts it against the settled rice's bumps: 0.77–0.84 r measured over the egg
-    layer's settings before static friction decided per contact, 0.93 r since, with eggs of 16 sizes; the fault
-    is 1.42 r) and every egg ends inside the bowl's rim, above its bottom."""
-    from scipy.spatial import cKDTree
-
-    recipe = load_recipe(REPO / "graphs" / "ikura_don.yaml", default_registry(), [])
-    result = run_recipe(
-        recipe,
-        outputs=["egg_place.placement", "egg_sim.aggregate", "rice_sim.particles", "bowl.vessel", "egg_base.mesh"],
-    )
-    vessel, rice = result.output("bowl.vessel"), result.output("rice_sim.particles")
-    eggs = result.output("egg_base.mesh")  # its variants: eggs of varying diameter
-    egg_radius = 0.5 * float(np.mean([np.ptp(egg.vertices[:, 0]) for egg in eggs]))
-    placed = result.output("egg_place.placement")
-    own = np.array([0.5 * float(np.ptp(egg.vertices[:, 0])) for egg in eggs])[placed.variants]  # each egg's radius
-    tree, radii = cKDTree(rice.positions), np.asarray(rice.radii)
-    deepest = 0.0  # in each egg's own radii
-    for x, r in zip(placed.positions, own):
-        near = tree.query_ball_point(x, r + radii.max())
-        if near:
-            depth = float((r + radii[near] - np.linalg.norm(rice.positions[near] - x, axis=1)).max())
-            deepest = max(deepest, depth / r)
-    assert deepest < 1.0
-    end = result.output("egg_sim.aggregate").placement.positions
-    assert np.hypot(end[:, 0], end[:, 1]).max() < vessel.radius - 0.5 * egg_radius  # none on the rim
-    assert end[:, 2].min() > -vessel.depth
+# The main job's egg layer at full size (it starts above the settled rice and stays in the bowl) is checked in
+# the suite's one full-size run of the main job: tests/shading/test_recipes.py
+# (test_the_main_job_runs_at_full_size_and_its_eggs_start_above_the_settled_rice).
