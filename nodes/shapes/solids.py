@@ -257,6 +257,8 @@ def wrap_band(
     for c, cut in enumerate(xs):  # a cut's rays lie in its plane: only the faces that cross it can meet them
         rays = slice(c * (rows + 1), (c + 1) * (rows + 1))
         crossing = np.flatnonzero((lo_x <= cut) & (hi_x >= cut))
+        if not len(crossing):  # a cut beside the shape: its rays miss (refused below)
+            continue
         d, f = first_hits(origins[rays], directions[rays], triangles[crossing])
         distance[rays], face[rays] = d, np.where(f >= 0, crossing[np.maximum(f, 0)], -1)
     if (face < 0).any() or (np.einsum("ij,ij->i", normals[face], directions) <= 0).any():
