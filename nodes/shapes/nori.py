@@ -16,6 +16,19 @@ def band_size(shape: Mesh, width: float, height: float) -> tuple[float, float]:
     return float(width * extent[0]), float(height * extent[2])
 
 
+def _check(params: dict) -> list[tuple[str, str]]:
+    """A sheet thicker than its gap would cut into what it lies on (its thickness goes inwards)."""
+    if params.get("thickness", 0.0) > params.get("gap", 0.3):
+        return [
+            (
+                "thickness",
+                f"{params['thickness']:g} mm is more than the gap ({params['gap']:g} mm): the sheet's inner face "
+                "would cut into the rice it lies on; allowed: thickness ≤ gap",
+            )
+        ]
+    return []
+
+
 def _band_fits(node_id: str, nodes) -> list[tuple[str, str, bool]]:
     """The band against the shape it dresses, before any work (the run said so after its simulation, 52 s in):
     when a ``shape`` node's parameters make that shape, the band is wrapped round it at a few rays, and a band
@@ -101,19 +114,51 @@ def _leaves(mould, width: float, height: float) -> str | None:
             units="mm",
         ),
         "rib_period": Param(float, 1.6, "spacing of the ribs along the band", range=(0.01, 100.0), units="mm"),
+        "crinkle": Param(
+            float,
+            0.0,
+            "height of the dry sheet's crinkles and fibres (waves 4–12 mm and 0.5–1.5 mm long, drawn from the "
+            "seed), outwards; 0 = none",
+            range=(0.0, 10.0),
+            units="mm",
+        ),
+        "thickness": Param(
+            float,
+            0.0,
+            "the sheet's thickness, inwards from where it lies: a closed thin solid with cut edges; 0 = an open "
+            "sheet with no thickness. At most the gap, so the rice under it stays under it",
+            range=(0.0, 10.0),
+            units="mm",
+        ),
     },
+    random=True,  # the crinkles' waves
+    check=_check,
     check_work=_band_fits,
 )
-def nori(ctx, shape, aggregate=None, *, width, height, gap, columns, rows, reach, ribs, rib_period):
+def nori(ctx, shape, aggregate=None, *, width, height, gap, columns, rows, reach, ribs, rib_period, crinkle, thickness):
     """The shape's surface (or the grains on it) under a plane ``height`` (a share of the shape's height) above
     the shape's lowest point, in a strip ``width`` (a share of its width) across x, ``gap`` outside it: a
-    rectangular sheet folded round the shape's bottom."""
+    rectangular sheet folded round the shape's bottom, ``thickness`` thick, crinkled by up to ``crinkle``."""
     from .solids import wrap_band
 
     width, height = band_size(shape, width, height)
     drape = None if aggregate is None else band_points(aggregate, shape, width, reach)
+    seed = int(ctx.rng.integers(2**31))
     vertices, faces = wrap_band(
-        shape.vertices, shape.faces, width, height, gap, columns, rows, drape, reach, ribs, rib_period
+        shape.vertices,
+        shape.faces,
+        width,
+        height,
+        gap,
+        columns,
+        rows,
+        drape,
+        reach,
+        ribs,
+        rib_period,
+        crinkle,
+        thickness,
+        seed,
     )
     return Mesh(vertices, faces, name="nori")
 

@@ -214,6 +214,9 @@ def wrap_band(
     reach: float = 2.0,
     ribs: float = 0.0,
     rib_period: float = 1.6,
+    crinkle: float = 0.0,
+    thickness: float = 0.0,
+    seed: int = 0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A sheet folded round the bottom of a closed shape (faces along ±y): for each of ``columns + 1`` cuts across
     x (``width`` wide, centred), rays in the y–z plane from the point at ``height`` above the shape's lowest point
@@ -227,7 +230,12 @@ def wrap_band(
 
     ``ribs`` > 0: the sheet's fine ribbing (a nori sheet keeps the lines of the mat it dried on), ridges across the
     band every ``rib_period`` mm of its length, raised up to ``ribs`` mm outwards along the rays (never inwards:
-    what the sheet covers stays covered)."""
+    what the sheet covers stays covered).
+
+    ``crinkle`` > 0: the dry sheet's crinkles and fibres (``crinkle_lift``), up to ``crinkle`` mm outwards along
+    the rays, drawn from ``seed``. ``thickness`` > 0: the sheet is a closed thin solid, its inner face
+    ``thickness`` inside the outer one along the rays and its four cut edges closed, so it shows an edge and the
+    rice under it stays under it (the inner face is ``gap`` − ``thickness`` off what it lies on)."""
     vertices, faces = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
     triangles = vertices[faces]
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
@@ -244,7 +252,15 @@ def wrap_band(
     x, angle = (g.ravel() for g in np.meshgrid(xs, angles, indexing="ij"))  # column-major: rows vary fastest
     origins = np.stack([x, np.full_like(x, middle[1]), np.full_like(x, lo[2] + height)], axis=1)
     directions = np.stack([np.zeros_like(x), np.cos(angle), np.sin(angle)], axis=1)
-    distance, face = first_hits(origins, directions, triangles)
+    distance, face = np.full(len(x), np.inf), np.full(len(x), -1)
+    lo_x, hi_x = triangles[:, :, 0].min(axis=1), triangles[:, :, 0].max(axis=1)
+    for c, cut in enumerate(xs):  # a cut's rays lie in its plane: only the faces that cross it can meet them
+        rays = slice(c * (rows + 1), (c + 1) * (rows + 1))
+        crossing = np.flatnonzero((lo_x <= cut) & (hi_x >= cut))
+        if not len(crossing):  # a cut beside the shape: its rays miss (refused below)
+            continue
+        d, f = first_hits(origins[rays], directions[rays], triangles[crossing])
+        distance[rays], face[rays] = d, np.where(f >= 0, crossing[np.maximum(f, 0)], -1)
     if (face < 0).any() or (np.einsum("ij,ij->i", normals[face], directions) <= 0).any():
         raise ValueError(
             f"width: a band {width:g} mm wide and {height:g} mm high leaves the shape "
@@ -270,6 +286,15 @@ def wrap_band(
         room = np.maximum(points[down, 2] - (lo[2] - gap), 0.0) / -directions[down, 2]
         lift[down] = np.minimum(lift[down], room)
         points = points + lift[:, None] * directions
+    if crinkle > 0:
+        grid = points.reshape(columns + 1, rows + 1, 3)
+        along = np.concatenate([np.zeros((columns + 1, 1)), np.linalg.norm(np.diff(grid, axis=1), axis=2).cumsum(1)], 1)
+        across = np.broadcast_to((xs - xs[0])[:, None], along.shape)
+        lift = crinkle * crinkle_lift(across.ravel(), along.ravel(), seed)
+        down = directions[:, 2] < -1e-9
+        room = np.maximum(points[down, 2] - (lo[2] - gap), 0.0) / -directions[down, 2]
+        lift[down] = np.minimum(lift[down], room)
+        points = points + lift[:, None] * directions
     k = np.arange((columns + 1) * (rows + 1)).reshape(columns + 1, rows + 1)
     a, b, c, d = k[:-1, :-1], k[1:, :-1], k[1:, 1:], k[:-1, 1:]
     quads = np.stack([a, b, c, d], axis=-1).reshape(-1, 4)
@@ -281,7 +306,43 @@ def wrap_band(
     centre_normal = normals[face][triangles_out].sum(axis=1)
     if np.einsum("ij,ij->", outward, centre_normal) < 0:
         triangles_out = triangles_out[:, ::-1]
+    if thickness > 0:
+        return solidify(points, triangles_out, directions, k, thickness)
     return points, triangles_out
+
+
+def crinkle_lift(across: np.ndarray, along: np.ndarray, seed: int) -> np.ndarray:
+    """A nori sheet's relief in [0, 1] at points (mm across and along the band): its crinkles, the waves a dried
+    sheet takes as it lies on moist rice (wavelengths 4–12 mm, two thirds of the relief), and its fibres, the
+    torn laver pressed into it (0.5–1.5 mm, mostly along the mat's lines, a third). Each a sum of plane waves
+    with random directions and phases from ``seed`` (the same seed, the same sheet), rescaled to [0, 1]."""
+    rng = np.random.default_rng(seed)
+    total = np.zeros_like(across, dtype=np.float64)
+    for count, (short, long), weight, spread in ((12, (4.0, 12.0), 2.0, np.pi), (24, (0.5, 1.5), 1.0, 0.6)):
+        heading = rng.uniform(-spread, spread, count) + (0.0 if spread >= np.pi else 0.5 * np.pi)
+        wavelength = rng.uniform(short, long, count)
+        phase = rng.uniform(0.0, 2.0 * np.pi, count)
+        k = 2.0 * np.pi / wavelength
+        waves = np.cos(np.outer(across, k * np.cos(heading)) + np.outer(along, k * np.sin(heading)) + phase)
+        total += weight * waves.sum(axis=1) / np.sqrt(count)
+    low, high = total.min(), total.max()
+    return (total - low) / max(high - low, 1e-12)
+
+
+def solidify(points: np.ndarray, faces: np.ndarray, directions: np.ndarray, grid: np.ndarray, thickness: float):
+    """The open sheet ``points``/``faces`` (a (columns + 1) × (rows + 1) ``grid`` of vertex indices, outward
+    ``faces``) as a closed thin solid: an inner copy ``thickness`` back along ``directions`` with its faces turned
+    inwards, and a strip of faces along each of the grid's four borders joining the two, wound against the outer
+    face beside it (each edge crossed once each way: a closed, consistently oriented surface)."""
+    n = len(points)
+    vertices = np.concatenate([points, points - thickness * directions])
+    border = np.concatenate([grid[0, :], grid[1:, -1], grid[-1, -2::-1], grid[-2:0:-1, 0]])  # a loop round the sheet
+    a, b = border, np.roll(border, -1)
+    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    forward = np.isin(a * n + b, directed[:, 0] * n + directed[:, 1])
+    a, b = np.where(forward, b, a), np.where(forward, a, b)  # each border edge as the outer faces do not cross it
+    strip = np.concatenate([np.stack([a, b, b + n], 1), np.stack([a, b + n, a + n], 1)])
+    return vertices, np.concatenate([faces, faces[:, ::-1] + n, strip])
 
 
 def draped_distances(

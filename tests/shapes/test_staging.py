@@ -56,13 +56,13 @@ def test_the_nori_band_wraps_the_onigiris_bottom():
     assert not inside_points(mould.vertices, mould.faces, band.vertices).any()
     surface = trimesh.sample.sample_surface_even(trimesh.Trimesh(mould.vertices, mould.faces), 100_000, seed=0)[0]
     distance = cKDTree(surface).query(band.vertices)[0]  # ≥ the distance to the surface, within the samples' spacing
-    assert distance.max() < 0.4 + 0.3
+    assert distance.max() < 0.4 + 0.2 + 0.06 + 0.3  # the gap, the crinkles and the ribs over it
     lo = mould.vertices.min(axis=0)
     assert band.vertices[:, 2].min() < lo[2]
-    assert band.vertices[:, 2].max() == pytest.approx(lo[2] + 28.0, abs=0.5)
-    y = band.vertices[band.vertices[:, 2] > lo[2] + 20.0, 1]
+    assert band.vertices[:, 2].max() == pytest.approx(lo[2] + 0.6 * 80.3, abs=0.5)
+    y = band.vertices[band.vertices[:, 2] > lo[2] + 40.0, 1]
     assert y.min() < 0 < y.max()  # up the front and the back face
-    assert np.ptp(band.vertices[:, 0]) == pytest.approx(34.0, abs=2 * 0.4)  # ± the gap along slanted normals
+    assert np.ptp(band.vertices[:, 0]) == pytest.approx(42.0, abs=2 * 0.4)  # a five-cut strip, 21 cm / 5
 
 
 def test_a_band_too_wide_for_the_shape_is_refused():
@@ -121,10 +121,10 @@ def test_the_nori_lies_on_the_rice_that_slumped_out_of_its_mould():
     recipe = load_recipe(ROOT / "graphs" / "onigiri.yaml", default_registry(), [])
     mould = shape.call(**recipe.nodes["onigiri"].params)["mesh"]
     grains = _bulging_grains(mould, bulge=1.0)
-    params = recipe.nodes["nori"].params
-    assert (params["width"], params["height"], params["gap"]) == (0.38, 0.35, 0.4)
+    params = {**recipe.nodes["nori"].params, "crinkle": 0.0, "thickness": 0.0, "reach": 0.5}  # the drape alone
+    assert (params["width"], params["height"], params["gap"]) == (0.472, 0.6, 0.4)
     height = band_size(mould, params["width"], params["height"])[1]
-    assert height == pytest.approx(28.0, abs=0.5)
+    assert height == pytest.approx(0.6 * 80.3, abs=0.5)
     on_mould = nori.call(shape=mould, **params)
     assert _outside_the_sheet(on_mould, grains, mould, height)[0].max() > 0.4  # the mould's sheet: grains through it
     draped = nori.call(shape=mould, aggregate=grains, **params)
@@ -146,6 +146,7 @@ def test_the_recipes_nori_is_ribbed_outwards_only():
     params = recipe.nodes["nori"].params
     ribs, period = params["ribs"], params["rib_period"]
     assert ribs > 0
+    params = {**params, "crinkle": 0.0, "thickness": 0.0}  # the ribs alone, on the open sheet
     smooth = nori.call(shape=mould, **{**params, "ribs": 0.0})
     ribbed = nori.call(shape=mould, **params)
     lo, hi = mould.vertices.min(axis=0), mould.vertices.max(axis=0)
@@ -162,13 +163,44 @@ def test_the_recipes_nori_is_ribbed_outwards_only():
     assert len(crests) == pytest.approx(length / period, rel=0.15)
 
 
-def test_the_nori_is_dark_green_and_satin():
-    """Issue 26: the band read as a flat black rectangle (linear (0.010, 0.018, 0.008), L* 13): nori is a very dark
-    green (L* 15–30: a colorimeter's 29 for a test sheet, specular included), with a satin specular lobe."""
+def test_the_recipes_nori_is_a_thin_crinkled_sheet():
+    """Issue 48: the band read as a flat plastic decal. It is a closed thin solid ``thickness`` thick (its cut edges
+    show; its inner face stays outside the mould), its outer face crinkled outwards only, by up to ``crinkle``
+    over the smooth sheet, with relief on the scale of a crinkle (not one bump), the same for the same seed."""
+    from nodegraph.api import default_registry, load_recipe
+
+    recipe = load_recipe(ROOT / "graphs" / "onigiri.yaml", default_registry(), [])
+    mould = shape.call(**recipe.nodes["onigiri"].params)["mesh"]
+    params = {**recipe.nodes["nori"].params, "ribs": 0.0, "columns": 12, "rows": 160}  # coarser: a fast test
+    thickness, crinkle = params["thickness"], params["crinkle"]
+    assert 0.05 <= thickness <= 0.3 and crinkle > 0
+    sheet = nori.call(shape=mould, **params)
+    solid = trimesh.Trimesh(sheet.vertices, sheet.faces, process=False)
+    assert solid.is_watertight and solid.is_winding_consistent and solid.volume > 0
+    assert solid.volume == pytest.approx(0.5 * solid.area * thickness, rel=0.35)  # the rays meet the faces aslant
+    assert not inside_points(mould.vertices, mould.faces, sheet.vertices).any()
+    count = (params["columns"] + 1) * (params["rows"] + 1)
+    flat = nori.call(shape=mould, **{**params, "crinkle": 0.0, "thickness": 0.0})
+    lo, hi = mould.vertices.min(axis=0), mould.vertices.max(axis=0)
+    centre = np.array([0.5 * (lo[1] + hi[1]), lo[2] + band_size(mould, params["width"], params["height"])[1]])
+    radius = lambda v: np.hypot(*(v[:, 1:] - centre).T)  # noqa: E731 - along the band's rays
+    lift = radius(sheet.vertices[:count]) - radius(flat.vertices)
+    up = flat.vertices[:, 2] > lo[2] + 5.0  # up the faces (under the shape the plate bounds it)
+    assert lift.min() >= -1e-9 and lift.max() <= crinkle + 1e-9 and np.ptp(lift[up]) > 0.8 * crinkle
+    depth = radius(sheet.vertices[:count]) - radius(sheet.vertices[count:])
+    assert depth[up] == pytest.approx(thickness, abs=1e-3)  # the gap is along the face's normal, not the ray
+    again = nori.call(shape=mould, **params)
+    assert np.array_equal(again.vertices, sheet.vertices)
+
+
+def test_the_nori_is_black_green_and_dry():
+    """Issue 26: the band read as a flat black rectangle (linear (0.010, 0.018, 0.008), L* 13); issue 48: with a
+    satin face and a white-ish sheen it read as grey rubber. Nori is black-green (L* 15–20 as an albedo: a
+    colorimeter's 29 for a test sheet, specular included), dry: a broad specular lobe, no clear coat."""
     from nodes.shading.materials import nori_material
 
     material = nori_material()
     r, g, b = material.base_color
     lightness = 116.0 * (0.2126 * r + 0.7152 * g + 0.0722 * b) ** (1.0 / 3.0) - 16.0
-    assert 15.0 <= lightness <= 30.0 and g > r and g > b
-    assert 0.3 <= material.roughness <= 0.5
+    assert 15.0 <= lightness <= 20.0 and g > r and g > b
+    assert 0.5 <= material.roughness <= 0.7 and material.clearcoat == 0.0 and material.sheen <= 0.3
