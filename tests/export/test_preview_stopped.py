@@ -83,3 +83,22 @@ def test_a_preview_loads_no_library_after_its_overlap_step(shaded, tmp_path):
         check=True,
     )
     assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout
+
+
+def test_the_overlap_step_loads_every_usd_module_the_export_beside_it_imports():
+    """The export runs beside the preview once ``load_libraries`` has run: each pxr module ``usd_writer`` imports is
+    loaded by then, so USD never opens a library in the export's thread while the render may open one (a run of
+    the onigiri hung so, USD holding the loader's lock and waiting for the GIL)."""
+    import re
+    import sys
+    from pathlib import Path
+
+    from nodes.export import usd_writer
+    from nodes.export.preview import load_libraries
+
+    source = Path(usd_writer.__file__).read_text()
+    used = {name.strip() for names in re.findall(r"from pxr import ([\w, ]+)", source) for name in names.split(",")}
+    assert used, "usd_writer imports no pxr module: this test reads nothing"
+    load_libraries()
+    missing = sorted(name for name in used if f"pxr.{name}" not in sys.modules)
+    assert not missing, f"load_libraries leaves {missing} for the export's thread to load"
