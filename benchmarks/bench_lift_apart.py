@@ -5,6 +5,7 @@ own value must leave none outside.
 
     python benchmarks/bench_lift_apart.py              # sd 1.2, overlap 1 / 0.5 / 0.25, seeds 3-5, the draft
     python benchmarks/bench_lift_apart.py --record     # and write benchmarks/measured/lift_apart.jsonl
+    python benchmarks/bench_lift_apart.py --quick      # the harness on one seed and share, 1 frame each: prints only
 
 An egg is outside when its centre lies past the bowl wall's outer surface (``Vessel.outside``, as ``measure`` counts
 them).
@@ -23,11 +24,14 @@ RECORD = REPO / "benchmarks" / "measured" / "lift_apart.jsonl"
 COMMAND = "python benchmarks/bench_lift_apart.py --record"
 
 
-def point(sd: float, overlap: float, seed: int, cache) -> dict:
+QUICK = ["rice_sim.frames=1", "egg_sim.frames=1"]  # a smoke run of the harness: nothing settles
+
+
+def point(sd: float, overlap: float, seed: int, cache, quick: bool = False) -> dict:
     """One draft run to the dropped eggs: eggs, eggs lifted, eggs ending outside the bowl."""
     from nodegraph.api import default_registry, load_recipe, run_recipe
 
-    overrides = [f"egg_base.diameter_sd={sd}", f"egg_apart.overlap={overlap}", f"seed={seed}"]
+    overrides = [f"egg_base.diameter_sd={sd}", f"egg_apart.overlap={overlap}", f"seed={seed}"] + (QUICK * quick)
     recipe = load_recipe(REPO / "graphs" / "ikura_don.yaml", default_registry(), overrides, draft=True)
     result = run_recipe(recipe, cache=cache, outputs=["egg_sim.aggregate", "egg_apart.stats", "bowl.vessel"])
     vessel = result.output("bowl.vessel")
@@ -43,7 +47,12 @@ def main() -> int:
     parser.add_argument("--overlaps", type=float, nargs="+", default=[1.0, 0.5, 0.25])
     parser.add_argument("--seeds", type=int, nargs="+", default=[3, 4, 5])
     parser.add_argument("--record", action="store_true", help=f"write {RECORD.relative_to(REPO)}")
+    parser.add_argument(
+        "--quick", action="store_true", help="one seed and share, 1 frame each; prints, records nothing"
+    )
     args = parser.parse_args()
+    if args.quick:
+        args.overlaps, args.seeds, args.record = [0.25], [3], False
     import tempfile
 
     from nodegraph.api import Cache
@@ -53,7 +62,7 @@ def main() -> int:
         cache = Cache(Path(tmp) / "cache")  # the rice settles once per seed, shared by the overlaps
         for overlap in args.overlaps:
             load = os.getloadavg()[0]
-            found = [point(args.sd, overlap, seed, cache) for seed in args.seeds]
+            found = [point(args.sd, overlap, seed, cache, args.quick) for seed in args.seeds]
             load = f"{load:.1f}–{os.getloadavg()[0]:.1f}"
             print(f"overlap {overlap:g}: {json.dumps(found)} load {load}", flush=True)
             rows.append(

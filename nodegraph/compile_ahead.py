@@ -153,7 +153,7 @@ class CompileAhead:
         except Exception:
             return None
 
-    def _marker(self) -> Path | None:
+    def marker(self) -> Path | None:
         """The file that says the kernels of ``jobs`` are all in numba's cache, named by what their entries there
         depend on: each kernel and its argument types, the digest of its module's code (the entry's stamp,
         ``numba_locator``), numba's and Python's versions, the CPU compiled for; inside the cache folder, so that
@@ -181,7 +181,7 @@ class CompileAhead:
     def cached(self) -> bool:
         """Whether an earlier run left every kernel of ``jobs`` in numba's cache (``close``): a worker would only
         load them (1.6 CPU s of the main job's run, beside it on the second core) before the run loads them too."""
-        marker = self._marker()
+        marker = self.marker()
         return marker is not None and marker.is_file()
 
     def spawn(self) -> None:
@@ -219,7 +219,7 @@ class CompileAhead:
             return
         try:
             if all(_loaded(job.module, job.name) for job in self.jobs):
-                marker = self._marker()
+                marker = self.marker()
                 if marker is not None:
                     marker.parent.mkdir(parents=True, exist_ok=True)
                     marker.touch()
@@ -267,7 +267,7 @@ def mark_compiled(recipe) -> None:
     try:
         jobs = _every_job(recipe)
         if jobs and all(_loaded(job.module, job.name) for job in jobs):
-            marker = CompileAhead(jobs)._marker()
+            marker = CompileAhead(jobs).marker()
             if marker is not None and not marker.is_file():
                 marker.parent.mkdir(parents=True, exist_ok=True)
                 marker.touch()

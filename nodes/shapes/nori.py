@@ -139,7 +139,7 @@ def nori(ctx, shape, aggregate=None, *, width, height, gap, columns, rows, reach
     """The shape's surface (or the grains on it) under a plane ``height`` (a share of the shape's height) above
     the shape's lowest point, in a strip ``width`` (a share of its width) across x, ``gap`` outside it: a
     rectangular sheet folded round the shape's bottom, ``thickness`` thick, crinkled by up to ``crinkle``."""
-    from .solids import wrap_band
+    from .solids import SheetSurface, wrap_band
 
     width, height = band_size(shape, width, height)
     drape = None if aggregate is None else band_points(aggregate, shape, width, reach)
@@ -154,11 +154,7 @@ def nori(ctx, shape, aggregate=None, *, width, height, gap, columns, rows, reach
         rows,
         drape,
         reach,
-        ribs,
-        rib_period,
-        crinkle,
-        thickness,
-        seed,
+        SheetSurface(ribs, rib_period, crinkle, thickness, seed),
     )
     return Mesh(vertices, faces, name="nori")
 

@@ -8,6 +8,8 @@ is closed and evenly meshed without marching cubes.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import trimesh
 
@@ -202,6 +204,19 @@ def first_hits(origins: np.ndarray, directions: np.ndarray, triangles: np.ndarra
     return distance, face
 
 
+class SheetSurface(NamedTuple):
+    """What a wrapped sheet has besides its shape (``wrap_band``): ribs, crinkles and thickness, in mm."""
+
+    ribs: float = 0.0
+    rib_period: float = 1.6
+    crinkle: float = 0.0
+    thickness: float = 0.0
+    seed: int = 0
+
+
+PLAIN_SHEET = SheetSurface()  # no ribs, no crinkles, no thickness
+
+
 def wrap_band(
     vertices: np.ndarray,
     faces: np.ndarray,
@@ -212,11 +227,7 @@ def wrap_band(
     rows: int,
     drape: np.ndarray | None = None,
     reach: float = 2.0,
-    ribs: float = 0.0,
-    rib_period: float = 1.6,
-    crinkle: float = 0.0,
-    thickness: float = 0.0,
-    seed: int = 0,
+    surface: SheetSurface = PLAIN_SHEET,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A sheet folded round the bottom of a closed shape (faces along ±y): for each of ``columns + 1`` cuts across
     x (``width`` wide, centred), rays in the y–z plane from the point at ``height`` above the shape's lowest point
@@ -235,7 +246,9 @@ def wrap_band(
     ``crinkle`` > 0: the dry sheet's crinkles and fibres (``crinkle_lift``), up to ``crinkle`` mm outwards along
     the rays, drawn from ``seed``. ``thickness`` > 0: the sheet is a closed thin solid, its inner face
     ``thickness`` inside the outer one along the rays and its four cut edges closed, so it shows an edge and the
-    rice under it stays under it (the inner face is ``gap`` − ``thickness`` off what it lies on)."""
+    rice under it stays under it (the inner face is ``gap`` − ``thickness`` off what it lies on). These four and
+    ``seed`` come in ``surface``."""
+    ribs, rib_period, crinkle, thickness, seed = surface
     vertices, faces = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
     triangles = vertices[faces]
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
