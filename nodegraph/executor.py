@@ -577,11 +577,14 @@ class Beside:
 
     def run(self, body: Callable[[], Any], prepare: Callable[[], None] | None = None) -> Any:
         """``body()`` in this thread, ``side`` in a second one started after ``prepare()`` (the node's native
-        libraries loaded: ``NodeSpec.overlap``)."""
+        libraries loaded: ``NodeSpec.overlap``) and the ``NodeSpec.libraries`` of the nodes in ``side``."""
         thread = threading.Thread(target=self._compute_side, name="nodegraph-beside")
         start = now()
         if prepare is not None:
             prepare()
+        specs = (self.executor.recipe.nodes[inst.node].spec for inst in self.side)
+        for load in dict.fromkeys(spec.libraries for spec in specs if spec.libraries is not None):
+            load()  # what the second thread's nodes open, opened here (``NodeSpec.libraries``)
         thread.start()
         ok = False
         try:

@@ -18,6 +18,13 @@ from ..values import ShadedScene
 FORMATS = ("glb", "usda", "usdc", "ply", "obj")
 
 
+def _load_libraries() -> None:
+    """The export's native libraries (``NodeSpec.libraries``): USD's."""
+    from .usd_writer import load_libraries
+
+    load_libraries()
+
+
 def _check(params):
     problems = []
     bad = [f for f in params.get("formats", ()) if f not in FORMATS]
@@ -46,6 +53,7 @@ def _check(params):
         ),
     },
     check=_check,
+    libraries=_load_libraries,
 )
 def export(ctx, scene, *, formats, basename, instancing):
     """glb: core PBR + KHR_materials_* (glTF-Validator clean); USD: UsdPreviewSurface; PLY/OBJ: sRGB colours;

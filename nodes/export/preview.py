@@ -23,18 +23,12 @@ def load_libraries() -> None:
     beside it (``load_renderer``), SciPy's spatial module too, which the scene's hulls import
     (``mitsuba_scene.hull_vertices``), and Pillow's, which writes the table's texture (``studio.wood_png``).
     Without them, a run whose upstream was cached hung for good: the preview importing SciPy's (or Pillow's)
-    libraries while the export beside it loaded USD's (the loader's lock against the GIL). USD's modules and its
-    file-format plugins, which the export beside the preview loads (``usd_writer``), are loaded here too, so that a
-    library the render still opens never waits on the export's: the onigiri's run hung so with the loader's lock held
-    by USD in the export's thread."""
+    libraries while the export beside it loaded USD's (the loader's lock against the GIL); the export's own, USD's,
+    are its ``NodeSpec.libraries``."""
     load_renderer()
     import PIL.Image  # noqa: F401 - loaded for its libraries
     import PIL.PngImagePlugin  # noqa: F401
     import scipy.spatial  # noqa: F401 - loaded for its libraries
-    from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt  # noqa: F401 - loaded for their libraries
-
-    Sdf.FileFormat.FindByExtension("usdc")  # the crate format's plugin, loaded on first use
-    Usd.Stage.CreateInMemory()
 
 
 # the process's memory while the preview renders, above Python and the engine (``nodegraph.cost.PROCESS_BYTES``),

@@ -34,6 +34,17 @@ from .gltf_writer import SHEEN_ROUGHNESS
 from .look import PREFIX, coat_is_skin, crossing_tint, exported_base_color, exported_specular, principled_attributes
 
 
+def load_libraries() -> None:
+    """Every USD library the writer opens: the pxr modules it imports and the crate format's plugin, which USD loads
+    on first use (the export's ``NodeSpec.libraries``: loaded in the main thread before the export runs beside the
+    preview; USD's initialiser drops and retakes the GIL, and a run of the onigiri hung so, the render's thread
+    waiting on the loader's lock that USD held in the export's)."""
+    from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt  # noqa: F401 - loaded for their libraries
+
+    Sdf.FileFormat.FindByExtension("usdc")
+    Usd.Stage.CreateInMemory()
+
+
 def prim_names(texts, fallback: str) -> list[str]:
     """Valid, unique USD prim names from mesh or material names, in order: characters USD does not allow
     become ``_``, a leading digit gets a ``_`` before it, an empty name is ``fallback``; a repeated name gets

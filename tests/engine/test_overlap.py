@@ -97,7 +97,10 @@ def test_the_renderer_loads_its_libraries_before_anything_runs_beside_it(registr
     """Its ``overlap`` callable runs once, in the main thread, before the second thread starts: a library loaded
     by the renderer while the other thread loads one deadlocked (the loader's lock against the GIL)."""
     prepared = registry["toy_render"].overlap.__globals__["RENDER_PREPARED"]  # the plugin file's own module
+    loaded = registry["toy_busy"].libraries.__globals__["BUSY_LOADED"]  # the node run beside it: its libraries too
     prepared.clear()
+    loaded.clear()
     result = run(registry, cache, "prepared")
     assert result.status()["busy"] == "ran"
     assert prepared == [False]
+    assert loaded == [(True, False)]  # once, in the main thread, before the thread beside started

@@ -275,8 +275,22 @@ def toy_render(ctx, spheres, *, seconds, meet, fail):
     return Image(pixels)
 
 
+BUSY_LOADED: list[tuple[bool, bool]] = []  # per call of toy_busy's ``libraries``: (main thread, beside running)
+
+
+def _load_busy_libraries() -> None:
+    """toy_busy's ``libraries`` (as the export's USD): loaded in the main thread before the thread beside starts."""
+    BUSY_LOADED.append(
+        (
+            threading.current_thread() is threading.main_thread(),
+            any(t.name == "nodegraph-beside" for t in threading.enumerate()),
+        )
+    )
+
+
 @node(
     "toy_busy",
+    libraries=_load_busy_libraries,
     inputs={"spheres": In(SphereSet, "passed through")},
     outputs={"spheres": Out(SphereSet, "same, scaled")},
     params={

@@ -85,20 +85,27 @@ def test_a_preview_loads_no_library_after_its_overlap_step(shaded, tmp_path):
     assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout
 
 
-def test_the_overlap_step_loads_every_usd_module_the_export_beside_it_imports():
-    """The export runs beside the preview once ``load_libraries`` has run: each pxr module ``usd_writer`` imports is
-    loaded by then, so USD never opens a library in the export's thread while the render may open one (a run of
-    the onigiri hung so, USD holding the loader's lock and waiting for the GIL)."""
+def test_the_export_declares_every_usd_module_its_writer_imports():
+    """A run loads the export's ``libraries`` in the main thread before the export runs beside the preview: each pxr
+    module ``usd_writer`` imports is loaded by then, so USD never opens a library in the export's thread while the
+    render may open one (a run of the onigiri hung so, USD holding the loader's lock and waiting for the GIL)."""
     import re
     import sys
     from pathlib import Path
 
     from nodes.export import usd_writer
-    from nodes.export.preview import load_libraries
 
     source = Path(usd_writer.__file__).read_text()
-    used = {name.strip() for names in re.findall(r"from pxr import ([\w, ]+)", source) for name in names.split(",")}
+    functions = source.split("def load_libraries", 1)[1].split("\ndef ", 1)[1]  # the writer, past the loader
+    used = {name.strip() for names in re.findall(r"from pxr import ([\w, ]+)", functions) for name in names.split(",")}
     assert used, "usd_writer imports no pxr module: this test reads nothing"
-    load_libraries()
-    missing = sorted(name for name in used if f"pxr.{name}" not in sys.modules)
-    assert not missing, f"load_libraries leaves {missing} for the export's thread to load"
+    import subprocess
+
+    # in a process of its own: a test before this one in the same worker may have loaded pxr already
+    probe = "import sys; from nodes.export import export; export.libraries(); print(*sorted(sys.modules))"
+    root = Path(__file__).resolve().parents[2]
+    loaded = subprocess.run(
+        [sys.executable, "-c", probe], cwd=root, capture_output=True, text=True, check=True
+    ).stdout.split()
+    missing = sorted(name for name in used if f"pxr.{name}" not in loaded)
+    assert not missing, f"the export's libraries leave {missing} for the export's thread to load"
