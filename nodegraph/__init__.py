@@ -2,7 +2,7 @@
 
 from .context import Context
 from .errors import Issue, NodeFailure, NodegraphError, RecipeError
-from .node import In, Moved, NodeSpec, Out, node
+from .node import In, Moved, NodeSpec, Out, loads_libraries, node
 from .params import Param
 
 __version__ = "0.1.0"
@@ -19,5 +19,6 @@ __all__ = [
     "Param",
     "RecipeError",
     "__version__",
+    "loads_libraries",
     "node",
 ]

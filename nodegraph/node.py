@@ -17,6 +17,7 @@ there is no version to bump by hand.
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
@@ -93,7 +94,7 @@ class NodeSpec:
     moved: Mapping[str, Moved] = field(default_factory=dict)
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None
     overlap: bool | Callable[[], None] = False
-    libraries: Callable[[], None] | None = None  # loads the native libraries its run opens (``node``)
+    libraries: Callable[[], None] | None = None  # loads the native libraries its run opens (``loads_libraries``)
     check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None
     store: bool = True  # False: its outputs never go into the cache; computed again where needed (``node``)
     cost: Callable[[Any], Any] | None = None  # its estimate from its parameters and inputs' (``cost.estimated_by``)
@@ -159,7 +160,6 @@ def node(
     moved: Mapping[str, Moved] | None = None,
     check_recipe: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None,
     overlap: bool | Callable[[], None] = False,
-    libraries: Callable[[], None] | None = None,
     check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None,
     store: bool = True,
 ) -> Callable[[Callable[..., Any]], NodeSpec]:
@@ -184,8 +184,8 @@ def node(
     the main thread before that second thread starts: it loads every native library the node will load, so the node
     never calls ``dlopen`` while the other thread may be in one (the loader's lock against the GIL: a library whose
     initialiser drops and retakes the GIL, as USD's does, deadlocked against Mitsuba loading a plugin).
-    ``libraries``: the same for a node that may run in that second thread (the export: USD's modules), called in the
-    main thread before it starts, so neither thread opens a library while the other may.
+    A node that may run in that second thread declares its own libraries the same way, above its ``@node`` with
+    ``loads_libraries`` (the export: USD's).
     ``store=False``: the node's outputs are cheaper to compute again from its cached inputs than to store and load
     (large values made in a moment: a scene description, files' bytes), so they never go into the cache, where they
     would fill its limit and push out what is dear to compute; a run computes the node again where its outputs are
@@ -231,9 +231,20 @@ def node(
             moved=MappingProxyType(dict(moved or {})),
             check_recipe=check_recipe,
             overlap=overlap,
-            libraries=libraries,
             check_work=check_work,
             store=store,
         )
+
+    return wrap
+
+
+def loads_libraries(load: Callable[[], None]) -> Callable[[NodeSpec], NodeSpec]:
+    """Declare, above a node's ``@node``, what loads the native libraries its run opens: a run calls ``load`` in the
+    main thread before it starts a second thread that computes the node beside an ``overlap`` node, so neither
+    thread opens a library while the other may (the loader's lock against the GIL: USD's initialiser drops and
+    retakes the GIL, and the export opening USD beside the preview hung a run of the onigiri)."""
+
+    def wrap(spec: NodeSpec) -> NodeSpec:
+        return dataclasses.replace(spec, libraries=load)
 
     return wrap

@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 
 from nodegraph.cost import estimated_by, passes
-from nodegraph.node import In, Out, node
+from nodegraph.node import In, Out, loads_libraries, node
 from nodegraph.params import Param
 from nodegraph.values import FileSet
 
@@ -38,6 +38,7 @@ def _check(params):
 
 
 @estimated_by(passes("scene"))
+@loads_libraries(_load_libraries)
 @node(
     "export",
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
@@ -53,7 +54,6 @@ def _check(params):
         ),
     },
     check=_check,
-    libraries=_load_libraries,
 )
 def export(ctx, scene, *, formats, basename, instancing):
     """glb: core PBR + KHR_materials_* (glTF-Validator clean); USD: UsdPreviewSurface; PLY/OBJ: sRGB colours;

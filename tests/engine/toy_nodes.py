@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nodegraph import In, Out, Param, node
+from nodegraph import In, Out, Param, loads_libraries, node
 from nodegraph.rerun_log import log_value
 from nodegraph.values import Image, Mesh, Table
 
@@ -288,9 +288,9 @@ def _load_busy_libraries() -> None:
     )
 
 
+@loads_libraries(_load_busy_libraries)
 @node(
     "toy_busy",
-    libraries=_load_busy_libraries,
     inputs={"spheres": In(SphereSet, "passed through")},
     outputs={"spheres": Out(SphereSet, "same, scaled")},
     params={
