@@ -234,11 +234,11 @@ class XpbdSolver:
         self.settings = settings
         self.dispatch = dispatch or KernelDispatch()
         radii = model.r[: model.n_moving]
-        self.r_min = float(radii.min()) if len(radii) else 1.0
         self.most = most_pieces(settings)
         if "gravity" in settings.effects and len(radii):  # at the solves a resting particle gets
-            rest = solve_pieces(settings.gravity * settings.h**2 / self.r_min, self.most)
-            check_gravity_step(settings, rest, self.r_min, float(np.median(radii)))
+            r_min = float(radii.min())
+            rest = solve_pieces(settings.gravity * settings.h**2 / r_min, self.most)
+            check_gravity_step(settings, rest, r_min, float(np.median(radii)))
         self._rules: dict[int, SolveRules] = {}  # per solves per substep, derived when first needed
         self._use(1)  # one solve per substep, until a frame finds a particle too fast for it
         self.steps = settings.substeps  # substeps per frame
