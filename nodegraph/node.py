@@ -242,7 +242,7 @@ def loads_libraries(load: Callable[[], None]) -> Callable[[NodeSpec], NodeSpec]:
     """Declare, above a node's ``@node``, what loads the native libraries its run opens: a run calls ``load`` in the
     main thread before it starts a second thread that computes the node beside an ``overlap`` node, so neither
     thread opens a library while the other may (the loader's lock against the GIL: USD's initialiser drops and
-    retakes the GIL, and the export opening USD beside the preview hung a run of the onigiri)."""
+    retakes the GIL, and an export opening USD beside a renderer hung runs)."""
 
     def wrap(spec: NodeSpec) -> NodeSpec:
         return dataclasses.replace(spec, libraries=load)
