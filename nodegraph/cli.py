@@ -158,7 +158,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="where outputs go (default outputs/<recipe>, --draft: <recipe>_draft)",
     )
     _draft(run)
-    run.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    run.add_argument(
+        "-q", "--quiet", action="store_true", help="print nothing but errors and the earlier outputs a run removes"
+    )
     run.add_argument(
         "--max-minutes",
         type=float,

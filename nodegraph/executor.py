@@ -690,12 +690,7 @@ def run_recipe(
         writers = dispatch_digest(write_output)
         earlier, removed = settle_earlier(out_dir, result.files, recipe.digest(), _current_key(recipe), writers)
         if removed and reporter is not None:
-            names = sorted(str(p.relative_to(out_dir)) for p in removed)
-            reporter.info(
-                f"removed {len(removed)} stale output(s) from {out_dir}, written from other settings than these: "
-                + ", ".join(names[:8])
-                + (" …" if len(names) > 8 else "")
-            )
+            reporter.tell(stale_line(out_dir, removed))
         write_manifest(
             out_dir,
             result.files,
@@ -717,6 +712,17 @@ def run_recipe(
         )
         _warn_others(out_dir, result.files, warn)
     return result
+
+
+def stale_line(out_dir: Path, removed: dict[Path, str | None]) -> str:
+    """What a run says of the earlier outputs it removed (``settle_earlier``): every file, and the steps that changed
+    since they were written."""
+    names = sorted(str(p.relative_to(out_dir)) for p in removed)
+    steps = sorted({step for step in removed.values() if step})
+    why = f"their step has changed since ({', '.join(steps)})" if steps else "the recipe has changed since"
+    return f"removed {len(removed)} stale output(s) from {out_dir}, written by an earlier run: {why}: " + ", ".join(
+        names
+    )
 
 
 def _current_key(recipe: Recipe) -> Callable[[str], str | None]:

@@ -191,6 +191,10 @@ class Reporter:
         if not self.quiet:
             self.console.print(message, soft_wrap=True)
 
+    def tell(self, message: str) -> None:
+        """Say ``message`` even with -q: what a run did to files the user has seen (removed them)."""
+        self.console.print(message, soft_wrap=True, highlight=False, markup=False)
+
     @contextlib.contextmanager
     def task(self, description: str, total: int, plan: list[float | None] | None = None) -> Iterator:
         """A progress bar; only drawn on an interactive terminal so logs in CI stay clean.
