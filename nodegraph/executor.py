@@ -301,6 +301,7 @@ class Executor:
         interrupt.step_started(inst.label, None if ctx.checkpoint is None else ctx.checkpoint.path)
         self.reporter.step_started(inst.label)
         ok = stopped = False
+        held = contextlib.ExitStack()  # from the node's return until its result is stored, a stop waits
         try:
             with memory, watch:
                 result = (
@@ -308,9 +309,11 @@ class Executor:
                     if beside is None
                     else beside.run(lambda: spec.run(ctx, **kwargs), None if spec.overlap is True else spec.overlap)
                 )
+            held.enter_context(interrupt.Hold(inst.label))
             outputs = self._check_outputs(spec, result)
             ok = True
         except BaseException as exc:
+            held.__exit__(type(exc), exc, exc.__traceback__)  # not stored: a stop that came meanwhile is this one
             if capture is not None:  # what the node logged before it stopped goes into the partial recording
                 self._append_unfinished(inst, capture)
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
@@ -358,6 +361,7 @@ class Executor:
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)
+            held.close()  # stored: a stop that came meanwhile is raised here
         if beside is not None and beside.error is not None:  # an instance beside it failed: this one is stored
             raise beside.error
         return outputs
