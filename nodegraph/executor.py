@@ -136,6 +136,10 @@ class Executor:
         order = self.plan({w.node for w in outputs})
         if self.cache is not None:
             self.hits = {key for key in set(self.keys.values()) if self.cache.has(key)}
+            # used by this run, loaded or not (the upstream of a cached step): marked now, not as the run ends, so
+            # the trim after a run that stops or fails (``Cache.evict``, sparing what a run used) keeps them too
+            for key in {self.keys[inst] for inst in order} & self.hits:
+                self.cache.touch(key)
         output_nodes = {w.node for w in outputs}
         # cached instances go into the recording after every instance that runs: what an edit changed reaches
         # the recording (and a viewer streaming it) first; the order of chunks in a recording carries no meaning
@@ -198,9 +202,6 @@ class Executor:
                     self.reporter.record(self.status[inst])
             if self.cache is not None:  # what the next run's progress bar expects
                 node_times.remember(self.cache.directory, self.recipe.name, [self.status[i] for i in self.status])
-        if self.cache is not None:  # used now, whole: what it had no need to load too (the upstream of a cached
-            for key in {self.keys[inst] for inst in order} & self.hits:  # output), so the cache keeps the run whole
-                self.cache.touch(key)
         if ahead is None and any(s.status == "ran" for s in self.status.values()):
             mark_compiled(self.recipe)  # every kernel in hand: the next estimate says none is left to compile
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
