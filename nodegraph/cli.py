@@ -35,7 +35,7 @@ from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
 from .rerun_log import has_display
-from .watch import Superseded, WatchSession
+from .watch import Superseded, WatchSession, run_name
 
 SETTLE_S = 0.05  # watch: how long a recipe file's bytes must stay the same before a run starts
 SWEEP_RRD = Path("<sweep>.rrd")  # --rrd given without a path
@@ -158,7 +158,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="where outputs go (default outputs/<recipe>, --draft: <recipe>_draft)",
     )
     _draft(run)
-    run.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    run.add_argument(
+        "-q", "--quiet", action="store_true", help="print nothing but errors and the earlier outputs a run removes"
+    )
     run.add_argument(
         "--max-minutes",
         type=float,
@@ -509,16 +511,16 @@ def _cmd_watch(args, registry) -> int:
             supervisor.start()
             try:
                 _cmd_run(args, registry, session)
-                print(f"run {runs} done in {time.perf_counter() - noticed:.1f} s", flush=True)
+                print(f"{run_name(runs)} done in {time.perf_counter() - noticed:.1f} s", flush=True)
                 ok = True
             except Superseded as exc:
-                print(f"run {runs}: stopped at {exc}: the file was saved again", flush=True)
+                print(f"{run_name(runs)}: stopped at {exc}: the file was saved again", flush=True)
             except RecipeError as exc:
                 print(str(exc), file=sys.stderr)
-                print(f"run {runs}: not run; the last good outputs stay", flush=True)
+                print(f"{run_name(runs)}: not run; the last good outputs stay", flush=True)
             except (NodeFailure, NodegraphError) as exc:
                 print(f"error: {exc}", file=sys.stderr)
-                print(f"run {runs}: failed; the last good outputs stay", flush=True)
+                print(f"{run_name(runs)}: failed; the last good outputs stay", flush=True)
             finally:
                 done.set()
                 supervisor.join()

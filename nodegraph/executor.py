@@ -136,6 +136,10 @@ class Executor:
         order = self.plan({w.node for w in outputs})
         if self.cache is not None:
             self.hits = {key for key in set(self.keys.values()) if self.cache.has(key)}
+            # used by this run, loaded or not (the upstream of a cached step): marked now, not as the run ends, so
+            # the trim after a run that stops or fails (``Cache.evict``, sparing what a run used) keeps them too
+            for key in {self.keys[inst] for inst in order} & self.hits:
+                self.cache.touch(key)
         output_nodes = {w.node for w in outputs}
         # cached instances go into the recording after every instance that runs: what an edit changed reaches
         # the recording (and a viewer streaming it) first; the order of chunks in a recording carries no meaning
@@ -198,9 +202,6 @@ class Executor:
                     self.reporter.record(self.status[inst])
             if self.cache is not None:  # what the next run's progress bar expects
                 node_times.remember(self.cache.directory, self.recipe.name, [self.status[i] for i in self.status])
-        if self.cache is not None:  # used now, whole: what it had no need to load too (the upstream of a cached
-            for key in {self.keys[inst] for inst in order} & self.hits:  # output), so the cache keeps the run whole
-                self.cache.touch(key)
         if ahead is None and any(s.status == "ran" for s in self.status.values()):
             mark_compiled(self.recipe)  # every kernel in hand: the next estimate says none is left to compile
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
@@ -301,6 +302,7 @@ class Executor:
         interrupt.step_started(inst.label, None if ctx.checkpoint is None else ctx.checkpoint.path)
         self.reporter.step_started(inst.label)
         ok = stopped = False
+        held = contextlib.ExitStack()  # from the node's return until its result is stored, a stop waits
         try:
             with memory, watch:
                 result = (
@@ -308,9 +310,11 @@ class Executor:
                     if beside is None
                     else beside.run(lambda: spec.run(ctx, **kwargs), None if spec.overlap is True else spec.overlap)
                 )
+            held.enter_context(interrupt.Hold(inst.label))
             outputs = self._check_outputs(spec, result)
             ok = True
         except BaseException as exc:
+            held.__exit__(type(exc), exc, exc.__traceback__)  # not stored: a stop that came meanwhile is this one
             if capture is not None:  # what the node logged before it stopped goes into the partial recording
                 self._append_unfinished(inst, capture)
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
@@ -358,6 +362,7 @@ class Executor:
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)
+            held.close()  # stored: a stop that came meanwhile is raised here
         if beside is not None and beside.error is not None:  # an instance beside it failed: this one is stored
             raise beside.error
         return outputs
@@ -690,12 +695,7 @@ def run_recipe(
         writers = dispatch_digest(write_output)
         earlier, removed = settle_earlier(out_dir, result.files, recipe.digest(), _current_key(recipe), writers)
         if removed and reporter is not None:
-            names = sorted(str(p.relative_to(out_dir)) for p in removed)
-            reporter.info(
-                f"removed {len(removed)} stale output(s) from {out_dir}, written from other settings than these: "
-                + ", ".join(names[:8])
-                + (" …" if len(names) > 8 else "")
-            )
+            reporter.tell(stale_line(out_dir, removed))
         write_manifest(
             out_dir,
             result.files,
@@ -717,6 +717,17 @@ def run_recipe(
         )
         _warn_others(out_dir, result.files, warn)
     return result
+
+
+def stale_line(out_dir: Path, removed: dict[Path, str | None]) -> str:
+    """What a run says of the earlier outputs it removed (``settle_earlier``): every file, and the steps that changed
+    since they were written."""
+    names = sorted(str(p.relative_to(out_dir)) for p in removed)
+    steps = sorted({step for step in removed.values() if step})
+    why = f"their step has changed since ({', '.join(steps)})" if steps else "the recipe has changed since"
+    return f"removed {len(removed)} stale output(s) from {out_dir}, written by an earlier run: {why}: " + ", ".join(
+        names
+    )
 
 
 def _current_key(recipe: Recipe) -> Callable[[str], str | None]:

@@ -7,6 +7,10 @@ does nothing else, waits. On Ctrl-C or SIGTERM the parent passes the signal on; 
 can (finished nodes stay cached); one that has not ended after ``GRACE`` seconds is killed, and the parent removes
 what it left half-written.
 
+A step that has finished is stored whole before a stop is honoured (``Hold``): a signal that comes while the
+step's result is logged and stored stops the run right after, and the parent waits for it (up to ``HOLD_MAX``
+seconds) rather than killing it after ``GRACE``, so a re-run finds every step that finished cached.
+
 What a run writes to a temporary or partial name (a recording's ``*.partial.rrd``, a node's capture, a file
 written by ``cache.atomic_write``) is named here first (``note``): a file in the list that still exists when the
 child has ended is an unfinished one (a finished file was renamed into place), and is removed.
@@ -19,11 +23,13 @@ import os
 import signal
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 ENV_VAR = "NODEGRAPH_LEFTOVERS"  # set in the child: the file that lists its temporary and partial files
 GRACE = 1.0  # seconds the child has to stop by itself after a signal, before it is killed
+HOLD_MAX = 60.0  # seconds the parent waits past GRACE for a step that has finished to be stored (``Hold``)
 REPEAT = 0.5  # seconds after a stop in which a second signal is the same stop (Ctrl-C reaches parent and child)
 
 
@@ -46,6 +52,7 @@ def said() -> None:
 
 
 RUNNING, ENDED = "#running ", "#ended "  # lines of the listing: a step began, a step ended (``step_started``)
+HELD, FREED = "#holding ", "#stored "  # lines of the listing: a finished step is being stored, and is (``Hold``)
 SAVED = "#saved "  # a line of the listing: a step saved its progress (``progress_saved``): its file, and where it is
 UNCACHED = "#uncached"  # a line of the listing: the run keeps nothing that finishes (--no-cache)
 
@@ -54,6 +61,7 @@ UNCACHED = "#uncached"  # a line of the listing: the run keeps nothing that fini
 _running: dict[str, tuple[float, Path | None]] = {}
 _saved: dict[Path, str] = {}  # checkpoint file: where its saved progress is ("frame 1,200"; "" where not known)
 _run: dict[str, bool | None] = {"cached": None, "stopping": False}  # cached None: no run has begun in this process
+_held = {"count": 0, "pending": False}  # the main thread's holds open now, and whether a stop waits for them
 
 
 def run_began(cached: bool) -> None:
@@ -96,6 +104,34 @@ def _rerun(uncached: bool, running: dict[str, Path | None], saved: dict[Path, st
     )
 
 
+class Hold:
+    """While a finished step's result is logged and stored (``with Hold(label):``), a stop signal waits: the
+    main thread's handler notes it (``stop``) and it is raised as the hold ends, once the result is stored; the
+    supervising parent, which reads the hold in the listing, does not kill the process meanwhile (``HOLD_MAX``).
+    Held in another thread (a step computed beside another), only the parent waits: the main thread stops at
+    once and waits for that thread's step (``executor.Beside``)."""
+
+    def __init__(self, label: str):
+        self.label = label
+        self.main = threading.current_thread() is threading.main_thread()
+
+    def __enter__(self) -> Hold:
+        note(HELD + self.label)
+        if self.main:
+            _held["count"] += 1
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        note(FREED + self.label)
+        if not self.main:
+            return
+        _held["count"] -= 1
+        if _held["count"] == 0 and _held["pending"]:
+            _held["pending"] = False
+            if kind is None:  # stored: the stop that came meanwhile is honoured now
+                raise KeyboardInterrupt
+
+
 def step_ended(label: str) -> None:
     """A step has ended (done, failed or stopped)."""
     _running.pop(label, None)
@@ -116,6 +152,21 @@ def stopped_line() -> str:
 def running_in(listing: Path) -> list[str]:
     """The steps the listing shows started and not ended (what a killed child was running)."""
     return list(_listed(listing)[0])
+
+
+def holding(listing: Path) -> bool:
+    """Whether the listing shows a finished step being stored now (``Hold``)."""
+    try:
+        lines = listing.read_text(encoding="utf-8").splitlines()
+    except OSError:
+        return False
+    held: set[str] = set()
+    for line in lines:
+        if line.startswith(HELD):
+            held.add(line[len(HELD) :])
+        elif line.startswith(FREED):
+            held.discard(line[len(FREED) :])
+    return bool(held)
 
 
 def _listed(listing: Path) -> tuple[dict[str, Path | None], dict[Path, str]]:
@@ -171,7 +222,7 @@ def remove_leftovers(listing: Path) -> list[Path]:
     removed, folders = [], []
     for name in dict.fromkeys(names):
         path = Path(name)
-        if name in (SAID, UNCACHED) or name.startswith((RUNNING, ENDED, SAVED)):
+        if name in (SAID, UNCACHED) or name.startswith((RUNNING, ENDED, SAVED, HELD, FREED)):
             continue
         if path.is_dir():
             folders.append(path)
@@ -232,10 +283,15 @@ def stopped_by(exc: BaseException) -> bool:
 
 
 def stop(signum, frame) -> None:
-    """The child's handler of SIGINT and SIGTERM: a ``KeyboardInterrupt``, once per stop (``repeated``)."""
+    """The child's handler of SIGINT and SIGTERM: a ``KeyboardInterrupt``, once per stop (``repeated``); while
+    a finished step is stored (``Hold``), as that ends."""
     stopping()
-    if not repeated():
-        raise KeyboardInterrupt
+    if repeated():
+        return
+    if _held["count"]:
+        _held["pending"] = True
+        return
+    raise KeyboardInterrupt
 
 
 def supervise(child_signals: bool = True) -> int | None:
@@ -307,6 +363,7 @@ def _wait(pid: int, listing: Path, news: int) -> int:
         signal.signal(signum, forward)
     killed = False
     status = None
+    held = 0.0  # when a finished step was last seen being stored after a stop
     while status is None:
         try:
             if {signal.SIGINT, signal.SIGTERM} & set(os.read(news, 64)):
@@ -317,10 +374,15 @@ def _wait(pid: int, listing: Path, news: int) -> int:
         if done:
             status = code
             break
-        # a second Ctrl-C: at once
-        if stops and not killed and (len(received) > 1 or time.monotonic() - min(stops) > GRACE):
-            os.kill(pid, signal.SIGKILL)
-            killed = True
+        # a second Ctrl-C: at once; else GRACE seconds after the stop, or after a finished step was stored (up to
+        # HOLD_MAX seconds, ``Hold``)
+        if stops and not killed:
+            now = time.monotonic()
+            if holding(listing) and now - min(stops) < HOLD_MAX:
+                held = now
+            if len(received) > 1 or now - max(min(stops), held) > GRACE:
+                os.kill(pid, signal.SIGKILL)
+                killed = True
         time.sleep(0.02)
     # stopped or killed: what it left unfinished goes; a run that ended by itself (done, or failed: its partial
     # recording kept for what the failing node logged, as it says) cleaned up after itself

@@ -137,24 +137,25 @@ def settle_earlier(
     digest: str,
     current: Callable[[str], str | None] | None = None,
     writers: str | None = None,
-) -> tuple[dict[str, Any], list[Path]]:
+) -> tuple[dict[str, Any], dict[Path, str | None]]:
     """What the folder's last manifest lists that this run (recipe ``digest``, writing ``files``) did not write
     again, settled by what each file was written from: a file whose step (``from``: a node instance) has the same
     cache key now (``current(label)``, None: no such step) and was written by the same ``writers`` is still this
     recipe's: kept, returned to be listed as ``earlier`` in this run's manifest; one whose step's key changed is
     stale: removed, so no output of other settings sits beside this run's (its value stays in the cache: running
     those settings again writes it in seconds). A file listed without its step (a manifest from before this rule) is
-    kept when the whole recipe's ``digest`` is the same. Returns (kept records by name, removed paths). A file
-    changed since it was written is someone's own: left, and said as not from this run (``executor``); a file no
-    manifest lists is never touched."""
+    kept when the whole recipe's ``digest`` is the same. Returns (kept records by name, each removed path with the
+    step it was written from, None where not recorded). A file this run wrote is never removed; a file changed since
+    it was written is someone's own: left, and said as not from this run (``executor``); a file no manifest lists is
+    never touched."""
     try:
         manifest = json.loads((directory / MANIFEST).read_bytes())
         records = {**manifest.get("earlier", {}), **manifest["files"]}
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return {}, []
+        return {}, {}
     written = {str(path.relative_to(directory)) for path in files}
     kept: dict[str, Any] = {}
-    removed: list[Path] = []
+    removed: dict[Path, str | None] = {}
     for name, record in records.items():
         path = directory / name
         if name in written or Path(name).is_absolute() or ".." in Path(name).parts:
@@ -172,7 +173,7 @@ def settle_earlier(
             kept[name] = {"written": manifest.get("written"), **record}
         else:
             path.unlink()
-            removed.append(path)
+            removed[path] = record.get("from")
             if path.parent != directory and not any(path.parent.iterdir()):
                 path.parent.rmdir()  # a variant family's folder, emptied
     return kept, removed

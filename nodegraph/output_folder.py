@@ -22,20 +22,26 @@ def recipe_folder_name(name: str, draft: bool) -> str:
 
 SETTINGS_PREFIX = "set_"  # a --set run's folder, inside its recipe's: set_<its settings>
 SETTINGS_NAME_MAX = 80  # characters of a settings folder's name; a longer one is cut and ends with a hash
+SETTINGS_DROPPED = " \t[]{}()'\""  # spacing, brackets and quotes: a value reads the same without them
+SETTINGS_UNSAFE = re.compile(r"[^A-Za-z0-9._=,+-]+")  # what a file name may not hold: a path's separators, ...
 
 
 def settings_folder(folder: Path, overrides) -> Path:
     """Where a run with the ``--set`` texts ``overrides`` writes: ``folder`` (the recipe's own) when there are none,
-    else a folder inside it named from them (``set_cooked.water_content=22``; several joined by ``+``; characters a
-    file name may not hold dropped; a name longer than ``SETTINGS_NAME_MAX`` cut and ended with a hash of the texts),
-    so that runs with other settings never replace or remove each other's files: each set of settings keeps its own
-    folder, the recipe as written ``folder`` itself, and a run replaces only what an earlier run of the same
-    settings wrote there (``output_files.settle_earlier``)."""
+    else a folder inside it named from them (``set_cooked.water_content=22``; several joined by ``+``; spacing,
+    brackets and quotes dropped; each run of other characters a file name may not hold, such as a path's ``/``,
+    written ``_``: ``set_mesh.path=scans_cat.obj-<hash>``), so that runs with other settings never replace or remove
+    each other's files: each set of settings keeps its own folder, the recipe as written ``folder`` itself, and a
+    run replaces only what an earlier run of the same settings wrote there (``output_files.settle_earlier``). A name
+    whose characters were replaced (``a/b`` and ``a_b`` would meet) or longer than ``SETTINGS_NAME_MAX`` (then cut)
+    ends with a hash of the texts."""
     if not overrides:
         return folder
-    texts = [re.sub(r"[^A-Za-z0-9._=,+-]", "", text.replace(" ", "")) for text in overrides]
+    kept = ["".join(c for c in text if c not in SETTINGS_DROPPED) for text in overrides]
+    texts = [SETTINGS_UNSAFE.sub("_", text) for text in kept]
     name = SETTINGS_PREFIX + "+".join(texts)
-    if len(name) > SETTINGS_NAME_MAX:
+    replaced = texts != kept
+    if replaced or len(name) > SETTINGS_NAME_MAX:
         digest = hashlib.sha256("\n".join(overrides).encode()).hexdigest()[:8]
         name = name[: SETTINGS_NAME_MAX - 9] + "-" + digest
     return folder / name

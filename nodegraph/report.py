@@ -191,6 +191,10 @@ class Reporter:
         if not self.quiet:
             self.console.print(message, soft_wrap=True)
 
+    def tell(self, message: str) -> None:
+        """Say ``message`` even with -q: what a run did to files the user has seen (removed them)."""
+        self.console.print(message, soft_wrap=True, highlight=False, markup=False)
+
     @contextlib.contextmanager
     def task(self, description: str, total: int, plan: list[float | None] | None = None) -> Iterator:
         """A progress bar; only drawn on an interactive terminal so logs in CI stay clean.
@@ -298,9 +302,8 @@ class Reporter:
             for rec in records:
                 statuses[rec.status] = statuses.get(rec.status, 0) + 1
             how = ", ".join(f"{n} {status}" for status, n in statuses.items())
-            table.caption = (
-                f"and {len(hidden)} more steps under {shown_s:g} s each: {how} ({took} in all): {', '.join(hidden)}"
-            )
+            lead = f"and {len(hidden)} more steps" if rows else f"all {len(hidden)} steps"
+            table.caption = f"{lead} under {shown_s:g} s each: {how} ({took} in all): {', '.join(hidden)}"
         for i in keep:
             table.add_column(columns[i][0], justify=columns[i][1], no_wrap=True)
         for row in cells:
@@ -315,7 +318,7 @@ class Reporter:
         """The table: on a terminal, fitted to its width; in a pipe or a log, which have no width, whole (every
         column, no cell cut: "wall ti…" told nothing) but short, the steps under ``PLAIN_SHOWN_S`` counted in a
         line."""
-        if self.quiet:
+        if self.quiet or not self.records:  # nothing ran or loaded: no table with no rows
             return
         if self.console.is_terminal:
             self.console.print(self.summary())
@@ -327,7 +330,10 @@ class Reporter:
         width = self.console.width
         self.console.width = max(width, needed)  # rich cuts whatever is wider than its console
         try:
-            self.console.print(table)
+            if table.row_count:
+                self.console.print(table)
+            else:  # every step folded into the caption: the caption alone, not an empty table above it
+                self._say(str(table.caption))
         finally:
             self.console.width = width
 

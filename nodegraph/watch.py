@@ -22,6 +22,11 @@ from .plan import Instance
 REHEARSE_S = 2.0  # a node that took longer when it ran is not rehearsed: there a first load is a small part
 
 
+def run_name(run: int) -> str:
+    """How the watch names its ``run``-th run: the first is the watch's start, each later one a save's."""
+    return "first run" if run == 1 else f"run {run}"
+
+
 class Superseded(KeyboardInterrupt):
     """A watched run stopped because the recipe was saved again and the step it was at is no longer needed."""
 
@@ -78,7 +83,10 @@ class WatchSession:
         with self.lock:
             self.running = None
         seconds = time.perf_counter() - self.seen
-        print(f"run {self.run}: {inst.label} updated {seconds:.2f} s after the save was seen", flush=True)
+        if self.run == 1:  # no save yet: the watch's own first run
+            print(f"{run_name(self.run)}: {inst.label} ready {seconds:.2f} s after the watch started", flush=True)
+        else:
+            print(f"{run_name(self.run)}: {inst.label} updated {seconds:.2f} s after the save was seen", flush=True)
 
     def supersede(self, needed: set[str] | None) -> None:
         """The file was saved (again) during the run; ``needed``: the keys it now needs (None: a bad edit,

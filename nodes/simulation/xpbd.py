@@ -34,13 +34,24 @@ FIXED_BYTES = 25 * 2**20
 SETUP_SECONDS = 0.5
 SETUP_SECONDS_PER_PARTICLE = 1e-4
 BYTES_PER_PARTICLE = 6_000
+# static obstacle particles (another simulation's, e.g. eggs dropped on settled rice) are hashed with the moving ones
+# every substep and give the setup their fields: the ikura don's egg_sim (972 particles, 30 frames) on the rice's
+# 11,016 against none, its inputs loaded from the cache in one process, kernels loaded, the least of 3 at 1 and 21
+# frames: 3.19 / 3.63 CPU s with them, 2.38 / 2.66 without (egg_sim called alone, NodeSpec.call); 2 cores,
+# load 9.7, 2026-12-07
+SETUP_SECONDS_PER_OBSTACLE = 7e-5
+OBSTACLE_SUBSTEPS_PER_SECOND = 1.3e7
 
 
-def _solve(particles: int, frames: int, substeps: int, iterations: int, about: str = "") -> tuple[float, str]:
-    """The frames' CPU seconds (``PARTICLE_ITERATIONS_PER_SECOND``) and what they are, in words: one formula for the
-    estimate before any work and the run's own after its setup."""
+def _solve(
+    particles: int, obstacles: int, frames: int, substeps: int, iterations: int, about: str = ""
+) -> tuple[float, str]:
+    """The frames' CPU seconds (``PARTICLE_ITERATIONS_PER_SECOND``, ``OBSTACLE_SUBSTEPS_PER_SECOND``) and what they
+    are, in words: one formula for the estimate before any work and the run's own after its setup."""
     what = f"{frames:,} frames × {substeps} substeps × {iterations} iterations of {about}{particles:,} particles"
-    return particles * frames * substeps * iterations / PARTICLE_ITERATIONS_PER_SECOND, what
+    what += f" among {about}{obstacles:,} obstacle particles" if obstacles else ""
+    moving = particles * frames * substeps * iterations / PARTICLE_ITERATIONS_PER_SECOND
+    return moving + obstacles * frames * substeps / OBSTACLE_SUBSTEPS_PER_SECOND, what
 
 
 def _cost(q: CostQuery) -> Cost:
@@ -52,8 +63,9 @@ def _cost(q: CostQuery) -> Cost:
         return Cost()
     p = q.params
     particles = elements * p["particles_per_element"]
-    setup = SETUP_SECONDS + particles * SETUP_SECONDS_PER_PARTICLE
-    solve, what = _solve(particles, p["frames"], p["substeps"], p["iterations"], about="≈ ")
+    obstacles = sum(c.particles for c in q.inputs.get("obstacles", []))  # what the wired simulations simulate
+    setup = SETUP_SECONDS + particles * SETUP_SECONDS_PER_PARTICLE + obstacles * SETUP_SECONDS_PER_OBSTACLE
+    solve, what = _solve(particles, obstacles, p["frames"], p["substeps"], p["iterations"], about="≈ ")
     seconds = setup + solve
     over = []
     limit = q.limits.max_seconds
@@ -135,7 +147,8 @@ def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=N
     )
     frames, every, meshes_every = p.frames, p.log_every, p.log_meshes_every
     substeps = sim.solver.settings.substeps  # ``slender``: more than p.substeps
-    ctx.expect_cost(*_solve(sim.model.n_moving, frames, substeps, p.iterations))
+    n_moving = sim.model.n_moving
+    ctx.expect_cost(*_solve(n_moving, len(sim.model.r) - n_moving, frames, substeps, p.iterations))
     done = 0
     resumed = ctx.checkpoint.load() if ctx.checkpoint is not None else None
     if resumed is not None:

@@ -1,6 +1,7 @@
 """The cache's size limit: least recently used entries go first (last stored or loaded), a blob goes with
 the last entry naming it, what a run just used stays, and ``nodegraph cache`` shows and sets the limit."""
 
+import json
 import os
 from pathlib import Path
 
@@ -179,3 +180,31 @@ def test_the_eviction_line_says_what_the_cache_holds_not_what_is_left(tmp_path):
     held = format_size(cache.info().bytes)
     assert len(said) == 1 and " left" not in said[0]
     assert f"the cache now holds {held} of its {format_size(cache.limit())} limit" in said[0]
+
+
+STOPPED = """\
+name: stopped
+outputs: [moved]
+nodes:
+  pts: {type: toy_points, params: {count: 5}}
+  moved: {type: toy_shift, inputs: {spheres: pts.spheres}}
+  broken: {type: toy_fail, inputs: {spheres: moved.spheres}}
+"""
+
+
+def test_a_run_that_stops_keeps_the_cached_steps_it_used(tmp_path, monkeypatch):
+    """Issue 47: a re-run after Ctrl-C computed again steps that had finished and were cached. A run that did not
+    complete (stopped, or a node failed) marked the cached steps it used only as it ended, so the trim above the
+    limit that follows it removed those it had not loaded (``pts`` here: ``moved`` was loaded, not its input)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "stopped.yaml").write_text(STOPPED)
+    run = ["run", "stopped.yaml", "--plugin", str(TOY), "--cache-dir", str(tmp_path / "c"), "--no-rrd", "-q"]
+    assert main(run) == 0
+    cache = Cache(tmp_path / "c")
+    for entry in (tmp_path / "c" / "entries").glob("*/*.json"):
+        os.utime(entry, (1000.0, 1000.0))  # stored by an earlier run
+    monkeypatch.setenv("NODEGRAPH_CACHE_LIMIT", "1")  # above the limit: all but what the run used goes
+    assert main([*run, "--output", "broken"]) == 1
+    kept = {entry.stem for entry in (tmp_path / "c" / "entries").glob("*/*.json")}
+    nodes = {json.loads(cache._entry_path(key).read_text())["node"] for key in kept}
+    assert nodes == {"pts", "moved"}, nodes

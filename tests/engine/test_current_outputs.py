@@ -132,3 +132,22 @@ def test_a_file_is_stale_only_when_the_step_it_came_from_changed(tmp_path, monke
     err = capsys.readouterr().err
     assert not (out / "a.npz").exists() and (out / "b.npz").exists() and (out / "notes.txt").read_text() == "mine"
     assert f"removed 1 stale output(s) from {Path('outputs') / 'two'}" in err and "a.npz" in err
+
+
+def test_a_quiet_run_still_names_each_stale_output_it_removes_and_keeps_its_own(tmp_path, monkeypatch, capsys):
+    """Issue 47: after ``--output ... -q`` files vanished with nothing said (-q silenced the line naming them). The
+    line is said under -q too, with every file and the step that changed; what the run writes and a file the user
+    made stay."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("NODEGRAPH_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "two.yaml").write_text(TWO)
+    out = tmp_path / "outputs" / "two"
+    assert cli("run", "two.yaml", "--no-rrd", "-q") == 0
+    (out / "notes.txt").write_text("mine")
+    capsys.readouterr()
+    here = ("--out-dir", str(out), "-q")
+    assert cli("run", "two.yaml", "--no-rrd", "--output", "b", "--set", "a.count=9", *here) == 0  # a's step changed
+    err = capsys.readouterr().err
+    assert not (out / "a.npz").exists() and (out / "b.npz").is_file() and (out / "notes.txt").read_text() == "mine"
+    assert "removed 1 stale output(s)" in err and "a.npz" in err and "their step has changed since (a)" in err, err
+    assert "b.npz" not in err and "notes.txt" not in err

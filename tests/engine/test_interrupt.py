@@ -1,6 +1,7 @@
 """Ctrl-C and SIGTERM stop a run within 2 s, whichever node is running, and leave nothing half-written (issue 47)."""
 
 import dataclasses
+import json
 import os
 import signal
 import subprocess
@@ -267,3 +268,42 @@ def test_a_resumed_steps_estimate_counts_only_the_steps_left(tmp_path):
     assert "rice_sim: 1,000 frames, ≈ 40 s expected" in said(None)
     assert "rice_sim: 1,000 frames; 250 of 1,000 left after the checkpoint, ≈ 10 s expected" in said(750)
     assert "expected" not in said(900)  # 4 s left: under the 10 s a node's estimate is said from
+
+
+def test_ctrl_c_while_a_finished_step_is_stored_keeps_it_cached(tmp_path, node_started):
+    """Issue 47: a re-run after Ctrl-C computed again a step that had finished: the stop came while its result was
+    stored (a long simulation's is seconds of encoding) and cut the store short, or the supervisor killed the run
+    after its grace second. Now the store completes first, the run stops right after, and a re-run finds the
+    step cached."""
+    started = tmp_path / "storing"
+    (tmp_path / "slow.yaml").write_text(SLOW.replace("STARTED", str(tmp_path / "never")))
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slow.yaml"), "--plugin", TOY]
+    command += ["--plugin", str(Path(__file__).with_name("slow_store.py"))]
+    command += ["--cache-dir", str(tmp_path / "cache"), "--no-rrd", "--out-dir", str(tmp_path / "out")]
+    env = dict(os.environ, SLOW_STORE_NODE="pts", SLOW_STORE_STARTED=str(started), SLOW_STORE_S="2")
+    proc = subprocess.Popen(
+        command,
+        cwd=tmp_path,
+        env=env,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        node_started(started, proc)  # pts has finished and is being stored
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=10.0)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    err = proc.stderr.read()
+    assert proc.returncode == 130, err
+    assert "did not stop within" not in err and "interrupted" in err, err
+    assert not (tmp_path / "never").exists()  # stopped before the slow step began
+    from nodegraph.cache import Cache
+
+    entries = [json.loads(p.read_text()) for p in (tmp_path / "cache" / "entries").glob("*/*.json")]
+    assert [e["node"] for e in entries] == ["pts"], err
+    assert Cache(tmp_path / "cache").has(entries[0]["key"])

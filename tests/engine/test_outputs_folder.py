@@ -94,3 +94,18 @@ def test_a_long_setting_gets_a_short_folder_name_of_its_own():
     long = [f"node.param_{k}={k}" for k in range(12)]
     names = {settings_folder(Path("o"), s).name for s in (long, long[:-1] + ["node.param_11=12"])}
     assert len(names) == 2 and all(len(n) <= SETTINGS_NAME_MAX for n in names)
+
+
+def test_a_path_setting_keeps_a_readable_folder_name_of_its_own():
+    """Issue 47: ``--set mesh.path=scans/cat.obj`` was named ``set_mesh.path=scanscat.obj``, its slashes dropped. A
+    path's separators read ``_``, and a name whose characters were replaced ends with a hash, so that
+    ``scans/cat.obj`` and ``scans_cat.obj`` never share a folder."""
+    from pathlib import Path
+
+    from nodegraph.output_folder import settings_folder
+
+    names = [settings_folder(Path("o"), [f"mesh.path={v}"]).name for v in ("scans/cat.obj", "scans_cat.obj")]
+    assert names[0].startswith("set_mesh.path=scans_cat.obj-") and len(names[0]) == len(names[1]) + 9, names
+    assert names[1] == "set_mesh.path=scans_cat.obj"
+    absolute = settings_folder(Path("o"), ["mesh.path=/home/me/scans/cat.obj"])
+    assert absolute.parent == Path("o") and absolute.name.startswith("set_mesh.path=_home_me_scans_cat.obj-")

@@ -66,3 +66,18 @@ def test_durations_read_back():
     for seconds in (0.0002, 0.035, 1.23, 85.1, 987.0, 12000.0):
         assert len(format_duration(seconds)) <= 7
         assert abs(parse_duration(format_duration(seconds)) - seconds) <= 0.01 * seconds + 60 * (seconds > 3600)
+
+
+def test_a_run_of_quick_steps_prints_no_empty_table():
+    """Issue 47: in a pipe, a run whose steps all took under a second printed the table's header box with no row
+    in it; now the line that counts them, alone. A run that reached no step prints no table at all."""
+    out = io.StringIO()
+    reporter = Reporter(console=Console(file=out, width=80))
+    for node in ("pts", "merge"):
+        reporter.record(NodeRecord(node, "toy", "cached", 0.01))
+    reporter.print_summary()
+    assert out.getvalue() == "all 2 steps under 1 s each: 2 cached (20 ms in all): pts, merge\n", out.getvalue()
+    for terminal in (False, True):
+        out = io.StringIO()
+        Reporter(console=Console(file=out, width=80, force_terminal=terminal)).print_summary()
+        assert out.getvalue() == ""

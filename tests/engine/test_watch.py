@@ -144,7 +144,7 @@ def test_a_save_during_a_long_step_it_no_longer_needs_stops_that_step(tmp_path):
         saved = time.perf_counter()
         recipe.write_text(recipe.read_text().replace("dx: 1.5", "dx: 2.5").replace("seconds: 30.0", "seconds: 0.5"))
         done = _until(lines, "run 2 done", seen, timeout=60)
-        assert any(line.startswith("run 1: stopped at slow") for line in seen), "".join(seen)
+        assert any(line.startswith("first run: stopped at slow") for line in seen), "".join(seen)
         assert done - saved < 10.0, f"{done - saved:.1f} s from the save to the new outputs"
         rows = {line.split("│")[1].strip(): line for line in seen if line.count("│") > 3}
         assert "cached" in rows["pts"] and "ran" in rows["shifted"] and "ran" in rows["slow"], "".join(seen)
@@ -174,7 +174,7 @@ def test_a_save_that_still_needs_the_running_step_lets_it_finish(tmp_path):
         _wait_for_start(started, proc, lines, seen)
         recipe.write_text(recipe.read_text().replace("dx: 1.5", "dx: 2.5"))
         _until(lines, "run 2 done", seen, timeout=60)
-        assert not any(line.startswith("run 1: stopped at slow") for line in seen), "".join(seen)
+        assert not any(line.startswith("first run: stopped at slow") for line in seen), "".join(seen)
         second = "".join(seen).split("watching")[-1]  # the second run's lines
         rows = {line.split("│")[1].strip(): line for line in second.splitlines() if line.count("│") > 3}
         assert "cached" in rows["slow"] and "ran" in rows["shifted"], second
@@ -252,3 +252,19 @@ def test_a_rehearsal_whose_input_is_gone_from_the_cache_skips_its_step_instead_o
     monkeypatch.setattr(Cache, "has", lambda self, key: True)
     assert "shifted" in list(session.warm_up(cache))  # its turn came ('scaled', with no entry, has no turn)
     assert trace.read_text().split().count("call") == 1, trace.read_text()  # 'scaled' was not computed for it
+
+
+def test_the_first_run_says_it_is_the_watchs_start_not_a_save(capsys):
+    """Issue 47: the first run said "run 1: pts updated 0.05 s after the save was seen" where nothing was saved."""
+    from nodegraph.plan import Instance
+    from nodegraph.watch import WatchSession, run_name
+
+    session = WatchSession()
+    session.begin(1, time.perf_counter())
+    session.ran(Instance("pts"))
+    first = capsys.readouterr().out
+    assert first.startswith("first run: pts ready ") and first.rstrip().endswith("after the watch started"), first
+    session.begin(2, time.perf_counter())
+    session.ran(Instance("pts"))
+    assert capsys.readouterr().out.startswith("run 2: pts updated ")
+    assert run_name(1) == "first run" and run_name(3) == "run 3"
