@@ -117,18 +117,21 @@ def slope(t, y):
     return float(np.polyfit(t, y, 1)[0])
 
 
-def params_for(frames, substeps):
-    """The xpbd node's defaults with only frames, substeps and logging set."""
+def params_for(frames, substeps, damping=None):
+    """The xpbd node's defaults with only frames, substeps and logging set (and the damping, where given)."""
     from nodes.simulation.settings import XpbdParams
     from nodes.simulation.xpbd import xpbd
 
     return XpbdParams(
-        **xpbd.resolve_params({"frames": frames, "substeps": substeps, "log_every": 0, "log_meshes_every": 0})
+        **xpbd.resolve_params(
+            {"frames": frames, "substeps": substeps, "log_every": 0, "log_meshes_every": 0}
+            | ({} if damping is None else {"damping": damping})
+        )
     )
 
 
 @functools.cache
-def settled(substeps, grains, radius, settle, frames, seed, d):
+def settled(substeps, grains, radius, settle, frames, seed, d, damping=None):
     """The bed settled with the hole closed, once per solver setting and fill (every hole discharges the same bed):
     (its checkpoint, placement's aggregate, height, bulk density g/mm³, fill top, 95th-percentile speed, grains
     escaped while settling, settle seconds)."""
@@ -141,7 +144,7 @@ def settled(substeps, grains, radius, settle, frames, seed, d):
     placement = fill(grains, radius, seed)
     height = float(placement.positions[:, 2].max()) + 8.0
     closed, _ = silo(radius, height, 1.0)
-    params = params_for(frames, substeps)
+    params = params_for(frames, substeps, damping)
     aggregate = Aggregate(placement, (rice_library(seed=seed),))
     sim_closed = build_simulation(aggregate, closed, EFFECTS, params)
     for _ in range(settle):
@@ -154,16 +157,16 @@ def settled(substeps, grains, radius, settle, frames, seed, d):
     return progress, aggregate, height, rho_b, top, v_settle, escaped, time.perf_counter() - clock
 
 
-def run(D, substeps, grains, radius=25.0, settle=60, max_seconds=6.0, seed=0, d=3.3):
+def run(D, substeps, grains, radius=25.0, settle=60, max_seconds=6.0, seed=0, d=3.3, damping=None):
     from nodes.simulation.setup import build_simulation
 
     wall_clock = time.perf_counter()
     frames = settle + int(max_seconds * 60)
     progress, aggregate, height, rho_b, top, v_settle, escaped_settle, settle_s = settled(
-        substeps, grains, radius, settle, frames, seed, d
+        substeps, grains, radius, settle, frames, seed, d, damping
     )
     _, opened = silo(radius, height, D)
-    params = params_for(frames, substeps)
+    params = params_for(frames, substeps, damping)
     sim_open = build_simulation(aggregate, opened, EFFECTS, params)
     dt, mass_g = params.dt, params.mass * 1e-3
     sim_open.resume(copy.deepcopy(progress))  # the settled bed stays as it was for the next hole
@@ -196,6 +199,7 @@ def run(D, substeps, grains, radius=25.0, settle=60, max_seconds=6.0, seed=0, d=
         what="silo_discharge",
         D_mm=D,
         substeps=substeps,
+        damping=params.damping,
         grains=grains,
         silo_diameter_mm=2 * radius,
         d_mm=round(d, 3),
@@ -225,7 +229,7 @@ def fit(rows, d):
     D = np.array([r["D_mm"] for r in rows], float)
     W = np.array([r["rate_g_per_s"] for r in rows], float)
     rho = np.mean([r["rho_b_g_per_cm3"] for r in rows]) / 1000.0  # g/mm³
-    out = {"rho_b_g_per_cm3": round(rho * 1000, 4), "d_mm": round(d, 3)}
+    out = {"D_mm": [float(x) for x in D], "rho_b_g_per_cm3": round(rho * 1000, 4), "d_mm": round(d, 3)}
     ok = W > 0
     D, W = D[ok], W[ok]
     if len(D) >= 2:
@@ -248,6 +252,9 @@ def main():
     ap.add_argument("--D", type=float, nargs="*", help="hole diameters (mm) at 10 substeps")
     ap.add_argument("--fine", type=float, nargs="*", help="(D, substeps) pairs run besides, e.g. 18 20")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument(
+        "--damping", type=float, help="velocity fraction removed per 1/60 s (the node's default if not given)"
+    )
     ap.add_argument("--no-write", action="store_true")
     ap.add_argument("--out", type=Path, default=OUT, help="where the rows go (replaced)")
     args = ap.parse_args()
@@ -269,7 +276,7 @@ def main():
     print(f"grain d (equivalent sphere) = {d:.3f} mm; silo {args.silo:.0f} mm; window {WINDOW} of grains out")
     print(hdr, flush=True)
     for D, sub in plan:
-        r = run(D, sub, grains, radius=args.silo / 2, seed=args.seed, d=d)
+        r = run(D, sub, grains, radius=args.silo / 2, seed=args.seed, d=d, damping=args.damping)
         r.update(values={"rate": r["rate_grains_per_s"]}, unit="grains/s", command=command, date=date, **stamp)
         rows.append(r)
         print(

@@ -259,8 +259,10 @@ TABLES = {
         "silo_discharge.jsonl",
         lambda r: r["what"] == "silo_discharge",
         [
+            ("silo, mm (fill height)", lambda r: f"{r['silo_diameter_mm']:g} ({r['fill_height_mm']:g})"),
             ("hole D, mm", field("D_mm")),
             ("substeps", field("substeps")),
+            ("damping", field("damping")),
             ("grains", field("grains")),
             ("bulk density, g/cm³", field("rho_b_g_per_cm3")),
             (
@@ -275,6 +277,19 @@ TABLES = {
                 "first / second half of the window, grains/s",
                 lambda r: f"{number(r['first_half'])} / {number(r['second_half'])}",
             ),
+        ],
+    ),
+    "silo_fit": (
+        "silo_discharge.jsonl",
+        lambda r: r["what"] == "silo_discharge_fit",
+        [
+            ("holes", lambda r: ", ".join(f"{d:g}" for d in r["D_mm"]) + " mm"),
+            ("n (k = 1.5)", field("n_k1.5")),
+            ("n (k = 0)", field("n_k0")),
+            ("k at n = 2.5", field("k_n2.5")),
+            ("C at n = 2.5, that k", field("C_n2.5_kfit")),
+            ("C at n = 2.5, k = 1.5", field("C_n2.5_k1.5")),
+            ("published (Beverloo et al. 1961)", lambda r: "n = 2.5, k ≈ 1.3–2.9, C ≈ 0.55–0.65"),
         ],
     ),
     "roofline": (
