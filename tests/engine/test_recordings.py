@@ -122,8 +122,8 @@ def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_partial_o
         text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
-    partial = rrd.with_name("slowrun.partial.rrd")
     node_started(tmp_path / "started", proc)  # the slow node is running (20 s to go): the signal lands inside it
+    partial = rrd.with_name(f"slowrun.{proc.pid}.partial.rrd")
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode != 0
@@ -158,3 +158,19 @@ def test_contradictory_recording_flags_are_refused_before_anything_runs(tmp_path
     assert main(["run", "slowrun.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), *flags]) == 2
     assert "--no-rrd contradicts" in capsys.readouterr().err
     assert not (tmp_path / "cache").exists() and not (tmp_path / "outputs").exists()
+
+
+def test_two_runs_at_once_each_write_and_move_their_own_partial_recording(tmp_path, monkeypatch):
+    """Two identical runs started together (two processes, here one process as two pids): each writes its own
+    partial file, so the one that ends second still finds its file to move (it raised FileNotFoundError when
+    both wrote ``name.partial.rrd``), and neither removes the other's while it is still being written."""
+    from nodegraph import rerun_log
+
+    rrd = tmp_path / "out" / "bowl.rrd"
+    monkeypatch.setattr(rerun_log.os, "getpid", os.getppid)  # the parent is alive as long as this test
+    first = rerun_log.RunRecording(rrd, "bowl", recording_id="r")
+    monkeypatch.undo()
+    second = rerun_log.RunRecording(rrd, "bowl", recording_id="r")
+    assert first.partial != second.partial
+    assert second.close() == rrd and first.partial.exists()  # the first, still running, keeps its file
+    assert first.close() == rrd and not list(rrd.parent.glob("*.partial.rrd"))
