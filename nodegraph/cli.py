@@ -631,11 +631,11 @@ def _sweep_time(args, registry, decl) -> str:
 
 
 def _limits(args, outputs: tuple[str, ...] | None = None):
-    """The limits a run enforces, as its arguments set them (``--max-minutes``), for the nodes ``outputs`` (None: the
-    recipe's outputs) and what they need."""
-    from .cost import Limits
+    """The limits a run enforces, as its arguments set them (``--max-minutes``) and the machine's available memory, for
+    the nodes ``outputs`` (None: the recipe's outputs) and what they need."""
+    from .cost import Limits, available_memory
 
-    return Limits(max_seconds=60 * args.max_minutes, outputs=outputs)
+    return Limits(max_seconds=60 * args.max_minutes, max_bytes=available_memory(), outputs=outputs)
 
 
 def doc_summary(doc: str | None) -> str:

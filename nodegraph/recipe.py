@@ -520,7 +520,8 @@ class _Validator:
             if passes_with_yes and self.yes:
                 continue
             message += "; or run with --yes to go ahead" if passes_with_yes else ""
-            self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+            at = ("nodes", node_id, "params", param) if param else ("nodes", node_id)  # a node with no lever: itself
+            self.issue(at, message, node=node_id, param=param)
         return result
 
     def _moved(self, node_id: str, model: NodeModel, path: tuple, moved, key: str) -> None:
