@@ -30,7 +30,7 @@ from .cache import (
 from .compile_ahead import kernels_due
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
-from .output_folder import recipe_folder, recipe_folder_name, settings_folder
+from .output_folder import recipe_folder, settings_folder
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
@@ -307,9 +307,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             yes=args.yes,
             limits=_limits(args, asked),
         )
-    out_dir = args.out_dir or settings_folder(
-        recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft)), args.overrides
-    )
+    out_dir = args.out_dir or settings_folder(recipe_folder(args.recipe, recipe.name, args.draft), args.overrides)
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
@@ -539,7 +537,7 @@ def _cmd_sweep(args, registry) -> int:
 
     base = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
-    out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(base.name, args.draft)) / "sweeps"
+    out_dir = args.out_dir or recipe_folder(args.recipe, base.name, args.draft) / "sweeps"
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     check_writable(out_dir, "sweep table", "choose another folder with --out-dir")
     if cache is not None:
