@@ -51,14 +51,18 @@ def remove_stale_partials(path: Path) -> list[Path]:
 
 
 def _alive(pid: int) -> bool:
-    """True while process ``pid`` exists (one of another user's counts as existing)."""
+    """True while process ``pid`` runs (one of another user's counts); a zombie does not: a run killed with its
+    supervising parent waits as one until something reaps it, which in a container may be never."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:
         pass
-    return True
+    try:  # Linux: the state after the command's closing parenthesis
+        return Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0] != "Z"
+    except (OSError, IndexError):
+        return True
 
 
 def has_display() -> bool:

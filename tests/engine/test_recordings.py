@@ -5,6 +5,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import datafusion
@@ -123,19 +124,19 @@ def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_partial_o
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     node_started(tmp_path / "started", proc)  # the slow node is running (20 s to go): the signal lands inside it
-    partial = rrd.with_name(f"slowrun.{proc.pid}.partial.rrd")
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
+    partials = lambda: list(rrd.parent.glob("slowrun.*.partial.rrd"))  # named by the pid of the run's process
     assert proc.returncode != 0
     assert rrd.read_bytes() == complete  # the last complete recording is untouched
     if sig != signal.SIGKILL:  # stopped on purpose: what it recorded is not wanted, and not left (issue 47)
-        assert "interrupted" in err and not partial.exists()
+        assert "interrupted" in err and not partials()
     else:  # killed outright, the run leaves its recording named as partial
-        assert partial.exists()
+        assert len(partials()) == 1
     assert not hidden_or_temp(tmp_path / "outputs"), hidden_or_temp(tmp_path / "outputs")
     write(tmp_path)  # the next complete run replaces the recording and leaves no partial beside it
     subprocess.run(command(tmp_path), check=True, cwd=tmp_path)
-    assert not partial.exists() and len(RrdReader(str(rrd)).recordings()) == 1
+    assert not partials() and len(RrdReader(str(rrd)).recordings()) == 1
 
 
 def test_spawn_without_a_display_says_so_first_and_still_writes_the_file(tmp_path):
@@ -174,3 +175,20 @@ def test_two_runs_at_once_each_write_and_move_their_own_partial_recording(tmp_pa
     assert first.partial != second.partial
     assert second.close() == rrd and first.partial.exists()  # the first, still running, keeps its file
     assert first.close() == rrd and not list(rrd.parent.glob("*.partial.rrd"))
+
+
+def test_a_complete_run_removes_the_partial_recordings_of_ended_runs_and_keeps_running_ones(tmp_path):
+    """What a killed run left (its process gone, or a zombie no one reaps, as in a container) goes with the next
+    complete run; a partial file a running process writes stays."""
+    from nodegraph import rerun_log
+
+    rrd = tmp_path / "bowl.rrd"
+    ended = subprocess.Popen(["true"])  # never waited for while the run closes: a zombie
+    while not Path(f"/proc/{ended.pid}/stat").read_text().rpartition(")")[2].split()[0] == "Z":
+        time.sleep(0.01)
+    left, running = rerun_log.partial_path(rrd, ended.pid), rerun_log.partial_path(rrd, os.getppid())
+    left.write_bytes(b"x")
+    running.write_bytes(b"x")
+    rerun_log.RunRecording(rrd, "bowl", recording_id="r").close()
+    ended.wait()
+    assert not left.exists() and running.exists()
