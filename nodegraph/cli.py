@@ -168,7 +168,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="M",
         help="a node whose own estimate is longer than this refuses to start (default 10)",
     )
-    run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take, however much memory")
     _distributed(run)
     _common(run)
 
@@ -185,7 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
     watch.add_argument("--poll", type=float, default=0.1, metavar="S", help="seconds between looks at the file")
     watch.add_argument("--runs", type=int, default=None, metavar="N", help="stop after N runs (scripts, tests)")
     watch.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
-    watch.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    watch.add_argument("--yes", action="store_true", help="run however long the nodes expect to take, however much memory")
     _draft(watch)
     _common(watch)
 
@@ -231,7 +231,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--no-cache", action="store_true", help="neither read nor write the cache (every point cold)")
     sweep.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors and the written files")
     sweep.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
-    sweep.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    sweep.add_argument("--yes", action="store_true", help="run however long the nodes expect to take, however much memory")
     _distributed(sweep)
     _common(sweep)
 
