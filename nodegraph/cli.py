@@ -122,6 +122,9 @@ def unknown_arguments(extra: list[str], parser: argparse.ArgumentParser, overrid
     return f"unrecognized arguments: {' '.join(extra)}" + "".join(f"; {hint}" for hint in hints)
 
 
+YES_HELP = "run however long the nodes expect to take, however much memory they expect to hold"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="nodegraph", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -168,7 +171,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="M",
         help="a node whose own estimate is longer than this refuses to start (default 10)",
     )
-    run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take, however much memory")
+    run.add_argument("--yes", action="store_true", help=YES_HELP)
     _distributed(run)
     _common(run)
 
@@ -185,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
     watch.add_argument("--poll", type=float, default=0.1, metavar="S", help="seconds between looks at the file")
     watch.add_argument("--runs", type=int, default=None, metavar="N", help="stop after N runs (scripts, tests)")
     watch.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
-    watch.add_argument("--yes", action="store_true", help="run however long the nodes expect to take, however much memory")
+    watch.add_argument("--yes", action="store_true", help=YES_HELP)
     _draft(watch)
     _common(watch)
 
@@ -231,7 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--no-cache", action="store_true", help="neither read nor write the cache (every point cold)")
     sweep.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors and the written files")
     sweep.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
-    sweep.add_argument("--yes", action="store_true", help="run however long the nodes expect to take, however much memory")
+    sweep.add_argument("--yes", action="store_true", help=YES_HELP)
     _distributed(sweep)
     _common(sweep)
 
