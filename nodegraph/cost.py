@@ -5,14 +5,14 @@ and sums.
 A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count
 reaches the simulation through the nodes that turn, mix and cull it; ``inscribed``: an element library's smallest
 inscribed radius, for a placement whose r comes from its elements; ``faces``: mesh faces per element, what a
-renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its
-peak), its ``levers``: the parameter that brings its seconds or its memory down, and ``over``: its own rules of what a
-run does not start on unasked. One rule weighs every node's estimate (``limit_over``): CPU seconds over the run's
-``--max-minutes`` and a peak over the memory the machine has available are refused at the node's lever, with the value
-that stays under. The run's peak memory is the process's own (``PROCESS_BYTES``) and the largest node's. A node
-type with no ``cost`` carries nothing on and spends nothing worth saying. ``nodegraph check`` prints the sum and
-refuses what is over (``--yes`` passes what a run would start with ``--yes``); ``run`` does the same before its
-first node.
+renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its peak),
+its levers (``time_lever``, ``memory_lever``: the parameter that brings its seconds or its memory down), and
+``over``: its own rules of what a run does not start on unasked. One rule weighs every node's estimate
+(``limit_over``): CPU seconds over the run's ``--max-minutes`` and a peak over the memory the machine has available
+are refused at the node's lever, with the value that stays under. The run's peak memory is the process's own
+(``PROCESS_BYTES``) and the largest node's. A node type with no ``cost`` carries nothing on and spends nothing worth
+saying. ``nodegraph check`` prints the sum and refuses what is over (``--yes`` passes what a run would start with
+``--yes``); ``run`` does the same before its first node.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import dataclasses
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from .context import format_seconds
@@ -45,7 +46,7 @@ MEMINFO = "/proc/meminfo"  # where Linux says the memory a new process can take 
 def available_memory() -> int | None:
     """Bytes of memory this machine has available now (MemAvailable); None where the system does not say."""
     try:
-        found = re.search(r"^MemAvailable:\s+(\d+) kB", open(MEMINFO).read(), re.M)
+        found = re.search(r"^MemAvailable:\s+(\d+) kB", Path(MEMINFO).read_text(), re.M)
     except OSError:
         return None
     return int(found.group(1)) * 1024 if found else None
@@ -197,7 +198,7 @@ class Estimate:
         held = self.costs[node].memory if node is not None else 0
         return PROCESS_BYTES + held, node if held else None
 
-    def over(self) -> list[tuple[str, str, str, bool]]:
+    def over(self) -> list[tuple[str, str | None, str, bool]]:
         """(node, parameter, message, passes with --yes) of every request beyond a limit: the nodes' own rules and
         the run's limits on time and memory (``limit_over``)."""
         own = [(n, p, m, yes) for n, c in self.costs.items() for p, m, yes in c.over]
@@ -239,7 +240,7 @@ class Estimate:
         return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)})" + compiling
 
 
-def limit_over(cost: Cost, limits: Limits, made: str = "") -> list[tuple[str, str]]:
+def limit_over(cost: Cost, limits: Limits, made: str = "") -> list[tuple[str | None, str]]:
     """(parameter, message) of each run limit a node's estimate is over: its CPU seconds over ``max_seconds``, the
     process's peak at it over ``max_bytes``; named at its lever with the values that stay under (at the node itself,
     parameter None, when it has none), the nodes that made the elements (``made``) beside a memory over. The one
