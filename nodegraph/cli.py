@@ -30,7 +30,7 @@ from .cache import (
 from .compile_ahead import kernels_due
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
-from .output_folder import recipe_folder, recipe_folder_name, settings_folder
+from .output_folder import recipe_folder, settings_folder
 from .recipe import Recipe, load_recipe
 from .registry import default_registry
 from .report import Reporter
@@ -122,6 +122,9 @@ def unknown_arguments(extra: list[str], parser: argparse.ArgumentParser, overrid
     return f"unrecognized arguments: {' '.join(extra)}" + "".join(f"; {hint}" for hint in hints)
 
 
+YES_HELP = "run however long the nodes expect to take, however much memory they expect to hold"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="nodegraph", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -168,7 +171,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="M",
         help="a node whose own estimate is longer than this refuses to start (default 10)",
     )
-    run.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    run.add_argument("--yes", action="store_true", help=YES_HELP)
     _distributed(run)
     _common(run)
 
@@ -185,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
     watch.add_argument("--poll", type=float, default=0.1, metavar="S", help="seconds between looks at the file")
     watch.add_argument("--runs", type=int, default=None, metavar="N", help="stop after N runs (scripts, tests)")
     watch.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
-    watch.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    watch.add_argument("--yes", action="store_true", help=YES_HELP)
     _draft(watch)
     _common(watch)
 
@@ -231,7 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--no-cache", action="store_true", help="neither read nor write the cache (every point cold)")
     sweep.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors and the written files")
     sweep.add_argument("--max-minutes", type=float, default=10.0, metavar="M", help="as for run (default 10)")
-    sweep.add_argument("--yes", action="store_true", help="run however long the nodes expect to take")
+    sweep.add_argument("--yes", action="store_true", help=YES_HELP)
     _distributed(sweep)
     _common(sweep)
 
@@ -307,9 +310,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             yes=args.yes,
             limits=_limits(args, asked),
         )
-    out_dir = args.out_dir or settings_folder(
-        recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft)), args.overrides
-    )
+    out_dir = args.out_dir or settings_folder(recipe_folder(args.recipe, recipe.name, args.draft), args.overrides)
     rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
@@ -539,7 +540,7 @@ def _cmd_sweep(args, registry) -> int:
 
     base = load_recipe(args.recipe, registry, args.overrides, draft=args.draft)
     decl = sweep_from_args(base, args.sweep_name, args.grids, args.metrics, args.outputs)
-    out_dir = args.out_dir or recipe_folder(args.recipe, recipe_folder_name(base.name, args.draft)) / "sweeps"
+    out_dir = args.out_dir or recipe_folder(args.recipe, base.name, args.draft) / "sweeps"
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     check_writable(out_dir, "sweep table", "choose another folder with --out-dir")
     if cache is not None:
@@ -631,11 +632,11 @@ def _sweep_time(args, registry, decl) -> str:
 
 
 def _limits(args, outputs: tuple[str, ...] | None = None):
-    """The limits a run enforces, as its arguments set them (``--max-minutes``), for the nodes ``outputs`` (None: the
-    recipe's outputs) and what they need."""
-    from .cost import Limits
+    """The limits a run enforces, as its arguments set them (``--max-minutes``) and the machine's available memory, for
+    the nodes ``outputs`` (None: the recipe's outputs) and what they need."""
+    from .cost import Limits, available_memory
 
-    return Limits(max_seconds=60 * args.max_minutes, outputs=outputs)
+    return Limits(max_seconds=60 * args.max_minutes, max_bytes=available_memory(), outputs=outputs)
 
 
 def doc_summary(doc: str | None) -> str:

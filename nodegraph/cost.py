@@ -5,21 +5,26 @@ and sums.
 A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count
 reaches the simulation through the nodes that turn, mix and cull it; ``inscribed``: an element library's smallest
 inscribed radius, for a placement whose r comes from its elements; ``faces``: mesh faces per element, what a
-renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its
-peak), and ``over``: the requests beyond a limit a run enforces, each naming the parameter to change and the value
-that stays under. The run's peak memory is the process's own (``PROCESS_BYTES``) and the largest node's. A node
-type with no ``cost`` carries nothing on and spends nothing worth saying. ``nodegraph check`` prints the sum and
-refuses what is over (``--yes`` passes what a run would start with ``--yes``); ``run`` does the same before its
-first node.
+renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its peak),
+its levers (``time_lever``, ``memory_lever``: the parameter that brings its seconds or its memory down), and
+``over``: its own rules of what a run does not start on unasked. One rule weighs every node's estimate
+(``limit_over``): CPU seconds over the run's ``--max-minutes`` and a peak over the memory the machine has available
+are refused at the node's lever, with the value that stays under. The run's peak memory is the process's own
+(``PROCESS_BYTES``) and the largest node's. A node type with no ``cost`` carries nothing on and spends nothing worth
+saying. ``nodegraph check`` prints the sum and refuses what is over (``--yes`` passes what a run would start with
+``--yes``); ``run`` does the same before its first node.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
+from .context import format_seconds
 from .node import NodeSpec
 
 # bytes a run's process holds before any node's work: Python with numpy and the engine loaded (each node's
@@ -35,13 +40,36 @@ OTHER_CPU_PER_FACE = 6e-6
 OTHER_CPU_PER_ELEMENT = 0.010
 
 
+MEMINFO = "/proc/meminfo"  # where Linux says the memory a new process can take without swapping (MemAvailable)
+
+
+def available_memory() -> int | None:
+    """Bytes of memory this machine has available now (MemAvailable); None where the system does not say."""
+    try:
+        found = re.search(r"^MemAvailable:\s+(\d+) kB", Path(MEMINFO).read_text(), re.M)
+    except OSError:
+        return None
+    return int(found.group(1)) * 1024 if found else None
+
+
 @dataclass(frozen=True)
 class Limits:
-    """The limits a run enforces that a node's estimate is weighed against (``--max-minutes``), and what it runs."""
+    """The limits a run enforces that a node's estimate is weighed against (``--max-minutes``, the machine's
+    available memory), and what it runs."""
 
     max_seconds: float | None = 600.0  # a node's own CPU seconds above this is refused unless --yes
+    max_bytes: int | None = None  # a peak above this is refused unless --yes (a run's: ``available_memory()``)
     outputs: tuple[str, ...] | None = None  # the nodes a run asks for (``--output``): those and what they need are
     # weighed (None: the recipe's outputs, as ``check`` weighs them)
+
+
+@dataclass(frozen=True)
+class Lever:
+    """The parameter that brings a node's CPU seconds (or its memory) down, and ``allowed(budget)``: in words, the
+    values that keep them within ``budget`` seconds (or bytes above ``PROCESS_BYTES``): "frames ≤ 1,234"."""
+
+    param: str
+    allowed: Callable[[float], str]
 
 
 @dataclass(frozen=True)
@@ -56,7 +84,9 @@ class Cost:
     seconds: float = 0.0  # CPU seconds of its work
     memory: int = 0  # bytes it holds at its peak, above ``PROCESS_BYTES``
     what: str = ""  # its work in words ("15 frames × 10 substeps × 2 iterations of 15,424 particles")
-    over: tuple[tuple[str, str, bool], ...] = ()  # (parameter, message, passes with --yes) beyond a limit
+    over: tuple[tuple[str, str, bool], ...] = ()  # (parameter, message, passes with --yes): its own rules
+    time_lever: Lever | None = None  # what brings ``seconds`` down (``limit_over`` names it)
+    memory_lever: Lever | None = None  # what brings ``memory`` down
 
 
 @dataclass(frozen=True)
@@ -130,6 +160,7 @@ class Estimate:
     family: dict[str, int] = field(default_factory=dict)  # instances of a variant family's node
     outputs: tuple[str, ...] = ()  # the nodes whose outputs the recipe asks for
     compiles: bool = True  # whether a run may compile kernels (``compile_ahead.kernels_due``), said beside the time
+    limits: Limits = field(default_factory=Limits)  # what ``over`` weighs each node against
 
     @property
     def elements(self) -> int | None:
@@ -167,15 +198,22 @@ class Estimate:
         held = self.costs[node].memory if node is not None else 0
         return PROCESS_BYTES + held, node if held else None
 
-    def over(self) -> list[tuple[str, str, str, bool]]:
-        """(node, parameter, message, passes with --yes) of every request beyond a limit."""
-        return [(n, p, m, yes) for n, c in self.costs.items() for p, m, yes in c.over]
+    def over(self) -> list[tuple[str, str | None, str, bool]]:
+        """(node, parameter, message, passes with --yes) of every request beyond a limit: the nodes' own rules and
+        the run's limits on time and memory (``limit_over``)."""
+        own = [(n, p, m, yes) for n, c in self.costs.items() for p, m, yes in c.over]
+        return own + [(n, p, m, True) for n, c in self.costs.items() for p, m in limit_over(c, self.limits, self.made)]
+
+    @property
+    def made(self) -> str:
+        """The nodes that made the elements, with how many each ("egg_place 23,447, rice_place 1,639")."""
+        return ", ".join(f"{n} {c.made:,}" for n, c in self.costs.items() if c.made)
 
     def lines(self) -> list[str]:
         """The estimate in words, a line each: elements, the simulations, memory."""
         out = []
         elements = self.elements
-        made = ", ".join(f"{n} {c.made:,}" for n, c in self.costs.items() if c.made)
+        made = self.made
         known = f"≈ {elements:,}" if elements is not None else "not known from the recipe alone"
         out.append(f"elements: {known}" + (f" (placed: {made})" if made else ""))
         sims = [(n, c) for n, c in self.costs.items() if c.particles]
@@ -202,6 +240,34 @@ class Estimate:
         return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)})" + compiling
 
 
+def limit_over(cost: Cost, limits: Limits, made: str = "") -> list[tuple[str | None, str]]:
+    """(parameter, message) of each run limit a node's estimate is over: its CPU seconds over ``max_seconds``, the
+    process's peak at it over ``max_bytes``; named at its lever with the values that stay under (at the node itself,
+    parameter None, when it has none), the nodes that made the elements (``made``) beside a memory over. The one
+    rule for every node: a run starts on neither unasked (``--yes``)."""
+    what = cost.what or "its work"
+    out = []
+    if limits.max_seconds is not None and cost.seconds > limits.max_seconds:
+        lever = cost.time_lever
+        allowed = f"; allowed: {lever.allowed(limits.max_seconds)}" if lever else ""
+        message = (
+            f"{what} would take ≈ {format_seconds(cost.seconds)} of CPU, over a run's limit of "
+            f"{format_seconds(limits.max_seconds)} (--max-minutes){allowed}"
+        )
+        out.append((lever.param if lever else None, message))
+    peak = PROCESS_BYTES + cost.memory
+    if limits.max_bytes is not None and peak > limits.max_bytes:
+        lever = cost.memory_lever
+        allowed = f"; allowed: {lever.allowed(limits.max_bytes - PROCESS_BYTES)}" if lever else ""
+        elements = f"; the elements it holds were made by {made}" if made and cost.elements else ""
+        message = (
+            f"{what} would hold ≈ {gib(peak)} at its peak, over the {gib(limits.max_bytes)} this machine has "
+            f"available{allowed}{elements}"
+        )
+        out.append((lever.param if lever else None, message))
+    return out
+
+
 def minutes(seconds: float) -> str:
     if seconds < 0.5:
         return "< 1 s"
@@ -215,7 +281,7 @@ def gib(size: float) -> str:
 def estimate(nodes: Mapping[str, Any], order: list[str], outputs: list[str], limits: Limits) -> Estimate:
     """Walk ``order`` (every node after those it reads), asking each node type's ``cost`` with its inputs'
     estimates; ``nodes``: ``NodeEntry`` by id, ``outputs``: the node ids the recipe asks for."""
-    result = Estimate(outputs=tuple(dict.fromkeys(outputs)))
+    result = Estimate(outputs=tuple(dict.fromkeys(outputs)), limits=limits)
     for node_id in order:
         entry = nodes[node_id]
         inputs = {port: [result.costs[w.node] for w in wires] for port, wires in entry.inputs.items()}

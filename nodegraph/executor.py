@@ -36,7 +36,7 @@ from .output_files import (
 from .plan import Instance, Plan, RecipeRef, plan_jobs
 from .recipe import Recipe, Wire, nearest
 from .report import NodeRecord, PeakMemory, Reporter, now
-from .rerun_log import NodeCapture, RunRecording, dispatch_digest, log_value, logger_digest, partial_path
+from .rerun_log import NodeCapture, RunRecording, dispatch_digest, log_value, logger_digest, remove_stale_partials
 
 OVERLAP_ENV = "NODEGRAPH_OVERLAP"  # off: every node in turn, none beside another (``Beside``)
 
@@ -219,8 +219,8 @@ class Executor:
             return None
         for k in keys:
             self.cache.touch(k)  # used by this run: the last to go when the cache is trimmed
-        if rrd is not None:  # what an interrupted run left beside the recording: this complete run ends it
-            partial_path(rrd).unlink(missing_ok=True)
+        if rrd is not None:  # what interrupted runs left beside the recording: this complete run ends it
+            remove_stale_partials(rrd)
         records = [NodeRecord(i.label, self.recipe.nodes[i.node].spec.type_name, "cached") for i in order]
         with self.reporter.task(self.recipe.name, len(order)) as tick:
             for record in records:
@@ -644,7 +644,7 @@ def run_recipe(
     the cache are computed by its workers first (``plugins``: the plugin files they load); the run then
     finds them in the cache, and its closing table shows the workers' wall times.
 
-    The recording is written beside ``rrd`` as ``*.partial.rrd`` and moved over ``rrd`` only when the run
+    The recording is written beside ``rrd`` as ``*.<pid>.partial.rrd`` and moved over ``rrd`` only when the run
     completes; its id is derived from what the recipe computes (``Recipe.digest``), so two settings of a
     recipe are two recordings a viewer shows side by side, and it carries a blueprint built from the
     recipe and what was logged (``blueprint``)."""

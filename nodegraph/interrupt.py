@@ -11,7 +11,7 @@ A step that has finished is stored whole before a stop is honoured (``Hold``): a
 step's result is logged and stored stops the run right after, and the parent waits for it (up to ``HOLD_MAX``
 seconds) rather than killing it after ``GRACE``, so a re-run finds every step that finished cached.
 
-What a run writes to a temporary or partial name (a recording's ``*.partial.rrd``, a node's capture, a file
+What a run writes to a temporary or partial name (a recording's ``*.<pid>.partial.rrd``, a node's capture, a file
 written by ``cache.atomic_write``) is named here first (``note``): a file in the list that still exists when the
 child has ended is an unfinished one (a finished file was renamed into place), and is removed.
 """

@@ -172,7 +172,7 @@ def settle_earlier(
         if valid:
             kept[name] = {"written": manifest.get("written"), **record}
         else:
-            path.unlink()
+            path.unlink(missing_ok=True)  # a run of the same settings at once may have settled it first
             removed[path] = record.get("from")
             if path.parent != directory and not any(path.parent.iterdir()):
                 path.parent.rmdir()  # a variant family's folder, emptied

@@ -15,9 +15,16 @@ MANIFEST = "manifest.json"  # output_files.MANIFEST: the run that wrote a folder
 DRAFT_SUFFIX = "_draft"  # a --draft run's folder is its recipe's name and this: drafts never mix with the final
 
 
-def recipe_folder_name(name: str, draft: bool) -> str:
-    """The output folder's name of a run of recipe ``name`` (its sweeps go into a ``sweeps/`` folder inside)."""
-    return name + (DRAFT_SUFFIX if draft else "")
+PLAIN_NAME = re.compile(r"^(?!.*\.\.)[A-Za-z0-9_-][A-Za-z0-9_.-]*$")  # a folder name: no separator, no ``..``
+
+
+def recipe_folder_name(recipe_path: Path, name: str, draft: bool) -> str:
+    """The output folder's name of a run of the recipe file ``recipe_path`` whose ``name:`` is ``name`` (its sweeps go
+    into a ``sweeps/`` folder inside): the file's stem, so a copy of a recipe under another file name never shares
+    the original's folder (the recipe as written, ``NAME.yaml`` of ``name: NAME``, gets ``NAME``); ``name`` where the
+    stem is not a plain folder name."""
+    stem = Path(recipe_path).stem
+    return (stem if PLAIN_NAME.match(stem) else name) + (DRAFT_SUFFIX if draft else "")
 
 
 SETTINGS_PREFIX = "set_"  # a --set run's folder, inside its recipe's: set_<its settings>
@@ -60,10 +67,12 @@ def outputs_root(recipe_path: Path) -> Path:
         return folder
 
 
-def recipe_folder(recipe_path: Path, name: str) -> Path:
-    """``outputs/<name>/`` of the recipe's project, unless a run of another recipe file wrote it (its manifest
-    names that file): then ``outputs/<name>-<hash>/``, the hash of this file's resolved path, the same on every
-    run, so each recipe file keeps one folder of its own."""
+def recipe_folder(recipe_path: Path, name: str, draft: bool = False) -> Path:
+    """``outputs/<folder>/`` of the recipe's project (``recipe_folder_name``: the file's stem, ``_draft`` for a
+    draft), unless a run of another recipe file wrote it (its manifest names that file; a recipe of the same file
+    name in another folder): then ``outputs/<folder>-<hash>/``, the hash of this file's resolved path, the same on
+    every run, so each recipe file keeps one folder of its own."""
+    name = recipe_folder_name(recipe_path, name, draft)
     root = outputs_root(recipe_path)
     plain = root / name
     mine = Path(recipe_path).resolve()

@@ -22,6 +22,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from .dag import Dag
 from .errors import Issue, Location, RecipeError
 from .node import NodeSpec
+from .output_folder import PLAIN_NAME
 from .params import ParamValueError, canonical
 from .registry import Registry
 from .yaml_source import SourceMap, load_yaml, load_yaml_file
@@ -31,7 +32,6 @@ if TYPE_CHECKING:
     from .sweep_decl import SweepDecl
 
 NODE_ID = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-RECIPE_NAME = re.compile(r"^(?!.*\.\.)[A-Za-z0-9_-][A-Za-z0-9_.-]*$")
 MAX_VARIANTS = 100_000
 
 
@@ -463,7 +463,7 @@ class _Validator:
             from .sweep_decl import check_sweeps
 
             sweeps = check_sweeps(self, raw_sweeps, entries, raw_nodes)
-        if partial.name is not None and not RECIPE_NAME.match(partial.name):
+        if partial.name is not None and not PLAIN_NAME.match(partial.name):
             self.issue(
                 ("name",),
                 "the recipe name names its output folder and recording, so it must be a plain name",
@@ -520,7 +520,8 @@ class _Validator:
             if passes_with_yes and self.yes:
                 continue
             message += "; or run with --yes to go ahead" if passes_with_yes else ""
-            self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+            at = ("nodes", node_id, "params", param) if param else ("nodes", node_id)  # a node with no lever: itself
+            self.issue(at, message, node=node_id, param=param)
         return result
 
     def _moved(self, node_id: str, model: NodeModel, path: tuple, moved, key: str) -> None:

@@ -8,6 +8,7 @@ with ``@log_value.register`` (the built-in ones: ``nodes.rerun_loggers``).
 from __future__ import annotations
 
 import dataclasses
+import glob
 import os
 import sys
 import uuid
@@ -30,9 +31,38 @@ def rerun_module():
     return rr
 
 
-def partial_path(path: Path) -> Path:
-    """Where a run's recording is written until the run completes: ``name.partial.rrd`` beside it."""
-    return path.with_name(f"{path.stem}.partial{path.suffix}")
+def partial_path(path: Path, pid: int | None = None) -> Path:
+    """Where process ``pid`` (this one by default) writes a recording until its run completes:
+    ``name.<pid>.partial.rrd`` beside it, so two runs of the same recipe and settings at once never write or
+    move each other's partial file."""
+    return path.with_name(f"{path.stem}.{os.getpid() if pid is None else pid}.partial{path.suffix}")
+
+
+def remove_stale_partials(path: Path) -> list[Path]:
+    """Remove the partial recordings beside ``path`` that no running process writes: what failed or killed
+    runs left (a complete run ends them), never the one a run still in progress writes. Returns them."""
+    removed = []
+    for partial in path.parent.glob(f"{glob.escape(path.stem)}.*.partial{path.suffix}"):
+        pid = partial.name[len(path.stem) + 1 : -len(f".partial{path.suffix}")]
+        if pid.isdigit() and not _alive(int(pid)):
+            partial.unlink(missing_ok=True)
+            removed.append(partial)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    """True while process ``pid`` runs (one of another user's counts); a zombie does not: a run killed with its
+    supervising parent waits as one until something reaps it, which in a container may be never."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass
+    try:  # Linux: the state after the command's closing parenthesis
+        return Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0] != "Z"
+    except (OSError, IndexError):
+        return True
 
 
 def has_display() -> bool:
@@ -75,10 +105,11 @@ class NodeCapture:
 
 
 class RunRecording:
-    """One recording per run, written to ``name.partial.rrd`` and renamed over ``name.rrd``
+    """One recording per run, written to ``name.<pid>.partial.rrd`` and renamed over ``name.rrd``
     only when the run completes, so an interrupted or failed run never replaces a complete recording
     (its partial file stays beside it, named as partial, until the next complete run; a run stopped by
-    Ctrl-C or SIGTERM removes it: ``executor.run_recipe``, ``interrupt``).
+    Ctrl-C or SIGTERM removes it: ``executor.run_recipe``, ``interrupt``), and two runs at once each write
+    their own.
 
     ``recording_id`` names the run (e.g. a digest of recipe and overrides), so runs of two settings
     are two recordings that a viewer shows side by side. ``spawn`` also streams to a viewer (a second
@@ -153,6 +184,7 @@ class RunRecording:
         if not complete:
             return self.partial
         os.replace(self.partial, self.path)
+        remove_stale_partials(self.path)
         return self.path
 
 
@@ -187,7 +219,7 @@ def dispatch_digest(dispatcher, salt: str = "") -> str:
 def merge_recordings(parts: list[Path], path: Path) -> Path:
     """Write the recordings of ``parts`` into one .rrd at ``path`` (each stays its own recording, e.g. one
     per sweep point, for a viewer to show side by side), by Rerun's own ``rerun rrd merge``; written to
-    ``name.partial.rrd`` and renamed, so ``path`` is a complete file or the previous one."""
+    this process's ``partial_path`` and renamed, so ``path`` is a complete file or the previous one."""
     import subprocess
 
     partial = partial_path(path)

@@ -125,12 +125,12 @@ def main() -> None:
     from nodegraph.api import Cache, default_cache_dir, default_registry, load_recipe, run_recipe
     from nodegraph.contact_sheet import grid_pixels
     from nodegraph.output_files import write_output
-    from nodegraph.output_folder import recipe_folder, recipe_folder_name, settings_folder
+    from nodegraph.output_folder import recipe_folder, settings_folder
     from nodegraph.report import Reporter
     from nodegraph.values import Image
 
     recipe = load_recipe(args.recipe, default_registry(), args.set, draft=args.draft)
-    out_dir = settings_folder(recipe_folder(args.recipe, recipe_folder_name(recipe.name, args.draft)), args.set)
+    out_dir = settings_folder(recipe_folder(args.recipe, recipe.name, args.draft), args.set)
     out = args.out or out_dir / "blender_side_by_side.png"
     say(f"1/3 running {args.recipe} for its .glb and preview (what is cached loads in seconds) into {out_dir}/")
     start = time.perf_counter()

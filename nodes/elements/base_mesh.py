@@ -47,8 +47,19 @@ def _check(p: dict) -> list[tuple[str, str]]:
         )
     if p["shape"] == "ikura" and p["eye_gap"] > 0:
         r_i = (p["diameter"] - 2 * p["diameter_sd"]) / 2  # the smallest egg a variant draws (±2 sd)
-        free = r_i * (1 - p["lipid_fraction"] ** (1 / 3))
-        if p["eye_gap"] >= free:
+        room = 1 - p["lipid_fraction"] ** (1 / 3)  # the membrane's radius less the yolk's, per mm of radius
+        free = r_i * room
+        if free <= 0:  # no eye_gap fits: the diameter is what leaves none, named with the diameters that fit
+            least = 2 * p["diameter_sd"] + 2 * p["eye_gap"] / room
+            issues.append(
+                (
+                    "diameter",
+                    f"{p['diameter']:g} mm leaves the smallest egg (at −2 sd: {p['diameter']:g} − 2 × diameter_sd "
+                    f"{p['diameter_sd']:g} mm) no radius, so no room for the yolk's eye_gap {p['eye_gap']:g} mm: "
+                    f"allowed: diameter > {least:.3g} mm (or a smaller diameter_sd)",
+                )
+            )
+        elif p["eye_gap"] >= free:
             issues.append(
                 (
                     "eye_gap",

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import functools
 
-from nodegraph.cost import Cost, CostQuery, estimated_by
+from nodegraph.cost import Cost, CostQuery, Lever, estimated_by, gib
 from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Image
@@ -50,11 +50,35 @@ CPU_PER_SAMPLE_MEGAPIXEL = 8.0
 
 
 def _cost(q: CostQuery) -> Cost:
+    """Its memory and CPU seconds from the scene's faces, the pixels and the samples; its levers: the samples for its
+    time, the pixels for its memory (``cost.limit_over``)."""
     elements, faces = q.elements("scene"), q.faces("scene")
-    pixels = q.params["width"] * q.params["height"]
-    held = RENDERER_BYTES + pixels * BYTES_PER_PIXEL + int((elements or 0) * (faces or 0) * BYTES_PER_FACE)
-    seconds = CPU_START + CPU_PER_SAMPLE_MEGAPIXEL * q.params["samples"] * pixels / 1e6
-    return Cost(elements=elements, faces=faces, memory=held, seconds=seconds)
+    width, height, samples = q.params["width"], q.params["height"], q.params["samples"]
+    pixels = width * height
+    scene = RENDERER_BYTES + int((elements or 0) * (faces or 0) * BYTES_PER_FACE)
+    seconds = CPU_START + CPU_PER_SAMPLE_MEGAPIXEL * samples * pixels / 1e6
+
+    def fewer_samples(budget: float) -> str:
+        """The samples that keep its seconds within ``budget`` at these pixels."""
+        kept = int((budget - CPU_START) / (CPU_PER_SAMPLE_MEGAPIXEL * pixels / 1e6))
+        return f"samples ≤ {kept:,}" if kept >= 1 else f"fewer pixels than {width:,} × {height:,}"
+
+    def fewer_pixels(budget: float) -> str:
+        """The pixels that keep its memory within ``budget`` bytes with this scene."""
+        kept = int((budget - scene) / BYTES_PER_PIXEL)
+        if kept < 16 * 16:  # the smallest picture its range allows
+            return f"fewer or simpler elements (the scene alone holds {gib(scene)})"
+        return f"width × height ≤ {kept:,} px"
+
+    return Cost(
+        elements=elements,
+        faces=faces,
+        memory=scene + pixels * BYTES_PER_PIXEL,
+        seconds=seconds,
+        what=f"a {width:,} × {height:,} px preview at {samples} samples",
+        time_lever=Lever("samples", fewer_samples),
+        memory_lever=Lever("width", fewer_pixels),
+    )
 
 
 @estimated_by(_cost)

@@ -8,8 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodegraph.context import format_seconds
-from nodegraph.cost import Cost, CostQuery, estimated_by
+from nodegraph.cost import Cost, CostQuery, Lever, estimated_by
 from nodegraph.node import In, Moved, Out, node
 from nodegraph.values import Mesh
 
@@ -56,8 +55,8 @@ def _solve(
 
 def _cost(q: CostQuery) -> Cost:
     """Particles, CPU seconds and memory from the elements its aggregate carries and its parameters, before any work
-    (its run says the same from the particles it made, ``expect_cost``); over ``--max-minutes`` is refused unless
-    --yes, naming the frames that stay under."""
+    (its run says the same from the particles it made, ``expect_cost``); its levers: the frames that keep it under
+    ``--max-minutes``, the particles per element that keep it within the machine's memory (``cost.limit_over``)."""
     elements = q.elements("aggregate")
     if elements is None:
         return Cost()
@@ -67,19 +66,18 @@ def _cost(q: CostQuery) -> Cost:
     setup = SETUP_SECONDS + particles * SETUP_SECONDS_PER_PARTICLE + obstacles * SETUP_SECONDS_PER_OBSTACLE
     solve, what = _solve(particles, obstacles, p["frames"], p["substeps"], p["iterations"], about="≈ ")
     seconds = setup + solve
-    over = []
-    limit = q.limits.max_seconds
-    if limit is not None and seconds > limit:
-        frames = max(1, int(p["frames"] * (limit - setup) / (seconds - setup)))
-        over.append(
-            (
-                "frames",
-                f"{what} would take ≈ {format_seconds(seconds)} of CPU, over a run's limit of "
-                f"{format_seconds(limit)} (--max-minutes); allowed: frames ≤ {frames:,} (or fewer elements, "
-                "substeps or iterations, or a larger --max-minutes)",
-                True,
-            )
-        )
+    frames = p["frames"]
+
+    def fewer_frames(budget: float) -> str:
+        """The frames that keep its seconds within ``budget`` (its setup stays)."""
+        kept = max(1, int(frames * (budget - setup) / (seconds - setup)))
+        return f"frames ≤ {kept:,} (or fewer elements, substeps or iterations, or a larger --max-minutes)"
+
+    def fewer_particles(budget: float) -> str:
+        """The particles per element that keep its memory within ``budget`` bytes."""
+        kept = int((budget - FIXED_BYTES) / BYTES_PER_PARTICLE / elements)
+        return f"particles_per_element ≤ {kept:,}" if kept >= 1 else "fewer elements (one particle each is over)"
+
     return Cost(
         elements=elements,
         faces=q.faces("aggregate"),
@@ -87,7 +85,8 @@ def _cost(q: CostQuery) -> Cost:
         seconds=seconds,
         memory=FIXED_BYTES + particles * BYTES_PER_PARTICLE,
         what=what,
-        over=tuple(over),
+        time_lever=Lever("frames", fewer_frames),
+        memory_lever=Lever("particles_per_element", fewer_particles),
     )
 
 

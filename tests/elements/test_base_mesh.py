@@ -74,6 +74,18 @@ def test_the_ikura_yolk_floats_up_under_the_membrane_as_its_eye():
     assert [name for name, _ in problems] == ["eye_gap"] and "allowed 0 ≤ eye_gap <" in problems[0][1]
 
 
+def test_a_diameter_that_leaves_no_eye_gap_possible_is_named_with_the_diameters_that_fit():
+    """A 1 mm egg with the recipe's diameter_sd 0.63: the smallest egg has no radius, so no eye_gap fits; the check
+    said ``allowed 0 ≤ eye_gap < -0.0617 mm`` at the eye_gap the user never touched. It names the diameter and the
+    diameters that leave the eye_gap room, and the one it names passes."""
+    given = {"shape": "ikura", "diameter_sd": 0.63, "eye_gap": 0.15, "lipid_fraction": 0.145}
+    problems = dict(base_mesh.check(base_mesh.resolve_params({**given, "diameter": 1.0})))
+    assert "eye_gap" not in problems and "diameter_sd" in problems  # the sd's own rule still says its part
+    assert "allowed: diameter > 1.89 mm" in problems["diameter"], problems
+    fits = dict(base_mesh.check(base_mesh.resolve_params({**given, "diameter": 1.9, "diameter_sd": 0.475})))
+    assert not fits, fits
+
+
 def test_ice_flake_is_thin_irregular_and_depends_on_shape_seed():
     a = base_mesh.call(shape="ice_flake")
     b = base_mesh.call(shape="ice_flake", shape_seed=3)

@@ -2,8 +2,10 @@
 its project (a pyproject.toml or .git above it), else beside the recipe; --out-dir as given."""
 
 import json
+from pathlib import Path
 
 from nodegraph.cli import main
+from nodegraph.output_folder import recipe_folder_name
 
 from .test_cli_and_rerun import RECIPE, TOY
 
@@ -60,6 +62,34 @@ def test_a_copy_with_the_same_name_gets_a_folder_of_its_own(tmp_path, monkeypatc
     for folder, recipe in ((folders[0], original), (folders[1], copy)):
         assert (folder / "surf.ply").is_file()
         assert json.loads((folder / "manifest.json").read_text())["recipe_file"] == str(recipe.resolve())
+
+
+def test_a_copy_under_another_file_name_writes_to_its_own_folder_and_the_original_keeps_its(
+    tmp_path, monkeypatch, capsys
+):
+    """A recipe copied to another file name in the same folder (its ``name:`` unchanged) took over the original's
+    outputs/<name>/ and sent the original's next run to a hashed folder. The folder is named from the file:
+    outputs/<stem>/ for the copy, outputs/<name>/ for the recipe as written, on every run, drafts alike."""
+    project = tmp_path / "project"
+    (project / "graphs").mkdir(parents=True)
+    (project / "pyproject.toml").write_text("[project]\nname = 'mine'\n")
+    original, copy = project / "graphs" / "toyrun.yaml", project / "graphs" / "my_run.yaml"
+    original.write_text(RECIPE)
+    copy.write_text(RECIPE)
+    monkeypatch.chdir(project)
+    common = ["--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), "--no-rrd"]
+    for recipe, folder in ((copy, "my_run"), (original, "toyrun"), (copy, "my_run")):
+        capsys.readouterr()
+        assert main(["run", str(recipe), *common]) == 0
+        assert capsys.readouterr().err.splitlines()[0] == f"outputs go to outputs/{folder}/"
+        manifest = json.loads((project / "outputs" / folder / "manifest.json").read_text())
+        assert manifest["recipe_file"].endswith(recipe.name)
+    assert sorted(p.name for p in (project / "outputs").iterdir()) == ["my_run", "toyrun"]
+
+
+def test_a_file_name_that_is_no_plain_folder_name_falls_back_to_the_recipes_name():
+    assert recipe_folder_name(Path("graphs/my bowl.yaml"), "rice_bowl", draft=True) == "rice_bowl_draft"
+    assert recipe_folder_name(Path("graphs/my_bowl.yaml"), "rice_bowl", draft=False) == "my_bowl"
 
 
 def test_a_plain_run_never_removes_what_a_set_run_wrote(tmp_path, monkeypatch, capsys):

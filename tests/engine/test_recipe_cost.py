@@ -54,10 +54,27 @@ def test_over_a_limit_is_refused_at_the_parameter_unless_yes(costed, tmp_path):
     with pytest.raises(RecipeError) as refused:
         load_recipe(path, costed, work=True, limits=Limits(max_seconds=5.0))
     text = str(refused.value)
-    assert "costed.yaml:13:" in text and "node 'step', steps: 10 s is over 5 s; allowed: steps ≤ 10" in text
+    assert "costed.yaml:13:" in text
+    assert "node 'step', steps: its work would take ≈ 10 s of CPU, over a run's limit of 5 s" in text
+    assert "(--max-minutes); allowed: steps ≤ 10" in text
     assert "or run with --yes to go ahead" in text
     assert load_recipe(path, costed, work=True, yes=True, limits=Limits(max_seconds=5.0)).cost.seconds == 10.0
     assert load_recipe(path, costed, ["step.steps=10"], work=True, limits=Limits(max_seconds=5.0))  # the value named
+
+
+def test_a_peak_over_the_available_memory_is_refused_by_the_same_rule_unless_yes(costed, tmp_path):
+    """Memory is weighed as time is, for every node (``cost.limit_over``): a peak over the machine's available memory
+    is refused (at the node itself where it names no lever), with the node that made the elements; --yes passes."""
+    path = tmp_path / "costed.yaml"
+    path.write_text(RECIPE)
+    tight = Limits(max_bytes=PROCESS_BYTES + 600_000)  # 'make' holds 1,000,000 bytes, 'step' 5,000
+    with pytest.raises(RecipeError) as refused:
+        load_recipe(path, costed, work=True, limits=tight)
+    text = str(refused.value)
+    assert "costed.yaml:5:" in text and "node 'make': its work would hold ≈ 49 MiB at its peak, over the" in text
+    assert "this machine has available; the elements it holds were made by make 1,000; or run with --yes" in text
+    assert "node 'step'" not in text  # the nodes within it are not named
+    assert load_recipe(path, costed, work=True, yes=True, limits=tight).cost.peak[1] == "make"
 
 
 def test_check_prints_the_estimate_and_max_minutes_sets_the_limit(costed, tmp_path, capsys, monkeypatch):

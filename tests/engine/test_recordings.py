@@ -5,6 +5,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import datafusion
@@ -122,20 +123,20 @@ def test_an_interrupted_run_keeps_the_complete_recording_and_leaves_no_partial_o
         text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
-    partial = rrd.with_name("slowrun.partial.rrd")
     node_started(tmp_path / "started", proc)  # the slow node is running (20 s to go): the signal lands inside it
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
+    partials = lambda: list(rrd.parent.glob("slowrun.*.partial.rrd"))  # named by the pid of the run's process
     assert proc.returncode != 0
     assert rrd.read_bytes() == complete  # the last complete recording is untouched
     if sig != signal.SIGKILL:  # stopped on purpose: what it recorded is not wanted, and not left (issue 47)
-        assert "interrupted" in err and not partial.exists()
+        assert "interrupted" in err and not partials()
     else:  # killed outright, the run leaves its recording named as partial
-        assert partial.exists()
+        assert len(partials()) == 1
     assert not hidden_or_temp(tmp_path / "outputs"), hidden_or_temp(tmp_path / "outputs")
     write(tmp_path)  # the next complete run replaces the recording and leaves no partial beside it
     subprocess.run(command(tmp_path), check=True, cwd=tmp_path)
-    assert not partial.exists() and len(RrdReader(str(rrd)).recordings()) == 1
+    assert not partials() and len(RrdReader(str(rrd)).recordings()) == 1
 
 
 def test_spawn_without_a_display_says_so_first_and_still_writes_the_file(tmp_path):
@@ -158,3 +159,36 @@ def test_contradictory_recording_flags_are_refused_before_anything_runs(tmp_path
     assert main(["run", "slowrun.yaml", "--plugin", TOY, "--cache-dir", str(tmp_path / "cache"), *flags]) == 2
     assert "--no-rrd contradicts" in capsys.readouterr().err
     assert not (tmp_path / "cache").exists() and not (tmp_path / "outputs").exists()
+
+
+def test_two_runs_at_once_each_write_and_move_their_own_partial_recording(tmp_path, monkeypatch):
+    """Two identical runs started together (two processes, here one process as two pids): each writes its own
+    partial file, so the one that ends second still finds its file to move (it raised FileNotFoundError when
+    both wrote ``name.partial.rrd``), and neither removes the other's while it is still being written."""
+    from nodegraph import rerun_log
+
+    rrd = tmp_path / "out" / "bowl.rrd"
+    monkeypatch.setattr(rerun_log.os, "getpid", os.getppid)  # the parent is alive as long as this test
+    first = rerun_log.RunRecording(rrd, "bowl", recording_id="r")
+    monkeypatch.undo()
+    second = rerun_log.RunRecording(rrd, "bowl", recording_id="r")
+    assert first.partial != second.partial
+    assert second.close() == rrd and first.partial.exists()  # the first, still running, keeps its file
+    assert first.close() == rrd and not list(rrd.parent.glob("*.partial.rrd"))
+
+
+def test_a_complete_run_removes_the_partial_recordings_of_ended_runs_and_keeps_running_ones(tmp_path):
+    """What a killed run left (its process gone, or a zombie no one reaps, as in a container) goes with the next
+    complete run; a partial file a running process writes stays."""
+    from nodegraph import rerun_log
+
+    rrd = tmp_path / "bowl.rrd"
+    ended = subprocess.Popen(["true"])  # never waited for while the run closes: a zombie
+    while not Path(f"/proc/{ended.pid}/stat").read_text().rpartition(")")[2].split()[0] == "Z":
+        time.sleep(0.01)
+    left, running = rerun_log.partial_path(rrd, ended.pid), rerun_log.partial_path(rrd, os.getppid())
+    left.write_bytes(b"x")
+    running.write_bytes(b"x")
+    rerun_log.RunRecording(rrd, "bowl", recording_id="r").close()
+    ended.wait()
+    assert not left.exists() and running.exists()

@@ -1,8 +1,8 @@
 """Toy node types that declare their cost (``nodegraph.cost``): a maker of ``count`` items, a pass-through that
-keeps a share, and a stepper whose CPU seconds are items × steps, refused over the run's limit naming ``steps``."""
+keeps a share, and a stepper whose CPU seconds are items × steps, its lever ``steps``."""
 
 from nodegraph import In, Out, Param, node
-from nodegraph.cost import Cost, estimated_by, passes
+from nodegraph.cost import Cost, Lever, estimated_by, passes
 from nodegraph.values import Table
 
 
@@ -13,11 +13,8 @@ def _make_cost(q):
 def _step_cost(q):
     items = q.elements("table")
     seconds = items * q.params["steps"] * 1e-3
-    limit = q.limits.max_seconds
-    over = ()
-    if limit is not None and seconds > limit:
-        over = (("steps", f"{seconds:g} s is over {limit:g} s; allowed: steps ≤ {int(limit / items / 1e-3)}", True),)
-    return Cost(elements=items, particles=items, seconds=seconds, memory=items * 10, over=over)
+    lever = Lever("steps", lambda budget: f"steps ≤ {int(budget / items / 1e-3)}")
+    return Cost(elements=items, particles=items, seconds=seconds, memory=items * 10, time_lever=lever)
 
 
 @estimated_by(_make_cost)

@@ -9,6 +9,7 @@ from nodegraph.cli import main
 
 GRAPHS = Path(__file__).resolve().parents[2] / "graphs"
 RICE_BOWL = str(GRAPHS / "rice_bowl.yaml")
+IKURA_DON = str(GRAPHS / "ikura_don.yaml")
 
 
 def test_a_simulation_over_the_time_limit_is_refused_naming_frames(capsys):
@@ -21,6 +22,33 @@ def test_a_simulation_over_the_time_limit_is_refused_naming_frames(capsys):
     assert main(["check", RICE_BOWL, "--set", f"rice_sim.frames={allowed}"]) == 0  # the value it names passes
     out = capsys.readouterr().out
     assert f"estimate: rice_sim: {allowed:,} frames × 10 substeps" in out  # (--yes: tests/engine/test_recipe_cost.py)
+
+
+def test_a_preview_over_the_time_limit_is_refused_by_the_simulations_rule_naming_samples(capsys):
+    """Every estimate meets the one rule (``cost.limit_over``): a 4096 × 4096 preview at 64 samples (≈ 2.4 h of CPU)
+    is refused as a 41-minute simulation is, at the samples, with the value that stays under; --yes passes."""
+    big = ["--set", "preview.width=4096", "--set", "preview.height=4096"]
+    assert main(["check", IKURA_DON, *big, "--set", "preview.samples=64"]) == 2
+    err = capsys.readouterr().err
+    assert "node 'preview', samples: a 4,096 × 4,096 px preview at 64 samples would take ≈ 2.4 h of CPU" in err
+    assert "over a run's limit of 10 min (--max-minutes); allowed: samples ≤ " in err
+    allowed = int(err.split("samples ≤ ")[1].split(";")[0])
+    assert 1 <= allowed < 64
+    assert main(["check", IKURA_DON, *big, "--set", f"preview.samples={allowed}"]) == 0
+    assert main(["check", IKURA_DON, *big, "--set", "preview.samples=64", "--yes"]) == 0
+
+
+def test_a_peak_over_the_machines_available_memory_is_refused_naming_the_pixels_and_the_elements(capsys, monkeypatch):
+    """Eggs of 1.5 mm: ≈ 23,000 of them, a preview holding ≈ 28 GiB, refused on a machine with 23 GiB available
+    (``check`` said OK and ``run`` started); the elements' makers are named; --yes passes."""
+    monkeypatch.setattr("nodegraph.cost.available_memory", lambda: 23 * 2**30, raising=False)
+    small = ["--set", "egg_base.diameter=1.5", "--set", "egg_base.eye_gap=0", "--set", "egg_base.diameter_sd=0.1"]
+    assert main(["check", IKURA_DON, *small]) == 2
+    err = capsys.readouterr().err
+    assert "node 'preview', width: a 1,280 × 720 px preview at 3 samples would hold ≈ " in err
+    assert "at its peak, over the 23.00 GiB this machine has available; allowed: fewer or simpler elements" in err
+    assert "the elements it holds were made by egg_place " in err
+    assert main(["check", IKURA_DON, *small, "--yes"]) == 0
 
 
 def test_check_prints_elements_particles_minutes_and_memory(capsys):
