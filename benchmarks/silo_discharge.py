@@ -256,7 +256,9 @@ def main():
         "--damping", type=float, help="velocity fraction removed per 1/60 s (the node's default if not given)"
     )
     ap.add_argument("--no-write", action="store_true")
-    ap.add_argument("--out", type=Path, default=OUT, help="where the rows go (replaced)")
+    ap.add_argument(
+        "--out", type=Path, default=OUT, help="the data file: rows of the same set-up and setting are replaced"
+    )
     args = ap.parse_args()
     if args.quick:
         plan, grains = [(16.0, 10), (22.0, 10)], min(args.grains, 1500)
@@ -297,7 +299,22 @@ def main():
         print("fit (10 substeps):", json.dumps(fitted))
         print("Beverloo et al. 1961: n = 2.5, C ≈ 0.55–0.65, k ≈ 1.3–2.9")
     if not args.no_write:
-        args.out.write_text("".join(json.dumps(r) + "\n" for r in rows))
+        write(args.out, rows)
+
+
+def key(row: dict) -> tuple:
+    """What a row measured: the set-up and setting (a fit row: which holes)."""
+    if row["what"] == "silo_discharge_fit":
+        return ("fit",)
+    return tuple(row.get(k) for k in ("silo_diameter_mm", "grains", "D_mm", "substeps", "damping"))
+
+
+def write(path: Path, rows: list[dict]) -> None:
+    """Rows into the data file, replacing those that measured the same set-up and setting, keeping the rest."""
+    new = {key(r) for r in rows}
+    old = [json.loads(line) for line in path.read_text().splitlines()] if path.exists() else []
+    kept = [r for r in old if key(r) not in new]
+    path.write_text("".join(json.dumps(r) + "\n" for r in kept + rows))
 
 
 if __name__ == "__main__":
