@@ -105,19 +105,25 @@ def slow_run_at_a_terminal(tmp_path):
     return proc, started
 
 
-def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
-    """Ctrl-C reaches every process of the terminal's group, the run's and the supervisor's, which passes it on:
-    the run stops once, by itself (a node in Python code stops at once), with its message and no traceback."""
-    proc, started = slow_run_at_a_terminal(tmp_path)
+def ctrl_c_group(proc, started, node_started, seconds: float) -> str:
+    """Ctrl-C to the run's process group once its node has started; waits ``seconds`` for it to stop (killed
+    after) and returns what it wrote on stderr."""
     try:
         node_started(started, proc)
         os.killpg(proc.pid, signal.SIGINT)
-        proc.wait(timeout=2.0)
+        proc.wait(timeout=seconds)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-    err = proc.stderr.read()
+    return proc.stderr.read()
+
+
+def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
+    """Ctrl-C reaches every process of the terminal's group, the run's and the supervisor's, which passes it on:
+    the run stops once, by itself (a node in Python code stops at once), with its message and no traceback."""
+    proc, started = slow_run_at_a_terminal(tmp_path)
+    err = ctrl_c_group(proc, started, node_started, 2.0)
     assert proc.returncode == 130, err
     assert "Traceback" not in err, err
     # the step it stopped in is named, and what a re-run does (issue 47: the line named neither)
@@ -290,15 +296,7 @@ def test_ctrl_c_while_a_finished_step_is_stored_keeps_it_cached(tmp_path, node_s
         start_new_session=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
-    try:
-        node_started(started, proc)  # pts has finished and is being stored
-        os.killpg(proc.pid, signal.SIGINT)
-        proc.wait(timeout=10.0)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    err = proc.stderr.read()
+    err = ctrl_c_group(proc, started, node_started, 10.0)  # pts has finished and is being stored
     assert proc.returncode == 130, err
     assert "did not stop within" not in err and "interrupted" in err, err
     assert not (tmp_path / "never").exists()  # stopped before the slow step began
