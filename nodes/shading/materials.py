@@ -79,7 +79,8 @@ def rice_material(water: float, name: str = "rice") -> Material:
     The subsurface colour is a cream white, chosen (no measured values): thin grains let most light through, so a
     heap shows their colour weaker than a thick piece would; at (0.90, 0.86, 0.76) (15 %) the studio rendered the
     rice neutral grey (CIELAB b* 3.8), at (0.90, 0.82, 0.69) warm white (b* 7.2), which beside the eggs' orange
-    still read bluish-white to art directors; at (0.91, 0.81, 0.65) cream (b* 9.5; docs/look.md, "Warm white rice").
+    still read bluish-white to art directors; at (0.91, 0.81, 0.665) cream (b* 8.0; docs/look.md, "Warm white rice").
+    The wet end's blue, 0.80, keeps its single-scattering albedo at 0.99: wetter is whiter in every channel.
     """
     if not 0.0 <= water <= WATER_MAX:
         raise ValueError(f"water_content {water} % is outside 0–{WATER_MAX:g} %")
@@ -89,7 +90,7 @@ def rice_material(water: float, name: str = "rice") -> Material:
         base_color=_mix((0.66, 0.60, 0.47), (0.90, 0.89, 0.84), t),
         subsurface=0.3 + 0.6 * t,
         subsurface_radius=_mix((0.3, 0.2, 0.1), RICE_RADIUS_WET, t),
-        subsurface_color=_mix((0.80, 0.65, 0.44), (0.975, 0.905, 0.77), t),
+        subsurface_color=_mix((0.80, 0.65, 0.44), (0.975, 0.905, 0.80), t),
         specular=0.5,
         roughness=0.7 - 0.35 * t,
         sheen=0.6 * t,

@@ -476,7 +476,8 @@ def test_the_denoisers_albedo_tells_the_eggs_from_the_rice(shaded, monkeypatch):
     albedo = guides[-1]
     egg_red, egg_green, _ = np.median(albedo[egg], axis=0)
     rice_rgb = np.median(albedo[rice], axis=0)
-    assert egg_red > 0.5 and egg_green < 0.3 * egg_red  # a red egg, not a grey skin
+    # a red-orange egg (the tints run to light orange, materials.EGG_HUE_SPREAD), not a grey skin (green ≈ red)
+    assert egg_red > 0.5 and egg_green < 0.45 * egg_red
     assert rice_rgb.min() > 0.5  # pale rice
 
 
