@@ -78,8 +78,9 @@ def rice_material(water: float, name: str = "rice") -> Material:
     the water film adds a clearcoat and a sheen at grazing angles (G fig. 3.1.2.1: dull at 0 %, glossy at 24 %).
     The subsurface colour is a cream white, chosen (no measured values): thin grains let most light through, so a
     heap shows their colour weaker than a thick piece would; at (0.90, 0.86, 0.76) (15 %) the studio rendered the
-    rice neutral grey (CIELAB b* 3.8), at (0.90, 0.82, 0.69) warm white (b* 7.3, as a Lambertian of the colour;
-    docs/look.md, "Warm white rice").
+    rice neutral grey (CIELAB b* 3.8), at (0.90, 0.82, 0.69) warm white (b* 7.2), which beside the eggs' orange
+    still read bluish-white to art directors; at (0.91, 0.81, 0.665) cream (b* 8.0; docs/look.md, "Warm white rice").
+    The wet end's blue, 0.80, keeps its single-scattering albedo at 0.99: wetter is whiter in every channel.
     """
     if not 0.0 <= water <= WATER_MAX:
         raise ValueError(f"water_content {water} % is outside 0–{WATER_MAX:g} %")
@@ -89,7 +90,7 @@ def rice_material(water: float, name: str = "rice") -> Material:
         base_color=_mix((0.66, 0.60, 0.47), (0.90, 0.89, 0.84), t),
         subsurface=0.3 + 0.6 * t,
         subsurface_radius=_mix((0.3, 0.2, 0.1), RICE_RADIUS_WET, t),
-        subsurface_color=_mix((0.80, 0.65, 0.44), (0.96, 0.92, 0.835), t),
+        subsurface_color=_mix((0.80, 0.65, 0.44), (0.975, 0.905, 0.80), t),
         specular=0.5,
         roughness=0.7 - 0.35 * t,
         sheen=0.6 * t,
@@ -106,26 +107,39 @@ EGG_TINTS = 12  # membrane tints the eggs of a scene are drawn from (the shade n
 # absorbance of the fluid scaled over EGG_HUE_SPREAD moves the hue of light through an egg from CIELAB h 59° (orange)
 # to 42° (red-orange); its pigment (astaxanthin) concentration over EGG_PIGMENT_SPREAD makes an egg lighter and
 # more translucent or deeper: L* 53–65 (docs/look.md, "Ikura colour")
-EGG_HUE_SPREAD = (0.70, 1.30)
-EGG_PIGMENT_SPREAD = (0.80, 1.25)
+EGG_HUE_SPREAD = (0.55, 1.45)
+EGG_PIGMENT_SPREAD = (0.70, 1.40)
 EGG_FLUID = (0.85, 0.10, 0.012)  # light through the whole egg (two crossings of the fluid): the palette's centre
+# the chorion is a smooth, wet membrane under tension: a near-mirror skin with a sharp highlight of the key
+# (at 0.2 the eggs read frosted, the highlight a smear and the droplet behind it blurred; art directors: "identical
+# beads"). 0.05 (α 0.0025) rather than 0: the surface is not optically flat over a pixel's footprint
+MEMBRANE_ROUGHNESS = 0.05
+# the oil droplet is "numerous little drop-like fat inclusions containing lipochromes" (1-800-caviar.com): an
+# emulsion, so it scatters (as milk does) and is pale, the honey-coloured centre graders look for (ASMI). Its
+# multiple-scattering colour is a pale honey-gold, linear (0.98, 0.70, 0.28) = sRGB (254, 218, 145): chosen, no
+# measured spectrum of roe oil at hand. As an orange (1.0, 0.50, 0.10) ball of mean free path up to 1 mm it scattered
+# light back in the fluid's own hue, and the eye did not read against the red (docs/look.md, "The pale eye"). Its
+# free path (0.5, 0.4, 0.3) mm, a few across the 4 mm droplet: a cloudy drop, seen through the thin fluid over it
+DROPLET_COLOR = (0.98, 0.70, 0.28)
+DROPLET_RADIUS = (0.5, 0.4, 0.3)
+DROPLET_ROUGHNESS = 0.05  # an oil–water interface, smooth under its tension as the membrane is
 
 
 def ikura_materials() -> tuple[Material, Material]:
     """(membrane, yolk): a clear dielectric skin (IOR 1.36) holding a deep orange-red fluid, around an oil yolk.
 
-    Both are transmissive: ``subsurface_color`` is the colour light keeps after crossing the part (absorption
-    over ``subsurface_radius`` mm), so the yolk shows through the membrane as a brighter, frosted orange core
-    (oil, IOR 1.47, in the egg fluid). All-specular eggs also keep the preview's caustic noise low: no diffuse
-    surface inside an egg is lit only through its skin.
+    Both are transmissive: the membrane's ``subsurface_color`` is the colour light keeps after crossing the egg;
+    the yolk (oil, IOR 1.47, in the egg fluid) is a scattering medium of that colour behind a smooth skin
+    (``DROPLET_COLOR``), so it shows through the membrane as a paler, cloudy honey-gold core. No diffuse surface
+    inside an egg is lit only through its skin, which keeps the preview's caustic noise low.
 
     Colour: the roe's pigment is astaxanthin, absorbing blue and green (maximum ≈ 470–480 nm) and passing red, so
     light through an egg keeps its red, a little of its green and almost no blue. No measured spectrum of ikura is
     at hand: the fluid's colour is chosen to read as ikura's deep orange-red, linear (0.80, 0.07, 0.01) = sRGB
     (231, 75, 25), CIELAB hue 45° and chroma 83 (it was (0.90, 0.20, 0.02) = sRGB (243, 124, 39), hue 57° and
     chroma 75: amber), and light through the whole egg (two crossings of the fluid) keeps ``EGG_FLUID``
-    (0.85, 0.10, 0.012); the yolk's oil is orange, the colour of honey at the egg's centre that graders look for
-    (Alaska Seafood Marketing Institute: "a center the color and consistency of honey"). Each egg of a scene
+    (0.85, 0.10, 0.012); the yolk's oil is pale honey-gold, the colour of honey at the egg's centre that graders
+    look for (Alaska Seafood Marketing Institute: "a center the color and consistency of honey"). Each egg of a scene
     takes one of ``ikura_tints`` of this membrane.
     """
     membrane = Material(
@@ -135,24 +149,24 @@ def ikura_materials() -> tuple[Material, Material]:
         subsurface_radius=(4.0, 1.2, 0.5),
         subsurface_color=EGG_FLUID,
         specular=0.5,
-        roughness=0.2,
+        roughness=MEMBRANE_ROUGHNESS,
         clearcoat=1.0,
         clearcoat_roughness=0.02,
         ior=1.36,
         transmission=1.0,
-        transmission_roughness=0.2,
+        transmission_roughness=MEMBRANE_ROUGHNESS,
     )
     yolk = Material(
         name="ikura_yolk",
-        base_color=(1.0, 0.40, 0.05),
+        base_color=DROPLET_COLOR,
         subsurface=0.0,
-        subsurface_radius=(1.0, 0.4, 0.1),
-        subsurface_color=(1.0, 0.50, 0.10),
-        roughness=0.3,
+        subsurface_radius=DROPLET_RADIUS,
+        subsurface_color=DROPLET_COLOR,
+        roughness=DROPLET_ROUGHNESS,
         ior=1.47,
         exterior_ior=1.36,
         transmission=1.0,
-        transmission_roughness=0.3,
+        transmission_roughness=DROPLET_ROUGHNESS,
     )
     return membrane, yolk
 

@@ -64,6 +64,27 @@ def test_the_yolk_shows_through_the_membrane(shaded):
     assert np.abs(with_yolk - without)[orange].mean() > 5
 
 
+def test_the_pale_droplet_shows_as_an_eye(shaded):
+    """Each egg's oil droplet is a cloudy, pale honey-gold medium (``materials.DROPLET_COLOR``): light entering over
+    the eye comes back out of it pale, so the eggs' pixels are more golden than with a droplet of the fluid's own
+    orange (the droplet before: (1.0, 0.50, 0.10), free path up to 1 mm), where the eye did not show."""
+    from nodes.shading import materials as mat
+
+    yolk = mat.ikura_materials()[1]
+    orange = dataclasses.replace(yolk, subsurface_color=(1.0, 0.50, 0.10), subsurface_radius=(1.0, 0.4, 0.1))
+    index = next(k for k, m in enumerate(shaded.materials) if m.name == yolk.name)
+    materials = tuple(orange if k == index else m for k, m in enumerate(shaded.materials))
+    pale = _render(shaded, width=96, height=72, samples=16).astype(float)
+    before = _render(dataclasses.replace(shaded, materials=materials), width=96, height=72, samples=16).astype(float)
+    eggs = (pale[..., 0] - pale[..., 2]) > 80
+
+    def golden(image):  # green over red on the palest tenth of the eggs' pixels: their eyes
+        return float(np.percentile((image[..., 1] / image[..., 0].clip(1))[eggs], 90))
+
+    print(f"eggs' palest green / red: pale droplet {golden(pale):.3f}, orange droplet {golden(before):.3f}")
+    assert golden(pale) > golden(before) + 0.03
+
+
 def test_a_glaze_reflects_fresnel_in_the_preview_as_in_cycles():
     """Mitsuba's principled coat is Disney's, a quarter of Fresnel at weight 1: the glaze's weight is passed over
     DISNEY_COAT, so it reflects F0 0.04 as Cycles' coat and glTF's clearcoat do (the bowl's rim and the studio's
@@ -82,6 +103,10 @@ def test_material_mapping():
     membrane, yolk = mat.ikura_materials()
     assert material_bsdf(membrane, False)["type"] in ("dielectric", "roughdielectric")
     assert material_bsdf(membrane, False)["int_ior"] == pytest.approx(1.36)
+    # a smooth wet chorion: a sharp highlight, the droplet seen sharply through it (at roughness 0.2, α 0.04, the
+    # eggs read frosted); the preview's skin and the files' transmission roughness are the one value
+    assert material_bsdf(membrane, False).get("alpha", 0.0) <= 0.01
+    assert membrane.roughness == membrane.transmission_roughness
     ice, syrup = mat.ice_materials((0.75, 0.02, 0.06))
     plain = material_bsdf(ice, False)  # a tuft of shavings in air: a matte thin diffuser, not clear ice
     assert plain["type"] == "principledthin" and plain["eta"] == pytest.approx(1.1) and plain["roughness"] == 1.0
@@ -451,7 +476,8 @@ def test_the_denoisers_albedo_tells_the_eggs_from_the_rice(shaded, monkeypatch):
     albedo = guides[-1]
     egg_red, egg_green, _ = np.median(albedo[egg], axis=0)
     rice_rgb = np.median(albedo[rice], axis=0)
-    assert egg_red > 0.5 and egg_green < 0.3 * egg_red  # a red egg, not a grey skin
+    # a red-orange egg (the tints run to light orange, materials.EGG_HUE_SPREAD), not a grey skin (green ≈ red)
+    assert egg_red > 0.5 and egg_green < 0.45 * egg_red
     assert rice_rgb.min() > 0.5  # pale rice
 
 
