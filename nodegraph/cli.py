@@ -491,7 +491,8 @@ def _cmd_watch(args, registry) -> int:
             done.set()
             watcher.join()
         if not session.warm_stopped:
-            print(f"warm: {steps} step(s) rehearsed in {time.perf_counter() - started:.1f} s", flush=True)
+            took = time.perf_counter() - started
+            print(f"ready: {steps} step(s) loaded ahead in {took:.1f} s, so a save updates fast", flush=True)
 
     seen, runs, session = None, 0, WatchSession()
     cache = Cache(args.cache_dir or default_cache_dir())

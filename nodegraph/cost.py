@@ -215,7 +215,7 @@ class Estimate:
         elements = self.elements
         made = self.made
         known = f"≈ {elements:,}" if elements is not None else "not known from the recipe alone"
-        out.append(f"elements: {known}" + (f" (placed: {made})" if made else ""))
+        out.append(f"elements: {known}" + (f", kept of those placed ({made})" if made else ""))
         sims = [(n, c) for n, c in self.costs.items() if c.particles]
         for node_id, c in sims:
             out.append(f"{node_id}: {c.what or f'{c.particles:,} particles'}, ≈ {minutes(c.seconds)} CPU")

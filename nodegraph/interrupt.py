@@ -294,6 +294,14 @@ def stop(signum, frame) -> None:
     raise KeyboardInterrupt
 
 
+def quiet_stops(unraisable) -> None:
+    """``sys.unraisablehook`` of a supervised run: a stop raised where Python can only report it (a callback from
+    compiled code, such as numba's compiler's into LLVM) is already noted (``stopping``) and the run stops as
+    ever, so it prints nothing; anything else is reported as Python would."""
+    if not issubclass(unraisable.exc_type, KeyboardInterrupt):
+        sys.__unraisablehook__(unraisable)
+
+
 def supervise(child_signals: bool = True) -> int | None:
     """In the parent: fork, and return the child's exit status once it has ended (killed after ``GRACE`` seconds
     if a signal did not stop it). In the child: None, the command to be run by the caller. None, too, where there
@@ -324,6 +332,7 @@ def supervise(child_signals: bool = True) -> int | None:
             os.close(word)
         signal.signal(signal.SIGINT, stop)
         signal.signal(signal.SIGTERM, stop)
+        sys.unraisablehook = quiet_stops
         return None
     os.close(word)
     try:

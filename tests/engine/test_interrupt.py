@@ -305,3 +305,26 @@ def test_ctrl_c_while_a_finished_step_is_stored_keeps_it_cached(tmp_path, node_s
     entries = [json.loads(p.read_text()) for p in (tmp_path / "cache" / "entries").glob("*/*.json")]
     assert [e["node"] for e in entries] == ["pts"], err
     assert Cache(tmp_path / "cache").has(entries[0]["key"])
+
+
+def test_a_stop_inside_a_compiled_callback_prints_no_traceback(monkeypatch, capsys):
+    """A Ctrl-C while numba compiles lands in a callback from LLVM, where Python can only print it ("Exception
+    ignored on calling ctypes callback function … KeyboardInterrupt"): a supervised run's hook keeps that quiet and
+    still reports any other error raised there."""
+    import ctypes
+
+    from nodegraph.interrupt import quiet_stops
+
+    monkeypatch.setattr(sys, "unraisablehook", quiet_stops)
+    callback = ctypes.CFUNCTYPE(None)
+
+    def stopped():
+        raise KeyboardInterrupt
+
+    def failed():
+        raise ValueError("a real failure")
+
+    callback(stopped)()
+    assert capsys.readouterr().err == ""
+    callback(failed)()
+    assert "ValueError: a real failure" in capsys.readouterr().err

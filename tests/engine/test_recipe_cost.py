@@ -44,7 +44,7 @@ def test_the_elements_flow_through_the_graph_and_the_costs_sum(costed, tmp_path)
     assert cost.costs["half"].elements == 500 and cost.elements == 500  # made 1,000, half kept, stepped
     assert cost.particles == 500 and cost.seconds == pytest.approx(10.0)
     assert cost.peak == (PROCESS_BYTES + 1_000_000, "make")  # the node holding the most
-    assert "elements: ≈ 500 (placed: make 1,000)" in cost.lines()
+    assert "elements: ≈ 500, kept of those placed (make 1,000)" in cost.lines()
     assert load_recipe(path, costed).cost is None  # weighed only with work (check, run before any work)
 
 
@@ -85,7 +85,8 @@ def test_check_prints_the_estimate_and_max_minutes_sets_the_limit(costed, tmp_pa
     assert "steps ≤ 1200" in capsys.readouterr().err
     assert main(["check", str(path), "--max-minutes", "20"]) == 0
     out = capsys.readouterr().out
-    assert "estimate: elements: ≈ 500 (placed: make 1,000)" in out and "estimate: step: 500 particles" in out
+    assert "estimate: elements: ≈ 500, kept of those placed (make 1,000)" in out
+    assert "estimate: step: 500 particles" in out
 
 
 def test_run_weighs_the_same_estimate_before_its_first_node(costed, tmp_path, capsys, monkeypatch):
@@ -96,7 +97,8 @@ def test_run_weighs_the_same_estimate_before_its_first_node(costed, tmp_path, ca
     assert main(["run", str(path), *common]) == 2  # refused before any node: nothing computed, nothing cached
     assert "steps ≤ 1200" in capsys.readouterr().err and not (tmp_path / "c").exists()
     assert main(["run", str(path), *common, "--max-minutes", "20"]) == 0
-    assert "estimate: elements: ≈ 500 (placed: make 1,000); step: 500 particles" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "estimate: elements: ≈ 500, kept of those placed (make 1,000); step: 500 particles" in err
 
 
 def test_a_run_of_one_output_weighs_only_what_it_needs(costed, tmp_path, capsys, monkeypatch):
@@ -105,7 +107,7 @@ def test_a_run_of_one_output_weighs_only_what_it_needs(costed, tmp_path, capsys,
     monkeypatch.setattr("nodegraph.cli.default_registry", lambda plugins=(): costed)
     common = ["--cache-dir", str(tmp_path / "c"), "--out-dir", str(tmp_path / "o"), "--no-rrd"]
     assert main(["run", str(path), "--output", "half", *common]) == 0
-    assert "estimate: elements: ≈ 500 (placed: make 1,000); peak memory" in capsys.readouterr().err
+    assert "estimate: elements: ≈ 500, kept of those placed (make 1,000); peak memory" in capsys.readouterr().err
 
 
 def test_a_cached_rerun_through_a_node_never_stored_weighs_nothing(costed, tmp_path, capsys, monkeypatch):

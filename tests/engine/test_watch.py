@@ -208,7 +208,7 @@ def test_the_first_edit_pays_no_first_load_and_finds_the_inputs_in_memory(tmp_pa
     recipe, proc = _watch(tmp_path, text, runs=2)
     lines, seen = _lines(proc), []
     try:
-        _until(lines, "warm:", seen, timeout=60)
+        _until(lines, "ready:", seen, timeout=60)
         shutil.rmtree(tmp_path / "cache")
         recipe.write_text(recipe.read_text().replace("scale: 2.5", "scale: 3.5"))
         _until(lines, "run 2 done", seen, timeout=60)
