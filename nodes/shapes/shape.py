@@ -15,8 +15,15 @@ KINDS = ("bowl", "onigiri", "sphere", "box", "cylinder", "block", "plate")
 
 def _check(params: dict) -> list[tuple[str, str]]:
     issues = []
-    if params.get("kind") == "bowl" and params.get("mound", 0) > 2 * params.get("size", 1):
-        issues.append(("mound", "a mound higher than twice the rim radius is not a bowl of rice"))
+    mound, size = params.get("mound", 0), params.get("size", 1)
+    if params.get("kind") == "bowl" and mound > 2 * size:
+        issues.append(
+            (
+                "mound",
+                f"a mound higher than twice the rim radius is not a bowl of rice; allowed: mound ≤ 2 × size = "
+                f"{2 * size:g} mm at size {size:g}, or size ≥ {mound / 2:g} mm for this mound",
+            )
+        )
     return issues
 
 

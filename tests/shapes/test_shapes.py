@@ -102,3 +102,16 @@ def test_mesh_file_repairs_inverted_normals_and_refuses_holes(tmp_path):
         mesh_file.call(path=str(tmp_path / "open.stl"))
     with pytest.raises(ValueError, match="no such"):
         mesh_file.call(path=str(tmp_path / "missing.stl"))
+
+
+def test_a_bowl_too_small_for_its_mound_says_the_sizes_that_fit(capsys):
+    """A smaller bowl set from the command line leaves the recipe's mound too high: the refusal says what would fit,
+    a mound up to twice the rim radius or a rim for the mound (a new user read only 'given: 5.0')."""
+    from pathlib import Path
+
+    from nodegraph.cli import main
+
+    recipe = Path(__file__).resolve().parents[2] / "graphs" / "rice_bowl.yaml"
+    assert main(["check", str(recipe), "--set", "bowl.size=2"]) == 2
+    err = capsys.readouterr().err
+    assert "node 'bowl', mound: " in err and "allowed: mound ≤ 2 × size = 4 mm at size 2, or size ≥ 10 mm" in err
