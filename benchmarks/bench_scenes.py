@@ -71,9 +71,13 @@ def _quick(name: str) -> list[str]:
     return [t for t in keep if not t.split("=")[0].endswith(".wall_cells")] + PREVIEW
 
 
-# the scene tests' own sizes where a recipe's draft is larger than a test needs: the onigiri's draft (28 mm,
-# ≈ 360 grains) is sized for an artist to judge a look; its tests run the 14.4 mm onigiri (≈ 50 grains)
-SMALLER = {"onigiri": ["onigiri.size=14.4", "plate.gap=0.15", "nori.gap=0.1"]}
+# the scene tests' own sizes where a recipe's draft is larger than a test needs: the drafts are sized for an artist
+# to judge a look (the onigiri 28 mm, ≈ 360 grains; the donburi 92 mm, ≈ 720 elements); the tests run the 14.4 mm
+# onigiri (≈ 50 grains) and the 64 mm donburi (≈ 340 elements)
+SMALLER = {
+    "onigiri": ["onigiri.size=14.4", "plate.gap=0.15", "nori.gap=0.1"],
+    "ikura_don": ["bowl.size=32.0", "bowl.depth=38.0"],
+}
 QUICK = {name: _quick(name) + SMALLER.get(name, []) for name in SCENES}
 
 
