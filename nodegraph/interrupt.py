@@ -156,28 +156,19 @@ def running_in(listing: Path) -> list[str]:
 
 def holding(listing: Path) -> bool:
     """Whether the listing shows a finished step being stored now (``Hold``)."""
+    return bool(_listed(listing)[2])
+
+
+def _listed(listing: Path) -> tuple[dict[str, Path | None], dict[Path, str], set[str]]:
+    """The steps the listing shows started and not ended, each with its checkpoint file (or None); where each
+    checkpoint file's saved progress is (``progress_saved``); the finished steps being stored now (``Hold``)."""
     try:
         lines = listing.read_text(encoding="utf-8").splitlines()
     except OSError:
-        return False
-    held: set[str] = set()
-    for line in lines:
-        if line.startswith(HELD):
-            held.add(line[len(HELD) :])
-        elif line.startswith(FREED):
-            held.discard(line[len(FREED) :])
-    return bool(held)
-
-
-def _listed(listing: Path) -> tuple[dict[str, Path | None], dict[Path, str]]:
-    """The steps the listing shows started and not ended, each with its checkpoint file (or None), and where each
-    checkpoint file's saved progress is (``progress_saved``)."""
-    try:
-        lines = listing.read_text(encoding="utf-8").splitlines()
-    except OSError:
-        return {}, {}
+        return {}, {}, set()
     running: dict[str, Path | None] = {}
     saved: dict[Path, str] = {}
+    held: set[str] = set()
     for line in lines:
         if line.startswith(RUNNING):
             label, _, checkpoint = line[len(RUNNING) :].partition("\t")
@@ -187,7 +178,11 @@ def _listed(listing: Path) -> tuple[dict[str, Path | None], dict[Path, str]]:
         elif line.startswith(SAVED):
             checkpoint, _, where = line[len(SAVED) :].partition("\t")
             saved[Path(checkpoint)] = where
-    return running, saved
+        elif line.startswith(HELD):
+            held.add(line[len(HELD) :])
+        elif line.startswith(FREED):
+            held.discard(line[len(FREED) :])
+    return running, saved, held
 
 
 NAMED = 3  # at most this many removed files are named in the line of a killed run; the rest are counted
@@ -196,7 +191,7 @@ NAMED = 3  # at most this many removed files are named in the line of a killed r
 def killed_line(listing: Path, removed: list[Path]) -> str:
     """The line of a run killed after ``GRACE`` seconds: the steps it was in, the unfinished files removed (the
     first ``NAMED``), what a re-run resumes from (a step's saved checkpoint, with how far it was)."""
-    running, saved = _listed(listing)
+    running, saved, _ = _listed(listing)
     during = f" during {', '.join(running)}" if running else ""
     who = "the run" if not running else ("the step" if len(running) == 1 else "the steps")
     what = ""

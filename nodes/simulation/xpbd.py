@@ -166,7 +166,8 @@ def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=N
                 ctx.checkpoint.save(sim.progress(frame))
             bar.advance()
     out = finish_simulation(sim)
-    extra = sum(sim.solver.diagnostics.solves) - (frames - done) * substeps
+    solves = sim.solver.diagnostics.solves  # per frame, a resumed run's earlier frames too (its checkpoint's)
+    extra = sum(solves) - len(solves) * substeps
     if extra and ctx.reporter is not None:  # what the fast particles cost (``solver.solve_pieces``)
         ctx.reporter.info(f"{ctx.node_id}: {extra:,} extra solves for particles faster than 1 radius per substep")
     if ctx.rerun.enabled:
