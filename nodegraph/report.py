@@ -6,6 +6,7 @@ import contextlib
 import os
 import threading
 import time
+from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -298,10 +299,7 @@ class Reporter:
         if hidden:
             records = [r for records in hidden.values() for r in records]
             took = format_duration(sum(r.seconds for r in records))
-            statuses: dict[str, int] = {}
-            for rec in records:
-                statuses[rec.status] = statuses.get(rec.status, 0) + 1
-            how = ", ".join(f"{n} {status}" for status, n in statuses.items())
+            how = ", ".join(f"{n} {status}" for status, n in Counter(r.status for r in records).items())
             lead = f"and {len(hidden)} more steps" if rows else f"all {len(hidden)} steps"
             table.caption = f"{lead} under {shown_s:g} s each: {how} ({took} in all): {', '.join(hidden)}"
         for i in keep:
