@@ -178,6 +178,18 @@ class CompileAhead:
         name = hashlib.sha256(key.encode()).hexdigest()[:32]
         return Path(os.environ[numba_cache.ENV_VAR]) / "compile_ahead" / f"{name}.cached"
 
+    def mark(self) -> None:
+        """Where this process has every kernel of ``jobs`` (compiled or loaded: numba's cache has them), say so for
+        the next run (``cached``)."""
+        try:
+            if all(_loaded(job.module, job.name) for job in self.jobs):
+                marker = self.marker()
+                if marker is not None:
+                    marker.parent.mkdir(parents=True, exist_ok=True)
+                    marker.touch()
+        except Exception:  # a read-only cache folder, a module that went: said as due next time, nothing else lost
+            pass
+
     def cached(self) -> bool:
         """Whether an earlier run left every kernel of ``jobs`` in numba's cache (``close``): a worker would only
         load them (1.6 CPU s of the main job's run, beside it on the second core) before the run loads them too."""
@@ -217,14 +229,7 @@ class CompileAhead:
         process, self.process = self.process, None
         if process is None:
             return
-        try:
-            if all(_loaded(job.module, job.name) for job in self.jobs):
-                marker = self.marker()
-                if marker is not None:
-                    marker.parent.mkdir(parents=True, exist_ok=True)
-                    marker.touch()
-        except Exception:  # a read-only cache folder, a module that went: the next run starts its worker
-            pass
+        self.mark()
         try:
             process.stdin.close()
         except OSError:
@@ -262,17 +267,14 @@ def kernels_due(recipe) -> bool:
 
 
 def mark_compiled(recipe) -> None:
-    """At the end of a run: where this process has every kernel recorded for the recipe's nodes (compiled or loaded:
-    numba's cache has them), mark them so (``CompileAhead.cached``), whether or not a worker compiled ahead."""
+    """At the end of a run: where this process has every kernel recorded for the recipe's nodes, mark them so
+    (``CompileAhead.mark``), whether or not a worker compiled ahead."""
     try:
         jobs = _every_job(recipe)
-        if jobs and all(_loaded(job.module, job.name) for job in jobs):
-            marker = CompileAhead(jobs).marker()
-            if marker is not None and not marker.is_file():
-                marker.parent.mkdir(parents=True, exist_ok=True)
-                marker.touch()
-    except Exception:  # a read-only cache folder, a module that went: said as due next time, nothing else lost
-        pass
+    except Exception:  # a record that cannot be read: said as due next time
+        return
+    if jobs:
+        CompileAhead(jobs).mark()
 
 
 def core_free() -> bool:
