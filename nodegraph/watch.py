@@ -83,10 +83,9 @@ class WatchSession:
         with self.lock:
             self.running = None
         seconds = time.perf_counter() - self.seen
-        if self.run == 1:  # no save yet: the watch's own first run
-            print(f"{run_name(self.run)}: {inst.label} ready {seconds:.2f} s after the watch started", flush=True)
-        else:
-            print(f"{run_name(self.run)}: {inst.label} updated {seconds:.2f} s after the save was seen", flush=True)
+        first = self.run == 1  # no save yet: the watch's own first run
+        done, since = ("ready", "the watch started") if first else ("updated", "the save was seen")
+        print(f"{run_name(self.run)}: {inst.label} {done} {seconds:.2f} s after {since}", flush=True)
 
     def supersede(self, needed: set[str] | None) -> None:
         """The file was saved (again) during the run; ``needed``: the keys it now needs (None: a bad edit,

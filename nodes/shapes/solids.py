@@ -290,24 +290,15 @@ def wrap_band(
         along[down] = np.minimum(along[down] + gap, (lo[2] + height - floor) / -directions[down, 2])
         along[~down] += gap
         points = origins + along[:, None] * directions
+    floor = lo[2] - gap  # under the shape no lower than its lowest point less the gap (the plate)
     if ribs > 0:
-        grid = points.reshape(columns + 1, rows + 1, 3)
-        length = np.linalg.norm(np.diff(grid, axis=1), axis=2).cumsum(axis=1)
-        length = np.concatenate([np.zeros((columns + 1, 1)), length], axis=1).ravel()
+        length = _along(points, columns, rows).ravel()
         lift = 0.5 * ribs * (1.0 - np.cos(2.0 * np.pi * length / rib_period))
-        down = directions[:, 2] < -1e-9  # under the shape no lower than its lowest point less the gap (the plate)
-        room = np.maximum(points[down, 2] - (lo[2] - gap), 0.0) / -directions[down, 2]
-        lift[down] = np.minimum(lift[down], room)
-        points = points + lift[:, None] * directions
+        points = _lifted(points, directions, lift, floor)
     if crinkle > 0:
-        grid = points.reshape(columns + 1, rows + 1, 3)
-        along = np.concatenate([np.zeros((columns + 1, 1)), np.linalg.norm(np.diff(grid, axis=1), axis=2).cumsum(1)], 1)
+        along = _along(points, columns, rows)
         across = np.broadcast_to((xs - xs[0])[:, None], along.shape)
-        lift = crinkle * crinkle_lift(across.ravel(), along.ravel(), seed)
-        down = directions[:, 2] < -1e-9
-        room = np.maximum(points[down, 2] - (lo[2] - gap), 0.0) / -directions[down, 2]
-        lift[down] = np.minimum(lift[down], room)
-        points = points + lift[:, None] * directions
+        points = _lifted(points, directions, crinkle * crinkle_lift(across.ravel(), along.ravel(), seed), floor)
     k = np.arange((columns + 1) * (rows + 1)).reshape(columns + 1, rows + 1)
     a, b, c, d = k[:-1, :-1], k[1:, :-1], k[1:, 1:], k[:-1, 1:]
     quads = np.stack([a, b, c, d], axis=-1).reshape(-1, 4)
@@ -322,6 +313,22 @@ def wrap_band(
     if thickness > 0:
         return solidify(points, triangles_out, directions, k, thickness)
     return points, triangles_out
+
+
+def _along(points: np.ndarray, columns: int, rows: int) -> np.ndarray:
+    """(columns + 1, rows + 1): each point's distance along its cut of the band, from the cut's first point (mm)."""
+    grid = points.reshape(columns + 1, rows + 1, 3)
+    length = np.linalg.norm(np.diff(grid, axis=1), axis=2).cumsum(axis=1)
+    return np.concatenate([np.zeros((columns + 1, 1)), length], axis=1)
+
+
+def _lifted(points: np.ndarray, directions: np.ndarray, lift: np.ndarray, floor: float) -> np.ndarray:
+    """``points`` moved outwards along their rays by ``lift``, those on downward rays no lower than ``floor``."""
+    down = directions[:, 2] < -1e-9
+    room = np.maximum(points[down, 2] - floor, 0.0) / -directions[down, 2]
+    lift = lift.copy()
+    lift[down] = np.minimum(lift[down], room)
+    return points + lift[:, None] * directions
 
 
 def crinkle_lift(across: np.ndarray, along: np.ndarray, seed: int) -> np.ndarray:
