@@ -27,6 +27,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from machine import stamp
+
 REPO = Path(__file__).resolve().parents[1]
 RECIPES = ("ikura_don", "rice_bowl", "onigiri")
 RECORD = REPO / "benchmarks" / "measured" / "cost.jsonl"
@@ -158,9 +160,7 @@ def _replace_row(flag: str, what: str, values, unit: str, load: float, write: bo
         "command": f"python benchmarks/bench_cost.py {flag} --record",
         "values": values,
         "unit": unit,
-        "load": f"{load:.1f}–{os.getloadavg()[0]:.1f}",
-        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-        "machine": "2 cores",
+        **stamp(load),
     }
     if write:
         kept = [line for line in RECORD.read_text().splitlines() if line.strip() and flag not in line]
@@ -217,8 +217,8 @@ def main() -> int:
                 print(done.stderr, file=sys.stderr)
                 return 1
             figures = json.loads(done.stdout.strip().splitlines()[-1]) | {"check_s": check_s}
-            load = f"{load:.1f}–{os.getloadavg()[0]:.1f}"
-            print(name, mode, json.dumps(figures), f"load {load}", flush=True)
+            stamped = stamp(load)
+            print(name, mode, json.dumps(figures), f"load {stamped['load']}", flush=True)
             rows.append(
                 {
                     "what": "cost estimate / a run: elements, particles, sim CPU s, peak RSS MiB",
@@ -230,9 +230,7 @@ def main() -> int:
                     | {"check_s": figures["check_s"]},
                     "heavy_nodes_mib": figures["heavy"],
                     "unit": "elements, particles, CPU s, MiB",
-                    "load": load,
-                    "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-                    "machine": "2 cores",
+                    **stamped,
                 }
             )
     if args.record:

@@ -16,8 +16,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import time
 from pathlib import Path
+
+from machine import stamp
 
 REPO = Path(__file__).resolve().parents[1]
 RECORD = REPO / "benchmarks" / "measured" / "lift_apart.jsonl"
@@ -63,8 +64,8 @@ def main() -> int:
         for overlap in args.overlaps:
             load = os.getloadavg()[0]
             found = [point(args.sd, overlap, seed, cache, args.quick) for seed in args.seeds]
-            load = f"{load:.1f}–{os.getloadavg()[0]:.1f}"
-            print(f"overlap {overlap:g}: {json.dumps(found)} load {load}", flush=True)
+            stamped = stamp(load)
+            print(f"overlap {overlap:g}: {json.dumps(found)} load {stamped['load']}", flush=True)
             rows.append(
                 {
                     "what": f"the draft at diameter_sd {args.sd:g}: eggs ending outside the bowl, seeds "
@@ -77,9 +78,7 @@ def main() -> int:
                         "lifted": [f["lifted"] for f in found],
                     },
                     "unit": "eggs",
-                    "load": load,
-                    "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-                    "machine": "2 cores",
+                    **stamped,
                 }
             )
     if args.record:

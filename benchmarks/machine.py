@@ -6,6 +6,7 @@ one taken under the same line. Call after the first parallel kernel ran (the lay
 """
 
 import os
+import time
 
 
 def conditions() -> str:
@@ -19,3 +20,13 @@ def conditions() -> str:
         f"numba threading layer {layer}, {numba.get_num_threads()} threads; "
         f"load average {os.getloadavg()[0]:.2f} (1 min) on {os.cpu_count()} cores"
     )
+
+
+def stamp(load_at_start: float) -> dict[str, str]:
+    """Where and when a measured row was taken (the fields every ``benchmarks/measured`` row carries): the load
+    average from its start to now, the date, the cores."""
+    return {
+        "load": f"{load_at_start:.1f}–{os.getloadavg()[0]:.1f}",
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "machine": f"{os.cpu_count()} cores",
+    }
