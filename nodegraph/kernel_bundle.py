@@ -18,7 +18,8 @@ bytes: docs/performance.md, "Shipped kernels".
 
 ``python tools/kernel_bundle.py build`` writes a bundle from a first run of the main job; a run unpacks
 ``BUNDLE`` (or the file ``NODEGRAPH_KERNEL_BUNDLE`` names; ``off``: none) into its numba cache once per bundle file
-and installation (``ensure_installed``). Bundles are build products, not kept in git.
+and installation (``ensure_installed``). ``BUNDLE`` is kept in git, so that a first run from a checkout compiles
+nothing; ``stale`` names the entries whose module changed since (``tests/engine/test_kernel_bundle.py`` fails on any).
 """
 
 from __future__ import annotations
@@ -103,8 +104,7 @@ def install(bundle: Path, cache_dir: Path) -> int:
     roots = project_roots()
     written = 0
     with tarfile.open(bundle, "r:gz") as tar:
-        member = tar.getmember(MANIFEST)
-        if json.loads(tar.extractfile(member).read()) != manifest():
+        if json.loads(tar.extractfile(tar.getmember(MANIFEST)).read()) != manifest():
             return 0
         for member in tar.getmembers():
             top, _, rest = member.name.partition("/")
@@ -120,6 +120,37 @@ def install(bundle: Path, cache_dir: Path) -> int:
             os.replace(temporary, target)  # numba reads a whole file or none
             written += 1
     return written
+
+
+def fits(bundle: Path) -> bool:
+    """Whether ``bundle`` was built for this numba, Python and CPU model (``install`` unpacks nothing otherwise)."""
+    with tarfile.open(bundle, "r:gz") as tar:
+        return json.loads(tar.extractfile(tar.getmember(MANIFEST)).read()) == manifest()
+
+
+def stale(bundle: Path) -> list[str]:
+    """The bundle's index files whose stamp is not the current code digest of their kernel's module (numba would
+    not load them: the kernel compiles), as bundle paths. Each index is numba's pickled version, then its pickled
+    ``(stamp, overloads)`` (``numba.core.caching.IndexDataCacheFile``)."""
+    import pickle
+
+    from . import code_digest
+    from .node_packages import project_packages
+
+    packages = project_packages()
+    out = []
+    with tarfile.open(bundle, "r:gz") as tar:
+        for member in tar.getmembers():
+            if not member.name.endswith(".nbi"):
+                continue
+            folder, _, name = member.name.rpartition("/")
+            module = ".".join([*folder.split("/"), name.split(".")[0]])
+            data = tar.extractfile(member)
+            pickle.load(data)  # numba's version: the manifest covers it
+            stamp, _overloads = pickle.loads(data.read())
+            if stamp != code_digest.module_digest(module, packages):
+                out.append(member.name)
+    return out
 
 
 def bundle_path() -> Path | None:

@@ -2,11 +2,13 @@
 
     python tools/kernel_bundle.py build [--out nodegraph/kernels.tar.gz] [--recipe graphs/ikura_don.yaml ...]
     python tools/kernel_bundle.py install BUNDLE      # into this installation's numba cache (a run does it itself)
+    python tools/kernel_bundle.py check [BUNDLE]      # the entries whose module changed since the build
 
 ``build`` runs each recipe in a fresh process with an empty numba cache and an empty node cache (``--draft``:
 a kernel's argument types do not depend on the size, and a draft compiles the same kernels sooner), kernels for
-numba's ``generic`` CPU, then packs the cache files of the project's kernels. The bundle is a build product: the
-package's release step writes it beside ``nodegraph/``; it is not kept in git.
+numba's ``generic`` CPU, then packs the cache files of the project's kernels. The
+bundle is kept in git (``nodegraph/kernels.tar.gz``): rebuild it after a change to a kernel's module (``check``
+names them; the suite fails on any).
 """
 
 from __future__ import annotations
@@ -51,11 +53,17 @@ def main() -> None:
     b.add_argument("--recipe", action="append", default=None, help="default: graphs/ikura_don.yaml")
     i = sub.add_parser("install")
     i.add_argument("bundle", type=Path)
+    c = sub.add_parser("check")
+    c.add_argument("bundle", type=Path, nargs="?", default=None)
     args = ap.parse_args()
     from nodegraph import kernel_bundle, runtime
 
     if args.command == "build":
         build(args.recipe or ["graphs/ikura_don.yaml"], args.out or kernel_bundle.BUNDLE)
+    elif args.command == "check":
+        old = kernel_bundle.stale(args.bundle or kernel_bundle.BUNDLE)
+        print("\n".join(old) or "every entry matches the code")
+        raise SystemExit(1 if old else 0)
     else:
         runtime.configure()
         written = kernel_bundle.install(args.bundle, Path(os.environ["NUMBA_CACHE_DIR"]))

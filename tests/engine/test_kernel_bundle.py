@@ -92,3 +92,40 @@ def test_a_first_run_loads_the_shipped_kernels_instead_of_compiling(tmp_path):
     bundle = tmp_path / "kernels.tar.gz"
     assert kernel_bundle.pack(tmp_path / "built", bundle) == 2  # the index and the machine code
     assert run("fresh", str(bundle)) == [1, 0]
+
+
+def _index(stamp) -> bytes:
+    """An index file as numba writes one: its version pickled, then the pickled ``(stamp, overloads)``."""
+    import pickle
+
+    return pickle.dumps("0.68.1") + pickle.dumps((stamp, {}))
+
+
+def test_stale_names_the_entries_whose_module_changed_since_the_build(tmp_path):
+    """An index stamped with its module's current code digest is fresh; one stamped with another digest (its module
+    edited after the build) is named, so that the bundle is rebuilt rather than silently compiling on a first run."""
+    from nodegraph import code_digest
+    from nodegraph.node_packages import project_packages
+
+    here = kernel_bundle.project_roots()
+    digest = code_digest.module_digest("nodes.simulation.integrate", project_packages())
+    cache = tmp_path / "built"
+    _entry(cache, here["nodes"], "simulation", "integrate.predict-1.py311.nbi", _index(digest))
+    _entry(cache, here["nodes"], "simulation", "integrate.predict-1.py311.0.nbc", b"code")
+    _entry(cache, here["nodes"], "simulation", "integrate.other-9.py311.nbi", _index("an older digest"))
+    bundle = tmp_path / "kernels.tar.gz"
+    kernel_bundle.pack(cache, bundle)
+    assert kernel_bundle.stale(bundle) == ["nodes/simulation/integrate.other-9.py311.nbi"]
+
+
+def test_the_shipped_bundle_matches_the_code():
+    """The bundle kept in git holds an entry for the kernels of the main job and every entry matches the code, so a
+    first run from a checkout compiles nothing (rebuild: ``python tools/kernel_bundle.py build``, ≈ 100 CPU s)."""
+    import pytest
+
+    bundle = kernel_bundle.BUNDLE
+    assert bundle.is_file(), "nodegraph/kernels.tar.gz is missing: python tools/kernel_bundle.py build"
+    if not kernel_bundle.fits(bundle):
+        pytest.skip(f"the bundle is for {kernel_bundle.manifest()} only where it was built")
+    old = kernel_bundle.stale(bundle)
+    assert not old, f"rebuild the bundle (python tools/kernel_bundle.py build): {len(old)} stale, e.g. {old[:3]}"
