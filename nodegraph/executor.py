@@ -302,7 +302,6 @@ class Executor:
         interrupt.step_started(inst.label, None if ctx.checkpoint is None else ctx.checkpoint.path)
         self.reporter.step_started(inst.label)
         ok = stopped = False
-        held = contextlib.ExitStack()  # from the node's return until its result is stored, a stop waits
         try:
             with memory, watch:
                 result = (
@@ -310,11 +309,9 @@ class Executor:
                     if beside is None
                     else beside.run(lambda: spec.run(ctx, **kwargs), None if spec.overlap is True else spec.overlap)
                 )
-            held.enter_context(interrupt.Hold(inst.label))
             outputs = self._check_outputs(spec, result)
             ok = True
         except BaseException as exc:
-            held.__exit__(type(exc), exc, exc.__traceback__)  # not stored: a stop that came meanwhile is this one
             if capture is not None:  # what the node logged before it stopped goes into the partial recording
                 self._append_unfinished(inst, capture)
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
@@ -340,32 +337,46 @@ class Executor:
             elapsed, cpu = beside.elapsed, cpu - beside.cpu
         for value in outputs.values():
             codec.freeze(value)
-        try:
-            log_start = now()
-            fragment = None if capture is None else self._capture_outputs(inst, capture, outputs)
-            log_seconds = now() - log_start
-            self.values[inst] = outputs
-            if self.kept is not None:
-                self.kept[key] = outputs
-            peak = memory.peak_bytes if isinstance(memory, PeakMemory) else None
-            self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, peak, cpu_seconds=cpu)
-            if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment,
-                log_start = now()  # read before the cache keeps it, so the recording and a viewer get it first
-                self._append(inst, fragment, capture.live)
-                self.status[inst].log_seconds = log_seconds + now() - log_start
+        self.values[inst] = outputs
+        if self.kept is not None:
+            self.kept[key] = outputs
+        peak = memory.peak_bytes if isinstance(memory, PeakMemory) else None
+        self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, peak, cpu_seconds=cpu)
+        stop = fragment = None
+        try:  # logged first, so the recording and a viewer get it before the cache keeps it
+            fragment = self._log_ran(inst, capture, outputs)
             if self.on_ran is not None:
                 self.on_ran(inst)
-            if self.cache is not None:
-                if spec.store:
-                    self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
-                ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
+        except KeyboardInterrupt as exc:  # a stop while it is logged: the finished step is stored, then it stops
+            stop, fragment = exc, None
+        try:
+            # stored whole before a stop is honoured: one that comes meanwhile is raised as the hold ends
+            with interrupt.Hold(inst.label):
+                if self.cache is not None:
+                    if spec.store:
+                        self.cache.store(
+                            key, outputs, inst.node, spec.type_name, elapsed, fragment, quick=stop is not None
+                        )
+                    ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)
-            held.close()  # stored: a stop that came meanwhile is raised here
+        if stop is not None:
+            raise stop
         if beside is not None and beside.error is not None:  # an instance beside it failed: this one is stored
             raise beside.error
         return outputs
+
+    def _log_ran(self, inst: Instance, capture, outputs: dict[str, Any]) -> Fragment | None:
+        """Log a computed instance's outputs into its capture and append that fragment to the recording, as a
+        cached re-run will put it; the fragment (None without a recording)."""
+        if capture is None:
+            return None
+        log_start = now()
+        fragment = self._capture_outputs(inst, capture, outputs)
+        self._append(inst, fragment, capture.live)
+        self.status[inst].log_seconds = now() - log_start
+        return fragment
 
     def _plan_beside(self, order: list[Instance], visit: Callable[[Instance], None]) -> Beside | None:
         """The first instance to run of a node declared ``overlap`` and the run's order with what it needs pulled
