@@ -277,6 +277,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _common(inspect)
 
+    clean = sub.add_parser(
+        "clean",
+        help="remove the outputs of a recipe's earlier runs and partial recordings",
+        description="lists, then removes, what a recipe's latest run did not write in its output folders (its own, "
+        "its draft's, each --set folder): the files of earlier runs and of other settings, their manifests, and the "
+        "partial recordings of stopped or failed runs. Only files a run's manifest lists, as that run wrote them",
+    )
+    clean.add_argument("recipe", type=Path)
+    clean.add_argument("--dry-run", action="store_true", help="list what would go; remove nothing")
+    _common(clean)
+
     cache = sub.add_parser(
         "cache",
         help="inspect, clear or limit the cache",
@@ -370,6 +381,8 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             print(f"{done} {path}")
         if result.rrd is not None:
             print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
+        if args.out_dir is None and session is None and (line := _prune_line(args.recipe, recipe.name)):
+            print(line)
     return 0
 
 
@@ -824,6 +837,49 @@ def _cmd_graph(args, registry) -> int:
     return 0
 
 
+def _recipe_name(path: Path) -> str:
+    """A recipe file's ``name:`` (its stem where it has none or cannot be read): enough to find its folders."""
+    import yaml
+
+    try:
+        name = (yaml.safe_load(path.read_text(encoding="utf-8")) or {}).get("name")
+    except (OSError, ValueError, AttributeError, yaml.YAMLError):
+        name = None
+    return name if isinstance(name, str) and name else path.stem
+
+
+def _cmd_clean(args, registry) -> int:
+    """List, then remove (not with --dry-run), what ``clean.prunable`` finds for the recipe."""
+    from .clean import prunable, remove
+
+    if not args.recipe.is_file():
+        raise NodegraphError(f"{args.recipe}: no such recipe file; give the recipe whose outputs to prune")
+    found = prunable(args.recipe, _recipe_name(args.recipe))
+    if not found.files and not found.manifests:
+        print(f"nothing to prune: {args.recipe}'s output folders hold only its latest run's files")
+        return 0
+    for path, size in sorted(found.files.items()):
+        print(f"{'would remove' if args.dry_run else 'removing'} {path} ({format_size(size)})")
+    done = "would free" if args.dry_run else "freed"
+    print(f"{done} {format_size(found.bytes)}: {len(found.files)} file(s) in {len(found.folders())} folder(s)")
+    if not args.dry_run:
+        remove(found)
+    return 0
+
+
+def _prune_line(recipe_path: Path, name: str) -> str | None:
+    """The one line a run says when earlier runs' outputs of its recipe can be pruned (``nodegraph clean``)."""
+    from .clean import prunable
+
+    found = prunable(recipe_path, name)
+    if not found.files:
+        return None
+    return (
+        f"earlier runs' outputs and partial recordings: {format_size(found.bytes)} in {len(found.files)} file(s); "
+        f"nodegraph clean {recipe_path} --dry-run lists them, without --dry-run removes them"
+    )
+
+
 def _cmd_cache(args, registry) -> int:
     cache = Cache(args.cache_dir or default_cache_dir())
     if args.action == "clear":
@@ -898,6 +954,7 @@ COMMANDS = {
     "describe": _cmd_describe,
     "graph": _cmd_graph,
     "cache": _cmd_cache,
+    "clean": _cmd_clean,
     "docs": _cmd_docs,
     "inspect": _cmd_inspect,
 }
@@ -926,7 +983,7 @@ def main(argv: list[str] | None = None) -> int:
             sys.stderr.flush()
             os._exit(status)
     try:
-        registry = default_registry(plugins=args.plugin) if args.command not in ("cache", "inspect") else None
+        registry = default_registry(plugins=args.plugin) if args.command not in ("cache", "inspect", "clean") else None
         return COMMANDS[args.command](args, registry)
     except RecipeError as exc:  # plain text: a terminal-width wrap would split file:line:column
         print(str(exc), file=sys.stderr)
