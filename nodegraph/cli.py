@@ -624,6 +624,8 @@ def _cmd_check(args, registry) -> int:
         + sweeps
         + (f", draft: {len(recipe.draft)} settings" if recipe.draft else "")
     )
+    for warning in recipe.warnings:  # what a run will warn of (a user's mesh file it repairs)
+        print(f"  warning: {warning}")
     recipe.cost.compiles = kernels_due(recipe)
     for line in recipe.cost.lines():
         print(f"  estimate: {line}")

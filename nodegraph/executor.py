@@ -121,6 +121,7 @@ class Executor:
         self._beside: Beside | None = None
         self.lane = threading.local()  # ``side``: this thread computes the instances beside a node (``Beside``)
         self.estimate = None  # the recipe's cost estimate (``cost.Estimate``): the bar's ETA where no time is kept
+        self.warned: set[str] = set()  # what this run's nodes warned of (``Context.warn``): each said once
 
     # planning ---------------------------------------------------------------------------------
     def plan(self, node_ids) -> list[Instance]:
@@ -222,6 +223,8 @@ class Executor:
         if rrd is not None:  # what interrupted runs left beside the recording: this complete run ends it
             remove_stale_partials(rrd)
         records = [NodeRecord(i.label, self.recipe.nodes[i.node].spec.type_name, "cached") for i in order]
+        for inst in order:
+            self._say(inst, self.cache.warnings(self.keys[inst]))
         with self.reporter.task(self.recipe.name, len(order)) as tick:
             for record in records:
                 tick()
@@ -274,6 +277,7 @@ class Executor:
                 if self.kept is not None:
                     self.kept[key] = outputs
                 self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
+                self._say(inst, self.cache.warnings(key))
                 return outputs
 
         kwargs = self._arguments(inst)
@@ -342,6 +346,7 @@ class Executor:
             self.kept[key] = outputs
         peak = memory.peak_bytes if isinstance(memory, PeakMemory) else None
         self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, peak, cpu_seconds=cpu)
+        self._say(inst, ctx.warnings)
         stop = fragment = None
         try:  # logged first, so the recording and a viewer get it before the cache keeps it
             fragment = self._log_ran(inst, capture, outputs)
@@ -354,9 +359,8 @@ class Executor:
             with interrupt.Hold(inst.label):
                 if self.cache is not None:
                     if spec.store:
-                        self.cache.store(
-                            key, outputs, inst.node, spec.type_name, elapsed, fragment, quick=stop is not None
-                        )
+                        said, quick = ctx.warnings, stop is not None
+                        self.cache.store(key, outputs, inst.node, spec.type_name, elapsed, fragment, quick, said)
                     ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
@@ -478,7 +482,16 @@ class Executor:
             self._append(inst, fragment, live=False)
             record.log_seconds = now() - start
         self.status[inst] = record
+        self._say(inst, self.cache.warnings(self.keys[inst]))
         return True
+
+    def _say(self, inst: Instance, warnings: list[str]) -> None:
+        """Say what ``inst``'s node warned of (``Context.warn``), each message once a run (a family's instances
+        reading one file say it once), under the node's id."""
+        for message in warnings:
+            if message not in self.warned and self.reporter is not None:
+                self.warned.add(message)
+                self.reporter.warn(f"{inst.node}: {message}")
 
     def _kept_fragment(self, inst: Instance) -> Fragment | None:
         try:
