@@ -184,6 +184,9 @@ class Executor:
                         continue
                     self.materialise(inst)
                     self._log_cached(inst)
+        except KeyboardInterrupt:  # stopped: its partial recording is removed, nothing more goes into it
+            self._keep_unstored(order)
+            raise
         except BaseException:
             for inst in later:  # what the failed run had in hand still goes into its partial recording
                 if inst not in self.logged and inst not in self.status:
@@ -280,6 +283,8 @@ class Executor:
                 self._say(inst, self.cache.warnings(key))
                 return outputs
 
+        if not spec.store and self._resumed(inst):
+            return self.values[inst]
         kwargs = self._arguments(inst)
         if self.on_start is not None:
             self.on_start(inst, key)
@@ -370,6 +375,50 @@ class Executor:
         if beside is not None and beside.error is not None:  # an instance beside it failed: this one is stored
             raise beside.error
         return outputs
+
+    def _unstored_checkpoint(self, inst: Instance) -> Checkpoint:
+        """Where a stopped run keeps the outputs of a never-cached step (``store=False``) it computed: the step's
+        checkpoint file (``checkpoints/<key>.npz``), removed by the run that resumes with it."""
+        return Checkpoint(self.cache.directory / "checkpoints" / f"{self.keys[inst]}.npz")
+
+    def _keep_unstored(self, order: list[Instance]) -> None:
+        """On a stop: the outputs of each never-cached step (``store=False``: a scene made in a second, too large to
+        cache) that this run computed and whose consumers have not all finished, saved as that step's checkpoint
+        (undeflated, within the stop's hold, ``interrupt.HOLD_MAX``), so the re-run resumes with them rather than
+        computing a step that had finished again. Not in a watch, which holds them in memory (``kept``)."""
+        if self.cache is None or self.kept is not None:
+            return
+        for inst in order:
+            record = self.status.get(inst)
+            if self.recipe.nodes[inst.node].spec.store or inst not in self.values or record is None:
+                continue
+            users = [u for u in order if any(src == inst for p in self.planned.sources(u).values() for src, _ in p)]
+            if record.status == "ran" and any(u not in self.values for u in users):
+                with interrupt.Hold(inst.label):
+                    self._unstored_checkpoint(inst).save(self.values[inst])
+
+    def _resumed(self, inst: Instance) -> bool:
+        """Whether a never-cached step's outputs were taken from the checkpoint a stopped run kept of them
+        (``_keep_unstored``), which goes once read: the step finished in that run, so it is not computed again."""
+        if self.cache is None:
+            return False
+        checkpoint = self._unstored_checkpoint(inst)
+        start, outputs = now(), checkpoint.load()
+        spec = self.recipe.nodes[inst.node].spec
+        if not isinstance(outputs, dict) or set(outputs) != set(spec.outputs):
+            return False
+        checkpoint.clear()
+        for value in outputs.values():
+            codec.freeze(value)
+        self.values[inst] = outputs
+        self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
+        if self.recording is not None:  # into the recording as a run of it logs it: it is never cached
+            capture = self.recording.capture(self._capture_path(self.keys[inst]))
+            try:
+                self._log_ran(inst, capture, outputs)
+            finally:
+                capture.path.unlink(missing_ok=True)
+        return True
 
     def _log_ran(self, inst: Instance, capture, outputs: dict[str, Any]) -> Fragment | None:
         """Log a computed instance's outputs into its capture and append that fragment to the recording, as a

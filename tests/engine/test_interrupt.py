@@ -327,6 +327,49 @@ def test_ctrl_c_while_a_finished_step_is_stored_keeps_it_cached_or_ends_within_2
         assert entries == [], entries
 
 
+UNSTORED = """\
+name: resume
+seed: 2
+effects: []
+outputs: [slow]
+nodes:
+  pts: {type: toy_points, params: {count: 6}}
+  scene: {type: toy_scene, inputs: {spheres: pts.spheres}, params: {runs: "RUNS"}}
+  slow: {type: toy_slow, inputs: {spheres: scene.spheres}, params: {seconds: 30.0, started: "STARTED"}}
+"""
+
+
+def test_a_finished_step_that_is_never_cached_is_not_computed_again_on_resume(tmp_path, node_started):
+    """Issue 47: after Ctrl-C during the preview, the resumed run computed the shade step again, which had
+    finished: its outputs are never cached (``store=False``). A stopped run keeps them as that step's checkpoint,
+    and the re-run (here with the slow step made quick: only its key changes) resumes with them, recording
+    included, and removes the checkpoint."""
+    runs, started = tmp_path / "runs.txt", tmp_path / "started"
+    recipe = UNSTORED.replace("RUNS", str(runs)).replace("STARTED", str(started))
+    (tmp_path / "resume.yaml").write_text(recipe)
+    command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "resume.yaml"), "--plugin", TOY]
+    command += ["--cache-dir", str(tmp_path / "cache")]
+    proc = subprocess.Popen(
+        command,
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    err = ctrl_c_group(proc, started, node_started, 5.0)
+    assert proc.returncode == 130, err
+    assert runs.read_text() == "ran\n"
+    assert len(list((tmp_path / "cache" / "checkpoints").glob("*.npz"))) == 1, err
+    done = subprocess.run([*command, "--set", "slow.seconds=0"], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert runs.read_text() == "ran\n", done.stderr  # scene was not computed again
+    assert not list((tmp_path / "cache" / "checkpoints").glob("*")), "the checkpoint is removed once resumed"
+    assert (tmp_path / "outputs" / "resume" / "set_slow.seconds=0" / "resume.rrd").is_file()
+    again = subprocess.run([*command, "--set", "slow.seconds=0.1"], cwd=tmp_path, capture_output=True, text=True)
+    assert again.returncode == 0 and runs.read_text() == "ran\nran\n", again.stderr  # no checkpoint: computed
+
+
 def test_a_stop_inside_a_compiled_callback_prints_no_traceback(monkeypatch, capsys):
     """A Ctrl-C while numba compiles lands in a callback from LLVM, where Python can only print it ("Exception
     ignored on calling ctypes callback function … KeyboardInterrupt"): a supervised run's hook keeps that quiet and
