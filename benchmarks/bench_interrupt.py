@@ -6,7 +6,8 @@ send SIGINT to the group (what Ctrl-C at a terminal does), and time the exit; re
 ``steps``: for each of ``--steps`` (``all``: every node of the recipe) and each of SIGINT and SIGTERM, remove that
 step and every step after it from the cache ``--cache-dir`` (warmed by a first, complete run), run, and signal
 ``--delay`` s after the step has started (read from the run's listing of its running steps, ``interrupt.RUNNING``,
-written as the step starts); ``--assert-s``: exit with an error where any run took longer to exit. A run not gone
+written as the step starts); ``--alternate``: one signal a step, SIGINT and SIGTERM in turn; ``--assert-s``: exit
+with an error where any run took longer to exit or left a process running. A run not gone
 ``HANG_S`` after the signal is a hang:
 every process of the group prints its threads' stacks (``kill -USR1``: faulthandler, registered by the command)
 before it is killed. One JSON line per try on stdout: the step(s) running (from the run's 'interrupted' line), the
@@ -105,19 +106,31 @@ def one(command: list[str], signum: int, after: float | None, step: str | None, 
     }
 
 
-def forget(cache: Path, recipe: str, step: str, draft: bool) -> None:
+def forget(cache: Path, recipe: str, step: str, draft: bool) -> dict[Path, bytes]:
     """Remove ``step`` and every step that depends on it from ``cache``, and any saved progress: the next run
-    computes them (and only them)."""
+    computes them (and only them). Returns the entries removed (path: bytes), for ``restore``."""
     from nodegraph.recipe import load_recipe
     from nodegraph.registry import default_registry
 
     loaded = load_recipe(Path(recipe), default_registry(), draft=draft)
     after = {n for n in loaded.nodes if step in loaded.graph.ancestors(n)} | {step}
+    removed = {}
     for entry in (cache / "entries").glob("*/*.json"):
-        if json.loads(entry.read_text()).get("node") in after:
+        data = entry.read_bytes()
+        if json.loads(data).get("node") in after:
+            removed[entry] = data
             entry.unlink()
     for saved in (cache / "checkpoints").glob("*"):
         saved.unlink()
+    return removed
+
+
+def restore(removed: dict[Path, bytes]) -> None:
+    """Put back the entries ``forget`` removed (their blobs stay in the cache): the next step's run finds what
+    precedes it cached, not computed again because this try stopped it."""
+    for entry, data in removed.items():
+        if not entry.exists():
+            entry.write_bytes(data)
 
 
 def every_step(recipe: str, draft: bool) -> list[str]:
@@ -142,6 +155,7 @@ def main() -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=[])
     parser.add_argument("--draft", action="store_true")
     parser.add_argument("--rrd", action="store_true", help="steps mode: with the run's recording, as a user's run")
+    parser.add_argument("--alternate", action="store_true", help="steps mode: one signal a step, INT and TERM in turn")
     parser.add_argument("--assert-s", type=float, default=None, help="exit 1 where a run took longer to exit")
     args = parser.parse_args()
     if args.quick:
@@ -160,10 +174,13 @@ def main() -> None:
                 sys.exit("the run did not stop cleanly")
     else:
         slow = []
-        for step in every_step(args.recipe, args.draft) if args.steps == "all" else args.steps.split(","):
-            for signum in (signal.SIGINT, signal.SIGTERM):
-                forget(args.cache_dir, args.recipe, step, args.draft)
+        steps = every_step(args.recipe, args.draft) if args.steps == "all" else args.steps.split(",")
+        for k, step in enumerate(steps):
+            both = (signal.SIGINT, signal.SIGTERM)
+            for signum in both[k % 2 :][:1] if args.alternate else both:
+                removed = forget(args.cache_dir, args.recipe, step, args.draft)
                 tried = {"step": step, **one(command, signum, None, step, args.delay)}
+                restore(removed)
                 print(json.dumps(tried), flush=True)
                 if args.assert_s is not None and (tried.get("exit_s", 0.0) > args.assert_s or tried.get("left")):
                     slow.append(f"{step} {tried['signal']}: {tried['exit_s']} s, left {tried['left']}")
