@@ -32,8 +32,8 @@ import time
 from pathlib import Path
 
 ENV_VAR = "NODEGRAPH_LEFTOVERS"  # set in the child: the file that lists its temporary and partial files
-GRACE = 1.0  # seconds the child has to stop by itself after a signal, before it is killed
-HOLD_MAX = 1.6  # seconds after a signal the parent waits for a finished step to be stored (``Hold``), at most
+GRACE = 0.8  # seconds the child has to stop by itself after a signal, before it is killed
+HOLD_MAX = 1.5  # seconds after a signal the parent waits for a finished step to be stored (``Hold``), at most
 REPEAT = 0.5  # seconds after a stop in which a second signal is the same stop (Ctrl-C reaches parent and child)
 
 

@@ -243,7 +243,7 @@ def test_the_killed_line_names_the_step_the_files_and_the_saved_checkpoint(tmp_p
     removed = interrupt.remove_leftovers(listing)
     assert sorted(removed) == files and checkpoint.exists()  # the checkpoint is kept: a re-run resumes from it
     line = interrupt.killed_line(listing, removed)
-    assert line.startswith("interrupted during rice_sim: the step did not stop within 1 s and was ended"), line
+    assert line.startswith("interrupted during rice_sim: the step did not stop within 0.8 s and was ended"), line
     assert f"removed 5 unfinished file(s): {', '.join(map(str, removed[:3]))} and 2 more" in line, line
     assert line.endswith("a re-run resumes from there, rice_sim from its saved checkpoint at frame 1,200"), line
 
@@ -276,17 +276,17 @@ def test_a_resumed_steps_estimate_counts_only_the_steps_left(tmp_path):
     assert "expected" not in said(900)  # 4 s left: under the 10 s a node's estimate is said from
 
 
-@pytest.mark.parametrize("store_s", [1.1, 5.0], ids=["stored-within-the-hold", "store-past-the-hold"])
+@pytest.mark.parametrize("store_s", [1.0, 5.0], ids=["stored-within-the-hold", "store-past-the-hold"])
 def test_ctrl_c_while_a_finished_step_is_stored_keeps_it_cached_or_ends_within_2_s(tmp_path, node_started, store_s):
     """Issue 47: a re-run after Ctrl-C computed again a step that had finished: the stop came while its result was
     stored and cut the store short, or the supervisor killed the run after its grace second. The store completes
-    first (here 1.1 s: past ``GRACE``, within ``HOLD_MAX``), the run stops right after, and a re-run finds the
+    first (here 1.0 s: past ``GRACE``, within ``HOLD_MAX``), the run stops right after, and a re-run finds the
     step cached. A store longer than ``HOLD_MAX`` (5 s) no longer holds the stop (it held it up to 60 s: the new
     user's 2.8 s): the run ends within 2 s all the same, its unfinished store removed, the step not cached."""
     from nodegraph import interrupt
     from nodegraph.cache import Cache
 
-    assert interrupt.GRACE < 1.1 < interrupt.HOLD_MAX < 2.0
+    assert interrupt.GRACE < 1.0 < interrupt.HOLD_MAX < 2.0
     started = tmp_path / "storing"
     (tmp_path / "slow.yaml").write_text(SLOW.replace("STARTED", str(tmp_path / "never")))
     command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slow.yaml"), "--plugin", TOY]
