@@ -220,10 +220,12 @@ def killed_line(listing: Path, removed: list[Path], waited: float = GRACE) -> st
         more = f" and {len(removed) - NAMED} more" if len(removed) > NAMED else ""
         what = f"; removed {len(removed)} unfinished file(s): {names}{more}"
     try:
-        uncached = UNCACHED in listing.read_text(encoding="utf-8").splitlines()
+        lines = listing.read_text(encoding="utf-8").splitlines()
     except OSError:
-        uncached = False
-    rerun = _rerun(uncached, running, saved)
+        lines = []
+    if not any(line.startswith(RUNNING) for line in lines):  # ended as it started (imports, the recipe's checks)
+        return f"interrupted before any step ran: the run did not stop within {waited:g} s and was ended{what}"
+    rerun = _rerun(UNCACHED in lines, running, saved)
     return f"interrupted{during}: {who} did not stop within {waited:g} s and was ended{what}; {rerun}"
 
 

@@ -246,6 +246,9 @@ def test_the_killed_line_names_the_step_the_files_and_the_saved_checkpoint(tmp_p
     assert line.startswith("interrupted during rice_sim: the step did not stop within 0.8 s and was ended"), line
     assert f"removed 5 unfinished file(s): {', '.join(map(str, removed[:3]))} and 2 more" in line, line
     assert line.endswith("a re-run resumes from there, rice_sim from its saved checkpoint at frame 1,200"), line
+    (tmp_path / "none.txt").write_text("")  # ended before any step began (a new user's Ctrl-C at 1.5 s)
+    line = interrupt.killed_line(tmp_path / "none.txt", [])
+    assert line == "interrupted before any step ran: the run did not stop within 0.8 s and was ended", line
 
 
 def test_a_resumed_steps_estimate_counts_only_the_steps_left(tmp_path):
