@@ -19,7 +19,7 @@ from typing import Any, Protocol
 
 from . import __version__, codec, interrupt, node_times, runtime
 from .blueprint import LOG, build_blueprint
-from .cache import Cache, Fragment
+from .cache import Cache, Fragment, atomic_write
 from .checkpoint import Checkpoint
 from .compile_ahead import CompileAhead, mark_compiled
 from .compile_progress import CompileWatch
@@ -185,7 +185,6 @@ class Executor:
                     self.materialise(inst)
                     self._log_cached(inst)
         except KeyboardInterrupt:  # stopped: its partial recording is removed, nothing more goes into it
-            self._keep_unstored(order)
             raise
         except BaseException:
             for inst in later:  # what the failed run had in hand still goes into its partial recording
@@ -206,6 +205,9 @@ class Executor:
                     self.reporter.record(self.status[inst])
             if self.cache is not None:  # what the next run's progress bar expects
                 node_times.remember(self.cache.directory, self.recipe.name, [self.status[i] for i in self.status])
+        for inst in order:  # complete: what a stopped run would have resumed with is not needed any more
+            if not self.recipe.nodes[inst.node].spec.store and self.cache is not None:
+                self._unstored_checkpoint(inst).clear()
         if ahead is None and any(s.status == "ran" for s in self.status.values()):
             mark_compiled(self.recipe)  # every kernel in hand: the next estimate says none is left to compile
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
@@ -363,10 +365,12 @@ class Executor:
             # stored whole before a stop is honoured: one that comes meanwhile is raised as the hold ends
             with interrupt.Hold(inst.label):
                 if self.cache is not None:
+                    ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
                     if spec.store:
                         said, quick = ctx.warnings, stop is not None
                         self.cache.store(key, outputs, inst.node, spec.type_name, elapsed, fragment, quick, said)
-                    ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
+                    elif self.kept is None:  # never cached: kept as its checkpoint until the run completes
+                        atomic_write(self._unstored_checkpoint(inst).path, codec.encode(outputs), durable=False)
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)
@@ -377,29 +381,16 @@ class Executor:
         return outputs
 
     def _unstored_checkpoint(self, inst: Instance) -> Checkpoint:
-        """Where a stopped run keeps the outputs of a never-cached step (``store=False``) it computed: the step's
-        checkpoint file (``checkpoints/<key>.npz``), removed by the run that resumes with it."""
+        """Where a run keeps the outputs of a never-cached step (``store=False``: a scene made in a second, too large
+        to cache) it computed until it completes: the step's checkpoint file (``checkpoints/<key>.npz``, written as
+        the step ends, undeflated and not flushed: a torn one fails to decode and the step is computed), so a
+        stopped run's re-run resumes with them, and removes it, rather than computing a finished step again (a stop
+        in a step of native code, a render, may leave no time to write it then)."""
         return Checkpoint(self.cache.directory / "checkpoints" / f"{self.keys[inst]}.npz")
 
-    def _keep_unstored(self, order: list[Instance]) -> None:
-        """On a stop: the outputs of each never-cached step (``store=False``: a scene made in a second, too large to
-        cache) that this run computed and whose consumers have not all finished, saved as that step's checkpoint
-        (undeflated, within the stop's hold, ``interrupt.HOLD_MAX``), so the re-run resumes with them rather than
-        computing a step that had finished again. Not in a watch, which holds them in memory (``kept``)."""
-        if self.cache is None or self.kept is not None:
-            return
-        for inst in order:
-            record = self.status.get(inst)
-            if self.recipe.nodes[inst.node].spec.store or inst not in self.values or record is None:
-                continue
-            users = [u for u in order if any(src == inst for p in self.planned.sources(u).values() for src, _ in p)]
-            if record.status == "ran" and any(u not in self.values for u in users):
-                with interrupt.Hold(inst.label):
-                    self._unstored_checkpoint(inst).save(self.values[inst])
-
     def _resumed(self, inst: Instance) -> bool:
-        """Whether a never-cached step's outputs were taken from the checkpoint a stopped run kept of them
-        (``_keep_unstored``), which goes once read: the step finished in that run, so it is not computed again."""
+        """Whether a never-cached step's outputs were taken from the checkpoint a run that did not complete kept of
+        them, which goes once read: the step finished in that run, so it is not computed again."""
         if self.cache is None:
             return False
         checkpoint = self._unstored_checkpoint(inst)
