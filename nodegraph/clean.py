@@ -101,8 +101,9 @@ def prunable(recipe: Path, name: str) -> Prunable:
             continue
         out.files.update(_listed(folder, manifest.get("files") or {}))
         recording = manifest.get("recording") or {}
-        path = Path(recording.get("path", ""))
-        if path.parent.resolve() == folder.resolve() and (size := _unchanged(path, recording)) is not None:
+        given = Path(recording.get("path", ""))
+        path = folder / given.name  # named as the folder is (the manifest keeps it absolute)
+        if given.parent.resolve() == folder.resolve() and (size := _unchanged(path, recording)) is not None:
             out.files[path] = size
         out.manifests.append(folder / MANIFEST)
     return out

@@ -226,7 +226,8 @@ def killed_line(listing: Path, removed: list[Path], waited: float = GRACE) -> st
     if not any(line.startswith(RUNNING) for line in lines):  # ended as it started (imports, the recipe's checks)
         return f"interrupted before any step ran: the run did not stop within {waited:g} s and was ended{what}"
     rerun = _rerun(UNCACHED in lines, running, saved)
-    return f"interrupted{during}: {who} did not stop within {waited:g} s and was ended{what}; {rerun}"
+    ended = "were ended" if len(running) > 1 else "was ended"
+    return f"interrupted{during}: {who} did not stop within {waited:g} s and {ended}{what}; {rerun}"
 
 
 def remove_leftovers(listing: Path) -> list[Path]:

@@ -85,3 +85,17 @@ def test_clean_keeps_the_latest_runs_files_and_prunes_what_it_kept_from_an_earli
 def test_clean_of_a_missing_recipe_says_so(tmp_path, capsys):
     assert main(["clean", str(tmp_path / "nope.yaml")]) == 2
     assert "no such recipe file" in capsys.readouterr().err
+
+
+def test_an_earlier_runs_recording_is_pruned_named_as_its_folder(tmp_path, monkeypatch, capsys):
+    """The manifest keeps the recording's path absolute: it was listed so, and counted as a folder of its own."""
+    recipe = tmp_path / "toyrun.yaml"
+    recipe.write_text(RECIPE)
+    monkeypatch.chdir(tmp_path)
+    for more in ([], ["--set", "pts.count=9"]):
+        assert main(["run", str(recipe), "--plugin", TOY, "--cache-dir", str(tmp_path / "c"), *more]) == 0
+    capsys.readouterr()
+    assert main(["clean", str(recipe), "--dry-run"]) == 0
+    listed = capsys.readouterr().out
+    assert f"would remove {Path('outputs/toyrun/toyrun.rrd')} (" in listed, listed
+    assert listed.splitlines()[-1].endswith("file(s) in 1 folder(s)"), listed
