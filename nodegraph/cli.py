@@ -1,6 +1,6 @@
-"""The ``nodegraph`` command: run, watch, sweep, check, nodes, describe, graph, cache, docs, inspect.
+"""The ``nodegraph`` command: run, watch, sweep, check, nodes, describe, graph, clean, cache, docs, inspect.
 
-Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid.
+Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid, 130 interrupted.
 """
 
 from __future__ import annotations
