@@ -3,9 +3,12 @@
 ``--quick``: one SIGINT 1.5 s into ``rice_bowl.yaml --draft`` (CI's smoke run). ``random``: start ``nodegraph run
 RECIPE --no-cache`` in a process group of its own, wait a random 1–20 s (seeded),
 send SIGINT to the group (what Ctrl-C at a terminal does), and time the exit; repeated ``--tries`` times.
-``steps``: for each of ``--steps`` and each of SIGINT and SIGTERM, remove that step and every step after it from the
-cache ``--cache-dir`` (warmed by a first, complete run), run, and signal ``--delay`` s after the step has started
-(its heartbeat line, due 0.2 s in: ``NODEGRAPH_HEARTBEAT``). A run not gone ``HANG_S`` after the signal is a hang:
+``steps``: for each of ``--steps`` (``all``: every node of the recipe) and each of SIGINT and SIGTERM, remove that
+step and every step after it from the cache ``--cache-dir`` (warmed by a first, complete run), run, and signal
+``--delay`` s after the step has started (read from the run's listing of its running steps, ``interrupt.RUNNING``,
+written as the step starts); ``--alternate``: one signal a step, SIGINT and SIGTERM in turn; ``--assert-s``: exit
+with an error where any run took longer to exit or left a process running. A run not gone
+``HANG_S`` after the signal is a hang:
 every process of the group prints its threads' stacks (``kill -USR1``: faulthandler, registered by the command)
 before it is killed. One JSON line per try on stdout: the step(s) running (from the run's 'interrupted' line), the
 seconds to exit, the exit status, the processes left.
@@ -24,6 +27,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from nodegraph.interrupt import RUNNING
+
 HANG_S = 30.0  # seconds after the signal before a run still there counts as hung
 
 
@@ -41,21 +46,33 @@ def group_pids(pgid: int) -> list[int]:
     return pids
 
 
+def started(listings: Path, step: str) -> bool:
+    """Whether the run's listing (``interrupt.supervise``'s, in the run's own temporary folder) shows ``step``, or
+    one of its instances (``step[3]``), started."""
+    for listing in listings.glob("nodegraph-leftovers-*.txt"):
+        for line in listing.read_text(errors="replace").splitlines():
+            label = line.removeprefix(RUNNING).partition("\t")[0]
+            if line.startswith(RUNNING) and (label == step or label.startswith(step + "[")):
+                return True
+    return False
+
+
 def one(command: list[str], signum: int, after: float | None, step: str | None, delay: float = 1.0) -> dict:
     """Run ``command``; signal it ``after`` seconds in, or ``delay`` s after ``step`` has started; time the exit."""
     log = tempfile.NamedTemporaryFile("w+b", suffix=".log", delete=False)
-    env = dict(os.environ, NODEGRAPH_HEARTBEAT="0.2")
+    listings = Path(tempfile.mkdtemp(prefix="bench-interrupt-tmp-"))  # the run's TMPDIR: its listing lands here
+    env = dict(os.environ, NODEGRAPH_HEARTBEAT="0.2", TMPDIR=str(listings))
     proc = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, start_new_session=True, env=env)
     start = time.monotonic()
     ended = None
     while proc.poll() is None:
-        if ended is None and step is not None and f"\n{step}: running" in Path(log.name).read_text(errors="replace"):
+        if ended is None and step is not None and started(listings, step):
             ended = time.monotonic()
         if (after is not None and time.monotonic() - start >= after) or (
             ended is not None and time.monotonic() - ended >= delay
         ):
             break
-        time.sleep(0.05)
+        time.sleep(0.01)
     if proc.poll() is not None:
         return {"signal": None, "ended_by_itself_s": round(time.monotonic() - start, 1)}
     signalled = time.monotonic()
@@ -89,19 +106,40 @@ def one(command: list[str], signum: int, after: float | None, step: str | None, 
     }
 
 
-def forget(cache: Path, recipe: str, step: str, draft: bool) -> None:
+def forget(cache: Path, recipe: str, step: str, draft: bool) -> dict[Path, bytes]:
     """Remove ``step`` and every step that depends on it from ``cache``, and any saved progress: the next run
-    computes them (and only them)."""
+    computes them (and only them). Returns the entries removed (path: bytes), for ``restore``."""
     from nodegraph.recipe import load_recipe
     from nodegraph.registry import default_registry
 
     loaded = load_recipe(Path(recipe), default_registry(), draft=draft)
     after = {n for n in loaded.nodes if step in loaded.graph.ancestors(n)} | {step}
+    removed = {}
     for entry in (cache / "entries").glob("*/*.json"):
-        if json.loads(entry.read_text()).get("node") in after:
+        data = entry.read_bytes()
+        if json.loads(data).get("node") in after:
+            removed[entry] = data
             entry.unlink()
     for saved in (cache / "checkpoints").glob("*"):
         saved.unlink()
+    return removed
+
+
+def restore(removed: dict[Path, bytes]) -> None:
+    """Put back the entries ``forget`` removed (their blobs stay in the cache): the next step's run finds what
+    precedes it cached, not computed again because this try stopped it."""
+    for entry, data in removed.items():
+        if not entry.exists():
+            entry.write_bytes(data)
+
+
+def every_step(recipe: str, draft: bool) -> list[str]:
+    """The recipe's nodes in the order a run computes them."""
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+
+    loaded = load_recipe(Path(recipe), default_registry(), draft=draft)
+    return list(loaded.graph.topological_order())
 
 
 def main() -> None:
@@ -111,16 +149,20 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="one SIGINT 1.5 s into a draft run: seconds, for CI")
     parser.add_argument("--tries", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--steps", default="", help="steps mode: comma-separated step (node) names")
+    parser.add_argument("--steps", default="", help="steps mode: comma-separated step (node) names, or all")
     parser.add_argument("--delay", type=float, default=1.0, help="steps mode: seconds after the step started")
     parser.add_argument("--cache-dir", type=Path, default=None, help="steps mode: a cache the recipe's run filled")
     parser.add_argument("--set", dest="overrides", action="append", default=[])
     parser.add_argument("--draft", action="store_true")
+    parser.add_argument("--rrd", action="store_true", help="steps mode: with the run's recording, as a user's run")
+    parser.add_argument("--alternate", action="store_true", help="steps mode: one signal a step, INT and TERM in turn")
+    parser.add_argument("--assert-s", type=float, default=None, help="exit 1 where a run took longer to exit")
     args = parser.parse_args()
     if args.quick:
         args.mode, args.tries, args.draft = "random", 1, True
     out = tempfile.mkdtemp(prefix="bench-interrupt-")
-    command = [sys.executable, "-m", "nodegraph.cli", "run", args.recipe, "--out-dir", out, "--no-rrd"]
+    command = [sys.executable, "-m", "nodegraph.cli", "run", args.recipe, "--out-dir", out]
+    command += [] if args.rrd and args.mode == "steps" else ["--no-rrd"]
     command += ["--no-cache"] if args.mode == "random" else ["--cache-dir", str(args.cache_dir)]
     command += ["--draft"] * args.draft + [x for o in args.overrides for x in ("--set", o)]
     if args.mode == "random":
@@ -131,10 +173,19 @@ def main() -> None:
             if args.quick and (tried["hang"] or tried["left"]):
                 sys.exit("the run did not stop cleanly")
     else:
-        for step in args.steps.split(","):
-            for signum in (signal.SIGINT, signal.SIGTERM):
-                forget(args.cache_dir, args.recipe, step, args.draft)
-                print(json.dumps({"step": step, **one(command, signum, None, step, args.delay)}), flush=True)
+        slow = []
+        steps = every_step(args.recipe, args.draft) if args.steps == "all" else args.steps.split(",")
+        for k, step in enumerate(steps):
+            both = (signal.SIGINT, signal.SIGTERM)
+            for signum in both[k % 2 :][:1] if args.alternate else both:
+                removed = forget(args.cache_dir, args.recipe, step, args.draft)
+                tried = {"step": step, **one(command, signum, None, step, args.delay)}
+                restore(removed)
+                print(json.dumps(tried), flush=True)
+                if args.assert_s is not None and (tried.get("exit_s", 0.0) > args.assert_s or tried.get("left")):
+                    slow.append(f"{step} {tried['signal']}: {tried['exit_s']} s, left {tried['left']}")
+        if slow:
+            sys.exit(f"over {args.assert_s} s or left running: " + "; ".join(slow))
 
 
 if __name__ == "__main__":

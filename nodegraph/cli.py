@@ -1,6 +1,6 @@
-"""The ``nodegraph`` command: run, watch, sweep, check, nodes, describe, graph, cache, docs, inspect.
+"""The ``nodegraph`` command: run, watch, sweep, check, nodes, describe, graph, clean, cache, docs, inspect.
 
-Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid.
+Exit status: 0 success, 1 a node failed, 2 the recipe or the command line is invalid, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -277,6 +277,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _common(inspect)
 
+    clean = sub.add_parser(
+        "clean",
+        help="remove the outputs of a recipe's earlier runs and partial recordings",
+        description="lists, then removes, what a recipe's latest run did not write in its output folders (its own, "
+        "its draft's, each --set folder): the files of earlier runs and of other settings, their manifests, and the "
+        "partial recordings of stopped or failed runs. Only files a run's manifest lists, as that run wrote them",
+    )
+    clean.add_argument("recipe", type=Path)
+    clean.add_argument("--dry-run", action="store_true", help="list what would go; remove nothing")
+    _common(clean)
+
     cache = sub.add_parser(
         "cache",
         help="inspect, clear or limit the cache",
@@ -333,6 +344,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         )
         spawn = False
     started = time.time() - 1.0  # file times may be rounded down to the second
+    stopped = False
     try:
         with _pool(args, cache, reporter) as pool:
             result = run_recipe(
@@ -352,6 +364,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         if session is not None:
             session.keep(result)
     except KeyboardInterrupt:
+        stopped = True
         reporter.print_summary()
         _remove_empty(made)  # stopped before any output was written: no empty folder is left
         raise
@@ -359,7 +372,8 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
         reporter.print_summary()
         raise
     finally:
-        _trim(cache, started, reporter)
+        if not stopped:  # a stop ends at once (``interrupt.GRACE``): the next run trims the cache
+            _trim(cache, started, reporter)
     reporter.print_summary()
     if not args.quiet:
         done = "up to date:" if result.current else "wrote"  # current: the last run's files, nothing written
@@ -367,6 +381,8 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             print(f"{done} {path}")
         if result.rrd is not None:
             print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
+        if args.out_dir is None and session is None and (line := _prune_line(args.recipe, recipe.name)):
+            print(line)
     return 0
 
 
@@ -608,6 +624,8 @@ def _cmd_check(args, registry) -> int:
         + sweeps
         + (f", draft: {len(recipe.draft)} settings" if recipe.draft else "")
     )
+    for warning in recipe.warnings:  # what a run will warn of (a user's mesh file it repairs)
+        print(f"  warning: {warning}")
     recipe.cost.compiles = kernels_due(recipe)
     for line in recipe.cost.lines():
         print(f"  estimate: {line}")
@@ -821,6 +839,49 @@ def _cmd_graph(args, registry) -> int:
     return 0
 
 
+def _recipe_name(path: Path) -> str:
+    """A recipe file's ``name:`` (its stem where it has none or cannot be read): enough to find its folders."""
+    import yaml
+
+    try:
+        name = (yaml.safe_load(path.read_text(encoding="utf-8")) or {}).get("name")
+    except (OSError, ValueError, AttributeError, yaml.YAMLError):
+        name = None
+    return name if isinstance(name, str) and name else path.stem
+
+
+def _cmd_clean(args, registry) -> int:
+    """List, then remove (not with --dry-run), what ``clean.prunable`` finds for the recipe."""
+    from .clean import prunable, remove
+
+    if not args.recipe.is_file():
+        raise NodegraphError(f"{args.recipe}: no such recipe file; give the recipe whose outputs to prune")
+    found = prunable(args.recipe, _recipe_name(args.recipe))
+    if not found.files and not found.manifests:
+        print(f"nothing to prune: {args.recipe}'s output folders hold only its latest run's files")
+        return 0
+    for path, size in sorted(found.files.items()):
+        print(f"{'would remove' if args.dry_run else 'removing'} {path} ({format_size(size)})")
+    done = "would free" if args.dry_run else "freed"
+    print(f"{done} {format_size(found.bytes)}: {len(found.files)} file(s) in {len(found.folders())} folder(s)")
+    if not args.dry_run:
+        remove(found)
+    return 0
+
+
+def _prune_line(recipe_path: Path, name: str) -> str | None:
+    """The one line a run says when earlier runs' outputs of its recipe can be pruned (``nodegraph clean``)."""
+    from .clean import prunable
+
+    found = prunable(recipe_path, name)
+    if not found.files:
+        return None
+    return (
+        f"earlier runs' outputs and partial recordings: {format_size(found.bytes)} in {len(found.files)} file(s); "
+        f"nodegraph clean {recipe_path} --dry-run lists them, without --dry-run removes them"
+    )
+
+
 def _cmd_cache(args, registry) -> int:
     cache = Cache(args.cache_dir or default_cache_dir())
     if args.action == "clear":
@@ -895,6 +956,7 @@ COMMANDS = {
     "describe": _cmd_describe,
     "graph": _cmd_graph,
     "cache": _cmd_cache,
+    "clean": _cmd_clean,
     "docs": _cmd_docs,
     "inspect": _cmd_inspect,
 }
@@ -918,10 +980,12 @@ def main(argv: list[str] | None = None) -> int:
         # in a child that a signal stops within interrupt.GRACE seconds, whatever its node is doing
         # (watch stops its own steps with SIGINT: only a signal to the supervisor is a stop there)
         status = interrupt.supervise(child_signals=args.command != "watch")
-        if status is not None:
-            return status
+        if status is not None:  # the child has ended: the parent's interpreter tear-down (0.2 s under load) is not due
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(status)
     try:
-        registry = default_registry(plugins=args.plugin) if args.command not in ("cache", "inspect") else None
+        registry = default_registry(plugins=args.plugin) if args.command not in ("cache", "inspect", "clean") else None
         return COMMANDS[args.command](args, registry)
     except RecipeError as exc:  # plain text: a terminal-width wrap would split file:line:column
         print(str(exc), file=sys.stderr)
@@ -935,6 +999,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(interrupt.stopped_line(), file=sys.stderr, flush=True)
         interrupt.said()  # a supervisor that ends this process during its clean-up says nothing more
+        interrupt.leave(130)  # a supervised child: at once, no interpreter tear-down
         return 130
 
 

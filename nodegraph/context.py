@@ -122,6 +122,7 @@ class Context:
     reporter: Any = None
     max_seconds: float | None = None  # a node expecting to run longer refuses to start (``expect_cost``)
     checkpoint: Any = None  # ``checkpoint.Checkpoint`` for resumable long nodes, None without a cache
+    warnings: list[str] = field(default_factory=list)  # said by ``warn``
     _rng: np.random.Generator | None = field(default=None, repr=False)
     _estimate: tuple[float, str] | None = field(default=None, repr=False)  # said once the resumed frame is known
 
@@ -129,6 +130,14 @@ class Context:
     def standalone(cls, node_type: str = "test", seed: int | None = 0, effects=(), variant=None) -> Context:
         """A context outside any recipe: what ``NodeSpec.call`` gives a node, or a test that builds its own."""
         return cls(node_id=node_type, node_type=node_type, seed=seed, effects=frozenset(effects), variant=variant)
+
+    def warn(self, message: str) -> None:
+        """The engine's warning channel: ``message`` is said once in the run's output, as a warning of this node
+        (a user's file repaired: the file and what changed), and kept with its cached result, so a run that loads
+        the result says it too; what the recipe alone decides is declared for ``nodegraph check`` too
+        (``node.warns_of``)."""
+        if message not in self.warnings:
+            self.warnings.append(message)
 
     @property
     def rng(self) -> np.random.Generator:

@@ -19,7 +19,7 @@ from typing import Any, Protocol
 
 from . import __version__, codec, interrupt, node_times, runtime
 from .blueprint import LOG, build_blueprint
-from .cache import Cache, Fragment
+from .cache import Cache, Fragment, atomic_write
 from .checkpoint import Checkpoint
 from .compile_ahead import CompileAhead, mark_compiled
 from .compile_progress import CompileWatch
@@ -121,6 +121,7 @@ class Executor:
         self._beside: Beside | None = None
         self.lane = threading.local()  # ``side``: this thread computes the instances beside a node (``Beside``)
         self.estimate = None  # the recipe's cost estimate (``cost.Estimate``): the bar's ETA where no time is kept
+        self.warned: set[str] = set()  # what this run's nodes warned of (``Context.warn``): each said once
 
     # planning ---------------------------------------------------------------------------------
     def plan(self, node_ids) -> list[Instance]:
@@ -183,6 +184,8 @@ class Executor:
                         continue
                     self.materialise(inst)
                     self._log_cached(inst)
+        except KeyboardInterrupt:  # stopped: its partial recording is removed, nothing more goes into it
+            raise
         except BaseException:
             for inst in later:  # what the failed run had in hand still goes into its partial recording
                 if inst not in self.logged and inst not in self.status:
@@ -202,6 +205,9 @@ class Executor:
                     self.reporter.record(self.status[inst])
             if self.cache is not None:  # what the next run's progress bar expects
                 node_times.remember(self.cache.directory, self.recipe.name, [self.status[i] for i in self.status])
+        for inst in order:  # complete: what a stopped run would have resumed with is not needed any more
+            if not self.recipe.nodes[inst.node].spec.store and self.cache is not None:
+                self._unstored_checkpoint(inst).clear()
         if ahead is None and any(s.status == "ran" for s in self.status.values()):
             mark_compiled(self.recipe)  # every kernel in hand: the next estimate says none is left to compile
         return RunResult(self.recipe, dict(self.keys), self.values, [self.status[i] for i in order if i in self.status])
@@ -222,6 +228,8 @@ class Executor:
         if rrd is not None:  # what interrupted runs left beside the recording: this complete run ends it
             remove_stale_partials(rrd)
         records = [NodeRecord(i.label, self.recipe.nodes[i.node].spec.type_name, "cached") for i in order]
+        for inst in order:
+            self._say(inst, self.cache.warnings(self.keys[inst]))
         with self.reporter.task(self.recipe.name, len(order)) as tick:
             for record in records:
                 tick()
@@ -274,8 +282,11 @@ class Executor:
                 if self.kept is not None:
                     self.kept[key] = outputs
                 self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
+                self._say(inst, self.cache.warnings(key))
                 return outputs
 
+        if not spec.store and self._resumed(inst):
+            return self.values[inst]
         kwargs = self._arguments(inst)
         if self.on_start is not None:
             self.on_start(inst, key)
@@ -302,7 +313,6 @@ class Executor:
         interrupt.step_started(inst.label, None if ctx.checkpoint is None else ctx.checkpoint.path)
         self.reporter.step_started(inst.label)
         ok = stopped = False
-        held = contextlib.ExitStack()  # from the node's return until its result is stored, a stop waits
         try:
             with memory, watch:
                 result = (
@@ -310,11 +320,9 @@ class Executor:
                     if beside is None
                     else beside.run(lambda: spec.run(ctx, **kwargs), None if spec.overlap is True else spec.overlap)
                 )
-            held.enter_context(interrupt.Hold(inst.label))
             outputs = self._check_outputs(spec, result)
             ok = True
         except BaseException as exc:
-            held.__exit__(type(exc), exc, exc.__traceback__)  # not stored: a stop that came meanwhile is this one
             if capture is not None:  # what the node logged before it stopped goes into the partial recording
                 self._append_unfinished(inst, capture)
             if not isinstance(exc, Exception):  # Ctrl-C, SIGTERM: the run stops here
@@ -340,32 +348,79 @@ class Executor:
             elapsed, cpu = beside.elapsed, cpu - beside.cpu
         for value in outputs.values():
             codec.freeze(value)
-        try:
-            log_start = now()
-            fragment = None if capture is None else self._capture_outputs(inst, capture, outputs)
-            log_seconds = now() - log_start
-            self.values[inst] = outputs
-            if self.kept is not None:
-                self.kept[key] = outputs
-            peak = memory.peak_bytes if isinstance(memory, PeakMemory) else None
-            self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, peak, cpu_seconds=cpu)
-            if fragment is not None:  # into the recording as a cached re-run will put it: from the fragment,
-                log_start = now()  # read before the cache keeps it, so the recording and a viewer get it first
-                self._append(inst, fragment, capture.live)
-                self.status[inst].log_seconds = log_seconds + now() - log_start
+        self.values[inst] = outputs
+        if self.kept is not None:
+            self.kept[key] = outputs
+        peak = memory.peak_bytes if isinstance(memory, PeakMemory) else None
+        self.status[inst] = NodeRecord(inst.label, spec.type_name, status, elapsed, peak, cpu_seconds=cpu)
+        self._say(inst, ctx.warnings)
+        stop = fragment = None
+        try:  # logged first, so the recording and a viewer get it before the cache keeps it
+            fragment = self._log_ran(inst, capture, outputs)
             if self.on_ran is not None:
                 self.on_ran(inst)
-            if self.cache is not None:
-                if spec.store:
-                    self.cache.store(key, outputs, inst.node, spec.type_name, seconds=elapsed, fragment=fragment)
-                ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
+        except KeyboardInterrupt as exc:  # a stop while it is logged: the finished step is stored, then it stops
+            stop, fragment = exc, None
+        try:
+            # stored whole before a stop is honoured: one that comes meanwhile is raised as the hold ends
+            with interrupt.Hold(inst.label):
+                if self.cache is not None:
+                    ctx.checkpoint.clear()  # the outputs are stored: no progress to resume any more
+                    if spec.store:
+                        said, quick = ctx.warnings, stop is not None
+                        self.cache.store(key, outputs, inst.node, spec.type_name, elapsed, fragment, quick, said)
+                    elif self.kept is None:  # never cached: kept as its checkpoint until the run completes
+                        atomic_write(self._unstored_checkpoint(inst).path, codec.encode(outputs), durable=False)
         finally:
             if capture is not None:  # moved into the cache by store; without a cache, not needed any more
                 capture.path.unlink(missing_ok=True)
-            held.close()  # stored: a stop that came meanwhile is raised here
+        if stop is not None:
+            raise stop
         if beside is not None and beside.error is not None:  # an instance beside it failed: this one is stored
             raise beside.error
         return outputs
+
+    def _unstored_checkpoint(self, inst: Instance) -> Checkpoint:
+        """Where a run keeps the outputs of a never-cached step (``store=False``: a scene made in a second, too large
+        to cache) it computed until it completes: the step's checkpoint file (``checkpoints/<key>.npz``, written as
+        the step ends, undeflated and not flushed: a torn one fails to decode and the step is computed), so a
+        stopped run's re-run resumes with them, and removes it, rather than computing a finished step again (a stop
+        in a step of native code, a render, may leave no time to write it then)."""
+        return Checkpoint(self.cache.directory / "checkpoints" / f"{self.keys[inst]}.npz")
+
+    def _resumed(self, inst: Instance) -> bool:
+        """Whether a never-cached step's outputs were taken from the checkpoint a run that did not complete kept of
+        them, which goes once read: the step finished in that run, so it is not computed again."""
+        if self.cache is None:
+            return False
+        checkpoint = self._unstored_checkpoint(inst)
+        start, outputs = now(), checkpoint.load()
+        spec = self.recipe.nodes[inst.node].spec
+        if not isinstance(outputs, dict) or set(outputs) != set(spec.outputs):
+            return False
+        checkpoint.clear()
+        for value in outputs.values():
+            codec.freeze(value)
+        self.values[inst] = outputs
+        self.status.setdefault(inst, NodeRecord(inst.label, spec.type_name, "cached", now() - start))
+        if self.recording is not None:  # into the recording as a run of it logs it: it is never cached
+            capture = self.recording.capture(self._capture_path(self.keys[inst]))
+            try:
+                self._log_ran(inst, capture, outputs)
+            finally:
+                capture.path.unlink(missing_ok=True)
+        return True
+
+    def _log_ran(self, inst: Instance, capture, outputs: dict[str, Any]) -> Fragment | None:
+        """Log a computed instance's outputs into its capture and append that fragment to the recording, as a
+        cached re-run will put it; the fragment (None without a recording)."""
+        if capture is None:
+            return None
+        log_start = now()
+        fragment = self._capture_outputs(inst, capture, outputs)
+        self._append(inst, fragment, capture.live)
+        self.status[inst].log_seconds = now() - log_start
+        return fragment
 
     def _plan_beside(self, order: list[Instance], visit: Callable[[Instance], None]) -> Beside | None:
         """The first instance to run of a node declared ``overlap`` and the run's order with what it needs pulled
@@ -467,7 +522,16 @@ class Executor:
             self._append(inst, fragment, live=False)
             record.log_seconds = now() - start
         self.status[inst] = record
+        self._say(inst, self.cache.warnings(self.keys[inst]))
         return True
+
+    def _say(self, inst: Instance, warnings: list[str]) -> None:
+        """Say what ``inst``'s node warned of (``Context.warn``), each message once a run (a family's instances
+        reading one file say it once), under the node's id."""
+        for message in warnings:
+            if message not in self.warned and self.reporter is not None:
+                self.warned.add(message)
+                self.reporter.warn(f"{inst.node}: {message}")
 
     def _kept_fragment(self, inst: Instance) -> Fragment | None:
         try:

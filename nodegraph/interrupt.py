@@ -7,9 +7,13 @@ does nothing else, waits. On Ctrl-C or SIGTERM the parent passes the signal on; 
 can (finished nodes stay cached); one that has not ended after ``GRACE`` seconds is killed, and the parent removes
 what it left half-written.
 
-A step that has finished is stored whole before a stop is honoured (``Hold``): a signal that comes while the
-step's result is logged and stored stops the run right after, and the parent waits for it (up to ``HOLD_MAX``
-seconds) rather than killing it after ``GRACE``, so a re-run finds every step that finished cached.
+A step that has finished is stored before it is logged, and stored whole before a stop is honoured (``Hold``): a
+signal that comes while the step's result is stored stops the run right after, and the parent waits for it (up to
+``HOLD_MAX`` seconds after the signal) rather than killing it after ``GRACE``, so a re-run finds every step that
+finished cached; a store still going at ``HOLD_MAX`` is ended, its temporary file removed, and the step is computed
+again. A child that has said its 'interrupted' line leaves at once (``leave``): its interpreter's tear-down (threads,
+the recording's sinks, freeing memory) took up to a second under load, and the parent's too. So a stop ends within
+``HOLD_MAX`` plus the parent's clean-up, whichever node runs (``benchmarks/bench_interrupt.py steps --steps all``).
 
 What a run writes to a temporary or partial name (a recording's ``*.<pid>.partial.rrd``, a node's capture, a file
 written by ``cache.atomic_write``) is named here first (``note``): a file in the list that still exists when the
@@ -28,8 +32,8 @@ import time
 from pathlib import Path
 
 ENV_VAR = "NODEGRAPH_LEFTOVERS"  # set in the child: the file that lists its temporary and partial files
-GRACE = 1.0  # seconds the child has to stop by itself after a signal, before it is killed
-HOLD_MAX = 60.0  # seconds the parent waits past GRACE for a step that has finished to be stored (``Hold``)
+GRACE = 0.8  # seconds the child has to stop by itself after a signal, before it is killed
+HOLD_MAX = 1.5  # seconds after a signal the parent waits for a finished step to be stored (``Hold``), at most
 REPEAT = 0.5  # seconds after a stop in which a second signal is the same stop (Ctrl-C reaches parent and child)
 
 
@@ -132,6 +136,22 @@ class Hold:
                 raise KeyboardInterrupt
 
 
+def pending() -> bool:
+    """Whether a stop waits for the main thread's hold to end (a store then writes what is quickest to write)."""
+    return bool(_held["pending"])
+
+
+def leave(status: int) -> None:
+    """End a supervised child at once with ``status``, its output flushed: what it had to do is done (files
+    renamed into place or named in the listing, its line said), and its interpreter's tear-down (joining threads,
+    the recording's sinks, freeing memory) took up to a second under load. Returns where nothing supervises it."""
+    if not os.environ.get(ENV_VAR):
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
+
+
 def step_ended(label: str) -> None:
     """A step has ended (done, failed or stopped)."""
     _running.pop(label, None)
@@ -188,9 +208,9 @@ def _listed(listing: Path) -> tuple[dict[str, Path | None], dict[Path, str], set
 NAMED = 3  # at most this many removed files are named in the line of a killed run; the rest are counted
 
 
-def killed_line(listing: Path, removed: list[Path]) -> str:
-    """The line of a run killed after ``GRACE`` seconds: the steps it was in, the unfinished files removed (the
-    first ``NAMED``), what a re-run resumes from (a step's saved checkpoint, with how far it was)."""
+def killed_line(listing: Path, removed: list[Path], waited: float = GRACE) -> str:
+    """The line of a run killed ``waited`` seconds after the stop: the steps it was in, the unfinished files removed
+    (the first ``NAMED``), what a re-run resumes from (a step's saved checkpoint, with how far it was)."""
     running, saved, _ = _listed(listing)
     during = f" during {', '.join(running)}" if running else ""
     who = "the run" if not running else ("the step" if len(running) == 1 else "the steps")
@@ -200,11 +220,14 @@ def killed_line(listing: Path, removed: list[Path]) -> str:
         more = f" and {len(removed) - NAMED} more" if len(removed) > NAMED else ""
         what = f"; removed {len(removed)} unfinished file(s): {names}{more}"
     try:
-        uncached = UNCACHED in listing.read_text(encoding="utf-8").splitlines()
+        lines = listing.read_text(encoding="utf-8").splitlines()
     except OSError:
-        uncached = False
-    rerun = _rerun(uncached, running, saved)
-    return f"interrupted{during}: {who} did not stop within {GRACE:g} s and was ended{what}; {rerun}"
+        lines = []
+    if not any(line.startswith(RUNNING) for line in lines):  # ended as it started (imports, the recipe's checks)
+        return f"interrupted before any step ran: the run did not stop within {waited:g} s and was ended{what}"
+    rerun = _rerun(UNCACHED in lines, running, saved)
+    ended = "were ended" if len(running) > 1 else "was ended"
+    return f"interrupted{during}: {who} did not stop within {waited:g} s and {ended}{what}; {rerun}"
 
 
 def remove_leftovers(listing: Path) -> list[Path]:
@@ -367,7 +390,7 @@ def _wait(pid: int, listing: Path, news: int) -> int:
         signal.signal(signum, forward)
     killed = False
     status = None
-    held = 0.0  # when a finished step was last seen being stored after a stop
+    held = False  # a finished step was seen being stored after the stop: it has up to HOLD_MAX seconds
     while status is None:
         try:
             if {signal.SIGINT, signal.SIGTERM} & set(os.read(news, 64)):
@@ -378,13 +401,11 @@ def _wait(pid: int, listing: Path, news: int) -> int:
         if done:
             status = code
             break
-        # a second Ctrl-C: at once; else GRACE seconds after the stop, or after a finished step was stored (up to
-        # HOLD_MAX seconds, ``Hold``)
+        # a second Ctrl-C: at once; else GRACE seconds after the stop, HOLD_MAX where a finished step was being
+        # stored (``Hold``)
         if stops and not killed:
-            now = time.monotonic()
-            if holding(listing) and now - min(stops) < HOLD_MAX:
-                held = now
-            if len(received) > 1 or now - max(min(stops), held) > GRACE:
+            held = held or holding(listing)
+            if len(received) > 1 or time.monotonic() - min(stops) > (HOLD_MAX if held else GRACE):
                 os.kill(pid, signal.SIGKILL)
                 killed = True
         time.sleep(0.02)
@@ -397,6 +418,6 @@ def _wait(pid: int, listing: Path, news: int) -> int:
     if killed:
         if sys.stderr.isatty():
             sys.stderr.write("\x1b[?25h\n")  # the progress bar hid the cursor
-        print(killed_line(listing, removed), file=sys.stderr)
+        print(killed_line(listing, removed, HOLD_MAX if held else GRACE), file=sys.stderr)
         return 130
     return os.WEXITSTATUS(status) if os.WIFEXITED(status) else 128 + os.WTERMSIG(status)

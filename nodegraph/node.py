@@ -98,6 +98,7 @@ class NodeSpec:
     check_work: Callable[[str, Mapping[str, Any]], list[tuple[str, str, bool]]] | None = None
     store: bool = True  # False: its outputs never go into the cache; computed again where needed (``node``)
     cost: Callable[[Any], Any] | None = None  # its estimate from its parameters and inputs' (``cost.estimated_by``)
+    warns: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]] | None = None  # ``warns_of``
 
     def __call__(self, ctx: Any, **kwargs: Any) -> Any:
         """Call the implementation with a context and arguments as given: nothing is checked or filled in."""
@@ -234,6 +235,17 @@ def node(
             check_work=check_work,
             store=store,
         )
+
+    return wrap
+
+
+def warns_of(find: Callable[[str, Mapping[str, Any]], list[tuple[str, str]]]) -> Callable[[NodeSpec], NodeSpec]:
+    """Declare, above a node's ``@node``, what its run will warn of (``Context.warn``) that the recipe alone decides,
+    such as a user's mesh file it repairs: ``find(node_id, nodes)`` → ``[(param, message), ...]`` (``nodes``: every
+    node's ``NodeEntry`` by id); ``nodegraph check`` prints each at the parameter's file:line."""
+
+    def wrap(spec: NodeSpec) -> NodeSpec:
+        return dataclasses.replace(spec, warns=find)
 
     return wrap
 

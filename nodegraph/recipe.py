@@ -101,6 +101,7 @@ class Recipe:
     sweeps: dict[str, SweepDecl] = field(default_factory=dict)  # the recipe's own sweeps (``nodegraph sweep``)
     draft: tuple[str, ...] = ()  # the draft: block as node.param=value texts (what --draft applies)
     cost: Estimate | None = None  # what it will cost (``nodegraph.cost``), weighed when loaded with ``work``
+    warnings: tuple[Issue, ...] = ()  # what its nodes will warn of (``node.warns_of``), found when loaded with ``work``
 
     def digest(self) -> str:
         """sha256 of what the recipe computes (name, seed, effects, outputs, every node's type, parameters,
@@ -243,6 +244,7 @@ class _Validator:
         recipe_file = Path(source.file)
         self.base_dir = recipe_file.resolve().parent if recipe_file.is_file() else None
         self.issues: list[Issue] = []
+        self.warnings: list[Issue] = []  # what a run's nodes will warn of, the recipe alone deciding (``warns_of``)
         self.override_at: dict[tuple, Location] = {}
 
     def _param_docs(self) -> dict[str, dict[str, str]]:
@@ -487,11 +489,13 @@ class _Validator:
             sweeps=sweeps,
             draft=tuple(f"{key}={json.dumps(value)}" for key, value in model.draft.items()),
             cost=cost,
+            warnings=tuple(self.warnings),
         )
 
     def _check_recipe_rules(self, entries: dict[str, NodeEntry]) -> None:
         """Each node type's ``check_recipe``: contradictions between the nodes of a valid recipe; with ``work``,
-        each one's ``check_work`` too (with ``yes``, less what ``--yes`` passes)."""
+        each one's ``check_work`` too (with ``yes``, less what ``--yes`` passes), and what each will warn of
+        (``warns_of``: a user's file it repairs), kept as warnings."""
         view = MappingProxyType(entries)
         for node_id, entry in entries.items():
             if entry.spec.check_recipe is None:
@@ -499,13 +503,16 @@ class _Validator:
             for param, message in entry.spec.check_recipe(node_id, view):
                 self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
         for node_id, entry in entries.items() if self.work else ():
-            if entry.spec.check_work is None:
-                continue
-            for param, message, passes_with_yes in entry.spec.check_work(node_id, view):
+            for param, message, passes_with_yes in (
+                entry.spec.check_work(node_id, view) if entry.spec.check_work else ()
+            ):
                 if passes_with_yes and self.yes:
                     continue
                 message += "; or run with --yes to go ahead" if passes_with_yes else ""
                 self.issue(("nodes", node_id, "params", param), message, node=node_id, param=param)
+            for param, message in entry.spec.warns(node_id, view) if entry.spec.warns is not None else ():
+                at = ("nodes", node_id, "params", param)
+                self.warnings.append(Issue(self.override_at.get(at) or self.source.at(at), message, node_id, param))
 
     def _weigh_cost(self, entries: dict[str, NodeEntry], graph: Dag, outputs: list[Wire]):
         """The cost estimate of the recipe's outputs (or those the limits name) and what they need

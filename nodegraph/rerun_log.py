@@ -44,13 +44,13 @@ def remove_stale_partials(path: Path) -> list[Path]:
     removed = []
     for partial in path.parent.glob(f"{glob.escape(path.stem)}.*.partial{path.suffix}"):
         pid = partial.name[len(path.stem) + 1 : -len(f".partial{path.suffix}")]
-        if pid.isdigit() and not _alive(int(pid)):
+        if pid.isdigit() and not alive(int(pid)):
             partial.unlink(missing_ok=True)
             removed.append(partial)
     return removed
 
 
-def _alive(pid: int) -> bool:
+def alive(pid: int) -> bool:
     """True while process ``pid`` runs (one of another user's counts); a zombie does not: a run killed with its
     supervising parent waits as one until something reaps it, which in a container may be never."""
     try:

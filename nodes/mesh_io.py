@@ -26,6 +26,11 @@ def suffix_problem(path: str | Path) -> str | None:
     return f"{Path(path).name} is {kind}, not a mesh file; allowed: {', '.join(MESH_SUFFIXES)}"
 
 
+def repair_line(path: str, changes: list[str]) -> str:
+    """What a run says (``Context.warn``) of a user's mesh file it repaired: the file and each change."""
+    return f"{path} was repaired: {'; '.join(changes)} (fix the file to silence this)"
+
+
 HEAD_BYTES = 4096  # what is read of a file to tell its format: a header, or the first lines of a text format
 
 

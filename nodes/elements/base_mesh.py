@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from nodegraph import In, Moved, Out, Param, node
 from nodegraph.cost import Cost, CostQuery, estimated_by
+from nodegraph.node import warns_of
 from nodegraph.values import Mesh
 
 from ..values import RiceVariety
@@ -85,6 +86,24 @@ def _cost(q: CostQuery) -> Cost:
     return Cost(inscribed=0.5 * min(p["size"] or DEFAULT_SIZE[p["shape"]]), faces=sphere)
 
 
+def _warns(node_id: str, nodes) -> list[tuple[str, str]]:
+    """What a run will say of the element's mesh file (``nodegraph check``): its repairs; nothing for another shape
+    or a file that cannot be used (the parameter's own check says why)."""
+    from ..mesh_io import repair_line
+    from .mesh_files import MeshFileError, load_element_mesh
+
+    params = nodes[node_id].params
+    if params["shape"] != "file" or not params["path"]:
+        return []
+    changes: list[str] = []
+    try:
+        load_element_mesh(params["path"], params["scale"], align=False, changes=changes)
+    except (MeshFileError, ValueError):
+        return []
+    return [("path", repair_line(params["path"], changes))] if changes else []
+
+
+@warns_of(_warns)
 @estimated_by(_cost)
 @node(
     "base_mesh",
@@ -215,5 +234,10 @@ def base_mesh(
         return Mesh(vertices, faces, name="ice_flake")
     if not path:
         raise ValueError("shape 'file' needs the parameter path (a mesh file)")
-    vertices, faces = mesh_files.load_element_mesh(path, scale, align)
+    changes: list[str] = []
+    vertices, faces = mesh_files.load_element_mesh(path, scale, align, changes)
+    if changes:
+        from ..mesh_io import repair_line
+
+        ctx.warn(repair_line(path, changes))
     return Mesh(vertices, faces, name=path.rsplit("/", 1)[-1])

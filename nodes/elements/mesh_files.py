@@ -21,22 +21,37 @@ class MeshFileError(ValueError):
     """A mesh file that cannot be used as an element, with the reason and what would be accepted."""
 
 
-def load_element_mesh(path: str | Path, scale: float = 1.0, align: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (mm) and faces of a closed, outward, centred element mesh read from ``path``."""
+def load_element_mesh(
+    path: str | Path, scale: float = 1.0, align: bool = True, changes: list[str] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (mm) and faces of a closed, outward, centred element mesh read from ``path``; ``changes``: the
+    repairs made, in words, are appended (duplicate vertices merged: not said of an STL, which stores each
+    triangle's corners apart)."""
     try:
         loaded = read_mesh(path, process=False)
     except ValueError as exc:
         raise MeshFileError(str(exc)) from exc
     vertices = np.asarray(getattr(loaded, "vertices", np.empty((0, 3))), dtype=np.float64)
     faces = np.asarray(getattr(loaded, "faces", np.empty((0, 3))), dtype=np.int64)
-    return repair_element_mesh(vertices * scale, faces, source=str(path), align=align)
+    made: list[str] = []
+    out = repair_element_mesh(vertices * scale, faces, source=str(path), align=align, changes=made)
+    if changes is not None:
+        changes += [c for c in made if not (c.startswith("merged") and str(path).lower().endswith(".stl"))]
+    return out
 
 
 def repair_element_mesh(
-    vertices: np.ndarray, faces: np.ndarray, source: str = "mesh", align: bool = True
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    source: str = "mesh",
+    align: bool = True,
+    changes: list[str] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Apply the documented repairs to a mesh, or raise MeshFileError saying why it cannot be used."""
+    """Apply the documented repairs to a mesh, or raise MeshFileError saying why it cannot be used; ``changes``:
+    each repair made is appended, in words."""
     import trimesh
+
+    changes = [] if changes is None else changes
 
     if len(faces) == 0 or len(vertices) == 0:
         raise MeshFileError(f"{source}: no triangles found; an element needs a closed triangle mesh")
@@ -46,9 +61,18 @@ def repair_element_mesh(
     if faces.min() < 0 or faces.max() >= len(vertices):
         raise MeshFileError(f"{source}: face indices out of range (0..{len(vertices) - 1})")
     mesh = trimesh.Trimesh(vertices, faces, process=True, validate=False)
+    merged = len(vertices) - len(mesh.vertices)
+    count = len(mesh.faces)
     mesh.update_faces(mesh.nondegenerate_faces())
+    if len(mesh.faces) < count:
+        changes.append(f"dropped {count - len(mesh.faces):,} degenerate faces")
+    count = len(mesh.faces)
     mesh.update_faces(mesh.unique_faces())
+    if len(mesh.faces) < count:
+        changes.append(f"dropped {count - len(mesh.faces):,} duplicate faces")
     mesh.remove_unreferenced_vertices()
+    if merged > 0:
+        changes.insert(0, f"merged {merged:,} duplicate vertices")
     if len(mesh.faces) == 0:
         raise MeshFileError(f"{source}: every face is degenerate (zero area); nothing is left of the mesh")
     if not mesh.is_watertight:
@@ -68,6 +92,7 @@ def repair_element_mesh(
         raise MeshFileError(f"{source}: mesh encloses zero volume (flat or collapsed); an element needs a solid")
     if mesh.volume < 0:
         mesh.invert()  # documented repair: inside-out mesh
+        changes.append("turned its normals outwards (it was inside out)")
     vertices = mesh.vertices - mesh.center_mass
     if align:
         vertices = vertices @ principal_frame(vertices)

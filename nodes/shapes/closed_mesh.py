@@ -8,20 +8,29 @@ import trimesh
 from ..mesh_io import read_mesh
 
 
-def load_mesh(path: str) -> trimesh.Trimesh:
-    """Read one triangle mesh (scenes are concatenated); a clear error naming the cause otherwise."""
+def load_mesh(path: str, changes: list[str] | None = None) -> trimesh.Trimesh:
+    """Read one triangle mesh (scenes are concatenated); a clear error naming the cause otherwise. ``changes``:
+    what reading it changed is appended (duplicate vertices merged; not said of an STL, which stores each
+    triangle's corners apart)."""
     try:
-        return read_mesh(path)
+        mesh = read_mesh(path, process=False)
     except ValueError as exc:
         raise ValueError(f"path: {exc}") from exc
+    given = len(mesh.vertices)
+    mesh.process()
+    if changes is not None and given > len(mesh.vertices) and not str(path).lower().endswith(".stl"):
+        changes.append(f"merged {given - len(mesh.vertices):,} duplicate vertices")
+    return mesh
 
 
-def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str) -> trimesh.Trimesh:
+def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str, changes: list[str] | None = None) -> trimesh.Trimesh:
     """``mesh`` as a watertight solid with outward normals.
 
     With ``repair``: consistent winding, inverted orientation flipped, small holes filled
-    (trimesh.repair). A mesh still open afterwards is refused: the aggregate needs an inside.
+    (trimesh.repair). A mesh still open afterwards is refused: the aggregate needs an inside. ``changes``: what
+    was changed is appended, in words (a user is told: ``Context.warn``).
     """
+    changes = [] if changes is None else changes
     given = mesh
     mesh = mesh.copy()
     mesh.merge_vertices()
@@ -29,9 +38,19 @@ def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str) -> trimesh.Tr
     mesh.remove_unreferenced_vertices()
     if not mesh.is_watertight and given.is_watertight:  # merging near-coincident vertices at slivers opened it
         mesh = given.copy()
+    elif len(mesh.faces) < len(given.faces):
+        changes.append(f"dropped {len(given.faces) - len(mesh.faces):,} degenerate faces")
     if repair:
+        faces, count = mesh.faces.copy(), len(mesh.faces)
         trimesh.repair.fix_winding(mesh)
+        flipped = int((mesh.faces != faces).any(axis=1).sum()) if len(mesh.faces) == count else 0
+        if flipped:
+            changes.append(f"turned {flipped:,} faces to agree with their neighbours")
         trimesh.repair.fill_holes(mesh)
+        if len(mesh.faces) > count:
+            changes.append(f"filled holes ({len(mesh.faces) - count:,} face(s) added)")
+        if mesh.is_watertight and mesh.volume < 0:
+            changes.append("turned its normals outwards (it was inside out)")
         trimesh.repair.fix_inversion(mesh)
     if not mesh.is_watertight:
         fix = (
@@ -44,6 +63,7 @@ def closed_mesh(mesh: trimesh.Trimesh, *, repair: bool, what: str) -> trimesh.Tr
         if not repair:
             raise ValueError(f"{what}: normals point inwards (negative volume); pass repair: true to flip them")
         mesh.invert()
+        changes.append("turned its normals outwards (it was inside out)")
     if not np.isfinite(mesh.vertices).all() or mesh.volume <= 0:
         raise ValueError(f"{what}: the mesh encloses no volume")
     return mesh

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
-from nodegraph.node import Out, node
+from nodegraph.node import Out, node, warns_of
 from nodegraph.params import Param
 from nodegraph.values import Mesh
+
+from ..mesh_io import repair_line
 
 
 def _check(params: dict) -> list[tuple[str, str]]:
@@ -14,6 +16,27 @@ def _check(params: dict) -> list[tuple[str, str]]:
     return [] if problem is None else [("path", problem)]
 
 
+def repaired(path: str, repair: bool) -> tuple[object, list[str]]:
+    """The closed mesh read from ``path`` (``closed_mesh``) and what was changed to make it one, in words."""
+    from .closed_mesh import closed_mesh, load_mesh
+
+    changes: list[str] = []
+    mesh = closed_mesh(load_mesh(path, changes), repair=repair, what=f"mesh_file {path!r}", changes=changes)
+    return mesh, list(dict.fromkeys(changes))
+
+
+def _warns(node_id: str, nodes) -> list[tuple[str, str]]:
+    """What a run will say of the mesh file (``nodegraph check``): its repairs; nothing where it cannot be read
+    (the parameter's own check says why)."""
+    params = nodes[node_id].params
+    try:
+        _, changes = repaired(params["path"], params["repair"])
+    except ValueError:
+        return []
+    return [("path", repair_line(params["path"], changes))] if changes else []
+
+
+@warns_of(_warns)
 @node(
     "mesh_file",
     outputs={"mesh": Out(Mesh, "the closed user mesh, outward normals")},
@@ -32,10 +55,11 @@ def _check(params: dict) -> list[tuple[str, str]]:
     check=_check,
 )
 def mesh_file(ctx, *, path, size, center, repair):
-    """Load a closed mesh; an open or inside-out one is repaired (``repair``) or refused with a clear error."""
-    from .closed_mesh import closed_mesh, load_mesh
-
-    mesh = closed_mesh(load_mesh(path), repair=repair, what=f"mesh_file {path!r}")
+    """Load a closed mesh; an open or inside-out one is repaired (``repair``, said as a warning) or refused with a
+    clear error."""
+    mesh, changes = repaired(path, repair)
+    if changes:
+        ctx.warn(repair_line(path, changes))
     if center:
         mesh.apply_translation(-mesh.bounds.mean(axis=0))
     if size > 0:

@@ -164,6 +164,22 @@ def toy_slow(ctx, spheres, *, seconds, started):
     return SphereSet(spheres.centers.copy(), spheres.radii.copy())
 
 
+@node(
+    "toy_scene",
+    store=False,
+    inputs={"spheres": In(SphereSet, "to copy")},
+    outputs={"spheres": Out(SphereSet, "a copy")},
+    params={"runs": Param(str, "", "a file: each run of the node appends a line to it")},
+)
+def toy_scene(ctx, spheres, *, runs):
+    """Never cached (``store=False``, as a scene made in a second): a copy of the spheres; each run says so in
+    ``runs``."""
+    if runs:
+        with open(runs, "a", encoding="utf-8") as out:
+            out.write("ran\n")
+    return SphereSet(spheres.centers.copy(), spheres.radii.copy())
+
+
 _FIRST_LOAD_PAID = False  # toy_first_load: whether this process paid its first load
 
 
