@@ -490,7 +490,13 @@ def grain_extent(x: np.ndarray, r: np.ndarray, rest: np.ndarray) -> float:
     return float((s + r).max() - (s - r).min())
 
 
-def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90, layers: int = 1, after: int = 0, **params) -> dict:
+# mm: the flat plate's radius (``squeeze_xpbd``): a sphere this large sags 0.02 mm over a grain 6.5 mm off its axis
+FLAT_PLATE = 1000.0
+
+
+def squeeze_xpbd(
+    load: float, particles: int = 8, frames: int = 90, layers: int = 1, after: int = 0, flat: bool = False, **params
+) -> dict:
     """Three rice grains of the element library (``scenes.grain_mesh``, 5 × 3 × 2.5 mm, ``particles`` per cluster in
     ``layers`` through the thickness, 25 mg) lying flat on the ground 120° apart under one disc plate (particles
     r 0.5 mm on a 1 mm grid, one cluster) whose weight is 3 × ``load`` (N): a plate that cannot tip, each grain
@@ -499,7 +505,8 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90, layers: int 
     left ``after`` frames to spring back. Returns the plate's mean height above the ground (mm), the grain's
     unloaded thickness, the grains' mean thickness under the load and after it (``grain_extent``), the grains that
     left the plate (centre > 5.5 mm from its axis), the grains' particles above the plate's mid-plane (it passed
-    them) and seconds."""
+    them) and seconds. ``flat``: the plate is one sphere of radius ``FLAT_PLATE`` instead (flat over the grains, one
+    contact per grain particle, as a compression tester's platen)."""
     from scene_builders import grain_mesh, solver_run
 
     from nodes.simulation.clusters import element_cluster
@@ -518,19 +525,23 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90, layers: int 
     disc = np.stack(np.meshgrid(axis, axis, indexing="ij"), -1).reshape(-1, 2)
     disc = disc[np.hypot(disc[:, 0], disc[:, 1]) <= 7.0]
     plate = np.c_[disc, np.full(len(disc), float((grain[:, 2] + cluster.radii).max()) + 0.51)]
+    plate_r = 0.5
+    if flat:
+        plate_r = FLAT_PLATE
+        plate = np.array([[0.0, 0.0, float((grain[:, 2] + cluster.radii).max()) + 0.01 + FLAT_PLATE]])
     n = len(grain)
     x = np.concatenate(grains + [plate])
     plate_g = 3 * load / 9.81 * 1000  # N → g
     settings = solver_settings_for(EFFECTS, 0.5, **{**NO_SLEEP, **params})
     run = solver_run(
         x,
-        np.concatenate([cluster.radii] * 3 + [np.full(len(plate), 0.5)]),
+        np.concatenate([cluster.radii] * 3 + [np.full(len(plate), plate_r)]),
         np.concatenate([np.full(3 * n, n / (GRAIN_MG * 1e-3)), np.full(len(plate), len(plate) / plate_g)]),
         np.array([0, n, 2 * n, 3 * n, len(x)]),
         np.concatenate([g - g.mean(axis=0) for g in grains] + [plate - plate.mean(axis=0)]),
         np.tile([1.0, 0, 0, 0], (4, 1)),
         settings,
-        sdf=ground(10.0, float(x[:, 2].max()) + 3.0, 0.25),
+        sdf=ground(10.0, float(x[: 3 * n, 2].max()) + 3.0, 0.25),
     )
 
     def extent() -> float:
@@ -541,11 +552,12 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90, layers: int 
         run.frame()
     centres = run.state.x[: 3 * n].reshape(3, n, 3).mean(axis=1)
     out = {
-        "gap": float((run.state.x[3 * n :, 2] - 0.5).mean()),
+        "gap": float((run.state.x[3 * n :, 2] - plate_r).mean()),
         "thickness": thickness,
         "loaded": extent(),
         "escaped": int((np.hypot(centres[:, 0], centres[:, 1]) > 5.5).sum()),
-        "above": int((run.state.x[: 3 * n, 2] > run.state.x[3 * n :, 2].mean()).sum()),  # grain particles over it
+        # grain particles over its mid-plane (over its underside: a flat plate)
+        "above": int((run.state.x[: 3 * n, 2] > run.state.x[3 * n :, 2].mean() - (plate_r if flat else 0.0)).sum()),
     }
     if after:
         run.state.x[3 * n :, 2] += 2000.0  # the plate lifted off (it falls 0.7 m in 0.4 s: out of reach)

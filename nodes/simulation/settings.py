@@ -47,6 +47,12 @@ SETTLE_TIME = 1.0 / 600.0
 HANDOFF_FRAMES = 3
 HANDOFF_DEPENETRATION = 50.0  # mm/s
 YOLK_DRAG = 40.0  # 1/s: a yolk's drag towards its egg's velocity (``buoyancy.yolk_predict``)
+# N: the load at which ``squeeze_strain`` is given (Tomita et al., via G §2.2: ≈ 25 % at 0.2 N)
+SQUEEZE_LOAD = 0.2
+# a contact is rigid past this strain of its element: cooked rice fractures near 50 % (Tomita et al., via G §2.2), and
+# beyond it the grain breaks (the tearing effect's business), it does not squeeze on; it also bounds how deep a
+# pile's weight can press particles into each other
+CRUSH_STRAIN = 0.5
 ROTATION_ITERATIONS = 8  # iterations of the rotation extraction in shape matching and glue (Müller 2016)
 
 
@@ -119,6 +125,16 @@ PARAMS = {
         "(deep dents after the run); the offset keeps them apart by up to twice as much where the cover is tight",
         range=(0.0, 0.5),
         units="radii",
+    ),
+    # 25 % at SQUEEZE_LOAD: cooked rice in its elastic range (Tomita et al., via G §2.2; SPEC §3); 0 = rigid contacts
+    "squeeze_strain": Param(
+        float,
+        0.0,
+        "strain of an element squeezed between two rigid plates under 0.2 N: its contacts give by an XPBD "
+        "compliance derived from it (``contact_constraints.face_compliance``), rigid past 50 % (crushed); 0 = rigid "
+        "contacts",
+        range=(0.0, 45.0),
+        units="%",
     ),
     "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
     "stiffness": Param(
@@ -302,6 +318,7 @@ class SolverSettings:
     depenetration_speed: float
     # s: until this time the depenetration speed is at most HANDOFF_DEPENETRATION (a state handed on by another run)
     handoff_until: float
+    squeeze_strain: float  # an element's strain between rigid plates under SQUEEZE_LOAD (0 = rigid contacts)
 
     def __post_init__(self):
         object.__setattr__(self, "effects", frozenset(self.effects))
@@ -351,6 +368,7 @@ def solver_settings(params: XpbdParams, effects, radius: float, material=None, h
         speed_clamp=p.speed_clamp,
         depenetration_speed=p.depenetration_speed if p.depenetration_speed > 0 else np.inf,
         handoff_until=HANDOFF_FRAMES * p.dt if handed else 0.0,
+        squeeze_strain=p.squeeze_strain / 100.0,
         shock_propagation=p.shock_propagation,
         yolk_accel=p.gravity * (p.white_density / p.part_density - 1.0) if "gravity" in effects else 0.0,
     )
