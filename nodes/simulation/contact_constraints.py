@@ -45,9 +45,10 @@ Colouring = namedtuple("Colouring", "cell_start order dims")
 # its friction takes the true masses and tests each entry alone (``_project_slab``); empty: none is
 # and ``spring``: the elastic overlap its compliance holds so far this substep (``compliant_push``; empty: rigid)
 PairEntries = namedtuple("PairEntries", "allowance anchor load held mode rubbed glued spring")
-# ``alpha``: α̃ of one element's face (``face_compliance`` / h², 1/g; 0 = rigid contacts), ``crush``: the overlap
-# (mm) one face gives before it turns rigid
-ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion alpha crush")
+# compliant contacts' ``alpha`` (α̃ of one element's face, ``face_compliance`` / h², 1/g; 0 = rigid contacts),
+# ``crush`` (the overlap in mm one face gives before it turns rigid) and ``zeta`` (damping ratio of their unloading,
+# ``compliant_push``); flat fields: numba's parallel loop takes no tuple inside the bundle
+ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion alpha crush zeta")
 
 
 @njit(cache=True, inline="always")
@@ -147,15 +148,17 @@ def face_compliance(r, q_rest, start, strain: float, load: float, crush: float, 
 
 
 @njit(cache=True, inline="always")
-def compliant_push(w, p, q, pen, share, spring, a, alpha, crush):
-    """The normal correction of a pair overlapping by ``pen`` beyond what it tolerates, with compliance: XPBD
-    Δλ = (pen − α̃λ)/(W + α̃) (Macklin, Müller & Chentanez 2016, eq. 18) in correction units c = W·λ, never
-    negative within a substep; α̃ = ``alpha`` per face of a moving element (a static obstacle is rigid). W is
-    the inverse mass the correction's split (``share`` to p, mass scaling included) gives the heavier side,
-    min(w_p/share, w_q/(1 − share)): then λ/h² is the force on that side, and a pair at rest keeps the overlap
-    α·F however many iterations run (a heavy plate on light grains carries its weight). Past ``crush`` per face it
-    is rigid (the rest is corrected in full). ``spring[a]`` keeps the elastic overlap α̃·λ (pre-stabilisation
-    leaves it the next substep)."""
+def compliant_push(x, x_prev, w, p, q, normal, pen, share, spring, a, soft):
+    """The normal correction of a pair overlapping by ``pen`` beyond what it tolerates, with compliance: damped XPBD
+    Δλ = (pen − α̃λ − γ·Δs)/((1 + γ)W + α̃) (Macklin, Müller & Chentanez 2016, eqs. 18 and 26) in correction units
+    c = W·λ, never negative within a substep; Δs the pair's separation over the solve so far (x − x_prev along
+    ``normal``, from q to p), γ = 2ζ·√(α̃/W) (a spring of damping ratio ζ), so a landing grain does not bounce on
+    the overlap it compressed. ``soft`` = (α̃ per face of a moving element, a static obstacle being rigid; the crush
+    overlap per face; ζ). W is the inverse mass the correction's split (``share`` to p, mass scaling included) gives
+    the heavier side, min(w_p/share, w_q/(1 − share)): then λ/h² is the force on that side, and a pair at rest
+    keeps the overlap α·F however many iterations run (a heavy plate on light grains carries its weight). Past
+    ``crush`` per face it is rigid (the rest is corrected in full). ``spring[a]`` keeps the elastic overlap α̃·λ."""
+    alpha, crush, zeta = soft
     faces = (1.0 if w[p] > 0.0 else 0.0) + (1.0 if w[q] > 0.0 else 0.0)
     at = alpha * faces
     wsum = np.inf
@@ -166,7 +169,14 @@ def compliant_push(w, p, q, pen, share, spring, a, alpha, crush):
     if at <= 0.0 or wsum == np.inf:
         return pen
     c = spring[a] * wsum / at
-    push = max((wsum * pen - at * c) / (wsum + at), 0.0)
+    nx, ny, nz = normal
+    sep = (
+        (x[p, 0] - x_prev[p, 0] - x[q, 0] + x_prev[q, 0]) * nx
+        + (x[p, 1] - x_prev[p, 1] - x[q, 1] + x_prev[q, 1]) * ny
+        + (x[p, 2] - x_prev[p, 2] - x[q, 2] + x_prev[q, 2]) * nz
+    )
+    gamma = 2.0 * zeta * np.sqrt(at / wsum)
+    push = max(wsum * (pen - at * c / wsum - gamma * sep) / ((1.0 + gamma) * wsum + at), 0.0)
     held = at * (c + push) / wsum
     limit = crush * faces
     if held > limit:  # crushed: the face turns rigid
@@ -202,7 +212,7 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     partner's row is ``rows.at``)."""
     nbr_start, nbr, half, order, at = rows
     allowance, anchor, load, held_mean, modes, rubbed, glued, spring = entries
-    wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion, alpha, crush = rule
+    wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion, alpha, crush, zeta = rule
     any_glued = glued.shape[0] > 0
     for p in range(p0, p1):
         i = order[p]
@@ -227,7 +237,8 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
                 continue
             pen = depth - allowance[a] if normal else 0.0
             if alpha > 0.0 and pen > 0.0:  # the correction a compliant contact takes (before friction reads it)
-                pen = compliant_push(w, p, q, pen, share, spring, a, alpha, crush)
+                soft = (alpha, crush, zeta)
+                pen = compliant_push(x, x_prev, w, p, q, (nx, ny, nz), pen, share, spring, a, soft)
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
                 mode = TESTED
                 if anchored:  # the contact's pooled load and mode, else (none touched last substep, glued, or a

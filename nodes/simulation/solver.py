@@ -39,6 +39,7 @@ from .buffers import NO_TRACKING, ClusterBuffers, Contacts, ListRows, NeighbourL
 from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
 from .settings import (
+    CONTACT_DAMPING,
     CRUSH_STRAIN,
     HANDOFF_DEPENETRATION,
     ROTATION_ITERATIONS,
@@ -581,6 +582,7 @@ class XpbdSolver:
                 k.cohesion,
                 k.contact_alpha if soft else 0.0,
                 k.crush,
+                CONTACT_DAMPING,
             ),
             self.threads,
         )
