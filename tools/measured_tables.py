@@ -231,6 +231,22 @@ TABLES = {
             ("s", value("seconds")),
         ],
     ),
+    "compliant_contacts": (
+        "compliant_contacts.jsonl",
+        None,
+        [
+            ("contacts, plate", field("what")),
+            ("knobs", field("knobs")),
+            (
+                "plate strain at 0.05 / 0.2 / 1 N",
+                lambda r: " / ".join(f"{v * 100:.1f} %" for v in r["values"]["strain"].values()),
+            ),
+            ("grains squeezed out", value("escaped")),
+            ("left 0.5 s after the lift", lambda r: f"{r['values']['left_after_lift'] * 100:.1f} %"),
+            ("10 mm drop: rebound mm", value("rebound")),
+            ("s", value("seconds")),
+        ],
+    ),
     "squeeze_candidates": (
         "squeeze_candidates.jsonl",
         None,

@@ -97,7 +97,8 @@ PARAMS = {
     "particles_per_element": Param(
         int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
     ),
-    # 1 (particles in the mid-plane): a japonica grain squeezed under 0.2 N strains 1.7 % (only the contacts give);
+    # 1 (particles in the mid-plane): with rigid contacts (squeeze_strain 0) a japonica grain squeezed under 0.2 N
+    # strains 1.7 % (the compliant contacts give it 23.7 %: docs/validation.md);
     # 2 (16 particles) can flatten, but at 10 × 2 a 0.2 N plate passes through it at any stiffness, and with 8
     # iterations at 100 N/m it flattens 6.4 % and springs back, where cooked rice strains ≈ 25 % (Tomita, via G);
     # its stream heap does not rest (benchmarks/squeeze_candidates.py, docs/validation.md)
