@@ -5,8 +5,12 @@ benchmarks/measured/compliant_contacts.jsonl (one line per row); ``python tools/
 table in docs/validation.md.
 
     python benchmarks/compliant_contacts.py      # ≈ 2 min on 2 cores
+    python benchmarks/compliant_contacts.py --heaps   # the 300-grain stream at 10 and 40 substeps, the 890-grain
+                                                      # ball at 10 (physics_at_defaults.heap_case), ≈ 10 min;
+                                                      # benchmarks/measured/compliant_heaps.jsonl
 """
 
+import argparse
 import json
 import os
 import time
@@ -20,6 +24,7 @@ from machine import stamp  # noqa: E402
 from validation import drop_bounce, squeeze_xpbd  # noqa: E402
 
 RECORD = Path(__file__).resolve().parent / "measured" / "compliant_contacts.jsonl"
+HEAPS = RECORD.with_name("compliant_heaps.jsonl")
 LOADS = (0.05, 0.2, 1.0)  # N per grain
 
 
@@ -51,7 +56,26 @@ def row(what: str, flat: bool, **params) -> dict:
     }
 
 
+def heaps() -> list[dict]:
+    """The heaps of physics_at_defaults at the node's defaults (compliant contacts): does a heap still rest?"""
+    from physics_at_defaults import heap_case
+
+    rows = []
+    for shape, n, substeps in (("stream", 300, 10), ("stream", 300, 40), ("ball", 890, 10)):
+        load0 = os.getloadavg()[0]
+        case = heap_case(shape, n, substeps)
+        rows.append({"what": case["case"], "substeps": substeps, **{k: case[k] for k in ("ours", "values")}})
+        rows[-1].update(unit="degrees, s", command="python benchmarks/compliant_contacts.py --heaps", **stamp(load0))
+        print(rows[-1]["what"], substeps, rows[-1]["ours"], flush=True)
+    return rows
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--heaps", action="store_true", help="the heaps only (compliant_heaps.jsonl)")
+    if parser.parse_args().heaps:
+        HEAPS.write_text("".join(json.dumps(r, ensure_ascii=False) + "\n" for r in heaps()))
+        return
     rows = [
         row("compliant (default), flat plate", True),
         row("compliant (default), flat plate, 4× substeps", True, substeps=40),
