@@ -247,6 +247,29 @@ TABLES = {
             ("s", value("seconds")),
         ],
     ),
+    "compliant_heaps": (
+        "compliant_heaps.jsonl",
+        None,
+        [
+            ("heap, compliant contacts (defaults)", field("what")),
+            ("substeps", field("substeps")),
+            ("ours", field("ours")),
+            ("s", value("seconds")),
+        ],
+    ),
+    "compliant_main_job": (
+        "compliant_main_job.jsonl",
+        None,
+        [
+            ("the main job (ikura don)", field("what")),
+            ("wall s / CPU s, no node cache", pair("wall", "cpu")),
+            ("overlap depth / length p95 / max", pair("overlap_p95", "overlap_max")),
+            ("pairs deeper than 1 %", value("deep_pairs")),
+            ("bumps median / p95", pair("bumps_median", "bumps_p95")),
+            ("folds", value("folds")),
+            ("watertight", value("watertight")),
+        ],
+    ),
     "squeeze_candidates": (
         "squeeze_candidates.jsonl",
         None,
