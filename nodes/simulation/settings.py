@@ -134,10 +134,13 @@ PARAMS = {
         range=(0.0, 0.5),
         units="radii",
     ),
-    # 25 % at SQUEEZE_LOAD: cooked rice in its elastic range (Tomita et al., via G §2.2; SPEC §3); 0 = rigid contacts
+    # cooked rice strains 25 % at SQUEEZE_LOAD in its elastic range (Tomita et al., via G §2.2; SPEC §3). Off (0) by
+    # default: after the first substep pre-stabilisation leaves overlaps to the compliance, so overlaps one sweep does
+    # not separate (64 particles started at one point) are pushed apart with speed, a 1000× heavier element sinks
+    # 0.55–0.63 r into a light one, a 60-sphere column 0.12 r (tests/simulation/test_xpbd_core.py; docs/validation.md)
     "squeeze_strain": Param(
         float,
-        25.0,
+        0.0,
         "strain of an element squeezed between two rigid plates under 0.2 N: its contacts give by an XPBD "
         "compliance derived from it (``contact_constraints.face_compliance``), rigid past 50 % (crushed); 0 = rigid "
         "contacts",
