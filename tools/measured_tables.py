@@ -251,7 +251,7 @@ TABLES = {
         "compliant_heaps.jsonl",
         None,
         [
-            ("heap, compliant contacts (defaults)", field("what")),
+            ("heap, compliant contacts (squeeze_strain 25)", field("what")),
             ("substeps", field("substeps")),
             ("ours", field("ours")),
             ("s", value("seconds")),
