@@ -490,7 +490,13 @@ def grain_extent(x: np.ndarray, r: np.ndarray, rest: np.ndarray) -> float:
     return float((s + r).max() - (s - r).min())
 
 
-def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90, layers: int = 1, after: int = 0, **params) -> dict:
+# mm: the flat plate's radius (``squeeze_xpbd``): a sphere this large sags 0.02 mm over a grain 6.5 mm off its axis
+FLAT_PLATE = 1000.0
+
+
+def squeeze_xpbd(
+    load: float, particles: int = 8, frames: int = 90, layers: int = 1, after: int = 0, flat: bool = False, **params
+) -> dict:
     """Three rice grains of the element library (``scenes.grain_mesh``, 5 × 3 × 2.5 mm, ``particles`` per cluster in
     ``layers`` through the thickness, 25 mg) lying flat on the ground 120° apart under one disc plate (particles
     r 0.5 mm on a 1 mm grid, one cluster) whose weight is 3 × ``load`` (N): a plate that cannot tip, each grain
@@ -499,7 +505,8 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90, layers: int 
     left ``after`` frames to spring back. Returns the plate's mean height above the ground (mm), the grain's
     unloaded thickness, the grains' mean thickness under the load and after it (``grain_extent``), the grains that
     left the plate (centre > 5.5 mm from its axis), the grains' particles above the plate's mid-plane (it passed
-    them) and seconds."""
+    them) and seconds. ``flat``: the plate is one sphere of radius ``FLAT_PLATE`` instead (flat over the grains, one
+    contact per grain particle, as a compression tester's platen)."""
     from scene_builders import grain_mesh, solver_run
 
     from nodes.simulation.clusters import element_cluster
@@ -518,43 +525,100 @@ def squeeze_xpbd(load: float, particles: int = 8, frames: int = 90, layers: int 
     disc = np.stack(np.meshgrid(axis, axis, indexing="ij"), -1).reshape(-1, 2)
     disc = disc[np.hypot(disc[:, 0], disc[:, 1]) <= 7.0]
     plate = np.c_[disc, np.full(len(disc), float((grain[:, 2] + cluster.radii).max()) + 0.51)]
+    plate_r = 0.5
+    if flat:
+        plate_r = FLAT_PLATE
+        plate = np.array([[0.0, 0.0, float((grain[:, 2] + cluster.radii).max()) + 0.01 + FLAT_PLATE]])
     n = len(grain)
     x = np.concatenate(grains + [plate])
     plate_g = 3 * load / 9.81 * 1000  # N → g
     settings = solver_settings_for(EFFECTS, 0.5, **{**NO_SLEEP, **params})
     run = solver_run(
         x,
-        np.concatenate([cluster.radii] * 3 + [np.full(len(plate), 0.5)]),
+        np.concatenate([cluster.radii] * 3 + [np.full(len(plate), plate_r)]),
         np.concatenate([np.full(3 * n, n / (GRAIN_MG * 1e-3)), np.full(len(plate), len(plate) / plate_g)]),
         np.array([0, n, 2 * n, 3 * n, len(x)]),
         np.concatenate([g - g.mean(axis=0) for g in grains] + [plate - plate.mean(axis=0)]),
         np.tile([1.0, 0, 0, 0], (4, 1)),
         settings,
-        sdf=ground(10.0, float(x[:, 2].max()) + 3.0, 0.25),
+        sdf=ground(10.0, float(x[: 3 * n, 2].max()) + 3.0, 0.25),
     )
 
     def extent() -> float:
         return float(np.mean([grain_extent(run.state.x[k * n : (k + 1) * n], cluster.radii, grain) for k in range(3)]))
+
+    def top() -> float:  # the grains' mean top above the ground (mm)
+        tops = (run.state.x[: 3 * n, 2] + np.tile(cluster.radii, 3)).reshape(3, n).max(axis=1)
+        return float(tops.mean())
 
     start = time.perf_counter()
     for _ in range(frames):
         run.frame()
     centres = run.state.x[: 3 * n].reshape(3, n, 3).mean(axis=1)
     out = {
-        "gap": float((run.state.x[3 * n :, 2] - 0.5).mean()),
+        "gap": float((run.state.x[3 * n :, 2] - plate_r).mean()),
         "thickness": thickness,
         "loaded": extent(),
         "escaped": int((np.hypot(centres[:, 0], centres[:, 1]) > 5.5).sum()),
-        "above": int((run.state.x[: 3 * n, 2] > run.state.x[3 * n :, 2].mean()).sum()),  # grain particles over it
+        "top": top(),
+        # grain particles over its mid-plane (over its underside: a flat plate)
+        "above": int((run.state.x[: 3 * n, 2] > run.state.x[3 * n :, 2].mean() - (plate_r if flat else 0.0)).sum()),
     }
     if after:
         run.state.x[3 * n :, 2] += 2000.0  # the plate lifted off (it falls 0.7 m in 0.4 s: out of reach)
         run.state.v[3 * n :] = 0.0
+        rise = 0.0
         for _ in range(after):
             run.frame()
+            rise = max(rise, top())
         out["after"] = extent()
+        out["top_after"] = top()
+        out["rise"] = rise - out["top_after"]  # how far the released grains rose above where they came to rest
     out["seconds"] = time.perf_counter() - start
     return out
+
+
+def drop_bounce(height: float = 10.0, frames: int = 60, **params) -> dict:
+    """A landing: one library grain (8 particles, 25 mg) lying flat on the ground and a second one, turned 90° about
+    the vertical, dropped onto it from ``height`` mm above contact, at the xpbd node's defaults (no sleeping) or
+    ``params`` over them. Returns its rebound (mm: the highest its centre rises after its lowest point, over its
+    height at rest at the end), its speed at impact (mm/s) and the two grains' compression at rest (mm: how far the
+    dropped one's centre ends below where the rigid grains would hold it)."""
+    from scene_builders import grain_mesh, solver_run
+
+    from nodes.simulation.clusters import element_cluster
+    from nodes.simulation.settings import solver_settings_for
+
+    cluster = element_cluster(grain_mesh(), 8, quadratic=False, layers=1)
+    grain = cluster.centres - cluster.centres.mean(axis=0)
+    grain[:, 2] -= (grain[:, 2] - cluster.radii).min() - 0.01
+    top = float((grain[:, 2] + cluster.radii).max())
+    turned = grain[:, [1, 0, 2]] * [-1.0, 1.0, 1.0] + [0.0, 0.0, top + height]
+    n = len(grain)
+    x = np.concatenate([grain, turned])
+    settings = solver_settings_for(EFFECTS, 0.5, **{**NO_SLEEP, **params})
+    run = solver_run(
+        x,
+        np.concatenate([cluster.radii] * 2),
+        np.full(2 * n, n / (GRAIN_MG * 1e-3)),
+        np.array([0, n, 2 * n]),
+        np.concatenate([g - g.mean(axis=0) for g in (grain, turned)]),
+        np.tile([1.0, 0, 0, 0], (2, 1)),
+        settings,
+        sdf=ground(10.0, float(x[:, 2].max()) + 3.0, 0.25),
+    )
+    z, speed = [], []
+    for _ in range(frames * run.solver.steps):  # substep by substep: a rebound shorter than a frame shows
+        run.step()
+        z.append(float(run.state.x[n:, 2].mean()))
+        speed.append(float(-run.state.v[n:, 2].mean()))
+    low = int(np.argmin(z))
+    rest = z[-1]
+    return {
+        "rebound": max(z[low:]) - rest,
+        "impact": max(speed),
+        "compression": float(x[n:, 2].mean() - height - rest),
+    }
 
 
 # the elastic body's stiffness (1/s², U eq. 3.16) at which a 25 mg grain strains 25 % at 0.2 N (fitted once:
@@ -919,29 +983,39 @@ def ellipsoid_case(quick: bool, figures: dict) -> Case:
 
 
 def squeeze_case(quick: bool, figures: dict) -> Case:
-    """A squeezed grain: the xpbd cluster under a plate (one layer of particles, and two through the thickness), the
-    tearing node's elastic body under a pressed patch."""
+    """A squeezed grain: the xpbd cluster under a flat plate and the grid plate with compliant contacts,
+    and with rigid ones (one layer of particles, and two through the thickness), the tearing node's elastic body under
+    a pressed patch."""
     t = time.perf_counter()
     loads = (0.001, 0.05, 0.2, 1.0) if quick else (0.001, 0.02, 0.05, 0.1, 0.2, 0.4, 1.0)
-    plate = [squeeze_xpbd(f, after=30 if f == 0.2 else 0) for f in loads]
+    soft = [squeeze_xpbd(f, flat=True, squeeze_strain=25.0) for f in loads]
+    soft_strain = [1 - r["gap"] / soft[0]["gap"] for r in soft]
+    grid = [squeeze_xpbd(f, squeeze_strain=25.0) for f in (0.001, 0.2)]
+    rigid = dict(squeeze_strain=0.0)
+    plate = [squeeze_xpbd(f, after=30 if f == 0.2 else 0, **rigid) for f in loads]
     rest = plate[0]["gap"]  # the plate on unloaded grains (≈ 1 mN): the reference height
     xpbd_strain = [1 - r["gap"] / rest for r in plate]
-    dense = squeeze_xpbd(0.2, particles=16)
-    dense_rest = squeeze_xpbd(0.001, particles=16)
+    dense = squeeze_xpbd(0.2, particles=16, **rigid)
+    dense_rest = squeeze_xpbd(0.001, particles=16, **rigid)
     # two layers through the thickness (``particle_layers`` 2), at the defaults and with 8 iterations
-    layered = {f: squeeze_xpbd(f, particles=16, layers=2) for f in (0.001, 0.05, 0.2)}
-    held = {f: squeeze_xpbd(f, particles=16, layers=2, after=30, iterations=8, stiffness=100.0) for f in (0.001, 0.2)}
+    layered = {f: squeeze_xpbd(f, particles=16, layers=2, **rigid) for f in (0.001, 0.05, 0.2)}
+    held = {
+        f: squeeze_xpbd(f, particles=16, layers=2, after=30, iterations=8, stiffness=100.0, **rigid)
+        for f in (0.001, 0.2)
+    }
     body_loads = (
         (0.05, 0.1, 0.2, 0.3, 0.4, 0.6, 0.8) if quick else (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
     )
     body = [squeeze_body(f) for f in body_loads]
-    soft = squeeze_body(0.002, stiffness=2.0e4, substeps=10)  # the elastic_body node's stiffness and substeps
+    crushed = squeeze_body(0.002, stiffness=2.0e4, substeps=10)  # the elastic_body node's stiffness and substeps
     low = squeeze_body(0.4, threshold=1.2)  # a break threshold below the longest edge at 50 % strain
     half = min(body, key=lambda r: abs(r["strain"] - 0.5))
     at02 = body[body_loads.index(0.2)]["strain"]
     one = plate[loads.index(0.2)]
     figures["squeeze"] = {
         "loads": loads,
+        "soft_strain": soft_strain,
+        "grid_strain": 1 - grid[1]["gap"] / grid[0]["gap"],
         "xpbd_strain": xpbd_strain,
         "xpbd_flattening": 1 - one["loaded"] / one["thickness"],
         "xpbd16_strain": 1 - dense["gap"] / dense_rest["gap"],
@@ -955,22 +1029,28 @@ def squeeze_case(quick: bool, figures: dict) -> Case:
         "body_strain": [r["strain"] for r in body],
         "body_stretch": [r["stretch"] for r in body],
         "body_tears": [r["tears"] for r in body],
-        "soft_strain": soft["strain"],
+        "crushed_strain": crushed["strain"],
         "low_threshold_tears": low["tears"],
     }
     sq = figures["squeeze"]
-    plot = _plot_squeeze(loads, xpbd_strain, body_loads, body)
+    plot = _plot_squeeze(loads, (soft_strain, xpbd_strain), body_loads, body)
     return Case(
         "Squeezed grain",
         "(a) xpbd: three library grains (5 × 3 × 2.5 mm ellipsoids, 8 particles, 25 mg) flat on the ground under one "
-        "disc plate of weight 3 × load (a plate that cannot tip), 1.5 s; strain = 1 − plate height / its height at "
-        "1 mN; flattening = 1 − the grain's thickness along its own axis / the unloaded one; springback: the plate "
-        "lifted off, 0.5 s. (c) the same with 16 particles in two layers through the thickness (particle_layers 2). "
+        "flat plate (a sphere of radius 1 m) of weight 3 × load, 1.5 s, compliant contacts "
+        "(squeeze_strain 25 %); strain = 1 − plate height / its height at 1 mN; the same under the grid plate "
+        "(particles r 0.5 mm on a 1 mm grid, one cluster: a plate that cannot tip). (a′) rigid contacts "
+        "(squeeze_strain 0), grid plate; flattening = 1 − the grain's thickness along its own axis / the unloaded "
+        "one; springback: the plate lifted off, 0.5 s. (c) the same with 16 particles in two layers through the "
+        "thickness (particle_layers 2), rigid contacts. "
         "(b) the tearing node's elastic body (the same grain's surface, 162 vertices, 25 mg): bottom tenth held, "
         "top tenth pressed, load ramped over 1/6 s, 0.5 s; strain from the two patches' heights; tearing on "
         "(rule vertex, 3× stretch)",
         "cooked rice strains ≈ 25 % at 0.2 N in its elastic range and fractures near 50 % (Tomita, via G; SPEC §3)",
         "(a) strain "
+        + ", ".join(f"{e * 100:.1f} %" for e in soft_strain)
+        + f" at {', '.join(f'{f:g}' for f in loads)} N (grid plate: {sq['grid_strain'] * 100:.1f} % at 0.2 N); "
+        "(a′) strain "
         + ", ".join(f"{e * 100:.1f} %" for e in xpbd_strain)
         + f" at {', '.join(f'{f:g}' for f in loads)} N (16 particles: {sq['xpbd16_strain'] * 100:.1f} % at 0.2 N); "
         f"the grain itself does not flatten ({sq['xpbd_flattening'] * 100:.1f} % at 0.2 N); (c) at the defaults "
@@ -982,22 +1062,28 @@ def squeeze_case(quick: bool, figures: dict) -> Case:
         + ", ".join(f"{r['strain'] * 100:.0f} %" for r in body)
         + f" at {', '.join(f'{f:g}' for f in body_loads)} N, tears {sum(r['tears'] for r in body)}; largest edge "
         f"stretch {half['stretch']:.2f}× at {half['strain'] * 100:.0f} % strain; at the node's stiffness "
-        f"(2·10⁴/s², 10 substeps) crushed through itself at 2 mN (strain {soft['strain']:.0f}×)",
-        f"(a) {xpbd_strain[loads.index(0.2)] * 100:.1f} % against 25 % at 0.2 N: the xpbd grain is rigid across its "
+        f"(2·10⁴/s², 10 substeps) crushed through itself at 2 mN (strain {crushed['strain']:.0f}×)",
+        f"(a) {soft_strain[loads.index(0.2)] * 100:.1f} % against 25 % at 0.2 N: the grain gives at its contacts, "
+        "by an XPBD compliance derived from Tomita's strain (``contact_constraints.face_compliance``), rigid past "
+        "50 % (the 1 N row stops there: fracture, which no rule here models); the grid plate's small particles "
+        "touch each grain particle 1–4 times, contacts in parallel, so it reads stiffer. (a′) "
+        f"{xpbd_strain[loads.index(0.2)] * 100:.1f} %: with rigid contacts the xpbd grain is rigid across its "
         "thickness — its particles are spheres that do not deform and at 8 per grain lie in one plane, so the only "
         "give is the contacts' tolerated overlap; stiffness and β cannot change it. (c) two layers can flatten, but "
         "the give is the solve's, not the stiffness's: at 10 × 2 two iterations of contacts then shape matching do "
         "not hold a top layer that touches nothing below, whatever the stiffness (1–2,000 N/m), and the plate "
         "passes between the smaller particles; with more iterations the grain holds and springs back but stays "
-        "stiffer than its compliance (most of the plate's strain is its sinking between the top particles): no "
-        "layout reaches 20–30 % at the defaults (candidates, heap angles and costs: the table below). (b) "
+        "stiffer than its compliance (most of the plate's strain is its sinking between the top particles): with "
+        "rigid contacts no layout reaches 20–30 % at the defaults (candidates, heap angles and costs: the table "
+        "below). (b) "
         f"{at02 * 100:.0f} % at 0.2 N by construction (the stiffness is fitted to it), linear to "
         f"{body[-1]['strain'] * 100:.0f} % (the top passes through the bottom: no contact inside the body); the "
         "tearing effect never breaks it: its test is edge stretch (3×), which a squeeze does not produce "
         f"(≤ {max(r['stretch'] for r in body):.2f}×); even at threshold 1.2 it holds at 50 % ({low['tears']} tears: "
         "rule vertex needs every edge at a vertex past it); fracture near 50 % needs a compressive rule",
-        "(a) xpbd defaults: 10 substeps × 2 iterations, stiffness 2,000 N/m, β 0.3, 8 particles per grain; (c) 16 "
-        "particles, particle_layers 2; "
+        "(a) xpbd defaults but squeeze_strain 25 %: 10 substeps × 2 iterations, stiffness 2,000 N/m, β 0.3, 8 "
+        "particles per grain; (a′) the defaults (squeeze_strain 0); (c) 16 particles, particle_layers 2, "
+        "squeeze_strain 0; "
         f"(b) 300 substeps per 1/60 s (α = k·h² ≤ 1 caps k at 1/h²: a 25 mg grain as stiff as Tomita's needs "
         f"k = {TOMITA_STIFFNESS:.2g}/s², ≥ 282 substeps), β 0.3, damping 50/s",
         time.perf_counter() - t,
@@ -1027,9 +1113,11 @@ def _saved(plt, fig, ax, path, legend: int | None = 8) -> str:
     return str(path.relative_to(DOC.parent))
 
 
-def _plot_squeeze(loads, xpbd_strain, body_loads, body):
+def _plot_squeeze(loads, xpbd_strains, body_loads, body):
     plt, fig, ax = _axes()
-    ax.plot(loads, np.array(xpbd_strain) * 100, "o-", label="xpbd grain (8 particles) under a plate")
+    soft, rigid = xpbd_strains
+    ax.plot(loads, np.array(soft) * 100, "o-", label="xpbd grain (8 particles), compliant contacts, flat plate")
+    ax.plot(loads, np.array(rigid) * 100, "o--", label="xpbd grain, rigid contacts")
     ax.plot(body_loads, [r["strain"] * 100 for r in body], "s-", label="elastic body (tearing on), k fitted")
     torn = [(f, r["strain"] * 100) for f, r in zip(body_loads, body) if r["tears"]]
     if torn:

@@ -231,6 +231,45 @@ TABLES = {
             ("s", value("seconds")),
         ],
     ),
+    "compliant_contacts": (
+        "compliant_contacts.jsonl",
+        None,
+        [
+            ("contacts, plate", field("what")),
+            ("knobs", field("knobs")),
+            (
+                "plate strain at 0.05 / 0.2 / 1 N",
+                lambda r: " / ".join(f"{v * 100:.1f} %" for v in r["values"]["strain"].values()),
+            ),
+            ("grains squeezed out", value("escaped")),
+            ("left 0.5 s after the lift", lambda r: f"{r['values']['left_after_lift'] * 100:.1f} %"),
+            ("10 mm drop: rebound mm", value("rebound")),
+            ("s", value("seconds")),
+        ],
+    ),
+    "compliant_heaps": (
+        "compliant_heaps.jsonl",
+        None,
+        [
+            ("heap, compliant contacts (squeeze_strain 25)", field("what")),
+            ("substeps", field("substeps")),
+            ("ours", field("ours")),
+            ("s", value("seconds")),
+        ],
+    ),
+    "compliant_main_job": (
+        "compliant_main_job.jsonl",
+        None,
+        [
+            ("the main job (ikura don)", field("what")),
+            ("wall s / CPU s, no node cache", pair("wall", "cpu")),
+            ("overlap depth / length p95 / max", pair("overlap_p95", "overlap_max")),
+            ("pairs deeper than 1 %", value("deep_pairs")),
+            ("bumps median / p95", pair("bumps_median", "bumps_p95")),
+            ("folds", value("folds")),
+            ("watertight", value("watertight")),
+        ],
+    ),
     "squeeze_candidates": (
         "squeeze_candidates.jsonl",
         None,

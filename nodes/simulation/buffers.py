@@ -123,6 +123,9 @@ class Contacts:
     mode: np.ndarray
     rubbed: np.ndarray
     force: np.ndarray  # per list entry, its contact's remembered force (``friction.FORCE`` columns)
+    # compliant contacts (``squeeze_strain``), per list entry: the elastic overlap its compliance holds this substep
+    # (``contact_constraints.compliant_push``); empty with rigid contacts
+    spring: np.ndarray
     # which contact each entry belongs to (``friction.contact_groups``)
     groups: ContactGroups = NO_GROUPS
     displacement: float = np.inf
@@ -151,6 +154,7 @@ class Contacts:
             np.empty(0, np.int8),
             np.empty((0, RUBBED)),
             np.empty((0, FORCE)),
+            np.empty(0),
         )
 
     def stale(self) -> bool:

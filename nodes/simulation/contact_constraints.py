@@ -9,7 +9,8 @@ particle moves by the mean of its contacts' corrections) was stable but weak: in
 particle with n contacts moved by 1/n of what it needed per sweep, and 50k-sphere piles sank into
 themselves (penetration ≈ 2 radii). Gauss–Seidel has no such division and stays race-free and
 deterministic (the order within a cell is fixed, colours run in a fixed order).
-Contacts have zero compliance and produce no restitution: velocities come from positions.
+Contacts are rigid, or with ``squeeze_strain`` compliant (``compliant_push``): an element then gives at its
+contacts as a squeezed grain does, and pre-stabilisation leaves each pair the elastic overlap its load holds.
 
 Tall piles: shock propagation by mass scaling (Macklin et al. 2014 §5.2, after Guendelman et al.
 2003). Within the contact solve a particle's inverse mass is scaled by exp(k·z): the lower of two
@@ -42,8 +43,12 @@ Colouring = namedtuple("Colouring", "cell_start order dims")
 # load), its contact's mean load over the last substep and its friction mode (``friction.pool_contacts``), what
 # friction removed this substep (``friction.RUBBED`` columns), and ``glued``: its grains are glued (``glue``), so
 # its friction takes the true masses and tests each entry alone (``_project_slab``); empty: none is
-PairEntries = namedtuple("PairEntries", "allowance anchor load held mode rubbed glued")
-ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion")
+# and ``spring``: the elastic overlap its compliance holds so far this substep (``compliant_push``; empty: rigid)
+PairEntries = namedtuple("PairEntries", "allowance anchor load held mode rubbed glued spring")
+# compliant contacts' ``alpha`` (α̃ of one element's face, ``face_compliance`` / h², 1/g; 0 = rigid contacts),
+# ``crush`` (the overlap in mm one face gives before it turns rigid) and ``zeta`` (damping ratio of their unloading,
+# ``compliant_push``); flat fields: numba's parallel loop takes no tuple inside the bundle
+ContactRule = namedtuple("ContactRule", "wake_step lift upright mu_s mu_k anchored normal cohesion alpha crush zeta")
 
 
 @njit(cache=True, inline="always")
@@ -117,6 +122,70 @@ def sleeper_share(x, x_prev, w, awake, pushed, i, j, wake_step):
     return 1.0 if a == i else 0.0
 
 
+def face_compliance(r, q_rest, start, strain: float, load: float, crush: float, sample: int = 64):
+    """The XPBD compliance (mm/N) of one face of an element and the overlap (mm) it gives before it turns rigid,
+    such that the element squeezed flat between two rigid plates under ``load`` (N) strains by ``strain``: its
+    thickness t along its thinnest axis (the smallest principal axis of its particles) shortens by strain·t, half at
+    each face, and a face's particles carry the load in parallel, each by its own overlap (the particles a plate
+    reaches first carry more, so the element stiffens as it flattens): α = Σ_k max(0, δ − (top − s_k)) / load,
+    δ = strain·t/2, s_k the top of particle k's sphere. Averaged over both faces and the median over up to
+    ``sample`` elements (``start``: CSR of the clusters, ``q_rest``: rest offsets, ``r``: radii). The crush overlap
+    is crush·t/2 (a face rigid past that strain). Overlap = α·F at rest whatever the iterations (Macklin, Müller &
+    Chentanez 2016, XPBD eq. 18)."""
+    m = len(start) - 1
+    alphas, limits = [], []
+    for e in np.unique(np.linspace(0, m - 1, min(m, sample)).astype(np.int64)):
+        q, radius = q_rest[start[e] : start[e + 1]], r[start[e] : start[e + 1]]
+        q = q - q.mean(axis=0)
+        axis = np.linalg.eigh(q.T @ q)[1][:, 0] if len(q) > 1 else np.array([0.0, 0.0, 1.0])
+        s = q @ axis
+        t = float((s + radius).max() - (s - radius).min())
+        delta = strain * t / 2.0
+        given = [np.maximum(0.0, delta - (top.max() - top)).sum() for top in (s + radius, radius - s)]
+        alphas.append(0.5 * sum(given) / load)
+        limits.append(crush * t / 2.0)
+    return float(np.median(alphas)), float(np.median(limits))
+
+
+@njit(cache=True, inline="always")
+def compliant_push(x, x_prev, w, p, q, normal, pen, share, spring, a, soft):
+    """The normal correction of a pair overlapping by ``pen`` beyond what it tolerates, with compliance: damped XPBD
+    Δλ = (pen − α̃λ − γ·Δs)/((1 + γ)W + α̃) (Macklin, Müller & Chentanez 2016, eqs. 18 and 26) in correction units
+    c = W·λ, never negative within a substep; Δs the pair's separation over the solve so far (x − x_prev along
+    ``normal``, from q to p), γ = 2ζ·√(α̃/W) (a spring of damping ratio ζ), so a landing grain does not bounce on
+    the overlap it compressed. ``soft`` = (α̃ per face of a moving element, a static obstacle being rigid; the crush
+    overlap per face; ζ). W is the inverse mass the correction's split (``share`` to p, mass scaling included) gives
+    the heavier side, min(w_p/share, w_q/(1 − share)): then λ/h² is the force on that side, and a pair at rest
+    keeps the overlap α·F however many iterations run (a heavy plate on light grains carries its weight). Past
+    ``crush`` per face it is rigid (the rest is corrected in full). ``spring[a]`` keeps the elastic overlap α̃·λ."""
+    alpha, crush, zeta = soft
+    faces = (1.0 if w[p] > 0.0 else 0.0) + (1.0 if w[q] > 0.0 else 0.0)
+    at = alpha * faces
+    wsum = np.inf
+    if share > 0.0 and w[p] > 0.0:
+        wsum = w[p] / share
+    if share < 1.0 and w[q] > 0.0:
+        wsum = min(wsum, w[q] / (1.0 - share))
+    if at <= 0.0 or wsum == np.inf:
+        return pen
+    c = spring[a] * wsum / at
+    nx, ny, nz = normal
+    sep = (
+        (x[p, 0] - x_prev[p, 0] - x[q, 0] + x_prev[q, 0]) * nx
+        + (x[p, 1] - x_prev[p, 1] - x[q, 1] + x_prev[q, 1]) * ny
+        + (x[p, 2] - x_prev[p, 2] - x[q, 2] + x_prev[q, 2]) * nz
+    )
+    gamma = 2.0 * zeta * np.sqrt(at / wsum)
+    push = max(wsum * (pen - at * c / wsum - gamma * sep) / ((1.0 + gamma) * wsum + at), 0.0)
+    held = at * (c + push) / wsum
+    limit = crush * faces
+    if held > limit:  # crushed: the face turns rigid
+        held = limit
+    spring[a] = held
+    rest = pen - push - limit
+    return push + rest if rest > 0.0 else push
+
+
 @njit(cache=True)
 def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     """Project, in order, every pair listed in the rows of the sorted range p0:p1 (a slab; full
@@ -142,8 +211,8 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     The particle arrays are the sweep's sorted copies (``_sorted_copies``: row p holds particle order[p], a
     partner's row is ``rows.at``)."""
     nbr_start, nbr, half, order, at = rows
-    allowance, anchor, load, held_mean, modes, rubbed, glued = entries
-    wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion = rule
+    allowance, anchor, load, held_mean, modes, rubbed, glued, spring = entries
+    wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion, alpha, crush, zeta = rule
     any_glued = glued.shape[0] > 0
     for p in range(p0, p1):
         i = order[p]
@@ -167,6 +236,9 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
             if share < 0.0:
                 continue
             pen = depth - allowance[a] if normal else 0.0
+            if alpha > 0.0 and pen > 0.0:  # the correction a compliant contact takes (before friction reads it)
+                soft = (alpha, crush, zeta)
+                pen = compliant_push(x, x_prev, w, p, q, (nx, ny, nz), pen, share, spring, a, soft)
             if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
                 mode = TESTED
                 if anchored:  # the contact's pooled load and mode, else (none touched last substep, glued, or a

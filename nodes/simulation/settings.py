@@ -47,6 +47,19 @@ SETTLE_TIME = 1.0 / 600.0
 HANDOFF_FRAMES = 3
 HANDOFF_DEPENETRATION = 50.0  # mm/s
 YOLK_DRAG = 40.0  # 1/s: a yolk's drag towards its egg's velocity (``buoyancy.yolk_predict``)
+# N: the load at which ``squeeze_strain`` is given (Tomita et al., via G §2.2: ≈ 25 % at 0.2 N)
+SQUEEZE_LOAD = 0.2
+# a contact is rigid past this strain of its element: cooked rice fractures near 50 % (Tomita et al., via G §2.2), and
+# beyond it the grain breaks (the tearing effect's business), it does not squeeze on; it also bounds how deep a
+# pile's weight can press particles into each other
+CRUSH_STRAIN = 0.5
+# the damping ratio of a compliant contact (``contact_constraints.compliant_push``). The damping acts on the pair's
+# motion within a substep, which two iterations leave unconverged under a heavy load, so it also carries part of a
+# load at rest: a grain dropped 10 mm onto another (``validation.drop_bounce``) rebounds 0.145 / 1.07 mm at 10 / 40
+# substeps undamped, 0.095 / 0.68 at 0.5 and 0.071 / 0.51 at 1 (rigid contacts: 0.074 / 0.67), while 0.2 N on the
+# flat plate strains the grains 23.4 %, 23.7 % and 15.1 % (``validation.squeeze_xpbd``): 0.5 bounces no more than
+# rigid contacts at 40 substeps and keeps the static strain
+CONTACT_DAMPING = 0.5
 ROTATION_ITERATIONS = 8  # iterations of the rotation extraction in shape matching and glue (Müller 2016)
 
 
@@ -84,7 +97,8 @@ PARAMS = {
     "particles_per_element": Param(
         int, 8, "particles per element cluster (G Table 3 'number of points')", range=(1, 64)
     ),
-    # 1 (particles in the mid-plane): a japonica grain squeezed under 0.2 N strains 1.7 % (only the contacts give);
+    # 1 (particles in the mid-plane): with rigid contacts (squeeze_strain 0) a japonica grain squeezed under 0.2 N
+    # strains 1.7 % (the compliant contacts give it 23.7 %: docs/validation.md);
     # 2 (16 particles) can flatten, but at 10 × 2 a 0.2 N plate passes through it at any stiffness, and with 8
     # iterations at 100 N/m it flattens 6.4 % and springs back, where cooked rice strains ≈ 25 % (Tomita, via G);
     # its stream heap does not rest (benchmarks/squeeze_candidates.py, docs/validation.md)
@@ -119,6 +133,19 @@ PARAMS = {
         "(deep dents after the run); the offset keeps them apart by up to twice as much where the cover is tight",
         range=(0.0, 0.5),
         units="radii",
+    ),
+    # cooked rice strains 25 % at SQUEEZE_LOAD in its elastic range (Tomita et al., via G §2.2; SPEC §3). Off (0) by
+    # default: after the first substep pre-stabilisation leaves overlaps to the compliance, so overlaps one sweep does
+    # not separate (64 particles started at one point) are pushed apart with speed, a 1000× heavier element sinks
+    # 0.55–0.63 r into a light one, a 60-sphere column 0.12 r (tests/simulation/test_xpbd_core.py; docs/validation.md)
+    "squeeze_strain": Param(
+        float,
+        0.0,
+        "strain of an element squeezed between two rigid plates under 0.2 N: its contacts give by an XPBD "
+        "compliance derived from it (``contact_constraints.face_compliance``), rigid past 50 % (crushed); 0 = rigid "
+        "contacts",
+        range=(0.0, 45.0),
+        units="%",
     ),
     "mass": Param(float, 25.0, "mass of one element (G Table 3)", range=(1e-3, 1000.0), units="mg"),
     "stiffness": Param(
@@ -302,6 +329,7 @@ class SolverSettings:
     depenetration_speed: float
     # s: until this time the depenetration speed is at most HANDOFF_DEPENETRATION (a state handed on by another run)
     handoff_until: float
+    squeeze_strain: float  # an element's strain between rigid plates under SQUEEZE_LOAD (0 = rigid contacts)
 
     def __post_init__(self):
         object.__setattr__(self, "effects", frozenset(self.effects))
@@ -351,6 +379,7 @@ def solver_settings(params: XpbdParams, effects, radius: float, material=None, h
         speed_clamp=p.speed_clamp,
         depenetration_speed=p.depenetration_speed if p.depenetration_speed > 0 else np.inf,
         handoff_until=HANDOFF_FRAMES * p.dt if handed else 0.0,
+        squeeze_strain=p.squeeze_strain / 100.0,
         shock_propagation=p.shock_propagation,
         yolk_accel=p.gravity * (p.white_density / p.part_density - 1.0) if "gravity" in effects else 0.0,
     )

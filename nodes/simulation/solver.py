@@ -39,10 +39,13 @@ from .buffers import NO_TRACKING, ClusterBuffers, Contacts, ListRows, NeighbourL
 from .friction_models import NO_FRICTION, FrictionRule
 from .model import Model
 from .settings import (
+    CONTACT_DAMPING,
+    CRUSH_STRAIN,
     HANDOFF_DEPENETRATION,
     ROTATION_ITERATIONS,
     SETTLE_TIME,
     SLEEP_PROBE,
+    SQUEEZE_LOAD,
     WAKE_ACCEL,
     YOLK_DRAG,
     SolverSettings,
@@ -148,6 +151,10 @@ class Coefficients:
     # adhesion's pull at the capture distance as a friction load per unit of the pair's inverse mass (mm·g): F·h²,
     # F = capture / adhesion compliance; 0 without 'adhesion' or anchors (``contact_constraints._project_slab``)
     cohesion: float
+    # α̃ of one element's face at its contacts (1/g; 0 = rigid contacts) and the overlap (mm) a face gives before it
+    # turns rigid (``contact_constraints.face_compliance``, from ``squeeze_strain``)
+    contact_alpha: float
+    crush: float
 
     @classmethod
     def of(cls, model: Model, settings: SolverSettings, pieces: int = 1) -> Coefficients:
@@ -156,6 +163,13 @@ class Coefficients:
         h = settings.h / pieces
         gravity = "gravity" in effects
         radii = model.r[: model.n_moving]
+        face, crush = (
+            contact_constraints.face_compliance(
+                model.r, model.q_rest, model.start, s.squeeze_strain, SQUEEZE_LOAD, CRUSH_STRAIN
+            )
+            if s.squeeze_strain > 0 and "contact" in effects and model.elements > 0
+            else (0.0, 0.0)
+        )
         lift = (
             np.log(s.shock_propagation) / (2.0 * float(np.median(radii)))
             if gravity and s.shock_propagation > 1.0
@@ -178,6 +192,8 @@ class Coefficients:
             adhesion_alpha=s.adhesion_compliance / (h * h),
             yolk_accel=np.array([0.0, 0.0, s.yolk_accel]),
             cohesion=s.friction.cohesion(s.capture, h, s.adhesion_compliance) if "adhesion" in effects else 0.0,
+            contact_alpha=face * 1e-6 / (h * h),  # mm/N → s²/g, over h²
+            crush=crush,
         )
 
 
@@ -262,6 +278,7 @@ class XpbdSolver:
         self.glue_floors = (None, None, None, NO_GLUED)
         self.x_mark = model.x0.copy()  # positions at the start of a frame's last solve (diagnostics)
         self.x_begin = model.x0.copy()  # positions at the start of the current solve
+        self.kept = 0.0  # mm: the overlap pre-stabilisation leaves compliant contacts (``_kept``)
         self.solved = 0  # particles solved over the substeps of the current frame
         # threads: fixed, or None = one below PARALLEL_PARTICLES, else the free cores, re-measured per frame
         most = (
@@ -379,6 +396,7 @@ class XpbdSolver:
                 0.0,
                 pairs.allowance,
             )
+            self._kept(pairs)
             self._pressed(st, pairs)
         if clusters is not None:
             clusters.clear()
@@ -470,6 +488,8 @@ class XpbdSolver:
         pairs.displacement = 0.0
         if "contact" in self.settings.effects:
             pairs.allowance = np.zeros(len(nbr))
+            if self.coefficients.contact_alpha > 0:  # this substep's elastic overlaps start afresh
+                pairs.spring = np.zeros(len(nbr))
         return True
 
     def _prestabilise(self, st: State, pairs: Contacts | None) -> None:
@@ -484,15 +504,22 @@ class XpbdSolver:
         self._refresh_neighbours(st, pairs)
         if "contact" in self.settings.effects:
             allowance = contact_constraints.overlap_allowance
-            pairs.allowance[:] = 0.0
+            if self.coefficients.contact_alpha > 0:  # overlaps up to the crush depth are the compliance's (``_kept``)
+                pairs.spring[:] = 0.0
+                fresh = st.substeps_done <= 1 or st.time < self.settings.handoff_until  # a start, or one handed on
+                self.kept = 0.0 if fresh else 2.0 * self.coefficients.crush
+            pairs.allowance[:] = self.kept
             if "friction" in self.settings.effects:
                 k = self.coefficients
                 self.settings.friction.pool_loads(self.dispatch, pairs, k.friction, k.cohesion)
             pairs.load[:] = 0.0
             self._pressed(st, pairs)
-            self._contacts(st, pairs, friction=self.settings.friction.rubs_in_prestabilisation, wake_step=np.inf)
+            self._contacts(
+                st, pairs, friction=self.settings.friction.rubs_in_prestabilisation, wake_step=np.inf, soft=False
+            )
             rows = contact_constraints.PairRows(*pairs.lists.sweep_rows())
             d("contact", allowance, st.arrays(), self.model_arrays, rows, 0.0, pairs.allowance)
+            self._kept(pairs)
             self._pressed(st, pairs)
         if m.collider is not None:  # x_prev = x: no swept test, no friction
             a = st.arrays()
@@ -505,11 +532,25 @@ class XpbdSolver:
                 NO_FRICTION,
             )
 
-    def _contacts(self, st: State, pairs: Contacts, friction=False, wake_step=None) -> None:
+    def _kept(self, pairs: Contacts) -> None:
+        """Compliant contacts: after a run's first substep, or a handed-on state's first frames (``HANDOFF_FRAMES``),
+        whose pre-stabilisation separates the overlaps they start with as rigid contacts do (a settled
+        bed handed from 10 to 40 substeps with compliant ones moved at 22.6 mm/s mean in the first frame, against the
+        14 mm/s test_handoff.py allows), pre-stabilisation leaves every overlap up to
+        the crush depth of two faces (``kept``), and
+        the solve holds all of it by the compliance (the allowance is what lies beyond). A rigid lift by
+        pre-stabilisation of an overlap that grew after the pair's last correction (shape matching, the walls) carries
+        part of a load without a λ: kept only where a pair had carried a load, a plate rested on 1/3 of the overlap
+        its weight gives."""
+        if self.kept > 0:
+            np.maximum(pairs.allowance - self.kept, 0.0, out=pairs.allowance)
+
+    def _contacts(self, st: State, pairs: Contacts, friction=False, wake_step=None, soft=True) -> None:
         """One Gauss–Seidel sweep of the contacts (if asked) and, with ``friction`` and the effect,
         friction on each pair just before its normal correction; one run of slabs per thread.
         ``wake_step``: ``Coefficients.wake_step`` unless given (pre-stabilisation passes inf: the
-        overlaps it undoes are no impact)."""
+        overlaps it undoes are no impact). ``soft``: compliant contacts where the settings have them
+        (pre-stabilisation's are rigid: it moves each pair to the overlap its compliance kept)."""
         s, k = self.settings, self.coefficients
         lists = pairs.lists
         normal = "contact" in s.effects
@@ -525,7 +566,14 @@ class XpbdSolver:
             cc.PairRows(*lists.sweep_rows()),
             cc.Colouring(*lists.grid()),
             cc.PairEntries(
-                pairs.allowance, pairs.anchor, pairs.load, pairs.held, pairs.mode, pairs.rubbed, self._stuck(lists)
+                pairs.allowance,
+                pairs.anchor,
+                pairs.load,
+                pairs.held,
+                pairs.mode,
+                pairs.rubbed,
+                self._stuck(lists),
+                pairs.spring,
             ),
             cc.ContactRule(
                 float(wake_step),
@@ -536,6 +584,9 @@ class XpbdSolver:
                 k.friction.anchored,
                 normal,
                 k.cohesion,
+                k.contact_alpha if soft else 0.0,
+                k.crush,
+                CONTACT_DAMPING,
             ),
             self.threads,
         )

@@ -84,25 +84,26 @@ def test_silo_walls_carry_part_of_the_weight(validation):
 
 
 def test_xpbd_grain_is_rigid_across_its_thickness(validation):
-    """The squeezed grain, (a) (quick case): three library grains under a plate; 0.2 N each strains them 1.5 % (the
-    contacts' overlap; Tomita: 25 %), 1 N 4.3 %: 8 rigid spheres in one plane cannot get thinner. Fails if the
-    load is lost (no strain at 1 N) or the grains give way like cooked rice."""
-    rest = validation.squeeze_xpbd(0.001)
+    """The squeezed grain, (a′) (quick case), rigid contacts (squeeze_strain 0): three library grains under a plate;
+    0.2 N each strains them 1.5 % (the contacts' overlap; Tomita: 25 %), 1 N 4.3 %: 8 rigid spheres in one plane
+    cannot get thinner. Fails if the load is lost (no strain at 1 N) or the grains give way like cooked rice (the
+    compliant contacts' part: test_compliant_contacts.py)."""
+    rest = validation.squeeze_xpbd(0.001, squeeze_strain=0.0)
     assert 0.7 * rest["thickness"] < rest["gap"] <= rest["thickness"]  # the plate rests on the grains
-    light = 1 - validation.squeeze_xpbd(0.2)["gap"] / rest["gap"]
-    heavy = 1 - validation.squeeze_xpbd(1.0)["gap"] / rest["gap"]
+    light = 1 - validation.squeeze_xpbd(0.2, squeeze_strain=0.0)["gap"] / rest["gap"]
+    heavy = 1 - validation.squeeze_xpbd(1.0, squeeze_strain=0.0)["gap"] / rest["gap"]
     assert -0.01 < light < 0.05
     assert 0.02 < heavy < 0.08
 
 
 def test_two_layer_grain_flattens_under_a_plate_and_springs_back(validation):
-    """The squeezed grain, (c): with particle_layers 2 (16 particles, 8 iterations, 1000 N/m) the grain itself
+    """The squeezed grain, (c): with particle_layers 2 (16 particles, 8 iterations, 1000 N/m, rigid contacts) the grain
     flattens 5.1 % under 0.2 N and keeps 1.2 % of it 1/6 s after the plate is lifted, where one layer of as many
     particles does not flatten at all (its spheres lie in one plane). At 100 N/m the plate squeezes the grain out
     from under it: sliding friction takes μk·load over a substep, not per iteration, and it was 8 iterations'
     friction that held so soft a grain together. Fails if the layered cover falls back to one plane (the grain
     rigid again) or the grain stays crushed."""
-    settings = dict(frames=20, after=10, iterations=8, stiffness=1000.0)
+    settings = dict(frames=20, after=10, iterations=8, stiffness=1000.0, squeeze_strain=0.0)  # rigid contacts
     layered = validation.squeeze_xpbd(0.2, particles=16, layers=2, **settings)
     flat = validation.squeeze_xpbd(0.2, particles=16, layers=1, **settings)
     assert layered["escaped"] == 0
