@@ -557,6 +557,17 @@ TABLES = {
             ("the exported file measures", field("measured")),
         ],
     ),
+    "rice_cost": (
+        "sizes.jsonl",
+        lambda r: r["table"] == "rice_cost",
+        [
+            ("scene", field("element")),
+            ("grains", value("grains")),
+            ("CPU s (user + sys)", value("cpu")),
+            ("wall s", value("wall")),
+            ("where it moved (node CPU s)", field("measured")),
+        ],
+    ),
     "servings": (
         "sizes.jsonl",
         lambda r: r["table"] == "servings",
