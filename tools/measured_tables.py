@@ -596,6 +596,27 @@ TABLES = {
             ("the exported file measures", field("measured")),
         ],
     ),
+    "rice_cost": (
+        "sizes.jsonl",
+        lambda r: r["table"] == "rice_cost",
+        [
+            ("scene", field("element")),
+            ("grains", value("grains")),
+            ("CPU s (user + sys)", value("cpu")),
+            ("wall s", value("wall")),
+            ("where it moved (node CPU s)", field("measured")),
+        ],
+    ),
+    "rice_files": (
+        "sizes.jsonl",
+        lambda r: r["table"] == "rice_files",
+        [
+            ("exported file", field("element")),
+            ("grains", value("grains")),
+            ("skin bumps: median / p95", pair("bumps_median", "bumps_p95")),
+            ("overlap / length: p95 / max", pair("overlap_p95", "overlap_max")),
+        ],
+    ),
     "servings": (
         "sizes.jsonl",
         lambda r: r["table"] == "servings",

@@ -8,6 +8,10 @@ from nodegraph.cost import Cost, CostQuery, estimated_by
 from ..values import DistanceField, RiceVariety
 from .element_values import ExpandedField
 
+# radians: the most a broken grain's fracture plane turns from square across its length (drawn uniformly in ±);
+# chosen, no published angle (docs/sizes.md): cut square, the piece read as a short whole grain with a flat end
+BREAK_TILT = 0.4
+
 
 def _check(p: dict) -> list[tuple[str, str]]:
     lo, hi = p["expansion"]
@@ -27,9 +31,10 @@ def is_broken(variant: int | None, share: float) -> bool:
 
 
 def _cost(q: CostQuery) -> Cost:
-    """The field's smallest inscribed radius × the smallest P: the wired rice variety's (``RICE_VARIETIES``, when the
-    wire comes straight from a rice_variety node), else ``expansion``'s low end (a broken grain is cut across its
-    length, not its thickness); nothing when a variety is wired from elsewhere."""
+    """The field's smallest inscribed radius × the smallest growth, P·e^(−1/3) across the grain (P·e^(2/3) along it
+    when e < 1), P the wired rice variety's (``RICE_VARIETIES``, when the wire comes straight from a rice_variety
+    node), else ``expansion``'s low end (a broken grain is cut across its length, not its thickness); nothing when a
+    variety is wired from elsewhere."""
     from .grain_shapes import RICE_VARIETIES
 
     inscribed = q.inscribed("field")
@@ -37,11 +42,17 @@ def _cost(q: CostQuery) -> Cost:
     if inscribed is None:
         return Cost()
     if not wires:
-        return Cost(inscribed=inscribed * q.params["expansion"][0])
+        return Cost(inscribed=inscribed * q.params["expansion"][0] * _least_growth(q.params["elongation"]))
     source = q.nodes.get(wires[0].node)
     if source is None or source.spec.type_name != "rice_variety":
         return Cost()
-    return Cost(inscribed=inscribed * RICE_VARIETIES[source.params["variety"]].expansion)
+    p = RICE_VARIETIES[source.params["variety"]].expansion
+    return Cost(inscribed=inscribed * p * _least_growth(q.params["elongation"]))
+
+
+def _least_growth(elongation: float) -> float:
+    """The smaller of the growths along (e^(2/3)) and across (e^(−1/3)) the grain, per unit P."""
+    return min(elongation ** (2.0 / 3.0), elongation ** (-1.0 / 3.0))
 
 
 @estimated_by(_cost)
@@ -64,6 +75,14 @@ def _cost(q: CostQuery) -> Cost:
             "P drawn uniformly per element in [low, high] (G: 1–1.5); low = high fixes P",
             range=(0.1, 10.0),
         ),
+        "elongation": Param(
+            float,
+            1.0,
+            "cooking's elongation e, the length's growth over the width's: length × P·e^(2/3), width and thickness × "
+            "P·e^(−1/3), so the volume still grows P³ (G eq. 6); 1: G's isotropic growth; japonica's, from its raw "
+            "and cooked length/width: docs/sizes.md",
+            range=(0.5, 3.0),
+        ),
         "broken": Param(
             float,
             0.0,
@@ -75,7 +94,7 @@ def _cost(q: CostQuery) -> Cost:
             tuple[float, float],
             (0.5, 0.75),
             "a broken grain keeps this share of its length, drawn uniformly (a broken kernel is one under 3/4 of a "
-            "whole one, USDA); cut square across its long axis x",
+            "whole one, USDA); cut across its long axis x, the fracture turned up to ±23° from square",
             range=(0.05, 1.0),
         ),
     },
@@ -83,12 +102,14 @@ def _cost(q: CostQuery) -> Cost:
     check=_check,
     moved={"variety": Moved("variety", "variety", "rice_variety")},
 )
-def expand(ctx, field, variety=None, *, expansion, broken, broken_length):
-    """Scale the grain by P about its centroid (G eq. 6); P per element from ``expansion`` or the variety.
+def expand(ctx, field, variety=None, *, expansion, elongation, broken, broken_length):
+    """Grow the grain by P about its centroid (G eq. 6), longer than wide by ``elongation`` (cooking lengthens a
+    grain more than it widens it); P per element from ``expansion`` or the variety.
 
-    The grid and the distances are scaled together, exactly: no resampling. A broken variant (``broken``) is
-    then cut square across x, keeping a share of its length drawn from ``broken_length``: the field is
-    intersected with the half-space behind the cut (min of the two, positive inside), still a distance bound.
+    With no elongation the grid and the distances are scaled together, exactly: no resampling. A broken variant
+    (``broken``) is then cut across x, keeping a share of its length drawn from ``broken_length``, the plane turned
+    by up to ``BREAK_TILT``: the field is intersected with the half-space behind the cut (min of the two, positive
+    inside), still a distance bound.
     """
     import numpy as np
 
@@ -99,8 +120,9 @@ def expand(ctx, field, variety=None, *, expansion, broken, broken_length):
     else:
         lo, hi = expansion
         p = float(ctx.rng.uniform(lo, hi)) if hi > lo else float(lo)
-    data, origin, voxel_size = expand_field(field.data, field.origin, field.voxel_size, p)
+    data, origin, voxel_size = expand_field(field.data, field.origin, field.voxel_size, p, elongation)
     if broken > 0 and is_broken(ctx.variant, broken):
         keep = float(ctx.rng.uniform(*broken_length))
-        data = break_field(np.asarray(data), np.asarray(origin), voxel_size, keep)
+        tilt = float(ctx.rng.uniform(-BREAK_TILT, BREAK_TILT))
+        data = break_field(np.asarray(data), np.asarray(origin), voxel_size, keep, tilt)
     return ExpandedField(data, origin, voxel_size, metric=field.metric, signed=field.signed, expansion=p)

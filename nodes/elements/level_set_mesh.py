@@ -11,26 +11,45 @@ from __future__ import annotations
 import numpy as np
 
 
-def expand_field(data: np.ndarray, origin: np.ndarray, voxel_size: float, expansion: float):
-    """G eq. 6, [x, y, z] = P·[r, s, t]: scale the grain by P about its occupied-cell centroid.
+def expand_field(data: np.ndarray, origin: np.ndarray, voxel_size: float, expansion: float, elongation: float = 1.0):
+    """G eq. 6, [x, y, z] = P·[r, s, t], with cooking's elongation e: the grain grows by a = P·e^(2/3) along its long
+    axis x and by b = P·e^(−1/3) across it, about its occupied-cell centroid, so its volume grows by P³ as G's and
+    its length/width by e.
 
-    The grid is scaled (origin and voxel size) and the distances with it, so the result is still a
-    distance field in mm and no resampling error is added. Returns (data, origin, voxel_size).
+    e = 1 scales the grid (origin and voxel size) and the distances, exactly: no resampling. Otherwise the voxel
+    size becomes voxel_size·b, x is resampled linearly at the ratio a/b, and the distances are scaled by min(a, b):
+    a map whose stretches lie in [min, max] moves no point nearer the surface than min × its distance, so the field
+    stays a lower bound on the distance, exact on the surface. Returns (data, origin, voxel_size).
     """
     inside = np.argwhere(data > 0)
     centroid = origin + inside.mean(axis=0) * voxel_size
-    scaled = np.multiply(data, np.float32(expansion), dtype=np.float32)
-    return scaled, centroid + expansion * (origin - centroid), voxel_size * expansion
+    if elongation == 1.0:
+        scaled = np.multiply(data, np.float32(expansion), dtype=np.float32)
+        return scaled, centroid + expansion * (origin - centroid), voxel_size * expansion
+    along, across = expansion * elongation ** (2.0 / 3.0), expansion * elongation ** (-1.0 / 3.0)
+    n = data.shape[0]
+    u = np.arange(int(np.floor((n - 1) * along / across)) + 1) * (across / along)  # source index of each new x
+    i = np.minimum(np.floor(u).astype(np.int64), n - 2)
+    w = (u - i).astype(np.float32)[:, None, None]
+    resampled = data[i] * (1.0 - w) + data[i + 1] * w
+    scaled = np.multiply(resampled, np.float32(min(along, across)), dtype=np.float32)
+    grown = centroid + np.array([along, across, across]) * (origin - centroid)
+    return scaled, grown, voxel_size * across
 
 
-def break_field(data: np.ndarray, origin: np.ndarray, voxel_size: float, keep: float) -> np.ndarray:
-    """A broken grain: the field (positive inside) cut square across x so that ``keep`` of its inside length
-    stays, the end at the highest x removed. Returns the new data (float32)."""
+def break_field(data: np.ndarray, origin: np.ndarray, voxel_size: float, keep: float, tilt: float = 0.0) -> np.ndarray:
+    """A broken grain: the field (positive inside) cut by a plane through the point ``keep`` of its inside length
+    along x, turned ``tilt`` radians about z (a fracture runs obliquely across a kernel, not square), the end at the
+    highest x removed. The plane's signed distance is exact, so the minimum stays a distance bound. Returns the new
+    data (float32)."""
     inside = np.argwhere(data > 0)
     lo, hi = inside[:, 0].min(), inside[:, 0].max()
     cut = origin[0] + (lo + keep * (hi - lo)) * voxel_size
+    middle = origin[1] + inside[:, 1].mean() * voxel_size
     x = origin[0] + np.arange(data.shape[0], dtype=np.float64) * voxel_size
-    return np.minimum(data, (cut - x)[:, None, None].astype(np.float32)).astype(np.float32)
+    y = origin[1] + np.arange(data.shape[1], dtype=np.float64) * voxel_size
+    behind = np.cos(tilt) * (cut - x)[:, None] - np.sin(tilt) * (y - middle)[None, :]
+    return np.minimum(data, behind[:, :, None].astype(np.float32)).astype(np.float32)
 
 
 def field_surface(data: np.ndarray, origin: np.ndarray, voxel_size: float, level: float, step: int = 1):

@@ -30,7 +30,9 @@ def _field(japonica):
 
 def _grow(field, variant, broken, keep=(0.6, 0.6)):
     ctx = Context.standalone(node_type="expand", seed=0, variant=variant)
-    return expand(ctx, field=field, variety=None, expansion=(1.2, 1.2), broken=broken, broken_length=keep)
+    return expand(
+        ctx, field=field, variety=None, expansion=(1.2, 1.2), elongation=1.0, broken=broken, broken_length=keep
+    )
 
 
 def test_a_broken_grain_keeps_its_share_of_the_length_and_stays_closed(japonica):
@@ -44,6 +46,33 @@ def test_a_broken_grain_keeps_its_share_of_the_length_and_stays_closed(japonica)
     assert np.ptp(broken.vertices[:, 1]) == pytest.approx(np.ptp(whole.vertices[:, 1]), rel=0.05)  # cut across x
     # the other 15 variants are left whole, bit for bit
     assert np.array_equal(_grow(field, 3, 1 / 16).data, _grow(field, 3, 0.0).data)
+
+
+def _extents(grain) -> np.ndarray:
+    return np.ptp(grain.vertices, axis=0)
+
+
+def test_cooking_lengthens_a_grain_more_than_it_widens_it(japonica):
+    """e = 1.25: length × P·e^(2/3), width and thickness × P·e^(−1/3) — length/width grows by e, the volume by P³
+    as G eq. 6's isotropic P (the field is resampled along x, so within a voxel's share), and the grain stays a
+    closed outward surface; e = 1 leaves G's exact scaling bit for bit."""
+    field = _field(japonica)
+    ctx = Context.standalone(node_type="expand", seed=0)
+
+    def grown(e):
+        return expand(
+            ctx, field=field, variety=None, expansion=(1.2, 1.2), elongation=e, broken=0.0, broken_length=(0.6, 0.6)
+        )
+
+    iso, long = remesh.call(field=grown(1.0)), remesh.call(field=grown(1.25))
+    tm = as_trimesh(long)
+    assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
+    a, b = _extents(iso), _extents(long)
+    assert (b[0] / b[1]) / (a[0] / a[1]) == pytest.approx(1.25, rel=0.03)
+    assert b[0] / a[0] == pytest.approx(1.25 ** (2 / 3), rel=0.03)
+    assert b[2] / a[2] == pytest.approx(1.25 ** (-1 / 3), rel=0.03)
+    assert tm.volume / as_trimesh(iso).volume == pytest.approx(1.0, rel=0.03)
+    assert np.array_equal(grown(1.0).data, expand.call(field=field, expansion=(1.2, 1.2)).data)
 
 
 def _diameter(egg) -> float:
