@@ -4,8 +4,8 @@ Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice
 (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a water film: clearcoat). Ikura has two
 parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white tuft of fine shavings, a scattering medium with
 no skin, and carries syrup graded by its depth below the mound's top surface, deeper along runs down the flanks;
-chestnut (kuri gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh,
-1 fat.
+chestnut (kuri gohan) is a pale yellow-gold, matte, slightly crumbly solid; a fish topping (salmon, tuna) has two
+parts: 0 flesh, 1 fat.
 """
 
 from __future__ import annotations
@@ -290,21 +290,26 @@ def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material,
 
 
 def chestnut_material() -> Material:
-    """Chestnut (kuri, as in kuri gohan): yellow, matte and slightly waxy — an opaque body with a little light
-    through it (subsurface 0.2, far less than rice) under a soft, rough coat (the waxy sheen), so it reads as
-    a different solid from the translucent, glossy rice around it."""
+    """Chestnut (kuri, as in kuri gohan): a peeled, steamed kernel, pale yellow-gold, matte and a little crumbly
+    — an opaque starchy body with a little light through it (subsurface 0.2, far less than rice), a dry, rough face
+    (roughness 0.8) and a faint waxy film (the gelatinised starch), so it reads as a different solid from the
+    translucent, glossy rice around it. Colour CIELAB (78, 4, 38), linear (0.74, 0.50, 0.195) = sRGB (223, 188,
+    122): chosen, the nearest published reading being chestnut flour, L* 90.7 → 81.4 and b* 12.0 → 20.5 on roasting
+    (sweet chestnut, pan and microwave roasting: pmc.ncbi.nlm.nih.gov/articles/PMC5470552); a whole piece is
+    darker and more saturated than its flour. At (0.80, 0.50, 0.06), a saturated mustard, art directors read the
+    pieces as cheese (issue 48)."""
     return Material(
         name="chestnut",
-        base_color=(0.80, 0.50, 0.06),
+        base_color=(0.74, 0.50, 0.195),
         subsurface=0.2,
-        subsurface_radius=(0.6, 0.35, 0.1),
-        subsurface_color=(0.90, 0.62, 0.15),
-        specular=0.4,
-        roughness=0.65,
-        sheen=0.15,
-        sheen_tint=0.6,
-        clearcoat=0.15,
-        clearcoat_roughness=0.4,
+        subsurface_radius=(0.6, 0.4, 0.2),
+        subsurface_color=(0.85, 0.62, 0.30),
+        specular=0.3,
+        roughness=0.8,
+        sheen=0.2,
+        sheen_tint=0.5,
+        clearcoat=0.08,
+        clearcoat_roughness=0.5,
         ior=1.45,
     )
 
