@@ -108,11 +108,12 @@ def is_volumetric(material: Material) -> bool:
 
 
 def has_skin(material: Material) -> bool:
-    """Whether a volumetric element's medium lies behind a dielectric skin (rice, yolks) or behind none (shaved
-    ice: a tuft of shavings whose pores open to the air; ``mitsuba_scene.boundary_bsdf``)."""
-    from ..shading.materials import is_ice
+    """Whether a volumetric element's medium lies behind a dielectric skin (rice, yolks, shaved ice soaked with
+    syrup: ``materials.is_wet``) or behind none (dry shaved ice: a tuft of shavings whose pores open to the air;
+    ``mitsuba_scene.boundary_bsdf``)."""
+    from ..shading.materials import is_ice, is_wet
 
-    return not is_ice(material)
+    return not is_ice(material) or is_wet(material)
 
 
 def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:

@@ -235,7 +235,7 @@ def boundary_bsdf(material: Material) -> dict:
     every crossing, and light crosses a heap of grains many times: at the grain's own roughness (α ≈ 0.23 at 15 %
     water) the rice heap rendered grey, L* 68 against 80 at the film's (α ≈ 0.02; docs/look.md).
 
-    Shaved ice has none (``null``): a flake stands for a tuft of shavings 0.05–0.1 mm thin with air between, whose
+    Dry or damp shaved ice has none (``null``; soaked through, ``materials.is_wet``, it has one): a flake stands for a tuft of shavings 0.05–0.1 mm thin with air between, whose
     pores open to the air; its countless small interfaces are the medium's scattering, not one skin. Behind a
     dielectric skin the light that crossed a flake unscattered was refracted and reflected as by glass, and the
     heap read as grey glass (docs/look.md, "Kakigori"); the wet gloss of soaked ice is its clear coat (the

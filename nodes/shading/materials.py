@@ -222,7 +222,8 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
     default syrup's top rendered sRGB (226, 86, 114), pink, against the syrup's (225, 39, 69); squared (224, 50, 74);
     docs/look.md, "Kakigori"). Its free path is short (0.05 mm) because absorption happens at the medium's
     collisions (one σt for every channel, ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm
-    flake (at 0.6 mm the top rendered pale pink). It is wet: glossy (roughness 0.15, index 1.33) under a clear coat
+    flake (at 0.6 mm the top rendered pale pink; at 0.25 mm pink, with a skin over it). Soaked through
+    (``is_wet``), the tuft is one liquid-filled body behind a smooth skin at the syrup's index. It is wet: glossy (roughness 0.15, index 1.33) under a clear coat
     (the key's glints; ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its diffuse light on, 30 %
     straight through (index-matched ice and syrup are clear)."""
     ice = Material(
@@ -254,11 +255,24 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
 
 
 def is_ice(material: Material) -> bool:
-    """Whether a material is kakigori ice (plain or a syrup grade): a scattering medium with no skin in the
-    preview (``mitsuba_scene.boundary_bsdf``), else a thin diffuser whose diffuse transmission is its
+    """Whether a material is kakigori ice (plain or a syrup grade): a scattering medium in the preview, with no
+    skin unless soaked through (``is_wet``; ``mitsuba_scene.boundary_bsdf``), else a thin diffuser whose diffuse transmission is its
     ``subsurface`` on every vertex (no CDRF); the preview traces longer paths through a heap of them
     (``mitsuba_scene.path_depth``)."""
     return material.name == ICE or material.name.startswith(ICE + "_syrup")
+
+
+# the share of syrup in a tuft's pores from which it is wet through: the liquid joins up between the shavings and
+# its one surface (a dielectric skin at the liquid's index, as smooth as its film: ``look.has_skin``) gives the
+# soaked top its wet gloss; a tuft with less is damp shavings, their pores still open to the air
+WET_SHARE = 0.5
+
+
+def is_wet(material: Material) -> bool:
+    """Whether a material is shaved ice soaked through with syrup (a grade ``ice_syrup_<percent>`` of at least
+    ``WET_SHARE``)."""
+    prefix = ICE + "_syrup_"
+    return material.name.startswith(prefix) and int(material.name.removeprefix(prefix)) >= 100 * WET_SHARE
 
 
 def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material, ...]:

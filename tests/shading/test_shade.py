@@ -102,7 +102,7 @@ def test_shaved_ice_is_white_and_its_syrup_colour_fades_downward(scene_inputs):
     syrup's red is strongest on top and fades down the mound: down a column of flakes the red share of each flake's
     colour never rises, and half-soaked ice is already red (the dye absorbs: colour mixes geometrically with the
     concentration, not linearly to a pale pink)."""
-    from nodes.export.look import has_skin, is_volumetric
+    from nodes.export.look import boundary_roughness, has_skin, is_volumetric
 
     ice = _ice_columns(scene_inputs, {0.0: 10})
     scene = shade.call(aggregates=[ice], syrup_depth=27.0, syrup_spread=0.0, syrup_levels=6)
@@ -116,6 +116,10 @@ def test_shaved_ice_is_white_and_its_syrup_colour_fades_downward(scene_inputs):
     assert (np.diff(redness) >= 0).all() and redness[-1] > 0.6 and redness[0] < 0.34  # red on top, white below
     half = next(m for m in scene.materials if m.name == "ice_syrup_50")
     assert half.subsurface_color[1] < 0.4  # linear mixing gives 0.55: pink
+    # soaked through, the syrup joins up between the shavings: one wet, glossy surface; damp ice keeps its pores open
+    grades = sorted((m for m in scene.materials if m.name.startswith("ice_syrup_")), key=lambda m: m.clearcoat)
+    assert not has_skin(grades[0]) and has_skin(grades[-1]) and has_skin(half)
+    assert boundary_roughness(grades[-1]) <= 0.1
 
 
 def _ice_ring(scene_inputs, columns=24, radius=12.0, height=8):
