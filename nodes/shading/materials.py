@@ -205,27 +205,27 @@ def ikura_tints(count: int) -> tuple[Material, ...]:
 
 
 def ice_materials(syrup_color) -> tuple[Material, Material]:
-    """(plain shaved ice, syrup-soaked shaved ice). A flake stands for a tuft of shavings far finer than the mesh
-    (a kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from its countless interfaces as
-    snow is, not a clear crystal. The preview renders it as what it is, light scattered under the surface: a dense,
+    """(plain shaved ice, syrup-soaked shaved ice). A flake stands for a tuft of shavings far finer than the mesh (a
+    kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from its countless interfaces as snow
+    is, not a clear crystal. The preview renders it as what it is, light scattered under the surface: a dense,
     nearly lossless medium (free path ``subsurface_radius`` 0.2 mm, multiple-scattering albedo ``subsurface_color``
     0.96–0.97; ice absorbs nothing over millimetres) behind no skin (``mitsuba_scene.boundary_bsdf``: the tuft's
     pores open to the air). Light walks through a flake and on to the flakes behind, and comes back out of the heap
-    white; behind a dielectric skin the part that crossed a flake unscattered was refracted as by glass, and the heap
-    read as grey glass (docs/look.md, "Kakigori"). Where a renderer has no medium (the preview with ``subsurface``
-    off, a glTF viewer), the same flake is a matte thin diffuser: near-Lambertian, high albedo (``base_color``), no
-    glassy facet (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air), passing ``subsurface`` of
-    its diffuse light on, on every part of the flake alike (no CDRF per vertex).
-    Syrup fills the pores: its dye absorbs green and blue and passes red, so the soaked tuft's medium keeps red at
-    the ice's albedo and takes the green and blue at the square of the syrup's hue (``syrup_color`` over its red:
-    twice the dye's absorbance), so that the soaked top renders the syrup's own colour (at the hue itself the
-    default syrup's top rendered sRGB (226, 86, 114), pink, against the syrup's (225, 39, 69); squared (224, 50, 74);
-    docs/look.md, "Kakigori"). Its free path is short (0.05 mm) because absorption happens at the medium's
-    collisions (one σt for every channel, ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm
-    flake (at 0.6 mm the top rendered pale pink; at 0.25 mm pink, with a skin over it). Soaked through
-    (``is_wet``), the tuft is one liquid-filled body behind a smooth skin at the syrup's index. It is wet: glossy (roughness 0.15, index 1.33) under a clear coat
-    (the key's glints; ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its diffuse light on, 30 %
-    straight through (index-matched ice and syrup are clear)."""
+    white; behind a dielectric skin the part that crossed a flake unscattered was refracted as by glass, and the
+    heap read as grey glass (docs/look.md, "Kakigori"). Where a renderer has no medium (the preview with
+    ``subsurface`` off, a glTF viewer), the same flake is a matte thin diffuser: near-Lambertian, high albedo
+    (``base_color``), no glassy facet (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air), passing
+    ``subsurface`` of its diffuse light on, on every part of the flake alike (no CDRF per vertex). Syrup fills the
+    pores: its dye absorbs green and blue and passes red, so the soaked tuft's medium keeps red at the ice's albedo
+    and takes the green and blue at the square of the syrup's hue (``syrup_color`` over its red: twice the dye's
+    absorbance), so that the soaked top renders the syrup's own colour (at the hue itself the default syrup's top
+    rendered sRGB (226, 86, 114), pink, against the syrup's (225, 39, 69); squared (224, 50, 74); docs/look.md,
+    "Kakigori"). Its free path is short (0.05 mm) because absorption happens at the medium's collisions (one σt for
+    every channel, ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm flake (at 0.6 mm the top
+    rendered pale pink; at 0.25 mm pink, with a skin over it). Soaked through (``is_wet``), the tuft is one
+    liquid-filled body behind a smooth skin at the syrup's index. It is wet: glossy (roughness 0.15, index 1.33)
+    under a clear coat (the key's glints; ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its
+    diffuse light on, 30 % straight through (index-matched ice and syrup are clear)."""
     ice = Material(
         name=ICE,
         base_color=(0.96, 0.965, 0.97),
@@ -256,9 +256,9 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
 
 def is_ice(material: Material) -> bool:
     """Whether a material is kakigori ice (plain or a syrup grade): a scattering medium in the preview, with no
-    skin unless soaked through (``is_wet``; ``mitsuba_scene.boundary_bsdf``), else a thin diffuser whose diffuse transmission is its
-    ``subsurface`` on every vertex (no CDRF); the preview traces longer paths through a heap of them
-    (``mitsuba_scene.path_depth``)."""
+    skin unless soaked through (``is_wet``; ``mitsuba_scene.boundary_bsdf``), else a thin diffuser whose diffuse
+    transmission is its ``subsurface`` on every vertex (no CDRF); the preview traces longer paths through a heap of
+    them (``mitsuba_scene.path_depth``)."""
     return material.name == ICE or material.name.startswith(ICE + "_syrup")
 
 
