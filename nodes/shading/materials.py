@@ -375,17 +375,17 @@ NORI = "nori"  # a scenery mesh of this name (the ``nori`` node's band) gets ``n
 
 
 def nori_material() -> Material:
-    """Nori (dried, toasted laver sheet): black-green and dry. Base linear (0.014, 0.023, 0.013) = sRGB (31, 42, 30),
-    L* 16 as a diffuse albedo; the one published figure at hand, L* 29.1, a* 1.6, b* 2.1 for a test sheet of
-    Vietnamese Porphyra (Tạp chí Công Thương, "nori from Porphyra harvested in Khánh Hòa"), is a colorimeter's,
-    specular included (a black surface's 4 % alone reads L* 24), so the albedo under it is darker; commercial
-    yaki-nori is greener. A dry, fibrous face: one broad specular lobe (roughness 0.55, F0 0.04), no clear coat
-    and a faint sheen in its own colour; the sheet's crinkles and fibres (the ``nori`` node's ``crinkle``) give it
-    its texture. With a satin face (roughness 0.42, a clear coat, a white-ish sheen 0.6) it reflected the studio
-    and read as grey rubber (issue 48)."""
+    """Nori (dried, toasted laver sheet): black-green and dry. Base linear (0.010, 0.026, 0.012) = sRGB (25, 45, 29),
+    L* 16 as a diffuse albedo (at sRGB (31, 42, 30), the same L* less green, the band rendered grey); the one
+    published figure at hand, L* 29.1, a* 1.6, b* 2.1 for a test sheet of Vietnamese Porphyra (Tạp chí Công
+    Thương, "nori from Porphyra harvested in Khánh Hòa"), is a colorimeter's, specular included (a black surface's
+    4 % alone reads L* 24), so the albedo under it is darker; commercial yaki-nori is greener. A dry, fibrous face:
+    one broad specular lobe (roughness 0.55, F0 0.04), no clear coat and a faint sheen in its own colour; the
+    sheet's crinkles and fibres (the ``nori`` node's ``crinkle``) give it its texture. With a satin face (roughness
+    0.42, a clear coat, a white-ish sheen 0.6) it reflected the studio and read as grey rubber (issue 48)."""
     return Material(
         name=NORI,
-        base_color=(0.014, 0.023, 0.013),
+        base_color=(0.010, 0.026, 0.012),
         roughness=0.55,
         sheen=0.25,
         sheen_tint=0.9,
