@@ -344,7 +344,7 @@ def fish_materials(kind: str) -> tuple[Material, Material]:
     the lines rendered grey. ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep red flesh, faint
     fat)."""
     if kind == "salmon":
-        flesh_color, flesh_sss, fat_color = (0.90, 0.22, 0.07), (0.99, 0.36, 0.12), (0.86, 0.72, 0.58)
+        flesh_color, flesh_sss, fat_color = (0.90, 0.22, 0.07), (0.99, 0.30, 0.10), (0.86, 0.72, 0.58)
     elif kind == "tuna":
         flesh_color, flesh_sss, fat_color = (0.42, 0.03, 0.04), (0.70, 0.08, 0.08), (0.80, 0.50, 0.48)
     else:
