@@ -21,7 +21,10 @@ import numpy as np
 from ..values import Material
 
 PREFIX = "nodegraph:principled:"
-VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk")  # closed elements whose inside scatters (and shaved ice: ``is_ice``)
+# elements whose inside scatters (and shaved ice: ``is_ice``): closed rice grains and yolks, and the fish slab's flesh,
+# which closes the slab with its fat lines: light enters through the flesh's faces, and the fat's opaque faces
+# reflect it back into the flesh from inside (a ray keeps its medium on a reflection)
+VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk", "salmon_flesh", "tuna_flesh")
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 
 
@@ -97,19 +100,20 @@ def random_walk_coefficients(albedo, radius) -> tuple[np.ndarray, np.ndarray]:
 
 
 def is_volumetric(material: Material) -> bool:
-    """Whether the preview renders ``material``'s inside as a scattering medium (closed elements only: rice
-    grains, ikura yolks, shaved ice and its syrup grades; fish flesh and fat are open parts of one slab)."""
+    """Whether the preview renders ``material``'s inside as a scattering medium (``VOLUMETRIC_ELEMENTS``: rice
+    grains, ikura yolks, the fish slab's flesh; shaved ice and its syrup grades)."""
     from ..shading.materials import is_ice
 
     return material.name in VOLUMETRIC_ELEMENTS or is_ice(material)
 
 
 def has_skin(material: Material) -> bool:
-    """Whether a volumetric element's medium lies behind a dielectric skin (rice, yolks) or behind none (shaved
-    ice: a tuft of shavings whose pores open to the air; ``mitsuba_scene.boundary_bsdf``)."""
-    from ..shading.materials import is_ice
+    """Whether a volumetric element's medium lies behind a dielectric skin (rice, yolks, shaved ice soaked with
+    syrup: ``materials.is_wet``) or behind none (dry shaved ice: a tuft of shavings whose pores open to the air;
+    ``mitsuba_scene.boundary_bsdf``)."""
+    from ..shading.materials import is_ice, is_wet
 
-    return not is_ice(material)
+    return not is_ice(material) or is_wet(material)
 
 
 def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:

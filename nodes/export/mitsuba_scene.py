@@ -229,17 +229,17 @@ def medium(material: Material) -> dict:
 
 
 def boundary_bsdf(material: Material) -> dict:
-    """The dielectric skin of a volumetric element, clear, so the medium alone colours the light. Its roughness:
-    a transmissive element's transmission roughness; a translucent one's water film (its clear coat's roughness,
-    else its roughness). Mitsuba's rough dielectric loses the energy of the microfacets' multiple scattering at
-    every crossing, and light crosses a heap of grains many times: at the grain's own roughness (α ≈ 0.23 at 15 %
-    water) the rice heap rendered grey, L* 68 against 80 at the film's (α ≈ 0.02; docs/look.md).
+    """The dielectric skin of a volumetric element, clear, so the medium alone colours the light. Its roughness: a
+    transmissive element's transmission roughness; a translucent one's water film (its clear coat's roughness, else
+    its roughness). Mitsuba's rough dielectric loses the energy of the microfacets' multiple scattering at every
+    crossing, and light crosses a heap of grains many times: at the grain's own roughness (α ≈ 0.23 at 15 % water)
+    the rice heap rendered grey, L* 68 against 80 at the film's (α ≈ 0.02; docs/look.md).
 
-    Shaved ice has none (``null``): a flake stands for a tuft of shavings 0.05–0.1 mm thin with air between, whose
-    pores open to the air; its countless small interfaces are the medium's scattering, not one skin. Behind a
-    dielectric skin the light that crossed a flake unscattered was refracted and reflected as by glass, and the
-    heap read as grey glass (docs/look.md, "Kakigori"); the wet gloss of soaked ice is its clear coat (the
-    key's glints, ``gloss``)."""
+    Dry or damp shaved ice has none (``null``; soaked through, ``materials.is_wet``, it has one): a flake stands
+    for a tuft of shavings 0.05–0.1 mm thin with air between, whose pores open to the air; its countless small
+    interfaces are the medium's scattering, not one skin. Behind a dielectric skin the light that crossed a flake
+    unscattered was refracted and reflected as by glass, and the heap read as grey glass (docs/look.md,
+    "Kakigori"); the wet gloss of soaked ice is its clear coat (the key's glints, ``gloss``)."""
     if not has_skin(material):
         return {"type": "null"}
     bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}

@@ -4,8 +4,8 @@ Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice
 (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a water film: clearcoat). Ikura has two
 parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white tuft of fine shavings, a scattering medium with
 no skin, and carries syrup graded by its depth below the mound's top surface, deeper along runs down the flanks;
-chestnut (kuri gohan) is a yellow, matte, slightly waxy solid; a fish topping (salmon, tuna) has two parts: 0 flesh,
-1 fat.
+chestnut (kuri gohan) is a pale yellow-gold, matte, slightly crumbly solid; a fish topping (salmon, tuna) has two
+parts: 0 flesh, 1 fat.
 """
 
 from __future__ import annotations
@@ -205,26 +205,27 @@ def ikura_tints(count: int) -> tuple[Material, ...]:
 
 
 def ice_materials(syrup_color) -> tuple[Material, Material]:
-    """(plain shaved ice, syrup-soaked shaved ice). A flake stands for a tuft of shavings far finer than the mesh
-    (a kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from its countless interfaces as
-    snow is, not a clear crystal. The preview renders it as what it is, light scattered under the surface: a dense,
+    """(plain shaved ice, syrup-soaked shaved ice). A flake stands for a tuft of shavings far finer than the mesh (a
+    kakigori machine planes ice 0.05–0.1 mm thin): ice with air between, white from its countless interfaces as snow
+    is, not a clear crystal. The preview renders it as what it is, light scattered under the surface: a dense,
     nearly lossless medium (free path ``subsurface_radius`` 0.2 mm, multiple-scattering albedo ``subsurface_color``
     0.96–0.97; ice absorbs nothing over millimetres) behind no skin (``mitsuba_scene.boundary_bsdf``: the tuft's
     pores open to the air). Light walks through a flake and on to the flakes behind, and comes back out of the heap
-    white; behind a dielectric skin the part that crossed a flake unscattered was refracted as by glass, and the heap
-    read as grey glass (docs/look.md, "Kakigori"). Where a renderer has no medium (the preview with ``subsurface``
-    off, a glTF viewer), the same flake is a matte thin diffuser: near-Lambertian, high albedo (``base_color``), no
-    glassy facet (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air), passing ``subsurface`` of
-    its diffuse light on, on every part of the flake alike (no CDRF per vertex).
-    Syrup fills the pores: its dye absorbs green and blue and passes red, so the soaked tuft's medium keeps red at
-    the ice's albedo and takes the green and blue at the square of the syrup's hue (``syrup_color`` over its red:
-    twice the dye's absorbance), so that the soaked top renders the syrup's own colour (at the hue itself the
-    default syrup's top rendered sRGB (226, 86, 114), pink, against the syrup's (225, 39, 69); squared (224, 50, 74);
-    docs/look.md, "Kakigori"). Its free path is short (0.05 mm) because absorption happens at the medium's
-    collisions (one σt for every channel, ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm
-    flake (at 0.6 mm the top rendered pale pink). It is wet: glossy (roughness 0.15, index 1.33) under a clear coat
-    (the key's glints; ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its diffuse light on, 30 %
-    straight through (index-matched ice and syrup are clear)."""
+    white; behind a dielectric skin the part that crossed a flake unscattered was refracted as by glass, and the
+    heap read as grey glass (docs/look.md, "Kakigori"). Where a renderer has no medium (the preview with
+    ``subsurface`` off, a glTF viewer), the same flake is a matte thin diffuser: near-Lambertian, high albedo
+    (``base_color``), no glassy facet (roughness 1, the tuft's effective index ≈ 1.1 for ≈ 30 % ice in air), passing
+    ``subsurface`` of its diffuse light on, on every part of the flake alike (no CDRF per vertex). Syrup fills the
+    pores: its dye absorbs green and blue and passes red, so the soaked tuft's medium keeps red at the ice's albedo
+    and takes the green and blue at the square of the syrup's hue (``syrup_color`` over its red: twice the dye's
+    absorbance), so that the soaked top renders the syrup's own colour (at the hue itself the default syrup's top
+    rendered sRGB (226, 86, 114), pink, against the syrup's (225, 39, 69); squared (224, 50, 74); docs/look.md,
+    "Kakigori"). Its free path is short (0.05 mm) because absorption happens at the medium's collisions (one σt for
+    every channel, ``mitsuba_scene.medium``): a strong dye needs many of them in a 0.3 mm flake (at 0.6 mm the top
+    rendered pale pink; at 0.25 mm pink, with a skin over it). Soaked through (``is_wet``), the tuft is one
+    liquid-filled body behind a smooth skin at the syrup's index. It is wet: glossy (roughness 0.15, index 1.33)
+    under a clear coat (the key's glints; ``mitsuba_scene.gloss``), and as a thin diffuser passes 90 % of its
+    diffuse light on, 30 % straight through (index-matched ice and syrup are clear)."""
     ice = Material(
         name=ICE,
         base_color=(0.96, 0.965, 0.97),
@@ -254,11 +255,24 @@ def ice_materials(syrup_color) -> tuple[Material, Material]:
 
 
 def is_ice(material: Material) -> bool:
-    """Whether a material is kakigori ice (plain or a syrup grade): a scattering medium with no skin in the
-    preview (``mitsuba_scene.boundary_bsdf``), else a thin diffuser whose diffuse transmission is its
-    ``subsurface`` on every vertex (no CDRF); the preview traces longer paths through a heap of them
-    (``mitsuba_scene.path_depth``)."""
+    """Whether a material is kakigori ice (plain or a syrup grade): a scattering medium in the preview, with no
+    skin unless soaked through (``is_wet``; ``mitsuba_scene.boundary_bsdf``), else a thin diffuser whose diffuse
+    transmission is its ``subsurface`` on every vertex (no CDRF); the preview traces longer paths through a heap of
+    them (``mitsuba_scene.path_depth``)."""
     return material.name == ICE or material.name.startswith(ICE + "_syrup")
+
+
+# the share of syrup in a tuft's pores from which it is wet through: the liquid joins up between the shavings and
+# its one surface (a dielectric skin at the liquid's index, as smooth as its film: ``look.has_skin``) gives the
+# soaked top its wet gloss; a tuft with less is damp shavings, their pores still open to the air
+WET_SHARE = 0.5
+
+
+def is_wet(material: Material) -> bool:
+    """Whether a material is shaved ice soaked through with syrup (a grade ``ice_syrup_<percent>`` of at least
+    ``WET_SHARE``)."""
+    prefix = ICE + "_syrup_"
+    return material.name.startswith(prefix) and int(material.name.removeprefix(prefix)) >= 100 * WET_SHARE
 
 
 def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material, ...]:
@@ -290,60 +304,69 @@ def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material,
 
 
 def chestnut_material() -> Material:
-    """Chestnut (kuri, as in kuri gohan): yellow, matte and slightly waxy — an opaque body with a little light
-    through it (subsurface 0.2, far less than rice) under a soft, rough coat (the waxy sheen), so it reads as
-    a different solid from the translucent, glossy rice around it."""
+    """Chestnut (kuri, as in kuri gohan): a peeled, steamed kernel, pale yellow-gold, matte and a little crumbly
+    — an opaque starchy body with a little light through it (subsurface 0.2, far less than rice), a dry, rough face
+    (roughness 0.8) and a faint waxy film (the gelatinised starch), so it reads as a different solid from the
+    translucent, glossy rice around it. Colour CIELAB (78, 4, 38), linear (0.74, 0.50, 0.195) = sRGB (223, 188,
+    122): chosen, the nearest published reading being chestnut flour, L* 90.7 → 81.4 and b* 12.0 → 20.5 on roasting
+    (sweet chestnut, pan and microwave roasting: pmc.ncbi.nlm.nih.gov/articles/PMC5470552); a whole piece is
+    darker and more saturated than its flour. At (0.80, 0.50, 0.06), a saturated mustard, art directors read the
+    pieces as cheese (issue 48)."""
     return Material(
         name="chestnut",
-        base_color=(0.80, 0.50, 0.06),
+        base_color=(0.74, 0.50, 0.195),
         subsurface=0.2,
-        subsurface_radius=(0.6, 0.35, 0.1),
-        subsurface_color=(0.90, 0.62, 0.15),
-        specular=0.4,
-        roughness=0.65,
-        sheen=0.15,
-        sheen_tint=0.6,
-        clearcoat=0.15,
-        clearcoat_roughness=0.4,
+        subsurface_radius=(0.6, 0.4, 0.2),
+        subsurface_color=(0.85, 0.62, 0.30),
+        specular=0.3,
+        roughness=0.8,
+        sheen=0.2,
+        sheen_tint=0.5,
+        clearcoat=0.08,
+        clearcoat_roughness=0.5,
         ior=1.45,
     )
 
 
+# a raw slice is wet and smooth: its skin is a water film (roughness 0.12, α 0.014), the key's sharp glint on it
+FISH_FILM_ROUGHNESS = 0.12
+
+
 def fish_materials(kind: str) -> tuple[Material, Material]:
-    """(flesh, fat) of a raw fish topping: translucent flesh (subsurface) with a moist coat, and the whiter
-    fat lines (myocommata) with more sheen. ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep
-    red flesh, faint fat)."""
+    """(flesh, fat) of a raw fish topping. The flesh is light under a wet skin: the preview fills the slab with a
+    scattering medium (``look.VOLUMETRIC_ELEMENTS``) behind a smooth dielectric film (``FISH_FILM_ROUGHNESS``), so
+    light enters it, glows through its thin edges and comes back coloured, and the film gives the wet sheen. Red
+    light travels furthest (subsurface radius 3 mm in red; Johansen 2008, NTNU: optical penetration depth in
+    Atlantic salmon 6.79 ± 0.33 mm at 632.8 nm); green and blue are absorbed by the pigment (astaxanthin in salmon,
+    myoglobin in tuna) within a millimetre. The fat lines (the myosepta's fat and collagen) are a dense white
+    scatterer seen as an opaque cream surface under the same wet coat: light in the flesh that reaches one is sent
+    back into the flesh. As a medium of their own, light entering a 0.7 mm line walked off through the flesh and
+    the lines rendered grey. ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep red flesh, faint
+    fat)."""
     if kind == "salmon":
-        flesh_color, flesh_sss, fat_color, fat_sheen = (0.90, 0.22, 0.07), (0.98, 0.38, 0.16), (0.95, 0.62, 0.45), 0.5
+        flesh_color, flesh_sss, fat_color = (0.90, 0.22, 0.07), (0.99, 0.30, 0.10), (0.86, 0.72, 0.58)
     elif kind == "tuna":
-        flesh_color, flesh_sss, fat_color, fat_sheen = (0.42, 0.03, 0.04), (0.70, 0.08, 0.08), (0.75, 0.30, 0.30), 0.3
+        flesh_color, flesh_sss, fat_color = (0.42, 0.03, 0.04), (0.70, 0.08, 0.08), (0.80, 0.50, 0.48)
     else:
         raise ValueError(f"fish kind '{kind}': expected salmon or tuna")
     flesh = Material(
         name=f"{kind}_flesh",
         base_color=flesh_color,
-        subsurface=0.6,
+        subsurface=1.0,
         subsurface_radius=(3.0, 1.0, 0.5),
         subsurface_color=flesh_sss,
-        roughness=0.4,
-        sheen=0.2,
-        sheen_tint=0.5,
-        clearcoat=0.4,
-        clearcoat_roughness=0.12,
+        roughness=0.3,
+        clearcoat=1.0,
+        clearcoat_roughness=FISH_FILM_ROUGHNESS,
         ior=1.38,
     )
     fat = Material(
         name=f"{kind}_fat",
         base_color=fat_color,
-        subsurface=0.4,
-        subsurface_radius=(1.5, 1.0, 0.7),
-        subsurface_color=fat_color,
-        roughness=0.3,
-        sheen=fat_sheen,
-        sheen_tint=0.2,
-        clearcoat=0.5,
-        clearcoat_roughness=0.08,
-        ior=1.47,
+        roughness=0.5,
+        clearcoat=1.0,
+        clearcoat_roughness=FISH_FILM_ROUGHNESS,
+        ior=1.38,
     )
     return flesh, fat
 
@@ -352,17 +375,17 @@ NORI = "nori"  # a scenery mesh of this name (the ``nori`` node's band) gets ``n
 
 
 def nori_material() -> Material:
-    """Nori (dried, toasted laver sheet): black-green and dry. Base linear (0.014, 0.023, 0.013) = sRGB (31, 42, 30),
-    L* 16 as a diffuse albedo; the one published figure at hand, L* 29.1, a* 1.6, b* 2.1 for a test sheet of
-    Vietnamese Porphyra (Tạp chí Công Thương, "nori from Porphyra harvested in Khánh Hòa"), is a colorimeter's,
-    specular included (a black surface's 4 % alone reads L* 24), so the albedo under it is darker; commercial
-    yaki-nori is greener. A dry, fibrous face: one broad specular lobe (roughness 0.55, F0 0.04), no clear coat
-    and a faint sheen in its own colour; the sheet's crinkles and fibres (the ``nori`` node's ``crinkle``) give it
-    its texture. With a satin face (roughness 0.42, a clear coat, a white-ish sheen 0.6) it reflected the studio
-    and read as grey rubber (issue 48)."""
+    """Nori (dried, toasted laver sheet): black-green and dry. Base linear (0.010, 0.026, 0.012) = sRGB (25, 45, 29),
+    L* 16 as a diffuse albedo (at sRGB (31, 42, 30), the same L* less green, the band rendered grey); the one
+    published figure at hand, L* 29.1, a* 1.6, b* 2.1 for a test sheet of Vietnamese Porphyra (Tạp chí Công
+    Thương, "nori from Porphyra harvested in Khánh Hòa"), is a colorimeter's, specular included (a black surface's
+    4 % alone reads L* 24), so the albedo under it is darker; commercial yaki-nori is greener. A dry, fibrous face:
+    one broad specular lobe (roughness 0.55, F0 0.04), no clear coat and a faint sheen in its own colour; the
+    sheet's crinkles and fibres (the ``nori`` node's ``crinkle``) give it its texture. With a satin face (roughness
+    0.42, a clear coat, a white-ish sheen 0.6) it reflected the studio and read as grey rubber (issue 48)."""
     return Material(
         name=NORI,
-        base_color=(0.014, 0.023, 0.013),
+        base_color=(0.010, 0.026, 0.012),
         roughness=0.55,
         sheen=0.25,
         sheen_tint=0.9,

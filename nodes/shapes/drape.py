@@ -14,9 +14,9 @@ from nodegraph.params import Param
 from ..values import Aggregate
 
 FISH = ("salmon", "tuna")
-# kind → (fat line spacing, line width, angle to the slab's width, bow), mm and degrees: salmon shows bold
-# white bands, tuna (akami) faint thin ones
-FAT_LINES = {"salmon": (7.0, 1.4, 25.0, 6.0), "tuna": (9.0, 0.6, 20.0, 4.0)}
+# kind → (fat line spacing, line width, angle to the slab's width, chevron depth), mm and degrees
+# (``plate_drape.fat_lines``): salmon shows thin white chevrons a flake apart, tuna (akami) fainter, sparser ones
+FAT_LINES = {"salmon": (6.0, 0.6, 30.0, 6.0), "tuna": (9.0, 0.5, 20.0, 4.0)}
 
 
 @node(
@@ -54,7 +54,8 @@ FAT_LINES = {"salmon": (7.0, 1.4, 25.0, 6.0), "tuna": (9.0, 0.6, 20.0, 4.0)}
         "cell": Param(
             float,
             0.5,
-            "grid cell of the plate and of the slab's mesh (fat lines need < their width)",
+            "grid cell of the plate and largest cell of the slab's mesh (which is finer where needed: under half "
+            "its fat lines' width)",
             range=(0.05, 10.0),
             units="mm",
         ),
@@ -85,8 +86,9 @@ def drape(ctx, aggregate, *, kind, size, corner, young_modulus, density, press, 
     load = density * 1e-6 * gravity * thickness + press * 1e-3  # kg/mm³·mm/s²·mm = kPa
     w = drape_plate(upper_envelope(local, grid), grid, bending, load)
 
-    vertices, faces = rounded_slab(length, width, thickness, corner, cell)
-    parts = fat_lines(vertices[faces].mean(axis=1), width, *FAT_LINES[kind])
+    lines = FAT_LINES[kind]
+    vertices, faces = rounded_slab(length, width, thickness, corner, min(cell, 0.5 * lines[1]))
+    parts = fat_lines(vertices[faces].mean(axis=1), width, *lines)
     draped = drape_points(vertices, thickness, w, grid)
     world = np.c_[draped[:, :2] @ axes + centre, draped[:, 2]]
     middle = world.mean(axis=0)

@@ -188,13 +188,28 @@ def rounded_slab(length: float, width: float, thickness: float, corner: float, c
     return field_surface(-distance.astype(np.float32), origin, cell, 0.0)
 
 
-def fat_lines(local_centres: np.ndarray, width: float, spacing: float, line_width: float, angle: float, bow: float):
+def fat_lines(local_centres: np.ndarray, width: float, spacing: float, line_width: float, angle: float, chevron: float):
     """Face part per face: 1 (fat) on bands across the slab, 0 (flesh) elsewhere. A band is where
-    (U·cos a + V·sin a + bow·V²/W) mod spacing < line width: parallel lines at angle a to the slab's width,
-    bowed like the myocommata of a fillet cut across. 0 spacing: no fat."""
+    (U·cos a + V·sin a + chevron·w(V)) mod spacing < line width, w the W-shaped zigzag across the slab's width
+    (0 at V = ±W/4, ½ at its middle and edges, corners rounded): thin parallel chevrons, the myosepta (the
+    sheets of connective tissue and fat between the muscle's flakes, "folded and nested in complex W-like
+    shapes", McGee, On Food and Cooking, 2004) where a slice cuts them. 0 spacing: no fat."""
     if spacing <= 0:
         return np.zeros(len(local_centres), np.int32)
     u, v = local_centres[:, 0], local_centres[:, 1]
     a = np.radians(angle)
-    phase = u * np.cos(a) + v * np.sin(a) + bow * v**2 / width
+    across = 2.0 * v / width  # −1 … 1 across the slab
+    zigzag = _soft_abs(_soft_abs(across) - 0.5)
+    # a sheet is not a ruled surface: the lines drift a little along the slab and across it (≈ 20 mm waves)
+    drift = CHEVRON_DRIFT * np.sin(0.31 * u + 0.17 * v + 1.3) + 0.5 * CHEVRON_DRIFT * np.sin(0.23 * v - 0.11 * u)
+    phase = u * np.cos(a) + v * np.sin(a) + chevron * zigzag + drift
     return (np.mod(phase, spacing) < line_width).astype(np.int32)
+
+
+CHEVRON_DRIFT = 0.8  # mm: how far a line wanders from its chevron (``fat_lines``)
+# the zigzag's corners rounded over this share of the half-width (a sheet bends, it does not fold)
+CHEVRON_CORNER = 0.08
+
+
+def _soft_abs(x: np.ndarray) -> np.ndarray:
+    return np.sqrt(x * x + CHEVRON_CORNER**2) - CHEVRON_CORNER

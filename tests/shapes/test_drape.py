@@ -92,8 +92,26 @@ def test_fat_lines_and_bad_input(block):
     aggregate, _ = block
     salmon = drape.call(aggregate=aggregate).element_mesh(0)
     tuna = drape.call(aggregate=aggregate, kind="tuna").element_mesh(0)
-    assert 0.1 < salmon.parts.mean() < 0.35 and 0 < tuna.parts.mean() < salmon.parts.mean()
+    # thin lines: a tenth of a 6 mm flake (0.6 mm), a few faces wide (the mesh under half a line's width)
+    assert 0.05 < salmon.parts.mean() < 0.2 and 0 < tuna.parts.mean() < salmon.parts.mean()
+    edges = np.linalg.norm(salmon.vertices[salmon.faces] - np.roll(salmon.vertices[salmon.faces], 1, axis=1), axis=2)
+    assert np.median(edges) <= 0.4  # 0.53 at the plate's 0.5 mm cell
     with pytest.raises(ValueError, match="length ≥ width > thickness"):
         drape.call(aggregate=aggregate, size=(20.0, 30.0, 5.0))
     with pytest.raises(ValueError, match="nothing under it"):
         drape.call(aggregate=aggregate, offset=(200.0, 0.0))
+
+
+def test_fat_lines_are_w_shaped_chevrons():
+    """Across the slab a line zigzags as a W (McGee: myosepta "folded and nested in complex W-like shapes"): at
+    its middle and edges it lies a chevron's depth before where it lies at a quarter of the width."""
+    from nodes.shapes.plate_drape import fat_lines
+
+    width, chevron = 24.0, 12.0
+    u = np.arange(-30.0, 30.0, 0.01)
+    firsts = []
+    for v in (-12.0, -6.0, 0.0, 6.0, 12.0):
+        fat = fat_lines(np.c_[u, np.full_like(u, v)], width, 100.0, 0.5, 0.0, chevron)
+        firsts.append(u[np.argmax(fat)])  # where the one line crosses this row
+    dips = np.diff(firsts)
+    assert (dips[[0, 2]] > chevron / 4).all() and (dips[[1, 3]] < -chevron / 4).all()  # down, up, down, up: a W
