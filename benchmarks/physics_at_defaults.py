@@ -40,7 +40,6 @@ HEAP_LEVERS = (
     ("speed clamp 1 (the old default)", {"speed_clamp": 1.0}),
     ("no damping", {"damping": 0.0}),
     ("no mass scaling (shock propagation 1)", {"shock_propagation": 1.0}),
-    ("no sleeping", {"sleep_speed": 0.0}),
     ("μk = μs (dynamic scale 1)", {"dynamic_scale": 1.0}),
     ("μs 1.0", {"static_threshold": 1.0}),
 )
