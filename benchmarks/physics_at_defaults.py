@@ -1,14 +1,15 @@
 """The held-out granular cases at the xpbd node's defaults and at 4× its substeps (issue 46): a rice grain on
 an inclined plane, and rice heaps, dry and sticky, dropped as a ball and poured as a stream (and the stream with
-the speed clamp at 4, so that a fall keeps its speed: ``solver.solve_pieces``), read at 2.5 s and 7 s. Each case
-writes one line to benchmarks/measured/physics_defaults.jsonl; ``python tools/measured_tables.py`` renders
-the table in docs/validation.md.
+the speed clamp at 1, the old default, under which a fall is braked to 1 r per substep), read at 2.5 s and 7 s.
+Each case writes one line to benchmarks/measured/physics_defaults.jsonl; ``python tools/measured_tables.py``
+renders the table in docs/validation.md.
 
     python benchmarks/physics_at_defaults.py            # every case (≈ 6 min on 2 cores)
     python benchmarks/physics_at_defaults.py --quick    # the inclined planes only (≈ 1 min), prints, writes nothing
     python benchmarks/physics_at_defaults.py --convergence   # the substep curve (docs/accuracy.md), ≈ 8 min
     python benchmarks/physics_at_defaults.py --funnel        # the fixed-funnel heap at 5–80 substeps, ≈ 5 min
     python benchmarks/physics_at_defaults.py --passes        # substeps against iterations; the stream's landing
+    python benchmarks/physics_at_defaults.py --levers        # what each solver setting does to the heaps, ≈ 12 min
 
 ``--convergence`` runs the poured heap (two seeds) and the grain sliding across its length at 5–80 substeps and
 writes benchmarks/measured/granular_convergence.jsonl, with its plot docs/images/accuracy/granular_convergence.png:
@@ -32,6 +33,16 @@ RECORD = Path(__file__).resolve().parent / "measured" / "physics_defaults.jsonl"
 CONVERGENCE = RECORD.with_name("granular_convergence.jsonl")
 FUNNEL = RECORD.with_name("funnel_heap.jsonl")
 PASSES_RECORD = RECORD.with_name("solver_passes.jsonl")
+LEVERS = RECORD.with_name("heap_levers.jsonl")
+# (what, node parameters) changed from the defaults, one at a time: what each does to the heaps at 10 and 40 substeps
+HEAP_LEVERS = (
+    ("the node's defaults", {}),
+    ("speed clamp 1 (the old default)", {"speed_clamp": 1.0}),
+    ("no damping", {"damping": 0.0}),
+    ("no mass scaling (shock propagation 1)", {"shock_propagation": 1.0}),
+    ("μk = μs (dynamic scale 1)", {"dynamic_scale": 1.0}),
+    ("μs 1.0", {"static_threshold": 1.0}),
+)
 PLOT = Path(__file__).resolve().parents[1] / "docs" / "images" / "accuracy" / "granular_convergence.png"
 SUBSTEPS = (5, 10, 20, 40, 80)  # the convergence curve's points; the node's default is 20
 EFFECTS = frozenset({"gravity", "contact", "friction", "collider", "damping"})
@@ -312,6 +323,25 @@ def landing() -> list[dict]:
     return rows
 
 
+def levers() -> list[dict]:
+    """Each of ``HEAP_LEVERS``: the 300-grain stream and ball (seed 0) at 10 and 40 substeps, atan H/R and the
+    surface slope at 2.5 s."""
+    from validation import rice_heap
+
+    rows = []
+    for what, params in HEAP_LEVERS:
+        values, start = {}, time.perf_counter()
+        for shape in ("stream", "ball"):
+            for substeps in (10, 40):
+                ((surface, hr),), _ = rice_heap(300, True, frames=(150,), substeps=substeps, shape=shape, **params)
+                values[f"{shape}_{substeps}"] = round(hr, 1)
+                values[f"{shape}_{substeps}_surface"] = round(surface, 1)
+        values["seconds"] = round(time.perf_counter() - start, 1)
+        rows.append({"case": "heap lever", "lever": what, "params": params, "values": values})
+        print(rows[-1], flush=True)
+    return rows
+
+
 def convergence() -> list[dict]:
     """The poured heap (seeds 0 and 1) and the grain sliding across its length at each of ``SUBSTEPS``: the
     heap's surface slope and H/R at 7 s, the tilt the grain holds to, and the seconds each costs."""
@@ -384,7 +414,12 @@ def main(argv=None) -> None:
     ap.add_argument("--replot", action="store_true", help="redraw the substep curve's plot from its data")
     ap.add_argument("--funnel", action="store_true", help="the fixed-funnel heap's substep curve only")
     ap.add_argument("--passes", action="store_true", help="substeps against iterations, and the stream's landing")
+    ap.add_argument("--levers", action="store_true", help="what each solver setting does to the heaps")
     args = ap.parse_args(argv)
+    if args.levers:
+        rows = levers()
+        LEVERS.write_text("".join(record(r, "python benchmarks/physics_at_defaults.py --levers") + "\n" for r in rows))
+        return
     if args.replot:
         plot_convergence([json.loads(line) for line in CONVERGENCE.read_text().splitlines()])
         return
@@ -415,7 +450,7 @@ def main(argv=None) -> None:
     if not args.quick:
         for shape, n in (("ball", 890), ("stream", 300)):
             cases += [heap_case(shape, n, s) for s in pair]
-        cases += [heap_case("stream", 300, s, speed_clamp=4.0) for s in pair]  # falls keep their speed
+        cases += [heap_case("stream", 300, s, speed_clamp=1.0) for s in pair]  # the old default: falls braked
         for shape in ("ball", "stream"):
             cases += [heap_case(shape, 300, s, sticky=True) for s in pair]
     for c in cases:

@@ -170,6 +170,26 @@ TABLES = {
             ("published", field("published")),
         ],
     ),
+    "heap_levers": (
+        "heap_levers.jsonl",
+        None,
+        [
+            ("changed from the defaults", field("lever")),
+            (
+                "poured stream: atan H/R at 10 / 40 substeps (°)",
+                lambda r: f"{r['values']['stream_10']} / {r['values']['stream_40']}",
+            ),
+            (
+                "dropped ball: atan H/R at 10 / 40 substeps (°)",
+                lambda r: f"{r['values']['ball_10']} / {r['values']['ball_40']}",
+            ),
+            (
+                "stream: surface slope at 10 / 40 (°)",
+                lambda r: f"{r['values']['stream_10_surface']} / {r['values']['stream_40_surface']}",
+            ),
+            ("s (four heaps)", value("seconds")),
+        ],
+    ),
     "granular_convergence": (
         "granular_convergence.jsonl",
         None,

@@ -9,9 +9,10 @@ from nodes.simulation.collider import signed_distance_grid
 from nodes.simulation.settings import solver_settings_for
 from nodes.simulation.shape_matching import extract_rotation
 
-# what these bounds were measured with before the node's defaults became the solver's (issue 45): μk/μs 2/3, no
-# sleeping (a test that watches the motion must see it), no mass scaling (shock 1), a rigid goal (β = 0)
-PLAIN = dict(dynamic_scale=0.4 / 0.6, sleep_speed=0.0, shock_propagation=1.0, linear_deformation=0.0)
+# what these bounds were measured with before the node's defaults became the solver's (issues 45, 46): μk/μs 2/3, no
+# sleeping (a test that watches the motion must see it), no mass scaling (shock 1), a rigid goal (β = 0), one solve
+# per substep (speed clamp 1: a fall is capped at 1 r per substep)
+PLAIN = dict(dynamic_scale=0.4 / 0.6, sleep_speed=0.0, shock_propagation=1.0, linear_deformation=0.0, speed_clamp=1.0)
 GROUND = [box_mesh([-40, -40, -4], [40, 40, 0], "ground")]
 
 
@@ -231,7 +232,7 @@ def test_fast_grains_do_not_tunnel_through_thin_bowl_wall(clamp):
     bowl = bowl_mesh(radius=20.0, wall=0.8, rim=0.3, segments=64)
     sdf = signed_distance_grid([bowl], np.array([-24.0, -24, -24]), np.array([24.0, 24, 10]), 0.25)
     settings = solver_settings_for(
-        frozenset({"contact", "collider"}), 0.5, substeps=4, iterations=1, speed_clamp=clamp, **PLAIN
+        frozenset({"contact", "collider"}), 0.5, substeps=4, iterations=1, **{**PLAIN, "speed_clamp": clamp}
     )
     rng = np.random.default_rng(1)
     n = 200
@@ -268,7 +269,7 @@ def test_fast_particles_do_not_pass_through_a_particle_plate(clamp, substeps):
     clear of the plate meets a contact before it can cross the plate's midplane. Every frame: no
     projectile centre below the plate over its footprint."""
     settings = solver_settings_for(
-        frozenset({"contact"}), 0.5, substeps=substeps, iterations=1, speed_clamp=clamp, **PLAIN
+        frozenset({"contact"}), 0.5, substeps=substeps, iterations=1, **{**PLAIN, "speed_clamp": clamp}
     )
     g = np.arange(-6, 7) * 1.0
     plate = np.stack([*np.meshgrid(g, g, indexing="ij"), np.zeros((13, 13))], -1).reshape(-1, 3)
@@ -296,10 +297,11 @@ def test_fast_particles_do_not_pass_through_a_particle_plate(clamp, substeps):
 
 
 @pytest.mark.parametrize(
-    "sleep_speed",
+    ("sleep_speed", "clamp"),
     [
         pytest.param(
             0.0,
+            1.0,
             marks=pytest.mark.xfail(
                 strict=True,
                 reason="issue 46: without sleeping a bar under another rocks in a 3-frame cycle at up to 0.084 mm/s "
@@ -307,10 +309,22 @@ def test_fast_particles_do_not_pass_through_a_particle_plate(clamp, substeps):
                 "substep's Coulomb test (friction.contact_mode); the old per-pass test let them settle",
             ),
         ),
-        1.0,
+        (1.0, 1.0),
+        pytest.param(
+            1.0,
+            4.0,
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="issue 46: at the node's speed clamp 4 the bars land at full speed and this placement jams a "
+                "bar between the ground, two sleepers and a bar on top: each substep pre-stabilisation moves its "
+                "free particles 12–30 µm apart and shape matching pulls them back, so it jitters at up to 10 mm/s "
+                "and keeps its neighbours awake (kinetic energy 4 g·mm²/s²); at clamp 1 the placement of seed 2 "
+                "does the same (docs/validation.md: 'A sleeping pile of bars does not always come to rest')",
+            ),
+        ),
     ],
 )
-def test_long_rest_comes_to_rest(sleep_speed):
+def test_long_rest_comes_to_rest(sleep_speed, clamp):
     """Twelve bars dropped on the ground, 5 s, sleeping off and on. Issue 11: without sleeping a bar
     crept over the one under it at 0.13 mm/s for ever (kinetic energy steady at 5e-4 g·mm²/s²
     though damped: the contacts' friction took the overlap its correction would leave as its load,
@@ -329,7 +343,7 @@ def test_long_rest_comes_to_rest(sleep_speed):
         frozenset({"gravity", "contact", "friction", "collider", "damping"}),
         0.5,
         stiffness=1000.0,
-        **{**PLAIN, "sleep_speed": sleep_speed},
+        **{**PLAIN, "sleep_speed": sleep_speed, "speed_clamp": clamp},
     )
     bar = cluster_bar(3)
     rng = np.random.default_rng(0)
