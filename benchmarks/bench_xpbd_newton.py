@@ -11,7 +11,14 @@ Newton's CPU path runs on one thread; ``--threads 1`` compares at equal thread c
 rates each side by the process's CPU seconds instead of the wall clock: at one thread each that is
 the work itself, which other processes on a shared, loaded machine do not inflate (wall time then
 mostly measures their share of the cores).
+``--equal-piles`` (issue 49) compares piles, not substeps: each side at the cheapest substeps × iterations at which its
+10k pile converges (packing at 1.5 s within ``CONVERGED`` of the pile at 4× the substeps) and rests (mean speed below
+``REST_SPEED``), ``EQUAL_PILES`` or, with ``--search``, searched over ``CANDIDATES``; per side the packing, the rest
+speed and CPU s per simulated second. At 10 × 1 Newton's pile boils (Jacobi contact sums overshoot), ours stands in
+the lattice's columns (no particle rotates, static friction holds a 2° tilt): docs/performance.md. ``--pile SIDE
+SUBSTEPS ITERATIONS`` traces one side's packing, speed and drift every 20 frames.
 Run: python benchmarks/bench_xpbd_newton.py [--quick] [--sizes 10000 50000] [--threads N] [--clock cpu]
+     [--equal-piles [--search] [--newton SUBSTEPS ITERATIONS] [--frames F]] [--pile SIDE SUBSTEPS ITERATIONS [--mu μ]]
 """
 
 from __future__ import annotations
@@ -193,12 +200,14 @@ def scene(side, n, settings, threads=None):
 def piles(n, settings, frames=PILE_FRAMES, threads=None, clock=time.process_time):
     """Each side of ``settings`` (side: (substeps, iterations)) runs ``frames`` frames from the start, the sides
     taking turns ``BLOCK`` frames at a time; per side (packing, mean speed over the last frame in m/s, ``clock``
-    seconds per simulated second)."""
+    seconds per simulated second after the first block: it loads the kernels and builds the first lists, a
+    once-per-process cost that at 50k made ours' first 10 frames cost 2.8× its rate)."""
     import warp as wp
 
     scenes = {side: scene(side, n, s, threads) for side, s in settings.items()}
     spent = dict.fromkeys(scenes, 0.0)
     last = {}
+    warm = BLOCK if frames > BLOCK else 0  # frames left out of the cost
     for done in range(0, frames, BLOCK):
         for side, (frame, positions, _) in scenes.items():
             t = clock()
@@ -207,12 +216,13 @@ def piles(n, settings, frames=PILE_FRAMES, threads=None, clock=time.process_time
                     last[side] = positions().copy()
                 frame()
             wp.synchronize()
-            spent[side] += clock() - t
+            if done >= warm:
+                spent[side] += clock() - t
     out = {}
     for side, (_, positions, _) in scenes.items():
         x = positions()
         speed = float(np.linalg.norm(x - last[side], axis=1).mean() * 60)
-        out[side] = (packing(x, SIDE), speed, spent[side] / (frames / 60))
+        out[side] = (packing(x, SIDE), speed, spent[side] / ((frames - warm) / 60))
     return out
 
 
@@ -281,6 +291,8 @@ def equal_piles(args, clock):
     sizes = [2000] if args.quick else args.sizes
     frames = 6 if args.quick else args.frames or PILE_FRAMES
     settings = dict(EQUAL_PILES)
+    if args.newton:
+        settings["newton"] = tuple(args.newton)
     if args.search:
         for side in settings:
             found, _ = search(side, sizes[0], args.threads, clock)
@@ -320,6 +332,7 @@ def main():
     ap.add_argument("--clock", choices=("wall", "cpu"), default="wall", help="cpu: substeps per CPU second")
     ap.add_argument("--equal-piles", action="store_true", help="each side at the settings where its pile converges")
     ap.add_argument("--search", action="store_true", help="with --equal-piles: search those settings first")
+    ap.add_argument("--newton", type=int, nargs=2, metavar=("SUBSTEPS", "ITERATIONS"), help="Newton's, --equal-piles")
     ap.add_argument("--pile", nargs=3, metavar=("SIDE", "SUBSTEPS", "ITERATIONS"), help="trace one side's pile")
     ap.add_argument("--frames", type=int, help=f"frames to run: --pile 120, --equal-piles {PILE_FRAMES}")
     ap.add_argument("--mu", type=float, default=MU["friction"], help="with --pile: friction coefficient, both sides")
