@@ -1,16 +1,16 @@
 """Side by side: our XPBD particle contacts vs Newton's SolverXPBD on CPU (issue 6).
 
-N spheres of radius 1 cm in an open box, 10 substeps per 1/60 s frame, 1 iteration, gravity,
-contact + friction, box walls. Both start from the same jittered grid (1 mm gaps), run
-``settle`` frames so the pile forms (60 frames: the 50k column starts 2 m tall and needs ≈ 0.65 s
-to land), then take turns, three rounds of 10 frames each, ours then Newton's (noise on this shared
-machine falls on both): substeps per second, median and range. Also reported per side: the pile top,
-the packing fraction below 80 % of the 95th-percentile height (random packing ≈ 0.60–0.64) and,
-for ours, the max penetration / r.
+N spheres of radius 1 cm in an open box, 10 substeps per 1/60 s frame, 1 iteration, gravity, contact + friction, box
+walls. Both start from the same jittered grid (1 mm gaps), run ``settle`` frames so the pile forms (60 frames: the
+50k lattice, 2 m tall, stands on the floor and closes its 1 mm gaps; a free fall of 95 mm takes 0.14 s), then take
+turns, three rounds of 10 frames each, ours then Newton's (noise on this shared machine falls on both): substeps per
+second, median and range. Also reported per side: the pile top, the packing fraction below 80 % of the
+95th-percentile height (random packing ≈ 0.60–0.64) and, for ours, the max penetration / r.
 Newton's CPU path runs on one thread; ``--threads 1`` compares at equal thread count. ``--clock cpu``
 rates each side by the process's CPU seconds instead of the wall clock: at one thread each that is
-the work itself, which other processes on a shared, loaded machine do not inflate (wall time then
-mostly measures their share of the cores).
+the work itself, which other processes on a shared, loaded machine inflate far less than the wall clock (wall time
+then mostly measures their share of the cores; at load 13–17 ours' CPU s per simulated second at 10k still rose
+≈ 2×: compare sides within one run).
 ``--equal-piles`` (issue 49) compares piles, not substeps: each side at the cheapest substeps × iterations at which
 its 10k pile converges (packing at 1.5 s within ``CONVERGED`` of the pile at 4× the substeps) and rests (mean speed
 below ``REST_SPEED``; where none rests, the cheapest that converges below ``CALM``), ``EQUAL_PILES`` or, with
@@ -182,7 +182,7 @@ def side_by_side(n, settle, timed, rounds, threads=None, clock=time.perf_counter
 
 
 # -- equal piles (issue 49): each side at the cheapest settings at which its pile converges and rests ----------
-PILE_FRAMES = 90  # 1.5 s: the 50k column lands by ≈ 0.65 s; packing and rest are read at the last frame
+PILE_FRAMES = 90  # 1.5 s (ours rests by 0.67 s at 50k); packing and rest are read at the last frame
 REST_SPEED = 1e-3  # m/s: a pile rests when its particles' mean speed over the last frame is below this (0.1 r/s)
 CONVERGED = 0.01  # a pile's packing within this of the same side's pile at 4× the substeps
 CALM = 1e-2  # m/s (1 r/s): where no setting rests, the cheapest that converges below this speed (not boiling)
