@@ -186,6 +186,15 @@ TABLES = {
             ("end (s)", value("end")),
         ],
     ),
+    "xpbd_profile": (
+        "xpbd_profile.jsonl",
+        None,
+        [
+            ("kernel", code("kernel")),
+            ("CPU ms per substep", value("ms", 3)),
+            ("calls per substep", value("calls", 0)),
+        ],
+    ),
     "physics_defaults": (
         "physics_defaults.jsonl",
         None,
