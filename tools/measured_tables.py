@@ -61,8 +61,8 @@ def pair(*keys: str, digits: int | None = None):
     return lambda r: " / ".join(number(r["values"].get(k), digits) for k in keys)
 
 
-def listed(key: str):
-    return lambda r: " / ".join(number(v) for v in r["values"][key])
+def listed(key: str, digits: int | None = None):
+    return lambda r: " / ".join(number(v, digits) for v in r["values"][key])
 
 
 def ratio(a: str, b: str, digits: int = 2):
@@ -149,7 +149,7 @@ TABLES = {
     ),
     "xpbd_newton": (
         "xpbd_newton.jsonl",
-        None,
+        lambda r: "settings" not in r and "side" not in r,  # equal substeps
         [
             ("particles", field("particles")),
             ("threads, ours / Newton", lambda r: "1 / 1" if "one thread each" in r["what"] else "2 / 1"),
@@ -157,6 +157,42 @@ TABLES = {
             ("ours", value("ours")),
             ("Newton", value("newton")),
             ("ratio", ratio("ours", "newton")),
+        ],
+    ),
+    # each side at the cheapest settings at which its pile converges and rests (bench_xpbd_newton.py --equal-piles)
+    "xpbd_newton_piles": (
+        "xpbd_newton.jsonl",
+        lambda r: "settings" in r,
+        [
+            ("particles", field("particles")),
+            ("substeps × iterations, ours / Newton", lambda r: " / ".join(r["settings"].values())),
+            ("packing at 1.5 s, ours / Newton", pair("packing_ours", "packing_newton", digits=3)),
+            ("mean speed at 1.5 s, ours / Newton (mm/s)", pair("speed_ours", "speed_newton", digits=2)),
+            ("CPU s per simulated s, ours / Newton", pair("ours", "newton", digits=2)),
+            ("ratio", lambda r: f"**{r['values']['newton'] / r['values']['ours']:.1f}×**"),
+        ],
+    ),
+    # one side's pile at one setting (bench_xpbd_newton.py --pile): where it converges and rests
+    "xpbd_newton_tries": (
+        "xpbd_newton.jsonl",
+        lambda r: "side" in r,
+        [
+            ("side", field("side")),
+            ("particles", field("particles")),
+            ("μ", field("mu")),
+            ("substeps × iterations", lambda r: f"{r['substeps']} × {r['iterations']}"),
+            ("packing at 1 s / at the end", listed("packing", 3)),
+            ("mean speed at 1 s / at the end (mm/s)", listed("speed", 1)),
+            ("end (s)", value("end")),
+        ],
+    ),
+    "xpbd_profile": (
+        "xpbd_profile.jsonl",
+        None,
+        [
+            ("kernel", code("kernel")),
+            ("CPU ms per substep", value("ms", 3)),
+            ("calls per substep", value("calls", 0)),
         ],
     ),
     "physics_defaults": (
