@@ -54,23 +54,11 @@ EXPECTED = {
     "rice_chestnut": ((180, 340), 0.003, 0.01),
 }
 SLOW: set[str] = set()  # each runs in 2–7 s on a calm machine (rice_chestnut, the slowest: 18 s at load 10)
-# The grains lengthened by cooking (``expand.elongation`` 1.25, 7.2 mm long in the onigiri) leave the 14.4 mm onigiri
-# two grain lengths across: pressed in its mould, one pair nests 0.15 of a length deep (max; p95 0.007), made in the
-# press (rest.frames 1: the same), not undone by deform_contacts (cap 2, 20 rounds: 0.11) nor by more particles (10:
-# 0.16); at 15.6 and 16 mm 0.042 and 0.034, at 15.2 mm 0.16. The full-size onigiri measures max 0.003, p95 0.
-NESTS = {"onigiri": "one pair nests 0.15 L deep in the 14.4 mm onigiri since the grains are lengthened"}
 
 
 @pytest.mark.parametrize(
     "recipe_name",
-    [
-        pytest.param(n, marks=pytest.mark.slow)
-        if n in SLOW
-        else pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=NESTS[n]))
-        if n in NESTS
-        else n
-        for n in sorted(EXPECTED)
-    ],
+    [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in sorted(EXPECTED)],
 )
 def test_scene_at_reduced_size_counts_and_quality(recipe_name, tmp_path_factory):
     row = _quick_row(recipe_name, tmp_path_factory)

@@ -53,9 +53,11 @@ def dry_bowl(tmp_path_factory):
 
 def test_dry_grains_keep_a_plump_skin(dry_bowl):
     # mean / p90 of the exported grains' skin: 0.106 / 0.152 without the offset (b7cdfc0; the full-size bowl 0.133),
-    # 0.069 / 0.099 with the recipe's 0.1; cooked rice ≤ 0.10 (issue 26)
+    # 0.069 / 0.099 with the recipe's 0.1 and grains grown evenly; 0.091 mean with the grains lengthened by cooking
+    # (expand.elongation 1.25: a longer grain touches more neighbours, 5.4 against 4.7, and each contact dents it);
+    # cooked rice ≤ 0.10 (issue 26)
     skins, _ = dry_bowl
-    assert skins.mean() <= 0.09
+    assert skins.mean() <= 0.10
     assert np.percentile(skins, 90) <= 0.12
 
 
