@@ -87,6 +87,19 @@ nodes:
 """
 
 
+def terminal_job(command: list[str], cwd):
+    """``command`` started as a terminal's job: a process group of its own (killpg is Ctrl-C), SIGINT at its
+    default."""
+    return subprocess.Popen(
+        command,
+        cwd=cwd,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+
+
 def slow_run_at_a_terminal(tmp_path):
     """(process, its node's start marker): the slow recipe run in a process group of its own, as a terminal's job
     (killpg is Ctrl-C), SIGINT at its default."""
@@ -94,14 +107,7 @@ def slow_run_at_a_terminal(tmp_path):
     (tmp_path / "slow.yaml").write_text(SLOW.replace("STARTED", str(started)))
     command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "slow.yaml"), "--plugin", TOY]
     command += ["--cache-dir", str(tmp_path / "cache")]
-    proc = subprocess.Popen(
-        command,
-        cwd=tmp_path,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
+    proc = terminal_job(command, tmp_path)
     return proc, started
 
 
@@ -353,14 +359,7 @@ def test_a_finished_step_that_is_never_cached_is_not_computed_again_on_resume(tm
     (tmp_path / "resume.yaml").write_text(recipe)
     command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "resume.yaml"), "--plugin", TOY]
     command += ["--cache-dir", str(tmp_path / "cache")]
-    proc = subprocess.Popen(
-        command,
-        cwd=tmp_path,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
+    proc = terminal_job(command, tmp_path)
     err = ctrl_c_group(proc, started, node_started, 5.0)
     assert proc.returncode == 130 and "did not stop within" in err, err  # ended in its loop
     assert runs.read_text() == "ran\n"
