@@ -88,7 +88,7 @@ def test_the_exported_onigiri_rests_on_its_plate(glued):
 )
 def test_without_glue_the_same_onigiri_loses_its_pressed_shape(tmp_path, glued):
     """Glue is what holds the pressed shape: unglued, the grains give up the overlaps the press left, at the bounded
-    speed of a handed-on state (``settings.HANDOFF_FRAMES``). At this draft size (64 grains) the onigiri swells to
+    speed of a handed-on state (``settings.START_FRAMES``). At this draft size (64 grains) the onigiri swells to
     1.11 of its pressed height as they do (glued: 1.00); at full size it slumps to 0.93 (``rested`` without
     ``quick_sizes``; before the bound, flung grains took it to 0.78)."""
     kept, _ = rested(tmp_path, "rest.glue=0")
