@@ -53,7 +53,13 @@ def test_a_grain_pulled_from_its_place_tears_off(block):
         of_grain = (g.link_grain == grain) & ~g.link_own
         assert of_grain.sum() >= 3
         assert (~st.glued[of_grain]).all() if torn else st.glued[of_grain].all(), shift
-        assert st.glued[~of_grain].all()  # the others hold
+        # the links of the regions the grain is not in hold (in its own regions, a fit that follows it 3 r may tear
+        # a third grain's link: the paste round a grain pulled out tears)
+        region = np.searchsorted(g.region_start, np.arange(len(g.link_grain)), side="right") - 1
+        apart = ~np.isin(region, region[g.link_grain == grain])
+        assert apart.sum() > 0.9 * len(apart) and st.glued[apart].all()
+        if not torn:
+            assert st.glued[~of_grain].all()  # a small pull tears nothing else
 
 
 def test_glue_runs_only_with_adhesion():
