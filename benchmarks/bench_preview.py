@@ -244,8 +244,10 @@ def timed(quick: bool, cache_dir: Path | None, repeat: int, save: Path | None) -
 
 def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None = None) -> str:
     """The whole default preview (OIDN, glints) at each ``spp:depth[:glint spp[:guide spp[:media 0/1[:rr depth]]]]``
-    of ``configs``: CPU and wall time of the full frame, PSNR/SSIM in the eggs-over-rice window against 256 spp (64
-    with ``--quick``) at depth 128 with media; each full frame written to ``save``/<config>.png if given."""
+    of ``configs``: CPU and wall time of the full frame, PSNR/SSIM/FLIP in the eggs-over-rice window against 256 spp
+    (64 with ``--quick``) at depth 128 with media, and the full frame's FLIP against the first config's (what a
+    viewer sees change from it); each full frame written to ``save``/<config>.png if given."""
+    import flip_evaluator as flip
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from nodes.export import mitsuba_scene as ms
@@ -261,7 +263,7 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
     truth = render_layers(scene, camera, width, height, reference_spp, sun, 1, crop, 128, subsurface=media)
     reference = linear_to_srgb8(tone_map(truth.noisy()))
     reference_time = time.perf_counter() - t
-    rows = []
+    rows, first = [], None
     defaults = (ms.HIGHLIGHT_SPP, ms.GUIDE_SPP, ms.RR_DEPTH)
     for config in configs.split(","):
         fields = [int(v) for v in config.split(":")]
@@ -284,9 +286,18 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
         image = linear_to_srgb8(tone_map(layers.denoised()))
         psnr = peak_signal_noise_ratio(reference, image, data_range=255)
         ssim = structural_similarity(reference, image, channel_axis=2, data_range=255)
+        first = frame if first is None else first
+        window_flip, frame_flip = (
+            float(flip.evaluate(a / 255.0, b / 255.0, "LDR")[1])
+            for a, b in (
+                (reference.astype(np.float32), image.astype(np.float32)),
+                (first.astype(np.float32), frame.astype(np.float32)),
+            )
+        )
         rows.append(
             f"| {spp} | {depth} | {rr_depth} | {glint_spp} | {guide_spp} | {'on' if with_media else 'off'} | "
-            f"{psnr:.2f} | {ssim:.3f} | {wall:.1f} | {cpu:.1f} | {cpu / (os.cpu_count() or 1):.1f} |"
+            f"{psnr:.2f} | {ssim:.3f} | {window_flip:.4f} | {frame_flip:.4f} | {wall:.1f} | {cpu:.1f} | "
+            f"{cpu / (os.cpu_count() or 1):.1f} |"
         )
         print(rows[-1], flush=True)
     n = os.cpu_count()
@@ -297,9 +308,9 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
             f"at ({crop.x}, {crop.y}) against {reference_spp} spp at depth 128 ({reference_time:.0f} s); load average "
             f"{os.getloadavg()[0]:.2f} on {n} cores",
             "",
-            f"| spp | path depth | rr depth | glint spp | guide spp | media (SSS) | PSNR (dB) | SSIM | wall (s) | "
-            f"CPU (s) | CPU s / {n} |",
-            "|---|---|---|---|---|---|---|---|---|---|---|",
+            f"| spp | path depth | rr depth | glint spp | guide spp | media (SSS) | PSNR (dB) | SSIM | FLIP | "
+            f"FLIP to the first (frame) | wall (s) | CPU (s) | CPU s / {n} |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
             *rows,
         ]
     )

@@ -306,16 +306,13 @@ def _swept_back(x, x_prev, phi, origin, pitch, val, gx, gy, gz, i):
     return sample_phi(phi, origin, pitch, x[i, 0], x[i, 1], x[i, 2])
 
 
-# called, not inlined into ``collider_project``'s parallel loop: inlined, numba 0.68 lost the writes to the state
-# bundle's arrays it fetched (what friction removed stayed 0)
-@njit(cache=True)
-def _wall_one(state, w, r, elem, phi, origin, pitch, blocks, rule, i):
-    """Project particle i (see ``collider_project``); returns its (r − φ)/r, 0 when clear."""
+@njit(cache=True, inline="always")
+def _near_wall(x, w, r, origin, pitch, blocks, i):
+    """Whether particle i has mass and its coarse block of φ (``block_minimum``) comes within its radius: the
+    others are clear of every wall. Tested in ``collider_project``'s loop before ``_wall_one``, whose call costs
+    more than this test for the many particles far from any wall."""
     if w[i] <= 0.0:
-        return 0.0
-    x, x_prev, anchor, load, mean = state.x, state.x_prev, state.wall_anchor, state.wall_load, state.wall_mean
-    rubbed, modes = state.wall_rubbed, state.wall_mode
-    mu_s, anchored = rule[0], rule[2]
+        return False
     fx = (x[i, 0] - origin[0]) / pitch
     fy = (x[i, 1] - origin[1]) / pitch
     fz = (x[i, 2] - origin[2]) / pitch
@@ -324,7 +321,19 @@ def _wall_one(state, w, r, elem, phi, origin, pitch, blocks, rule, i):
         bj = int(fy) // COARSE
         bk = int(fz) // COARSE
         if bi < blocks.shape[0] and bj < blocks.shape[1] and bk < blocks.shape[2] and blocks[bi, bj, bk] > r[i]:
-            return 0.0
+            return False
+    return True
+
+
+# called, not inlined into ``collider_project``'s parallel loop: inlined, numba 0.68 lost the writes to the state
+# bundle's arrays it fetched (what friction removed stayed 0)
+@njit(cache=True)
+def _wall_one(state, r, elem, phi, origin, pitch, rule, i):
+    """Project particle i, one ``_near_wall`` passes (see ``collider_project``); returns its (r − φ)/r, 0 when
+    clear."""
+    x, x_prev, anchor, load, mean = state.x, state.x_prev, state.wall_anchor, state.wall_load, state.wall_mean
+    rubbed, modes = state.wall_rubbed, state.wall_mode
+    mu_s, anchored = rule[0], rule[2]
     val, gx, gy, gz = sample_phi(phi, origin, pitch, x[i, 0], x[i, 1], x[i, 2])
     pen = r[i] - val
     if pen <= 0.0:
@@ -368,7 +377,8 @@ def collider_project(state, model, grid, rule):
     n = x.shape[0]
     worst = np.zeros(n)
     for i in prange(n):
-        worst[i] = _wall_one(state, w, r, elem, phi, origin, pitch, blocks, rule, i)
+        if _near_wall(x, w, r, origin, pitch, blocks, i):
+            worst[i] = _wall_one(state, r, elem, phi, origin, pitch, rule, i)
     return worst.max() if n > 0 else 0.0
 
 
