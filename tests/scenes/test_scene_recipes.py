@@ -79,8 +79,8 @@ def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
     """Issue 26: the chestnut pieces must show, embedded in the rice. At S's refine range (±0.1 b) every one of the
     38 placed was the deepest of its pairs and the cull removed all of them; a range of ±2 b kept 30, but about half
     had stepped out over the rice, standing out of the onigiri by up to 1.4× their size. Now the cull's priority
-    removes the grains in a piece instead, and the refine's shape bound (``refine.protrusion``: ¼ for the pieces)
-    keeps each within a quarter of its size of the surface, where its face shows among the grains. Full size up
+    removes the grains in a piece instead, and the refine's shape bound (``refine.protrusion``: 0.35 for the pieces)
+    keeps each within a third of its size of the surface, where its rounded face shows among the grains. Full size up
     to the cull (≈ 8 s)."""
     import igl
     import numpy as np
@@ -107,7 +107,7 @@ def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
         reach = igl.signed_distance(world, vertices, faces, sign_type=sign)[0].max()
         share.append(reach / (height.max() - height.min()))
     share = np.array(share)
-    assert share.max() <= 0.25 + 0.02  # was 1.40: 17 of 30 wholly outside the onigiri
+    assert share.max() <= 0.35 + 0.02  # was 1.40: 17 of 30 wholly outside the onigiri
     assert (share > 0.0).all()  # every one shows a face at the surface (not stepped under the rice)
 
 
