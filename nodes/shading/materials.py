@@ -304,26 +304,26 @@ def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material,
 
 
 def chestnut_material() -> Material:
-    """Chestnut (kuri, as in kuri gohan): a peeled, steamed kernel, pale yellow-gold, matte and a little crumbly
-    — an opaque starchy body with a little light through it (subsurface 0.2, far less than rice), a dry, rough face
-    (roughness 0.8) and a faint waxy film (the gelatinised starch), so it reads as a different solid from the
-    translucent, glossy rice around it. Colour CIELAB (78, 4, 38), linear (0.74, 0.50, 0.195) = sRGB (223, 188,
-    122): chosen, the nearest published reading being chestnut flour, L* 90.7 → 81.4 and b* 12.0 → 20.5 on roasting
-    (sweet chestnut, pan and microwave roasting: pmc.ncbi.nlm.nih.gov/articles/PMC5470552); a whole piece is
-    darker and more saturated than its flour. At (0.80, 0.50, 0.06), a saturated mustard, art directors read the
-    pieces as cheese (issue 48)."""
+    """Chestnut (kuri, as in kuri gohan): a peeled kernel boiled and broken into chunks, pale cream-yellow, an
+    opaque starchy body with a little light through it (subsurface 0.2, far less than rice), a satin face (roughness
+    0.65) under the thin moist film the rice's steam leaves (clear coat 0.15), so it reads as a different solid from
+    the translucent, glossy rice around it. Colour CIELAB (82, 2, 30), linear (0.775, 0.583, 0.295) = sRGB (228,
+    201, 148): chosen, the nearest published reading being chestnut flour, L* 90.7 → 81.4 and b* 12.0 → 20.5 on
+    roasting (sweet chestnut, pan and microwave roasting: pmc.ncbi.nlm.nih.gov/articles/PMC5470552); a whole
+    piece is more saturated than its flour. At CIELAB (78, 4, 38) the pieces rendered a deep gold in the rice's
+    shade, and at (0.80, 0.50, 0.06), a saturated mustard, art directors read them as cheese (issue 48)."""
     return Material(
         name="chestnut",
-        base_color=(0.74, 0.50, 0.195),
+        base_color=(0.775, 0.583, 0.295),
         subsurface=0.2,
         subsurface_radius=(0.6, 0.4, 0.2),
-        subsurface_color=(0.85, 0.62, 0.30),
+        subsurface_color=(0.88, 0.70, 0.42),
         specular=0.3,
-        roughness=0.8,
+        roughness=0.65,
         sheen=0.2,
         sheen_tint=0.5,
-        clearcoat=0.08,
-        clearcoat_roughness=0.5,
+        clearcoat=0.15,
+        clearcoat_roughness=0.4,
         ior=1.45,
     )
 
@@ -341,10 +341,11 @@ def fish_materials(kind: str) -> tuple[Material, Material]:
     myoglobin in tuna) within a millimetre. The fat lines (the myosepta's fat and collagen) are a dense white
     scatterer seen as an opaque cream surface under the same wet coat: light in the flesh that reaches one is sent
     back into the flesh. As a medium of their own, light entering a 0.7 mm line walked off through the flesh and
-    the lines rendered grey. ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep red flesh, faint
-    fat)."""
+    the lines rendered grey. Salmon's fat is a pale pink cream (chosen): in a whiter cream (0.86, 0.72, 0.58) the
+    lines read as painted stripes (issue 48). ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep red
+    flesh, faint fat)."""
     if kind == "salmon":
-        flesh_color, flesh_sss, fat_color = (0.90, 0.22, 0.07), (0.99, 0.30, 0.10), (0.86, 0.72, 0.58)
+        flesh_color, flesh_sss, fat_color = (0.90, 0.22, 0.07), (0.99, 0.30, 0.10), (0.84, 0.64, 0.52)
     elif kind == "tuna":
         flesh_color, flesh_sss, fat_color = (0.42, 0.03, 0.04), (0.70, 0.08, 0.08), (0.80, 0.50, 0.48)
     else:

@@ -15,8 +15,9 @@ from ..values import Aggregate
 
 FISH = ("salmon", "tuna")
 # kind → (fat line spacing, line width, angle to the slab's width, chevron depth), mm and degrees
-# (``plate_drape.fat_lines``): salmon shows thin white chevrons a flake apart, tuna (akami) fainter, sparser ones
-FAT_LINES = {"salmon": (6.0, 0.6, 30.0, 6.0), "tuna": (9.0, 0.5, 20.0, 4.0)}
+# (``plate_drape.fat_lines``; the mean width: a line swells and thins along its length): salmon shows thin pale
+# chevrons a flake apart, tuna (akami) fainter, sparser ones
+FAT_LINES = {"salmon": (6.0, 0.4, 30.0, 6.0), "tuna": (9.0, 0.5, 20.0, 4.0)}
 
 
 @node(

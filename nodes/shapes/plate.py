@@ -14,6 +14,8 @@ from nodegraph.node import In, Out, node
 from nodegraph.params import Param
 from nodegraph.values import Mesh
 
+from ..values import Aggregate
+
 
 def _check(params: dict) -> list[tuple[str, str]]:
     """The shape set on the plate stands in its flat well: the well's radius (size × well plan radii) holds it."""
@@ -30,7 +32,15 @@ def _check(params: dict) -> list[tuple[str, str]]:
 
 @node(
     "plate",
-    inputs={"shape": In(Mesh, "what is set on the plate: the plate is centred under it and sized by it")},
+    inputs={
+        "shape": In(Mesh, "what is set on the plate: the plate is centred under it and sized by it"),
+        "rests": In(
+            Aggregate,
+            "the elements set on it, where they stand out of the shape's bottom (grains placed on its surface): "
+            "the well goes `gap` under their lowest vertex instead of the shape's",
+            optional=True,
+        ),
+    },
     outputs={"mesh": Out(Mesh, "the plate, closed, the top of its flat well `gap` under the shape's lowest point")},
     params={
         "size": Param(
@@ -49,11 +59,14 @@ def _check(params: dict) -> list[tuple[str, str]]:
     },
     check=_check,
 )
-def plate(ctx, shape, *, size, depth, wall, well, gap, resolution):
-    """A plate (``solids.plate``) centred under ``shape``, its rim radius ``size`` × the shape's plan radius."""
+def plate(ctx, shape, rests=None, *, size, depth, wall, well, gap, resolution):
+    """A plate (``solids.plate``) centred under ``shape``, its rim radius ``size`` × the shape's plan radius, its
+    well under the shape's lowest point or, given ``rests``, its elements' (they rest on it: none through it)."""
     from . import solids
 
     lo, hi = shape.vertices.min(axis=0), shape.vertices.max(axis=0)
+    if rests is not None and len(rests.placement):
+        lo[2] = min(float(rests.element_mesh(i).vertices[:, 2].min()) for i in range(len(rests.placement)))
     middle = 0.5 * (lo + hi)
     radius = size * float(np.hypot(*(shape.vertices[:, :2] - middle[:2]).T).max())
     mesh = solids.plate(

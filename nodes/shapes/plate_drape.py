@@ -193,7 +193,9 @@ def fat_lines(local_centres: np.ndarray, width: float, spacing: float, line_widt
     (U·cos a + V·sin a + chevron·w(V)) mod spacing < line width, w the W-shaped zigzag across the slab's width
     (0 at V = ±W/4, ½ at its middle and edges, corners rounded): thin parallel chevrons, the myosepta (the
     sheets of connective tissue and fat between the muscle's flakes, "folded and nested in complex W-like
-    shapes", McGee, On Food and Cooking, 2004) where a slice cuts them. 0 spacing: no fat."""
+    shapes", McGee, On Food and Cooking, 2004) where a slice cuts them. A sheet meets the knife at an angle that
+    changes along it, so a line swells and thins along its length (``LINE_SWELL``): a ruled line of one width
+    reads as a painted stripe (issue 48). 0 spacing: no fat."""
     if spacing <= 0:
         return np.zeros(len(local_centres), np.int32)
     u, v = local_centres[:, 0], local_centres[:, 1]
@@ -203,10 +205,14 @@ def fat_lines(local_centres: np.ndarray, width: float, spacing: float, line_widt
     # a sheet is not a ruled surface: the lines drift a little along the slab and across it (≈ 20 mm waves)
     drift = CHEVRON_DRIFT * np.sin(0.31 * u + 0.17 * v + 1.3) + 0.5 * CHEVRON_DRIFT * np.sin(0.23 * v - 0.11 * u)
     phase = u * np.cos(a) + v * np.sin(a) + chevron * zigzag + drift
-    return (np.mod(phase, spacing) < line_width).astype(np.int32)
+    line = np.floor(phase / spacing)  # which sheet: each swells at its own places
+    swell = 1.0 + LINE_SWELL * np.sin(LINE_SWELL_WAVE * v + 2.4 * line)
+    return (np.mod(phase, spacing) < line_width * swell).astype(np.int32)
 
 
 CHEVRON_DRIFT = 0.8  # mm: how far a line wanders from its chevron (``fat_lines``)
+# a line's width runs from (1 − swell) to (1 + swell) times its mean along its length, over ≈ 10 mm waves
+LINE_SWELL, LINE_SWELL_WAVE = 0.6, 0.6
 # the zigzag's corners rounded over this share of the half-width (a sheet bends, it does not fold)
 CHEVRON_CORNER = 0.08
 

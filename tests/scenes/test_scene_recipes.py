@@ -79,8 +79,8 @@ def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
     """Issue 26: the chestnut pieces must show, embedded in the rice. At S's refine range (±0.1 b) every one of the
     38 placed was the deepest of its pairs and the cull removed all of them; a range of ±2 b kept 30, but about half
     had stepped out over the rice, standing out of the onigiri by up to 1.4× their size. Now the cull's priority
-    removes the grains in a piece instead, and the refine's shape bound (``refine.protrusion``: ¼ for the pieces)
-    keeps each within a quarter of its size of the surface, where its face shows among the grains. Full size up
+    removes the grains in a piece instead, and the refine's shape bound (``refine.protrusion``: 0.35 for the pieces)
+    keeps each within a third of its size of the surface, where its rounded face shows among the grains. Full size up
     to the cull (≈ 8 s)."""
     import igl
     import numpy as np
@@ -107,5 +107,21 @@ def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
         reach = igl.signed_distance(world, vertices, faces, sign_type=sign)[0].max()
         share.append(reach / (height.max() - height.min()))
     share = np.array(share)
-    assert share.max() <= 0.25 + 0.02  # was 1.40: 17 of 30 wholly outside the onigiri
+    assert share.max() <= 0.35 + 0.02  # was 1.40: 17 of 30 wholly outside the onigiri
     assert (share > 0.0).all()  # every one shows a face at the surface (not stepped under the rice)
+
+
+@pytest.mark.parametrize("recipe_name", ["sushi", "rice_chestnut"])
+def test_the_dish_rests_on_its_plate(recipe_name, tmp_path):
+    """Issue 48: a dish floating on the backdrop reads as a packshot, not food. Each stands on a plate sized by it:
+    no element below the plate's well (nigiri: a grain placed across its mould's floor stayed there, 4 mm through
+    the plate), and the lowest within 1 mm of it (resting on it, not hovering). At the reduced size."""
+    import numpy as np
+
+    recipe = load_recipe(REPO / "graphs" / f"{recipe_name}.yaml", default_registry(), QUICK[recipe_name])
+    result = run_recipe(recipe, outputs=["contact.aggregate", "plate.mesh"], cache=Cache(tmp_path / "cache"))
+    aggregate, plate = result.output("contact.aggregate"), result.output("plate.mesh")
+    rim = np.hypot(*(plate.vertices[:, :2] - plate.vertices[:, :2].mean(axis=0)).T)
+    well = plate.vertices[rim < 0.3 * rim.max(), 2].max()
+    lowest = min(float(aggregate.element_mesh(i).vertices[:, 2].min()) for i in range(len(aggregate.placement)))
+    assert well <= lowest < well + 1.0

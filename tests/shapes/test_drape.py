@@ -92,7 +92,7 @@ def test_fat_lines_and_bad_input(block):
     aggregate, _ = block
     salmon = drape.call(aggregate=aggregate).element_mesh(0)
     tuna = drape.call(aggregate=aggregate, kind="tuna").element_mesh(0)
-    # thin lines: a tenth of a 6 mm flake (0.6 mm), a few faces wide (the mesh under half a line's width)
+    # thin lines: a fifteenth of a 6 mm flake (0.4 mm on average), a few faces wide (the mesh under half of it)
     assert 0.05 < salmon.parts.mean() < 0.2 and 0 < tuna.parts.mean() < salmon.parts.mean()
     edges = np.linalg.norm(salmon.vertices[salmon.faces] - np.roll(salmon.vertices[salmon.faces], 1, axis=1), axis=2)
     assert np.median(edges) <= 0.4  # 0.53 at the plate's 0.5 mm cell
@@ -115,3 +115,19 @@ def test_fat_lines_are_w_shaped_chevrons():
         firsts.append(u[np.argmax(fat)])  # where the one line crosses this row
     dips = np.diff(firsts)
     assert (dips[[0, 2]] > chevron / 4).all() and (dips[[1, 3]] < -chevron / 4).all()  # down, up, down, up: a W
+
+
+def test_fat_lines_swell_and_thin_along_their_length():
+    """A myoseptum meets the knife at an angle that changes along it: one line is up to several times broader in
+    one place than in another (a line of one width reads as a painted stripe, issue 48)."""
+    from nodes.shapes.plate_drape import fat_lines
+
+    width = 27.0
+    u = np.arange(-3.0, 3.0, 0.002)  # one line crosses each row near u = 0 (chevron and drift off)
+    widths = []
+    for v in np.linspace(-12.0, 12.0, 25):
+        fat = fat_lines(np.c_[u, np.full_like(u, v)], width, 100.0, 0.4, 0.0, 0.0)
+        widths.append(fat.sum() * 0.002)
+    widths = np.array(widths)
+    assert widths.min() > 0.1 and widths.max() < 0.8  # thin throughout: ≈ 0.16–0.64 mm at a 0.4 mm mean
+    assert widths.max() > 2.5 * widths.min()
