@@ -689,6 +689,17 @@ TABLES = {
             ("the scene holds", field("measured")),
         ],
     ),
+    "rice_bowl_layer": (
+        "rice_bowl.jsonl",
+        lambda r: r["table"] == "rice_bowl_layer",
+        [
+            ("the chawan's top layer", field("element")),
+            ("grains", value("grains")),
+            ("contacts per grain", value("contacts")),
+            ("touching pairs", value("pairs")),
+            ("what the picture shows", field("measured")),
+        ],
+    ),
     "cut_islands": (
         "cut.jsonl",
         None,

@@ -69,6 +69,13 @@ def _absorb(clear, dyed, t):
 # tests/scenes/test_grain_optics.py: thinner, light crosses a grain unscattered and rice reads as glass; docs/look.md,
 # "Cooked rice: wet, milky, warm")
 RICE_RADIUS_WET = (1.6, 1.2, 0.8)
+# the roughness of the grain's skin, its water-and-starch film, dry → wet (0.325 at 15 %: α 0.11). A cooked grain's
+# adherent starch layer is smooth (Cookery Science 42(6):394), yet eaters read a food's gloss as strong where
+# glass or plastic would be middling (J. Color Sci. Assoc. Japan 42(3+):30): a medium gloss, not a mirror. At
+# 0.25 − 0.15·t (0.156 at 15 %, α 0.024) the skin mirrored the key in every grain and art directors read the rice
+# as "pills, too glossy". No published BRDF of cooked rice was found: the pair is chosen (docs/look.md,
+# "Cooked rice: wet, milky, warm")
+RICE_FILM_ROUGHNESS = (0.45, 0.25)
 
 
 def rice_material(water: float, name: str = "rice") -> Material:
@@ -96,7 +103,7 @@ def rice_material(water: float, name: str = "rice") -> Material:
         sheen=0.6 * t,
         sheen_tint=0.3,
         clearcoat=0.5 * t,
-        clearcoat_roughness=0.25 - 0.15 * t,
+        clearcoat_roughness=_mix((RICE_FILM_ROUGHNESS[0],), (RICE_FILM_ROUGHNESS[1],), t)[0],
         ior=1.45 - 0.08 * t,
     )
 

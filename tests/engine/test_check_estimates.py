@@ -33,5 +33,5 @@ def test_the_time_estimate_follows_the_preview_and_the_elements():
 
     base = cost()
     assert cost("preview.samples=6").cpu_seconds > base.cpu_seconds
-    bigger = cost("bowl.size=45")
+    bigger = cost("bowl.size=65")
     assert bigger.elements > base.elements and bigger.other_seconds > base.other_seconds

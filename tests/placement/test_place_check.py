@@ -16,17 +16,17 @@ RICE_BOWL = str(Path(__file__).resolve().parents[2] / "graphs" / "rice_bowl.yaml
 def test_an_r_larger_than_the_shape_is_refused_by_check(capsys):
     assert main(["check", RICE_BOWL, "--set", "rice_place.r=60"]) == 2
     err = capsys.readouterr().err
-    assert "--set:1: node 'rice_place', r: 60 is larger than the shape 'bowl' (bowl) it fills" in err
-    assert "the shape spans 74.2 mm; allowed: r < 37.1" in err
+    assert "--set:1: node 'rice_place', r: 60 is larger than the shape 'rice_layer' (boolean) it fills" in err
+    assert "the shape spans 107 mm; allowed: r < 53.4" in err
 
 
 def test_a_placement_too_large_is_refused_unless_yes(capsys):
     assert main(["check", RICE_BOWL, "--set", "rice_place.r=0.4"]) == 2
     err = capsys.readouterr().err
-    assert "node 'rice_place', r: 0.4 would place ≈ 147,118 elements in 'bowl'" in err
-    assert "r ≥ 0.58 stays under; or run with --yes to go ahead" in err
+    assert "node 'rice_place', r: 0.4 would place ≈ 54,913 elements in 'rice_layer'" in err
+    assert "r ≥ 0.42 stays under; or run with --yes to go ahead" in err
     assert main(["check", RICE_BOWL, "--set", "rice_place.r=0.4", "--yes"]) == 0
-    main(["check", RICE_BOWL, "--set", "rice_place.r=0.58"])  # the r it names passes the placement's rule (the
+    main(["check", RICE_BOWL, "--set", "rice_place.r=0.42"])  # the r it names passes the placement's rule (the
     assert "node 'rice_place'" not in capsys.readouterr().err  # preview's memory is weighed against the machine's)
 
 
@@ -55,7 +55,7 @@ def test_run_refuses_it_before_any_work(tmp_path):
     done = subprocess.run(  # the old code ran for minutes: the timeout fails it
         [*command, "--cache-dir", str(tmp_path / "c")], cwd=tmp_path, capture_output=True, text=True, timeout=60
     )
-    assert done.returncode == 2 and "would place ≈ 147,118 elements" in done.stderr
+    assert done.returncode == 2 and "would place ≈ 54,913 elements" in done.stderr
     assert not (tmp_path / "c").exists() and not (tmp_path / "outputs").exists()
 
 

@@ -273,6 +273,18 @@ def test_scene_carries_the_cdrf_sigma_per_vertex(scene_inputs):
     assert rice_wet.roughness < rice_dry.roughness  # the water film glosses
 
 
+def test_cooked_rices_skin_is_a_medium_gloss_not_a_mirror():
+    """The grain's skin (its starch-and-water film, the preview's dielectric skin and the files' clear coat) is a
+    medium gloss wherever there is water: at α 0.024 (roughness 0.156 at 15 %) each grain mirrored the key and read
+    as a glossy pill; the wetter grain is still the glossier (docs/look.md, "Cooked rice: wet, milky, warm")."""
+    from nodes.export.look import boundary_roughness
+    from nodes.shading.materials import rice_material
+
+    dry, cooked, wet = (boundary_roughness(rice_material(w)) for w in (0.0, 15.0, 24.0))
+    assert 0.25 <= wet < cooked <= 0.5  # α = r² in 0.06–0.25: neither a mirror nor chalk
+    assert dry > cooked  # no film on a dry grain: its own matte surface
+
+
 def test_egg_tints_span_orange_to_red_orange_and_touching_eggs_differ():
     """The palette runs from orange to red-orange in CIELAB hue, lighter to deeper; eggs in a tight cluster draw
     tints seeded, no two neighbours alike, the same for the same seed."""
