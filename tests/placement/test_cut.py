@@ -192,7 +192,9 @@ def test_rice_bunny_cut_preview_at_a_small_size(tmp_path):
     assert 0 < len(opened) < len(pressed) and len(pressed) > 20
     middle = 0.5 * (pressed.positions.min(axis=0) + pressed.positions.max(axis=0))
     far = pressed.positions[pressed.positions[:, 1] >= middle[1]]
-    assert {tuple(p) for p in far} <= {tuple(p) for p in opened.positions} and len(opened) <= len(far) + 2
+    kept = {tuple(p) for p in far} & {tuple(p) for p in opened.positions}
+    # at most two far grains go: a grain the 2-frame press left touching nothing is a floating piece (islands)
+    assert len(kept) >= len(far) - 2 and len(opened) <= len(kept) + 2
     # one piece: grains touch when vertices of their meshes come within 0.1 grain lengths (the cut's gap)
     aggregate = result.output("cut.aggregate")
     meshes = [aggregate.element_mesh(i).vertices for i in range(len(opened))]

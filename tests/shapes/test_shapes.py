@@ -114,4 +114,4 @@ def test_a_bowl_too_small_for_its_mound_says_the_sizes_that_fit(capsys):
     recipe = Path(__file__).resolve().parents[2] / "graphs" / "rice_bowl.yaml"
     assert main(["check", str(recipe), "--set", "bowl.size=2"]) == 2
     err = capsys.readouterr().err
-    assert "node 'bowl', mound: " in err and "allowed: mound ≤ 2 × size = 4 mm at size 2, or size ≥ 10 mm" in err
+    assert "node 'bowl', mound: " in err and "allowed: mound ≤ 2 × size = 4 mm at size 2, or size ≥ 8 mm" in err
