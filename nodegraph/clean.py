@@ -1,13 +1,16 @@
-"""What ``nodegraph clean`` prunes: the outputs of a recipe's earlier runs that its latest run did not write, and
-the partial recordings that stopped or failed runs left.
+"""What ``nodegraph clean`` prunes: the outputs of a recipe's earlier runs that no folder's last run wrote, the
+``--set`` folders of earlier runs, and the partial recordings that stopped or failed runs left.
 
 A recipe's runs write into its folders (``output_folder``: ``outputs/<recipe>/``, ``outputs/<recipe>_draft/`` and
 the ``set_*`` folder of each ``--set``), each with the ``manifest.json`` of the run that wrote it last. The latest
-run is the newest manifest among the folders whose manifest names the recipe file. Prunable: in the latest run's
-folder, the files its manifest keeps from an earlier run (``earlier``); in every other folder, every file its
-manifest lists (``files``, ``earlier``, its recording) and then the manifest; anywhere, a ``*.<pid>.partial.rrd``
-whose process has ended. Only a file whose size and modification time are still what its manifest recorded is
-removed: a file a user made or changed is never touched, nor is one no manifest lists.
+run is the newest manifest among the folders whose manifest names the recipe file. Prunable: in every folder, the
+files its manifest keeps from an earlier run (``earlier``); in every ``set_*`` folder but the latest run's, every
+file its manifest lists (``files``, ``earlier``, its recording) and then the manifest; anywhere, a
+``*.<pid>.partial.rrd`` whose process has ended. The recipe's own folder and its draft's keep their last run's
+files: a draft or a ``--set`` run after the final render must not make the render prunable (a new user's first
+``clean`` removed the main job's picture after a draft run). Only a file whose size and modification time are
+still what its manifest recorded is removed: a file a user made or changed is never touched, nor is one no manifest
+lists.
 """
 
 from __future__ import annotations
@@ -97,7 +100,7 @@ def prunable(recipe: Path, name: str) -> Prunable:
                 out.files[partial] = partial.stat().st_size
     for folder, manifest in manifests.items():
         out.files.update(_listed(folder, manifest.get("earlier") or {}))
-        if folder == latest:
+        if folder == latest or not folder.name.startswith(SETTINGS_PREFIX):
             continue
         out.files.update(_listed(folder, manifest.get("files") or {}))
         recording = manifest.get("recording") or {}

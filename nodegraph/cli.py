@@ -280,9 +280,10 @@ def build_parser() -> argparse.ArgumentParser:
     clean = sub.add_parser(
         "clean",
         help="remove the outputs of a recipe's earlier runs and partial recordings",
-        description="lists, then removes, what a recipe's latest run did not write in its output folders (its own, "
-        "its draft's, each --set folder): the files of earlier runs and of other settings, their manifests, and the "
-        "partial recordings of stopped or failed runs. Only files a run's manifest lists, as that run wrote them",
+        description="lists, then removes, what earlier runs left in a recipe's output folders: files a later run of "
+        "the same settings did not write again, every --set folder but the latest run's, and the partial recordings "
+        "of stopped or failed runs. The recipe's own folder and its draft's keep their last run's files. Only files "
+        "a run's manifest lists, as that run wrote them",
     )
     clean.add_argument("recipe", type=Path)
     clean.add_argument("--dry-run", action="store_true", help="list what would go; remove nothing")

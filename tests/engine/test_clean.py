@@ -35,9 +35,7 @@ def test_clean_removes_earlier_runs_outputs_and_dead_partials_only(tmp_path, mon
     assert "surf.ply" in earlier and "manifest.json" in earlier
     assert run(recipe, tmp_path / "c", "--set", "pts.count=9") == 0  # the latest run: its own folder
     latest = plain / "set_pts.count=9"
-    said = capsys.readouterr().out
-    line = [x for x in said.splitlines() if "nodegraph clean" in x]
-    assert len(line) == 1 and line[0].startswith("earlier runs' outputs and partial recordings: "), said
+    assert "nodegraph clean" not in capsys.readouterr().out  # the recipe's own folder keeps its last run's files
     mine = plain / "notes.txt"  # a user's own file, no manifest lists it
     mine.write_text("keep me")
     changed = plain / "merge.spheres.npz"  # written by a run, then changed by the user
@@ -48,17 +46,22 @@ def test_clean_removes_earlier_runs_outputs_and_dead_partials_only(tmp_path, mon
     running = latest / f"toyrun.{os.getpid()}.partial.rrd"  # a run in progress writes it
     running.write_bytes(b"y")
 
+    assert run(recipe, tmp_path / "c", "--set", "pts.count=9") == 0  # a run now says what can be pruned
+    line = [x for x in capsys.readouterr().out.splitlines() if "nodegraph clean" in x]
+    assert len(line) == 1 and line[0].startswith("earlier runs' outputs and partial recordings: "), line
     assert main(["clean", str(recipe), "--dry-run"]) == 0
     listed = capsys.readouterr().out
     named = {line.split(" (")[0].removeprefix("would remove ") for line in listed.splitlines()[:-1]}
-    assert named == {str(p.relative_to(tmp_path)) for p in (plain / "surf.ply", stopped)}, listed  # not the rest
+    # the recipe's own folder keeps its last run's files though a --set run came after it (a new user's first clean
+    # removed the main job's picture after a draft): only what a stopped run left goes
+    assert named == {str(stopped.relative_to(tmp_path))}, listed
     assert listed.splitlines()[-1].startswith("would free "), listed
-    assert (plain / "surf.ply").is_file() and stopped.is_file()  # a dry run removes nothing
+    assert stopped.is_file()  # a dry run removes nothing
 
     assert main(["clean", str(recipe)]) == 0
     capsys.readouterr()
     left = sorted(p.name for p in plain.iterdir() if p.is_file())
-    assert left == ["merge.spheres.npz", "notes.txt"], left  # the user's files only; the earlier manifest went too
+    assert "surf.ply" in left and "manifest.json" in left and "notes.txt" in left and stopped.name not in left, left
     assert running.is_file() and (latest / "surf.ply").is_file() and (latest / "manifest.json").is_file()
     assert main(["clean", str(recipe)]) == 0
     assert capsys.readouterr().out.startswith("nothing to prune")
@@ -88,14 +91,16 @@ def test_clean_of_a_missing_recipe_says_so(tmp_path, capsys):
 
 
 def test_an_earlier_runs_recording_is_pruned_named_as_its_folder(tmp_path, monkeypatch, capsys):
-    """The manifest keeps the recording's path absolute: it was listed so, and counted as a folder of its own."""
+    """The manifest keeps the recording's path absolute: it was listed so, and counted as a folder of its own. An
+    earlier --set folder goes whole; the recipe's own folder, run last, keeps its files."""
     recipe = tmp_path / "toyrun.yaml"
     recipe.write_text(RECIPE)
     monkeypatch.chdir(tmp_path)
-    for more in ([], ["--set", "pts.count=9"]):
+    for more in (["--set", "pts.count=9"], ["--set", "pts.count=7"]):
         assert main(["run", str(recipe), "--plugin", TOY, "--cache-dir", str(tmp_path / "c"), *more]) == 0
     capsys.readouterr()
     assert main(["clean", str(recipe), "--dry-run"]) == 0
     listed = capsys.readouterr().out
-    assert f"would remove {Path('outputs/toyrun/toyrun.rrd')} (" in listed, listed
+    assert f"would remove {Path('outputs/toyrun/set_pts.count=9/toyrun.rrd')} (" in listed, listed
+    assert "set_pts.count=7" not in listed, listed
     assert listed.splitlines()[-1].endswith("file(s) in 1 folder(s)"), listed
