@@ -261,9 +261,21 @@ def kernels_due(recipe) -> bool:
     beside their estimate of the time."""
     try:
         jobs = _every_job(recipe)
-        return bool(jobs) and not CompileAhead(jobs).cached()
+        if not jobs or CompileAhead(jobs).cached():
+            return False
+        return not _shipped({job.module for job in jobs if job.plugin is None}, any(job.plugin for job in jobs))
     except Exception:  # a record or a module that cannot be read: as if they were due
         return True
+
+
+def _shipped(modules: set[str], plugins: bool) -> bool:
+    """Whether the kernel bundle kept in git holds the current kernels of every module of ``modules`` (and no
+    ``--plugin`` kernel is due): a clean clone's first run then loads them and compiles none (it had said "its kernels
+    are not compiled yet" to a new user whose run compiled nothing)."""
+    from . import kernel_bundle
+
+    bundle = kernel_bundle.bundle_path()
+    return not plugins and bundle is not None and modules <= kernel_bundle.current_modules(bundle)
 
 
 def mark_compiled(recipe) -> None:

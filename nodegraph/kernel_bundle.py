@@ -153,6 +153,27 @@ def stale(bundle: Path) -> list[str]:
     return out
 
 
+def current_modules(bundle: Path) -> set[str]:
+    """The kernel modules whose every index in ``bundle`` matches the current code (``stale``), where the bundle fits
+    this numba, Python and CPU model (``fits``); empty otherwise: a run loads these modules' kernels, compiling none."""
+    if not fits(bundle):
+        return set()
+    modules, old = set(), set()
+    for name in _indices(bundle):
+        folder, _, file = name.rpartition("/")
+        modules.add(".".join([*folder.split("/"), file.split(".")[0]]))
+    for name in stale(bundle):
+        folder, _, file = name.rpartition("/")
+        old.add(".".join([*folder.split("/"), file.split(".")[0]]))
+    return modules - old
+
+
+def _indices(bundle: Path) -> list[str]:
+    """The bundle's numba index files (``.nbi``), as bundle paths."""
+    with tarfile.open(bundle, "r:gz") as tar:
+        return [m.name for m in tar.getmembers() if m.name.endswith(".nbi")]
+
+
 def bundle_path() -> Path | None:
     setting = os.environ.get(ENV_VAR, "")
     if setting.lower() in ("off", "0", "false", "no"):

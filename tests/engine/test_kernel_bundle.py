@@ -129,3 +129,20 @@ def test_the_shipped_bundle_matches_the_code():
         pytest.skip(f"the bundle is for {kernel_bundle.manifest()} only where it was built")
     old = kernel_bundle.stale(bundle)
     assert not old, f"rebuild the bundle (python tools/kernel_bundle.py build): {len(old)} stale, e.g. {old[:3]}"
+
+
+def test_the_estimate_says_no_kernel_is_due_where_the_shipped_bundle_holds_them(tmp_path, monkeypatch):
+    """A clean clone's first run loads the shipped kernels, so its estimate must not say they are compiled first (a new
+    user was told "its kernels are not compiled yet" by a run that compiled none); without the bundle it says so."""
+    from pathlib import Path
+
+    from nodegraph import compile_ahead
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))  # no run has marked anything here
+    recipe = load_recipe(Path(__file__).resolve().parents[2] / "graphs" / "ikura_don.yaml", default_registry())
+    monkeypatch.setenv(kernel_bundle.ENV_VAR, "off")
+    assert compile_ahead.kernels_due(recipe)
+    monkeypatch.setenv(kernel_bundle.ENV_VAR, str(kernel_bundle.BUNDLE))
+    assert not compile_ahead.kernels_due(recipe)
