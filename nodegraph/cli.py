@@ -207,8 +207,9 @@ def build_parser() -> argparse.ArgumentParser:
         dest="metrics",
         action="append",
         default=[],
-        metavar="NODE.PORT[.COLUMN][:AGG]",
-        help="a number read from a Table output per point (AGG: last, first, min, max, mean, sum; default last)",
+        metavar="NODE.PORT[.COLUMN][:AGG][:higher]",
+        help="a number read from a Table output per point (AGG: last, first, min, max, mean, sum; default last); "
+        ":higher marks a metric better higher on the Pareto front (else lower is better, an error)",
     )
     sweep.add_argument("--sweep", dest="sweep_name", default=None, help="which of the recipe's sweeps to run")
     sweep.add_argument("--set", dest="overrides", action="append", default=[], metavar="NODE.PARAM=VALUE")

@@ -39,3 +39,20 @@ def test_the_readme_and_reference_links_resolve():
         for target in re.findall(r"\]\(([^)#]+)\)", doc.read_text()):
             if not target.startswith("http"):
                 assert (doc.parent / target).exists(), f"{doc.name}: {target}"
+
+
+def test_every_metric_suffix_readme_uses_is_in_the_sweep_help(capsys):
+    """README's sweep example ends its metric with ``:higher``; a new user found only the aggregates in --help."""
+    import re
+
+    import pytest
+
+    from nodegraph.cli import main
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    suffixes = {m.group(1) for m in re.finditer(r"--metric \S+?:(\w+)", readme)}
+    assert suffixes
+    with pytest.raises(SystemExit):
+        main(["sweep", "--help"])
+    shown = capsys.readouterr().out
+    assert all(f":{s}" in shown or f" {s}," in shown for s in suffixes), (suffixes, shown)
