@@ -128,50 +128,51 @@ def fits(bundle: Path) -> bool:
         return json.loads(tar.extractfile(tar.getmember(MANIFEST)).read()) == manifest()
 
 
-def stale(bundle: Path) -> list[str]:
-    """The bundle's index files whose stamp is not the current code digest of their kernel's module (numba would
-    not load them: the kernel compiles), as bundle paths. Each index is numba's pickled version, then its pickled
+def _index_stamps(bundle: Path):
+    """(bundle path, kernel module, stamp) of each index file in ``bundle``: numba's pickled version, then its pickled
     ``(stamp, overloads)`` (``numba.core.caching.IndexDataCacheFile``)."""
     import pickle
 
-    from . import code_digest
-    from .node_packages import project_packages
-
-    packages = project_packages()
-    out = []
     with tarfile.open(bundle, "r:gz") as tar:
         for member in tar.getmembers():
             if not member.name.endswith(".nbi"):
                 continue
             folder, _, name = member.name.rpartition("/")
-            module = ".".join([*folder.split("/"), name.split(".")[0]])
             data = tar.extractfile(member)
             pickle.load(data)  # numba's version: the manifest covers it
             stamp, _overloads = pickle.loads(data.read())
-            if stamp != code_digest.module_digest(module, packages):
-                out.append(member.name)
-    return out
+            yield member.name, ".".join([*folder.split("/"), name.split(".")[0]]), stamp
+
+
+def _stale_and_current(bundle: Path) -> tuple[list[str], set[str]]:
+    """The index files whose stamp is not the current code digest of their module (``stale``), and the modules all
+    of whose indices are current."""
+    from . import code_digest
+    from .node_packages import project_packages
+
+    packages = project_packages()
+    digests: dict[str, str] = {}
+    old, modules, old_modules = [], set(), set()
+    for name, module, stamp in _index_stamps(bundle):
+        modules.add(module)
+        if module not in digests:
+            digests[module] = code_digest.module_digest(module, packages)
+        if stamp != digests[module]:
+            old.append(name)
+            old_modules.add(module)
+    return old, modules - old_modules
+
+
+def stale(bundle: Path) -> list[str]:
+    """The bundle's index files whose stamp is not the current code digest of their kernel's module (numba would
+    not load them: the kernel compiles), as bundle paths."""
+    return _stale_and_current(bundle)[0]
 
 
 def current_modules(bundle: Path) -> set[str]:
     """The kernel modules whose every index in ``bundle`` matches the current code (``stale``), where the bundle fits
     this numba, Python and CPU model (``fits``); empty otherwise: a run loads these modules' kernels, compiling none."""
-    if not fits(bundle):
-        return set()
-    modules, old = set(), set()
-    for name in _indices(bundle):
-        folder, _, file = name.rpartition("/")
-        modules.add(".".join([*folder.split("/"), file.split(".")[0]]))
-    for name in stale(bundle):
-        folder, _, file = name.rpartition("/")
-        old.add(".".join([*folder.split("/"), file.split(".")[0]]))
-    return modules - old
-
-
-def _indices(bundle: Path) -> list[str]:
-    """The bundle's numba index files (``.nbi``), as bundle paths."""
-    with tarfile.open(bundle, "r:gz") as tar:
-        return [m.name for m in tar.getmembers() if m.name.endswith(".nbi")]
+    return _stale_and_current(bundle)[1] if fits(bundle) else set()
 
 
 def bundle_path() -> Path | None:

@@ -39,15 +39,14 @@ WAKE_ACCEL = 981.0
 # substeps slept at once (its first substep under gravity moves it g·h·h with g·h ≈ 2 mm/s, the sleep speed), landed
 # on one particle and never woke to 40°; a whole frame (1/60 s) left the long-rest pile awake (test_xpbd_core.py)
 SETTLE_TIME = 1.0 / 600.0
-# a run without glue starts from overlaps that are no stored elastic energy: a placement's (poisson_place leaves them
-# up to cull's threshold) or another run's rest (the overlaps that run tolerated; at more substeps its solve separates
-# them at overlap/h). Unbounded, separating them is a launch: 150 grains settled at 10 substeps, run on at 40, rose
-# 0.82 mm in one frame at 23 mm/s mean speed; the main job threw 2 of 1,512 placed grains over the bowl's rim at the
-# default speed clamp. For its first frames the depenetration speed is bounded, so the elements come apart without
-# being thrown (the handed bed 0.18 mm, 8.6 mm/s: tests/simulation/test_handoff.py; tests/simulation/test_slender.py);
-# after them the run's own depenetration_speed applies
-START_FRAMES = 3
-START_DEPENETRATION = 50.0  # mm/s
+# a run without glue that starts from another run's rest (its aggregate carries deformations) inherits the overlaps
+# that run tolerated; at more substeps its solve separates them at overlap/h, a launch (150 grains settled at 10
+# substeps, run on at 40: the bed's top rose 0.82 mm in one frame at 23 mm/s mean speed). For its first frames the
+# depenetration speed is bounded, so the bed expands to the new settings' overlaps without being thrown (0.18 mm,
+# 8.6 mm/s: tests/simulation/test_handoff.py); after them the run's own depenetration_speed applies. A placement's
+# start is not bounded: bounded, the dropped and poured heaps parted by 5.6° (tests/simulation/test_heap_convergence.py)
+HANDOFF_FRAMES = 3
+HANDOFF_DEPENETRATION = 50.0  # mm/s
 YOLK_DRAG = 40.0  # 1/s: a yolk's drag towards its egg's velocity (``buoyancy.yolk_predict``)
 # N: the load at which ``squeeze_strain`` is given (Tomita et al., via G §2.2: ≈ 25 % at 0.2 N)
 SQUEEZE_LOAD = 0.2
@@ -337,8 +336,8 @@ class SolverSettings:
     shock_propagation: float  # mass ratio of a contact particle to one a diameter above it (1 = off)
     # mm/s: the solve leaves a particle no faster than max(its predicted speed, this) (``integrate.update_velocity``)
     depenetration_speed: float
-    # s: until this time the depenetration speed is at most START_DEPENETRATION (``START_FRAMES``)
-    start_bound_until: float
+    # s: until this time the depenetration speed is at most HANDOFF_DEPENETRATION (a state handed on by another run)
+    handoff_until: float
     squeeze_strain: float  # an element's strain between rigid plates under SQUEEZE_LOAD (0 = rigid contacts)
 
     def __post_init__(self):
@@ -355,12 +354,12 @@ class SolverSettings:
         return self.dt / self.substeps
 
 
-def solver_settings(params: XpbdParams, effects, radius: float, material=None, bounded: bool = False) -> SolverSettings:
+def solver_settings(params: XpbdParams, effects, radius: float, material=None, handed: bool = False) -> SolverSettings:
     """Table-3 style parameters → solver settings (SPEC §3); 'moisture' rescales stiffness, friction
     and adhesion by the cooked ``material``'s factors (``CookedMaterial.stiffness_scale``, ``friction_scale``,
     ``adhesion_scale``: computed once, by ``cooked_material``, from its water content; None: the cooked_rice
     defaults, ``moisture_factors(WATER_CONTENT)``). ``radius``: the particles' median radius (mm), the unit of
-    the capture radius. ``bounded``: the start's overlaps come apart at a bounded speed (``START_FRAMES``)."""
+    the capture radius. ``handed``: the elements come from another run's rest (``HANDOFF_FRAMES``)."""
     p = params
     material = material if material is not None else moisture_factors(WATER_CONTENT)
     moist = "moisture" in effects
@@ -388,7 +387,7 @@ def solver_settings(params: XpbdParams, effects, radius: float, material=None, b
         sleep_speed=p.sleep_speed,
         speed_clamp=p.speed_clamp,
         depenetration_speed=p.depenetration_speed if p.depenetration_speed > 0 else np.inf,
-        start_bound_until=START_FRAMES * p.dt if bounded else 0.0,
+        handoff_until=HANDOFF_FRAMES * p.dt if handed else 0.0,
         squeeze_strain=p.squeeze_strain / 100.0,
         shock_propagation=p.shock_propagation,
         yolk_accel=p.gravity * (p.white_density / p.part_density - 1.0) if "gravity" in effects else 0.0,

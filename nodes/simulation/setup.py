@@ -218,11 +218,10 @@ def build_simulation(
     # a reduced bowl at up to 1,226 mm/s; docs/look.md)
     speed = params.depenetration_speed or (SLENDER_DEPENETRATION if slender > 1 else 0.0)
     stepped = dataclasses.replace(params, substeps=params.substeps * slender**3, depenetration_speed=speed)
-    # a state handed on by another run (its aggregate carries deformations) starts bounded; a glued run keeps its
-    # start's overlaps in its regions' goal, so there is nothing to bound (bounded, a pressed block set down glued
-    # rocked at 2.2 mm/s where it rests at ≤ 1.2: tests/simulation/test_glue.py)
+    # a glued run keeps a handed-on state's overlaps in its regions' goal, so there is nothing to bound (bounded, a
+    # pressed block set down glued rocked at 2.2 mm/s where it rests at ≤ 1.2: tests/simulation/test_glue.py)
     handed = aggregate.deformations is not None and params.glue == 0
-    settings = solver_settings(stepped, effects, radius, material, bounded=handed)
+    settings = solver_settings(stepped, effects, radius, material, handed=handed)
     sdf = None
     if "collider" in effects:
         shapes = colliders + moulds

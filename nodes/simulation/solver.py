@@ -41,11 +41,11 @@ from .model import Model
 from .settings import (
     CONTACT_DAMPING,
     CRUSH_STRAIN,
+    HANDOFF_DEPENETRATION,
     ROTATION_ITERATIONS,
     SETTLE_TIME,
     SLEEP_PROBE,
     SQUEEZE_LOAD,
-    START_DEPENETRATION,
     WAKE_ACCEL,
     YOLK_DRAG,
     SolverSettings,
@@ -377,8 +377,8 @@ class XpbdSolver:
         s, d, k, m = self.settings, self.dispatch, self.coefficients, self.model
         pairs, clusters = contacts, self.clusters
         gain = s.depenetration_speed
-        if st.time < s.start_bound_until:  # the start's overlaps come apart without a launch (``START_FRAMES``)
-            gain = min(gain, START_DEPENETRATION)
+        if st.time < s.handoff_until:  # a handed-on state's overlaps come apart without a launch (settings)
+            gain = min(gain, HANDOFF_DEPENETRATION)
         motion = integrate.Motion(control.accel, k.h, k.clamp, k.damping, gain)
         moved = d("integrate", integrate.predict, st.arrays(), self.model_arrays, self._tracking(pairs), motion)
         self._track(pairs, moved)
@@ -506,7 +506,7 @@ class XpbdSolver:
             allowance = contact_constraints.overlap_allowance
             if self.coefficients.contact_alpha > 0:  # overlaps up to the crush depth are the compliance's (``_kept``)
                 pairs.spring[:] = 0.0
-                fresh = st.substeps_done <= 1 or st.time < self.settings.start_bound_until  # a start's first frames
+                fresh = st.substeps_done <= 1 or st.time < self.settings.handoff_until  # a start, or one handed on
                 self.kept = 0.0 if fresh else 2.0 * self.coefficients.crush
             pairs.allowance[:] = self.kept
             if "friction" in self.settings.effects:
@@ -533,7 +533,7 @@ class XpbdSolver:
             )
 
     def _kept(self, pairs: Contacts) -> None:
-        """Compliant contacts: after a run's first frames (``START_FRAMES``),
+        """Compliant contacts: after a run's first substep, or a handed-on state's first frames (``HANDOFF_FRAMES``),
         whose pre-stabilisation separates the overlaps they start with as rigid contacts do (a settled
         bed handed from 10 to 40 substeps with compliant ones moved at 22.6 mm/s mean in the first frame, against the
         14 mm/s test_handoff.py allows), pre-stabilisation leaves every overlap up to

@@ -88,6 +88,6 @@ def test_the_exported_onigiri_rests_on_its_plate(glued):
 )
 def test_without_glue_the_same_onigiri_loses_its_pressed_shape(tmp_path, glued):
     """Glue is what holds the pressed shape: unglued, the grains should give up the overlaps the press left, at the
-    bounded speed of a handed-on state (``settings.START_FRAMES``), and the onigiri lose its height (xfail)."""
+    bounded speed of a handed-on state (``settings.HANDOFF_FRAMES``), and the onigiri lose its height (xfail)."""
     kept, _ = rested(tmp_path, "rest.glue=0")
     assert abs(glued[0] - 1.0) < 0.05 < abs(kept - 1.0), (glued[0], kept)

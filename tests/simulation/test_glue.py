@@ -31,7 +31,7 @@ def test_a_glued_block_stands_where_a_loose_one_slumps(block, glued):
     loose, _ = heights(block, 0.0, substeps=30)
     # every frame of the glued run (not only the last): ≥ 95 % of the height, as a pressed onigiri
     # (measured 0.968 at worst); the same block without glue flows into a heap: 0.889. It went to 0.856 while a
-    # handed-on state's overlaps came apart unbounded (``settings.START_FRAMES`` 0): that part was grains thrown
+    # handed-on state's overlaps came apart unbounded (``settings.HANDOFF_FRAMES`` 0): that part was grains thrown
     assert kept.min() >= 0.95, kept.min()
     assert loose[-1] < 0.90 and loose[-1] < kept.min() - 0.05, (loose[-1], kept.min())
     links = ~sim.model.glue.link_own

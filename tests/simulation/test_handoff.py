@@ -1,5 +1,5 @@
 """A bed settled at 10 substeps and handed to a run at 40 (its aggregate, as one xpbd node hands it to the next)
-expands to the finer run's smaller overlaps without being launched (``settings.START_FRAMES``)."""
+expands to the finer run's smaller overlaps without being launched (``settings.HANDOFF_FRAMES``)."""
 
 import numpy as np
 from scene_builders import open_box, rice_library
@@ -35,6 +35,6 @@ def test_a_settled_bed_handed_to_finer_substeps_is_not_launched():
         rise.append(np.percentile(fine.model.centres(fine.state.x)[:, 2], 95) - top)
         speed.append(np.linalg.norm(fine.state.v[: fine.model.n_moving], axis=1).mean())
     # measured: the top rises 0.18 mm at 8.6 mm/s mean speed in the first frame, 1.7 mm/s by the fourth; with the
-    # depenetration speed unbounded (START_FRAMES 0) 0.82 mm at 23 mm/s
+    # depenetration speed unbounded (HANDOFF_FRAMES 0) 0.82 mm at 23 mm/s
     assert max(rise) < 0.4, rise
     assert max(speed) < 14.0, speed
