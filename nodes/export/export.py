@@ -50,7 +50,7 @@ def _check(params):
             bool,
             True,
             "write meshes that are one mesh moved rigidly (elements no contact, shape matching or bending changed) "
-            "once, as instances: a USD PointInstancer, glTF EXT_mesh_gpu_instancing; false: a mesh per element",
+            "once, as instances: a USD PointInstancer, glTF nodes sharing one mesh; false: a mesh per element",
         ),
     },
     check=_check,

@@ -33,7 +33,6 @@ from .mesh_files import rowwise
 FLOAT, UINT = 5126, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 Z_UP_TO_Y_UP = [-np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)]  # quaternion (x, y, z, w): −90° about x
-INSTANCING = "EXT_mesh_gpu_instancing"
 SHEEN_ROUGHNESS = 0.5  # a water film's soft rim (glTF's sheen roughness; Blender principled v1 has none)
 
 
@@ -213,8 +212,8 @@ def _mesh_json(
 
 def glb_bytes(scene: ShadedScene, instancing: bool = True, groups=None, weights=None) -> bytes:
     """The scene as a .glb (glTF 2.0 binary): JSON chunk + BIN chunk. With ``instancing``, each group of meshes
-    that are one mesh moved rigidly (``instancing.instance_groups``) is one mesh drawn by one node with
-    ``EXT_mesh_gpu_instancing`` (per-instance translation and rotation) instead of a copy per element. ``groups``
+    that are one mesh moved rigidly (``instancing.instance_groups``) is one mesh that a node per element places
+    (translation and rotation) instead of a copy per element. ``groups``
     and ``weights``: the scene's ``instance_groups`` and ``material_translucency`` when already found (the export
     node finds them once for every file it writes)."""
     from .instancing import written_meshes
@@ -242,17 +241,17 @@ def glb_bytes(scene: ShadedScene, instancing: bool = True, groups=None, weights=
         if group is None:
             nodes.append({"name": name, "mesh": len(meshes) - 1})
             continue
-        instances = {
-            "TRANSLATION": buffer.add(group.positions.astype(np.float32), FLOAT, "VEC3", None),
-            "ROTATION": buffer.add(group.quaternions().astype(np.float32), FLOAT, "VEC4", None),
-        }
-        nodes.append(
-            {
-                "name": f"{name} ×{len(group.members)}",
-                "mesh": len(meshes) - 1,
-                "extensions": {INSTANCING: {"attributes": instances}},
-            }
-        )
+        # glTF core instancing (§3.5.1: nodes may share a mesh), one node per element: every reader places
+        # them, where EXT_mesh_gpu_instancing is drawn by readers that lack it as one prototype at the origin
+        for member, rotation, position in zip(group.members, group.quaternions(), group.positions):
+            nodes.append(
+                {
+                    "name": scene.meshes[int(member)].name or f"mesh_{int(member)}",
+                    "mesh": len(meshes) - 1,
+                    "rotation": [float(c) for c in rotation],
+                    "translation": [float(c) for c in position],
+                }
+            )
     root = {
         "name": "aggregate",
         "rotation": Z_UP_TO_Y_UP,
@@ -270,9 +269,6 @@ def glb_bytes(scene: ShadedScene, instancing: bool = True, groups=None, weights=
         "bufferViews": buffer.views,
         "buffers": [{"byteLength": buffer.size}],
     }
-    if groups:  # a viewer without it would draw each prototype once, at the origin
-        used.add(INSTANCING)
-        document["extensionsRequired"] = [INSTANCING]
     if used:
         document["extensionsUsed"] = sorted(used)
     text = json.dumps(document, separators=(",", ":")).encode()

@@ -1,5 +1,5 @@
 """Which exported meshes are one mesh moved rigidly: the groups the writers instance (USD ``PointInstancer``,
-glTF ``EXT_mesh_gpu_instancing``) instead of writing each copy's vertices.
+glTF nodes sharing one mesh) instead of writing each copy's vertices.
 
 Decided per mesh from its vertices, not from the recipe: a mesh joins a group when it has the group's faces,
 parts and material and its vertices (and normals) equal the group's prototype under a rotation and a translation

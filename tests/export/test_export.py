@@ -36,13 +36,7 @@ def test_glb_is_valid_with_khr_material_extensions(shaded, gltf_validator):
         "KHR_materials_sheen",
         "KHR_materials_diffuse_transmission",
     } <= set(doc["extensionsUsed"])
-    drawn = [
-        doc["accessors"][n["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"]]["count"]
-        if "extensions" in n
-        else 1
-        for n in doc["nodes"][1:]
-    ]
-    assert sum(drawn) == len(shaded.meshes) and len(doc["meshes"]) < len(shaded.meshes)  # the grains are instanced
+    assert len(doc["nodes"]) - 1 == len(shaded.meshes) and len(doc["meshes"]) < len(shaded.meshes)  # instanced
     primitives = [m["primitives"][0] for m in doc["meshes"]]
     assert all("_CDRF_SIGMA" in p["attributes"] for p in primitives)  # σ travels; baked light does not
     names = [m.name for m in shaded.materials]
