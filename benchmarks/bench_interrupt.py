@@ -59,8 +59,15 @@ def started(listings: Path, step: str) -> bool:
 
 def one(command: list[str], signum: int, after: float | None, step: str | None, delay: float = 1.0) -> dict:
     """Run ``command``; signal it ``after`` seconds in, or ``delay`` s after ``step`` has started; time the exit."""
+    with tempfile.TemporaryDirectory(
+        prefix="bench-interrupt-tmp-", ignore_cleanup_errors=True
+    ) as listings:  # the run's TMPDIR: its listing
+        return _signalled(command, signum, after, step, delay, Path(listings))
+
+
+def _signalled(command: list[str], signum: int, after: float | None, step: str | None, delay: float, listings: Path):
+    """``one`` with the run's TMPDIR ``listings``."""
     log = tempfile.NamedTemporaryFile("w+b", suffix=".log", delete=False)
-    listings = Path(tempfile.mkdtemp(prefix="bench-interrupt-tmp-"))  # the run's TMPDIR: its listing lands here
     env = dict(os.environ, NODEGRAPH_HEARTBEAT="0.2", TMPDIR=str(listings))
     proc = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, start_new_session=True, env=env)
     start = time.monotonic()
@@ -74,6 +81,7 @@ def one(command: list[str], signum: int, after: float | None, step: str | None, 
             break
         time.sleep(0.01)
     if proc.poll() is not None:
+        os.unlink(log.name)
         return {"signal": None, "ended_by_itself_s": round(time.monotonic() - start, 1)}
     signalled = time.monotonic()
     os.killpg(proc.pid, signum)
@@ -160,7 +168,12 @@ def main() -> None:
     args = parser.parse_args()
     if args.quick:
         args.mode, args.tries, args.draft = "random", 1, True
-    out = tempfile.mkdtemp(prefix="bench-interrupt-")
+    with tempfile.TemporaryDirectory(prefix="bench-interrupt-", ignore_cleanup_errors=True) as out:
+        measure(args, out)
+
+
+def measure(args, out: str) -> None:
+    """Each try's row, printed as one JSON line; exits 1 where ``--assert-s`` is broken. ``out``: the runs' folder."""
     command = [sys.executable, "-m", "nodegraph.cli", "run", args.recipe, "--out-dir", out]
     command += [] if args.rrd and args.mode == "steps" else ["--no-rrd"]
     command += ["--no-cache"] if args.mode == "random" else ["--cache-dir", str(args.cache_dir)]
