@@ -102,7 +102,18 @@ def test_nodes_describe_graph(recipe, capsys):
     assert cli("describe", "toy_shfit") == 2
     assert "did you mean 'toy_shift'" in capsys.readouterr().err
     assert cli("describe", "egg_base") == 2  # a step's name, not a type: the step's type line names it
-    assert "the step's `type:` line" in capsys.readouterr().err
+    assert "found by its name in the recipes here" in capsys.readouterr().err
+
+
+def test_describe_takes_a_step_name_or_the_start_of_a_type(recipe, capsys):
+    """A new user reads step names in a recipe (``cooked``), not type names (``cooked_rice``)."""
+    assert cli("describe", "merge") == 0  # toyrun.yaml's step 'merge' is a toy_merge
+    out = capsys.readouterr().out
+    assert out.startswith(f"'merge' is a step of {recipe.name}: node type toy_merge") and "toy_merge  (" in out
+    assert cli("describe", "toy_sh") == 0
+    assert "'toy_sh' begins node type toy_shift" in capsys.readouterr().out
+    assert cli("describe", "toy_p") == 2  # toy_physics, toy_picture, toy_points: named, not guessed
+    assert "did you mean 'toy_physics' or 'toy_picture' or 'toy_points'" in capsys.readouterr().err
     assert cli("graph", str(recipe)) == 0
     out = capsys.readouterr().out
     assert "pts (toy_points ×2)" in out and "parts ← phys.spheres" in out
