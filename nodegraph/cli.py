@@ -328,7 +328,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             limits=_limits(args, asked),
         )
     out_dir = args.out_dir or settings_folder(recipe_folder(args.recipe, recipe.name, args.draft), args.overrides)
-    rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
+    rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.file_name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
     made = check_writable(out_dir, "outputs", "choose another folder with --out-dir")

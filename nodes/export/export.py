@@ -10,7 +10,7 @@ import re
 
 from nodegraph.cost import estimated_by, passes
 from nodegraph.node import In, Out, loads_libraries, node
-from nodegraph.params import Param
+from nodegraph.params import RECIPE_FILE_NAME, Param
 from nodegraph.values import FileSet
 
 from ..values import ShadedScene
@@ -45,7 +45,9 @@ def _check(params):
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={
         "formats": Param(list[str], ["glb", "usdc", "ply", "obj"], f"file formats, any of {', '.join(FORMATS)}"),
-        "basename": Param(str, "scene", "file name without extension (a plain name, no folders)"),
+        "basename": Param(
+            str, RECIPE_FILE_NAME, "file name without extension (a plain name, no folders; a copied recipe's own)"
+        ),
         "instancing": Param(
             bool,
             True,

@@ -93,6 +93,15 @@ def test_check_ok_and_nothing_runs(recipe, tmp_path, capsys):
     assert not (tmp_path / "cache").exists() and not (tmp_path / "outputs").exists()
 
 
+def test_a_copied_recipe_names_its_recording_after_its_own_file(recipe, tmp_path):
+    """Issue 47: a copy keeps the original's ``name:`` line; its folder followed the copy's file name, its
+    recording the original's name."""
+    copy = tmp_path / "mycopy.yaml"
+    copy.write_text(recipe.read_text())  # name: toyrun
+    assert cli("run", str(copy), "-q") == 0
+    assert sorted(p.name for p in (tmp_path / "outputs" / "mycopy").glob("*.rrd")) == ["mycopy.rrd"]
+
+
 def test_nodes_describe_graph(recipe, capsys):
     assert cli("nodes") == 0
     assert "toy_points" in capsys.readouterr().out

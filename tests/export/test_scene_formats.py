@@ -21,3 +21,13 @@ def test_every_scene_in_the_readme_exports_glb_usdc_and_ply(name):
     recipe = load_recipe(ROOT / "graphs" / f"{name}.yaml", default_registry())
     formats = [set(e.params["formats"]) for e in recipe.nodes.values() if e.spec.type_name == "export"]
     assert formats and all({"glb", "usdc", "ply"} <= f for f in formats), (name, formats)
+
+
+def test_a_copied_recipe_names_its_files_after_its_own_file(tmp_path):
+    """Issue 47: a copy of rice_bowl.yaml saved as my_bowl.yaml wrote rice_bowl.glb (and rice_bowl.rrd) into
+    outputs/my_bowl/: its export's basename and its name: line were the original's."""
+    copy = tmp_path / "my_bowl.yaml"
+    copy.write_text((ROOT / "graphs" / "rice_bowl.yaml").read_text())
+    recipe = load_recipe(copy, default_registry())
+    assert recipe.name == "rice_bowl" and recipe.file_name == "my_bowl"  # the name: line stays a title
+    assert recipe.nodes["export"].params["basename"] == "my_bowl"
