@@ -369,6 +369,11 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             )
         if session is not None:
             session.keep(result)
+        if cache is not None:  # its entries go last when the cache is trimmed, until the recipe runs again
+            kind = " --draft" if args.draft else ""
+            cache.keep_run(
+                f"{Path(args.recipe).resolve()}{kind}{' --set' if args.overrides else ''}", result.keys.values()
+            )
     except KeyboardInterrupt:
         stopped = True
         reporter.print_summary()
