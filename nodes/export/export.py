@@ -44,7 +44,7 @@ def _check(params):
     inputs={"scene": In(ShadedScene, "shaded meshes with materials")},
     outputs={"files": Out(FileSet, "<basename>.<format> for each requested format")},
     params={
-        "formats": Param(list[str], ["glb", "usdc", "ply", "obj"], f"file formats, any of {', '.join(FORMATS)}"),
+        "formats": Param(list[str], ["glb", "usdc"], f"file formats, any of {', '.join(FORMATS)}"),
         "basename": Param(
             str, RECIPE_FILE_NAME, "file name without extension (a plain name, no folders; a copied recipe's own)"
         ),

@@ -1,5 +1,6 @@
-"""README: each scene recipe writes `.glb`, `.usdc` and `.ply` (issue 47: kakigori and rice + chestnut wrote no
-`.usdc`, though usd-core writes their scenes)."""
+"""README: each scene recipe writes `.glb` and `.usdc` (issue 47: kakigori and rice + chestnut wrote no `.usdc`,
+though usd-core writes their scenes), and no `.ply` unless asked: it repeats the `.glb`'s meshes without their
+materials (45 MB of the main job's 213 MB of files per run)."""
 
 import re
 from pathlib import Path
@@ -17,10 +18,10 @@ SCENES = sorted({name for line in GALLERY for name in re.findall(r"`(\w+)\.yaml`
 
 
 @pytest.mark.parametrize("name", SCENES)
-def test_every_scene_in_the_readme_exports_glb_usdc_and_ply(name):
+def test_every_scene_in_the_readme_exports_glb_and_usdc_and_no_ply(name):
     recipe = load_recipe(ROOT / "graphs" / f"{name}.yaml", default_registry())
     formats = [set(e.params["formats"]) for e in recipe.nodes.values() if e.spec.type_name == "export"]
-    assert formats and all({"glb", "usdc", "ply"} <= f for f in formats), (name, formats)
+    assert formats and all({"glb", "usdc"} <= f and "ply" not in f for f in formats), (name, formats)
 
 
 def test_a_copied_recipe_names_its_files_after_its_own_file(tmp_path):
