@@ -8,12 +8,14 @@ Layout under the cache directory::
     rerun/ab/<key>.rrd      what the node logged to Rerun (as it ran, then its outputs): replayed into
                             a cached re-run's recording instead of logging the values again
     checkpoints/<key>.npz   a long node's progress while it runs (``checkpoint``), removed when it completes
+    runs/<hash>.json        {"run", "keys"}: the entries the latest run of a recipe used (``keep_run``)
     limit                   the size limit in bytes (``nodegraph cache limit SIZE``), if one was set
 
 An entry's modification time is when it was last stored or loaded. Above the size limit (``limit``: the
 ``$NODEGRAPH_CACHE_LIMIT`` environment variable, else the ``limit`` file, else ``DEFAULT_LIMIT``) ``evict``
 removes the least recently used entries, their Rerun fragments and the blobs no remaining entry names; the CLI
-calls it when a run ends, sparing what that run used.
+calls it when a run ends, sparing what that run used. Entries the latest run of some recipe used go only after
+every other entry (an hour of drafts and sweeps of other recipes no longer evicts the main job's last run).
 
 Every file is written to a temporary name in its final directory and renamed into place, blobs and the Rerun
 fragment before the entry that names them, so a crash of the process at any moment leaves either no entry or a
@@ -366,11 +368,32 @@ class Cache:
         self._mark()
         atomic_write(self.directory / LIMIT_FILE, f"{limit}\n".encode())
 
+    def _run_path(self, run: str) -> Path:
+        return self.directory / "runs" / f"{hashlib.sha256(run.encode()).hexdigest()[:16]}.json"
+
+    def keep_run(self, run: str, keys) -> None:
+        """Record ``keys`` as the entries the latest run called ``run`` (a recipe file, draft or not) used,
+        replacing that run's earlier record: ``evict`` takes them last."""
+        self._mark()
+        (self.directory / "runs").mkdir(exist_ok=True)
+        atomic_write(self._run_path(run), json.dumps({"run": run, "keys": sorted(set(keys))}).encode(), durable=False)
+
+    def latest_runs(self) -> set[str]:
+        """The keys the latest run of each recipe used (``keep_run``)."""
+        kept: set[str] = set()
+        for path in (self.directory / "runs").glob("*.json"):
+            try:
+                kept.update(json.loads(path.read_bytes())["keys"])
+            except (OSError, ValueError, KeyError, TypeError):
+                continue  # being written or damaged: its entries are plain LRU
+        return kept
+
     def evict(self, limit: int | None = None, spare_since: float | None = None) -> Eviction:
         """Remove least recently used entries until the cache holds at most ``limit`` bytes (default
-        ``self.limit()``); entries used at or after ``spare_since`` (a ``time.time()``: the run that just
-        ended) stay even above it. An entry goes first (readers then miss it), then its Rerun fragment, then
-        each blob that no remaining entry names."""
+        ``self.limit()``), those a recipe's latest run used (``keep_run``) only once every other has gone;
+        entries used at or after ``spare_since`` (a ``time.time()``: the run that just ended) stay even above it.
+        An entry goes first (readers then miss it), then its Rerun fragment, then each blob that no remaining
+        entry names."""
         limit = self.limit() if limit is None else limit
         total = self.info().bytes
         if total <= limit:  # the usual case, known from file sizes alone: no entry need be read
@@ -401,8 +424,9 @@ class Cache:
             except OSError:
                 return 0
 
+        latest = self.latest_runs()
         freed = removed = 0
-        for mtime, path, size, blobs in sorted(entries, key=lambda e: e[0]):
+        for mtime, path, size, blobs in sorted(entries, key=lambda e: (e[1].stem in latest, e[0])):
             if total - freed <= limit:
                 break
             if spare_since is not None and mtime >= spare_since:
@@ -449,7 +473,7 @@ class Cache:
                 "nothing removed. Give --cache-dir the cache directory itself"
             )
         failed = []
-        for part in ("entries", "blobs", "rerun", "checkpoints", "node_times.json", LIMIT_FILE, MARKER):
+        for part in ("entries", "blobs", "rerun", "checkpoints", "runs", "node_times.json", LIMIT_FILE, MARKER):
             target = self.directory / part
             try:
                 if target.is_dir():

@@ -256,8 +256,12 @@ def build_parser() -> argparse.ArgumentParser:
     nodes = sub.add_parser("nodes", help="list every node type")
     _common(nodes)
 
-    describe = sub.add_parser("describe", help="ports and parameters of a node type")
-    describe.add_argument("type")
+    describe = sub.add_parser(
+        "describe",
+        help="ports and parameters of a node type; a step's name in a recipe here or in graphs/, or the start of a "
+        "type's name, finds its type",
+    )
+    describe.add_argument("type", metavar="TYPE_OR_STEP")
     _common(describe)
 
     docs = sub.add_parser("docs", help="Markdown reference of every node type, generated from the declarations")
@@ -324,7 +328,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             limits=_limits(args, asked),
         )
     out_dir = args.out_dir or settings_folder(recipe_folder(args.recipe, recipe.name, args.draft), args.overrides)
-    rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.name}.rrd")
+    rrd = None if args.no_rrd else (args.rrd or out_dir / f"{recipe.file_name}.rrd")
     cache = None if args.no_cache else Cache(args.cache_dir or default_cache_dir())
     # every place the run writes, checked before anything is computed
     made = check_writable(out_dir, "outputs", "choose another folder with --out-dir")
@@ -365,6 +369,11 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             )
         if session is not None:
             session.keep(result)
+        if cache is not None:  # its entries go last when the cache is trimmed, until the recipe runs again
+            kind = " --draft" if args.draft else ""
+            cache.keep_run(
+                f"{Path(args.recipe).resolve()}{kind}{' --set' if args.overrides else ''}", result.keys.values()
+            )
     except KeyboardInterrupt:
         stopped = True
         reporter.print_summary()
@@ -745,19 +754,47 @@ def describe_spec(spec) -> str:
     return "\n".join(lines)
 
 
+def recipe_steps(name: str, folders=(Path("."), Path("graphs"))) -> dict[str, list[str]]:
+    """{node type: [recipe files]} of the steps called ``name`` in the recipes of ``folders`` (read as plain YAML,
+    nothing validated): ``describe`` takes a step's name as a user reads it in a recipe."""
+    import yaml
+
+    found: dict[str, list[str]] = {}
+    for path in sorted({p for folder in folders for p in folder.glob("*.yaml")}):
+        try:
+            step = yaml.safe_load(path.read_text()).get("nodes", {}).get(name)
+        except (OSError, yaml.YAMLError, AttributeError):
+            continue
+        if isinstance(step, dict) and isinstance(step.get("type"), str):
+            found.setdefault(step["type"], []).append(str(path))
+    return found
+
+
 def _cmd_describe(args, registry) -> int:
     spec = registry.get(args.type)
-    if spec is None:
-        import difflib
+    if spec is not None:
+        print(describe_spec(spec))
+        return 0
+    import difflib
 
-        near = difflib.get_close_matches(args.type, registry.names(), n=1)
+    steps = {t: files for t, files in recipe_steps(args.type).items() if registry.get(t) is not None}
+    prefixed = [n for n in registry.names() if n.startswith(args.type)]
+    if len(steps) == 1:
+        ((type_name, files),) = steps.items()
+        where = files[0] + (f" and {len(files) - 1} more recipes" if len(files) > 1 else "")
+        print(f"'{args.type}' is a step of {where}: node type {type_name}\n")
+    elif not steps and len(prefixed) == 1:
+        type_name = prefixed[0]
+        print(f"'{args.type}' begins node type {type_name}\n")
+    else:
+        near = ([*steps] or prefixed)[:5] or difflib.get_close_matches(args.type, registry.names(), n=3)
         hint = (
-            f"; did you mean '{near[0]}'?"
+            f"; did you mean {' or '.join(repr(n) for n in near)}?"
             if near
-            else "; if it is a step of a recipe, the step's `type:` line there names its node type"
+            else "; a step of a recipe is found by its name in the recipes here and in graphs/"
         )
         raise NodegraphError(f"unknown node type '{args.type}'{hint} (see `nodegraph nodes`)")
-    print(describe_spec(spec))
+    print(describe_spec(registry.get(type_name)))
     return 0
 
 

@@ -35,7 +35,7 @@ from .output_files import (
 )
 from .plan import Instance, Plan, RecipeRef, plan_jobs
 from .recipe import Recipe, Wire, nearest
-from .report import NodeRecord, PeakMemory, Reporter, now
+from .report import NodeRecord, PeakMemory, Reporter, bar_label, now
 from .rerun_log import NodeCapture, RunRecording, dispatch_digest, log_value, logger_digest, remove_stale_partials
 
 OVERLAP_ENV = "NODEGRAPH_OVERLAP"  # off: every node in turn, none beside another (``Beside``)
@@ -171,7 +171,9 @@ class Executor:
         times = {} if self.cache is None else node_times.load(self.cache.directory, self.recipe.name)
         plan = node_times.planned([(i.node, i.label, self.keys[i] in self.hits) for i in order], times, self.estimate)
         try:
-            with self.reporter.task(self.recipe.name, len(order), plan=plan) as tick:
+            with self.reporter.task(
+                bar_label(self.recipe.name, [i.node for i in order]), len(order), plan=plan
+            ) as tick:
                 for position, inst in enumerate(order):
                     tick()
                     if ahead is not None:
@@ -230,7 +232,7 @@ class Executor:
         records = [NodeRecord(i.label, self.recipe.nodes[i.node].spec.type_name, "cached") for i in order]
         for inst in order:
             self._say(inst, self.cache.warnings(self.keys[inst]))
-        with self.reporter.task(self.recipe.name, len(order)) as tick:
+        with self.reporter.task(bar_label(self.recipe.name, [i.node for i in order]), len(order)) as tick:
             for record in records:
                 tick()
                 self.reporter.record(record)

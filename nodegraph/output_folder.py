@@ -18,13 +18,19 @@ DRAFT_SUFFIX = "_draft"  # a --draft run's folder is its recipe's name and this:
 PLAIN_NAME = re.compile(r"^(?!.*\.\.)[A-Za-z0-9_-][A-Za-z0-9_.-]*$")  # a folder name: no separator, no ``..``
 
 
-def recipe_folder_name(recipe_path: Path, name: str, draft: bool) -> str:
-    """The output folder's name of a run of the recipe file ``recipe_path`` whose ``name:`` is ``name`` (its sweeps go
-    into a ``sweeps/`` folder inside): the file's stem, so a copy of a recipe under another file name never shares
-    the original's folder (the recipe as written, ``NAME.yaml`` of ``name: NAME``, gets ``NAME``); ``name`` where the
-    stem is not a plain folder name."""
+def recipe_file_name(recipe_path: Path, name: str) -> str:
+    """What a run of the recipe file ``recipe_path`` whose ``name:`` is ``name`` names its folder, recording and
+    files after: the file's stem, so a copy of a recipe under another file name names them after itself, never
+    after the original (the recipe as written, ``NAME.yaml`` of ``name: NAME``, gets ``NAME``); ``name`` where the
+    stem is not a plain name."""
     stem = Path(recipe_path).stem
-    return (stem if PLAIN_NAME.match(stem) else name) + (DRAFT_SUFFIX if draft else "")
+    return stem if PLAIN_NAME.match(stem) else name
+
+
+def recipe_folder_name(recipe_path: Path, name: str, draft: bool) -> str:
+    """The output folder's name of a run of the recipe (its sweeps go into a ``sweeps/`` folder inside):
+    ``recipe_file_name``, and ``_draft`` for a draft."""
+    return recipe_file_name(recipe_path, name) + (DRAFT_SUFFIX if draft else "")
 
 
 SETTINGS_PREFIX = "set_"  # a --set run's folder, inside its recipe's: set_<its settings>

@@ -20,6 +20,18 @@ from pydantic import TypeAdapter, ValidationError
 REQUIRED: Any = type("Required", (), {"__repr__": lambda self: "REQUIRED"})()
 
 
+class _RecipeFileName(str):
+    """The default of a name that follows the recipe's file (``RECIPE_FILE_NAME``)."""
+
+    def __repr__(self) -> str:
+        return "the recipe's file name"
+
+
+# a str parameter's default that a recipe fills with its file's name (``output_folder.recipe_file_name``), so a
+# copy of a recipe names its files after itself; outside a recipe (``NodeSpec.call``) it reads "recipe"
+RECIPE_FILE_NAME: Any = _RecipeFileName("recipe")
+
+
 class ParamValueError(ValueError):
     """A parameter value is not allowed; ``allowed`` says what is."""
 

@@ -22,8 +22,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from .dag import Dag
 from .errors import Issue, Location, RecipeError
 from .node import NodeSpec
-from .output_folder import PLAIN_NAME
-from .params import ParamValueError, canonical
+from .output_folder import PLAIN_NAME, recipe_file_name
+from .params import RECIPE_FILE_NAME, ParamValueError, canonical
 from .registry import Registry
 from .yaml_source import SourceMap, load_yaml, load_yaml_file
 
@@ -90,6 +90,7 @@ class Recipe:
     """A validated recipe, ready for the executor."""
 
     name: str
+    file_name: str  # what its outputs are named after (``output_folder.recipe_file_name``)
     path: str
     seed: int
     effects: frozenset[str]
@@ -243,6 +244,7 @@ class _Validator:
         self.name = name
         recipe_file = Path(source.file)
         self.base_dir = recipe_file.resolve().parent if recipe_file.is_file() else None
+        self.file_name = recipe_file_name(recipe_file, str(raw.get("name") or name or recipe_file.stem))
         self.issues: list[Issue] = []
         self.warnings: list[Issue] = []  # what a run's nodes will warn of, the recipe alone deciding (``warns_of``)
         self.override_at: dict[tuple, Location] = {}
@@ -478,6 +480,7 @@ class _Validator:
         name = model.name or self.name or Path(self.source.file).stem
         return Recipe(
             name=name,
+            file_name=self.file_name,
             path=self.source.file,
             seed=model.seed,
             effects=effects,
@@ -623,7 +626,7 @@ class _Validator:
                         )
                     ok = False
                 else:
-                    params[key] = param.default
+                    params[key] = self.file_name if param.default is RECIPE_FILE_NAME else param.default
         if ok and spec.check is not None:
             for param_name, message in spec.check(dict(params)):
                 self.issue(

@@ -297,11 +297,7 @@ class Reporter:
         keep = [i for i in range(len(columns)) if i != 1 or sum(widths) + 3 * len(columns) + 1 <= room]
         table = Table(title="nodegraph run")
         if hidden:
-            records = [r for records in hidden.values() for r in records]
-            took = format_duration(sum(r.seconds for r in records))
-            how = ", ".join(f"{n} {status}" for status, n in Counter(r.status for r in records).items())
-            lead = f"and {len(hidden)} more steps" if rows else f"all {len(hidden)} steps"
-            table.caption = f"{lead} under {shown_s:g} s each: {how} ({took} in all): {', '.join(hidden)}"
+            table.caption = _hidden_line(hidden, shown_s, more=bool(rows))
         for i in keep:
             table.add_column(columns[i][0], justify=columns[i][1], no_wrap=True)
         for row in cells:
@@ -418,3 +414,29 @@ def format_bytes(size: float) -> str:
 
 def now() -> float:
     return time.perf_counter()
+
+
+def _hidden_line(hidden: dict[str, list[NodeRecord]], shown_s: float, more: bool) -> str:
+    """The closing table's line for the steps it does not list, counted as steps as its rows are: a step counts
+    as ran if any of its variants ran; the variants, where a step has several, are counted apart in brackets."""
+    records = [r for records in hidden.values() for r in records]
+    took = format_duration(sum(r.seconds for r in records))
+    status = Counter(_step_status(records) for records in hidden.values())
+    how = ", ".join(f"{n} {s}" for s, n in status.items())
+    variants = f"{len(records)} with their variants; " if len(records) > len(hidden) else ""
+    steps = f"{len(hidden)} {'step' if len(hidden) == 1 else 'steps'}"
+    lead = f"and {len(hidden)} more {steps.split()[1]}" if more else (f"all {steps}" if len(hidden) > 1 else steps)
+    return f"{lead} under {shown_s:g} s each: {how} ({variants}{took} in all): {', '.join(hidden)}"
+
+
+def _step_status(records: list[NodeRecord]) -> str:
+    """One status for a step from its variants': the first of failed, ran, recomputed that one has, else cached."""
+    found = {r.status for r in records}
+    return next((s for s in ("failed", "ran", "recomputed") if s in found), "cached")
+
+
+def bar_label(name: str, nodes: list[str]) -> str:
+    """A run's progress bar title: what its count counts, the steps and, where a step has variants (each run
+    apart, so the bar's total is larger), how many with them."""
+    steps = len(set(nodes))
+    return f"{name}: {steps} steps" + (f", {len(nodes)} with their variants" if len(nodes) > steps else "")

@@ -4,7 +4,7 @@
 
 Each node instance's outputs are hashed by content: arrays (dtype, shape, bytes), plain fields, and
 the value type's *class name* (not its module, so a type moved between packages hashes the same).
-Files the recipe writes (.glb, .usdc, .ply, .png) are hashed by their bytes.
+Files the recipe writes (.glb, .usdc, .png, ...) are hashed by their bytes.
 """
 
 from __future__ import annotations

@@ -208,3 +208,32 @@ def test_a_run_that_stops_keeps_the_cached_steps_it_used(tmp_path, monkeypatch):
     kept = {entry.stem for entry in (tmp_path / "c" / "entries").glob("*/*.json")}
     nodes = {json.loads(cache._entry_path(key).read_text())["node"] for key in kept}
     assert nodes == {"pts", "moved"}, nodes
+
+
+def test_the_latest_run_of_each_recipe_goes_last(tmp_path):
+    """Issue 47: a full shared cache evicted the main job within 20 minutes of other work, and going back to it
+    took 86 s instead of 1 s. The entries a recipe's latest run used go only after every other entry."""
+    cache = Cache(tmp_path / "c")
+    main_job = _store(cache, "a", 1.0, 1000.0)  # the main job's run, the oldest
+    others = [_store(cache, name, float(i), 2000.0 + i) for i, name in enumerate("bcd", 2)]
+    cache.keep_run("graphs/ikura_don.yaml", [main_job])
+    cache.keep_run("graphs/rice_bowl.yaml --draft", others[-1:])
+    entry = cache.info().bytes // 4
+    done = cache.evict(limit=2 * entry + entry // 2)
+    assert done.entries == 2 and cache.has(main_job) and cache.has(others[-1])  # b and c went, though newer
+    cache.keep_run("graphs/ikura_don.yaml", others[-1:])  # the main job ran again, without a
+    cache.evict(limit=entry + entry // 2)
+    assert not cache.has(main_job) and cache.has(others[-1])
+
+
+def test_a_run_records_the_entries_it_used(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "toyrun.yaml").write_text(
+        "name: toyrun\noutputs: [pts.spheres]\nnodes:\n  pts: {type: toy_points, params: {count: 8}}\n"
+    )
+    cache = Cache(tmp_path / "c")
+    assert (
+        main(["run", "toyrun.yaml", "-q", "--no-rrd", "--cache-dir", str(cache.directory), "--plugin", str(TOY)]) == 0
+    )
+    (entry,) = (cache.directory / "entries").glob("*/*.json")
+    assert cache.latest_runs() == {entry.stem}

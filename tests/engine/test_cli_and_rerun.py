@@ -93,6 +93,15 @@ def test_check_ok_and_nothing_runs(recipe, tmp_path, capsys):
     assert not (tmp_path / "cache").exists() and not (tmp_path / "outputs").exists()
 
 
+def test_a_copied_recipe_names_its_recording_after_its_own_file(recipe, tmp_path):
+    """Issue 47: a copy keeps the original's ``name:`` line; its folder followed the copy's file name, its
+    recording the original's name."""
+    copy = tmp_path / "mycopy.yaml"
+    copy.write_text(recipe.read_text())  # name: toyrun
+    assert cli("run", str(copy), "-q") == 0
+    assert sorted(p.name for p in (tmp_path / "outputs" / "mycopy").glob("*.rrd")) == ["mycopy.rrd"]
+
+
 def test_nodes_describe_graph(recipe, capsys):
     assert cli("nodes") == 0
     assert "toy_points" in capsys.readouterr().out
@@ -102,7 +111,18 @@ def test_nodes_describe_graph(recipe, capsys):
     assert cli("describe", "toy_shfit") == 2
     assert "did you mean 'toy_shift'" in capsys.readouterr().err
     assert cli("describe", "egg_base") == 2  # a step's name, not a type: the step's type line names it
-    assert "the step's `type:` line" in capsys.readouterr().err
+    assert "found by its name in the recipes here" in capsys.readouterr().err
+
+
+def test_describe_takes_a_step_name_or_the_start_of_a_type(recipe, capsys):
+    """A new user reads step names in a recipe (``cooked``), not type names (``cooked_rice``)."""
+    assert cli("describe", "merge") == 0  # toyrun.yaml's step 'merge' is a toy_merge
+    out = capsys.readouterr().out
+    assert out.startswith(f"'merge' is a step of {recipe.name}: node type toy_merge") and "toy_merge  (" in out
+    assert cli("describe", "toy_sh") == 0
+    assert "'toy_sh' begins node type toy_shift" in capsys.readouterr().out
+    assert cli("describe", "toy_p") == 2  # toy_physics, toy_picture, toy_points: named, not guessed
+    assert "did you mean 'toy_physics' or 'toy_picture' or 'toy_points'" in capsys.readouterr().err
     assert cli("graph", str(recipe)) == 0
     out = capsys.readouterr().out
     assert "pts (toy_points ×2)" in out and "parts ← phys.spheres" in out

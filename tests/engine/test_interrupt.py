@@ -172,7 +172,7 @@ def test_a_failed_run_keeps_the_partial_recording_it_names(tmp_path):
     command = [sys.executable, "-m", "nodegraph.cli", "run", str(tmp_path / "fail.yaml"), "--plugin", TOY]
     done = subprocess.run([*command, "--cache-dir", str(tmp_path / "c")], cwd=tmp_path, capture_output=True, text=True)
     assert done.returncode == 1, done.stderr
-    (partial,) = (tmp_path / "outputs" / "fail").glob("failrun.*.partial.rrd")  # the folder: the file's name
+    (partial,) = (tmp_path / "outputs" / "fail").glob("fail.*.partial.rrd")  # folder and recording: the file's name
     assert str(partial.name) in done.stderr
 
 

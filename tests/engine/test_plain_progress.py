@@ -26,7 +26,7 @@ def test_a_run_in_a_pipe_prints_a_line_per_long_step_and_a_heartbeat(tmp_path, m
     err = capsys.readouterr().err
     lines = err.splitlines()
     assert not re.search(r"^pts: done", err, re.M) and not re.search(r"│ pts ", err), err  # milliseconds: a line
-    assert "and 1 more steps under 0.3 s each: 1 ran" in err and re.search(r"│ slow ", err), err
+    assert "and 1 more step under 0.3 s each: 1 ran" in err and re.search(r"│ slow ", err), err
     assert re.search(r"^slow: running, 0 s so far$", err, re.M), err  # said while it ran
     assert re.search(r"^slow: done in 6\d\d ms$", err, re.M), err
     assert lines.index("slow: running, 0 s so far") < next(i for i, x in enumerate(lines) if x.startswith("slow: done"))

@@ -49,7 +49,8 @@ def test_in_a_pipe_the_table_is_whole_and_no_memory_is_negative():
     assert "…" not in text and "wall time" in text and "deform_contacts" in text  # every column, whole
     # short: the steps under a second (grain_spheres ×16, 0 s) counted in a line, not listed
     assert len([line for line in lines if line.startswith("│")]) == len(NODES) - 1
-    assert "and 1 more steps under 1 s each: 16 cached (0.0 ms in all): grain_spheres" in text  # named in a line
+    said = " ".join(text.split())  # the caption wraps to the table's width
+    assert "and 1 more step under 1 s each: 1 cached (16 with their variants; 0.0 ms in all): grain_spheres" in said
     out = io.StringIO()
     reporter = Reporter(console=Console(file=out, width=80))
     for node, peak in (("frees", -0.2 * 2**20), ("tiny", 300 * 2**10), ("big", 5 * 2**20)):
@@ -81,3 +82,42 @@ def test_a_run_of_quick_steps_prints_no_empty_table():
         out = io.StringIO()
         Reporter(console=Console(file=out, width=80, force_terminal=terminal)).print_summary()
         assert out.getvalue() == ""
+
+
+def test_the_steps_not_listed_are_counted_as_steps():
+    """Issue 47: the line read "28 more steps … 116 cached, 2 ran": steps, then their variants, in one breath.
+    Each count is of steps now (a step with a variant that ran counts as ran); the variants apart, in brackets."""
+    out = io.StringIO()
+    reporter = Reporter(console=Console(file=out, width=80))
+    reporter.record(NodeRecord("slow", "toy", "ran", 2.0))
+    for k in range(16):
+        reporter.record(NodeRecord(f"family[{k}]", "toy", "cached", 0.01))
+    reporter.record(NodeRecord("pair[0]", "toy", "cached", 0.01))
+    reporter.record(NodeRecord("pair[1]", "toy", "ran", 0.01))
+    reporter.print_summary()
+    said = " ".join(out.getvalue().split())
+    assert "and 2 more steps under 1 s each: 1 cached, 1 ran (18 with their variants; 180 ms in all)" in said
+
+
+def test_the_progress_bar_says_what_it_counts(tmp_path, monkeypatch):
+    """Issue 47: the bar read "89/97" for a recipe of fewer steps, its variants counted apart, said nowhere."""
+    from pathlib import Path
+
+    from nodegraph.cli import main
+
+    bars = []
+    task = Reporter.task
+
+    def recorded(self, description, total, plan=None):
+        bars.append((description, total))
+        return task(self, description, total, plan)
+
+    monkeypatch.setattr(Reporter, "task", recorded)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "two.yaml").write_text(
+        "outputs: [merge.spheres]\nnodes:\n  pts: {type: toy_points, variants: 3}\n"
+        "  merge: {type: toy_merge, inputs: {parts: pts.spheres}}\n"
+    )
+    toy = str(Path(__file__).with_name("toy_nodes.py"))
+    assert main(["run", "two.yaml", "-q", "--no-rrd", "--cache-dir", str(tmp_path / "c"), "--plugin", toy]) == 0
+    assert bars == [("two: 2 steps, 4 with their variants", 4)]

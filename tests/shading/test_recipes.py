@@ -21,7 +21,7 @@ def _run(recipe_name, overrides, tmp_path):
 def test_ikura_don_small_end_to_end_and_shade_only_rerun(tmp_path):
     first = _run("ikura_don", SMALL, tmp_path)
     names = {p.name for p in first.files}
-    assert {"ikura_don.glb", "ikura_don.usdc", "ikura_don.ply", "preview.png"} <= names
+    assert {"ikura_don.glb", "ikura_don.usdc", "preview.png"} <= names
     second = _run("ikura_don", SMALL + ["shade.baked_ambient=0.5"], tmp_path)
     ran = {r.node for r in second.records if r.status == "ran"}
     assert ran == {"shade", "export", "preview"}
