@@ -10,6 +10,7 @@ renders the table in docs/validation.md.
     python benchmarks/physics_at_defaults.py --funnel        # the fixed-funnel heap at 5–80 substeps, ≈ 5 min
     python benchmarks/physics_at_defaults.py --passes        # substeps against iterations; the stream's landing
     python benchmarks/physics_at_defaults.py --levers        # what each solver setting does to the heaps, ≈ 12 min
+    python benchmarks/physics_at_defaults.py --mechanism     # what shapes a dropped heap: the contacts, ≈ 15 min
 
 ``--convergence`` runs the poured heap (two seeds) and the grain sliding across its length at 5–80 substeps and
 writes benchmarks/measured/granular_convergence.jsonl, with its plot docs/images/accuracy/granular_convergence.png:
@@ -34,6 +35,12 @@ CONVERGENCE = RECORD.with_name("granular_convergence.jsonl")
 FUNNEL = RECORD.with_name("funnel_heap.jsonl")
 PASSES_RECORD = RECORD.with_name("solver_passes.jsonl")
 LEVERS = RECORD.with_name("heap_levers.jsonl")
+MECHANISM = RECORD.with_name("heap_mechanism.jsonl")
+# (grains, seeds, frames, (substeps, iterations) ...): the dropped ball's collapse read at 0.1 s, 0.3 s and the end
+COLLAPSES = (
+    (300, (0, 1, 2), 45, ((10, 2), (20, 1), (10, 4), (20, 2), (40, 1), (40, 2), (80, 2), (40, 4))),
+    (890, (0,), 60, ((10, 2), (10, 4), (20, 2), (40, 2), (40, 4))),
+)
 # (what, node parameters) changed from the defaults, one at a time: what each does to the heaps at 10 and 40 substeps
 HEAP_LEVERS = (
     ("the node's defaults", {}),
@@ -342,6 +349,54 @@ def levers() -> list[dict]:
     return rows
 
 
+def contact_state(sim) -> tuple[float, float, float]:
+    """What the contacts of a heap do: grain–grain contacts per grain (pairs of grains that carried a load in the
+    last substep, counted once), the share of them in the static branch (``friction.STICKING``), and the largest
+    overlap the solve left over the last 10 frames, in radii (``Diagnostics.penetration``)."""
+    from nodes.simulation.friction import STICKING
+
+    c = sim.solver.contacts
+    touching = (c.groups.group >= 0) & (c.held > 0)
+    groups, first = np.unique(c.groups.group[touching], return_index=True)
+    sticking = float(np.mean(c.mode[touching][first] == STICKING)) if len(groups) else 0.0
+    grains = len(sim.model.start) - 1
+    return 2.0 * len(groups) / grains, sticking, max(sim.solver.diagnostics.penetration[-10:])
+
+
+def collapses() -> list[dict]:
+    """Each of ``COLLAPSES``: a dry ball of grains dropped on flat ground (``validation.rice_heap``) at each
+    (substeps, iterations), per seed: atan H/R and the surface slope at 0.1 s, 0.3 s and the end, and there the
+    contacts (``contact_state``)."""
+    from validation import rice_heap
+
+    rows = []
+    for n, seeds, end, settings in COLLAPSES:
+        for substeps, iterations in settings:
+            digits = {"hr": 1, "surface": 1, "contacts_per_grain": 2, "sticking": 2, "penetration": 3}
+            values, start = {k: [] for k in (*digits, "hr_0_1", "hr_0_3")}, time.perf_counter()
+            for seed in seeds:
+                early, mid, last = rice_heap(
+                    n, True, (6, 18, end), substeps, seed=seed, shape="ball", read=contact_state, iterations=iterations
+                )[0]
+                values["hr_0_1"].append(round(early[1], 1))
+                values["hr_0_3"].append(round(mid[1], 1))
+                for k, v in zip(digits, (last[1], last[0], *last[2])):
+                    values[k].append(round(v, digits[k]))
+            values["seconds"] = round((time.perf_counter() - start) / len(seeds), 1)
+            rows.append(
+                {
+                    "case": "dropped ball",
+                    "grains": n,
+                    "substeps": substeps,
+                    "iterations": iterations,
+                    "end_s": round(end / 60, 2),
+                    "values": values,
+                }
+            )
+            print(rows[-1], flush=True)
+    return rows
+
+
 def convergence() -> list[dict]:
     """The poured heap (seeds 0 and 1) and the grain sliding across its length at each of ``SUBSTEPS``: the
     heap's surface slope and H/R at 7 s, the tilt the grain holds to, and the seconds each costs."""
@@ -415,7 +470,14 @@ def main(argv=None) -> None:
     ap.add_argument("--funnel", action="store_true", help="the fixed-funnel heap's substep curve only")
     ap.add_argument("--passes", action="store_true", help="substeps against iterations, and the stream's landing")
     ap.add_argument("--levers", action="store_true", help="what each solver setting does to the heaps")
+    ap.add_argument("--mechanism", action="store_true", help="the dropped ball's collapse at substeps × iterations")
     args = ap.parse_args(argv)
+    if args.mechanism:
+        rows = collapses()
+        MECHANISM.write_text(
+            "".join(record(r, "python benchmarks/physics_at_defaults.py --mechanism") + "\n" for r in rows)
+        )
+        return
     if args.levers:
         rows = levers()
         LEVERS.write_text("".join(record(r, "python benchmarks/physics_at_defaults.py --levers") + "\n" for r in rows))

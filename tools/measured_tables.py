@@ -251,6 +251,24 @@ TABLES = {
             ("s (each)", value("seconds")),
         ],
     ),
+    "heap_mechanism": (
+        "heap_mechanism.jsonl",
+        None,
+        [
+            ("ball (grains)", field("grains")),
+            ("substeps × iterations", lambda r: f"{r['substeps']} × {r['iterations']}"),
+            (
+                "atan H/R at 0.1 s / 0.3 s / end, seed 0 (°)",
+                lambda r: " / ".join(number(r["values"][k][0]) for k in ("hr_0_1", "hr_0_3", "hr")),
+            ),
+            ("atan H/R at the end, per seed (°)", listed("hr")),
+            ("surface slope at the end, per seed (°)", listed("surface")),
+            ("grain–grain contacts per grain", listed("contacts_per_grain")),
+            ("contacts sticking", listed("sticking")),
+            ("largest overlap, last 10 frames (r)", listed("penetration")),
+            ("s (each)", value("seconds")),
+        ],
+    ),
     "solver_passes": (
         "solver_passes.jsonl",
         lambda r: r["case"] == "solver passes",
