@@ -269,6 +269,33 @@ TABLES = {
             ("s (each)", value("seconds")),
         ],
     ),
+    "heap_creep": (
+        "heap_creep.jsonl",
+        None,
+        [
+            ("ball (grains)", field("grains")),
+            ("substeps", field("substeps")),
+            ("atan H/R at 2.5 s / 7 s (°)", pair("hr_2_5", "hr_7")),
+            ("grains moving > 0.2 mm from 2.5 s to 7 s, all / on the ground", pair("creeping", "creeping_on_ground")),
+            (
+                "their move, median / p95 / max (mm)",
+                lambda r: " / ".join(number(r["values"][k]) for k in ("median_mm", "p95_mm", "max_mm")),
+            ),
+            ("s", value("seconds")),
+        ],
+    ),
+    "pass_overlap": (
+        "pass_overlap.jsonl",
+        None,
+        [
+            ("substeps (2 iterations)", field("substeps")),
+            ("after pre-stabilisation (mm)", value("pre-stabilisation")),
+            ("after the prediction (mm)", value("predicted")),
+            ("after a contact sweep (mm)", value("sweep")),
+            ("after shape matching (mm)", value("shape matching")),
+            ("after the walls (mm)", value("walls")),
+        ],
+    ),
     "solver_passes": (
         "solver_passes.jsonl",
         lambda r: r["case"] == "solver passes",
