@@ -10,6 +10,9 @@ renders the table in docs/validation.md.
     python benchmarks/physics_at_defaults.py --funnel        # the fixed-funnel heap at 5–80 substeps, ≈ 5 min
     python benchmarks/physics_at_defaults.py --passes        # substeps against iterations; the stream's landing
     python benchmarks/physics_at_defaults.py --levers        # what each solver setting does to the heaps, ≈ 12 min
+    python benchmarks/physics_at_defaults.py --mechanism     # what shapes a dropped heap: the contacts, ≈ 15 min
+    python benchmarks/physics_at_defaults.py --creep         # how far the dropped ball's grains move at rest, ≈ 6 min
+    python benchmarks/physics_at_defaults.py --passes-overlap  # the grains' overlap after each step of a pass, ≈ 3 min
 
 ``--convergence`` runs the poured heap (two seeds) and the grain sliding across its length at 5–80 substeps and
 writes benchmarks/measured/granular_convergence.jsonl, with its plot docs/images/accuracy/granular_convergence.png:
@@ -34,6 +37,22 @@ CONVERGENCE = RECORD.with_name("granular_convergence.jsonl")
 FUNNEL = RECORD.with_name("funnel_heap.jsonl")
 PASSES_RECORD = RECORD.with_name("solver_passes.jsonl")
 LEVERS = RECORD.with_name("heap_levers.jsonl")
+MECHANISM = RECORD.with_name("heap_mechanism.jsonl")
+CREEP = RECORD.with_name("heap_creep.jsonl")
+CREEP_MM = 0.2  # mm: a grain that moves further between 2.5 s and 7 s creeps (issue 46's reading)
+PASS_OVERLAP = RECORD.with_name("pass_overlap.jsonl")
+# the solver's kernels after which ``pass_overlap`` sums the grains' overlap, and what each step is called there
+PASS_STEPS = {
+    "contact_sweep": "sweep",
+    "predict": "predicted",
+    "shape_match_project": "shape matching",
+    "collider_project": "walls",
+}
+# (grains, seeds, frames, (substeps, iterations) ...): the dropped ball's collapse read at 0.1 s, 0.3 s and the end
+COLLAPSES = (
+    (300, (0, 1, 2), 45, ((10, 2), (20, 1), (10, 4), (20, 2), (40, 1), (40, 2), (80, 2), (40, 4))),
+    (890, (0,), 60, ((10, 2), (10, 4), (20, 2), (40, 2), (40, 4))),
+)
 # (what, node parameters) changed from the defaults, one at a time: what each does to the heaps at 10 and 40 substeps
 HEAP_LEVERS = (
     ("the node's defaults", {}),
@@ -342,6 +361,130 @@ def levers() -> list[dict]:
     return rows
 
 
+def contact_state(sim) -> tuple[float, float, float]:
+    """What the contacts of a heap do: grain–grain contacts per grain (pairs of grains that carried a load in the
+    last substep, counted once), the share of them in the static branch (``friction.STICKING``), and the largest
+    overlap the solve left over the last 10 frames, in radii (``Diagnostics.penetration``)."""
+    from nodes.simulation.friction import STICKING
+
+    c = sim.solver.contacts
+    touching = (c.groups.group >= 0) & (c.held > 0)
+    groups, first = np.unique(c.groups.group[touching], return_index=True)
+    sticking = float(np.mean(c.mode[touching][first] == STICKING)) if len(groups) else 0.0
+    grains = len(sim.model.start) - 1
+    return 2.0 * len(groups) / grains, sticking, max(sim.solver.diagnostics.penetration[-10:])
+
+
+def collapses() -> list[dict]:
+    """Each of ``COLLAPSES``: a dry ball of grains dropped on flat ground (``validation.rice_heap``) at each
+    (substeps, iterations), per seed: atan H/R and the surface slope at 0.1 s, 0.3 s and the end, and there the
+    contacts (``contact_state``)."""
+    from validation import rice_heap
+
+    rows = []
+    for n, seeds, end, settings in COLLAPSES:
+        for substeps, iterations in settings:
+            digits = {"hr": 1, "surface": 1, "contacts_per_grain": 2, "sticking": 2, "penetration": 3}
+            values, start = {k: [] for k in (*digits, "hr_0_1", "hr_0_3")}, time.perf_counter()
+            for seed in seeds:
+                early, mid, last = rice_heap(
+                    n, True, (6, 18, end), substeps, seed=seed, shape="ball", read=contact_state, iterations=iterations
+                )[0]
+                values["hr_0_1"].append(round(early[1], 1))
+                values["hr_0_3"].append(round(mid[1], 1))
+                for k, v in zip(digits, (last[1], last[0], *last[2])):
+                    values[k].append(round(v, digits[k]))
+            values["seconds"] = round((time.perf_counter() - start) / len(seeds), 1)
+            rows.append(
+                {
+                    "case": "dropped ball",
+                    "grains": n,
+                    "substeps": substeps,
+                    "iterations": iterations,
+                    "end_s": round(end / 60, 2),
+                    "values": values,
+                }
+            )
+            print(rows[-1], flush=True)
+    return rows
+
+
+def creep() -> list[dict]:
+    """The 890-grain ball (seed 0) at the node's substeps and 4× them: how far each grain's centre moves between
+    2.5 s and 7 s, for all grains and for those on the ground (centre below 2 mm), against ``CREEP_MM``."""
+    from validation import rice_heap
+
+    from nodes.simulation.settings import PARAMS
+
+    default = PARAMS["substeps"].default
+    rows = []
+    for substeps in (default, 4 * default):
+        (early, late), seconds = rice_heap(
+            890, True, (150, 420), substeps, shape="ball", read=lambda sim: sim.model.centres(sim.state.x).copy()
+        )
+        moved = np.linalg.norm(late[2] - early[2], axis=1)
+        ground = early[2][:, 2] < 2.0
+        values = {
+            "hr_2_5": round(early[1], 1),
+            "hr_7": round(late[1], 1),
+            "median_mm": round(float(np.median(moved)), 4),
+            "p95_mm": round(float(np.percentile(moved, 95)), 3),
+            "max_mm": round(float(moved.max()), 3),
+            "creeping": round(float(np.mean(moved > CREEP_MM)), 3),
+            "creeping_on_ground": round(float(np.mean(moved[ground] > CREEP_MM)), 3),
+            "seconds": round(seconds, 1),
+        }
+        rows.append({"case": "dropped ball at rest", "grains": 890, "substeps": substeps, "values": values})
+        print(rows[-1], flush=True)
+    return rows
+
+
+def pass_overlap(substeps: int, frames: int = 12) -> dict:
+    """The 890-grain ball (seed 0) over its first ``frames`` (its collapse): the summed overlap of particles of
+    different grains (mm) after each step of each solve — the prediction, every contact sweep, shape matching and
+    the walls — and after pre-stabilisation's sweep, averaged per call: how much of what a contact sweep separates
+    the grains' shape matching puts back in the same pass."""
+    from scipy.spatial import cKDTree
+    from validation import rice_heap
+
+    from nodes.simulation.solver import KernelDispatch
+
+    sums, calls = dict.fromkeys(["pre-stabilisation", *PASS_STEPS.values()], 0.0), {}
+
+    class Trace(KernelDispatch):
+        """The solver's dispatch, summing the overlap after the kernels of ``PASS_STEPS``."""
+
+        def __init__(self, sim):
+            super().__init__()
+            self.sim, self.solving = sim, False
+            m = sim.model.n_moving
+            self.r, self.elem = sim.model.r[:m], sim.model.elem[:m]
+
+        def overlap(self) -> float:
+            r, elem = self.r, self.elem
+            x = self.sim.state.x[: len(r)]
+            i, j = cKDTree(x).query_pairs(2 * float(r.max()), output_type="ndarray").T
+            depth = r[i] + r[j] - np.linalg.norm(x[i] - x[j], axis=1)
+            return float(depth[(elem[i] != elem[j]) & (depth > 0)].sum())
+
+        def __call__(self, family, kernel, *args):
+            out = super().__call__(family, kernel, *args)
+            name = kernel.__name__
+            self.solving = (self.solving or name == "predict") and name != "update_velocity"
+            step = PASS_STEPS.get(name) if self.solving else "pre-stabilisation" if name == "contact_sweep" else None
+            if step:
+                sums[step] += self.overlap()
+                calls[step] = calls.get(step, 0) + 1
+            return out
+
+    def watch(sim):
+        sim.solver.dispatch = Trace(sim)
+
+    rice_heap(890, True, (frames,), substeps, shape="ball", watch=watch)
+    values = {k: round(sums[k] / calls[k], 2) for k in sums if calls.get(k)}
+    return {"case": "overlap through a pass", "grains": 890, "substeps": substeps, "frames": frames, "values": values}
+
+
 def convergence() -> list[dict]:
     """The poured heap (seeds 0 and 1) and the grain sliding across its length at each of ``SUBSTEPS``: the
     heap's surface slope and H/R at 7 s, the tilt the grain holds to, and the seconds each costs."""
@@ -415,7 +558,27 @@ def main(argv=None) -> None:
     ap.add_argument("--funnel", action="store_true", help="the fixed-funnel heap's substep curve only")
     ap.add_argument("--passes", action="store_true", help="substeps against iterations, and the stream's landing")
     ap.add_argument("--levers", action="store_true", help="what each solver setting does to the heaps")
+    ap.add_argument("--mechanism", action="store_true", help="the dropped ball's collapse at substeps × iterations")
+    ap.add_argument("--creep", action="store_true", help="how far the dropped ball's grains move at rest")
+    ap.add_argument("--passes-overlap", action="store_true", help="the grains' overlap after each step of a pass")
     args = ap.parse_args(argv)
+    if args.passes_overlap:
+        rows = [pass_overlap(s) for s in (10, 40)]
+        print(*rows, sep="\n")
+        PASS_OVERLAP.write_text(
+            "".join(record(r, "python benchmarks/physics_at_defaults.py --passes-overlap") + "\n" for r in rows)
+        )
+        return
+    if args.creep:
+        rows = creep()
+        CREEP.write_text("".join(record(r, "python benchmarks/physics_at_defaults.py --creep") + "\n" for r in rows))
+        return
+    if args.mechanism:
+        rows = collapses()
+        MECHANISM.write_text(
+            "".join(record(r, "python benchmarks/physics_at_defaults.py --mechanism") + "\n" for r in rows)
+        )
+        return
     if args.levers:
         rows = levers()
         LEVERS.write_text("".join(record(r, "python benchmarks/physics_at_defaults.py --levers") + "\n" for r in rows))

@@ -135,12 +135,26 @@ def sphere_heap(n, mu, anchored, frames=(150,), substeps=10, radius=1.0, seed=0)
     return angles, time.perf_counter() - start
 
 
-def rice_heap(n, anchored, frames=(150,), substeps=10, friction=1.0, seed=0, shape="stream", effects=EFFECTS, **params):
+def rice_heap(
+    n,
+    anchored,
+    frames=(150,),
+    substeps=10,
+    friction=1.0,
+    seed=0,
+    shape="stream",
+    effects=EFFECTS,
+    read=None,
+    watch=None,
+    **params,
+):
     """Pour n rice-like grains (ellipsoids 5 × 3 × 2.5 mm ±10 %, 8 particles each) on flat ground: a column
     2 × 2 grains wide, one layer per 3.2 mm, random yaw, falls as a stream onto the heap's apex (at most the
     speed clamp, ≈ 0.5 m/s), at the xpbd node's defaults (effects gravity, contact, friction, collider,
     damping; no adhesion: dry rice, unless ``effects`` say otherwise). Returns (``heap_angle``, ``mound_angle``)
-    after each of ``frames`` and the seconds."""
+    after each of ``frames`` and the seconds; with ``read``, a function of the simulation, its value joins each
+    pair (what the contacts do: ``physics_at_defaults.contact_state``); ``watch``, called with the simulation
+    before its first frame (to trace the solver: ``physics_at_defaults.pass_overlap``)."""
     from scene_builders import box_mesh, rice_library
     from scipy.spatial.transform import Rotation
 
@@ -178,13 +192,15 @@ def rice_heap(n, anchored, frames=(150,), substeps=10, friction=1.0, seed=0, sha
     half = 3.0 * n ** (1 / 3) * 6.0
     slab = box_mesh([-half, -half, -6], [half, half, 0], "ground")
     sim = build_simulation(Aggregate(placement, (rice_library(seed=seed),)), [slab], effects, params)
+    if watch:
+        watch(sim)
     start = time.perf_counter()
     angles = []
     for f in range(1, max(frames) + 1):
         sim.frame()
         if f in frames:
             centres = sim.model.centres(sim.state.x)
-            angles.append((heap_angle(centres), mound_angle(centres)))
+            angles.append((heap_angle(centres), mound_angle(centres)) + ((read(sim),) if read else ()))
     return angles, time.perf_counter() - start
 
 

@@ -251,6 +251,51 @@ TABLES = {
             ("s (each)", value("seconds")),
         ],
     ),
+    "heap_mechanism": (
+        "heap_mechanism.jsonl",
+        None,
+        [
+            ("ball (grains)", field("grains")),
+            ("substeps × iterations", lambda r: f"{r['substeps']} × {r['iterations']}"),
+            (
+                "atan H/R at 0.1 s / 0.3 s / end, seed 0 (°)",
+                lambda r: " / ".join(number(r["values"][k][0]) for k in ("hr_0_1", "hr_0_3", "hr")),
+            ),
+            ("atan H/R at the end, per seed (°)", listed("hr")),
+            ("surface slope at the end, per seed (°)", listed("surface")),
+            ("grain–grain contacts per grain", listed("contacts_per_grain")),
+            ("contacts sticking", listed("sticking")),
+            ("largest overlap, last 10 frames (r)", listed("penetration")),
+            ("s (each)", value("seconds")),
+        ],
+    ),
+    "heap_creep": (
+        "heap_creep.jsonl",
+        None,
+        [
+            ("ball (grains)", field("grains")),
+            ("substeps", field("substeps")),
+            ("atan H/R at 2.5 s / 7 s (°)", pair("hr_2_5", "hr_7")),
+            ("grains moving > 0.2 mm from 2.5 s to 7 s, all / on the ground", pair("creeping", "creeping_on_ground")),
+            (
+                "their move, median / p95 / max (mm)",
+                lambda r: " / ".join(number(r["values"][k]) for k in ("median_mm", "p95_mm", "max_mm")),
+            ),
+            ("s", value("seconds")),
+        ],
+    ),
+    "pass_overlap": (
+        "pass_overlap.jsonl",
+        None,
+        [
+            ("substeps (2 iterations)", field("substeps")),
+            ("after pre-stabilisation (mm)", value("pre-stabilisation")),
+            ("after the prediction (mm)", value("predicted")),
+            ("after a contact sweep (mm)", value("sweep")),
+            ("after shape matching (mm)", value("shape matching")),
+            ("after the walls (mm)", value("walls")),
+        ],
+    ),
     "solver_passes": (
         "solver_passes.jsonl",
         lambda r: r["case"] == "solver passes",
