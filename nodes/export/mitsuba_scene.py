@@ -599,7 +599,7 @@ def eye_albedo(skin: np.ndarray, material: Material) -> np.ndarray:
     """The albedo guide of a skin whose transmittance varies per vertex (``_shapes``: √ of the egg's colour there,
     times its transmission), as ``guide_albedo`` gives a whole egg: the colour light keeps through it, in and out.
     With the material's one colour the guide had no edge where the eye is, and OIDN at 3 spp smeared each egg's
-    pale eye into the egg's own red (docs/look.md, "The eye")."""
+    pale eye into the egg's own red (docs/look.md, "Ikura colour")."""
     return np.clip((skin / max(material.transmission, 1e-6)) ** 2, 0.0, 1.0).astype(np.float32)
 
 

@@ -63,9 +63,9 @@ def _absorb(clear, dyed, t):
 
 
 # the subsurface radius (mm) of rice at the wettest (24 %): its medium's mean free path in red is then 1.65 mm at 24 %
-# and 1.15 mm at 15 % (one σt for every channel: 0.86 and 1.16 mm⁻¹), the wet end at the starchy stand-in's, potato
-# (Jensen et al. 2001, table 2: 1/σ′s = 1.47, 1.43, 1.82 mm); it was (1.2, 0.9, 0.6): 1.24 and 0.89 mm, grains that
-# read as opaque pebbles. Bounded by the grain's optical thickness (σt × 2.0 mm ≥ 2 up to 18 % water,
+# and 1.15 mm at 15 % (one σt for every channel: 0.85 and 1.14 mm⁻¹), the wet end at the starchy stand-in's, potato
+# (Jensen et al. 2001, table 2: 1/σ′s = 1.47, 1.43, 1.82 mm); at (1.2, 0.9, 0.6) grains read as opaque pebbles.
+# Bounded by the grain's optical thickness (σt × 2.0 mm ≥ 2 up to 18 % water,
 # tests/scenes/test_grain_optics.py: thinner, light crosses a grain unscattered and rice reads as glass; docs/look.md,
 # "Cooked rice: wet, milky, warm")
 RICE_RADIUS_WET = (1.6, 1.2, 0.8)
@@ -111,9 +111,9 @@ def rice_material(water: float, name: str = "rice") -> Material:
 EGG_TINTS = 12  # membrane tints the eggs of a scene are drawn from (the shade node's ``egg_tints``)
 # the spread of the eggs' colour (``ikura_tints``): salmon roe is graded "light orange, orange, reddish-orange, red ...
 # shiny, slightly transparent" (caviar quality assessment checklist, table 6-1, markys.com/beluga/tab6-1.htm): the green
-# absorbance of the fluid scaled over EGG_HUE_SPREAD moves the hue of light through an egg from CIELAB h 59° (orange)
-# to 42° (red-orange); its pigment (astaxanthin) concentration over EGG_PIGMENT_SPREAD makes an egg lighter and
-# more translucent or deeper: L* 53–65 (docs/look.md, "Ikura colour")
+# absorbance of the fluid scaled over EGG_HUE_SPREAD moves the hue of light through an egg from CIELAB h 67° (orange)
+# to 40° (red-orange); its pigment (astaxanthin) concentration over EGG_PIGMENT_SPREAD makes an egg lighter and
+# more translucent or deeper: L* 51–70 (docs/look.md, "Ikura colour")
 EGG_HUE_SPREAD = (0.55, 1.45)
 EGG_PIGMENT_SPREAD = (0.70, 1.40)
 EGG_FLUID = (0.85, 0.10, 0.012)  # light through the whole egg (two crossings of the fluid): the palette's centre
@@ -318,7 +318,7 @@ def chestnut_material() -> Material:
     201, 148): chosen, the nearest published reading being chestnut flour, L* 90.7 → 81.4 and b* 12.0 → 20.5 on
     roasting (sweet chestnut, pan and microwave roasting: pmc.ncbi.nlm.nih.gov/articles/PMC5470552); a whole
     piece is more saturated than its flour. At CIELAB (78, 4, 38) the pieces rendered a deep gold in the rice's
-    shade, and at (0.80, 0.50, 0.06), a saturated mustard, art directors read them as cheese (issue 48)."""
+    shade, and at (0.80, 0.50, 0.06), a saturated mustard, they read as cheese."""
     return Material(
         name="chestnut",
         base_color=(0.775, 0.583, 0.295),
@@ -349,7 +349,7 @@ def fish_materials(kind: str) -> tuple[Material, Material]:
     scatterer seen as an opaque cream surface under the same wet coat: light in the flesh that reaches one is sent
     back into the flesh. As a medium of their own, light entering a 0.7 mm line walked off through the flesh and
     the lines rendered grey. Salmon's fat is a pale pink cream (chosen): in a whiter cream (0.86, 0.72, 0.58) the
-    lines read as painted stripes (issue 48). ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep red
+    lines read as painted stripes. ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep red
     flesh, faint fat)."""
     if kind == "salmon":
         flesh_color, flesh_sss, fat_color = (0.90, 0.22, 0.07), (0.99, 0.30, 0.10), (0.84, 0.64, 0.52)
@@ -390,7 +390,7 @@ def nori_material() -> Material:
     4 % alone reads L* 24), so the albedo under it is darker; commercial yaki-nori is greener. A dry, fibrous face:
     one broad specular lobe (roughness 0.55, F0 0.04), no clear coat and a faint sheen in its own colour; the
     sheet's crinkles and fibres (the ``nori`` node's ``crinkle``) give it its texture. With a satin face (roughness
-    0.42, a clear coat, a white-ish sheen 0.6) it reflected the studio and read as grey rubber (issue 48)."""
+    0.42, a clear coat, a white-ish sheen 0.6) it reflected the studio and read as grey rubber."""
     return Material(
         name=NORI,
         base_color=(0.010, 0.026, 0.012),
@@ -412,7 +412,7 @@ def ceramic_material(color) -> Material:
     1.5, roughness 0.04); the colour lies in and under the glass, seen only diffusely (roughness 1, no specular
     of its own: the glass over the body is index-matched, and a glaze has no second, satin surface). With a
     specular lobe of its own at roughness 0.35 the dark glaze reflected the studio as a broad grey sheen, and the
-    bowl read grey, its rim as brushed metal (issue 48; docs/look.md, "The bowl's glaze")."""
+    bowl read grey, its rim as brushed metal (docs/look.md, "The bowl's glaze")."""
     return coated(CERAMIC, tuple(float(c) for c in color), 0.04)
 
 
