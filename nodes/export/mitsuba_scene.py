@@ -480,9 +480,18 @@ def glints_window(
     return Crop(x0, y0, x1 - x0, y1 - y0)
 
 
+def backdrop_gloss(backdrop: dict) -> dict | None:
+    """What the backdrop reflects of the key's bright core (the glints' pass): the table's oiled sheen, its
+    principled lobe over a black base, or None for the paper sweep, which is matte. Cycles' table, glossy, showed
+    the core as a broad sheen on the boards in front of the bowl where the preview's black table showed none
+    (docs/look.md, "Noise or a different picture")."""
+    bsdf = backdrop["bsdf"]
+    return {**bsdf, "base_color": _rgb((0.0, 0.0, 0.0))} if bsdf["type"] == "principled" else None
+
+
 def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = None) -> dict:
     """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
-    surface reflecting only its gloss (``specular_bsdf``), the backdrop black, lit by the key's bright core
+    surface reflecting only its gloss (``specular_bsdf``, ``backdrop_gloss``), lit by the key's bright core
     alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce; rendered in ``window`` of the film
     if given (``glints_window``), through a pinhole at the lens's centre, sharp at every depth, for ``defocus`` to
     blur as the thin lens would (with ``DEPTH_AOV``'s distances)."""
@@ -513,7 +522,11 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
             "radius": radius,
             "emitter": {"type": "area", "radiance": {"type": "rgb", "value": scene.key_gain * HIGHLIGHT_RADIANCE}},
         },
-        "backdrop": {**description["backdrop"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
+        "backdrop": {
+            **description["backdrop"],
+            "bsdf": backdrop_gloss(description["backdrop"])
+            or {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))},
+        },
         **shapes,
     }
 
@@ -842,7 +855,9 @@ def render_layers(
         loaded = mi.load_dict(description, optimize=False)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         aov = guide_layers(loaded, scene, seed)
-        window = glints_window(set_up, camera, width, height, glints_core(description), crop)
+        window = None  # the core's sheen on a glossy backdrop can fall anywhere on it: the whole film
+        if backdrop_gloss(description["backdrop"]) is None:
+            window = glints_window(set_up, camera, width, height, glints_core(description), crop)
         pinhole = mi.load_dict(highlight_dict(scene, description, window), optimize=False)
         part = np.asarray(mi.render(pinhole, seed=seed), np.float32)[..., 0:3]
         distance = np.zeros_like(part[..., :1])

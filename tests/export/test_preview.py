@@ -524,6 +524,32 @@ def _defocused_spheres():
     return ShadedScene(meshes, (glossy,), np.zeros(2, np.int32)), Camera(30.0, 20.0, 35.0, 0.1, 16.0, 0.0)
 
 
+def test_the_oiled_table_shows_the_keys_core_as_a_sheen(shaded):
+    """On the table the glints' pass lets the boards reflect the key's bright core by their gloss
+    (``backdrop_gloss``), as Cycles' glossy table does, over the whole film: the sheen falls on the boards
+    outside the subject's window, which the black table of the paper sweep's rule left dark."""
+    import tempfile
+    from pathlib import Path
+
+    import mitsuba as mi
+
+    from nodes.export import mitsuba_scene as ms
+
+    params = preview.resolve_params({})
+    camera = ms.Camera(params["elevation"], params["azimuth"], params["fov"], params["margin"], 8.0, params["focus"])
+    width, height, sun = 160, 90, params["sun_direction"]
+    mi.set_variant("scalar_rgb")
+    with tempfile.TemporaryDirectory() as folder:
+        description, set_up = ms._described(
+            shaded, Path(folder), camera, width, height, 2, sun, None, None, True, params["ambient"], "table"
+        )
+        window = ms.glints_window(set_up, camera, width, height, ms.glints_core(description))
+        whole = np.asarray(mi.render(mi.load_dict(ms.highlight_dict(shaded, description), optimize=False)))
+    outside = np.ones((height, width), bool)
+    outside[window.y : window.y + window.height, window.x : window.x + window.width] = False
+    assert whole[..., :3].max(axis=2)[outside].mean() > 1e-3  # 0 on a black table
+
+
 def test_an_out_of_focus_glint_is_a_smooth_disc_not_dots(tmp_path):
     """The key's glint on a sphere far out of focus is a blur disc. The glints' pass sampled it through the thin lens
     at 2 spp (``HIGHLIGHT_SPP``), so each pixel of the disc saw the glint or not: a few bright dots (here 30
