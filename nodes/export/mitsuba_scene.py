@@ -203,7 +203,19 @@ def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
         # coat; the thin share's transmission is raised to keep the whole surface's (``_shapes``).
         coated = {**_principled(material), "clearcoat": 1.0}
         return {"type": "blendbsdf", "weight": coat_share(material), "bsdf_0": thin, "bsdf_1": coated}
+    if material.specular <= 0 and material.clearcoat >= 1 and material.metallic <= 0:
+        return coat_bsdf(material)
     return _principled(material)
+
+
+def coat_bsdf(material: Material) -> dict:
+    """A colour seen only diffusely under one dielectric coat (a glaze, a lacquer: ``materials.coated``): Mitsuba's
+    plastic, a diffuse body under a GGX interface at the coat's IOR and roughness, as Cycles' coat over its base.
+    Disney's coat in ``principled`` is GTR1, whose long tails spread a glaze's sharp reflections of the studio into
+    a haze over the bowl (docs/look.md, "Noise or a different picture")."""
+    bsdf = {"type": "plastic", "diffuse_reflectance": _rgb(material.base_color), "int_ior": float(material.ior)}
+    a = alpha(material.clearcoat_roughness)
+    return {**bsdf, "type": "roughplastic", "alpha": a, "distribution": "ggx"} if a > 1e-3 else bsdf
 
 
 def medium(material: Material) -> dict:
@@ -265,10 +277,10 @@ DISNEY_COAT = 0.25  # Mitsuba's principled coat lobe is Disney's: clearcoat × 0
 
 def _principled(material: Material) -> dict:
     """Mitsuba's principled BSDF for a material's parameters. Its coat follows Disney (Burley 2012), whose lobe is
-    scaled by ``DISNEY_COAT``: a coat of weight 1 reflected a quarter of a glaze's Fresnel (F0 0.04 at IOR 1.5),
-    where Cycles' coat and glTF's KHR_materials_clearcoat reflect all of it. The weight passed is the material's
-    over ``DISNEY_COAT``, so a glaze reflects the studio as Fresnel says in both renderers (docs/look.md). A
-    material with no specular of its own (``specular`` 0: a glaze's body, under its coat) gets Mitsuba's
+    scaled by ``DISNEY_COAT``: a coat of weight 1 reflected a quarter of Fresnel (F0 0.04 at IOR 1.5), where
+    Cycles' coat and glTF's KHR_materials_clearcoat reflect all of it. The weight passed is the material's over
+    ``DISNEY_COAT``, so a coat reflects the studio as Fresnel says in both renderers (docs/look.md; a glaze or a
+    lacquer is ``coat_bsdf``). A material with no specular of its own (``specular`` 0) gets Mitsuba's
     ``specular`` 0 in place of its IOR (Fresnel 0: Blender's Specular IOR Level 0, glTF's specularFactor 0)."""
     own = {"eta": float(material.ior)} if material.specular > 0 else {"specular": 0.0}
     return {

@@ -85,15 +85,28 @@ def test_the_pale_droplet_shows_as_an_eye(shaded):
     assert golden(pale) > golden(before) + 0.03
 
 
-def test_a_glaze_reflects_fresnel_in_the_preview_as_in_cycles():
-    """Mitsuba's principled coat is Disney's, a quarter of Fresnel at weight 1: the glaze's weight is passed over
-    DISNEY_COAT, so it reflects F0 0.04 as Cycles' coat and glTF's clearcoat do (the bowl's rim and the studio's
-    lights in it were fainter in the preview than in Cycles)."""
-    from nodes.export.mitsuba_scene import DISNEY_COAT, material_bsdf
+def test_a_white_body_under_a_glaze_returns_all_the_light_of_a_white_furnace():
+    """Energy conservation: a white body under a clear glaze (``materials.coated``) in a uniform white sky absorbs
+    nothing, so it looks as bright as the sky. The glaze is a dielectric interface over the body (``coat_bsdf``:
+    Mitsuba's plastic, GGX at the coat's IOR, F0 0.04 as Cycles' coat); Disney's coat in Mitsuba's principled adds
+    its reflection on top of the body's, 1.14 of the sky (docs/look.md, "Noise or a different picture")."""
+    import mitsuba as mi
+
+    from nodes.export.mitsuba_scene import material_bsdf
     from nodes.shading import materials as mat
 
-    glaze = mat.ceramic_material((0.03, 0.021, 0.015))
-    assert DISNEY_COAT == 0.25 and material_bsdf(glaze, False)["clearcoat"] == pytest.approx(glaze.clearcoat / 0.25)
+    mi.set_variant("scalar_rgb")
+    view = mi.ScalarTransform4f().look_at(origin=[0, 0, 20], target=[0, 0, 0], up=[0, 1, 0])
+    film = {"type": "hdrfilm", "width": 24, "height": 24, "rfilter": {"type": "box"}}
+    furnace = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": 256, "rr_depth": 256},
+        "sensor": {"type": "perspective", "fov": 10, "to_world": view, "film": film},
+        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
+        "ball": {"type": "sphere", "radius": 1.5, "bsdf": material_bsdf(mat.coated("white", (1, 1, 1), 0.04), False)},
+    }
+    image = np.asarray(mi.render(mi.load_dict(furnace), spp=32), np.float64)
+    assert abs(image[8:16, 8:16].mean() - 1.0) < 0.03  # inside the ball's outline (radius 6.8 px)
 
 
 def test_material_mapping():
@@ -122,7 +135,7 @@ def test_material_mapping():
     assert gltf["extensions"]["KHR_materials_diffuse_transmission"]["diffuseTransmissionFactor"] == 0.9
     assert gltf["extensions"]["KHR_materials_transmission"]["transmissionFactor"] == syrup.transmission
     glaze = material_bsdf(mat.ceramic_material((0.05, 0.07, 0.16)), False)
-    assert glaze["type"] == "principled" and glaze["clearcoat"] > 0
+    assert glaze["type"] in ("plastic", "roughplastic") and glaze["int_ior"] == pytest.approx(1.5)
     wet, dry = mat.rice_material(24.0), mat.rice_material(0.0)
     assert material_bsdf(dry, True)["type"] == "principledthin"
     assert material_bsdf(wet, True)["bsdf_1"]["clearcoat"] > 0  # the water film's coat
