@@ -1,8 +1,10 @@
-"""A white furnace for a grain's skin: the main job's rice (15 % water) as a sphere of radius 1.5 mm, its medium's
-albedo raised to 1, in a uniform white sky. Nothing absorbs, so a renderer that conserves energy shows the grain
-exactly as bright as the sky (1). The preview's skin (``mitsuba_scene.boundary_bsdf``) and Mitsuba's rough
-dielectric at the skin's roughness, beside Cycles' Principled transmission at the same roughness with single- and
-multiple-scattering GGX (``tools/cycles_furnace.py``, the Blender venv of ``tools/blender_side_by_side.py``).
+"""A white furnace for a grain's skin and a glaze: the main job's rice (15 % water) as a sphere of radius 1.5 mm,
+its medium's albedo raised to 1, and a white body under a clear glaze (``materials.coated``), in a uniform white
+sky. Nothing absorbs, so a renderer that conserves energy shows the sphere exactly as bright as the sky (1). The
+preview's skin (``mitsuba_scene.boundary_bsdf``) and Mitsuba's rough dielectric at the skin's roughness, beside
+Cycles' Principled transmission at the same roughness with single- and multiple-scattering GGX
+(``tools/cycles_furnace.py``, the Blender venv of ``tools/blender_side_by_side.py``); the preview's glaze
+(``mitsuba_scene.coat_bsdf``) beside Disney's coat over Mitsuba's principled.
 
     python benchmarks/furnace.py [--spp 256]
 """
@@ -26,7 +28,7 @@ sys.path.insert(0, str(ROOT / "tools"))
 RADIUS, SIZE, FOV, DISTANCE = 1.5, 64, 20.0, 20.0  # mm, px, degrees, mm: the grain fills a third of the frame
 
 
-def mitsuba(skin: dict, medium: dict, spp: int) -> float:
+def mitsuba(skin: dict, medium: dict | None, spp: int) -> float:
     """Mean radiance inside the grain's outline."""
     import mitsuba as mi
 
@@ -42,7 +44,7 @@ def mitsuba(skin: dict, medium: dict, spp: int) -> float:
             "sampler": {"type": "independent", "sample_count": spp},
         },
         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
-        "grain": {"type": "sphere", "radius": RADIUS, "bsdf": skin, "interior": medium},
+        "grain": {"type": "sphere", "radius": RADIUS, "bsdf": skin} | ({"interior": medium} if medium else {}),
     }
     image = np.asarray(mi.render(mi.load_dict(scene)), np.float64)
     y, x = np.mgrid[:SIZE, :SIZE] - (SIZE - 1) / 2
@@ -71,7 +73,7 @@ def main() -> None:
 
     from nodes.export import mitsuba_scene as ms
     from nodes.export.look import boundary_roughness
-    from nodes.shading.materials import rice_material
+    from nodes.shading.materials import coated, rice_material
 
     mi.set_variant("scalar_rgb")
     rice = rice_material(15.0)
@@ -86,6 +88,11 @@ def main() -> None:
             roughness, rice.ior, sigma_t, "MULTI_GGX", a.spp
         ),
     }
+    white = coated("white", (1.0, 1.0, 1.0), 0.04)
+    rows["a white body under a glaze: Mitsuba, the preview's (plastic)"] = mitsuba(ms.coat_bsdf(white), None, a.spp)
+    rows["a white body under a glaze: Mitsuba, Disney's coat over principled"] = mitsuba(
+        ms._principled(white), None, a.spp
+    )
     for skin, mean in rows.items():
         print(json.dumps({"skin": skin, "mean": mean}), flush=True)
 

@@ -489,7 +489,7 @@ TABLES = {
     "furnace": (
         "furnace.jsonl",
         None,
-        [("skin over a clear medium", field("skin")), ("grain / sky", value("mean"))],
+        [("in the furnace", field("skin")), ("grain / sky", value("mean"))],
     ),
     "flip": (
         "flip.jsonl",

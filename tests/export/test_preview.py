@@ -89,7 +89,7 @@ def test_a_white_body_under_a_glaze_returns_all_the_light_of_a_white_furnace():
     """Energy conservation: a white body under a clear glaze (``materials.coated``) in a uniform white sky absorbs
     nothing, so it looks as bright as the sky. The glaze is a dielectric interface over the body (``coat_bsdf``:
     Mitsuba's plastic, GGX at the coat's IOR, F0 0.04 as Cycles' coat); Disney's coat in Mitsuba's principled adds
-    its reflection on top of the body's, 1.14 of the sky (docs/look.md, "Noise or a different picture")."""
+    its reflection on top of the body's, 1.13 of the sky (docs/look.md, "Noise or a different picture")."""
     import mitsuba as mi
 
     from nodes.export.mitsuba_scene import material_bsdf
