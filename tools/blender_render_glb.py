@@ -153,7 +153,7 @@ def main() -> None:
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = s["samples"]
-    scene.cycles.seed = 0
+    scene.cycles.seed = s.get("seed", 0)
     scene.cycles.max_bounces = s["max_depth"]
     scene.cycles.transmission_bounces = s["max_depth"]
     scene.cycles.volume_bounces = s["max_depth"]

@@ -531,9 +531,14 @@ TABLES = {
             ("Cycles, the add-on", value("cycles")),
         ],
     ),
+    "furnace": (
+        "furnace.jsonl",
+        None,
+        [("in the furnace", field("skin")), ("grain / sky", value("mean"))],
+    ),
     "flip": (
         "flip.jsonl",
-        None,
+        lambda r: "pair" not in r,
         [
             ("scene", code("recipe")),
             ("size", field("size")),
@@ -542,6 +547,20 @@ TABLES = {
             ("FLIP mean / p95, before", value("before")),
             ("FLIP mean / p95, now", value("after")),
             ("mean sRGB of the eggs (or rice): preview · Cycles before · now", value("eggs")),
+        ],
+    ),
+    "flip_floor": (
+        "flip.jsonl",
+        lambda r: "pair" in r,
+        [
+            ("build", field("build")),
+            ("pair: test against reference", field("pair")),
+            ("frame", value("frame")),
+            ("p95", value("p95")),
+            ("eggs", value("eggs")),
+            ("rice", value("rice")),
+            ("bowl", value("bowl")),
+            ("table and props", value("table")),
         ],
     ),
     "blender_instancing": (

@@ -124,7 +124,8 @@ def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:
 
 
 def boundary_roughness(material: Material) -> float:
-    """The principled roughness of a volumetric element's skin (``boundary_bsdf``)."""
+    """The principled roughness of a volumetric element's skin: the files' (Cycles' multiscatter GGX) and its glints'
+    (``mitsuba_scene.gloss``); the preview traces light through it as a smooth skin (``boundary_bsdf``)."""
     if material.transmission >= TRANSMISSIVE:
         return float(material.transmission_roughness)
     return float(material.clearcoat_roughness if material.clearcoat > 0 else material.roughness)

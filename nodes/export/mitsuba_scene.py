@@ -203,7 +203,19 @@ def material_bsdf(material: Material, translucent_vertices: bool) -> dict:
         # coat; the thin share's transmission is raised to keep the whole surface's (``_shapes``).
         coated = {**_principled(material), "clearcoat": 1.0}
         return {"type": "blendbsdf", "weight": coat_share(material), "bsdf_0": thin, "bsdf_1": coated}
+    if material.specular <= 0 and material.clearcoat >= 1 and material.metallic <= 0:
+        return coat_bsdf(material)
     return _principled(material)
+
+
+def coat_bsdf(material: Material) -> dict:
+    """A colour seen only diffusely under one dielectric coat (a glaze, a lacquer: ``materials.coated``): Mitsuba's
+    plastic, a diffuse body under a GGX interface at the coat's IOR and roughness, as Cycles' coat over its base.
+    Disney's coat in ``principled`` is GTR1, whose long tails spread a glaze's sharp reflections of the studio into
+    a haze over the bowl (docs/look.md, "Noise or a different picture")."""
+    bsdf = {"type": "plastic", "diffuse_reflectance": _rgb(material.base_color), "int_ior": float(material.ior)}
+    a = alpha(material.clearcoat_roughness)
+    return {**bsdf, "type": "roughplastic", "alpha": a, "distribution": "ggx"} if a > 1e-3 else bsdf
 
 
 def medium(material: Material) -> dict:
@@ -229,11 +241,12 @@ def medium(material: Material) -> dict:
 
 
 def boundary_bsdf(material: Material) -> dict:
-    """The dielectric skin of a volumetric element, clear, so the medium alone colours the light. Its roughness: a
-    transmissive element's transmission roughness; a translucent one's water film (its clear coat's roughness, else
-    its roughness). Mitsuba's rough dielectric loses the energy of the microfacets' multiple scattering at every
-    crossing, and light crosses a heap of grains many times: at the grain's own roughness (α ≈ 0.23 at 15 % water)
-    the rice heap rendered grey, L* 68 against 80 at the film's (α ≈ 0.02; docs/look.md).
+    """The dielectric skin of a volumetric element, clear, so the medium alone colours the light, and smooth.
+    Mitsuba's rough dielectric is single-scattering microfacets: it loses the energy of light bouncing between
+    facets at every crossing, inside as well as out, and light under a skin meets it many times. Under a white
+    furnace a rice grain at its film's roughness (α 0.11) returned 0.93, a smooth skin 1.00, and Cycles' multiscatter
+    GGX skin in the add-on conserves it (docs/look.md, "The skin over a medium conserves energy"). The skin's
+    roughness stays in its glints (``gloss``) and in the files (``look.boundary_roughness``).
 
     Dry or damp shaved ice has none (``null``; soaked through, ``materials.is_wet``, it has one): a flake stands
     for a tuft of shavings 0.05–0.1 mm thin with air between, whose pores open to the air; its countless small
@@ -242,11 +255,7 @@ def boundary_bsdf(material: Material) -> dict:
     "Kakigori"); the wet gloss of soaked ice is its clear coat (the key's glints, ``gloss``)."""
     if not has_skin(material):
         return {"type": "null"}
-    bsdf = {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
-    a = alpha(boundary_roughness(material))
-    if a > 1e-3:
-        bsdf = {**bsdf, "type": "roughdielectric", "alpha": a, "distribution": "ggx"}
-    return bsdf
+    return {"type": "dielectric", "int_ior": float(material.ior), "ext_ior": float(material.exterior_ior)}
 
 
 def diffuse_transmission(material: Material, sigma: np.ndarray) -> np.ndarray:
@@ -268,10 +277,10 @@ DISNEY_COAT = 0.25  # Mitsuba's principled coat lobe is Disney's: clearcoat × 0
 
 def _principled(material: Material) -> dict:
     """Mitsuba's principled BSDF for a material's parameters. Its coat follows Disney (Burley 2012), whose lobe is
-    scaled by ``DISNEY_COAT``: a coat of weight 1 reflected a quarter of a glaze's Fresnel (F0 0.04 at IOR 1.5),
-    where Cycles' coat and glTF's KHR_materials_clearcoat reflect all of it. The weight passed is the material's
-    over ``DISNEY_COAT``, so a glaze reflects the studio as Fresnel says in both renderers (docs/look.md). A
-    material with no specular of its own (``specular`` 0: a glaze's body, under its coat) gets Mitsuba's
+    scaled by ``DISNEY_COAT``: a coat of weight 1 reflected a quarter of Fresnel (F0 0.04 at IOR 1.5), where
+    Cycles' coat and glTF's KHR_materials_clearcoat reflect all of it. The weight passed is the material's over
+    ``DISNEY_COAT``, so a coat reflects the studio as Fresnel says in both renderers (docs/look.md; a glaze or a
+    lacquer is ``coat_bsdf``). A material with no specular of its own (``specular`` 0) gets Mitsuba's
     ``specular`` 0 in place of its IOR (Fresnel 0: Blender's Specular IOR Level 0, glTF's specularFactor 0)."""
     own = {"eta": float(material.ior)} if material.specular > 0 else {"specular": 0.0}
     return {
@@ -483,9 +492,18 @@ def glints_window(
     return Crop(x0, y0, x1 - x0, y1 - y0)
 
 
+def backdrop_gloss(backdrop: dict) -> dict | None:
+    """What the backdrop reflects of the key's bright core (the glints' pass): the table's oiled sheen, its
+    principled lobe over a black base, or None for the paper sweep, which is matte. Cycles' table, glossy, showed
+    the core as a broad sheen on the boards in front of the bowl where the preview's black table showed none
+    (docs/look.md, "Noise or a different picture")."""
+    bsdf = backdrop["bsdf"]
+    return {**bsdf, "base_color": _rgb((0.0, 0.0, 0.0))} if bsdf["type"] == "principled" else None
+
+
 def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = None) -> dict:
     """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
-    surface reflecting only its gloss (``specular_bsdf``), the backdrop black, lit by the key's bright core
+    surface reflecting only its gloss (``specular_bsdf``, ``backdrop_gloss``), lit by the key's bright core
     alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce; rendered in ``window`` of the film
     if given (``glints_window``), through a pinhole at the lens's centre, sharp at every depth, for ``defocus`` to
     blur as the thin lens would (with ``DEPTH_AOV``'s distances)."""
@@ -516,7 +534,11 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
             "radius": radius,
             "emitter": {"type": "area", "radiance": {"type": "rgb", "value": scene.key_gain * HIGHLIGHT_RADIANCE}},
         },
-        "backdrop": {**description["backdrop"], "bsdf": {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}},
+        "backdrop": {
+            **description["backdrop"],
+            "bsdf": backdrop_gloss(description["backdrop"])
+            or {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))},
+        },
         **shapes,
     }
 
@@ -845,7 +867,9 @@ def render_layers(
         loaded = mi.load_dict(description, optimize=False)
         image = np.asarray(mi.render(loaded, seed=seed), np.float32)
         aov = guide_layers(loaded, scene, seed)
-        window = glints_window(set_up, camera, width, height, glints_core(description), crop)
+        window = None  # the core's sheen on a glossy backdrop can fall anywhere on it: the whole film
+        if backdrop_gloss(description["backdrop"]) is None:
+            window = glints_window(set_up, camera, width, height, glints_core(description), crop)
         pinhole = mi.load_dict(highlight_dict(scene, description, window), optimize=False)
         part = np.asarray(mi.render(pinhole, seed=seed), np.float32)[..., 0:3]
         distance = np.zeros_like(part[..., :1])
