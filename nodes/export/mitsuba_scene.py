@@ -96,6 +96,7 @@ GLINTS_MARGIN = 4
 DEPTH_AOV = "distance:depth"
 COAT_SHARE_MAX = 0.3  # at most this share of a translucent surface is the coated lobe (the rest transmits)
 ALBEDO_AOV = "albedo:albedo,nn:sh_normal"
+VARIANT = "scalar_rgb"  # Mitsuba's scalar CPU RGB variant, which every description and render here uses
 SAMPLER = "independent"  # multijitter, orthogonal, ldsampler: within ±1 dB after OIDN at 8 spp (and round spp)
 # OIDN's filter quality. On the CPU "balanced" gives the same bits as "high" (its own network is for GPUs); "fast"
 # saves ≈ 1.4 of its 2.8 CPU s on the main job but the frame moves 32.1 dB / SSIM 0.956 from high's (eggs window
@@ -643,6 +644,9 @@ def scene_dict(
     (default ``path_depth``: by the scene's materials); ``subsurface``: media inside the volumetric elements, traced
     by ``volpath``; ``ambient``: radiance of the studio's uniform ambient; ``setting``: what the subject stands on
     (``studio.SETTINGS``: the seamless sweep, or a table of oak boards)."""
+    import mitsuba as mi
+
+    mi.set_variant(VARIANT)  # the description builds Mitsuba's transforms, which need a variant
     return _described(
         scene, folder, camera, width, height, spp, light_direction, crop, max_depth, subsurface, ambient, setting
     )[0]
@@ -846,7 +850,7 @@ def render_layers(
 
     import mitsuba as mi
 
-    mi.set_variant("scalar_rgb")
+    mi.set_variant(VARIANT)
     with tempfile.TemporaryDirectory(prefix="nodegraph_preview_") as folder:
         description, set_up = _described(
             scene,
@@ -901,7 +905,7 @@ def load_renderer() -> None:
     import mitsuba as mi
     import pyoidn
 
-    mi.set_variant("scalar_rgb")
+    mi.set_variant(VARIANT)
     plugins = mi.PluginManager.instance()
     for name in sorted(os.listdir(Path(mi.__file__).parent / "plugins")):
         stem, suffix = os.path.splitext(name)
