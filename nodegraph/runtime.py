@@ -41,8 +41,9 @@ import os
 from . import numba_cache
 
 # numba's OpenMP workers sleep between parallel loops rather than spin: the solver launches thousands of short loops a
-# frame with Python between them, and on 2 cores a spinning worker took a core from that Python (onigiri_cylinder's
-# press: 28.6 CPU s and 29.2 s wall, against 38.4 and 39.9 spinning; the same bits; docs/performance.md)
+# frame with Python between them, and on the shared 2 cores a spinning worker takes a core from that Python and from
+# other processes (less CPU always, the same bits; less wall under load, a little more on an idle machine:
+# docs/performance.md, "One policy for parallel work")
 OMP_WAIT_POLICY = "PASSIVE"
 
 
