@@ -7,7 +7,11 @@ dispatch, so the table shows ms per substep and calls per substep per kernel, an
 rest of the substep (solver code between kernels). Also reports how often the neighbour lists were
 rebuilt. ``--clock cpu`` times by the process's CPU seconds instead of the wall clock: with
 ``--threads 1`` that is the work itself, which a shared, loaded machine does not inflate.
+``--recipe R --output NODE.PORT`` profiles a recipe's own simulations instead: every xpbd node that output
+needs, run without the node cache, per solve (one ``predict`` a solve); "rebuilds per solve" reads off the
+``neighbour_lists`` row.
 Run: python benchmarks/bench_xpbd_profile.py [--quick] [--sizes 10000 50000] [--threads N] [--clock cpu]
+     python benchmarks/bench_xpbd_profile.py --recipe graphs/onigiri_cylinder.yaml --output rest.aggregate --clock cpu
 """
 
 from __future__ import annotations
@@ -66,14 +70,39 @@ def profile(n, settle, timed, threads=None, clock=time.perf_counter):
     return steps / wall, rows
 
 
+def profile_recipe(recipe: str, output: str, clock) -> tuple[int, list]:
+    """(solves, rows) of ``profile`` for the xpbd nodes a recipe's ``output`` needs: the solver's dispatch swapped
+    for a timing one while the recipe runs without the node cache."""
+    from nodegraph.api import default_registry, load_recipe, run_recipe
+    from nodes.simulation import solver
+
+    d = TimedDispatch(clock)
+    given, solver.KernelDispatch = solver.KernelDispatch, lambda: d
+    try:
+        run_recipe(load_recipe(recipe, default_registry()), outputs=[output], cache=None)
+    finally:
+        solver.KernelDispatch = given
+    solves = d.kernel_calls["predict"]
+    return solves, [(name, 1e3 * sec / solves, d.kernel_calls[name] / solves) for name, sec in d.seconds.most_common()]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--sizes", type=int, nargs="+", default=[10000, 50000])
     ap.add_argument("--threads", type=int, default=None, help="a fixed thread count (default: the free cores)")
     ap.add_argument("--clock", choices=("wall", "cpu"), default="wall", help="cpu: the process's CPU seconds")
+    ap.add_argument("--recipe", help="profile this recipe's simulations (with --output) instead of the box pile")
+    ap.add_argument("--output", help="NODE.PORT of --recipe: the xpbd nodes it needs are profiled")
     args = ap.parse_args()
     clock = time.process_time if args.clock == "cpu" else time.perf_counter
+    if args.recipe:
+        solves, rows = profile_recipe(args.recipe, args.output, clock)
+        print(f"{args.recipe} {args.output}: {solves} solves, {args.clock} clock", flush=True)
+        print(f"| kernel | {args.clock} ms / solve | calls / solve |\n|---|---|---|")
+        print("\n".join(f"| {name} | {ms:.3f} | {calls:.2f} |" for name, ms, calls in rows))
+        print(conditions())
+        return
     settle, timed = (3, 2) if args.quick else (60, 10)
     sizes = [2000] if args.quick else args.sizes
     out = []

@@ -105,6 +105,19 @@ TABLES = {
             ("slowest nodes, wall s (CPU s)", field("slowest_nodes")),
         ],
     ),
+    "speed_levers": (
+        "speed_levers.jsonl",
+        None,
+        [
+            ("recipe", code("recipe")),
+            ("nodes", field("nodes")),
+            ("what changed", field("lever")),
+            ("CPU s, this build", value("after")),
+            ("CPU s, the build before", value("before")),
+            ("this / before", ratio("after", "before")),
+            ("outputs", field("outputs")),
+        ],
+    ),
     "main_job": (
         "main_job.jsonl",
         None,

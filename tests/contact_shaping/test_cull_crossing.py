@@ -9,7 +9,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from nodegraph.values import Mesh
-from nodes.contact_shaping.cull_crossing import crossed_elements, cull_crossing
+from nodes.contact_shaping.cull_crossing import crossed_elements, cull_crossing, wall_depths
 from nodes.values import Aggregate, ElementLibrary, Placement
 
 
@@ -58,3 +58,12 @@ def test_the_element_in_more_deep_pairs_goes_first():
     pairs = np.array([[0, 1], [1, 2]])
     gone = crossed_elements(pairs, np.array([0.3, 0.2]), 0.01, 3)
     assert gone.tolist() == [False, True, False]
+
+
+def test_a_vertex_in_the_middle_of_a_wall_is_half_its_thickness_deep():
+    """The deepest a point can be inside a closed mesh (the middle of its thinnest side) is looked up: the lookup
+    stops at a bound, and a bound of half the side lost the middle."""
+    wall = trimesh.creation.box([10.0, 10.0, 1.0]).apply_translation([0.0, 0.0, -1.5])  # z from −2 to −1
+    plate = trimesh.creation.box([3.0, 2.0, 0.5]).apply_translation([0.0, 0.0, -1.25])  # its underside at z = −1.5
+    depth = wall_depths([Mesh.from_trimesh(plate, name="plate")], [Mesh.from_trimesh(wall, name="wall")])
+    assert np.allclose(depth, [0.5], atol=1e-6)
