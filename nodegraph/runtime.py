@@ -36,25 +36,15 @@ What each earns, measured, and what was removed: docs/performance.md, "One polic
 
 from __future__ import annotations
 
-import os
-
 from . import numba_cache
-
-# numba's OpenMP workers sleep between parallel loops rather than spin: the solver launches thousands of short loops a
-# frame with Python between them, and on the shared 2 cores a spinning worker takes a core from that Python and from
-# other processes (less CPU always, the same bits; less wall under load, a little more on an idle machine:
-# docs/performance.md, "One policy for parallel work")
-OMP_WAIT_POLICY = "PASSIVE"
 
 
 def configure() -> None:
     """Point numba at the project's kernel cache and its per-module locator (``numba_cache.configure``), in
     ``os.environ`` too: the processes this one starts (the compile-ahead worker, Dask workers) and numba's own
     re-reading of its ``NUMBA_*`` variables at each compile see the same. A directory or locators the user set are
-    kept; calling it again follows a ``NUMBA_CACHE_DIR`` changed since. OpenMP's threads wait passively
-    (``OMP_WAIT_POLICY``, read when OpenMP starts, at the first parallel kernel), unless the user chose."""
+    kept; calling it again follows a ``NUMBA_CACHE_DIR`` changed since."""
     numba_cache.configure()
-    os.environ.setdefault("OMP_WAIT_POLICY", OMP_WAIT_POLICY)
 
 
 __all__ = ["configure"]

@@ -75,18 +75,6 @@ def test_fresh_process_uses_the_project_directory_unless_the_user_sets_one(tmp_p
     assert out.split() == [str(tmp_path / "mine")] * 2
 
 
-def test_openmp_threads_wait_passively_unless_the_user_chose():
-    """A fresh process's OpenMP threads sleep between parallel loops (``runtime.OMP_WAIT_POLICY``): spinning, they
-    took a core from the solver's Python on 2 cores. A policy the user set is kept."""
-    probe = "import os; from nodegraph import runtime; runtime.configure(); print(os.environ.get('OMP_WAIT_POLICY'))"
-    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, check=True).stdout
-    assert out.split() == ["PASSIVE"]
-    env["OMP_WAIT_POLICY"] = "ACTIVE"
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, check=True).stdout
-    assert out.split() == ["ACTIVE"]
-
-
 def _bare_env(tmp_path) -> dict:
     """This environment without numba's cache settings (conftest configured them), the user's cache in tmp_path."""
     env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "NUMBA_CACHE_LOCATOR_CLASSES")}
