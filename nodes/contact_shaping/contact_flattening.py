@@ -77,49 +77,25 @@ class ShapeFields(NamedTuple):
     dims: np.ndarray  # (s, 3) int64, each grid's own size
 
 
-# each shape's φ by its shell's bytes, the fields made last kept: a run's contact nodes each gather every aggregate
-# they touch (the main job's rice_contact and egg_contact: both the grains' and the eggs' shapes), so the second
-# finds the first's fields (``shape_fields``)
-_FIELDS: dict[bytes, tuple[np.ndarray, np.ndarray, float]] = {}
-FIELDS_KEPT = 256  # ≈ 0.1–0.5 MB each
-
-
 def shape_fields(shells: list[tuple[np.ndarray, np.ndarray]], cells: int = 32) -> ShapeFields:
     """φ of each closed shell (vertices, faces) in its local frame, ``cells`` across its longest side plus a
     3-cell border: the pitch is a grain length / 32 ≈ 0.2 mm for rice (``collider.signed_distance_grid``)."""
-    grids = [_shape_field(vertices, faces, cells) for vertices, faces in shells]
+    import trimesh
+
+    from ..simulation.collider import signed_distance_grid
+
+    grids = []
+    for vertices, faces in shells:
+        body = trimesh.Trimesh(vertices, faces, process=False)
+        lo, hi = body.bounds
+        pitch = float((hi - lo).max()) / cells
+        grids.append(signed_distance_grid([body], lo - 3 * pitch, hi + 3 * pitch, pitch))
     dims = np.array([g[0].shape for g in grids], np.int64)
     phi = np.full((len(grids), *dims.max(axis=0)), np.inf)
     for s, (grid, _, _) in enumerate(grids):
         phi[s, : grid.shape[0], : grid.shape[1], : grid.shape[2]] = grid
     origin = np.array([g[1] for g in grids], np.float64)
     return ShapeFields(phi, origin, np.array([g[2] for g in grids], np.float64), dims)
-
-
-def _shape_field(vertices: np.ndarray, faces: np.ndarray, cells: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """One shell's (φ, origin, pitch), made once per process for the same bytes (``_FIELDS``); read only."""
-    import hashlib
-
-    import trimesh
-
-    from ..simulation.collider import signed_distance_grid
-
-    vertices, faces = np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64)
-    digest = hashlib.sha256(b"%d %d %d|" % (cells, len(vertices), len(faces)))
-    digest.update(vertices)
-    digest.update(faces)
-    key = digest.digest()
-    field = _FIELDS.get(key)
-    if field is None:
-        body = trimesh.Trimesh(vertices, faces, process=False)
-        lo, hi = body.bounds
-        pitch = float((hi - lo).max()) / cells
-        field = signed_distance_grid([body], lo - 3 * pitch, hi + 3 * pitch, pitch)
-        field[0].flags.writeable = False
-        while len(_FIELDS) >= FIELDS_KEPT:
-            _FIELDS.pop(next(iter(_FIELDS)))
-        _FIELDS[key] = field
-    return field
 
 
 @njit(cache=True, inline="always")

@@ -129,19 +129,3 @@ def test_deterministic_cached_and_cut_keeps_the_dents():
     assert len(kept.placement) == 2
     for i in range(2):
         assert np.array_equal(kept.element_mesh(i).vertices, a.element_mesh(i).vertices)
-
-
-def test_a_shape_field_is_made_once_per_process(monkeypatch):
-    """The main job's two contact nodes gather the same shapes: the second reads the first's fields, the same bits."""
-    import importlib
-
-    collider = importlib.import_module("nodes.simulation.collider")
-    flattening = importlib.import_module("nodes.contact_shaping.contact_flattening")
-    made = []
-    make = collider.signed_distance_grid
-    monkeypatch.setattr(collider, "signed_distance_grid", lambda *a, **k: made.append(1) or make(*a, **k))
-    box = trimesh.creation.box([1.7, 1.1, 0.35])  # a size no other test uses: not in the process's fields yet
-    shells = [(np.asarray(box.vertices), np.asarray(box.faces, np.int64))]
-    first, again = flattening.shape_fields(shells), flattening.shape_fields(shells * 2)
-    assert len(made) == 1
-    assert np.array_equal(again.phi[1], first.phi[0]) and np.array_equal(again.origin[1], first.origin[0])
