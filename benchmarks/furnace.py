@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,8 +23,17 @@ from nodegraph import runtime
 runtime.configure()
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tools"))
 RADIUS, SIZE, FOV, DISTANCE = 1.5, 64, 20.0, 20.0  # mm, px, degrees, mm: the grain fills a third of the frame
+
+
+def _side_by_side():
+    """``tools/blender_side_by_side.py``, loaded from its file: sys.path is left as it is."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("blender_side_by_side", ROOT / "tools" / "blender_side_by_side.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def mitsuba(skin: dict, medium: dict | None, spp: int) -> float:
@@ -53,7 +61,7 @@ def mitsuba(skin: dict, medium: dict | None, spp: int) -> float:
 
 
 def cycles(roughness: float, ior: float, sigma_t: float, distribution: str, spp: int) -> float:
-    import blender_side_by_side as side
+    side = _side_by_side()
 
     command = [str(side.blender_python()), str(ROOT / "tools" / "cycles_furnace.py")]
     out = subprocess.run(

@@ -244,7 +244,8 @@ class _Validator:
         self.name = name
         recipe_file = Path(source.file)
         self.base_dir = recipe_file.resolve().parent if recipe_file.is_file() else None
-        self.file_name = recipe_file_name(recipe_file, str(raw.get("name") or name or recipe_file.stem))
+        named = raw.get("name") if isinstance(raw, dict) else None  # a recipe that is not a mapping is refused later
+        self.file_name = recipe_file_name(recipe_file, str(named or name or recipe_file.stem))
         self.issues: list[Issue] = []
         self.warnings: list[Issue] = []  # what a run's nodes will warn of, the recipe alone deciding (``warns_of``)
         self.override_at: dict[tuple, Location] = {}

@@ -374,6 +374,7 @@ def test_the_rice_filling_is_rice_and_the_glaze_has_no_satin_sheen(scene_inputs)
     assert glaze.metallic == 0.0 and glaze.specular == 0.0 and glaze.clearcoat == 1.0
     from nodes.export.mitsuba_scene import material_bsdf
 
-    assert material_bsdf(glaze, False)["specular"] == 0.0 and "eta" not in material_bsdf(glaze, False)
+    glazed = material_bsdf(glaze, False)  # one clear coat over a diffuse body, no second (satin) lobe
+    assert glazed["type"] in ("plastic", "roughplastic") and "specular" not in glazed and "sheen" not in glazed
     with pytest.raises(ValueError, match="filling"):  # eggs alone, no cooked rice wired
         shade.call(aggregates=scene_inputs["aggregates"][1:], scenery=[bowl], filling=[bowl])
