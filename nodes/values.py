@@ -331,13 +331,15 @@ class Vessel:
 
     def outside(self, points: np.ndarray, margin: float = 0.0) -> np.ndarray:
         """Which points lie outside the vessel: below the rim, outside the cavity's half-ellipsoid (through the
-        wall or under the bowl); above it, further from the axis than the rim. ``margin`` (mm) widens the
-        cavity by that much on every side."""
+        wall or under the bowl); above it, further from the axis than the rim, or higher over the heap's top (the
+        fill plane plus the mound) than the rim's radius: no heap stands steeper than 45° over its whole rim, so
+        such an element was thrown. ``margin`` (mm) widens the cavity by that much on every side."""
         p = np.asarray(points, float) - np.asarray(self.offset, float)
         r = np.hypot(p[:, 0], p[:, 1])
         a, b = self.radius + margin, self.depth + margin
         below = (r / a) ** 2 + (np.minimum(p[:, 2], 0.0) / b) ** 2 > 1.0
-        return np.where(p[:, 2] < 0.0, below, r > a)
+        top = max(self.fill_z - self.offset[2] + self.mound, 0.0)
+        return np.where(p[:, 2] < 0.0, below, (r > a) | (p[:, 2] > top + a))
 
 
 @dataclass(frozen=True, eq=False)

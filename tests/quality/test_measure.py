@@ -69,10 +69,14 @@ def test_elements_outside_their_vessel_are_counted_and_warned_about():
     with pytest.warns(UserWarning, match="2 of 5 elements ended outside their vessel"):
         table = measure.call(aggregates=[inside, above], vessels=[vessel])
     assert column(table, "outside_vessel") == 2
-    assert vessel.outside(np.array([[9.9, 0.0, 0.5], [0.0, 0.0, -7.9], [7.5, 0.0, -6.0]])).tolist() == [
+    thrown = vessel.fill_z + vessel.mound + vessel.radius + 0.5  # over the heap's top by more than the rim's radius
+    points = [[9.9, 0.0, 0.5], [0.0, 0.0, -7.9], [7.5, 0.0, -6.0], [0.0, 0.0, thrown], [0.0, 0.0, thrown - 1.0]]
+    assert vessel.outside(np.array(points)).tolist() == [
         False,
         False,
         True,  # through the wall: (7.5/10)² + (6/8)² > 1
+        True,  # thrown: over the axis, higher over the heap's top than the rim's radius
+        False,  # a heap's steepest top
     ]
 
 
