@@ -406,14 +406,14 @@ def nori_material() -> Material:
 CERAMIC = "ceramic"
 
 
-def ceramic_material(color) -> Material:
-    """The bowl (scenery): a glazed ceramic — a coloured body under a glossy glaze. A glaze is a glass, a
-    dielectric (metallic 0): the one surface that reflects is the glaze's smooth top (the clear coat, F0 0.04 at IOR
-    1.5, roughness 0.04); the colour lies in and under the glass, seen only diffusely (roughness 1, no specular
-    of its own: the glass over the body is index-matched, and a glaze has no second, satin surface). With a
-    specular lobe of its own at roughness 0.35 the dark glaze reflected the studio as a broad grey sheen, and the
-    bowl read grey, its rim as brushed metal (docs/look.md, "The bowl's glaze")."""
-    return coated(CERAMIC, tuple(float(c) for c in color), 0.04)
+def ceramic_material(color, roughness: float = 0.04) -> Material:
+    """The bowl (scenery): a glazed ceramic — a coloured body under a glaze. A glaze is a glass, a dielectric
+    (metallic 0): the one surface that reflects is the glaze's top (the clear coat, F0 0.04 at IOR 1.5; roughness
+    0.04 glossy, ≈ 0.3 a satin glaze: ``shade.scenery_roughness``); the colour lies in and under the glass, seen
+    only diffusely (roughness 1, no specular of its own: the glass over the body is index-matched). With a specular
+    lobe of its own at roughness 0.35 the dark glaze reflected the studio as a broad grey sheen, and the bowl read
+    grey, its rim as brushed metal (docs/look.md, "The bowl's glaze")."""
+    return coated(CERAMIC, tuple(float(c) for c in color), roughness)
 
 
 def coated(name: str, color, coat_roughness: float) -> Material:

@@ -37,6 +37,7 @@ class ShadeSettings:
     syrup_run_length: float
     seed: int  # draws the syrup's runs (``materials.syrup_runs``) and each egg's tint (``egg_tints``)
     scenery_color: tuple[float, float, float]
+    scenery_roughness: float
     table: CdrfTable
     egg_tints: int = mat.EGG_TINTS  # membrane tints the eggs are drawn from (``materials.ikura_tints``)
     key_gain: float = 1.0  # the preview's key softbox over its default (``ShadedScene.key_gain``)
@@ -239,7 +240,7 @@ def shade_scene(
     from ..shapes.chopsticks import NAME as CHOPSTICKS
 
     looks = {mat.NORI: mat.nori_material(), CHOPSTICKS: mat.lacquer_material()}
-    ceramic = mat.ceramic_material(settings.scenery_color)
+    ceramic = mat.ceramic_material(settings.scenery_color, settings.scenery_roughness)
     pieces += [
         _Piece(Mesh(m.vertices, m.faces, name=m.name or f"scenery_{k}"), looks.get(m.name, ceramic))
         for k, m in enumerate(scenery)

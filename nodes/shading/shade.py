@@ -138,6 +138,13 @@ def _check(params):
             range=(1, 64),
         ),
         "scenery_color": Param(RGB, (0.05, 0.07, 0.16), "glaze colour of scenery meshes (the bowl)", range=(0.0, 1.0)),
+        "scenery_roughness": Param(
+            float,
+            0.04,
+            "roughness of the scenery's glaze: 0.04 a glossy glaze that mirrors the studio's softboxes; ≈ 0.3 a satin "
+            "(matte-finished) glaze, whose reflections spread into a soft sheen",
+            range=(0.0, 1.0),
+        ),
         "table_size": Param(
             tuple[int, int],
             (128, 64),
@@ -168,6 +175,7 @@ def shade(
     syrup_run_length,
     egg_tints,
     scenery_color,
+    scenery_roughness,
     table_size,
 ):
     """Curvature from libigl, CDRF eq. 7–9 with the cooked material's σ₀(water), lights, and a material per
@@ -194,6 +202,7 @@ def shade(
         syrup_run_length=syrup_run_length,
         seed=ctx.seed,
         scenery_color=tuple(scenery_color),
+        scenery_roughness=float(scenery_roughness),
         table=CdrfTable.build(*table_size),
         egg_tints=egg_tints,
         key_gain=float(light_intensities[0]) / KEY_INTENSITY,

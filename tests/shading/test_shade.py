@@ -378,3 +378,22 @@ def test_the_rice_filling_is_rice_and_the_glaze_has_no_satin_sheen(scene_inputs)
     assert glazed["type"] in ("plastic", "roughplastic") and "specular" not in glazed and "sheen" not in glazed
     with pytest.raises(ValueError, match="filling"):  # eggs alone, no cooked rice wired
         shade.call(aggregates=scene_inputs["aggregates"][1:], scenery=[bowl], filling=[bowl])
+
+
+def test_a_satin_glaze_spreads_the_studios_reflection(scene_inputs):
+    """``scenery_roughness`` reaches the glaze: the preview's coat and the exported material take it, so a satin plate
+    shows a soft sheen where a glossy one mirrors the softboxes."""
+    from nodes.export.mitsuba_scene import material_bsdf
+    from nodes.material.cooked import cooked_material
+    from nodes.shading import shade
+
+    cooked = cooked_material()
+    glazes = [
+        next(
+            m for m in shade.call(**scene_inputs, material=cooked, scenery_roughness=r).materials if m.name == "ceramic"
+        )
+        for r in (0.04, 0.3)
+    ]
+    assert [g.clearcoat_roughness for g in glazes] == [0.04, 0.3]
+    glossy, satin = (material_bsdf(g, False)["alpha"] for g in glazes)
+    assert satin > 10 * glossy
