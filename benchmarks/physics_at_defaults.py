@@ -562,47 +562,28 @@ def main(argv=None) -> None:
     ap.add_argument("--creep", action="store_true", help="how far the dropped ball's grains move at rest")
     ap.add_argument("--passes-overlap", action="store_true", help="the grains' overlap after each step of a pass")
     args = ap.parse_args(argv)
-    if args.passes_overlap:
-        rows = [pass_overlap(s) for s in (10, 40)]
-        print(*rows, sep="\n")
-        PASS_OVERLAP.write_text(
-            "".join(record(r, "python benchmarks/physics_at_defaults.py --passes-overlap") + "\n" for r in rows)
-        )
-        return
-    if args.creep:
-        rows = creep()
-        CREEP.write_text("".join(record(r, "python benchmarks/physics_at_defaults.py --creep") + "\n" for r in rows))
-        return
-    if args.mechanism:
-        rows = collapses()
-        MECHANISM.write_text(
-            "".join(record(r, "python benchmarks/physics_at_defaults.py --mechanism") + "\n" for r in rows)
-        )
-        return
-    if args.levers:
-        rows = levers()
-        LEVERS.write_text("".join(record(r, "python benchmarks/physics_at_defaults.py --levers") + "\n" for r in rows))
-        return
     if args.replot:
         plot_convergence([json.loads(line) for line in CONVERGENCE.read_text().splitlines()])
         return
-    if args.passes:
-        rows = passes() + landing()
-        PASSES_RECORD.write_text(
-            "".join(record(r, "python benchmarks/physics_at_defaults.py --passes") + "\n" for r in rows)
-        )
-        return
-    if args.funnel:
-        rows = funnel_curve()
-        FUNNEL.write_text("".join(record(r, "python benchmarks/physics_at_defaults.py --funnel") + "\n" for r in rows))
-        return
-    if args.convergence:
-        rows = convergence()
-        CONVERGENCE.write_text(
-            "".join(record(r, "python benchmarks/physics_at_defaults.py --convergence") + "\n" for r in rows)
-        )
-        plot_convergence(rows)
-        return
+    # each study: its option, the rows it measures and the data file they replace
+    studies = {
+        "passes_overlap": (lambda: [pass_overlap(s) for s in (10, 40)], PASS_OVERLAP),
+        "creep": (creep, CREEP),
+        "mechanism": (collapses, MECHANISM),
+        "levers": (levers, LEVERS),
+        "passes": (lambda: passes() + landing(), PASSES_RECORD),
+        "funnel": (funnel_curve, FUNNEL),
+        "convergence": (convergence, CONVERGENCE),
+    }
+    for option, (measure, path) in studies.items():
+        if getattr(args, option):
+            rows = measure()
+            print(*rows, sep="\n")
+            command = f"python benchmarks/physics_at_defaults.py --{option.replace('_', '-')}"
+            path.write_text("".join(record(r, command) + "\n" for r in rows))
+            if option == "convergence":
+                plot_convergence(rows)
+            return
     from nodes.simulation.settings import PARAMS
 
     default = PARAMS["substeps"].default
