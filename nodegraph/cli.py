@@ -771,31 +771,52 @@ def recipe_steps(name: str, folders=(Path("."), Path("graphs"))) -> dict[str, li
 
 
 def _cmd_describe(args, registry) -> int:
-    spec = registry.get(args.type)
+    name, _, setting = args.type.partition(".")  # README's `step.setting` names a step's parameter
+    spec = registry.get(name)
     if spec is not None:
-        print(describe_spec(spec))
+        print(_setting_line(spec, setting) + describe_spec(spec))
         return 0
     import difflib
 
-    steps = {t: files for t, files in recipe_steps(args.type).items() if registry.get(t) is not None}
-    prefixed = [n for n in registry.names() if n.startswith(args.type)]
+    steps = {t: files for t, files in recipe_steps(name).items() if registry.get(t) is not None}
+    prefixed = [n for n in registry.names() if n.startswith(name)]
     if len(steps) == 1:
         ((type_name, files),) = steps.items()
         where = files[0] + (f" and {len(files) - 1} more recipes" if len(files) > 1 else "")
-        print(f"'{args.type}' is a step of {where}: node type {type_name}\n")
+        print(f"'{name}' is a step of {where}: node type {type_name}\n")
     elif not steps and len(prefixed) == 1:
         type_name = prefixed[0]
-        print(f"'{args.type}' begins node type {type_name}\n")
+        print(f"'{name}' begins node type {type_name}\n")
     else:
-        near = ([*steps] or prefixed)[:5] or difflib.get_close_matches(args.type, registry.names(), n=3)
+        near = ([*steps] or prefixed)[:5] or difflib.get_close_matches(name, registry.names(), n=3)
         hint = (
             f"; did you mean {' or '.join(repr(n) for n in near)}?"
             if near
             else "; a step of a recipe is found by its name in the recipes here and in graphs/"
         )
-        raise NodegraphError(f"unknown node type '{args.type}'{hint} (see `nodegraph nodes`)")
-    print(describe_spec(registry.get(type_name)))
+        raise NodegraphError(f"unknown node type '{name}'{hint} (see `nodegraph nodes`)")
+    spec = registry.get(type_name)
+    print(_setting_line(spec, setting) + describe_spec(spec))
     return 0
+
+
+def _setting_line(spec, setting: str) -> str:
+    """The line that answers ``describe step.setting``: the setting's type, default, range and doc (empty without
+    one); an unknown setting is refused with the type's own."""
+    if not setting:
+        return ""
+    param = spec.params.get(setting)
+    if param is None:
+        import difflib
+
+        near = difflib.get_close_matches(setting, list(spec.params), n=3)
+        hint = f"; did you mean {' or '.join(repr(n) for n in near)}?" if near else ""
+        raise NodegraphError(
+            f"{spec.type_name} has no setting '{setting}'{hint} (its settings: {', '.join(spec.params)})"
+        )
+    d = param.describe()
+    extra = "  ".join(x for x in (f"default {d['default']}", d["range"] and f"range {d['range']}", d["units"]) if x)
+    return f"{setting}: {d['type']}  {extra}\n  {d['doc']}\n\n"
 
 
 def markdown_reference(registry) -> str:

@@ -121,6 +121,8 @@ def test_describe_takes_a_step_name_or_the_start_of_a_type(recipe, capsys):
     assert out.startswith(f"'merge' is a step of {recipe.name}: node type toy_merge") and "toy_merge  (" in out
     assert cli("describe", "toy_sh") == 0
     assert "'toy_sh' begins node type toy_shift" in capsys.readouterr().out
+    assert cli("describe", "merge.nope") == 2  # README's step.setting form: a setting the type lacks is refused
+    assert "toy_merge has no setting 'nope'" in capsys.readouterr().err
     assert cli("describe", "toy_p") == 2  # toy_physics, toy_picture, toy_points: named, not guessed
     assert "did you mean 'toy_physics' or 'toy_picture' or 'toy_points'" in capsys.readouterr().err
     assert cli("graph", str(recipe)) == 0
