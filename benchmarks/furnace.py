@@ -16,14 +16,12 @@ import json
 import subprocess
 from pathlib import Path
 
-import numpy as np
-
 from nodegraph import runtime
 
 runtime.configure()
 
 ROOT = Path(__file__).resolve().parents[1]
-RADIUS, SIZE, FOV, DISTANCE = 1.5, 64, 20.0, 20.0  # mm, px, degrees, mm: the grain fills a third of the frame
+SIZE = 64  # px
 
 
 def _side_by_side():
@@ -37,32 +35,16 @@ def _side_by_side():
 
 
 def mitsuba(skin: dict, medium: dict | None, spp: int) -> float:
-    """Mean radiance inside the grain's outline."""
-    import mitsuba as mi
+    """Mean radiance inside the grain's outline (``furnace.white_furnace`` at 64 × 64 pixels)."""
+    from nodes.export.furnace import white_furnace
 
-    view = mi.ScalarTransform4f().look_at(origin=[0, 0, DISTANCE], target=[0, 0, 0], up=[0, 1, 0])
-    scene = {
-        "type": "scene",
-        "integrator": {"type": "volpath", "max_depth": 1024, "rr_depth": 1024},
-        "sensor": {
-            "type": "perspective",
-            "fov": FOV,
-            "to_world": view,
-            "film": {"type": "hdrfilm", "width": SIZE, "height": SIZE, "rfilter": {"type": "box"}},
-            "sampler": {"type": "independent", "sample_count": spp},
-        },
-        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
-        "grain": {"type": "sphere", "radius": RADIUS, "bsdf": skin} | ({"interior": medium} if medium else {}),
-    }
-    image = np.asarray(mi.render(mi.load_dict(scene)), np.float64)
-    y, x = np.mgrid[:SIZE, :SIZE] - (SIZE - 1) / 2
-    outline = RADIUS / (np.tan(np.radians(FOV / 2)) * DISTANCE) * SIZE / 2
-    return round(float(image[np.hypot(x, y) < 0.95 * outline].mean()), 4)
+    return round(white_furnace(skin, medium, spp, SIZE), 4)
 
 
 def cycles(roughness: float, ior: float, sigma_t: float, distribution: str, spp: int) -> float:
-    side = _side_by_side()
+    from nodes.export.furnace import RADIUS
 
+    side = _side_by_side()
     command = [str(side.blender_python()), str(ROOT / "tools" / "cycles_furnace.py")]
     out = subprocess.run(
         command + [str(v) for v in (RADIUS, roughness, ior, sigma_t, distribution, spp)],
