@@ -3,15 +3,14 @@
 ``--quick``: one SIGINT 1.5 s into ``rice_bowl.yaml --draft`` (CI's smoke run). ``random``: start ``nodegraph run
 RECIPE --no-cache`` in a process group of its own, wait a random 1–20 s (seeded),
 send SIGINT to the group (what Ctrl-C at a terminal does), and time the exit; repeated ``--tries`` times.
-``steps``: for each of ``--steps`` (``all``: every node of the recipe) and each of SIGINT and SIGTERM, remove that
-step and every step after it from the cache ``--cache-dir`` (warmed by a first, complete run), run, and signal
-``--delay`` s after the step has started (read from the run's listing of its running steps, ``interrupt.RUNNING``,
-written as the step starts); ``--alternate``: one signal a step, SIGINT and SIGTERM in turn; ``--assert-s``: exit
-with an error where any run took longer to exit or left a process running. A run not gone
-``HANG_S`` after the signal is a hang:
-every process of the group prints its threads' stacks (``kill -USR1``: faulthandler, registered by the command)
-before it is killed. One JSON line per try on stdout: the step(s) running (from the run's 'interrupted' line), the
-seconds to exit, the exit status, the processes left.
+``steps``: for each of ``--steps`` (``all``: every node of the recipe; ``types``: the first node of each type) and
+each of SIGINT and SIGTERM, remove that step and every step after it from the cache ``--cache-dir`` (warmed by a
+first, complete run), run, and signal ``--delay`` s after the step has started (read from the run's listing of its
+running steps, ``interrupt.RUNNING``, written as the step starts); ``--alternate``: one signal a step, SIGINT and
+SIGTERM in turn; ``--assert-s``: exit with an error where any run took longer to exit or left a process running. A
+run not gone ``HANG_S`` after the signal is a hang: every process of the group prints its threads' stacks (``kill
+-USR1``: faulthandler, registered by the command) before it is killed. One JSON line per try on stdout: the step(s)
+running (from the run's 'interrupted' line), the seconds to exit, the exit status, the processes left.
 """
 
 from __future__ import annotations
@@ -141,13 +140,20 @@ def restore(removed: dict[Path, bytes]) -> None:
             entry.write_bytes(data)
 
 
-def every_step(recipe: str, draft: bool) -> list[str]:
-    """The recipe's nodes in the order a run computes them."""
+def every_step(recipe: str, draft: bool, one_per_type: bool = False) -> list[str]:
+    """The recipe's nodes in the order a run computes them; ``one_per_type``: the first of each node type only (two
+    steps of one type run the same code, so they stop alike)."""
     from nodegraph.recipe import load_recipe
     from nodegraph.registry import default_registry
 
     loaded = load_recipe(Path(recipe), default_registry(), draft=draft)
-    return list(loaded.graph.topological_order())
+    order = list(loaded.graph.topological_order())
+    if not one_per_type:
+        return order
+    first = {}
+    for step in order:
+        first.setdefault(loaded.nodes[step].spec.type_name, step)
+    return [step for step in order if step in first.values()]
 
 
 def main() -> None:
@@ -157,7 +163,11 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="one SIGINT 1.5 s into a draft run: seconds, for CI")
     parser.add_argument("--tries", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--steps", default="", help="steps mode: comma-separated step (node) names, or all")
+    parser.add_argument(
+        "--steps",
+        default="",
+        help="steps mode: comma-separated step (node) names, all, or types (the first step of each node type)",
+    )
     parser.add_argument("--delay", type=float, default=1.0, help="steps mode: seconds after the step started")
     parser.add_argument("--cache-dir", type=Path, default=None, help="steps mode: a cache the recipe's run filled")
     parser.add_argument("--set", dest="overrides", action="append", default=[])
@@ -187,7 +197,8 @@ def measure(args, out: str) -> None:
                 sys.exit("the run did not stop cleanly")
     else:
         slow = []
-        steps = every_step(args.recipe, args.draft) if args.steps == "all" else args.steps.split(",")
+        named = args.steps.split(",")
+        steps = every_step(args.recipe, args.draft, args.steps == "types") if args.steps in ("all", "types") else named
         for k, step in enumerate(steps):
             both = (signal.SIGINT, signal.SIGTERM)
             for signum in both[k % 2 :][:1] if args.alternate else both:
