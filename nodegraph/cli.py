@@ -1121,6 +1121,7 @@ def main(argv: list[str] | None = None) -> int:
 
             faulthandler.register(signal.SIGUSR1, all_threads=True)
     args = build_parser().parse_args(argv)
+    interrupt.said_command(sys.argv[1:] if argv is None else list(argv))  # what a stopped run says to type again
     runtime.configure()  # numba's kernel cache, before any node imports a kernel module (and before the fork)
     if argv is None and args.command in ("run", "sweep", "watch"):
         # in a child that a signal stops within interrupt.GRACE seconds, whatever its node is doing
