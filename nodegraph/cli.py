@@ -380,6 +380,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             cache.keep_run(
                 f"{Path(args.recipe).resolve()}{kind}{' --set' if args.overrides else ''}", result.keys.values()
             )
+        reporter.print_summary()  # before the cache's trim: what it removed is said below the table
     except KeyboardInterrupt:
         stopped = True
         reporter.print_summary()
@@ -391,7 +392,6 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     finally:
         if not stopped:  # a stop ends at once (``interrupt.GRACE``): the next run trims the cache
             _trim(cache, started, reporter)
-    reporter.print_summary()
     if not args.quiet:
         done = "up to date:" if result.current else "wrote"  # current: the last run's files, nothing written
         for path in result.files:
@@ -400,7 +400,14 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
         if args.out_dir is None and session is None and (line := _prune_line(args.recipe, recipe.name)):
             print(line)
+        print(_outputs_line(out_dir, chosen=args.out_dir is not None))
     return 0
+
+
+def _outputs_line(out_dir: Path, chosen: bool) -> str:
+    """A run's last line: the folder its outputs are in, as a whole path (the recipe's project's ``outputs/``,
+    wherever the command ran)."""
+    return f"the outputs are in {out_dir.resolve()}{os.sep}" + ("" if chosen else " (--out-dir chooses another folder)")
 
 
 def _remove_empty(folders: list[Path]) -> None:
@@ -1067,25 +1074,42 @@ def _cmd_cache(args, registry) -> int:
 
 def _trim(cache: Cache | None, since: float | None, reporter: Reporter | None) -> None:
     """Evict least recently used cache entries above the cache's size limit, sparing those used since
-    ``since`` (the run that just ended), and say so when it removed something or could not get under."""
+    ``since`` (the run that just ended), and say so in one line when it removed something or could not get under."""
     if cache is None or not cache.directory.exists():
         return
     done = cache.evict(spare_since=since)
     if reporter is None and done.entries:
-        print(
-            f"removed {done.entries} least recently used entries ({format_size(done.freed)}); "
-            f"the cache now holds {format_size(done.left)} of its {format_size(cache.limit())} limit"
+        print(_eviction_line(done, cache))
+    elif reporter is not None and (done.entries or done.over):
+        reporter.warn("cache: " + _eviction_line(done, cache))
+
+
+EVICTED_NAMED = 4  # steps named in the eviction line, the most evicted first; the rest are counted
+
+
+def _eviction_line(done, cache: Cache) -> str:
+    """What an eviction removed (how many results of which steps, and whose latest run lost some), what the cache
+    holds of its limit and where, and how to raise the limit: a full cache no longer forgets work unsaid."""
+    from collections import Counter
+
+    limit, folder = format_size(cache.limit()), cache.directory.resolve()
+    if done.entries:
+        counts = Counter(done.nodes).most_common()
+        steps = ", ".join(f"{node} ×{n}" if n > 1 else node for node, n in counts[:EVICTED_NAMED])
+        if len(counts) > EVICTED_NAMED:
+            steps += f" and {len(counts) - EVICTED_NAMED} more steps"
+        lost = "".join(f"; the next nodegraph run {run} computes its own again" for run in done.runs)
+        head = (
+            f"removed {done.entries} least recently used entries ({format_size(done.freed)}: {steps}){lost}; the "
+            f"cache now holds {format_size(done.left)} of its {limit} limit, in {folder}"
         )
-    elif reporter is not None and done.entries:
-        reporter.info(
-            f"cache: removed {done.entries} least recently used entries ({format_size(done.freed)}); "
-            f"the cache now holds {format_size(done.left)} of its {format_size(cache.limit())} limit"
-        )
-    if done.over and reporter is not None:
-        reporter.warn(
-            f"cache: this run's results alone take {format_size(done.left)}, above the limit "
-            f"{format_size(cache.limit())}; raise it with: nodegraph cache limit SIZE"
-        )
+    else:
+        head = f"this run's results alone take {format_size(done.left)}, above the {limit} limit of {folder}"
+    double = 2 * cache.limit()
+    more = f"{-(-double // 2**30)}GiB" if double >= 2**30 else f"{-(-double // 2**20)}MiB"  # rounded up
+    set_by = os.environ.get(LIMIT_ENV_VAR)
+    raise_it = f"${LIMIT_ENV_VAR} (now {set_by})" if set_by else f"nodegraph cache limit {more} (or ${LIMIT_ENV_VAR})"
+    return f"{head}; to keep more, raise it: {raise_it}"
 
 
 def _interrupt(signum, frame):
