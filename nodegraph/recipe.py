@@ -389,8 +389,8 @@ class _Validator:
 
     def _nearest_having(self, node_id: str, param: str, nodes: dict) -> str | None:
         """The ``node.param`` an unknown ``node_id.param`` most likely meant: among the nodes whose type declares
-        ``param``, the one whose name is closest to ``node_id`` (``egg.diameter``: ``egg_base.diameter``, not
-        ``egg_sim``, which has no diameter); None where no node has it."""
+        ``param``, the one whose name is closest to ``node_id`` (``shift.dx``: ``shifted.dx``, not ``shifts``, which
+        has no ``dx``); None where no node has it."""
         having = self._having(param, nodes)
         if not having:
             return None
