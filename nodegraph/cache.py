@@ -150,13 +150,15 @@ class CacheInfo:
 
 @dataclass(frozen=True)
 class Eviction:
-    """What ``evict`` did: entries removed, bytes freed, bytes left, and whether what was spared alone is
-    above the limit."""
+    """What ``evict`` did: entries removed, bytes freed, bytes left, whether what was spared alone is above the
+    limit, the node of each entry removed, and the runs (``keep_run``) whose latest entries it removed."""
 
     entries: int
     freed: int
     left: int
     over: bool
+    nodes: tuple[str, ...] = ()
+    runs: tuple[str, ...] = ()
 
 
 class Cache:
@@ -380,10 +382,15 @@ class Cache:
 
     def latest_runs(self) -> set[str]:
         """The keys the latest run of each recipe used (``keep_run``)."""
-        kept: set[str] = set()
+        return set().union(*self.latest_run_keys().values())
+
+    def latest_run_keys(self) -> dict[str, set[str]]:
+        """{run: the keys it used} of the latest run of each recipe (``keep_run``)."""
+        kept: dict[str, set[str]] = {}
         for path in (self.directory / "runs").glob("*.json"):
             try:
-                kept.update(json.loads(path.read_bytes())["keys"])
+                record = json.loads(path.read_bytes())
+                kept[str(record["run"])] = set(record["keys"])
             except (OSError, ValueError, KeyError, TypeError):
                 continue  # being written or damaged: its entries are plain LRU
         return kept
@@ -406,7 +413,7 @@ class Cache:
                 blobs = {item["blob"] for item in manifest["outputs"].values()}
             except (OSError, ValueError, KeyError, TypeError, AttributeError):
                 continue  # being written or corrupt: not ours to judge here
-            entries.append((stat.st_mtime, path, stat.st_size, blobs))
+            entries.append((stat.st_mtime, path, stat.st_size, blobs, str(manifest.get("node", "?"))))
         blob_sizes = {}
         for blob in (self.directory / "blobs").glob("*/*.npz"):
             try:
@@ -414,7 +421,7 @@ class Cache:
             except OSError:
                 continue
         users: dict[str, int] = {}
-        for _, _, _, blobs in entries:
+        for _, _, _, blobs, _ in entries:
             for digest in blobs:
                 users[digest] = users.get(digest, 0) + 1
 
@@ -424,9 +431,11 @@ class Cache:
             except OSError:
                 return 0
 
-        latest = self.latest_runs()
-        freed = removed = 0
-        for mtime, path, size, blobs in sorted(entries, key=lambda e: (e[1].stem in latest, e[0])):
+        runs = self.latest_run_keys()
+        latest = set().union(*runs.values())
+        freed = 0
+        nodes, keys = [], set()
+        for mtime, path, size, blobs, node in sorted(entries, key=lambda e: (e[1].stem in latest, e[0])):
             if total - freed <= limit:
                 break
             if spare_since is not None and mtime >= spare_since:
@@ -440,8 +449,10 @@ class Cache:
                     self._blob_path(digest).unlink(missing_ok=True)
                     gone += blob_sizes[digest]
             freed += gone
-            removed += 1
-        return Eviction(removed, freed, total - freed, total - freed > limit)
+            nodes.append(node)
+            keys.add(path.stem)
+        lost = tuple(sorted(run for run, used in runs.items() if used & keys))
+        return Eviction(len(nodes), freed, total - freed, total - freed > limit, tuple(nodes), lost)
 
     def info(self) -> CacheInfo:
         entries = list((self.directory / "entries").glob("*/*.json"))

@@ -28,6 +28,7 @@ from .cache import (
     parse_size,
 )
 from .compile_ahead import kernels_due
+from .describe import describe_command
 from .errors import NodeFailure, NodegraphError, RecipeError
 from .executor import resolve_outputs, run_recipe
 from .output_folder import recipe_folder, settings_folder
@@ -259,9 +260,14 @@ def build_parser() -> argparse.ArgumentParser:
     describe = sub.add_parser(
         "describe",
         help="ports and parameters of a node type; a step's name in a recipe here or in graphs/, or the start of a "
-        "type's name, finds its type",
+        "type's name, finds its type; a step's values in its recipe are shown beside the defaults",
+        usage="nodegraph describe [RECIPE.yaml] TYPE_OR_STEP[.SETTING]",
+        description="A node type's ports and parameters. A step's name (egg_base) is looked up in RECIPE.yaml, else "
+        "in the recipes here and in graphs/, and the values its recipe sets (and its draft: block) are shown beside "
+        "the type's defaults.",
     )
-    describe.add_argument("type", metavar="TYPE_OR_STEP")
+    describe.add_argument("first", metavar="RECIPE.yaml", help="the recipe whose step to describe (optional)")
+    describe.add_argument("second", nargs="?", metavar="TYPE_OR_STEP[.SETTING]")
     _common(describe)
 
     docs = sub.add_parser("docs", help="Markdown reference of every node type, generated from the declarations")
@@ -374,6 +380,7 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             cache.keep_run(
                 f"{Path(args.recipe).resolve()}{kind}{' --set' if args.overrides else ''}", result.keys.values()
             )
+        reporter.print_summary()  # before the cache's trim: what it removed is said below the table
     except KeyboardInterrupt:
         stopped = True
         reporter.print_summary()
@@ -385,7 +392,6 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
     finally:
         if not stopped:  # a stop ends at once (``interrupt.GRACE``): the next run trims the cache
             _trim(cache, started, reporter)
-    reporter.print_summary()
     if not args.quiet:
         done = "up to date:" if result.current else "wrote"  # current: the last run's files, nothing written
         for path in result.files:
@@ -394,7 +400,14 @@ def _cmd_run(args, registry, session: WatchSession | None = None) -> int:
             print(f"{done} {result.rrd} (open with: rerun {result.rrd})")
         if args.out_dir is None and session is None and (line := _prune_line(args.recipe, recipe.name)):
             print(line)
+        print(_outputs_line(out_dir, chosen=args.out_dir is not None))
     return 0
+
+
+def _outputs_line(out_dir: Path, chosen: bool) -> str:
+    """A run's last line: the folder its outputs are in, as a whole path (the recipe's project's ``outputs/``,
+    wherever the command ran)."""
+    return f"the outputs are in {out_dir.resolve()}{os.sep}" + ("" if chosen else " (--out-dir chooses another folder)")
 
 
 def _remove_empty(folders: list[Path]) -> None:
@@ -719,104 +732,9 @@ def _cmd_nodes(args, registry) -> int:
     return 0
 
 
-def describe_spec(spec) -> str:
-    """Plain-text description of a node type: header, doc, ports, parameters (readable in a pipe)."""
-    lines = [f"{spec.type_name}  ({spec.module})"]
-    if spec.doc:
-        lines += ["", *spec.doc.splitlines()]
-    lines += ["", f"random: {'yes (seeded per node and variant)' if spec.random else 'no'}"]
-    if spec.effects:
-        lines.append(f"effects: {', '.join(sorted(spec.effects))}")
-    if not spec.store:
-        lines.append("cached: no (cheaper to compute again than to store)")
-    for title, ports in (("inputs", spec.inputs), ("outputs", spec.outputs)):
-        lines += ["", f"{title}:"] + ([] if ports else ["  (none)"])
-        for name, port in ports.items():
-            flags = " (optional)" if getattr(port, "optional", False) else ""
-            lines.append(f"  {name:<16} {port.type_name + flags:<24} {port.doc}")
-            if getattr(port, "columns", ()):
-                lines.append(f"  {'':<16} {'':<24} columns: {', '.join(port.columns)}")
-    lines += ["", "parameters:"] + ([] if spec.params else ["  (none)"])
-    for name, param in spec.params.items():
-        d = param.describe()
-        detail = "  ".join(
-            x
-            for x in (
-                f"default {d['default']}",
-                d["range"] and f"range {d['range']}",
-                d["units"] and f"units {d['units']}",
-            )
-            if x
-        )
-        lines.append(f"  {name:<16} {d['type']:<24} {detail}")
-        if d["doc"]:
-            lines.append(f"  {'':<16} {d['doc']}")
-    return "\n".join(lines)
-
-
-def recipe_steps(name: str, folders=(Path("."), Path("graphs"))) -> dict[str, list[str]]:
-    """{node type: [recipe files]} of the steps called ``name`` in the recipes of ``folders`` (read as plain YAML,
-    nothing validated): ``describe`` takes a step's name as a user reads it in a recipe."""
-    import yaml
-
-    found: dict[str, list[str]] = {}
-    for path in sorted({p for folder in folders for p in folder.glob("*.yaml")}):
-        try:
-            step = yaml.safe_load(path.read_text()).get("nodes", {}).get(name)
-        except (OSError, yaml.YAMLError, AttributeError):
-            continue
-        if isinstance(step, dict) and isinstance(step.get("type"), str):
-            found.setdefault(step["type"], []).append(str(path))
-    return found
-
-
 def _cmd_describe(args, registry) -> int:
-    name, _, setting = args.type.partition(".")  # README's `step.setting` names a step's parameter
-    spec = registry.get(name)
-    if spec is not None:
-        print(_setting_line(spec, setting) + describe_spec(spec))
-        return 0
-    import difflib
-
-    steps = {t: files for t, files in recipe_steps(name).items() if registry.get(t) is not None}
-    prefixed = [n for n in registry.names() if n.startswith(name)]
-    if len(steps) == 1:
-        ((type_name, files),) = steps.items()
-        where = files[0] + (f" and {len(files) - 1} more recipes" if len(files) > 1 else "")
-        print(f"'{name}' is a step of {where}: node type {type_name}\n")
-    elif not steps and len(prefixed) == 1:
-        type_name = prefixed[0]
-        print(f"'{name}' begins node type {type_name}\n")
-    else:
-        near = ([*steps] or prefixed)[:5] or difflib.get_close_matches(name, registry.names(), n=3)
-        hint = (
-            f"; did you mean {' or '.join(repr(n) for n in near)}?"
-            if near
-            else "; a step of a recipe is found by its name in the recipes here and in graphs/"
-        )
-        raise NodegraphError(f"unknown node type '{name}'{hint} (see `nodegraph nodes`)")
-    spec = registry.get(type_name)
-    print(_setting_line(spec, setting) + describe_spec(spec))
+    print(describe_command(args.first, args.second, registry), end="")
     return 0
-
-
-def _setting_line(spec, setting: str) -> str:
-    """The line that answers ``describe step.setting``: the setting's type, default, range and doc (empty without
-    one); an unknown setting is refused with the type's own."""
-    if not setting:
-        return ""
-    param = spec.params.get(setting)
-    if param is None:
-        import difflib
-
-        near = difflib.get_close_matches(setting, list(spec.params), n=3)
-        hint = f"; did you mean {' or '.join(repr(n) for n in near)}?" if near else ""
-        raise NodegraphError(
-            f"{spec.type_name} has no setting '{setting}'{hint} (its settings: {', '.join(spec.params)})"
-        )
-    d = param.describe()
-    extra = "  ".join(x for x in (f"default {d['default']}", d["range"] and f"range {d['range']}", d["units"]) if x)
-    return f"{setting}: {d['type']}  {extra}\n  {d['doc']}\n\n"
 
 
 def markdown_reference(registry) -> str:
@@ -981,25 +899,42 @@ def _cmd_cache(args, registry) -> int:
 
 def _trim(cache: Cache | None, since: float | None, reporter: Reporter | None) -> None:
     """Evict least recently used cache entries above the cache's size limit, sparing those used since
-    ``since`` (the run that just ended), and say so when it removed something or could not get under."""
+    ``since`` (the run that just ended), and say so in one line when it removed something or could not get under."""
     if cache is None or not cache.directory.exists():
         return
     done = cache.evict(spare_since=since)
     if reporter is None and done.entries:
-        print(
-            f"removed {done.entries} least recently used entries ({format_size(done.freed)}); "
-            f"the cache now holds {format_size(done.left)} of its {format_size(cache.limit())} limit"
+        print(_eviction_line(done, cache))
+    elif reporter is not None and (done.entries or done.over):
+        reporter.warn("cache: " + _eviction_line(done, cache))
+
+
+EVICTED_NAMED = 4  # steps named in the eviction line, the most evicted first; the rest are counted
+
+
+def _eviction_line(done, cache: Cache) -> str:
+    """What an eviction removed (how many results of which steps, and whose latest run lost some), what the cache
+    holds of its limit and where, and how to raise the limit: a full cache no longer forgets work unsaid."""
+    from collections import Counter
+
+    limit, folder = format_size(cache.limit()), cache.directory.resolve()
+    if done.entries:
+        counts = Counter(done.nodes).most_common()
+        steps = ", ".join(f"{node} ×{n}" if n > 1 else node for node, n in counts[:EVICTED_NAMED])
+        if len(counts) > EVICTED_NAMED:
+            steps += f" and {len(counts) - EVICTED_NAMED} more steps"
+        lost = "".join(f"; the next nodegraph run {run} computes its own again" for run in done.runs)
+        head = (
+            f"removed {done.entries} least recently used entries ({format_size(done.freed)}: {steps}){lost}; the "
+            f"cache now holds {format_size(done.left)} of its {limit} limit, in {folder}"
         )
-    elif reporter is not None and done.entries:
-        reporter.info(
-            f"cache: removed {done.entries} least recently used entries ({format_size(done.freed)}); "
-            f"the cache now holds {format_size(done.left)} of its {format_size(cache.limit())} limit"
-        )
-    if done.over and reporter is not None:
-        reporter.warn(
-            f"cache: this run's results alone take {format_size(done.left)}, above the limit "
-            f"{format_size(cache.limit())}; raise it with: nodegraph cache limit SIZE"
-        )
+    else:
+        head = f"this run's results alone take {format_size(done.left)}, above the {limit} limit of {folder}"
+    double = 2 * cache.limit()
+    more = f"{-(-double // 2**30)}GiB" if double >= 2**30 else f"{-(-double // 2**20)}MiB"  # rounded up
+    set_by = os.environ.get(LIMIT_ENV_VAR)
+    raise_it = f"${LIMIT_ENV_VAR} (now {set_by})" if set_by else f"nodegraph cache limit {more} (or ${LIMIT_ENV_VAR})"
+    return f"{head}; to keep more, raise it: {raise_it}"
 
 
 def _interrupt(signum, frame):
@@ -1035,6 +970,7 @@ def main(argv: list[str] | None = None) -> int:
 
             faulthandler.register(signal.SIGUSR1, all_threads=True)
     args = build_parser().parse_args(argv)
+    interrupt.said_command(sys.argv[1:] if argv is None else list(argv))  # what a stopped run says to type again
     runtime.configure()  # numba's kernel cache, before any node imports a kernel module (and before the fork)
     if argv is None and args.command in ("run", "sweep", "watch"):
         # in a child that a signal stops within interrupt.GRACE seconds, whatever its node is doing

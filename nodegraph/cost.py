@@ -79,6 +79,7 @@ class Cost:
     elements: int | None = None  # elements its outputs carry on (None: not known from the recipe)
     inscribed: float | None = None  # mm: the smallest inscribed radius of the elements its outputs are made of
     faces: float | None = None  # mesh faces per element its outputs carry (a mean over them)
+    kinds: tuple[str, ...] = ()  # the element kinds its outputs carry, where a library names them (a cull's share)
     made: int = 0  # elements it makes (a placement)
     particles: int = 0  # particles it simulates
     seconds: float = 0.0  # CPU seconds of its work
@@ -120,6 +121,10 @@ class CostQuery:
         radii = [c.inscribed for c in self.inputs.get(port, []) if c.inscribed is not None]
         return min(radii) if radii else None
 
+    def kinds(self, port: str) -> tuple[str, ...]:
+        """The element kinds the wires into ``port`` carry, in order, each once (empty where none says)."""
+        return tuple(dict.fromkeys(k for c in self.inputs.get(port, []) for k in c.kinds))
+
 
 def estimated_by(cost: Callable[[CostQuery], Cost]) -> Callable[[NodeSpec], NodeSpec]:
     """Declare a node type's estimate, above its ``@node``: ``cost(query)`` gives its ``Cost`` from its parameters
@@ -136,17 +141,23 @@ def estimated_by(cost: Callable[[CostQuery], Cost]) -> Callable[[NodeSpec], Node
     return wrap
 
 
-def passes(port: str, share: float = 1.0, faces: str | None = None) -> Callable[[CostQuery], Cost]:
+def passes(
+    port: str, share: float | Callable[[tuple[str, ...]], float] = 1.0, faces: str | None = None
+) -> Callable[[CostQuery], Cost]:
     """A ``cost`` for a node whose output carries the elements of input ``port`` (× ``share``: a cull's kept
-    share), with the faces per element of input ``faces`` (default ``port``: the meshes a placement gets from the
-    libraries it is mixed with), and whose own work is small."""
+    share, or a function of the element kinds that gives it), with the faces per element and the kinds of input
+    ``faces`` (default ``port``: the meshes a placement gets from the libraries it is mixed with), and whose own
+    work is small."""
 
     def cost(q: CostQuery) -> Cost:
         count = q.elements(port)
+        kinds = q.kinds(faces or port)
+        kept = share(kinds) if callable(share) else share
         return Cost(
-            elements=None if count is None else int(round(count * share)),
+            elements=None if count is None else int(round(count * kept)),
             inscribed=q.inscribed(port),
             faces=q.faces(faces or port),
+            kinds=kinds,
         )
 
     return cost

@@ -90,21 +90,38 @@ def progress_saved(checkpoint: Path, where: str = "") -> None:
 
 
 def _resumes(label: str, checkpoint: Path | None, saved: dict[Path, str]) -> str | None:
-    """What a re-run of a stopped step resumes from ("rice_sim from its checkpoint at frame 1,200"), or None."""
+    """What a stopped step keeps for a re-run ("rice_sim's progress up to frame 1,200"), or None."""
     if checkpoint is None or not Path(checkpoint).exists():
         return None
     where = saved.get(Path(checkpoint), "")
-    return f"{label} from its saved checkpoint" + (f" at {where}" if where else "")
+    return f"{label}'s progress" + (f" up to {where}" if where else " so far")
+
+
+_command: list[str] = []  # the command line after ``nodegraph`` (``said_command``): what a re-run types again
+
+
+def said_command(argv: list[str]) -> None:
+    """Keep the command line (``run graphs/ikura_don.yaml --draft``) that a stopped run tells the user to repeat."""
+    _command[:] = argv
+
+
+def _again() -> str:
+    """The command that resumes: this one again, as typed."""
+    import shlex
+
+    return "the same command again" + (f": nodegraph {shlex.join(_command)}" if _command else "")
 
 
 def _rerun(uncached: bool, running: dict[str, Path | None], saved: dict[Path, str]) -> str:
-    """What a re-run of a stopped run starts from: nothing without a cache, else the finished nodes and each
-    running step's saved checkpoint (``running``: label → its checkpoint file or None)."""
+    """What a stopped run kept and how to resume, in plain words: nothing without a cache, else every finished step
+    and each running step's saved progress (``running``: label → its checkpoint file or None)."""
     if uncached:
-        return "nothing was cached (--no-cache): a re-run starts over"
+        return f"Nothing was kept (--no-cache). To start over, run {_again()}"
     resumes = [r for label, checkpoint in running.items() if (r := _resumes(label, checkpoint, saved))]
-    return "nodes that finished are cached: a re-run resumes from there" + (
-        f", {' and '.join(resumes)}" if resumes else ""
+    return (
+        "Kept: every step that finished (in the cache)"
+        + (f" and {' and '.join(resumes)}" if resumes else "")
+        + f". To resume from there, run {_again()}"
     )
 
 
@@ -164,9 +181,9 @@ def stopped_line() -> str:
     where = ", ".join(f"{label} ({now - start:.0f} s in)" for label, (start, _) in _running.items())
     head = f"interrupted during {where}" if where else "interrupted"
     if _run["cached"] is None:
-        return f"{head} before any step ran"
+        return f"{head} before any step ran: nothing was computed. To start, run {_again()}"
     checkpoints = {label: checkpoint for label, (_, checkpoint) in _running.items()}
-    return f"{head}; {_rerun(not _run['cached'], checkpoints, _saved)}"
+    return f"{head}. {_rerun(not _run['cached'], checkpoints, _saved)}"
 
 
 def running_in(listing: Path) -> list[str]:
@@ -224,10 +241,13 @@ def killed_line(listing: Path, removed: list[Path], waited: float = GRACE) -> st
     except OSError:
         lines = []
     if not any(line.startswith(RUNNING) for line in lines):  # ended as it started (imports, the recipe's checks)
-        return f"interrupted before any step ran: the run did not stop within {waited:g} s and was ended{what}"
+        return (
+            f"interrupted before any step ran: the run did not stop within {waited:g} s and was ended{what}. "
+            f"Nothing was computed. To start, run {_again()}"
+        )
     rerun = _rerun(UNCACHED in lines, running, saved)
     ended = "were ended" if len(running) > 1 else "was ended"
-    return f"interrupted{during}: {who} did not stop within {waited:g} s and {ended}{what}; {rerun}"
+    return f"interrupted{during}: {who} did not stop within {waited:g} s and {ended}{what}. {rerun}"
 
 
 def remove_leftovers(listing: Path) -> list[Path]:

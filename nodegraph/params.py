@@ -32,6 +32,26 @@ class _RecipeFileName(str):
 RECIPE_FILE_NAME: Any = _RecipeFileName("recipe")
 
 
+# the meshes the recipes in graphs/ name (``assets/bunny.ply``), where a copy of a recipe elsewhere no longer finds them
+SHIPPED_ASSETS = Path(__file__).resolve().parent.parent / "graphs" / "assets"
+
+
+def _missing_file(given: Path, base: Path | None) -> str:
+    """What a file parameter whose file is missing accepts: where its relative path was taken from (the recipe's
+    folder, or for ``--set`` the working folder) and, for a recipe, where the shipped assets are."""
+    if given.is_absolute():
+        return "an existing file"
+    if base is None:
+        return f"an existing file; a relative path given with --set is taken from where nodegraph runs, {Path.cwd()}"
+    text = f"an existing file; a relative path in a recipe is taken from the recipe's folder, {base}"
+    shipped = SHIPPED_ASSETS / given.name
+    if shipped.is_file():
+        return text + f"; the shipped one is {shipped}: write that path, or copy {SHIPPED_ASSETS} beside the recipe"
+    if SHIPPED_ASSETS.is_dir():
+        return text + f"; the shipped assets are in {SHIPPED_ASSETS}"
+    return text
+
+
 class ParamValueError(ValueError):
     """A parameter value is not allowed; ``allowed`` says what is."""
 
@@ -154,9 +174,7 @@ class Param:
             if path.is_dir():
                 raise ParamValueError(f"{path} is a folder, not a file", self._file_in(path))
             if not path.is_file():
-                raise ParamValueError(
-                    f"no such file: {path}", f"an existing file (a relative path is taken from {base or Path.cwd()})"
-                )
+                raise ParamValueError(f"no such file: {path}", _missing_file(Path(value), base))
         return coerced
 
     def file_types(self) -> tuple[str, ...]:

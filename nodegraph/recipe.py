@@ -358,8 +358,14 @@ class _Validator:
                 continue
             node_id, key = target
             if node_id not in nodes:
+                near = self._nearest_having(node_id, key, nodes)
                 self.issues.append(
-                    Issue(where, f"no node '{node_id}' in the recipe", given=text, suggestion=nearest(node_id, nodes))
+                    Issue(
+                        where,
+                        f"no node '{node_id}' in the recipe",
+                        given=text,
+                        suggestion=f"{near}={text.partition('=')[2]}" if near else nearest(node_id, nodes),
+                    )
                 )
                 continue
             entry = nodes[node_id]
@@ -380,6 +386,15 @@ class _Validator:
         types = {node_id: body.get("type") for node_id, body in nodes.items() if isinstance(body, dict)}
         specs = {node_id: self.registry.get(t) for node_id, t in types.items() if isinstance(t, str)}
         return [f"{node_id}.{param}" for node_id, spec in specs.items() if spec is not None and param in spec.params]
+
+    def _nearest_having(self, node_id: str, param: str, nodes: dict) -> str | None:
+        """The ``node.param`` an unknown ``node_id.param`` most likely meant: among the nodes whose type declares
+        ``param``, the one whose name is closest to ``node_id`` (``shift.dx``: ``shifted.dx``, not ``shifts``, which
+        has no ``dx``); None where no node has it."""
+        having = self._having(param, nodes)
+        if not having:
+            return None
+        return max(having, key=lambda name: difflib.SequenceMatcher(None, node_id, name.partition(".")[0]).ratio())
 
     def build(self) -> Recipe | None:
         if not isinstance(self.raw, dict):

@@ -131,8 +131,13 @@ def _subset(aggregate, keep: np.ndarray):
     return dataclasses.replace(aggregate, placement=aggregate.placement.subset(keep), **per_element)
 
 
-# at most the elements it is given (those crossing deeper than the threshold go)
-@estimated_by(passes("aggregate"))
+# the share of the elements it is given that it keeps (those crossing deeper than the threshold go), for the estimate:
+# the kakigori's two (crossed before the dents, apart after) kept 11,031 of 12,787 together (0.863, 0.93 each; its
+# draft 1,406 of 1,712, 0.91 each)
+KEPT = 0.93
+
+
+@estimated_by(passes("aggregate", KEPT))
 @node(
     "cull_crossing",
     inputs={

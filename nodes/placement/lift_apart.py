@@ -136,14 +136,8 @@ def lift_apart(ctx, placement, libraries, below=None, *, overlap):
     if np.any(lift > 0.0):
         positions = placement.positions.copy()
         positions[:, 2] = z
+        # said nowhere but in ``stats``: a lift is this node doing its work, nothing a user need change
         placement = dataclasses.replace(with_kind_names(placement, libraries), positions=positions)
-        if ctx.reporter is not None:
-            ctx.reporter.info(
-                f"{ctx.node_id}: lifted {int((lift > 0).sum()):,} of {len(lift):,} elements by up to "
-                f"{lift.max():.2g} mm, so that none starts deeper than {overlap:g} of a radius in another"
-                + (" or in what lies below" if below else "")
-                + f" (they were placed by the smallest's size; up to {before:.2f} deep in one another): they fall"
-            )
     stats = Table(
         {
             "lifted": np.array([int((lift > 0).sum())]),

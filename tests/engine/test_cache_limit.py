@@ -237,3 +237,48 @@ def test_a_run_records_the_entries_it_used(tmp_path, monkeypatch):
     )
     (entry,) = (cache.directory / "entries").glob("*/*.json")
     assert cache.latest_runs() == {entry.stem}
+
+
+def test_an_eviction_says_once_what_went_the_limit_and_how_to_raise_it(tmp_path, monkeypatch, capsys):
+    """Issue 47: a full cache evicted 74 entries, the main job's among them, in one line that scrolled away above the
+    run's table and named neither what went nor how to keep more. One line, below the table, names the steps whose
+    results went, the run that will compute its own again, the limit, where the cache is and how to raise it."""
+    from nodegraph.cli import _trim
+
+    monkeypatch.delenv("NODEGRAPH_CACHE_LIMIT", raising=False)
+    cache = Cache(tmp_path / "c")
+    old = [_store(cache, name, float(i), 1000.0 + i) for i, name in enumerate("abc")]
+    cache.keep_run("/r/ikura_don.yaml --draft", old[:1])
+    cache.set_limit(cache.info().bytes // 4)
+    said = []
+
+    class Reporter:
+        def info(self, message):
+            said.append(message)
+
+        def warn(self, message):
+            said.append(message)
+
+    _trim(cache, None, Reporter())
+    (line,) = said
+    assert line.startswith("cache: removed 3 least recently used entries (") and ": b, c, a)" in line, line
+    assert "the next nodegraph run /r/ikura_don.yaml --draft computes its own again" in line, line
+    assert f"of its {format_size(cache.limit())} limit, in {cache.directory}; to keep more, raise it: " in line
+    assert line.endswith("nodegraph cache limit 1MiB (or $NODEGRAPH_CACHE_LIMIT)"), line
+    # in a run: below the table, and the run's last line says where its outputs are
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("NODEGRAPH_CACHE_LIMIT", "1")
+    (tmp_path / "r.yaml").write_text("outputs: [pts]\nnodes:\n  pts: {type: toy_points, params: {count: 50}}\n")
+    run = ["run", "r.yaml", "--no-rrd", "--plugin", str(TOY), "--cache-dir", str(cache.directory)]
+    for seed in ("1", "2"):
+        assert main([*run, "--set", f"seed={seed}"]) == 0
+        for entry in (cache.directory / "entries").glob("*/*.json"):
+            os.utime(entry, (1000.0, 1000.0))  # used by an earlier run, not the one that ends next
+    captured = capsys.readouterr()
+    err = captured.err
+    second = err[err.rindex("outputs go to") :]  # the second run's: one line below its table
+    assert second.index("under 1 s") < second.index("cache: removed 1 least recently used entries ("), err
+    assert "KiB: pts); the cache now holds" in second, err
+    assert second.count("cache:") == 1 and "raise it: $NODEGRAPH_CACHE_LIMIT (now 1)" in second, err
+    last = captured.out.splitlines()[-1]
+    assert last.startswith(f"the outputs are in {tmp_path / 'outputs' / 'r' / 'set_seed=2'}{os.sep}"), last

@@ -132,6 +132,22 @@ def test_describe_takes_a_step_name_or_the_start_of_a_type(recipe, capsys):
     assert '"phys" -> "merge"' in capsys.readouterr().out
 
 
+def test_describe_shows_what_the_recipe_sets_beside_the_default(recipe, tmp_path, capsys):
+    """Issue 47: ``describe STEP`` showed the type's defaults only (egg_base's diameter 6.5, where the ikura don
+    sets 7.75): a step's values in its recipe, and its draft's, stand beside each default."""
+    recipe.write_text(RECIPE + "draft:\n  pts.count: 4\n")
+    assert cli("describe", "pts") == 0
+    out = capsys.readouterr().out
+    (count,) = [line for line in out.splitlines() if line.strip().startswith("count ")]
+    assert "default 10  recipe 8  --draft 4" in count, count
+    (scale,) = [line for line in out.splitlines() if line.strip().startswith("scale ")]
+    assert "recipe" not in scale, scale  # not set: the default stands alone
+    assert cli("describe", str(recipe), "pts.count") == 0  # describe RECIPE STEP.SETTING
+    assert capsys.readouterr().out.splitlines()[2].startswith("count: int  default 10  recipe 8  --draft 4")
+    assert cli("describe", str(recipe), "ptz") == 2
+    assert "no step 'ptz' in " in capsys.readouterr().err
+
+
 def test_failing_node_exit_status_1(recipe, capsys):
     recipe.write_text(
         RECIPE.replace("type: toy_merge", "type: toy_fail")

@@ -3,6 +3,7 @@ its keys are checked whenever the recipe loads."""
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from nodegraph.cli import main
@@ -117,10 +118,11 @@ def test_the_ikura_draft_is_the_final_at_fewer_elements():
             assert [w.node for w in entry.inputs["vessel"]] == ["bowl"]
 
 
-def test_the_kakigori_draft_keeps_the_final_proportions():
-    """Issue 47: the kakigori draft shrank the cup but kept the syrup's lengths, so a heap a third as tall was
-    soaked nearly to the cup. Every length of the cup and the syrup now scales by one factor; the flakes, their
-    spacing, the materials and the camera are the final's, the preview the final's aspect."""
+def test_the_kakigori_draft_is_the_final_with_fewer_larger_flakes():
+    """Issue 47: the kakigori draft shrank the cup to 3/8, so it did not frame as the final (the camera closer, the
+    table's grain and the depth of field other than the final's). A draft is the final at fewer elements and
+    samples: the cup, the syrup, the camera and the materials are the final's; every length of the flakes, their
+    spacing and the cull's D scale by one factor, so fewer fill the same heap; the preview the final's aspect."""
     from pathlib import Path
 
     from nodegraph.registry import default_registry
@@ -128,15 +130,18 @@ def test_the_kakigori_draft_keeps_the_final_proportions():
     path = Path(__file__).resolve().parents[2] / "graphs" / "kakigori.yaml"
     final = load_recipe(path, default_registry())
     draft = load_recipe(path, default_registry(), draft=True)
-    factor = draft.nodes["cup"].params["size"] / final.nodes["cup"].params["size"]
-    assert factor < 1
-    lengths = {"cup": ("size", "depth", "mound", "wall"), "shade": ("syrup_depth", "syrup_spread", "syrup_run_length")}
+    factor = draft.nodes["place"].params["r"] / final.nodes["place"].params["r"]
+    assert factor > 1
+    flakes = [n for n, e in final.nodes.items() if e.spec.type_name == "base_mesh"]
+    lengths = {"place": ("r",), "refine": ("r",), "pile": ("threshold",)} | {n: ("size",) for n in flakes}
     for node_id, names in lengths.items():
         for name in names:
-            assert draft.nodes[node_id].params[name] == pytest.approx(factor * final.nodes[node_id].params[name]), name
+            assert draft.nodes[node_id].params[name] == pytest.approx(
+                factor * np.asarray(final.nodes[node_id].params[name])
+            ), (node_id, name)
         rest = {k: v for k, v in final.nodes[node_id].params.items() if k not in names}
         assert {k: draft.nodes[node_id].params[k] for k in rest} == rest, node_id
-    for node_id in ("place", "refine", "pile", "implicit", "flake0", "flake7"):
+    for node_id in ("cup", "shade", "implicit", "crossed", "apart"):
         assert draft.nodes[node_id].params == final.nodes[node_id].params, node_id
     look = {k: v for k, v in final.nodes["preview"].params.items() if k not in ("width", "height", "samples")}
     assert {k: draft.nodes["preview"].params[k] for k in look} == look

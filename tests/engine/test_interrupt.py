@@ -133,7 +133,7 @@ def test_ctrl_c_at_a_terminal_is_one_clean_stop(tmp_path, node_started):
     assert proc.returncode == 130, err
     assert "Traceback" not in err, err
     # the step it stopped in is named, and what a re-run does (issue 47: the line named neither)
-    assert "interrupted during slow (" in err and "nodes that finished are cached: a re-run resumes" in err, err
+    assert "interrupted during slow (" in err and "Kept: every step that finished (in the cache)" in err, err
     assert "did not stop within" not in err  # it stopped by itself, not killed
     assert not leftovers(tmp_path), leftovers(tmp_path)
     assert not (tmp_path / "outputs").exists()  # made for outputs the stopped run never wrote (issue 47)
@@ -176,16 +176,26 @@ def test_a_failed_run_keeps_the_partial_recording_it_names(tmp_path):
     assert str(partial.name) in done.stderr
 
 
-def test_without_a_cache_the_stopped_line_says_a_rerun_starts_over():
+def test_the_stopped_line_says_in_plain_words_what_was_kept_and_the_command_that_resumes():
+    """Issue 47: "interrupted; nodes that finished are cached: a re-run resumes from there" named neither what a
+    user keeps nor what to type; the line says what was kept and the command to run again."""
     from nodegraph import interrupt
 
+    interrupt.said_command(["run", "graphs/ikura_don.yaml", "--set", "cooked.water_content=22"])
+    again = "run the same command again: nodegraph run graphs/ikura_don.yaml --set cooked.water_content=22"
     interrupt._run["cached"] = None
-    assert interrupt.stopped_line() == "interrupted before any step ran"  # in the recipe's checks, say
+    assert interrupt.stopped_line() == f"interrupted before any step ran: nothing was computed. To start, {again}"
     interrupt.run_began(cached=False)
     interrupt.step_started("sim")
-    assert interrupt.stopped_line().startswith("interrupted during sim (0 s in); nothing was cached")
+    assert (
+        interrupt.stopped_line()
+        == f"interrupted during sim (0 s in). Nothing was kept (--no-cache). To start over, {again}"
+    )
     interrupt.run_began(cached=True)
-    assert interrupt.stopped_line() == "interrupted; nodes that finished are cached: a re-run resumes from there"
+    assert interrupt.stopped_line() == (
+        f"interrupted. Kept: every step that finished (in the cache). To resume from there, {again}"
+    )
+    interrupt.said_command([])
 
 
 def test_a_node_that_raises_while_a_stop_is_pending_is_interrupted_not_failed(tmp_path, monkeypatch, capsys):
@@ -204,7 +214,7 @@ def test_a_node_that_raises_while_a_stop_is_pending_is_interrupted_not_failed(tm
     err = capsys.readouterr().err
     assert code == 130, err
     assert "failed" not in err and "partial" not in err and "error:" not in err, err
-    assert "interrupted during boom (" in err and "nodes that finished are cached" in err, err
+    assert "interrupted during boom (" in err and "Kept: every step that finished" in err, err
     assert not leftovers(tmp_path), leftovers(tmp_path)
     # a stop noted by the signal's handler makes any error a node raises after it the stop's doing
     interrupt.run_began(cached=True)
@@ -243,7 +253,9 @@ def test_the_killed_line_names_the_step_the_files_and_the_saved_checkpoint(tmp_p
         for f in files:
             f.write_text("x")
             interrupt.note(f)
-        assert "rice_sim from its saved checkpoint at frame 1,200" in interrupt.stopped_line()
+        assert "Kept: every step that finished (in the cache) and rice_sim's progress up to frame 1,200. To resume" in (
+            interrupt.stopped_line()
+        )
     finally:
         monkey.undo()
     removed = interrupt.remove_leftovers(listing)
@@ -251,10 +263,10 @@ def test_the_killed_line_names_the_step_the_files_and_the_saved_checkpoint(tmp_p
     line = interrupt.killed_line(listing, removed)
     assert line.startswith("interrupted during rice_sim: the step did not stop within 0.8 s and was ended"), line
     assert f"removed 5 unfinished file(s): {', '.join(map(str, removed[:3]))} and 2 more" in line, line
-    assert line.endswith("a re-run resumes from there, rice_sim from its saved checkpoint at frame 1,200"), line
+    assert "and rice_sim's progress up to frame 1,200. To resume from there, run the same command again" in line, line
     (tmp_path / "none.txt").write_text("")  # ended before any step began (a new user's Ctrl-C at 1.5 s)
     line = interrupt.killed_line(tmp_path / "none.txt", [])
-    assert line == "interrupted before any step ran: the run did not stop within 0.8 s and was ended", line
+    assert line.startswith("interrupted before any step ran: the run did not stop within 0.8 s and was ended. "), line
 
 
 def test_a_resumed_steps_estimate_counts_only_the_steps_left(tmp_path):

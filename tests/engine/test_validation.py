@@ -167,7 +167,7 @@ def test_set_override_is_validated(registry):
     issues = issues_of(VALID, registry, overrides=["shifted.dx=50", "shifted.dy=1", "shiftd.dx=1"])
     assert [str(i.location) for i in issues] == ["--set:1", "--set:2", "--set:3"]
     assert "out of range" in issues[0].message
-    assert issues[1].suggestion == "dx" and issues[2].suggestion == "shifted"
+    assert issues[1].suggestion == "dx" and issues[2].suggestion == "shifted.dx=1"
 
 
 def test_a_parameter_set_without_its_node_lists_the_nodes_that_have_it(registry):
@@ -278,3 +278,19 @@ def test_a_top_level_error_does_not_hide_the_others(registry):
         (3, "unknown key 'efects'"),
         (4, "'merge' has no output 'sphere'"),
     }
+
+
+def test_a_setting_on_a_node_not_in_the_recipe_suggests_the_node_that_has_the_setting():
+    """Issue 47: ``--set egg.diameter=8`` on the ikura don suggested ``egg_sim``, which has no diameter: the nearest
+    name among all the nodes. Among the nodes that have the setting, the nearest by name is the one meant."""
+    from pathlib import Path
+
+    from nodegraph.api import default_registry
+
+    ikura = Path(__file__).resolve().parents[2] / "graphs" / "ikura_don.yaml"
+    with pytest.raises(RecipeError) as info:
+        load_recipe(ikura, default_registry(), overrides=["egg.diameter=8", "bowel.size=30", "xyz.foo=1"])
+    egg, bowl, nothing = info.value.issues
+    assert egg.suggestion == "egg_base.diameter=8" and "did you mean 'egg_base.diameter=8'?" in str(egg), str(egg)
+    assert bowl.suggestion == "bowl.size=30"
+    assert nothing.suggestion is None

@@ -44,9 +44,9 @@ EXPECTED = {
     "ikura_don": ((280, 420), 0.03, 0.10),  # 386 elements (the donburi's draft; 347 in the 84 mm bowl): max 0.016
     "onigiri": ((45, 75), 0.03, 0.10),  # 53 grains (a real onigiri's shape, 14.4 mm): p95 0, max 0.016
     "sushi": ((65, 110), 0.03, 0.12),  # 87 grains: p95 0.019, max 0.097
-    # 546 flakes 2.25–2.7 × 1.5–1.65 × 0.3 mm (issue 26: finer shavings): p95 0.0023, max 0.0067; the 3–3.6 mm
-    # flakes before: 213, p95 0, max 0.0061 (issue 25); with the settle frame and no removal 298: p95 0.051, max 0.069
-    "kakigori": ((400, 700), 0.003, 0.01),
+    # 1,406 flakes (the draft: the final's cup, each flake twice the final's 2.25–2.7 × 1.5–1.65 × 0.3 mm):
+    # p95 0.0010, max 0.0034
+    "kakigori": ((1100, 1700), 0.003, 0.01),
     # 294 elements: p95 0, max 0 with deform_contacts (issue 25); p95 0.077, max 0.096 without it (S: no physics).
     # With the onigiri's straight sides and the cull's priority for the chestnut pieces: 203; max 0.026 while a
     # grain's tip poking into a coarse piece's face (no piece vertex inside the grain) was dented only its half

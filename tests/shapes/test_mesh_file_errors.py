@@ -65,3 +65,23 @@ def test_check_refuses_a_path_that_is_not_a_mesh_and_says_which_files_are(tmp_pa
     assert f"{recipe}:3:" in err and f"{recipe}:4:" in err  # each node's line
     assert "node 'm', path: README.md is a .md file, not a mesh file; allowed: .stl, .obj, .ply" in err
     assert "node 'e', path: README.md is a .md file" in err
+
+
+def test_a_copied_recipe_that_misses_its_mesh_says_where_it_looked_and_where_the_shipped_one_is(tmp_path, capsys):
+    """Issue 47: graphs/rice_bunny.yaml copied to another folder cannot find ``assets/bunny.ply``; the message names
+    the line, the parameter, the path looked at, that a recipe's paths are taken from its folder, and the shipped
+    mesh."""
+    from pathlib import Path
+
+    from nodegraph.cli import main
+
+    shipped = Path(__file__).resolve().parents[2] / "graphs"
+    recipe = tmp_path / "rice_bunny.yaml"
+    recipe.write_text((shipped / "rice_bunny.yaml").read_text())
+    assert main(["check", str(recipe)]) == 2
+    err = capsys.readouterr().err
+    line = next(n for n, text in enumerate(recipe.read_text().splitlines(), 1) if "path: assets/bunny.ply" in text)
+    assert f"{recipe}:{line}:" in err and "node 'bunny', path: no such file: " in err, err
+    assert str(tmp_path / "assets" / "bunny.ply") in err, err
+    assert f"a relative path in a recipe is taken from the recipe's folder, {tmp_path}" in err, err
+    assert f"the shipped one is {shipped / 'assets' / 'bunny.ply'}" in err, err
