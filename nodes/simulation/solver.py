@@ -32,6 +32,7 @@ from . import (
     contact_constraints,
     glue,
     integrate,
+    rigid_contacts,
     shape_matching,
     spatial_hash,
 )
@@ -558,13 +559,16 @@ class XpbdSolver:
         family = ("contact",) * normal + ("friction",) * rub
         wake_step = k.wake_step if wake_step is None else wake_step
         cc = contact_constraints
+        alpha = k.contact_alpha if soft else 0.0
+        rigid = s.rigid_grains and alpha == 0.0  # compliant contacts keep the particle sweep
+        grid = () if rigid else (cc.Colouring(*lists.grid()),)
         self.dispatch(
             family,
-            cc.contact_sweep,
+            rigid_contacts.rigid_sweep if rigid else cc.contact_sweep,
             st.arrays(),
             self.model_arrays,
             cc.PairRows(*lists.sweep_rows()),
-            cc.Colouring(*lists.grid()),
+            *grid,
             cc.PairEntries(
                 pairs.allowance,
                 pairs.anchor,
@@ -584,11 +588,11 @@ class XpbdSolver:
                 k.friction.anchored,
                 normal,
                 k.cohesion,
-                k.contact_alpha if soft else 0.0,
+                alpha,
                 k.crush,
                 CONTACT_DAMPING,
             ),
-            self.threads,
+            *(() if rigid else (self.threads,)),
         )
 
     def _adhesion(self, st: State, pairs: Contacts) -> None:
