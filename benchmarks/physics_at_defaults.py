@@ -445,11 +445,11 @@ def creep() -> list[dict]:
     return rows
 
 
-def pass_overlap(substeps: int, frames: int = 12) -> dict:
+def pass_overlap(substeps: int, frames: int = 12, **params) -> dict:
     """The 890-grain ball (seed 0) over its first ``frames`` (its collapse): the summed overlap of particles of
     different grains (mm) after each step of each solve — the prediction, every contact sweep, shape matching and
     the walls — and after pre-stabilisation's sweep, averaged per call: how much of what a contact sweep separates
-    the grains' shape matching puts back in the same pass."""
+    the grains' shape matching puts back in the same pass. ``params``: other node parameters (contact_response)."""
     from scipy.spatial import cKDTree
     from validation import rice_heap
 
@@ -487,9 +487,10 @@ def pass_overlap(substeps: int, frames: int = 12) -> dict:
     def watch(sim):
         sim.solver.dispatch = Trace(sim)
 
-    rice_heap(890, True, (frames,), substeps, shape="ball", watch=watch)
+    rice_heap(890, True, (frames,), substeps, shape="ball", watch=watch, **params)
     values = {k: round(sums[k] / calls[k], 2) for k in sums if calls.get(k)}
-    return {"case": "overlap through a pass", "grains": 890, "substeps": substeps, "frames": frames, "values": values}
+    case = {"case": "overlap through a pass", "grains": 890, "substeps": substeps, "frames": frames, **params}
+    return {**case, "values": values}
 
 
 def rigid() -> list[dict]:
@@ -519,7 +520,12 @@ def rigid() -> list[dict]:
             row = {"case": "contact response", "response": response, "substeps": substeps, "iterations": iterations}
             rows.append({**row, "values": values})
             print(rows[-1], flush=True)
-    return rows
+    return rows + rigid_overlap()
+
+
+def rigid_overlap() -> list[dict]:
+    """``pass_overlap`` with rigid grains at 10 and 40 substeps (the particles' rows: ``--passes-overlap``)."""
+    return [pass_overlap(s, contact_response="rigid") for s in (10, 40)]
 
 
 def convergence() -> list[dict]:
