@@ -13,7 +13,6 @@ renders the table in docs/validation.md.
     python benchmarks/physics_at_defaults.py --mechanism     # what shapes a dropped heap: the contacts, ≈ 15 min
     python benchmarks/physics_at_defaults.py --creep         # how far the dropped ball's grains move at rest, ≈ 6 min
     python benchmarks/physics_at_defaults.py --passes-overlap  # the grains' overlap after each step of a pass, ≈ 3 min
-    python benchmarks/physics_at_defaults.py --rigid         # contacts on particles against rigid grains, ≈ 20 min
 
 ``--convergence`` runs the poured heap (two seeds) and the grain sliding across its length at 5–80 substeps and
 writes benchmarks/measured/granular_convergence.jsonl, with its plot docs/images/accuracy/granular_convergence.png:
@@ -42,14 +41,9 @@ MECHANISM = RECORD.with_name("heap_mechanism.jsonl")
 CREEP = RECORD.with_name("heap_creep.jsonl")
 CREEP_MM = 0.2  # mm: a grain that moves further between 2.5 s and 7 s creeps (issue 46's reading)
 PASS_OVERLAP = RECORD.with_name("pass_overlap.jsonl")
-RIGID = RECORD.with_name("rigid_contacts.jsonl")
-# (substeps, iterations) at which ``rigid`` compares the node's contact responses: the defaults, 4× the iterations and
-# 4× the substeps
-RIGID_PASSES = ((10, 2), (10, 8), (40, 2))
 # the solver's kernels after which ``pass_overlap`` sums the grains' overlap, and what each step is called there
 PASS_STEPS = {
     "contact_sweep": "sweep",
-    "rigid_sweep": "sweep",
     "predict": "predicted",
     "shape_match_project": "shape matching",
     "collider_project": "walls",
@@ -445,11 +439,11 @@ def creep() -> list[dict]:
     return rows
 
 
-def pass_overlap(substeps: int, frames: int = 12, **params) -> dict:
+def pass_overlap(substeps: int, frames: int = 12) -> dict:
     """The 890-grain ball (seed 0) over its first ``frames`` (its collapse): the summed overlap of particles of
     different grains (mm) after each step of each solve — the prediction, every contact sweep, shape matching and
     the walls — and after pre-stabilisation's sweep, averaged per call: how much of what a contact sweep separates
-    the grains' shape matching puts back in the same pass. ``params``: other node parameters (contact_response)."""
+    the grains' shape matching puts back in the same pass."""
     from scipy.spatial import cKDTree
     from validation import rice_heap
 
@@ -477,8 +471,7 @@ def pass_overlap(substeps: int, frames: int = 12, **params) -> dict:
             out = super().__call__(family, kernel, *args)
             name = kernel.__name__
             self.solving = (self.solving or name == "predict") and name != "update_velocity"
-            step = PASS_STEPS.get(name)
-            step = step if self.solving else "pre-stabilisation" if step == "sweep" else None
+            step = PASS_STEPS.get(name) if self.solving else "pre-stabilisation" if name == "contact_sweep" else None
             if step:
                 sums[step] += self.overlap()
                 calls[step] = calls.get(step, 0) + 1
@@ -487,45 +480,9 @@ def pass_overlap(substeps: int, frames: int = 12, **params) -> dict:
     def watch(sim):
         sim.solver.dispatch = Trace(sim)
 
-    rice_heap(890, True, (frames,), substeps, shape="ball", watch=watch, **params)
+    rice_heap(890, True, (frames,), substeps, shape="ball", watch=watch)
     values = {k: round(sums[k] / calls[k], 2) for k in sums if calls.get(k)}
-    case = {"case": "overlap through a pass", "grains": 890, "substeps": substeps, "frames": frames, **params}
-    return {**case, "values": values}
-
-
-def rigid() -> list[dict]:
-    """The dropped 890-grain ball (seed 0, read at 0.3 s and 1 s: H/R, surface slope, ``contact_state``) and the
-    poured 300-grain stream (seed 0, at 2.5 s) with each ``contact_response`` at each of ``RIGID_PASSES``."""
-    from validation import rice_heap
-
-    rows = []
-    for response in ("particle", "rigid"):
-        for substeps, iterations in RIGID_PASSES:
-            given = {"iterations": iterations, "contact_response": response}
-            (mid, last), ball_s = rice_heap(890, True, (18, 60), substeps, shape="ball", read=contact_state, **given)
-            ((stream_slope, stream_hr),), stream_s = rice_heap(300, True, (150,), substeps, shape="stream", **given)
-            contacts, sticking, overlap = last[2]
-            values = {
-                "ball_hr_0_3": round(mid[1], 1),
-                "ball_hr_1": round(last[1], 1),
-                "ball_surface_1": round(last[0], 1),
-                "contacts_per_grain": round(contacts, 2),
-                "sticking": round(sticking, 2),
-                "penetration": round(overlap, 3),
-                "ball_seconds": round(ball_s, 1),
-                "stream_hr_2_5": round(stream_hr, 1),
-                "stream_surface_2_5": round(stream_slope, 1),
-                "stream_seconds": round(stream_s, 1),
-            }
-            row = {"case": "contact response", "response": response, "substeps": substeps, "iterations": iterations}
-            rows.append({**row, "values": values})
-            print(rows[-1], flush=True)
-    return rows + rigid_overlap()
-
-
-def rigid_overlap() -> list[dict]:
-    """``pass_overlap`` with rigid grains at 10 and 40 substeps (the particles' rows: ``--passes-overlap``)."""
-    return [pass_overlap(s, contact_response="rigid") for s in (10, 40)]
+    return {"case": "overlap through a pass", "grains": 890, "substeps": substeps, "frames": frames, "values": values}
 
 
 def convergence() -> list[dict]:
@@ -604,7 +561,6 @@ def main(argv=None) -> None:
     ap.add_argument("--mechanism", action="store_true", help="the dropped ball's collapse at substeps × iterations")
     ap.add_argument("--creep", action="store_true", help="how far the dropped ball's grains move at rest")
     ap.add_argument("--passes-overlap", action="store_true", help="the grains' overlap after each step of a pass")
-    ap.add_argument("--rigid", action="store_true", help="grain contacts on particles against rigid grains")
     args = ap.parse_args(argv)
     if args.replot:
         plot_convergence([json.loads(line) for line in CONVERGENCE.read_text().splitlines()])
@@ -612,7 +568,6 @@ def main(argv=None) -> None:
     # each study: its option, the rows it measures and the data file they replace
     studies = {
         "passes_overlap": (lambda: [pass_overlap(s) for s in (10, 40)], PASS_OVERLAP),
-        "rigid": (rigid, RIGID),
         "creep": (creep, CREEP),
         "mechanism": (collapses, MECHANISM),
         "levers": (levers, LEVERS),

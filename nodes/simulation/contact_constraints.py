@@ -91,14 +91,9 @@ def lifted_share(w, x, i, j, nz, lift, upright):
     shooting it out at 421 mm/s). Gauss–Seidel against the ground converges like (1 − m_l/m_u) per
     iteration without it (mass scaling, Macklin et al. 2014 §5.2; it does not conserve momentum in
     such contacts, by design)."""
-    return split_share(w[i], w[j], x[j, 2] - x[i, 2], nz, lift, upright)
-
-
-@njit(cache=True, inline="always")
-def split_share(wi, wj, dz, nz, lift, upright):
-    """``lifted_share`` of inverse masses ``wi``, ``wj`` (a particle's, or a rigid grain's generalised one at the
-    contact, ``rigid_contacts``) with j ``dz`` above i."""
-    scale = np.exp(lift * dz) if lift != 0.0 and wj > 0.0 else 1.0
+    wi = w[i]
+    wj = w[j]
+    scale = np.exp(lift * (x[j, 2] - x[i, 2])) if lift != 0.0 and wj > 0.0 else 1.0
     wsum = wi + wj * scale
     if wsum <= 0.0:
         return -1.0

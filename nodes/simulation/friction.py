@@ -145,30 +145,11 @@ def friction_pair(x, x_prev, anchor, rubbed, a, i, j, normal, held, share, rule,
     """Friction on the pair (i, j) of list entry ``a`` with unit normal ``normal`` = (nx, ny, nz)
     (j → i) and normal load ``held``, in place; i takes ``share`` of the correction, j the rest (the
     contacts' mass scaling). ``rule``: a ``friction_models.FrictionRule`` (μs, μk, anchored); ``mode``: the
-    contact's (``TESTED``, ``STICKING``, ``SLIDING``). The drift is ``pair_drift``'s; a sliding pair is
-    re-anchored after its step. What is removed adds to ``rubbed[a]``."""
-    t, tx, ty, tz = pair_drift(x, x_prev, anchor, a, i, j, normal, rule[2])
-    if t <= 1e-12:
-        return
-    scale = rubbed_share(rubbed, a, t, tx, ty, tz, held, rule, mode)
-    si = scale * share
-    sj = scale - si
-    x[i, 0] -= si * tx
-    x[i, 1] -= si * ty
-    x[i, 2] -= si * tz
-    x[j, 0] += sj * tx
-    x[j, 1] += sj * ty
-    x[j, 2] += sj * tz
-    if rule[2] and scale < 1.0:  # it slid: the contact sticks again, if at all, where it now is
-        for k in range(3):
-            anchor[a, k] = x[i, k] - x[j, k]
-
-
-@njit(cache=True, inline="always")
-def pair_drift(x, x_prev, anchor, a, i, j, normal, anchored):
-    """The tangential drift (t, tx, ty, tz) of the pair (i, j) of list entry ``a`` against ``normal``: without
-    anchors the substep's (Macklin's rule); with them since the anchor, a pair without one anchored where it
-    stood at the substep's start (its first substep is Macklin's rule)."""
+    contact's (``TESTED``, ``STICKING``, ``SLIDING``). Without anchors the drift is the substep's (Macklin's
+    rule); with them a pair without an anchor is anchored where it stood at the substep's start (its first
+    substep is Macklin's rule) and a sliding pair is re-anchored after its step. What is removed adds to
+    ``rubbed[a]``."""
+    mu_s, mu_k, anchored = rule
     nx, ny, nz = normal
     if anchored:
         if np.isnan(anchor[a, 0]):
@@ -181,19 +162,23 @@ def pair_drift(x, x_prev, anchor, a, i, j, normal, anchored):
         rx = (x[i, 0] - x_prev[i, 0]) - (x[j, 0] - x_prev[j, 0])
         ry = (x[i, 1] - x_prev[i, 1]) - (x[j, 1] - x_prev[j, 1])
         rz = (x[i, 2] - x_prev[i, 2]) - (x[j, 2] - x_prev[j, 2])
-    return tangential_part(rx, ry, rz, nx, ny, nz)
-
-
-@njit(cache=True, inline="always")
-def rubbed_share(rubbed, a, t, tx, ty, tz, held, rule, mode):
-    """The share of the drift (length t > 0, vector (tx, ty, tz), in the units of the load ``held``) that friction
-    removes in this pass (``removed_share``), added with anchors to ``rubbed[a]`` (without them nothing is kept per
-    pair: ``rubbed`` is empty)."""
-    mu_s, mu_k, anchored = rule
+    t, tx, ty, tz = tangential_part(rx, ry, rz, nx, ny, nz)
+    if t <= 1e-12:
+        return
     scale = removed_share(t, mode, held, rubbed[a, 3] if anchored else 0.0, mu_s, mu_k)
-    if anchored:
+    if anchored:  # without anchors nothing is kept per pair: ``rubbed`` is empty
         _rub(rubbed, a, scale, t, tx, ty, tz)
-    return scale
+    si = scale * share
+    sj = scale - si
+    x[i, 0] -= si * tx
+    x[i, 1] -= si * ty
+    x[i, 2] -= si * tz
+    x[j, 0] += sj * tx
+    x[j, 1] += sj * ty
+    x[j, 2] += sj * tz
+    if anchored and scale < 1.0:  # it slid: the contact sticks again, if at all, where it now is
+        for k in range(3):
+            anchor[a, k] = x[i, k] - x[j, k]
 
 
 @njit(cache=True, inline="always")

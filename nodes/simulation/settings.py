@@ -194,13 +194,6 @@ PARAMS = {
         "flat)",
         choices=("substep", "anchored"),
     ),
-    "contact_response": Param(
-        str,
-        "particle",
-        "rigid: a grain–grain contact moves both grains as rigid bodies (Müller et al. 2020; ``rigid_contacts``); "
-        "particle: it moves the two touching particles and shape matching spreads the push over their grains",
-        choices=("particle", "rigid"),
-    ),
     "capture_radius": Param(
         float,
         0.2,
@@ -346,7 +339,6 @@ class SolverSettings:
     # s: until this time the depenetration speed is at most HANDOFF_DEPENETRATION (a state handed on by another run)
     handoff_until: float
     squeeze_strain: float  # an element's strain between rigid plates under SQUEEZE_LOAD (0 = rigid contacts)
-    rigid_grains: bool  # contacts move whole grains as rigid bodies (``rigid_contacts``), rigid contacts only
 
     def __post_init__(self):
         object.__setattr__(self, "effects", frozenset(self.effects))
@@ -397,7 +389,6 @@ def solver_settings(params: XpbdParams, effects, radius: float, material=None, h
         depenetration_speed=p.depenetration_speed if p.depenetration_speed > 0 else np.inf,
         handoff_until=HANDOFF_FRAMES * p.dt if handed else 0.0,
         squeeze_strain=p.squeeze_strain / 100.0,
-        rigid_grains=p.contact_response == "rigid",
         shock_propagation=p.shock_propagation,
         yolk_accel=p.gravity * (p.white_density / p.part_density - 1.0) if "gravity" in effects else 0.0,
     )

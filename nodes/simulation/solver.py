@@ -32,7 +32,6 @@ from . import (
     contact_constraints,
     glue,
     integrate,
-    rigid_contacts,
     shape_matching,
     spatial_hash,
 )
@@ -559,16 +558,13 @@ class XpbdSolver:
         family = ("contact",) * normal + ("friction",) * rub
         wake_step = k.wake_step if wake_step is None else wake_step
         cc = contact_constraints
-        alpha = k.contact_alpha if soft else 0.0
-        rigid = s.rigid_grains and alpha == 0.0  # compliant contacts keep the particle sweep
-        grid = () if rigid else (cc.Colouring(*lists.grid()),)
         self.dispatch(
             family,
-            rigid_contacts.rigid_sweep if rigid else cc.contact_sweep,
+            cc.contact_sweep,
             st.arrays(),
             self.model_arrays,
             cc.PairRows(*lists.sweep_rows()),
-            *grid,
+            cc.Colouring(*lists.grid()),
             cc.PairEntries(
                 pairs.allowance,
                 pairs.anchor,
@@ -588,11 +584,11 @@ class XpbdSolver:
                 k.friction.anchored,
                 normal,
                 k.cohesion,
-                alpha,
+                k.contact_alpha if soft else 0.0,
                 k.crush,
                 CONTACT_DAMPING,
             ),
-            *(() if rigid else (self.threads,)),
+            self.threads,
         )
 
     def _adhesion(self, st: State, pairs: Contacts) -> None:
