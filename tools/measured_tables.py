@@ -309,6 +309,33 @@ TABLES = {
             ("after the walls (mm)", value("walls")),
         ],
     ),
+    "rigid_contacts": (
+        "rigid_contacts.jsonl",
+        lambda r: r["case"] == "contact response",
+        [
+            ("contact response", field("response")),
+            ("substeps × iterations", lambda r: f"{r['substeps']} × {r['iterations']}"),
+            ("ball, 890: atan H/R at 0.3 s / 1 s (°)", pair("ball_hr_0_3", "ball_hr_1")),
+            ("its surface slope at 1 s (°)", value("ball_surface_1")),
+            ("grain–grain contacts per grain", value("contacts_per_grain")),
+            ("contacts sticking", value("sticking")),
+            ("largest overlap, last 10 frames (r)", value("penetration")),
+            ("stream, 300: atan H/R / surface slope at 2.5 s (°)", pair("stream_hr_2_5", "stream_surface_2_5")),
+            ("s, ball / stream", pair("ball_seconds", "stream_seconds")),
+        ],
+    ),
+    "rigid_pass_overlap": (
+        "rigid_contacts.jsonl",
+        lambda r: r["case"] == "overlap through a pass",
+        [
+            ("substeps (2 iterations), rigid grains", field("substeps")),
+            ("after pre-stabilisation (mm)", value("pre-stabilisation")),
+            ("after the prediction (mm)", value("predicted")),
+            ("after a contact sweep (mm)", value("sweep")),
+            ("after shape matching (mm)", value("shape matching")),
+            ("after the walls (mm)", value("walls")),
+        ],
+    ),
     "solver_passes": (
         "solver_passes.jsonl",
         lambda r: r["case"] == "solver passes",
