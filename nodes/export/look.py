@@ -25,6 +25,10 @@ PREFIX = "nodegraph:principled:"
 # which closes the slab with its fat lines: light enters through the flesh's faces, and the fat's opaque faces
 # reflect it back into the flesh from inside (a ray keeps its medium on a reflection)
 VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk", "salmon_flesh", "tuna_flesh")
+# elements whose skin is a thin wet film over their medium: cooked rice, coated by the adherent layer of starch and
+# water it took up in cooking (Cookery Science 42(6):394). The film reflects Fresnel's share at its roughness and
+# passes the rest without bending it (``has_film``)
+FILMED_ELEMENTS = ("rice",)
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 
 
@@ -52,8 +56,10 @@ def principled_attributes(material: Material, translucency: float) -> dict[str, 
         look["mediumSigmaT"] = sigma_t  # mm⁻¹, every channel
         look["mediumAlbedo"] = tuple(float(c) for c in albedo)
         look["boundaryRoughness"] = boundary_roughness(material)
-        if not has_skin(material):  # index-matched: the boundary neither reflects nor bends the light
+        if not has_skin(material):  # index-matched: the boundary does not bend the light
             look["boundaryIor"] = 1.0
+        if has_film(material):  # what reflects is the film over it, at the element's IOR
+            look["filmIor"] = float(material.ior)
     return look
 
 
@@ -108,12 +114,21 @@ def is_volumetric(material: Material) -> bool:
 
 
 def has_skin(material: Material) -> bool:
-    """Whether a volumetric element's medium lies behind a dielectric skin (rice, yolks, shaved ice soaked with
-    syrup: ``materials.is_wet``) or behind none (dry shaved ice: a tuft of shavings whose pores open to the air;
-    ``mitsuba_scene.boundary_bsdf``)."""
+    """Whether a volumetric element's medium lies behind a dielectric skin that bends the light (yolks, fish flesh,
+    shaved ice soaked with syrup: ``materials.is_wet``) or behind an index-matched boundary (dry shaved ice: a tuft
+    of shavings whose pores open to the air; rice: its film, ``has_film``; ``mitsuba_scene.boundary_bsdf``)."""
     from ..shading.materials import is_ice, is_wet
 
-    return not is_ice(material) or is_wet(material)
+    return (not is_ice(material) or is_wet(material)) and not has_film(material)
+
+
+def has_film(material: Material) -> bool:
+    """Whether a volumetric element's skin is a thin film (``FILMED_ELEMENTS``: cooked rice) that reflects Fresnel's
+    share at its roughness and passes the rest unbent. Its light under the skin converges in a few samples, since
+    every scattering event inside samples the lights through the film (``mitsuba_scene.medium``); behind a refracting
+    skin none can, and at the preview's 3-5 spp the denoiser made chalky beads of a few bright samples (docs/look.md,
+    "Cooked rice: a wet film over a milky grain")."""
+    return material.name in FILMED_ELEMENTS
 
 
 def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:
