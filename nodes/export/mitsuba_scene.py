@@ -15,10 +15,10 @@ The path tracer does the lighting, so surfaces get their materials, not the bake
 - the rest (the bowl's glaze) is ``principled`` with its clearcoat.
 
 With ``subsurface`` on (the default), light goes under the skin for real (Mitsuba's ``volpath``): each closed
-element of rice and each ikura yolk is a homogeneous scattering medium, the yolk's behind a
-dielectric boundary, the grain's behind its wet film, which passes light unbent and reflects in a pass of its own
-(``medium``, ``boundary_bsdf``, ``highlight_dict``); each shaved-ice flake (a tuft of finer shavings in air, no skin of its own) is
-one behind no boundary at all (``null``). The medium's mean free path and single-scattering albedo come from the
+element of rice and each ikura yolk is a homogeneous scattering medium, the yolk's behind a dielectric boundary,
+the grain's behind its wet film, which passes light unbent and reflects in a pass of its own (``medium``,
+``boundary_bsdf``, ``highlight_dict``); each shaved-ice flake (a tuft of finer shavings in air, no skin of its own)
+is one behind no boundary at all (``null``). The medium's mean free path and single-scattering albedo come from the
 material's principled subsurface radius and colour (G Table 3) by the random-walk mapping of Chiang, Kutz and
 Burley 2016, the one Blender's Cycles uses for the same parameters, so both renderers read the same numbers.
 Rice's radius and colour follow its water content (``shading.materials.rice_material``; G fig. 3.1.2.1: wetter
