@@ -82,15 +82,6 @@ def random_walk(sigma_t, albedo, n, h, photons, depth=None, seed=1):
     return reflected / photons, transmitted / photons
 
 
-def dipole(albedo, n):
-    """Total diffuse reflectance of a semi-infinite isotropic medium behind index ``n`` (Jensen et al. 2001)."""
-    a = np.asarray(albedo, np.float64)
-    fdr = -1.440 / n**2 + 0.710 / n + 0.668 + 0.0636 * n
-    big_a = (1.0 + fdr) / (1.0 - fdr)
-    s = np.sqrt(3.0 * (1.0 - a))
-    return a / 2.0 * (1.0 + np.exp(-4.0 / 3.0 * big_a * s)) * np.exp(-s)
-
-
 def mitsuba(bsdf: dict, interior: dict | None, h: float, side: str, spp: int) -> np.ndarray:
     import mitsuba as mi
 
@@ -157,14 +148,15 @@ def main() -> None:
     )
     args = parser.parse_args()
     from nodes.export import mitsuba_scene as ms
-    from nodes.export.look import medium_coefficients, principled_attributes
+    from nodes.export.look import diffuse_reflectance, principled_attributes, random_walk_coefficients
     from nodes.shading.materials import ikura_materials, rice_material
 
     def show(label, values):
         print(f"{label:58s} {' / '.join(f'{v:.3f}' for v in values)}")
 
     rice = rice_material(15.0)
-    sigma_t, albedo = medium_coefficients(rice)
+    channels, albedo = random_walk_coefficients(rice.subsurface_color, rice.subsurface_radius)  # the refracting grain
+    sigma_t = float(channels.mean())
     look = principled_attributes(rice, 0.0)
     print(f"rice at 15 % water: σt {sigma_t:.3f} mm⁻¹, albedo {np.round(albedo, 4).tolist()}, IOR {rice.ior}")
     for h, sides in ((2.7, ("top", "bottom")), (60.0, ("top",))):
@@ -174,7 +166,10 @@ def main() -> None:
             show(f"{what}: reference, depth 64", random_walk(sigma_t, albedo, rice.ior, h, args.photons, DEPTH)[k])
             show(f"{what}: reference, unlimited", random_walk(sigma_t, albedo, rice.ior, h, args.photons)[k])
             if h > 10:
-                show(f"{what}: dipole + F0", dipole(albedo, rice.ior) + float(fresnel(np.array(1.0), 1.0, rice.ior)))
+                show(
+                    f"{what}: dipole + F0",
+                    diffuse_reflectance(albedo, rice.ior) + float(fresnel(np.array(1.0), 1.0, rice.ior)),
+                )
             show(f"{what}: Mitsuba (preview)", mitsuba(ms.boundary_bsdf(rice), ms.medium(rice), h, side, args.spp))
             show(f"{what}: Cycles (add-on)", cycles(look, "rice", h, side, args.spp // 4, args.addon))
     membrane = ikura_materials()[0]

@@ -571,6 +571,15 @@ TABLES = {
             ("Cycles, the add-on", value("cycles")),
         ],
     ),
+    "rice_film": (
+        "rice_film.jsonl",
+        None,
+        [
+            ("measured", field("measured")),
+            ("behind a refracting skin", value("skin")),
+            ("behind the film", value("film")),
+        ],
+    ),
     "furnace": (
         "furnace.jsonl",
         None,

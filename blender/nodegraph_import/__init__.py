@@ -10,7 +10,8 @@ add-on sets the Principled BSDF from them:
 
 - the light under the skin the preview renders: where the files carry a medium (``mediumSigmaT``,
   ``mediumAlbedo``: rice grains, ikura yolks, ice flakes) a clear skin of the preview's roughness (none where the
-  files say ``boundaryIor`` 1: ice) over a volume
+  files say ``boundaryIor`` 1: ice; where they give a ``filmIor``, rice, a coat at that IOR and the skin's
+  roughness over the unbent boundary: the wet film) over a volume
   that scatters and absorbs as the preview's medium (Cycles renders it; set enough volume bounces);
 - transmission and IOR (alpha back to 1; an element inside another, the yolk in the egg's fluid, gets its IOR
   relative to it, ``exteriorIor``: Cycles has no stack of IORs); the colour light keeps through the element is
@@ -111,11 +112,16 @@ def apply_look(material) -> bool:
         inputs["Transmission Weight"].default_value = 1.0
         inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
         inputs["Roughness"].default_value = look["boundaryRoughness"]
-        if "boundaryIor" in look:  # no skin (shaved ice): an index-matched boundary, neither reflecting nor bending
+        if "boundaryIor" in look:  # no skin (shaved ice) or a film (rice): an index-matched boundary, not bending
             inputs["IOR"].default_value = look["boundaryIor"]
             inputs["Roughness"].default_value = 0.0
         inputs["Subsurface Weight"].default_value = 0.0
         inputs["Coat Weight"].default_value = 0.0
+        if "filmIor" in look:  # rice's wet film: the coat reflects Fresnel's share at its roughness, as the preview's
+            inputs["Coat Weight"].default_value = 1.0  # film pass; the rest passes unbent into the medium
+            inputs["Coat IOR"].default_value = look["filmIor"]
+            inputs["Coat Roughness"].default_value = look["boundaryRoughness"]
+            inputs["Coat Tint"].default_value = (1.0, 1.0, 1.0, 1.0)
         inputs["Alpha"].default_value = 1.0
         material.surface_render_method = "DITHERED"
         _set_medium(material, look)

@@ -25,6 +25,15 @@ PREFIX = "nodegraph:principled:"
 # which closes the slab with its fat lines: light enters through the flesh's faces, and the fat's opaque faces
 # reflect it back into the flesh from inside (a ray keeps its medium on a reflection)
 VOLUMETRIC_ELEMENTS = ("rice", "ikura_yolk", "salmon_flesh", "tuna_flesh")
+# elements whose skin is a thin wet film over their medium: cooked rice, coated by the adherent layer of starch and
+# water it took up in cooking (Cookery Science 42(6):394). The film reflects Fresnel's share at its roughness and
+# passes the rest without bending it (``has_film``)
+FILMED_ELEMENTS = ("rice",)
+# the medium behind a film stands in for the grain behind a refracting skin (``film_medium``): σt scaled by this and
+# each channel's albedo the dipole's equivalent (``film_albedo``) keep a grain-thick slab's reflectance and
+# transmittance (2.7 mm, 15 % water, normal incidence) within 0.02 of the refracting skin's (random walk, 60,000
+# paths; docs/look.md, "Cooked rice: a wet film over a milky grain"); unscaled, R was 0.04 under and T 0.06 under
+FILM_SIGMA_T = 0.8
 TRANSMISSIVE = 0.5  # transmission at or above which a material is a dielectric
 
 
@@ -52,8 +61,10 @@ def principled_attributes(material: Material, translucency: float) -> dict[str, 
         look["mediumSigmaT"] = sigma_t  # mm⁻¹, every channel
         look["mediumAlbedo"] = tuple(float(c) for c in albedo)
         look["boundaryRoughness"] = boundary_roughness(material)
-        if not has_skin(material):  # index-matched: the boundary neither reflects nor bends the light
+        if not has_skin(material):  # index-matched: the boundary does not bend the light
             look["boundaryIor"] = 1.0
+        if has_film(material):  # what reflects is the film over it, at the element's IOR
+            look["filmIor"] = float(material.ior)
     return look
 
 
@@ -108,19 +119,60 @@ def is_volumetric(material: Material) -> bool:
 
 
 def has_skin(material: Material) -> bool:
-    """Whether a volumetric element's medium lies behind a dielectric skin (rice, yolks, shaved ice soaked with
-    syrup: ``materials.is_wet``) or behind none (dry shaved ice: a tuft of shavings whose pores open to the air;
-    ``mitsuba_scene.boundary_bsdf``)."""
+    """Whether a volumetric element's medium lies behind a dielectric skin that bends the light (yolks, fish flesh,
+    shaved ice soaked with syrup: ``materials.is_wet``) or behind an index-matched boundary (dry shaved ice: a tuft
+    of shavings whose pores open to the air; rice: its film, ``has_film``; ``mitsuba_scene.boundary_bsdf``)."""
     from ..shading.materials import is_ice, is_wet
 
-    return not is_ice(material) or is_wet(material)
+    return (not is_ice(material) or is_wet(material)) and not has_film(material)
+
+
+def has_film(material: Material) -> bool:
+    """Whether a volumetric element's skin is a thin film (``FILMED_ELEMENTS``: cooked rice) that reflects Fresnel's
+    share at its roughness and passes the rest unbent. Its light under the skin converges in a few samples, since
+    every scattering event inside samples the lights through the film (``mitsuba_scene.medium``); behind a refracting
+    skin none can, and at the preview's 3-5 spp the denoiser made chalky beads of a few bright samples (docs/look.md,
+    "Cooked rice: a wet film over a milky grain")."""
+    return material.name in FILMED_ELEMENTS
 
 
 def medium_coefficients(material: Material) -> tuple[float, np.ndarray]:
     """(σt in mm⁻¹, the same in every channel; single-scattering albedo per channel) of the medium inside a
-    volumetric element (``medium``): what the exported files hand a renderer that builds the same medium."""
+    volumetric element (``medium``): what the exported files hand a renderer that builds the same medium; behind a
+    film (``has_film``), the medium that stands in for the grain behind a refracting skin (``film_medium``)."""
     sigma_t, single = random_walk_coefficients(material.subsurface_color, material.subsurface_radius)
+    if has_film(material):
+        return film_medium(float(sigma_t.mean()), single, material.ior)
     return float(sigma_t.mean()), single
+
+
+def diffuse_reflectance(albedo, n: float) -> np.ndarray:
+    """Total diffuse reflectance of a semi-infinite isotropic medium of single-scattering ``albedo`` behind index
+    ``n`` (the dipole: Jensen, Marschner, Levoy and Hanrahan 2001, with Groenhuis et al.'s F_dr)."""
+    a = np.asarray(albedo, np.float64)
+    fdr = -1.440 / n**2 + 0.710 / n + 0.668 + 0.0636 * n
+    big_a = (1.0 + fdr) / (1.0 - fdr)
+    s = np.sqrt(3.0 * (1.0 - a))
+    return a / 2.0 * (1.0 + np.exp(-4.0 / 3.0 * big_a * s)) * np.exp(-s)
+
+
+def film_albedo(albedo, n: float) -> np.ndarray:
+    """The single-scattering albedo whose medium behind no boundary reflects as much light as one of ``albedo``
+    behind index ``n`` (``diffuse_reflectance``; bisection): a refracting skin keeps light inside by total internal
+    reflection, where more of it is absorbed, so the index-matched equivalent absorbs more."""
+    target = diffuse_reflectance(albedo, n)
+    lo, hi = np.zeros_like(target), np.ones_like(target)
+    for _ in range(48):
+        mid = 0.5 * (lo + hi)
+        below = diffuse_reflectance(mid, 1.0) < target
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def film_medium(sigma_t: float, albedo, n: float) -> tuple[float, np.ndarray]:
+    """(σt, albedo) behind a film for a medium of ``sigma_t`` and ``albedo`` behind a refracting skin of index
+    ``n``: σt × ``FILM_SIGMA_T``, the albedo ``film_albedo``'s."""
+    return sigma_t * FILM_SIGMA_T, film_albedo(albedo, n)
 
 
 def boundary_roughness(material: Material) -> float:

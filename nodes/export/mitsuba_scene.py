@@ -15,9 +15,10 @@ The path tracer does the lighting, so surfaces get their materials, not the bake
 - the rest (the bowl's glaze) is ``principled`` with its clearcoat.
 
 With ``subsurface`` on (the default), light goes under the skin for real (Mitsuba's ``volpath``): each closed
-element of rice and each ikura yolk is a homogeneous scattering medium behind a (rough)
-dielectric boundary (``medium``); each shaved-ice flake (a tuft of finer shavings in air, no skin of its own) is
-one behind no boundary at all (``null``). The medium's mean free path and single-scattering albedo come from the
+element of rice and each ikura yolk is a homogeneous scattering medium, the yolk's behind a dielectric boundary,
+the grain's behind its wet film, which passes light unbent and reflects in a pass of its own (``medium``,
+``boundary_bsdf``, ``highlight_dict``); each shaved-ice flake (a tuft of finer shavings in air, no skin of its own)
+is one behind no boundary at all (``null``). The medium's mean free path and single-scattering albedo come from the
 material's principled subsurface radius and colour (G Table 3) by the random-walk mapping of Chiang, Kutz and
 Burley 2016, the one Blender's Cycles uses for the same parameters, so both renderers read the same numbers.
 Rice's radius and colour follow its water content (``shading.materials.rice_material``; G fig. 3.1.2.1: wetter
@@ -58,6 +59,7 @@ from .look import (
     TRANSMISSIVE,
     boundary_roughness,
     crossing_tint,
+    has_film,
     has_skin,
     is_volumetric,
     medium_coefficients,
@@ -87,6 +89,9 @@ HIGHLIGHT_RADIANCE = 60.0
 # out-of-focus glint's disc as a few dots (a pixel of a 6.5-px disc sees a 1–3 px glint from ≈ 1–2 % of the
 # aperture: 10 % noise at ≈ 7,000 spp; docs/look.md, "Bokeh, not dots")
 HIGHLIGHT_SPP = 2
+# the film pass (``highlight_dict`` with ``film``: rice's sheen, the softboxes in its rough lobe) samples a light
+# at every sample; 8 a pixel leave its broad sheen smooth, added after the denoiser as the glints are
+FILM_SPP = 8
 # the glints' pass renders only the window of the film where a glint can be (``glints_window``): the subject's hull
 # widened by the lens's blur and this many pixels. On the main job 58 % of the frame, 2.3–2.4 → 1.6 CPU s, every
 # glint pixel of the whole-frame pass inside it (3–4 px from its edges at the bowl's rim)
@@ -234,9 +239,10 @@ def medium(material: Material) -> dict:
         "sigma_t": _rgb(np.ones(3)),  # Mitsuba reads an RGB as a reflectance in [0, 1]: the scale carries the unit
         "scale": sigma_t,
         "phase": {"type": "isotropic"},
-        # light sampling from inside only through a null boundary (shaved ice): a dielectric one blocks every
-        # shadow ray cast from within (volpath counts light only through a null boundary), so each was a wasted
-        # ray; light still reaches the medium by the phase function's own direction and the boundary's refraction
+        # light sampling from inside only through a null boundary (shaved ice, rice's film): a dielectric one blocks
+        # every shadow ray cast from within (volpath counts light only through a null boundary), so each was a
+        # wasted ray; light still reaches the medium by the phase function's own direction and the boundary's
+        # refraction
         "sample_emitters": not has_skin(material),
     }
 
@@ -249,7 +255,9 @@ def boundary_bsdf(material: Material) -> dict:
     GGX skin in the add-on conserves it (docs/look.md, "The skin over a medium conserves energy"). The skin's
     roughness stays in its glints (``gloss``) and in the files (``look.boundary_roughness``).
 
-    Dry or damp shaved ice has none (``null``; soaked through, ``materials.is_wet``, it has one): a flake stands
+    Rice's skin is a film (``look.has_film``): ``null`` here, the film's reflection a pass of its own
+    (``highlight_dict`` with ``film``). Dry or damp shaved ice has none (``null``; soaked through,
+    ``materials.is_wet``, it has one): a flake stands
     for a tuft of shavings 0.05–0.1 mm thin with air between, whose pores open to the air; its countless small
     interfaces are the medium's scattering, not one skin. Behind a dielectric skin the light that crossed a flake
     unscattered was refracted and reflected as by glass, and the heap read as grey glass (docs/look.md,
@@ -502,17 +510,25 @@ def backdrop_gloss(backdrop: dict) -> dict | None:
     return {**bsdf, "base_color": _rgb((0.0, 0.0, 0.0))} if bsdf["type"] == "principled" else None
 
 
-def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = None) -> dict:
+def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = None, film: bool = False) -> dict:
     """The glints' pass of a scene description (``scene_dict``): the same shapes (PLY files) and camera, every
     surface reflecting only its gloss (``specular_bsdf``, ``backdrop_gloss``), lit by the key's bright core
     alone (``HIGHLIGHT_ANGLE``, ``HIGHLIGHT_RADIANCE``), paths of one bounce; rendered in ``window`` of the film
     if given (``glints_window``), through a pinhole at the lens's centre, sharp at every depth, for ``defocus`` to
-    blur as the thin lens would (with ``DEPTH_AOV``'s distances)."""
+    blur as the thin lens would (with ``DEPTH_AOV``'s distances).
+
+    ``film``: the film pass. The films over media (``look.has_film``: rice) reflect the studio's softboxes (key,
+    fill, rim) and nothing else does: the path-traced pass passes light through a film unbent and reflects none
+    of it (``boundary_bsdf``), so the film's sheen is this one-bounce pass, where its rough lobe samples the
+    softboxes directly, every sample, and no denoiser blurs it."""
     shapes = {}
     for key, shape in description.items():
         if key.startswith("shape_"):
             material = scene.materials[int(key.removeprefix("shape_"))]
-            bsdf = specular_bsdf(material, "interior" in shape and has_skin(material))
+            skin = "interior" in shape and (has_skin(material) or has_film(material))
+            bsdf = specular_bsdf(material, skin)
+            if film and not ("interior" in shape and has_film(material)):
+                bsdf = {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
             shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
     centre, radius = glints_core(description)
     sensor = {k: v for k, v in description["sensor"].items() if k not in ("aperture_radius", "focus_distance")}
@@ -525,21 +541,20 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
             "crop_width": window.width,
             "crop_height": window.height,
         }
+    black = {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
+    if film:
+        lights = {name: description[name] for name in studio.LIGHTS}
+        backdrop = black
+    else:
+        core = {"type": "area", "radiance": {"type": "rgb", "value": scene.key_gain * HIGHLIGHT_RADIANCE}}
+        lights = {"key": {"type": "sphere", "center": centre.tolist(), "radius": radius, "emitter": core}}
+        backdrop = backdrop_gloss(description["backdrop"]) or black
     return {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": 2},
         "sensor": sensor,
-        "key": {
-            "type": "sphere",
-            "center": centre.tolist(),
-            "radius": radius,
-            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": scene.key_gain * HIGHLIGHT_RADIANCE}},
-        },
-        "backdrop": {
-            **description["backdrop"],
-            "bsdf": backdrop_gloss(description["backdrop"])
-            or {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))},
-        },
+        **lights,
+        "backdrop": {**description["backdrop"], "bsdf": backdrop},
         **shapes,
     }
 
@@ -876,6 +891,9 @@ def render_layers(
             window = glints_window(set_up, camera, width, height, glints_core(description), crop)
         pinhole = mi.load_dict(highlight_dict(scene, description, window), optimize=False)
         part = np.asarray(mi.render(pinhole, seed=seed), np.float32)[..., 0:3]
+        if subsurface and any(has_film(m) for m in scene.materials):  # the films' sheen, in the same frame
+            sheen = mi.load_dict(highlight_dict(scene, description, window, film=True), optimize=False)
+            part = part + np.asarray(mi.render(sheen, seed=seed, spp=FILM_SPP), np.float32)[..., 0:3]
         distance = np.zeros_like(part[..., :1])
         if description["sensor"]["type"] == "thinlens":  # its blur (``defocus``) needs each pixel's depth
             depth = mi.load_dict({"type": "aov", "aovs": DEPTH_AOV})

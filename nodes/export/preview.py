@@ -103,9 +103,10 @@ def _cost(q: CostQuery) -> Cost:
         "subsurface": Param(
             bool,
             True,
-            "light under the skin: a scattering medium inside each rice grain and ikura yolk behind a "
-            "dielectric boundary (volpath; mean free path and albedo from the material's subsurface radius and "
-            "colour); off: the thin principled surface with the CDRF translucency per vertex",
+            "light under the skin: a scattering medium inside each rice grain (behind its wet film, whose sheen is "
+            "a pass of its own) and ikura yolk (behind a dielectric boundary) (volpath; mean free path and albedo "
+            "from the material's subsurface radius and colour); off: the thin principled surface with the CDRF "
+            "translucency per vertex",
         ),
         "elevation": Param(float, 40.0, "camera elevation above the horizon", range=(-89.0, 89.0), units="degrees"),
         "azimuth": Param(float, 20.0, "camera azimuth (0 looks along +y)", range=(-360.0, 360.0), units="degrees"),

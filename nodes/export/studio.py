@@ -104,6 +104,9 @@ def camera_side(view: np.ndarray) -> np.ndarray:
     return h / np.linalg.norm(h) if np.linalg.norm(h) > 1e-6 else np.array([0.0, -1.0, 0.0])
 
 
+LIGHTS = ("key", "fill", "rim")  # the studio's softboxes (``lights``), by name in the scene description
+
+
 def lights(
     target: np.ndarray, radius: float, view: np.ndarray, key_direction, key_gain: float = 1.0
 ) -> dict[str, Light]:

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from nodes.export import export
-from nodes.export.look import has_skin, is_volumetric
+from nodes.export.look import has_film, has_skin, is_volumetric
 
 REPO = Path(__file__).resolve().parents[2]
 SCRIPT = Path(__file__).with_name("blender_roundtrip.py")
@@ -87,8 +87,12 @@ def test_blender_sees_the_whole_look(dish, tmp_path, fmt):
             assert seen["volume"] and seen["scatters"] and seen["subsurface"] == 0.0
             if has_skin(material):  # relative to what it sits in (the yolk in the egg's fluid): no stack of IORs
                 assert seen["ior"] == pytest.approx(material.ior / material.exterior_ior, abs=1e-6)
-            else:  # shaved ice: an index-matched boundary, as the preview's null one
+            else:  # shaved ice, rice's film: an index-matched boundary, as the preview's null one
                 assert seen["ior"] == 1.0 and seen["roughness"] == 0.0
+            if has_film(material):  # rice: the film reflects as a coat at the rice's IOR, as the preview's film pass
+                assert seen["coat_weight"] == 1.0 and seen["coat_ior"] == pytest.approx(material.ior, abs=1e-6)
+            else:
+                assert seen["coat_weight"] == 0.0
         elif material.transmission > 0:  # the egg's membrane: refracts, not a see-through ghost
             assert seen["transmission"] == pytest.approx(material.transmission, abs=1e-6)
             assert seen["ior"] == pytest.approx(material.ior, abs=1e-6)
