@@ -91,8 +91,14 @@ def render(path: Path) -> float:
 
     scene = bpy.context.scene
     depsgraph = bpy.context.evaluated_depsgraph_get()  # world matrices of the imported objects and instances
-    drawn = [(i.matrix_world.copy(), i.object) for i in depsgraph.object_instances if i.object.type == "MESH"]
-    corners = [matrix @ Vector(c) for matrix, o in drawn for c in o.bound_box]
+    # an instance's object is valid only during the iteration (Blender's ``Depsgraph.object_instances``): read its
+    # box there; a box read afterwards came from freed memory, and one run in about six framed a black nothing
+    corners = [
+        i.matrix_world @ Vector(c)
+        for i in depsgraph.object_instances
+        if i.object.type == "MESH"
+        for c in i.object.bound_box
+    ]
     low = Vector([min(c[i] for c in corners) for i in range(3)])
     high = Vector([max(c[i] for c in corners) for i in range(3)])
     centre, size = (low + high) / 2, max((high - low).length, 1e-3)
