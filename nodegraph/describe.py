@@ -7,6 +7,7 @@ import dataclasses
 from pathlib import Path
 
 from .errors import NodegraphError
+from .yaml_source import nearest_recipe
 
 
 def describe_spec(spec, values: StepValues | None = None) -> str:
@@ -112,7 +113,9 @@ def describe_command(first: str, second: str | None, registry) -> str:
     beside the defaults."""
     recipe = Path(first) if second is not None else None  # describe RECIPE STEP: the step as that recipe sets it
     if recipe is not None and not recipe.is_file():
-        raise NodegraphError(f"{recipe}: no such recipe (describe RECIPE.yaml STEP, or describe STEP)")
+        near = nearest_recipe(recipe)
+        hint = f"; did you mean {near}?" if near else ""
+        raise NodegraphError(f"{recipe}: no such recipe{hint} (describe RECIPE.yaml STEP, or describe STEP)")
     given = second if second is not None else first
     name, _, setting = given.partition(".")  # README's `step.setting` names a step's parameter
     spec = registry.get(name)

@@ -146,6 +146,9 @@ def test_describe_shows_what_the_recipe_sets_beside_the_default(recipe, tmp_path
     assert capsys.readouterr().out.splitlines()[2].startswith("count: int  default 10  recipe 8  --draft 4")
     assert cli("describe", str(recipe), "ptz") == 2
     assert "no step 'ptz' in " in capsys.readouterr().err
+    # a recipe named without its folder: the nearest recipe, as ``run`` suggests it (a new user's describe)
+    assert cli("describe", str(recipe.with_name("toyrn.yaml")), "pts.count") == 2
+    assert f"no such recipe; did you mean {recipe}?" in capsys.readouterr().err
 
 
 def test_failing_node_exit_status_1(recipe, capsys):

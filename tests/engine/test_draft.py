@@ -150,3 +150,20 @@ def test_the_kakigori_draft_is_the_final_with_fewer_larger_flakes():
         width >= 480
         and width * final.nodes["preview"].params["height"] == height * final.nodes["preview"].params["width"]
     )
+
+
+def test_the_sushi_draft_slice_follows_its_smaller_block():
+    """A new user's draft of the sushi showed a full-size salmon slice arching over a block 0.6 its size: the draft
+    shrank the block, not the slice that dresses it. The slice keeps its overhang: its length and width over the
+    block's are the final's, its thickness the final's."""
+    from pathlib import Path
+
+    from nodegraph.registry import default_registry
+
+    path = Path(__file__).resolve().parents[2] / "graphs" / "sushi.yaml"
+    final = load_recipe(path, default_registry())
+    draft = load_recipe(path, default_registry(), draft=True)
+    block = [np.asarray(r.nodes["nigiri"].params["extents"][:2], float) for r in (final, draft)]
+    fish = [np.asarray(r.nodes["fish"].params["size"], float) for r in (final, draft)]
+    assert fish[1][:2] / block[1] == pytest.approx(fish[0][:2] / block[0], rel=0.03)
+    assert fish[1][2] == fish[0][2]
