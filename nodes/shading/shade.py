@@ -20,11 +20,17 @@ KEY_INTENSITY = 1.2
 
 
 def _check(params):
+    from .materials import parse_overrides
+
     problems = []
     n = len(params.get("light_directions", ()))
     for name in ("light_colors", "light_intensities"):
         if len(params.get(name, ())) not in (1, n):
             problems.append((name, f"give one value for all lights or one per light ({n} directions)"))
+    try:  # a misspelt preset is refused by ``check``, not after the simulation
+        parse_overrides(params.get("presets", []))
+    except ValueError as error:
+        problems.append(("presets", str(error)))
     return problems
 
 
@@ -207,4 +213,11 @@ def shade(
         egg_tints=egg_tints,
         key_gain=float(light_intensities[0]) / KEY_INTENSITY,
     )
+    kinds = {lib.kind for aggregate in aggregates for lib in aggregate.libraries}
+    unknown = sorted(set(settings.presets) - kinds)
+    if unknown:  # a misspelt kind changed nothing, silently
+        raise ValueError(
+            f"presets: {', '.join(repr(k) for k in unknown)} names no element kind of this scene; "
+            f"its kinds are {', '.join(sorted(kinds))}"
+        )
     return shade_scene(list(aggregates), list(scenery or []), settings, list(filling or []))

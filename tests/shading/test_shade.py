@@ -248,6 +248,17 @@ def test_bad_input_at_run_time_gives_clear_errors(scene_inputs):
     )
 
 
+def test_a_misspelt_preset_is_refused_by_check_and_a_misspelt_kind_by_the_run(scene_inputs):
+    """A new user's ``--set "shade.presets=[slamon=tuna]"`` changed nothing, without a word, and ``[salmon=tunaa]``
+    passed ``check`` and failed after the simulation: a preset is checked with the recipe, a kind against the
+    scene's kinds."""
+    base = {"light_directions": [(0, 0, 1)], "light_colors": [(1, 1, 1)], "light_intensities": [1.0]}
+    assert [name for name, _ in shade.check({**base, "presets": ["salmon=tunaa"]})] == ["presets"]
+    assert not shade.check({**base, "presets": ["salmon=tuna"]})
+    with pytest.raises(ValueError, match="'slamon' names no element kind of this scene; its kinds are "):
+        shade.call(**scene_inputs, presets=["slamon=tuna"])
+
+
 def test_unknown_kind_and_empty_aggregates_are_refused(scene_inputs):
     from dataclasses import replace
 
