@@ -298,6 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     clean.add_argument("recipe", type=Path)
     clean.add_argument("--dry-run", action="store_true", help="list what would go; remove nothing")
+    clean.add_argument("--yes", "-y", action="store_true", help="remove without asking (at a terminal it asks)")
     _common(clean)
 
     cache = sub.add_parser(
@@ -829,7 +830,8 @@ def _recipe_name(path: Path) -> str:
 
 
 def _cmd_clean(args, registry) -> int:
-    """List, then remove (not with --dry-run), what ``clean.prunable`` finds for the recipe."""
+    """List, then remove (not with --dry-run), what ``clean.prunable`` finds for the recipe; at a terminal only once
+    the user says yes (``--yes``: without asking): a user's earlier results are theirs."""
     from .clean import prunable, remove
 
     if not args.recipe.is_file():
@@ -838,10 +840,14 @@ def _cmd_clean(args, registry) -> int:
     if not found.files and not found.manifests:
         print(f"nothing to prune: {args.recipe}'s output folders hold only its latest run's files")
         return 0
+    ask = not args.dry_run and not args.yes and sys.stdin.isatty()
     for path, size in sorted(found.files.items()):
-        print(f"{'would remove' if args.dry_run else 'removing'} {path} ({format_size(size)})")
-    done = "would free" if args.dry_run else "freed"
+        print(f"{'would remove' if args.dry_run or ask else 'removing'} {path} ({format_size(size)})")
+    done = "would free" if args.dry_run or ask else "freed"
     print(f"{done} {format_size(found.bytes)}: {len(found.files)} file(s) in {len(found.folders())} folder(s)")
+    if ask and input("remove them? [y/N] ").strip().lower() not in ("y", "yes"):
+        print("nothing removed")
+        return 1
     if not args.dry_run:
         remove(found)
     return 0

@@ -85,6 +85,24 @@ def test_clean_keeps_the_latest_runs_files_and_prunes_what_it_kept_from_an_earli
     assert sorted(p.name for p in folder.iterdir()) == ["manifest.json", "surf.ply"]
 
 
+def test_clean_at_a_terminal_asks_first(tmp_path, monkeypatch, capsys):
+    """A new user's ``nodegraph clean`` removed their earlier results without a word: at a terminal it lists what
+    would go and removes it only on a yes (``--yes``: without asking)."""
+    recipe = tmp_path / "toyrun.yaml"
+    recipe.write_text(RECIPE)
+    monkeypatch.chdir(tmp_path)
+    assert run(recipe, tmp_path / "c") == 0
+    assert run(recipe, tmp_path / "c", "--output", "surf") == 0
+    earlier = tmp_path / "outputs" / "toyrun" / "merge.spheres.npz"
+    monkeypatch.setattr(sys.stdin, "isatty", lambda: True)
+    answers = iter(["", "y"])
+    monkeypatch.setattr("builtins.input", lambda prompt: next(answers))
+    capsys.readouterr()
+    assert main(["clean", str(recipe)]) == 1  # Enter: no
+    assert earlier.is_file() and "nothing removed" in capsys.readouterr().out
+    assert main(["clean", str(recipe)]) == 0 and not earlier.exists()
+
+
 def test_clean_of_a_missing_recipe_says_so(tmp_path, capsys):
     assert main(["clean", str(tmp_path / "nope.yaml")]) == 2
     assert "no such recipe file" in capsys.readouterr().err
