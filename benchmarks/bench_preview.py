@@ -318,7 +318,7 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
 
 def passes(quick: bool, cache_dir: Path | None) -> str:
     """CPU and wall seconds of each pass of the default preview (scene load, path-traced image, the denoiser's
-    guides, the glints), the same calls ``mitsuba_scene.render_layers`` makes, timed one by one."""
+    guides, the glints, rice's film), the same calls ``mitsuba_scene.render_layers`` makes, timed one by one."""
     import tempfile
 
     import mitsuba as mi
@@ -376,6 +376,15 @@ def passes(quick: bool, cache_dir: Path | None) -> str:
             f"glints: {ms.HIGHLIGHT_SPP} spp, one bounce, pinhole, in {window.width} × {window.height} px",
             lambda: np.asarray(mi.render(pinhole, seed=0), np.float32),
         )
+        if params["subsurface"] and any(ms.has_film(m) for m in scene.materials):  # rice's sheen: a pass of its own
+            sheen = clock(
+                "film: scene load",
+                lambda: mi.load_dict(ms.highlight_dict(scene, description, window, film=True), optimize=False),
+            )
+            clock(
+                f"film: {ms.FILM_SPP} spp, one bounce, pinhole, in {window.width} × {window.height} px",
+                lambda: mi.render(sheen, seed=0, spp=ms.FILM_SPP),
+            )
         depth = mi.load_dict({"type": "aov", "aovs": ms.DEPTH_AOV})
         distance = clock(
             "glints: depth, 1 spp", lambda: np.asarray(mi.render(pinhole, integrator=depth, seed=0, spp=1), np.float32)
