@@ -159,6 +159,13 @@ def test_the_cache_keeps_outputs_deflated(tmp_path):
     assert np.array_equal(again.faces, faces) and np.array_equal(again.vertices, grid)
 
 
+class _Said:
+    """A reporter that keeps what a step says, info and warnings alike."""
+
+    def __init__(self, said: list):
+        self.info = self.warn = said.append
+
+
 def test_the_eviction_line_says_what_the_cache_holds_not_what_is_left(tmp_path):
     """Issue 47: '2.0 GiB of 2.0 GiB left' read as free space; the line says what the cache holds of its limit."""
     from nodegraph.cli import _trim
@@ -168,15 +175,7 @@ def test_the_eviction_line_says_what_the_cache_holds_not_what_is_left(tmp_path):
         _store(cache, name, float(i), 1000.0 + i)
     cache.set_limit(cache.info().bytes // 2)
     said = []
-
-    class Reporter:
-        def info(self, message):
-            said.append(message)
-
-        def warn(self, message):
-            said.append(message)
-
-    _trim(cache, None, Reporter())
+    _trim(cache, None, _Said(said))
     held = format_size(cache.info().bytes)
     assert len(said) == 1 and " left" not in said[0]
     assert f"the cache now holds {held} of its {format_size(cache.limit())} limit" in said[0]
@@ -251,15 +250,7 @@ def test_an_eviction_says_once_what_went_the_limit_and_how_to_raise_it(tmp_path,
     cache.keep_run("/r/ikura_don.yaml --draft", old[:1])
     cache.set_limit(cache.info().bytes // 4)
     said = []
-
-    class Reporter:
-        def info(self, message):
-            said.append(message)
-
-        def warn(self, message):
-            said.append(message)
-
-    _trim(cache, None, Reporter())
+    _trim(cache, None, _Said(said))
     (line,) = said
     assert line.startswith("cache: removed 3 least recently used entries (") and ": b, c, a)" in line, line
     assert "the next nodegraph run /r/ikura_don.yaml --draft computes its own again" in line, line
