@@ -4,7 +4,8 @@
     python tools/kernel_bundle.py install BUNDLE      # into this installation's numba cache (a run does it itself)
     python tools/kernel_bundle.py check [BUNDLE]      # the entries whose module changed since the build
 
-``build`` runs each recipe in a fresh process with an empty numba cache and an empty node cache (``--draft``:
+``build`` runs each recipe (by default every recipe in graphs/, so that a first run of any scene compiles nothing)
+in a fresh process with an empty numba cache and an empty node cache (``--draft``:
 a kernel's argument types do not depend on the size, and a draft compiles the same kernels sooner), kernels for
 numba's ``generic`` CPU, then packs the cache files of the project's kernels. The
 bundle is kept in git (``nodegraph/kernels.tar.gz``): rebuild it after a change to a kernel's module (``check``
@@ -50,7 +51,7 @@ def main() -> None:
     sub = ap.add_subparsers(dest="command", required=True)
     b = sub.add_parser("build")
     b.add_argument("--out", type=Path, default=None)
-    b.add_argument("--recipe", action="append", default=None, help="default: graphs/ikura_don.yaml")
+    b.add_argument("--recipe", action="append", default=None, help="default: every recipe in graphs/")
     i = sub.add_parser("install")
     i.add_argument("bundle", type=Path)
     c = sub.add_parser("check")
@@ -59,7 +60,8 @@ def main() -> None:
     from nodegraph import kernel_bundle, runtime
 
     if args.command == "build":
-        build(args.recipe or ["graphs/ikura_don.yaml"], args.out or kernel_bundle.BUNDLE)
+        every = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "graphs").glob("*.yaml"))
+        build(args.recipe or every, args.out or kernel_bundle.BUNDLE)
     elif args.command == "check":
         old = kernel_bundle.stale(args.bundle or kernel_bundle.BUNDLE)
         print("\n".join(old) or "every entry matches the code")
