@@ -900,6 +900,8 @@ def _cmd_cache(args, registry) -> int:
         f"cache {info.directory}: {info.entries} entries, {info.blobs} blobs, {format_size(info.bytes)} "
         f"of {format_size(limit)} ({source}); the least recently used results go first when a run ends above it"
     )
+    # compiled kernels have a cache of their own, numba's (``numba_cache``): NODEGRAPH_CACHE does not move it
+    print(f"compiled kernels: {os.environ.get('NUMBA_CACHE_DIR', '')} (numba's cache; $NUMBA_CACHE_DIR moves it)")
     return 0
 
 

@@ -1,5 +1,6 @@
 """The command line (with a --plugin node module) and the Rerun recording it saves."""
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -166,7 +167,10 @@ def test_cache_info_and_clear(recipe, tmp_path, capsys):
     cli("run", str(recipe), "--no-rrd")
     capsys.readouterr()
     assert main(["cache", "info"]) == 0
-    assert "entries" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "entries" in out
+    # a new user moved the cache with NODEGRAPH_CACHE and found the compiled kernels still in ~/.cache: info says where
+    assert f"compiled kernels: {os.environ['NUMBA_CACHE_DIR']} (numba's cache; $NUMBA_CACHE_DIR moves it)" in out
     assert main(["cache", "clear"]) == 0
     assert not (tmp_path / "cache").exists()
 
