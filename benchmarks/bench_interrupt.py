@@ -19,6 +19,7 @@ import argparse
 import json
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -99,7 +100,9 @@ def _signalled(command: list[str], signum: int, after: float | None, step: str |
     left = group_pids(proc.pid)
     lines = Path(log.name).read_text(errors="replace").splitlines()
     said = [line for line in lines if line.startswith("interrupted")]
-    running = said[-1].partition(" during ")[2].partition(";")[0].partition(":")[0] if said else None
+    # "interrupted during rice_sim (12 s in), egg_sim (3 s in). Kept: …": the step(s) running
+    during = said[-1].partition(" during ")[2].partition(". ")[0] if said else None
+    running = re.sub(r" \(\d+ s in\)", "", during) if during is not None else None
     os.unlink(log.name)
     return {
         "signal": signal.Signals(signum).name,

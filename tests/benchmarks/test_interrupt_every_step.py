@@ -36,4 +36,13 @@ def test_every_step_of_the_main_job_stops_within_2_s(tmp_path):
     assert {nodes[row["step"]].spec.type_name for row in rows} == {node.spec.type_name for node in nodes.values()}
     stopped = [row for row in rows if row.get("signal")]
     assert len(stopped) >= 0.9 * len(rows), rows  # a run that ended before its signal is no measurement
-    assert all(row["exit_s"] <= BOUND_S and not row["left"] and row["status"] == 130 for row in stopped), stopped
+    # stopped (130, its 'interrupted' line said), or finished: a signal landing as the last steps end lets them
+    # end (one run in three, signalled in export: status 0, 1.4 s, nothing said); either within the bound
+    finished = [row for row in stopped if row["status"] == 0 and not row["said"]]
+    late = [
+        row
+        for row in stopped
+        if row["exit_s"] > BOUND_S or row["left"] or (row["status"] != 130 and row not in finished)
+    ]
+    assert not late, late
+    assert len(finished) <= 2, finished  # the others were stopped, not finished
