@@ -389,12 +389,11 @@ class _Validator:
 
     def _nearest_having(self, node_id: str, param: str, nodes: dict) -> str | None:
         """The ``node.param`` an unknown ``node_id.param`` most likely meant: among the nodes whose type declares
-        ``param``, the one whose name is closest to ``node_id`` (``shift.dx``: ``shifted.dx``, not ``shifts``, which
-        has no ``dx``); None where no node has it."""
-        having = self._having(param, nodes)
-        if not having:
-            return None
-        return max(having, key=lambda name: difflib.SequenceMatcher(None, node_id, name.partition(".")[0]).ratio())
+        ``param``, the one whose name is closest to ``node_id`` (``nearest``; ``shift.dx``: ``shifted.dx``, not
+        ``shifts``, which has no ``dx``); None where none is close."""
+        having = {name.partition(".")[0]: name for name in self._having(param, nodes)}
+        near = nearest(node_id, having)
+        return having[near] if near else None
 
     def build(self) -> Recipe | None:
         if not isinstance(self.raw, dict):
