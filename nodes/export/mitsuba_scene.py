@@ -521,6 +521,7 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
     fill, rim) and nothing else does: the path-traced pass passes light through a film unbent and reflects none
     of it (``boundary_bsdf``), so the film's sheen is this one-bounce pass, where its rough lobe samples the
     softboxes directly, every sample, and no denoiser blurs it."""
+    black = {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
     shapes = {}
     for key, shape in description.items():
         if key.startswith("shape_"):
@@ -528,7 +529,7 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
             skin = "interior" in shape and (has_skin(material) or has_film(material))
             bsdf = specular_bsdf(material, skin)
             if film and not ("interior" in shape and has_film(material)):
-                bsdf = {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
+                bsdf = black
             shapes[key] = {k: v for k, v in shape.items() if k != "interior"} | {"bsdf": bsdf}
     centre, radius = glints_core(description)
     sensor = {k: v for k, v in description["sensor"].items() if k not in ("aperture_radius", "focus_distance")}
@@ -541,7 +542,6 @@ def highlight_dict(scene: ShadedScene, description: dict, window: Crop | None = 
             "crop_width": window.width,
             "crop_height": window.height,
         }
-    black = {"type": "diffuse", "reflectance": _rgb((0.0, 0.0, 0.0))}
     if film:
         lights = {name: description[name] for name in studio.LIGHTS}
         backdrop = black
