@@ -29,6 +29,7 @@ from pathlib import Path
 
 from nodegraph.interrupt import RUNNING
 
+SAID_LINE = re.compile(r"\binterrupted( during|\.| before|:)")  # the run's own stop line, or its supervisor's
 HANG_S = 30.0  # seconds after the signal before a run still there counts as hung
 
 
@@ -99,10 +100,12 @@ def _signalled(command: list[str], signum: int, after: float | None, step: str |
     time.sleep(0.2)
     left = group_pids(proc.pid)
     lines = Path(log.name).read_text(errors="replace").splitlines()
-    said = [line for line in lines if line.startswith("interrupted")]
+    # the line may follow another process's unfinished output on the same line of the log (stdout and stderr share it)
+    said = [line[m.start() :] for line in lines if (m := SAID_LINE.search(line))]
     # "interrupted during rice_sim (12 s in), egg_sim (3 s in). Kept: …": the step(s) running
     during = said[-1].partition(" during ")[2].partition(". ")[0] if said else None
     running = re.sub(r" \(\d+ s in\)", "", during) if during is not None else None
+    tail = None if said and proc.returncode == 130 else lines[-6:]  # what an unexpected ending printed last
     os.unlink(log.name)
     return {
         "signal": signal.Signals(signum).name,
@@ -113,6 +116,7 @@ def _signalled(command: list[str], signum: int, after: float | None, step: str |
         "left": left,
         "hang": hang,
         "said": said,
+        "tail": tail,
     }
 
 
