@@ -33,7 +33,7 @@ from pathlib import Path
 
 ENV_VAR = "NODEGRAPH_LEFTOVERS"  # set in the child: the file that lists its temporary and partial files
 GRACE = 0.8  # seconds the child has to stop by itself after a signal, before it is killed
-HOLD_MAX = 1.5  # seconds after a signal the parent waits for a finished step to be stored (``Hold``), at most
+HOLD_MAX = 1.3  # seconds the parent waits after a signal for a step being stored (``Hold``): 2 s less its clean-up
 REPEAT = 0.5  # seconds after a stop in which a second signal is the same stop (Ctrl-C reaches parent and child)
 
 
