@@ -6,6 +6,7 @@ reference (PSNR and SSIM, scikit-image) and the wall time of a 1280 × 720 previ
     python benchmarks/bench_preview.py --sss [--quick] [--cache-dir DIR]    # subsurface media × depth × spp
     python benchmarks/bench_preview.py --highlights [--quick]   # default preview: time, determinism, highlights
     python benchmarks/bench_preview.py --budget 10:64,8:48:4:2 [--save DIR]  # spp:depth[:glints[:guides[:media[:rr]]]]
+    python benchmarks/bench_preview.py --budget 5:64,4:64,3:64 --recipe rice_bowl  # another recipe of graphs/
     python benchmarks/bench_preview.py --time 2 [--save PNG] [--quick]  # the default preview alone: time, same bytes
     python benchmarks/bench_preview.py --passes [--quick]       # CPU seconds of each pass of the default preview
     python benchmarks/bench_preview.py --bokeh 64 [--save PNG]  # out-of-focus glints: dots, energy vs the lens
@@ -41,12 +42,12 @@ from machine import conditions
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def main_job_scene(cache_dir: Path | None):
-    """The ikura don's shaded scene and its preview camera (from the recipe)."""
+def main_job_scene(cache_dir: Path | None, name: str = "ikura_don"):
+    """A recipe's shaded scene (the ikura don's by default) and its preview camera (from the recipe)."""
     from nodegraph.api import Cache, default_cache_dir, default_registry, load_recipe, run_recipe
     from nodes.export.mitsuba_scene import Camera
 
-    recipe = load_recipe(ROOT / "graphs" / "ikura_don.yaml", default_registry(), [])
+    recipe = load_recipe(ROOT / "graphs" / f"{name}.yaml", default_registry(), [])
     result = run_recipe(recipe, outputs=["shade.scene"], cache=Cache(cache_dir or default_cache_dir()))
     p = recipe.nodes["preview"].params
     camera = Camera(
@@ -242,11 +243,15 @@ def timed(quick: bool, cache_dir: Path | None, repeat: int, save: Path | None) -
     )
 
 
-def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None = None) -> str:
+def budget(
+    configs: str, quick: bool, cache_dir: Path | None, save: Path | None = None, recipe: str = "ikura_don"
+) -> str:
     """The whole default preview (OIDN, glints) at each ``spp:depth[:glint spp[:guide spp[:media 0/1[:rr depth]]]]``
-    of ``configs``: CPU and wall time of the full frame, PSNR/SSIM/FLIP in the eggs-over-rice window against 256 spp
-    (64 with ``--quick``) at depth 128 with media, and the full frame's FLIP against the first config's (what a
-    viewer sees change from it); each full frame written to ``save``/<config>.png if given."""
+    of ``configs``: CPU and wall time of the full frame, PSNR/SSIM/FLIP in the window at the frame's centre (the
+    main job's eggs over rice; 15 % of each side) against 256 spp (64 with ``--quick``) at depth 128 with media, and
+    the full frame's FLIP against the first config's (what a viewer sees change from it), beside the first config at
+    seed 1 (what changes at the same samples: the noise floor, below which fewer samples change nothing a reseed would
+    not); each full frame written to ``save``/<config>.png if given. ``recipe``: a recipe of graphs/ by name."""
     import flip_evaluator as flip
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
@@ -254,9 +259,11 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
     from nodes.export.mesh_files import linear_to_srgb8
     from nodes.export.mitsuba_scene import Crop, render, render_layers, tone_map
 
-    scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir)
+    scene, camera, params = quick_scene() if quick else main_job_scene(cache_dir, recipe)
     width, height, sun, media = params["width"], params["height"], params["sun_direction"], params["subsurface"]
-    crop, reference_spp = Crop(544, 306, 192, 108), 256
+    window = (round(width * 0.15), round(height * 0.15))  # 192 × 108 at 1280 × 720: the main job's eggs over rice
+    crop = Crop((width - window[0]) // 2, (height - window[1]) // 2, *window)
+    reference_spp = 256
     if quick:
         width, height, crop, reference_spp = 320, 180, Crop(112, 63, 96, 54), 64
     t = time.perf_counter()
@@ -265,7 +272,9 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
     reference_time = time.perf_counter() - t
     rows, first = [], None
     defaults = (ms.HIGHLIGHT_SPP, ms.GUIDE_SPP, ms.RR_DEPTH)
-    for config in configs.split(","):
+    listed = configs.split(",")
+    for k, config in enumerate([*listed, listed[0]]):  # the first again at seed 1: the noise floor
+        seed = int(k == len(listed))
         fields = [int(v) for v in config.split(":")]
         spp, depth, glint_spp, guide_spp, with_media, rr_depth = (
             fields + [*defaults[:2], int(media), defaults[2]][len(fields) - 2 :]
@@ -273,14 +282,14 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
         ms.HIGHLIGHT_SPP, ms.GUIDE_SPP, ms.RR_DEPTH = glint_spp, guide_spp, rr_depth
         try:
             t, c = time.perf_counter(), cpu_seconds()
-            frame = render(scene, camera, width, height, spp, sun, True, 0, bool(with_media), depth)
+            frame = render(scene, camera, width, height, spp, sun, True, seed, bool(with_media), depth)
             wall, cpu = time.perf_counter() - t, cpu_seconds() - c
             if save is not None:
                 from PIL import Image
 
                 save.mkdir(parents=True, exist_ok=True)
-                Image.fromarray(frame).save(save / f"{config.replace(':', '_')}.png")
-            layers = render_layers(scene, camera, width, height, spp, sun, 0, crop, depth, bool(with_media))
+                Image.fromarray(frame).save(save / f"{config.replace(':', '_')}{'_seed1' * seed}.png")
+            layers = render_layers(scene, camera, width, height, spp, sun, seed, crop, depth, bool(with_media))
         finally:
             ms.HIGHLIGHT_SPP, ms.GUIDE_SPP, ms.RR_DEPTH = defaults
         image = linear_to_srgb8(tone_map(layers.denoised()))
@@ -295,7 +304,8 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
             )
         )
         rows.append(
-            f"| {spp} | {depth} | {rr_depth} | {glint_spp} | {guide_spp} | {'on' if with_media else 'off'} | "
+            f"| {spp}{' (seed 1)' * seed} | {depth} | {rr_depth} | {glint_spp} | {guide_spp} | "
+            f"{'on' if with_media else 'off'} | "
             f"{psnr:.2f} | {ssim:.3f} | {window_flip:.4f} | {frame_flip:.4f} | {wall:.1f} | {cpu:.1f} | "
             f"{cpu / (os.cpu_count() or 1):.1f} |"
         )
@@ -303,7 +313,7 @@ def budget(configs: str, quick: bool, cache_dir: Path | None, save: Path | None 
     n = os.cpu_count()
     return "\n".join(
         [
-            f"Default preview of {'a synthetic scene' if quick else 'the ikura don (main job)'} at {width}×{height} "
+            f"Default preview of {'a synthetic scene' if quick else recipe} at {width}×{height} "
             f"(media {'on' if media else 'off'}, OIDN, glints): PSNR/SSIM in the {crop.width}×{crop.height} window "
             f"at ({crop.x}, {crop.y}) against {reference_spp} spp at depth 128 ({reference_time:.0f} s); load average "
             f"{os.getloadavg()[0]:.2f} on {n} cores",
@@ -520,6 +530,7 @@ def main():
         default=None,
         help="spp:depth[:glint spp[:guide spp[:media 0/1[:rr depth]]]],...: time against quality",
     )
+    parser.add_argument("--recipe", default="ikura_don", help="--budget: the recipe of graphs/ (name) to render")
     parser.add_argument("--time", type=int, default=0, metavar="N", help="the default preview alone, N renders: time")
     parser.add_argument("--passes", action="store_true", help="CPU seconds of each pass of the default preview")
     parser.add_argument(
@@ -539,7 +550,7 @@ def main():
         print(timed(args.quick, args.cache_dir, args.time, args.save))
         return
     if args.budget:
-        print(budget(args.budget, args.quick, args.cache_dir, args.save))
+        print(budget(args.budget, args.quick, args.cache_dir, args.save, args.recipe))
         return
     if args.highlights:
         print(highlights(args.quick, args.cache_dir))

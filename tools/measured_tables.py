@@ -628,6 +628,7 @@ TABLES = {
         "preview_budget.jsonl",
         None,
         [
+            ("recipe", lambda r: r.get("recipe", "ikura_don")),
             ("scene of", lambda r: r["date"][:10]),
             ("spp", lambda r: str(r["config"]["spp"])),
             ("seed", lambda r: number(r["config"].get("seed"))),
@@ -637,7 +638,7 @@ TABLES = {
             ("PSNR (dB)", value("psnr")),
             ("SSIM", value("ssim")),
             ("FLIP", value("flip")),
-            ("FLIP over the frame to 5 spp, seed 0", value("flip_frame")),
+            ("FLIP over the frame to the most spp, seed 0", value("flip_frame")),
             ("CPU s", value("cpu")),
         ],
     ),
