@@ -2,17 +2,17 @@
 its inputs' estimates (``NodeSpec.cost``, declared with ``estimated_by``), and the engine walks the graph in order
 and sums.
 
-A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count
-reaches the simulation through the nodes that turn, mix and cull it; ``inscribed``: an element library's smallest
-inscribed radius, for a placement whose r comes from its elements; ``faces``: mesh faces per element, what a
-renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its peak),
-its levers (``time_lever``, ``memory_lever``: the parameter that brings its seconds or its memory down), and
-``over``: its own rules of what a run does not start on unasked. One rule weighs every node's estimate
-(``limit_over``): CPU seconds over the run's ``--max-minutes`` and a peak over the memory the machine has available
-are refused at the node's lever, with the value that stays under. The run's peak memory is the process's own
-(``PROCESS_BYTES``) and the largest node's. A node type with no ``cost`` carries nothing on and spends nothing worth
-saying. ``nodegraph check`` prints the sum and refuses what is over (``--yes`` passes what a run would start with
-``--yes``); ``run`` does the same before its first node.
+A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count reaches
+the simulation through the nodes that turn, mix and cull it; ``inscribed``, ``volume``: an element library's smallest
+inscribed radius and mean volume, for a placement whose r comes from its elements; ``faces``: mesh faces per element,
+what a renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its
+peak), its levers (``time_lever``, ``memory_lever``: the parameter that brings its seconds or its memory down), and
+``over``: its own rules of what a run does not start on unasked. One rule weighs every node's estimate (``limit_over``):
+CPU seconds over the run's ``--max-minutes`` and a peak over the memory the machine has available are refused at the
+node's lever, with the value that stays under. The run's peak memory is the process's own (``PROCESS_BYTES``) and the
+largest node's. A node type with no ``cost`` carries nothing on and spends nothing worth saying. ``nodegraph check``
+prints the sum and refuses what is over (``--yes`` passes what a run would start with ``--yes``); ``run`` does the same
+before its first node.
 """
 
 from __future__ import annotations
@@ -78,6 +78,7 @@ class Cost:
 
     elements: int | None = None  # elements its outputs carry on (None: not known from the recipe)
     inscribed: float | None = None  # mm: the smallest inscribed radius of the elements its outputs are made of
+    volume: float | None = None  # mm³: the mean volume of the elements its outputs are made of
     faces: float | None = None  # mesh faces per element its outputs carry (a mean over them)
     kinds: tuple[str, ...] = ()  # the element kinds its outputs carry, where a library names them (a cull's share)
     made: int = 0  # elements it makes (a placement)
@@ -121,6 +122,11 @@ class CostQuery:
         radii = [c.inscribed for c in self.inputs.get(port, []) if c.inscribed is not None]
         return min(radii) if radii else None
 
+    def volume(self, port: str) -> float | None:
+        """The mean element volume over the wires into ``port`` (None when one of them does not say)."""
+        volumes = [c.volume for c in self.inputs.get(port, [])]
+        return None if not volumes or None in volumes else sum(volumes) / len(volumes)
+
     def kinds(self, port: str) -> tuple[str, ...]:
         """The element kinds the wires into ``port`` carry, in order, each once (empty where none says)."""
         return tuple(dict.fromkeys(k for c in self.inputs.get(port, []) for k in c.kinds))
@@ -156,6 +162,7 @@ def passes(
         return Cost(
             elements=None if count is None else int(round(count * kept)),
             inscribed=q.inscribed(port),
+            volume=q.volume(port),
             faces=q.faces(faces or port),
             kinds=kinds,
         )
