@@ -38,6 +38,19 @@ PROCESS_BYTES = 48 * 2**20
 # element): the estimate's ``time`` line
 OTHER_CPU_PER_FACE = 6e-6
 OTHER_CPU_PER_ELEMENT = 0.010
+# CPU seconds of each step that says nothing of its own time, whatever its elements (its inputs read and hashed, its
+# result stored and recorded), and of a run's start before its first step (imports, the recipe loaded and checked):
+# a draft's steps are mostly these. The cold --draft runs of the ikura don (63 such steps: 6.9 CPU s, 0.025 a step
+# beyond its faces' share) and of the rice bowl (38: 3.6 CPU s, 0.09 a step) spent 1.9 and 1.6 CPU s before their
+# steps (their closing tables; 2 cores, load 7-10); the drafts' runs against the estimate: benchmarks/measured/
+# cost.jsonl
+OTHER_CPU_PER_STEP = 0.05
+START_CPU = 2.0
+# what the time line leaves out: the rates above are an idle machine's; where other work holds the cores, the threads
+# of the simulations and the preview wait for them and spend more CPU (the ikura don's draft, 21 CPU s estimated:
+# 23.3 spent on two threads at load 1.2-2.3, 31.3 at load 5.5, its simulations 11.1 of them against 3.4; 22.3 on one
+# thread at load 4.5; benchmarks/measured/cost.jsonl)
+IDLE_RATES = "at an idle machine's rates (on a busy one the simulations' and preview's threads spend more)"
 
 
 MEMINFO = "/proc/meminfo"  # where Linux says the memory a new process can take without swapping (MemAvailable)
@@ -198,16 +211,20 @@ class Estimate:
 
     @property
     def other_seconds(self) -> float:
-        """CPU seconds of the steps that do not estimate their own: ``OTHER_CPU_PER_FACE`` for each face of the
-        elements of the recipe's outputs (``OTHER_CPU_PER_ELEMENT`` an element where their faces are not known)."""
+        """CPU seconds of the steps that do not estimate their own: ``OTHER_CPU_PER_STEP`` each and
+        ``OTHER_CPU_PER_FACE`` for each face of the elements of the recipe's outputs (``OTHER_CPU_PER_ELEMENT`` an
+        element where their faces are not known)."""
         elements = self.elements or 0
         faces = [c.faces for c in (self.costs[n] for n in self.outputs) if c.elements == elements and c.faces]
-        return elements * (OTHER_CPU_PER_FACE * max(faces) if faces else OTHER_CPU_PER_ELEMENT)
+        steps = sum(self.family.get(n, 1) for n, c in self.costs.items() if not c.seconds)
+        per_element = OTHER_CPU_PER_FACE * max(faces) if faces else OTHER_CPU_PER_ELEMENT
+        return steps * OTHER_CPU_PER_STEP + elements * per_element
 
     @property
     def cpu_seconds(self) -> float:
-        """CPU seconds of the whole run: what the nodes estimate (``seconds``) and ``other_seconds``."""
-        return self.seconds + self.other_seconds
+        """CPU seconds of the whole run: its start (``START_CPU``), what the nodes estimate (``seconds``) and
+        ``other_seconds``."""
+        return START_CPU + self.seconds + self.other_seconds
 
     @property
     def peak(self) -> tuple[int, str | None]:
@@ -254,8 +271,9 @@ class Estimate:
         other = self.other_seconds
         parts = [f"{what} {minutes(s)}" for what, s in (("simulations", sims), ("pictures", pictures)) if s >= 0.5]
         parts.append(f"other steps {minutes(other)}")
+        parts.append(f"start {minutes(START_CPU)}")
         compiling = "; its kernels are not compiled yet: a run compiles them first" if self.compiles else ""
-        return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)})" + compiling
+        return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)}), {IDLE_RATES}" + compiling
 
 
 def limit_over(cost: Cost, limits: Limits, made: str = "") -> list[tuple[str | None, str]]:
