@@ -4,6 +4,7 @@ running it (each run a process of its own, an empty node cache, numba kernels al
 
     python benchmarks/bench_cost.py                          # ikura_don, rice_bowl, onigiri: draft and full size
     python benchmarks/bench_cost.py rice_bowl --draft-only   # some recipes, their --draft runs only
+    python benchmarks/bench_cost.py --draft-only --threads 1 # the kernels on one thread: the work, not the waits
     python benchmarks/bench_cost.py --record                 # and write benchmarks/measured/cost.jsonl
     python benchmarks/bench_cost.py --check-time --record    # `nodegraph check graphs/ikura_don.yaml`'s time alone
     python benchmarks/bench_cost.py --placements --record    # each placement alone: placed against its estimate
@@ -46,6 +47,7 @@ def estimated(name: str, draft: bool, registry=None):
         "elements": cost.elements,
         "particles": cost.particles,
         "sim_cpu_s": round(sum(c.seconds for c in cost.costs.values() if c.particles), 1),
+        "cpu_s": round(cost.cpu_seconds, 1),
         "peak_rss_mib": round(cost.peak[0] / 2**20),
     }
 
@@ -65,6 +67,12 @@ def re_estimate(write: bool = True) -> None:
         print(row["recipe"], row["size"], json.dumps(row["values"]))
     if write:
         RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
+
+
+def _process_cpu() -> float:
+    """CPU seconds (user + system) this process has spent."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
 
 
 def measure(name: str, draft: bool) -> dict:
@@ -88,6 +96,7 @@ def measure(name: str, draft: bool) -> dict:
             "elements": elements,
             "particles": particles,
             "sim_cpu_s": round(sum(records[n].cpu_seconds or 0.0 for n in sims), 1),
+            "cpu_s": round(_process_cpu(), 1),  # the whole process's: its start, the estimate and the run
             "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024),
         }
     heavy = {
@@ -171,6 +180,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("recipes", nargs="*", default=list(RECIPES))
     parser.add_argument("--draft-only", action="store_true")
+    parser.add_argument("--threads", type=int, help="the kernels' threads in the runs measured (NUMBA_NUM_THREADS)")
     parser.add_argument("--record", action="store_true", help=f"write {RECORD.relative_to(REPO)}")
     parser.add_argument("--check-time", action="store_true", help="time `nodegraph check` on the ikura don alone")
     parser.add_argument("--placements", action="store_true", help="each placement alone against its estimate")
@@ -201,6 +211,8 @@ def main() -> int:
         return 0
     rows = []
     env = {**os.environ, "PYTHONPATH": f"{REPO}{os.pathsep}{REPO / 'benchmarks'}"}
+    if args.threads:  # the kernels' threads: one measures the work alone, where two wait for a busy machine's cores
+        env["NUMBA_NUM_THREADS"] = str(args.threads)
     for name in args.recipes:
         for mode in ("draft",) if args.draft_only else ("draft", "full"):
             # a first run compiles what numba's cache lacks; the second is the one measured
@@ -221,10 +233,12 @@ def main() -> int:
             print(name, mode, json.dumps(figures), f"load {stamped['load']}", flush=True)
             rows.append(
                 {
-                    "what": "cost estimate / a run: elements, particles, sim CPU s, peak RSS MiB",
+                    "what": "cost estimate / a run: elements, particles, sim CPU s, the run's CPU s, peak RSS MiB",
                     "recipe": name,
                     "size": "--draft" if mode == "draft" else "full size",
-                    "command": "python benchmarks/bench_cost.py --record",
+                    **({"threads": args.threads} if args.threads else {}),
+                    "command": "python benchmarks/bench_cost.py --record"
+                    + (f" --threads {args.threads}" if args.threads else ""),
                     "values": {f"{k}_estimate": v for k, v in figures["estimate"].items()}
                     | {f"{k}_measured": v for k, v in figures["measured"].items()}
                     | {"check_s": figures["check_s"]},
@@ -233,8 +247,11 @@ def main() -> int:
                     **stamped,
                 }
             )
-    if args.record:
-        RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
+    if args.record:  # the rows of the runs measured now replace theirs; every other row stays
+        ran = {(row["recipe"], row["size"], row.get("threads")) for row in rows}
+        kept = [json.loads(line) for line in RECORD.read_text().splitlines() if line.strip()]
+        kept = [row for row in kept if (row.get("recipe"), row.get("size"), row.get("threads")) not in ran]
+        RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in kept + rows))
         print(f"wrote {RECORD}")
     return 0
 

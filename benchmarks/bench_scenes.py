@@ -72,11 +72,13 @@ def _quick(name: str) -> list[str]:
 
 
 # the scene tests' own sizes where a recipe's draft is larger than a test needs: the drafts are sized for an artist
-# to judge a look (the onigiri 28 mm, ≈ 360 grains; the donburi 92 mm, ≈ 720 elements); the tests run the 14.4 mm
-# onigiri (≈ 50 grains) and the 64 mm donburi (≈ 340 elements)
+# to judge a look (the chawan and the donburi at full size, ≈ 480 grains and ≈ 1,230 elements; the onigiri 28 mm,
+# ≈ 360 grains); the tests run a 39 mm chawan (≈ 120 grains), the 14.4 mm onigiri (≈ 50 grains) and the 64 mm donburi
+# (≈ 340 elements)
 SMALLER = {
+    "rice_bowl": ["bowl.size=18.0", "bowl.depth=18.0", "bowl.mound=5.0", "bowl.wall=1.5", "rice_core.lower=8.0"],
     "onigiri": ["onigiri.size=14.4", "plate.gap=0.15", "nori.gap=0.1"],
-    "ikura_don": ["bowl.size=32.0", "bowl.depth=38.0"],
+    "ikura_don": ["bowl.size=32.0", "bowl.depth=38.0", "bowl.mound=4.0", "bowl.wall=2.7", "rice_core.lower=5.0"],
 }
 QUICK = {name: _quick(name) + SMALLER.get(name, []) for name in SCENES}
 

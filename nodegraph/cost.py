@@ -2,17 +2,17 @@
 its inputs' estimates (``NodeSpec.cost``, declared with ``estimated_by``), and the engine walks the graph in order
 and sums.
 
-A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count
-reaches the simulation through the nodes that turn, mix and cull it; ``inscribed``: an element library's smallest
-inscribed radius, for a placement whose r comes from its elements; ``faces``: mesh faces per element, what a
-renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its peak),
-its levers (``time_lever``, ``memory_lever``: the parameter that brings its seconds or its memory down), and
-``over``: its own rules of what a run does not start on unasked. One rule weighs every node's estimate
-(``limit_over``): CPU seconds over the run's ``--max-minutes`` and a peak over the memory the machine has available
-are refused at the node's lever, with the value that stays under. The run's peak memory is the process's own
-(``PROCESS_BYTES``) and the largest node's. A node type with no ``cost`` carries nothing on and spends nothing worth
-saying. ``nodegraph check`` prints the sum and refuses what is over (``--yes`` passes what a run would start with
-``--yes``); ``run`` does the same before its first node.
+A node's ``Cost`` says what its outputs carry (``elements``: how many elements flow on, so a placement's count reaches
+the simulation through the nodes that turn, mix and cull it; ``inscribed``, ``volume``: an element library's smallest
+inscribed radius and mean volume, for a placement whose r comes from its elements; ``faces``: mesh faces per element,
+what a renderer holds) and what its work spends (``particles`` simulated, ``seconds`` of CPU, ``memory`` held at its
+peak), its levers (``time_lever``, ``memory_lever``: the parameter that brings its seconds or its memory down), and
+``over``: its own rules of what a run does not start on unasked. One rule weighs every node's estimate (``limit_over``):
+CPU seconds over the run's ``--max-minutes`` and a peak over the memory the machine has available are refused at the
+node's lever, with the value that stays under. The run's peak memory is the process's own (``PROCESS_BYTES``) and the
+largest node's. A node type with no ``cost`` carries nothing on and spends nothing worth saying. ``nodegraph check``
+prints the sum and refuses what is over (``--yes`` passes what a run would start with ``--yes``); ``run`` does the same
+before its first node.
 """
 
 from __future__ import annotations
@@ -38,6 +38,19 @@ PROCESS_BYTES = 48 * 2**20
 # element): the estimate's ``time`` line
 OTHER_CPU_PER_FACE = 6e-6
 OTHER_CPU_PER_ELEMENT = 0.010
+# CPU seconds of each step that says nothing of its own time, whatever its elements (its inputs read and hashed, its
+# result stored and recorded), and of a run's start before its first step (imports, the recipe loaded and checked):
+# a draft's steps are mostly these. The cold --draft runs of the ikura don (63 such steps: 6.9 CPU s, 0.025 a step
+# beyond its faces' share) and of the rice bowl (38: 3.6 CPU s, 0.09 a step) spent 1.9 and 1.6 CPU s before their
+# steps (their closing tables; 2 cores, load 7-10); the drafts' runs against the estimate: benchmarks/measured/
+# cost.jsonl
+OTHER_CPU_PER_STEP = 0.05
+START_CPU = 2.0
+# what the time line leaves out: the rates above are an idle machine's; where other work holds the cores, the threads
+# of the simulations and the preview wait for them and spend more CPU (the ikura don's draft, 21 CPU s estimated:
+# 23.3 spent on two threads at load 1.2-2.3, 31.3 at load 5.5, its simulations 11.1 of them against 3.4; 22.3 on one
+# thread at load 4.5; benchmarks/measured/cost.jsonl)
+IDLE_RATES = "at an idle machine's rates (on a busy one the simulations' and preview's threads spend more)"
 
 
 MEMINFO = "/proc/meminfo"  # where Linux says the memory a new process can take without swapping (MemAvailable)
@@ -78,6 +91,7 @@ class Cost:
 
     elements: int | None = None  # elements its outputs carry on (None: not known from the recipe)
     inscribed: float | None = None  # mm: the smallest inscribed radius of the elements its outputs are made of
+    volume: float | None = None  # mm³: the mean volume of the elements its outputs are made of
     faces: float | None = None  # mesh faces per element its outputs carry (a mean over them)
     kinds: tuple[str, ...] = ()  # the element kinds its outputs carry, where a library names them (a cull's share)
     made: int = 0  # elements it makes (a placement)
@@ -121,6 +135,11 @@ class CostQuery:
         radii = [c.inscribed for c in self.inputs.get(port, []) if c.inscribed is not None]
         return min(radii) if radii else None
 
+    def volume(self, port: str) -> float | None:
+        """The mean element volume over the wires into ``port`` (None when one of them does not say)."""
+        volumes = [c.volume for c in self.inputs.get(port, [])]
+        return None if not volumes or None in volumes else sum(volumes) / len(volumes)
+
     def kinds(self, port: str) -> tuple[str, ...]:
         """The element kinds the wires into ``port`` carry, in order, each once (empty where none says)."""
         return tuple(dict.fromkeys(k for c in self.inputs.get(port, []) for k in c.kinds))
@@ -156,6 +175,7 @@ def passes(
         return Cost(
             elements=None if count is None else int(round(count * kept)),
             inscribed=q.inscribed(port),
+            volume=q.volume(port),
             faces=q.faces(faces or port),
             kinds=kinds,
         )
@@ -191,16 +211,20 @@ class Estimate:
 
     @property
     def other_seconds(self) -> float:
-        """CPU seconds of the steps that do not estimate their own: ``OTHER_CPU_PER_FACE`` for each face of the
-        elements of the recipe's outputs (``OTHER_CPU_PER_ELEMENT`` an element where their faces are not known)."""
+        """CPU seconds of the steps that do not estimate their own: ``OTHER_CPU_PER_STEP`` each and
+        ``OTHER_CPU_PER_FACE`` for each face of the elements of the recipe's outputs (``OTHER_CPU_PER_ELEMENT`` an
+        element where their faces are not known)."""
         elements = self.elements or 0
         faces = [c.faces for c in (self.costs[n] for n in self.outputs) if c.elements == elements and c.faces]
-        return elements * (OTHER_CPU_PER_FACE * max(faces) if faces else OTHER_CPU_PER_ELEMENT)
+        steps = sum(self.family.get(n, 1) for n, c in self.costs.items() if not c.seconds)
+        per_element = OTHER_CPU_PER_FACE * max(faces) if faces else OTHER_CPU_PER_ELEMENT
+        return steps * OTHER_CPU_PER_STEP + elements * per_element
 
     @property
     def cpu_seconds(self) -> float:
-        """CPU seconds of the whole run: what the nodes estimate (``seconds``) and ``other_seconds``."""
-        return self.seconds + self.other_seconds
+        """CPU seconds of the whole run: its start (``START_CPU``), what the nodes estimate (``seconds``) and
+        ``other_seconds``."""
+        return START_CPU + self.seconds + self.other_seconds
 
     @property
     def peak(self) -> tuple[int, str | None]:
@@ -247,8 +271,9 @@ class Estimate:
         other = self.other_seconds
         parts = [f"{what} {minutes(s)}" for what, s in (("simulations", sims), ("pictures", pictures)) if s >= 0.5]
         parts.append(f"other steps {minutes(other)}")
+        parts.append(f"start {minutes(START_CPU)}")
         compiling = "; its kernels are not compiled yet: a run compiles them first" if self.compiles else ""
-        return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)})" + compiling
+        return f"time: ≈ {minutes(self.cpu_seconds)} CPU ({', '.join(parts)}), {IDLE_RATES}" + compiling
 
 
 def limit_over(cost: Cost, limits: Limits, made: str = "") -> list[tuple[str | None, str]]:

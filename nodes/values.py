@@ -103,7 +103,9 @@ class Placement:
     """Element instances: position, rotation (3×3), kind, surface normal, and P_num (SPEC §2.2–2.4).
 
     ``kinds[i]`` indexes ``kind_names``; ``variants[i]`` picks the mesh within that kind's library;
-    ``offsets`` is the refine displacement t along the normal; ``overlap`` the residual depth.
+    ``offsets`` is the refine displacement t along the normal; ``overlap`` the residual depth; ``spacing`` the
+    Poisson radius r the points were placed at (0: not placed by ``poisson_place``), which ``overlap_refine``'s gan
+    range follows when it is given no r.
     """
 
     positions: np.ndarray
@@ -115,6 +117,7 @@ class Placement:
     offsets: np.ndarray | None = None
     overlap: np.ndarray | None = None
     kind_names: tuple[str, ...] = ()
+    spacing: float = 0.0
 
     def __post_init__(self):
         positions = as_array(self.positions, np.float64, (3,), "positions")

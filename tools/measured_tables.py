@@ -718,10 +718,11 @@ TABLES = {
         lambda r: "size" in r,
         [
             ("recipe", code("recipe")),
-            ("run", field("size")),
+            ("run", lambda r: r["size"] + (f", {r['threads']} thread" if r.get("threads") else "")),
             ("elements", pair("elements_estimate", "elements_measured")),
             ("particles", pair("particles_estimate", "particles_measured")),
             ("sim CPU s", pair("sim_cpu_s_estimate", "sim_cpu_s_measured")),
+            ("run CPU s", pair("cpu_s_estimate", "cpu_s_measured")),
             ("peak RSS MiB", pair("peak_rss_mib_estimate", "peak_rss_mib_measured")),
             ("check s", value("check_s")),
             ("load", field("load")),

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from nodegraph import In, Moved, Out, Param, node
 from nodegraph.cost import Cost, CostQuery, estimated_by
 from nodegraph.node import warns_of
 from nodegraph.values import Mesh
 
 from ..values import RiceVariety
+from . import grain_shapes
 from .element_room import element_fits
-from .grain_shapes import DEFAULT_SIZE
+from .grain_shapes import DEFAULT_SIZE, RICE_VARIETIES
 
 SHAPES = ("rice", "ikura", "ice_flake", "file")
 
@@ -74,16 +77,36 @@ def _check(p: dict) -> list[tuple[str, str]]:
 
 
 def _cost(q: CostQuery) -> Cost:
-    """The smallest inscribed radius its meshes can have (what a placement whose r comes from the elements reads),
-    from the parameters alone: an egg's radius at its diameter's low clip (−2 sd), a grain's or flake's half
-    thickness; and its faces; a file's are not known before it is read."""
+    """The smallest inscribed radius its meshes can have and their volume (what a placement whose r comes from the
+    elements reads), from the parameters alone: an egg's radius at its diameter's low clip (−2 sd) and the volume
+    at its mean diameter, a grain's or flake's half thickness, a grain's volume its mesh's at the wired variety's
+    length (made now: milliseconds); and its faces; a file's are not known before it is read."""
     p = q.params
     sphere = 20 * 4 ** p["subdivisions"]  # faces of the icosphere a grain or an egg's shell is made from
     if p["shape"] == "ikura":  # membrane and yolk, each a sphere one subdivision finer
-        return Cost(inscribed=0.5 * (p["diameter"] - 2.0 * p["diameter_sd"]), faces=2 * 4 * sphere)
+        volume = np.pi / 6.0 * p["diameter"] ** 3
+        return Cost(inscribed=0.5 * (p["diameter"] - 2.0 * p["diameter_sd"]), volume=volume, faces=2 * 4 * sphere)
     if p["shape"] == "file":
         return Cost()
-    return Cost(inscribed=0.5 * min(p["size"] or DEFAULT_SIZE[p["shape"]]), faces=sphere)
+    size = p["size"] or DEFAULT_SIZE[p["shape"]]
+    volume = _grain_volume(q, size) if p["shape"] == "rice" else None
+    return Cost(inscribed=0.5 * min(size), volume=volume, faces=sphere)
+
+
+def _grain_volume(q: CostQuery, size) -> float | None:
+    """The rice grain's volume at the length factor of the variety wired from a rice_variety node (1 unwired;
+    None when a variety comes from elsewhere)."""
+    wires = q.nodes[q.node_id].inputs.get("variety") or []
+    factor = 1.0
+    if wires:
+        source = q.nodes.get(wires[0].node)
+        if source is None or source.spec.type_name != "rice_variety":
+            return None
+        factor = RICE_VARIETIES[source.params["variety"]].length_factor
+    p = q.params
+    length, width, thickness = size
+    mesh = grain_shapes.rice_grain(length * factor, width, thickness, p["bluntness"], p["bend"], p["subdivisions"])
+    return grain_shapes.volume_centroid(*mesh)[0]
 
 
 def _warns(node_id: str, nodes) -> list[tuple[str, str]]:
@@ -213,7 +236,7 @@ def base_mesh(
     (seeded: the same recipe and seed give the same eggs). Files are repaired (merge, drop degenerate faces,
     un-invert, recentre) or refused.
     """
-    from . import grain_shapes, mesh_files
+    from . import mesh_files
 
     if variety is not None and shape != "rice":
         raise ValueError(f"input 'variety' ({variety.name}) is only read by shape 'rice' (shape is '{shape}')")

@@ -11,11 +11,12 @@ from ..values import ElementLibrary, RiceVariety
 
 def _cost(q: CostQuery) -> Cost:
     """The library's meshes (one per variant of each node wired in: what ``check`` counts as the elements of a
-    recipe that makes only libraries), their smallest inscribed radius and faces."""
+    recipe that makes only libraries), their smallest inscribed radius, mean volume and faces."""
     wires = q.nodes[q.node_id].inputs.get("meshes") or []
     return Cost(
         elements=sum(q.nodes[w.node].family or 1 for w in wires) or None,
         inscribed=q.inscribed("meshes"),
+        volume=q.volume("meshes"),
         faces=q.faces("meshes"),
         kinds=(q.params["kind"],) if q.params["kind"] else (),
     )

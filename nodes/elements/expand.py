@@ -33,21 +33,25 @@ def is_broken(variant: int | None, share: float) -> bool:
 def _cost(q: CostQuery) -> Cost:
     """The field's smallest inscribed radius × the smallest growth, P·e^(−1/3) across the grain (P·e^(2/3) along it
     when e < 1), P the wired rice variety's (``RICE_VARIETIES``, when the wire comes straight from a rice_variety
-    node), else ``expansion``'s low end (a broken grain is cut across its length, not its thickness); nothing when a
-    variety is wired from elsewhere."""
+    node), else ``expansion``'s low end (a broken grain is cut across its length, not its thickness); its volume ×
+    the mean P³ (e keeps the volume), less what the broken grains lose; nothing when a variety is wired from
+    elsewhere."""
     from .grain_shapes import RICE_VARIETIES
 
-    inscribed = q.inscribed("field")
+    inscribed, volume = q.inscribed("field"), q.volume("field")
     wires = [w for w in q.nodes[q.node_id].inputs.get("variety") or []]
     if inscribed is None:
         return Cost()
-    if not wires:
-        return Cost(inscribed=inscribed * q.params["expansion"][0] * _least_growth(q.params["elongation"]))
-    source = q.nodes.get(wires[0].node)
-    if source is None or source.spec.type_name != "rice_variety":
-        return Cost()
-    p = RICE_VARIETIES[source.params["variety"]].expansion
-    return Cost(inscribed=inscribed * p * _least_growth(q.params["elongation"]))
+    lo, hi = q.params["expansion"]
+    if wires:
+        source = q.nodes.get(wires[0].node)
+        if source is None or source.spec.type_name != "rice_variety":
+            return Cost()
+        lo = hi = RICE_VARIETIES[source.params["variety"]].expansion
+    cubed = lo**3 if hi == lo else (hi**4 - lo**4) / (4.0 * (hi - lo))  # the mean of P³, P uniform in [lo, hi]
+    kept = 1.0 - q.params["broken"] * (1.0 - sum(q.params["broken_length"]) / 2.0)
+    grown = None if volume is None else volume * cubed * kept
+    return Cost(inscribed=inscribed * lo * _least_growth(q.params["elongation"]), volume=grown)
 
 
 def _least_growth(elongation: float) -> float:

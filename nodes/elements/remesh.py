@@ -11,11 +11,13 @@ from .element_values import GrainMesh
 
 
 def _cost(q) -> Cost:
-    """Its faces, and the field's smallest inscribed radius less ``level`` (what a placement whose r comes from the
-    elements reads; None where the field's is not known)."""
+    """Its faces, the field's smallest inscribed radius less ``level`` and its volume (what a placement whose r
+    comes from the elements reads; None where the field's is not known)."""
     inscribed = q.inscribed("field")
     return Cost(
-        faces=q.params["target_faces"], inscribed=None if inscribed is None else max(inscribed - q.params["level"], 0.0)
+        faces=q.params["target_faces"],
+        inscribed=None if inscribed is None else max(inscribed - q.params["level"], 0.0),
+        volume=q.volume("field"),
     )
 
 

@@ -14,12 +14,6 @@ from ..values import Aggregate, ElementLibrary, Placement
 from .element_templates import template_params
 
 
-def _check(params: dict) -> list[tuple[str, str]]:
-    if params.get("cost") == "gan" and params.get("r") is None:
-        return [("r", "the gan cost (G eq. 1) searches t in [0, r·C_refine]: give r (the Poisson radius)")]
-    return []
-
-
 @estimated_by(passes("placement"))
 @node(
     "overlap_refine",
@@ -51,7 +45,12 @@ def _check(params: dict) -> list[tuple[str, str]]:
             float, 1.0, "b = range_scale × kind refine_range × element circumradius (S: 1)", range=(0.0, 10.0)
         ),
         "r": Param(
-            float, None, "Poisson radius r of G eq. 1 (gan cost only)", range=(1e-6, 1e5), units="mm", nullable=True
+            float,
+            None,
+            "Poisson radius r of G eq. 1 (gan cost only; empty: the r poisson_place placed the points at)",
+            range=(1e-6, 1e5),
+            units="mm",
+            nullable=True,
         ),
         "c_refine": Param(float, 2.0, "C_refine of G eq. 1: range and penalty r·C_refine", range=(0.0, 100.0)),
         "offset": Param(
@@ -81,7 +80,6 @@ def _check(params: dict) -> list[tuple[str, str]]:
         **template_params(),
     },
     random=True,
-    check=_check,
 )
 def overlap_refine(
     ctx,
@@ -112,12 +110,18 @@ def overlap_refine(
         empty = {key: np.zeros(0) for key in FIT_KEYS}
         return {"placement": placement, "aggregate": Aggregate(placement, libraries), "stats": Table(empty)}
     placement = with_kind_names(placement, libraries)
+    r = r or placement.spacing
+    if cost == "gan" and not r:
+        raise ValueError(
+            "r: the gan cost (G eq. 1) searches t in [0, r·C_refine]: give r, or refine a placement "
+            "made by poisson_place (its r is used)"
+        )
     templates = build_templates(libraries, sphere_tolerance, max_spheres, cost_points, measure_fit=True)
     settings = RefineSettings(
         cost=cost,
         slope=slope,
         range_scale=range_scale,
-        spacing=r or 0.0,
+        spacing=r,
         c_refine=c_refine,
         offset=offset,
         tolerance=tolerance,

@@ -171,15 +171,20 @@ def _least(fits, given: float) -> float:
 
 def _cost(q: CostQuery) -> Cost:
     """The elements the placement makes and its candidates' memory, from the shape's size and r (given, or from the
-    elements' inscribed radius) before any work; more than ``MAX_ELEMENTS`` is refused unless --yes, more
+    elements' inscribed radius or volume) before any work; more than ``MAX_ELEMENTS`` is refused unless --yes, more
     candidates than ``max_candidates`` (which the run refuses) always."""
     from .candidates import BYTES_PER_CANDIDATE, estimate_candidates
 
     p = q.params
     r, name = p["r"], "r"
-    if r is None:  # S §3.1.2: half the elements' smallest inscribed radius, × r_scale
-        inscribed = q.inscribed("elements")
-        r, name = (None, "") if inscribed is None else (p["r_scale"] * 0.5 * inscribed, "r_scale")
+    if r is None:  # S §3.1.2: half the elements' smallest inscribed radius (or a sphere of their volume), × r_scale
+        if p["r_from"] == "volume":
+            volume = q.volume("elements")
+            base = None if volume is None else sphere_radius(volume)
+        else:
+            inscribed = q.inscribed("elements")
+            base = None if inscribed is None else 0.5 * inscribed
+        r, name = (None, "") if base is None else (p["r_scale"] * base, "r_scale")
     target = _target(q.node_id, q.nodes) if r is not None else None
     if target is None:
         return Cost()
@@ -248,6 +253,14 @@ def _cost(q: CostQuery) -> Cost:
             units="mm",
             nullable=True,
         ),
+        "r_from": Param(
+            str,
+            "inscribed",
+            "what r comes from when it is not given: inscribed (S: half the elements' smallest inscribed radius); "
+            "volume (the radius of a sphere of their mean volume: a grain twice as long gets r × 2^(1/3), the same "
+            "share of the shape filled, where its inscribed radius, set by its thickness, does not change)",
+            choices=("inscribed", "volume"),
+        ),
         "r_scale": Param(
             float,
             1.0,
@@ -280,7 +293,9 @@ def _cost(q: CostQuery) -> Cost:
     random=True,
     check_work=_fits_shape,
 )
-def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, candidate_spacing, inset, max_candidates):
+def poisson_place(
+    ctx, shape, elements=None, *, mode, r, r_from, r_scale, candidates, candidate_spacing, inset, max_candidates
+):
     """Dart throwing over dense candidates (random order, flags) until none is free; maximal over them."""
     from nodes.shapes.closed_mesh import as_trimesh
 
@@ -289,7 +304,7 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
 
     solid = as_trimesh(shape, "poisson_place shape")
     if r is None:
-        r = r_scale * _radius_from_elements(elements)
+        r = r_scale * _radius_from_elements(elements, r_from)
     extent = float(np.ptp(solid.vertices, axis=0).max())
     vertices, faces = np.asarray(solid.vertices), np.asarray(solid.faces)
     if 2.0 * r > extent:
@@ -322,7 +337,7 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
             + _fitting_r_hint(mode, vertices, faces, r, candidate_spacing, inset)
         )
     placed = dart_throw(points, ctx.rng.permutation(len(points)), 2.0 * r)
-    placement = Placement(points[placed], normals[placed])
+    placement = Placement(points[placed], normals[placed], spacing=float(r))
     ratio = min_distance_ratio(placement.positions, 2.0 * r)
     if ctx.rerun.enabled:
         import rerun as rr
@@ -340,8 +355,9 @@ def poisson_place(ctx, shape, elements=None, *, mode, r, r_scale, candidates, ca
     return {"placement": placement, "stats": stats}
 
 
-def _radius_from_elements(elements) -> float:
-    """S §3.1.2: r = half the radius of the largest sphere inscribed in the element (smallest over all meshes).
+def _radius_from_elements(elements, r_from: str = "inscribed") -> float:
+    """r from the elements (r_scale 1): S §3.1.2, half the radius of the largest sphere inscribed in the element
+    (smallest over all meshes); or ``volume``: the radius of the sphere of the meshes' mean volume.
 
     An element of several parts (an ikura egg: membrane 0 around its yolk 1) is measured by its outer part 0
     alone: the yolk inside is not a wall the sphere must stay clear of."""
@@ -350,7 +366,17 @@ def _radius_from_elements(elements) -> float:
     meshes = [mesh for library in (elements or ()) for mesh in library.meshes]
     if not meshes:
         raise ValueError("r: give r, or connect elements so r can be derived from them")
+    if r_from == "volume":
+        from nodes.elements.grain_shapes import volume_centroid
+
+        volumes = [volume_centroid(*(np.asarray(a) for a in _outer_part(m)))[0] for m in meshes]
+        return sphere_radius(float(np.mean(volumes)))
     return 0.5 * min(largest_inscribed_radius(*_outer_part(m)) for m in meshes)
+
+
+def sphere_radius(volume: float) -> float:
+    """The radius of a sphere of this volume."""
+    return (3.0 * volume / (4.0 * np.pi)) ** (1.0 / 3.0)
 
 
 def _outer_part(mesh) -> tuple[np.ndarray, np.ndarray]:

@@ -58,6 +58,20 @@ def test_r_from_the_element_is_half_its_inscribed_radius(small_onigiri):
     assert out["stats"].columns["r"][0] == pytest.approx(0.22, rel=0.03)
 
 
+def test_r_from_volume_follows_a_longer_grain_where_the_inscribed_radius_does_not(small_onigiri):
+    # issue 47: an indica grain is 1.8× a japonica's length at the same width and thickness; r from the inscribed
+    # radius (its thickness) stays, r from the volume grows by 1.8^(1/3), so the grains fill the same share
+    def r(length, r_from):
+        library = ElementLibrary("rice", (ellipsoid((length, 0.64, 0.44)),))
+        out = poisson_place.call(shape=small_onigiri, elements=[library], r_from=r_from, r_scale=0.5)
+        return out["stats"].columns["r"][0], out["placement"].spacing
+
+    assert r(1.1 * 1.8, "inscribed")[0] == pytest.approx(r(1.1, "inscribed")[0], rel=0.03)
+    short, spacing = r(1.1, "volume")
+    assert spacing == short == pytest.approx(0.5 * (1.1 * 0.64 * 0.44) ** (1 / 3), rel=0.02)  # a sphere's volume
+    assert r(1.1 * 1.8, "volume")[0] == pytest.approx(short * 1.8 ** (1 / 3), rel=0.01)
+
+
 def test_same_seed_same_placement(small_onigiri):
     a = poisson_place.call(seed=3, shape=small_onigiri, r=0.3)["placement"]
     b = poisson_place.call(seed=3, shape=small_onigiri, r=0.3)["placement"]

@@ -53,9 +53,15 @@ def test_gan_refine_stays_in_zero_to_r_c_refine(pile, rice):
     assert refined.offsets.min() >= 0.0 and refined.offsets.max() <= 0.7 + 1e-9
 
 
-def test_gan_without_r_is_refused_by_the_check():
-    problems = overlap_refine.check({"cost": "gan", "r": None})
-    assert problems and problems[0][0] == "r"
+def test_gan_without_r_searches_up_to_the_r_the_points_were_placed_at(pile, rice):
+    # issue 47: the refine's range follows the placement's r (from the grains), not a second fixed r in the recipe
+    spaced = dataclasses.replace(pile, spacing=0.35)
+    refined = overlap_refine.call(seed=2, placement=spaced, libraries=[rice], cost="gan", c_refine=2.0)["placement"]
+    given = overlap_refine.call(seed=2, placement=pile, libraries=[rice], cost="gan", r=0.35, c_refine=2.0)
+    assert refined.offsets.max() > 0.0 and np.array_equal(refined.offsets, given["placement"].offsets)
+    unspaced = dataclasses.replace(pile, spacing=0.0)  # not from poisson_place
+    with pytest.raises(ValueError, match="give r, or refine a placement made by poisson_place"):
+        overlap_refine.call(seed=2, placement=unspaced, libraries=[rice], cost="gan", c_refine=2.0)
 
 
 def test_refine_is_deterministic_and_thread_count_independent(pile, rice):

@@ -41,7 +41,7 @@ def indica_run(tmp_path_factory):
 
 def test_the_run_keeps_the_long_grains_in_the_bowl(indica_run):
     # a fix by more solver effort must not launch grains: 16 particles at 80 substeps (or 8 at 40) sent grains
-    # through the reduced bowl at up to 1,200 mm/s (docs/look.md); the recipe's run keeps all 60 inside
+    # through the reduced bowl at up to 1,200 mm/s (docs/look.md); the recipe's run keeps every grain inside
     aggregate, vessel = indica_run
     assert not vessel.outside(aggregate.placement.positions, margin=vessel.wall).any()
 
