@@ -35,7 +35,7 @@ def test_the_line_in_the_file_is_named(tmp_path):
     """Set in the recipe itself, the problem points at the line that sets it."""
     text = (ROOT / "graphs" / "rice_chestnut.yaml").read_text()
     recipe = tmp_path / "rice_chestnut.yaml"
-    recipe.write_text(text.replace("size: [14.25, 12.35, 9.5]", "size: [200, 180, 150]"))
+    recipe.write_text(text.replace("size: [26.0, 23.0, 17.0]", "size: [200, 180, 150]"))
     line = next(i for i, row in enumerate(recipe.read_text().splitlines(), 1) if "[200, 180, 150]" in row)
     with pytest.raises(RecipeError, match=rf"rice_chestnut.yaml:{line}:\d+: node 'chestnut_base', size: "):
         load_recipe(recipe, default_registry(), work=True)

@@ -94,7 +94,7 @@ def test_fat_lines_and_bad_input(block):
     aggregate, _ = block
     salmon = drape.call(aggregate=aggregate).element_mesh(0)
     tuna = drape.call(aggregate=aggregate, kind="tuna").element_mesh(0)
-    # thin lines: a fifteenth of a 6 mm flake (0.4 mm on average), a few faces wide (the mesh under half of it)
+    # thin lines: a twelfth of a 6 mm flake (0.5 mm on average), a few faces wide (the mesh under half of it)
     assert 0.05 < salmon.parts.mean() < 0.2 and 0 < tuna.parts.mean() < salmon.parts.mean()
     edges = np.linalg.norm(salmon.vertices[salmon.faces] - np.roll(salmon.vertices[salmon.faces], 1, axis=1), axis=2)
     assert np.median(edges) <= 0.4  # 0.53 at the plate's 0.5 mm cell
