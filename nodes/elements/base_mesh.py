@@ -14,7 +14,7 @@ from . import grain_shapes
 from .element_room import element_fits
 from .grain_shapes import DEFAULT_SIZE, RICE_VARIETIES
 
-SHAPES = ("rice", "ikura", "ice_flake", "file")
+SHAPES = ("rice", "ikura", "ice_flake", "chestnut", "file")
 
 
 def _check(p: dict) -> list[tuple[str, str]]:
@@ -89,6 +89,8 @@ def _cost(q: CostQuery) -> Cost:
     if p["shape"] == "file":
         return Cost()
     size = p["size"] or DEFAULT_SIZE[p["shape"]]
+    if p["shape"] == "chestnut":  # a quarter of the kernel: about half its smallest half-size
+        return Cost(inscribed=0.25 * min(size), faces=sphere)
     volume = _grain_volume(q, size) if p["shape"] == "rice" else None
     return Cost(inscribed=0.5 * min(size), volume=volume, faces=sphere)
 
@@ -144,7 +146,8 @@ def _warns(node_id: str, nodes) -> list[tuple[str, str]]:
             tuple[float, float, float],
             None,
             "length, width, thickness before the variety factor; default rice 5.2×3.0×2.0 (a raw Japanese short "
-            "grain, docs/sizes.md), ice flake 4×3×0.4",
+            "grain, docs/sizes.md), ice flake 4×3×0.4; chestnut: the whole peeled kernel before it is cut, "
+            "default 26×23×17",
             range=(0.01, 1000.0),
             units="mm",
             nullable=True,
@@ -227,7 +230,8 @@ def base_mesh(
     align,
     subdivisions,
 ):
-    """Low-resolution element model: rice grain preset, ikura egg (membrane + yolk parts), ice flake, or a file.
+    """Low-resolution element model: rice grain preset, ikura egg (membrane + yolk parts), ice flake, chestnut
+    piece, or a file.
 
     Rice: a blunted, slightly bent ellipsoid; the variety (input) multiplies the length (SPEC §1.1), its
     expansion P is applied later by ``expand``. Ikura: parts 0 = outer membrane, 1 = yolk, both
@@ -255,6 +259,10 @@ def base_mesh(
         length, width, thickness = size or DEFAULT_SIZE["ice_flake"]
         vertices, faces = grain_shapes.ice_flake(length, width, thickness, irregularity, shape_seed, curl)
         return Mesh(vertices, faces, name="ice_flake")
+    if shape == "chestnut":  # each variant its own cuts, seeded
+        length, width, thickness = size or DEFAULT_SIZE["chestnut"]
+        vertices, faces = grain_shapes.chestnut_piece(length, width, thickness, ctx.rng, subdivisions)
+        return Mesh(vertices, faces, name="chestnut")
     if not path:
         raise ValueError("shape 'file' needs the parameter path (a mesh file)")
     changes: list[str] = []

@@ -4,28 +4,30 @@ run said so only after its element modelling, or not at all. ``base_mesh``'s ``c
 
 from __future__ import annotations
 
-from .grain_shapes import DEFAULT_SIZE, RICE_VARIETIES
+from .grain_shapes import CHESTNUT_PIECE_SHARE, DEFAULT_SIZE, RICE_VARIETIES
 
 # the input a node's placement or region comes through, nearest first: a placement's own (rotate, mix_ratio), a
 # placer's shape (poisson_place), a boolean's first operand, a vessel_region's vessel
 UPSTREAM = ("placement", "shape", "a", "vessel")
 
 
-def base_length(node_id: str, nodes) -> tuple[str, float, float] | None:
-    """(parameter, the element's longest side in mm, the factor on that parameter's value) of a ``base_mesh``
-    node from its parameters; None for a mesh file (only reading it would tell)."""
+def base_length(node_id: str, nodes) -> tuple[str, float, float, str] | None:
+    """(parameter, the element's longest side in mm, the factor on that parameter's value, what the factor is) of
+    a ``base_mesh`` node from its parameters; None for a mesh file (only reading it would tell)."""
     entry = nodes[node_id]
     params = entry.params
     if params["shape"] == "ikura":
-        return "diameter", params["diameter"], 1.0
+        return "diameter", params["diameter"], 1.0, ""
     if params["shape"] not in DEFAULT_SIZE:
         return None
     size = params["size"] or DEFAULT_SIZE[params["shape"]]
+    if params["shape"] == "chestnut":  # a quarter of the kernel the size gives
+        return "size", CHESTNUT_PIECE_SHARE * max(size), CHESTNUT_PIECE_SHARE, "a quarter's share of the kernel"
     factor = 1.0
     wires = entry.inputs.get("variety") or []
     if params["shape"] == "rice" and len(wires) == 1 and nodes[wires[0].node].spec.type_name == "rice_variety":
         factor = RICE_VARIETIES[nodes[wires[0].node].params["variety"]].length_factor
-    return "size", max(size[0] * factor, *size[1:]), factor
+    return "size", max(size[0] * factor, *size[1:]), factor, f"the variety's factor {factor:g}"
 
 
 def downstream(node_id: str, nodes) -> set[str]:
@@ -68,7 +70,7 @@ def element_fits(node_id: str, nodes) -> list[tuple[str, str, bool]]:
     length = base_length(node_id, nodes)
     if length is None:
         return []
-    param, longest, factor = length
+    param, longest, factor, why = length
     for reader in sorted(downstream(node_id, nodes)):
         if nodes[reader].spec.type_name != "mix_ratio":
             continue
@@ -83,7 +85,7 @@ def element_fits(node_id: str, nodes) -> list[tuple[str, str, bool]]:
         if param == "diameter":
             allowed = f"diameter ≤ {room:.3g} mm"
         elif factor != 1.0:
-            before = f"the length ≤ {room / factor:.3g} mm before the variety's factor {factor:g}"
+            before = f"the length ≤ {room / factor:.3g} mm before {why}"
             allowed = f"each side ≤ {room:.3g} mm, {before}"
         else:
             allowed = f"each side ≤ {room:.3g} mm"

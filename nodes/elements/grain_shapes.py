@@ -13,8 +13,10 @@ from ..values import RiceVariety
 
 # base_mesh's size when none is given. Rice: a raw Japanese short grain (Koshihikari, brown): length 5.18 ± 0.17 mm,
 # width 2.99 ± 0.11 mm (MAFF variety table, 18 prefectures), thickness 1.99 mm (mean of 20 Ibaraki fields); sources
-# and what the exported files measure: docs/sizes.md.
-DEFAULT_SIZE = {"rice": (5.2, 3.0, 2.0), "ice_flake": (4.0, 3.0, 0.4)}
+# and what the exported files measure: docs/sizes.md. Chestnut: a peeled Japanese chestnut kernel (Castanea crenata
+# nuts are 1–2 in, 25–50 mm, across: acf.org/resources/identification/japanese-chestnuts), 26 mm, at the small end,
+# whose quarters are 15–20 mm long (17 mm on average; 5–95 % of 300 draws, icosphere subdivisions 4).
+DEFAULT_SIZE = {"rice": (5.2, 3.0, 2.0), "ice_flake": (4.0, 3.0, 0.4), "chestnut": (26.0, 23.0, 17.0)}
 
 #: SPEC §1.1 table (G §3.1.1): indica 1.8 / 1.2, japonica 1.0 / 1.5, aromatic 0.7 / 1.5 (length factor / P).
 RICE_VARIETIES = {
@@ -182,3 +184,78 @@ def ice_flake(
     )
     _, centroid = volume_centroid(vertices, faces)
     return vertices - centroid, faces
+
+
+# A piece of peeled chestnut (kuri gohan): the kernel cut in quarters by two cuts through near its middle, each
+# tilted up to CUT_TILT degrees and off the middle by up to CUT_OFFSET of the kernel's half-size,
+# its face that lay against a neighbour in the bur flat (FLAT_FACE of its half-thickness from the middle), and its
+# outer face pared by the knife that took its pellicle (shibukawa) off: KNIFE_FACETS flat facets, each shaving a cap
+# KNIFE_DEPTH deep (shares of the half-size). Chosen to match a cook's cut, not measured.
+CUT_TILT, CUT_OFFSET, FLAT_FACE = 20.0, 0.12, 0.8
+# a piece's longest side (its principal frame's x) as a share of the kernel's longest side, at most: 0.81 the
+# longest of 300 draws (seeds 0–299) of the 26 × 23 × 17 mm kernel
+CHESTNUT_PIECE_SHARE = 0.85
+KNIFE_FACETS, KNIFE_DEPTH = 2, (0.04, 0.10)
+
+
+def chestnut_piece(
+    length: float, width: float, thickness: float, rng: np.random.Generator, subdivisions: int = 4
+) -> tuple[np.ndarray, np.ndarray]:
+    """A peeled chestnut piece: a kernel (an ellipsoid ``length × width × thickness``) cut by knife planes: two
+    cuts through near its middle (a quarter), its flat face, and a few shallow facets pared off its rounded back.
+    The piece is convex, so every ray from a point inside leaves it once: an icosphere's vertices moved along
+    their rays to where each leaves it (the nearest of the ellipsoid and the planes) make a closed outward mesh
+    with flat faces where the knife cut and rounded ones where the kernel's skin was.
+    Centred, long axis x; ``rng`` draws the cuts (a seeded variant)."""
+    from .mesh_files import principal_frame
+
+    axes = np.array([length, width, thickness]) / 2.0
+    planes = [(np.array([0.0, 0.0, 1.0]), -FLAT_FACE * axes[2])]  # keep n·x ≥ o
+    for axis in (0, 1):
+        normal = _tilted(np.eye(3)[axis] * rng.choice([-1.0, 1.0]), CUT_TILT, rng)
+        planes.append((normal, -CUT_OFFSET * axes[axis] * rng.uniform(-1.0, 1.0)))
+    inside = _points_inside(axes, planes, rng)
+    for _ in range(KNIFE_FACETS):  # a facet across the outer face: a cap cut off where the knife went
+        normal = rng.normal(size=3)
+        normal /= np.linalg.norm(normal)
+        if inside.mean(axis=0) @ normal > 0:  # kept side towards the kernel's middle: the knife pares the back
+            normal = -normal
+        reach = np.min(inside @ normal)  # the piece's extent along −normal, from its points
+        planes.append((normal, reach + rng.uniform(*KNIFE_DEPTH) * float(np.abs(normal) @ axes)))
+    centre = _points_inside(axes, planes, rng).mean(axis=0)
+    directions, faces = icosphere(subdivisions)
+    reach = _ray_to_ellipsoid(centre, directions, axes)
+    for normal, offset in planes:
+        toward = directions @ normal
+        room = centre @ normal - offset
+        out = toward < -1e-12
+        reach[out] = np.minimum(reach[out], room / -toward[out])
+    vertices = centre + reach[:, None] * directions
+    _, centroid = volume_centroid(vertices, faces)
+    vertices = vertices - centroid
+    return vertices @ principal_frame(vertices), faces
+
+
+def _tilted(direction: np.ndarray, degrees: float, rng: np.random.Generator) -> np.ndarray:
+    """``direction`` (normalised) turned by up to ``degrees`` about a random axis."""
+    direction = direction / np.linalg.norm(direction)
+    turn = np.cross(direction, rng.normal(size=3))
+    turn /= np.linalg.norm(turn)
+    angle = np.radians(degrees) * rng.uniform(-1.0, 1.0)
+    return direction * np.cos(angle) + turn * np.sin(angle)
+
+
+def _points_inside(axes: np.ndarray, planes, rng: np.random.Generator, count: int = 4000) -> np.ndarray:
+    """Points drawn uniformly in the ellipsoid that every plane keeps (its mean lies inside: the body is convex)."""
+    points = rng.uniform(-1.0, 1.0, (count, 3))
+    points = points[(points**2).sum(axis=1) <= 1.0] * axes
+    for normal, offset in planes:
+        points = points[points @ normal >= offset]
+    return points
+
+
+def _ray_to_ellipsoid(centre: np.ndarray, directions: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """Distance along each unit direction from ``centre`` (inside) to the ellipsoid of semi-axes ``axes``."""
+    c, d = centre / axes, directions / axes
+    a, b, k = (d * d).sum(axis=1), 2.0 * d @ c, c @ c - 1.0
+    return (-b + np.sqrt(b * b - 4.0 * a * k)) / (2.0 * a)

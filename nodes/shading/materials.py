@@ -4,7 +4,7 @@ Colours are linear RGB in [0, 1]; lengths (subsurface radius) in mm. Cooked rice
 (0–24 %, SPEC §4): wetter grains are whiter, more translucent and glossier (a water film: clearcoat). Ikura has two
 parts (``Mesh.parts``: 0 membrane, 1 yolk); kakigori ice is a white tuft of fine shavings, a scattering medium with
 no skin, and carries syrup graded by its depth below the mound's top surface, deeper along runs down the flanks;
-chestnut (kuri gohan) is a pale yellow-gold, matte, slightly crumbly solid; a fish topping (salmon, tuna) has two
+chestnut (kuri gohan) is a golden, dense, waxy solid under a moist film; a fish topping (salmon, tuna) has two
 parts: 0 flesh, 1 fat.
 """
 
@@ -311,32 +311,33 @@ def syrup_grades(ice: Material, syrup: Material, levels: int) -> tuple[Material,
 
 
 def chestnut_material() -> Material:
-    """Chestnut (kuri, as in kuri gohan): a peeled kernel boiled and broken into chunks, pale cream-yellow, an
-    opaque starchy body with a little light through it (subsurface 0.2, far less than rice), a satin face (roughness
-    0.65) under the thin moist film the rice's steam leaves (clear coat 0.15), so it reads as a different solid from
-    the translucent, glossy rice around it. Colour CIELAB (82, 2, 30), linear (0.775, 0.583, 0.295) = sRGB (228,
-    201, 148): chosen, the nearest published reading being chestnut flour, L* 90.7 → 81.4 and b* 12.0 → 20.5 on
-    roasting (sweet chestnut, pan and microwave roasting: pmc.ncbi.nlm.nih.gov/articles/PMC5470552); a whole
-    piece is more saturated than its flour. At CIELAB (78, 4, 38) the pieces rendered a deep gold in the rice's
-    shade, and at (0.80, 0.50, 0.06), a saturated mustard, they read as cheese."""
+    """Chestnut (kuri, as in kuri gohan): a peeled kernel cooked in the rice, dyed golden yellow with gardenia
+    (kuchinashi, whose yellow colours kuri kinton: murin-an.jp/news/staff-viewpoint/eyes-20191221); a dense, waxy
+    body (subsurface 0.3 over a short radius: light softens its edges and does not cross it, as it crosses rice)
+    under a moist film of starch and cooking water (clear coat 0.7 at roughness 0.35, softer than the rice's: a
+    soft glint on each cut face). Colour linear (0.80, 0.52, 0.15) = sRGB (231, 191, 108): the dyed colour
+    kuchinashi-iro, Munsell 4Y 8/8 = sRGB (231, 195, 87) (natubunko.net/mmbn/fushin042.html), taken a little
+    paler, as a kernel dyed through its cooking water is (chosen). In a pale cream (sRGB (228, 201, 148)), matte
+    (roughness 0.65), art directors read the pieces as "pale mustard blobs, cheese cubes" (issue 48)."""
     return Material(
         name="chestnut",
-        base_color=(0.775, 0.583, 0.295),
-        subsurface=0.2,
-        subsurface_radius=(0.6, 0.4, 0.2),
-        subsurface_color=(0.88, 0.70, 0.42),
-        specular=0.3,
-        roughness=0.65,
+        base_color=(0.80, 0.52, 0.15),
+        subsurface=0.3,
+        subsurface_radius=(0.8, 0.5, 0.2),
+        subsurface_color=(0.90, 0.62, 0.22),
+        specular=0.4,
+        roughness=0.5,
         sheen=0.2,
         sheen_tint=0.5,
-        clearcoat=0.15,
-        clearcoat_roughness=0.4,
+        clearcoat=0.7,
+        clearcoat_roughness=0.35,
         ior=1.45,
     )
 
 
-# a raw slice is wet and smooth: its skin is a water film (roughness 0.12, α 0.014), the key's sharp glint on it
-FISH_FILM_ROUGHNESS = 0.12
+# a raw slice is wet and smooth: its skin is a water film (roughness 0.08, α 0.0064), the key's sharp glint on it,
+# broken into one glint a flake by the flakes' relief (``plate_drape.flake_relief``)
+FISH_FILM_ROUGHNESS = 0.08
 
 
 def fish_materials(kind: str) -> tuple[Material, Material]:
@@ -352,7 +353,7 @@ def fish_materials(kind: str) -> tuple[Material, Material]:
     lines read as painted stripes. ``kind``: salmon (orange flesh, marked fat) or tuna (akami: deep red
     flesh, faint fat)."""
     if kind == "salmon":
-        flesh_color, flesh_sss, fat_color = (0.90, 0.22, 0.07), (0.99, 0.30, 0.10), (0.84, 0.64, 0.52)
+        flesh_color, flesh_sss, fat_color = (0.90, 0.22, 0.07), (0.99, 0.30, 0.10), (0.80, 0.56, 0.44)
     elif kind == "tuna":
         flesh_color, flesh_sss, fat_color = (0.42, 0.03, 0.04), (0.70, 0.08, 0.08), (0.80, 0.50, 0.48)
     else:

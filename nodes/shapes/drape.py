@@ -15,9 +15,9 @@ from ..values import Aggregate
 
 FISH = ("salmon", "tuna")
 # kind → (fat line spacing, line width, angle to the slab's width, chevron depth), mm and degrees
-# (``plate_drape.fat_lines``; the mean width: a line swells and thins along its length): salmon shows thin pale
-# chevrons a flake apart, tuna (akami) fainter, sparser ones
-FAT_LINES = {"salmon": (6.0, 0.4, 30.0, 6.0), "tuna": (9.0, 0.5, 20.0, 4.0)}
+# (``plate_drape.fat_lines``; the mean width across the line: it swells and thins a little along its length):
+# salmon shows thin pale chevrons a flake apart, tuna (akami) fainter, sparser ones
+FAT_LINES = {"salmon": (6.0, 0.5, 45.0, 4.0), "tuna": (9.0, 0.5, 20.0, 3.0)}
 
 
 @node(
@@ -68,7 +68,15 @@ def drape(ctx, aggregate, *, kind, size, corner, young_modulus, density, press, 
     from nodegraph.values import Mesh
 
     from ..values import ElementLibrary, Placement
-    from .plate_drape import PlateGrid, drape_plate, drape_points, fat_lines, rounded_slab, upper_envelope
+    from .plate_drape import (
+        PlateGrid,
+        drape_plate,
+        drape_points,
+        fat_lines,
+        flake_relief,
+        rounded_slab,
+        upper_envelope,
+    )
 
     length, width, thickness = size
     if thickness >= width or width > length:
@@ -90,6 +98,8 @@ def drape(ctx, aggregate, *, kind, size, corner, young_modulus, density, press, 
     lines = FAT_LINES[kind]
     vertices, faces = rounded_slab(length, width, thickness, corner, min(cell, 0.5 * lines[1]))
     parts = fat_lines(vertices[faces].mean(axis=1), width, *lines)
+    spacing, _, angle, chevron = lines
+    vertices[:, 2] += flake_relief(vertices, thickness, width, spacing, angle, chevron)
     draped = drape_points(vertices, thickness, w, grid)
     world = np.c_[draped[:, :2] @ axes + centre, draped[:, 2]]
     middle = world.mean(axis=0)

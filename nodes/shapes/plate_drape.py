@@ -189,32 +189,57 @@ def rounded_slab(length: float, width: float, thickness: float, corner: float, c
 
 
 def fat_lines(local_centres: np.ndarray, width: float, spacing: float, line_width: float, angle: float, chevron: float):
-    """Face part per face: 1 (fat) on bands across the slab, 0 (flesh) elsewhere. A band is where
-    (U·cos a + V·sin a + chevron·w(V)) mod spacing < line width, w the W-shaped zigzag across the slab's width
-    (0 at V = ±W/4, ½ at its middle and edges, corners rounded): thin parallel chevrons, the myosepta (the
-    sheets of connective tissue and fat between the muscle's flakes, "folded and nested in complex W-like
-    shapes", McGee, On Food and Cooking, 2004) where a slice cuts them. A sheet meets the knife at an angle that
-    changes along it, so a line swells and thins along its length (``LINE_SWELL``): a ruled line of one width
-    reads as a painted stripe (issue 48). 0 spacing: no fat."""
+    """Face part per face: 1 (fat) on thin parallel chevrons across the slab, 0 (flesh) elsewhere: the myosepta
+    (the sheets of connective tissue and fat between the muscle's flakes, "folded and nested in complex W-like
+    shapes", McGee, On Food and Cooking, 2004) where a slice cuts them. A nigiri's slice is a few cm of the
+    fillet's width, so it shows one fold of the W: each line a chevron whose arms run back ``chevron`` mm over
+    half the slab's width from its apex (``flake_phase``), every line the same shape a flake further on. Across
+    the line (not along the slab) a line is ``line_width`` wide on average, swelling and thinning a little along
+    its length (``LINE_SWELL``: a sheet meets the knife at an angle that changes along it). 0 spacing: no fat."""
     if spacing <= 0:
         return np.zeros(len(local_centres), np.int32)
+    phase, stretch = flake_phase(local_centres, width, angle, chevron)
+    line = np.floor(phase / spacing)  # which sheet: each swells at its own places
+    along = local_centres[:, 1] * np.cos(np.radians(angle)) - local_centres[:, 0] * np.sin(np.radians(angle))
+    swell = 1.0 + LINE_SWELL * np.sin(LINE_SWELL_WAVE * along + 2.4 * line)
+    return (np.mod(phase, spacing) < line_width * swell * stretch).astype(np.int32)
+
+
+def flake_phase(local_centres: np.ndarray, width: float, angle: float, chevron: float):
+    """(phase, stretch) of points on the flat slab: the phase (mm) grows by one flake's spacing from one fat line
+    to the next; lines run at ``angle`` degrees to the slab's width, bent into a chevron at ``CHEVRON_APEX`` of
+    the width off its middle (the horizontal septum), drifting a little (``CHEVRON_DRIFT``: a sheet is not a ruled
+    surface). ``stretch`` is the phase's gradient, so a width in phase over it is a width across the line."""
     u, v = local_centres[:, 0], local_centres[:, 1]
     a = np.radians(angle)
-    across = 2.0 * v / width  # −1 … 1 across the slab
-    zigzag = _soft_abs(_soft_abs(across) - 0.5)
-    # a sheet is not a ruled surface: the lines drift a little along the slab and across it (≈ 20 mm waves)
-    drift = CHEVRON_DRIFT * np.sin(0.31 * u + 0.17 * v + 1.3) + 0.5 * CHEVRON_DRIFT * np.sin(0.23 * v - 0.11 * u)
-    phase = u * np.cos(a) + v * np.sin(a) + chevron * zigzag + drift
-    line = np.floor(phase / spacing)  # which sheet: each swells at its own places
-    swell = 1.0 + LINE_SWELL * np.sin(LINE_SWELL_WAVE * v + 2.4 * line)
-    return (np.mod(phase, spacing) < line_width * swell).astype(np.int32)
+    normal, along = u * np.cos(a) + v * np.sin(a), v * np.cos(a) - u * np.sin(a)
+    half = 0.5 * width
+    x = (along - CHEVRON_APEX * width) / half
+    drift = CHEVRON_DRIFT * np.sin(0.31 * u + 0.17 * v + 1.3)
+    slope = chevron / half * x / np.sqrt(x * x + CHEVRON_CORNER**2)  # d(bend)/d(along)
+    return normal + chevron * _soft_abs(x) + drift, np.sqrt(1.0 + slope * slope)
 
 
-CHEVRON_DRIFT = 0.8  # mm: how far a line wanders from its chevron (``fat_lines``)
+def flake_relief(local: np.ndarray, thickness: float, width: float, spacing: float, angle: float, chevron: float):
+    """Height (mm) added to the slab's top at flat-slab points ``local`` (U, V, z): each flake between two fat
+    lines a low dome ``FLAKE_RELIEF`` high, down to 0 at the lines, fading out over the rounded rim (z from the
+    top face down to the mid-plane). A cut fillet's flakes stand a little proud of the sheets between them, and
+    the wet film on them catches the key as a run of glints, one a flake, where a flat face shows one smear."""
+    if spacing <= 0:
+        return np.zeros(len(local))
+    phase, _ = flake_phase(local, width, angle, chevron)
+    dome = np.sin(np.pi * np.mod(phase, spacing) / spacing) ** 2
+    top = np.clip(2.0 * local[:, 2] / thickness, 0.0, 1.0) ** 4  # 1 on the top face, 0 at the mid-plane
+    return FLAKE_RELIEF * dome * top
+
+
+CHEVRON_DRIFT = 0.3  # mm: how far a line wanders from its chevron (≈ 20 mm waves)
+CHEVRON_APEX = 0.15  # the chevron's apex (the horizontal septum) off the slab's middle, a share of its width
 # a line's width runs from (1 − swell) to (1 + swell) times its mean along its length, over ≈ 10 mm waves
-LINE_SWELL, LINE_SWELL_WAVE = 0.6, 0.6
-# the zigzag's corners rounded over this share of the half-width (a sheet bends, it does not fold)
+LINE_SWELL, LINE_SWELL_WAVE = 0.25, 0.6
+# the chevron's apex rounded over this share of the half-width (a sheet bends, it does not fold)
 CHEVRON_CORNER = 0.08
+FLAKE_RELIEF = 0.2  # mm: a flake's dome over the fat lines beside it (chosen: under the 0.5 mm cell of a drape)
 
 
 def _soft_abs(x: np.ndarray) -> np.ndarray:

@@ -212,3 +212,22 @@ def test_parameter_combinations_are_checked():
     assert [p for p, _ in problems] == ["path"]
     problems = base_mesh.check(base_mesh.resolve_params({"shape": "ikura", "size": (1.0, 1.0, 1.0)}))
     assert [p for p, _ in problems] == ["size"]
+
+
+def test_chestnut_pieces_are_knife_cut_quarters_of_a_kernel():
+    """A kuri gohan piece (issue 48): a quarter of a 26 mm peeled kernel, 10–20 mm, closed and outward; flat
+    knife-cut faces (a large share of its faces coplanar with a neighbour, as on no rounded blob) and a rounded
+    back; each variant its own cuts, the same seed the same piece."""
+    pieces = [base_mesh.call(seed=s, shape="chestnut", subdivisions=4) for s in range(6)]
+    for mesh in pieces:
+        tm = as_trimesh(mesh)
+        assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
+        extent = np.ptp(mesh.vertices, axis=0)
+        assert 10.0 < extent[0] < 22.0 and extent[2] > 7.0  # a quarter of a 26 × 23 × 17 mm kernel
+        normals = tm.face_normals[tm.face_adjacency]
+        flat = np.einsum("ij,ij->i", normals[:, 0], normals[:, 1]) > 1.0 - 1e-9
+        assert 0.3 < flat.mean() < 0.9  # cut faces flat, the back curved
+        assert tm.volume > 0.99 * tm.convex_hull.volume  # a convex chunk: a kernel cut by planes
+    assert len({round(float(as_trimesh(m).volume), 3) for m in pieces}) == len(pieces)  # every variant its own
+    again = base_mesh.call(seed=3, shape="chestnut", subdivisions=4)
+    assert np.array_equal(again.vertices, pieces[3].vertices)

@@ -35,7 +35,7 @@ def test_the_line_in_the_file_is_named(tmp_path):
     """Set in the recipe itself, the problem points at the line that sets it."""
     text = (ROOT / "graphs" / "rice_chestnut.yaml").read_text()
     recipe = tmp_path / "rice_chestnut.yaml"
-    recipe.write_text(text.replace("size: [14.25, 12.35, 9.5]", "size: [200, 180, 150]"))
+    recipe.write_text(text.replace("size: [26.0, 23.0, 17.0]", "size: [200, 180, 150]"))
     line = next(i for i, row in enumerate(recipe.read_text().splitlines(), 1) if "[200, 180, 150]" in row)
     with pytest.raises(RecipeError, match=rf"rice_chestnut.yaml:{line}:\d+: node 'chestnut_base', size: "):
         load_recipe(recipe, default_registry(), work=True)
@@ -44,3 +44,10 @@ def test_the_line_in_the_file_is_named(tmp_path):
 def test_an_element_that_fits_passes():
     """The recipes as written, and an egg as large as fits, pass."""
     load_recipe(ROOT / "graphs" / "ikura_don.yaml", default_registry(), ["egg_base.diameter=30"], work=True)
+
+
+@pytest.mark.parametrize("recipe_file", ["rice_chestnut.yaml", "ikura_don.yaml"])
+def test_each_draft_fits_its_elements(recipe_file):
+    """A draft shrinks the shape, not the elements: its chestnut quarters (up to 22 mm) must still fit the draft's
+    onigiri (at 22.8 mm its smallest span was 20.5 mm, and ``--draft`` refused to run)."""
+    load_recipe(ROOT / "graphs" / recipe_file, default_registry(), draft=True, work=True)

@@ -50,8 +50,8 @@ EXPECTED = {
     # 294 elements: p95 0, max 0 with deform_contacts (issue 25); p95 0.077, max 0.096 without it (S: no physics).
     # With the onigiri's straight sides and the cull's priority for the chestnut pieces: 203; max 0.026 while a
     # grain's tip poking into a coarse piece's face (no piece vertex inside the grain) was dented only its half
-    # (deform_contacts v4), max 0 with v5
-    "rice_chestnut": ((180, 340), 0.003, 0.01),
+    # (deform_contacts v4), max 0 with v5. 178 with knife-cut quarters, each a larger share of the small ball
+    "rice_chestnut": ((150, 340), 0.003, 0.01),
 }
 SLOW: set[str] = set()  # each runs in 2–7 s on a calm machine (rice_chestnut, the slowest: 18 s at load 10)
 
@@ -79,9 +79,9 @@ def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
     """Issue 26: the chestnut pieces must show, embedded in the rice. At S's refine range (±0.1 b) every one of the
     38 placed was the deepest of its pairs and the cull removed all of them; a range of ±2 b kept 30, but about half
     had stepped out over the rice, standing out of the onigiri by up to 1.4× their size. Now the cull's priority
-    removes the grains in a piece instead, and the refine's shape bound (``refine.protrusion``: 0.35 for the pieces)
-    keeps each within a third of its size of the surface, where its rounded face shows among the grains. Full size up
-    to the cull (≈ 8 s)."""
+    removes the grains in a piece instead, and the refine's shape bound (``refine.protrusion``: 0.5 for the pieces)
+    keeps each within half its size of the surface, where a face shows among the grains. Full size up to the cull
+    (≈ 8 s)."""
     import igl
     import numpy as np
 
@@ -107,7 +107,7 @@ def test_rice_chestnut_keeps_its_chestnut_pieces(tmp_path):
         reach = igl.signed_distance(world, vertices, faces, sign_type=sign)[0].max()
         share.append(reach / (height.max() - height.min()))
     share = np.array(share)
-    assert share.max() <= 0.35 + 0.02  # was 1.40: 17 of 30 wholly outside the onigiri
+    assert share.max() <= 0.5 + 0.02  # was 1.40: 17 of 30 wholly outside the onigiri
     assert (share > 0.0).all()  # every one shows a face at the surface (not stepped under the rice)
 
 
