@@ -40,14 +40,14 @@ OTHER_CPU_PER_FACE = 6e-6
 OTHER_CPU_PER_ELEMENT = 0.010
 # CPU seconds of each step that says nothing of its own time, whatever its elements (its inputs read and hashed, its
 # result stored and recorded), and of a run's start before its first step (imports, the recipe loaded and checked):
-# a draft's steps are mostly these. The cold --draft runs of the ikura don (63 such steps: 6.9 CPU s, 0.025 a step
-# beyond its faces' share) and of the rice bowl (38: 3.6 CPU s, 0.09 a step) spent 1.9 and 1.6 CPU s before their
+# a draft's steps are mostly these. The cold --draft runs of the main job (63 such steps: 6.9 CPU s, 0.025 a step
+# beyond its faces' share) and of a second recipe (38: 3.6 CPU s, 0.09 a step) spent 1.9 and 1.6 CPU s before their
 # steps (their closing tables; 2 cores, load 7-10); the drafts' runs against the estimate: benchmarks/measured/
 # cost.jsonl
 OTHER_CPU_PER_STEP = 0.05
 START_CPU = 2.0
 # what the time line leaves out: the rates above are an idle machine's; where other work holds the cores, the threads
-# of the simulations and the preview wait for them and spend more CPU (the ikura don's draft, 21 CPU s estimated:
+# of the simulations and the preview wait for them and spend more CPU (the main job's draft, 21 CPU s estimated:
 # 23.3 spent on two threads at load 1.2-2.3, 31.3 at load 5.5, its simulations 11.1 of them against 3.4; 22.3 on one
 # thread at load 4.5; benchmarks/measured/cost.jsonl)
 IDLE_RATES = "at an idle machine's rates (on a busy one the simulations' and preview's threads spend more)"
