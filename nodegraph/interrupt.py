@@ -64,7 +64,8 @@ UNCACHED = "#uncached"  # a line of the listing: the run keeps nothing that fini
 # finishes (a cache): what a re-run would find
 _running: dict[str, tuple[float, Path | None]] = {}
 _saved: dict[Path, str] = {}  # checkpoint file: where its saved progress is ("frame 1,200"; "" where not known)
-_run: dict[str, bool | None] = {"cached": None, "stopping": False}  # cached None: no run has begun in this process
+# cached None: no run has begun in this process; command: the command line after ``nodegraph`` (``said_command``)
+_run: dict = {"cached": None, "stopping": False, "command": ()}
 _held = {"count": 0, "pending": False}  # the main thread's holds open now, and whether a stop waits for them
 
 
@@ -97,19 +98,16 @@ def _resumes(label: str, checkpoint: Path | None, saved: dict[Path, str]) -> str
     return f"{label}'s progress" + (f" up to {where}" if where else " so far")
 
 
-_command: list[str] = []  # the command line after ``nodegraph`` (``said_command``): what a re-run types again
-
-
 def said_command(argv: list[str]) -> None:
     """Keep the command line (``run graphs/ikura_don.yaml --draft``) that a stopped run tells the user to repeat."""
-    _command[:] = argv
+    _run["command"] = tuple(argv)
 
 
 def _again() -> str:
     """The command that resumes: this one again, as typed."""
     import shlex
 
-    return "the same command again" + (f": nodegraph {shlex.join(_command)}" if _command else "")
+    return "the same command again" + (f": nodegraph {shlex.join(_run['command'])}" if _run["command"] else "")
 
 
 def _rerun(uncached: bool, running: dict[str, Path | None], saved: dict[Path, str]) -> str:
