@@ -1,8 +1,8 @@
 """Whether any grain ends outside a thin-walled bowl, read from the exported file alone (issue 46: "no grain through a
 thin wall at any setting that check accepts"). Runs ``graphs/rice_bowl.yaml`` at full size for each wall thickness ×
 speed clamp at the fewest substeps the solver accepts (3: at 2 it refuses, gravity alone moving a particle past what
-2 iterations hold), exports the .glb, and counts the elements whose centre lies beyond the bowl's rim radius or below
-its floor (trimesh; glTF's metres, y up). One JSON row per setting on stdout.
+2 iterations hold), exports the .glb, and reads it with ``tools/vessel_check.py``: the elements outside the bowl
+(centre beyond its rim's radius or below it) and those reaching into its wall. One JSON row per setting on stdout.
 
     python benchmarks/thin_wall.py [--walls 0.5,0.05] [--clamps 2,8] [--substeps 3]
 """
@@ -18,28 +18,9 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
+from tools.vessel_check import vessel_report
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def outside(glb: Path) -> tuple[int, list[tuple[str, float, float]]]:
-    """The elements of ``glb`` (meshes named kind/index) and those whose centre is outside the bowl: beyond its rim
-    radius from its axis, or below its lowest point (each: name, mm from the axis, mm above the floor)."""
-    import trimesh
-
-    meshes = trimesh.load(glb).dump()
-    bowl = next(m for m in meshes if "bowl" in m.metadata.get("name", "").lower())
-    low, high = bowl.bounds
-    centre, rim = (low + high) / 2, max(high[0] - low[0], high[2] - low[2]) / 2
-    elements = [m for m in meshes if "/" in m.metadata.get("name", "")]
-    out = []
-    for mesh in elements:
-        p = mesh.vertices.mean(axis=0)
-        distance = float(np.hypot(p[0] - centre[0], p[2] - centre[2]))
-        if distance > rim or p[1] < low[1]:
-            out.append((mesh.metadata["name"], round(distance * 1e3, 1), round(float(p[1] - low[1]) * 1e3, 1)))
-    return len(elements), out
 
 
 def main() -> None:
@@ -58,9 +39,8 @@ def main() -> None:
                 command += ["--cache-dir", str(Path(folder) / "cache")]
                 start = time.perf_counter()
                 subprocess.run(command, cwd=ROOT, check=True)
-                count, escaped = outside(out / "rice_bowl.glb")
                 row = {"wall_mm": float(wall), "speed_clamp": float(clamp), "substeps": args.substeps}
-                row |= {"elements": count, "outside": len(escaped), "first": escaped[:3]}
+                row |= vessel_report(out / "rice_bowl.glb")
                 row |= {"seconds": round(time.perf_counter() - start, 1), "load": round(os.getloadavg()[0], 1)}
                 print(json.dumps(row), flush=True)
 
