@@ -14,6 +14,35 @@ from ..values import Aggregate, ElementLibrary, Placement
 from .element_templates import template_params
 
 
+def _placed_by_poisson(node_id: str, nodes) -> bool:
+    """Whether the placement into ``node_id`` comes, through nodes that pass a placement on (rotate, mix_ratio,
+    another refine), from a ``poisson_place``: its r (``Placement.spacing``) is the gan range's."""
+    current, seen = node_id, set()
+    while current not in seen:
+        seen.add(current)
+        wires = nodes[current].inputs.get("placement") or []
+        if len(wires) != 1:
+            return False
+        current = wires[0].node
+        if nodes[current].spec.type_name == "poisson_place":
+            return True
+    return False
+
+
+def _check_recipe(node_id: str, nodes) -> list[tuple[str, str]]:
+    """The gan cost needs r: given, or the one the placement was made at (refused by ``check``, before any work)."""
+    params = nodes[node_id].params
+    if params["cost"] != "gan" or params["r"] is not None or _placed_by_poisson(node_id, nodes):
+        return []
+    return [
+        (
+            "r",
+            "the gan cost (G eq. 1) searches t in [0, r·C_refine]: give r, or refine a placement made by "
+            "poisson_place (its r is used)",
+        )
+    ]
+
+
 @estimated_by(passes("placement"))
 @node(
     "overlap_refine",
@@ -80,6 +109,7 @@ from .element_templates import template_params
         **template_params(),
     },
     random=True,
+    check_recipe=_check_recipe,
 )
 def overlap_refine(
     ctx,

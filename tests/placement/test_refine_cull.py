@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +16,8 @@ from nodes.placement.medial_spheres import medial_spheres, union_fit
 from nodes.values import ElementLibrary, Placement
 
 from .conftest import digest, ellipsoid
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
@@ -183,3 +186,21 @@ def test_r_scale_multiplies_the_radius_derived_from_the_elements(small_onigiri, 
     s1 = poisson_place.call(seed=1, shape=small_onigiri, elements=[rice])["stats"].columns["r"][0]
     s2 = poisson_place.call(seed=1, shape=small_onigiri, elements=[rice], r_scale=2.0)["stats"].columns["r"][0]
     assert s2 == pytest.approx(2.0 * s1)
+
+
+def test_check_refuses_gan_without_r_unless_a_poisson_placement_gives_it():
+    """The gan cost's range needs r: ``check`` refuses a refine given none whose placement does not come from a
+    poisson_place (through rotate and mix_ratio), before any work; rice_bowl's refine reads its placement's r."""
+    from types import SimpleNamespace
+
+    from nodegraph.recipe import load_recipe
+    from nodegraph.registry import default_registry
+    from nodes.placement.overlap_refine import _check_recipe
+
+    nodes = dict(load_recipe(REPO / "graphs" / "rice_bowl.yaml", default_registry()).nodes)
+    assert nodes["refine"].params["cost"] == "gan" and nodes["refine"].params["r"] is None
+    assert _check_recipe("refine", nodes) == []
+    source = SimpleNamespace(spec=SimpleNamespace(type_name="plugin_place"), inputs={}, params={})
+    nodes["rice_place"] = source  # the placement made by a node that says no r
+    (problem,) = _check_recipe("refine", nodes)
+    assert problem[0] == "r" and "poisson_place" in problem[1]
