@@ -205,8 +205,9 @@ def chestnut_piece(
     cuts through near its middle (a quarter), its flat face, and a few shallow facets pared off its rounded back.
     The piece is convex, so every ray from a point inside leaves it once: an icosphere's vertices moved along
     their rays to where each leaves it (the nearest of the ellipsoid and the planes) make a closed outward mesh
-    with flat faces where the knife cut and rounded ones where the kernel's skin was.
-    Centred, long axis x; ``rng`` draws the cuts (a seeded variant)."""
+    with flat faces where the knife cut and rounded ones where the kernel's skin was. By hand rather than trimesh's
+    ``slice_plane(cap=True)``: the caps it adds are fans of slivers, where this keeps the icosphere's even triangles
+    and its vertex count for every variant. Centred, long axis x; ``rng`` draws the cuts (a seeded variant)."""
     from .mesh_files import principal_frame
 
     axes = np.array([length, width, thickness]) / 2.0
