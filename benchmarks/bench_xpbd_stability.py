@@ -4,7 +4,7 @@ Map 1 — Δt/substeps × mass ratio × compliance: a two-cube stack (``scene_bu
 upper cube ``ratio``× heavier) dropped 0.1 r onto the ground; max inter-element penetration / r over
 the run, energy growth (max of E − E₀ over the run, in M·g·r; gravity does the only work, so > 0 is
 a gain) and the settled error of the element centres against the analytic rest (r). A refused
-setting (``solver.check_gravity_step``: g·h² beyond what the iterations hold or the speed clamp)
+setting (``step_limits.check_gravity_step``: g·h² beyond what the iterations hold or the speed clamp)
 is marked "refused".
 Map 2 — speed clamp × wall thickness: 200 particles fired at 20 m/s at a bowl wall; how many cross it.
 Run: python benchmarks/bench_xpbd_stability.py [--quick]   (tables; benchmarks/results/xpbd_stability[_quick].png)
@@ -124,7 +124,7 @@ def plot(rows, walls_rows, path):
     crosses at the top; right: particles through the wall, speed clamp × wall thickness."""
     import matplotlib.pyplot as plt
 
-    from nodes.simulation.solver import HOLD, SINK
+    from nodes.simulation.step_limits import HOLD, SINK
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5))
     colours = {c: f"C{k}" for k, c in enumerate(sorted({row[3] for row in rows}))}

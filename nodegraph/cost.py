@@ -107,13 +107,15 @@ class Cost:
 @dataclass(frozen=True)
 class CostQuery:
     """What a node's ``cost`` function receives: its id and parameters, its inputs' estimates by port (one per wire),
-    every node of the recipe (``NodeEntry`` by id, to weigh a shape it fills), and the run's limits."""
+    every node of the recipe (``NodeEntry`` by id, to weigh a shape it fills), the run's limits and the recipe's
+    effects."""
 
     node_id: str
     params: Mapping[str, Any]
     inputs: Mapping[str, list[Cost]]
     nodes: Mapping[str, Any]
     limits: Limits
+    effects: frozenset[str] = frozenset()
 
     def elements(self, port: str) -> int | None:
         """The elements the wires into ``port`` carry, summed; None when one of them is not known."""
@@ -164,9 +166,9 @@ def passes(
     port: str, share: float | Callable[[tuple[str, ...]], float] = 1.0, faces: str | None = None
 ) -> Callable[[CostQuery], Cost]:
     """A ``cost`` for a node whose output carries the elements of input ``port`` (× ``share``: a cull's kept
-    share, or a function of the element kinds that gives it), with the faces per element and the kinds of input
-    ``faces`` (default ``port``: the meshes a placement gets from the libraries it is mixed with), and whose own
-    work is small."""
+    share, or a function of the element kinds that gives it), with the faces per element, the kinds, the smallest
+    inscribed radius and the mean volume of input ``faces`` (default ``port``: the meshes a placement gets from the
+    libraries it is mixed with), and whose own work is small."""
 
     def cost(q: CostQuery) -> Cost:
         count = q.elements(port)
@@ -174,8 +176,8 @@ def passes(
         kept = share(kinds) if callable(share) else share
         return Cost(
             elements=None if count is None else int(round(count * kept)),
-            inscribed=q.inscribed(port),
-            volume=q.volume(port),
+            inscribed=q.inscribed(faces or port),
+            volume=q.volume(faces or port),
             faces=q.faces(faces or port),
             kinds=kinds,
         )
@@ -314,15 +316,22 @@ def gib(size: float) -> str:
     return f"{size / 2**30:.2f} GiB" if size >= 2**30 else f"{size / 2**20:,.0f} MiB"
 
 
-def estimate(nodes: Mapping[str, Any], order: list[str], outputs: list[str], limits: Limits) -> Estimate:
+def estimate(
+    nodes: Mapping[str, Any],
+    order: list[str],
+    outputs: list[str],
+    limits: Limits,
+    effects: frozenset[str] = frozenset(),
+) -> Estimate:
     """Walk ``order`` (every node after those it reads), asking each node type's ``cost`` with its inputs'
-    estimates; ``nodes``: ``NodeEntry`` by id, ``outputs``: the node ids the recipe asks for."""
+    estimates; ``nodes``: ``NodeEntry`` by id, ``outputs``: the node ids the recipe asks for, ``effects``: the
+    recipe's."""
     result = Estimate(outputs=tuple(dict.fromkeys(outputs)), limits=limits)
     for node_id in order:
         entry = nodes[node_id]
         inputs = {port: [result.costs[w.node] for w in wires] for port, wires in entry.inputs.items()}
         spec_cost = entry.spec.cost
-        query = CostQuery(node_id, entry.params, inputs, nodes, limits)
+        query = CostQuery(node_id, entry.params, inputs, nodes, limits, effects)
         result.costs[node_id] = spec_cost(query) if spec_cost is not None else Cost()
         if entry.family:
             result.family[node_id] = entry.family

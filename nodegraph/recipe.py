@@ -474,7 +474,7 @@ class _Validator:
         if nodes_valid:  # the nodes' checks across the recipe read valid parameters and wires only
             self._check_recipe_rules(entries)
             if self.work and not cyclic and not self.issues:
-                cost = self._weigh_cost(entries, graph, outputs)
+                cost = self._weigh_cost(entries, graph, outputs, effects)
         self._check_draft(entries)
         raw_sweeps = self.raw.get("sweeps")
         sweeps = {}
@@ -532,7 +532,7 @@ class _Validator:
                 at = ("nodes", node_id, "params", param)
                 self.warnings.append(Issue(self.override_at.get(at) or self.source.at(at), message, node_id, param))
 
-    def _weigh_cost(self, entries: dict[str, NodeEntry], graph: Dag, outputs: list[Wire]):
+    def _weigh_cost(self, entries: dict[str, NodeEntry], graph: Dag, outputs: list[Wire], effects: frozenset[str]):
         """The cost estimate of the recipe's outputs (or those the limits name) and what they need
         (``nodegraph.cost``); what is over a run's limits is an issue at the parameter to change (with ``yes``, less
         what ``--yes`` passes)."""
@@ -540,7 +540,7 @@ class _Validator:
 
         asked = list(self.limits.outputs or [w.node for w in outputs])
         needed = set(asked).union(*(graph.ancestors(node_id) for node_id in asked))
-        result = estimate(MappingProxyType(entries), graph.topological_order(needed), asked, self.limits)
+        result = estimate(MappingProxyType(entries), graph.topological_order(needed), asked, self.limits, effects)
         for node_id, param, message, passes_with_yes in result.over():
             if passes_with_yes and self.yes:
                 continue

@@ -2,7 +2,7 @@
 
 The speed clamp (|v| ≤ clamp·r/h) is what keeps a particle from crossing a wall or another
 particle between two projections; it is always on (stability, not an effect). The solver runs
-clamps above one radius per substep as several solves of ≤ 1 r each (``solver.MAX_TRAVEL``): φ is
+clamps above one radius per substep as several solves of ≤ 1 r each (``step_limits.MAX_TRAVEL``): φ is
 a distance (|∇φ| ≤ 1), so a particle that starts a solve clear of a wall (φ ≥ r) and travels ≤ r
 ends with its centre in free space (φ ≥ 0) and is pushed back out on its own side, however thin
 the wall. Damping acts on velocities only; sleeping (``wake_flags``, ``sleep_clusters``)

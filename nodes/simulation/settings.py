@@ -228,8 +228,8 @@ PARAMS = {
     ),
     # 4 (issue 46): at 1 a 1 mm particle moves ≤ 0.6 m/s at 10 substeps and 2.4 m/s at 40, so a stream poured from
     # 240 mm landed braked at 10 and at its fall speed at 40, and its heap stood at H/R 36.5° and 21.3° (15° apart);
-    # at 4 a fast substep runs as up to 4 solves of ≤ 1 r (``solver.solve_pieces``) and the stream lands at its fall
-    # speed at either: H/R 24.3° and 21.3°, the dropped ball 24.3° and 22.5° (300 grains, 2.5 s;
+    # at 4 a fast substep runs as up to 4 solves of ≤ 1 r (``step_limits.solve_pieces``) and the stream lands at its
+    # fall speed at either: H/R 24.3° and 21.3°, the dropped ball 24.3° and 22.5° (300 grains, 2.5 s;
     # benchmarks/physics_at_defaults.py, docs/validation.md). It costs the main job 13 % more CPU cold (80.8 → 91.5 s,
     # rice_sim 13.8 → 18.4 s: its grains relax out of their packed overlaps faster than 1 r per substep; load 5–6)
     "speed_clamp": Param(

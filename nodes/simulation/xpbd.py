@@ -13,7 +13,8 @@ from nodegraph.node import In, Moved, Out, node
 from nodegraph.values import Mesh
 
 from ..values import Aggregate, CookedMaterial, ParticleState
-from .settings import EFFECTS, PARAMS, XpbdParams
+from .settings import EFFECTS, PARAMS, XpbdParams, solver_settings, xpbd_params
+from .step_limits import check_gravity_step, most_pieces, solve_pieces
 
 # particle-iterations per CPU second of a substep's work: what ``expect_cost`` tells before a long run starts (and
 # ``--max-minutes`` refuses above), in the node's CPU seconds. `nodegraph run graphs/rice_bowl.yaml --set
@@ -53,6 +54,24 @@ def _solve(
     return moving + obstacles * frames * substeps / OBSTACLE_SUBSTEPS_PER_SECOND, what
 
 
+def _step_refused(q: CostQuery) -> tuple[tuple[str, str, bool], ...]:
+    """The run's refusal of a step in which gravity alone sinks resting stacks (``step_limits.check_gravity_step``),
+    weighed before any work with the elements' smallest inscribed radius for the particles' radii: the particles lie
+    inside their elements, so where the elements are alike the run, with its particles' own radii, refuses at least
+    what this refuses."""
+    r = q.inscribed("aggregate")
+    if r is None or not r > 0 or "gravity" not in q.effects:
+        return ()
+    settings = solver_settings(xpbd_params(**q.params), q.effects, r)
+    try:
+        check_gravity_step(settings, solve_pieces(settings.gravity * settings.h**2 / r, most_pieces(settings)), r, r)
+    except ValueError as refused:
+        said = str(refused).removeprefix("substeps: ")
+        said += f" (weighed with the elements' smallest inscribed radius, {r:.3g} mm, for the particles')"
+        return (("substeps", said, False),)
+    return ()
+
+
 def _cost(q: CostQuery) -> Cost:
     """Particles, CPU seconds and memory from the elements its aggregate carries and its parameters, before any work
     (its run says the same from the particles it made, ``expect_cost``); its levers: the frames that keep it under
@@ -87,6 +106,7 @@ def _cost(q: CostQuery) -> Cost:
         what=what,
         time_lever=Lever("frames", fewer_frames),
         memory_lever=Lever("particles_per_element", fewer_particles),
+        over=_step_refused(q),
     )
 
 
@@ -168,7 +188,7 @@ def xpbd(ctx, aggregate, material=None, colliders=None, moulds=None, obstacles=N
     out = finish_simulation(sim)
     solves = sim.solver.diagnostics.solves  # per frame, a resumed run's earlier frames too (its checkpoint's)
     extra = sum(solves) - len(solves) * substeps
-    if extra and ctx.reporter is not None:  # what the fast particles cost (``solver.solve_pieces``)
+    if extra and ctx.reporter is not None:  # what the fast particles cost (``step_limits.solve_pieces``)
         ctx.reporter.info(f"{ctx.node_id}: {extra:,} extra solves for particles faster than 1 radius per substep")
     if ctx.rerun.enabled:
         if every:

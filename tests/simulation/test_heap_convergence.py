@@ -2,7 +2,7 @@
 from high measures the speed its grains land at: at speed clamp 1 a 1 mm particle moved at most 0.6 m/s at the
 default 10 substeps and 2.4 m/s at 40, so the stream landed braked at 10 and stood 8° steeper than the same grains
 dropped as a ball, and 10° steeper than at 40 substeps (120 grains). At the default clamp 4 a fast substep runs as
-several solves of ≤ 1 r (``solver.solve_pieces``): a falling grain keeps its speed at any substep count."""
+several solves of ≤ 1 r (``step_limits.solve_pieces``): a falling grain keeps its speed at any substep count."""
 
 import numpy as np
 import pytest

@@ -3,7 +3,7 @@ element counts, masses 1e-3 … 1e3 g, radii, Δt, substeps, iterations, complia
 the node's whole range, initial overlaps, degenerate (one-particle, collinear) clusters — dropped on
 a ground slab. Invariants, every frame: finite; energy ≤ initial + ε (gravity's work is in the
 potential term, nothing else does work); no particle centre inside the ground; same seed ⇒ same bits.
-Scenes the solver refuses (``SolverSettings`` / ``solver.check_gravity_step`` ValueError: gravity's
+Scenes the solver refuses (``SolverSettings`` / ``step_limits.check_gravity_step`` ValueError: gravity's
 step beyond what the iterations or the speed clamp hold) are skipped. CI runs a few derandomized
 examples; ``XPBD_FUZZ_EXAMPLES=500`` also runs that many random ones."""
 
