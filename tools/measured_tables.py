@@ -580,6 +580,15 @@ TABLES = {
             ("behind the film", value("film")),
         ],
     ),
+    "rice_sheen": (
+        "rice_sheen.jsonl",
+        None,
+        [
+            ("measured", field("measured")),
+            ("a chalky sheen, cream", value("before")),
+            ("the wet film, warm white", value("now")),
+        ],
+    ),
     "furnace": (
         "furnace.jsonl",
         None,

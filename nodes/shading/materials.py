@@ -69,13 +69,18 @@ def _absorb(clear, dyed, t):
 # tests/scenes/test_grain_optics.py: thinner, light crosses a grain unscattered and rice reads as glass; docs/look.md,
 # "Cooked rice: wet, milky, warm")
 RICE_RADIUS_WET = (1.6, 1.2, 0.8)
-# the roughness of the grain's skin, its water-and-starch film, dry → wet (0.325 at 15 %: α 0.11). A cooked grain's
-# adherent starch layer is smooth (Cookery Science 42(6):394), yet eaters read a food's gloss as strong where
-# glass or plastic would be middling (J. Color Sci. Assoc. Japan 42(3+):30): a medium gloss, not a mirror. At
-# 0.25 − 0.15·t (0.156 at 15 %, α 0.024) the skin mirrored the key in every grain and art directors read the rice
-# as "pills, too glossy". No published BRDF of cooked rice was found: the pair is chosen (docs/look.md,
-# "Cooked rice: wet, milky, warm")
-RICE_FILM_ROUGHNESS = (0.45, 0.25)
+# the roughness of the grain's skin, its water-and-starch film, dry → wet (0.225 at 15 %: α 0.05). A cooked grain's
+# adherent starch layer is smooth (Cookery Science 42(6):394), and graders judge cooked rice by its gloss (tsuya, by
+# eye: Japan Grain Inspection Association; by image analysis, the share of high-luminance pixels: Hokkaido Central
+# Agricultural Experiment Station 1999). At 0.156 at 15 % (α 0.024) the skin mirrored the key in every grain and
+# art directors read "pills"; at 0.325 (α 0.11) the sheen spread over each grain and they read dry, chalky rice
+# with "no sheen". No published BRDF of cooked rice was found: the pair is chosen (docs/look.md, "A bowl of rice")
+RICE_FILM_ROUGHNESS = (0.40, 0.12)
+# the subsurface colour of the wettest rice (24 %), the dry end's (0.80, 0.65, 0.44) being raw rice's cream; at 15 %
+# (0.87, 0.79, 0.67). At (0.91, 0.81, 0.665) at 15 % the heap was cream and lit grains sat at the tone curve's
+# knee, leaving the film's sheen no headroom (art directors: "chalky, no sheen"); chosen, no measured values
+# (docs/look.md, "Warm white rice")
+RICE_COLOR_WET = (0.91, 0.875, 0.81)
 
 
 def rice_material(water: float, name: str = "rice") -> Material:
@@ -83,11 +88,10 @@ def rice_material(water: float, name: str = "rice") -> Material:
 
     ``subsurface`` scales the CDRF's diffuse transmission (``cdrf.translucency``, per vertex from σ₀|κ|);
     the water film adds a clearcoat and a sheen at grazing angles (G fig. 3.1.2.1: dull at 0 %, glossy at 24 %).
-    The subsurface colour is a cream white, chosen (no measured values): thin grains let most light through, so a
+    The subsurface colour is a warm white, chosen (no measured values): thin grains let most light through, so a
     heap shows their colour weaker than a thick piece would; at (0.90, 0.86, 0.76) (15 %) the studio rendered the
-    rice neutral grey (CIELAB b* 3.8), at (0.90, 0.82, 0.69) warm white (b* 7.2), which beside the eggs' orange
-    still read bluish-white to art directors; at (0.91, 0.81, 0.665) cream (b* 8.0; docs/look.md, "Warm white rice").
-    The wet end's blue, 0.80, keeps its single-scattering albedo at 0.99: wetter is whiter in every channel.
+    rice neutral grey (CIELAB b* 3.8), at (0.91, 0.81, 0.665) cream and chalky (``RICE_COLOR_WET``). The wet
+    end's blue, 0.81, keeps its single-scattering albedo at 0.99: wetter is whiter in every channel.
     """
     if not 0.0 <= water <= WATER_MAX:
         raise ValueError(f"water_content {water} % is outside 0–{WATER_MAX:g} %")
@@ -97,7 +101,7 @@ def rice_material(water: float, name: str = "rice") -> Material:
         base_color=_mix((0.66, 0.60, 0.47), (0.90, 0.89, 0.84), t),
         subsurface=0.3 + 0.6 * t,
         subsurface_radius=_mix((0.3, 0.2, 0.1), RICE_RADIUS_WET, t),
-        subsurface_color=_mix((0.80, 0.65, 0.44), (0.975, 0.905, 0.80), t),
+        subsurface_color=_mix((0.80, 0.65, 0.44), RICE_COLOR_WET, t),
         specular=0.5,
         roughness=0.7 - 0.35 * t,
         sheen=0.6 * t,

@@ -286,15 +286,16 @@ def test_scene_carries_the_cdrf_sigma_per_vertex(scene_inputs):
 
 
 def test_cooked_rices_skin_is_a_medium_gloss_not_a_mirror():
-    """The grain's skin (its starch-and-water film, the preview's dielectric skin and the files' clear coat) is a
-    medium gloss wherever there is water: at α 0.024 (roughness 0.156 at 15 %) each grain mirrored the key and read
-    as a glossy pill; the wetter grain is still the glossier (docs/look.md, "Cooked rice: wet, milky, warm")."""
+    """The grain's skin (its starch-and-water film, the preview's film and the files' clear coat) is a wet gloss
+    at the recipes' 15 %: at α 0.024 (roughness 0.156) each grain mirrored the key and read as a glossy pill, at
+    α 0.11 (0.325) the sheen spread over the grain and art directors read it as dry, chalky rice; the wetter grain
+    is the glossier, a dry one matte (docs/look.md, "A bowl of rice")."""
     from nodes.export.look import boundary_roughness
     from nodes.shading.materials import rice_material
 
     dry, cooked, wet = (boundary_roughness(rice_material(w)) for w in (0.0, 15.0, 24.0))
-    assert 0.25 <= wet < cooked <= 0.5  # α = r² in 0.06–0.25: neither a mirror nor chalk
-    assert dry > cooked  # no film on a dry grain: its own matte surface
+    assert 0.18 <= cooked <= 0.3  # α 0.032–0.09 at 15 %: neither a mirror nor chalk
+    assert wet < cooked < dry  # no film on a dry grain: its own matte surface
 
 
 def test_egg_tints_span_orange_to_red_orange_and_touching_eggs_differ():
