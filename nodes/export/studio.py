@@ -265,9 +265,9 @@ def wood_texture(pixels: int = TABLE_PIXELS) -> np.ndarray:
         cy = rng.integers(0, pixels, count)
         length = (rng.uniform(2.0, 12.0, count) / mm).astype(np.int64)
         depth_of = rng.uniform(0.80, 0.93, count).astype(np.float32)
-        for k in range(count):
-            rows = np.arange(cy[k], cy[k] + length[k]) % pixels
-            pores[rows, cx[k]] = np.minimum(pores[rows, cx[k]], depth_of[k])
+        starts = np.repeat(np.cumsum(length) - length, length)  # each streak's pixels, rows along y from cy
+        rows = (np.repeat(cy, length) + np.arange(int(length.sum())) - starts) % pixels
+        np.minimum.at(pores, (rows, np.repeat(cx, length)), np.repeat(depth_of, length))  # crossings: the darker
         out[:, columns] = (shade * pores)[..., None] * np.asarray(TABLE_COLOR, np.float32)
     seam = np.minimum(across, width - across) < 0.4  # the joint between boards, 0.8 mm, in shadow
     out[:, seam] *= 0.45
@@ -277,12 +277,15 @@ def wood_texture(pixels: int = TABLE_PIXELS) -> np.ndarray:
 
 
 def wood_png(path: Path) -> Path:
-    """``wood_texture`` written as an 8-bit sRGB PNG at ``path`` (for Mitsuba's and Blender's image textures)."""
+    """``wood_texture`` written as an 8-bit sRGB PNG at ``path`` (for Mitsuba's and Blender's image textures), at
+    the outputs' zlib level: the same pixels as the default level's, for ≈ a fifth of the encoding time."""
     from PIL import Image as PILImage
+
+    from nodegraph.output_files import PNG_LEVEL
 
     from .mesh_files import linear_to_srgb8
 
-    PILImage.fromarray(linear_to_srgb8(wood_texture())).save(path)
+    PILImage.fromarray(linear_to_srgb8(wood_texture())).save(path, compress_level=PNG_LEVEL)
     return path
 
 
