@@ -19,21 +19,25 @@ NO_PAIRS = np.zeros((0, 2), np.int64)  # no pair parting
 NO_ENTRIES = np.zeros(0, np.bool_)  # no list entry parting: the sweep rubs every pair
 
 
-def deep_pairs(x: np.ndarray, r: np.ndarray, elem: np.ndarray, n: int) -> np.ndarray:
-    """(k, 2) element pairs (lower first, sorted) of the first ``n`` particles that overlap deeper than
-    ``PART_DEPTH`` of the smaller radius."""
+def deep_pairs(x: np.ndarray, r: np.ndarray, start: np.ndarray, n: int) -> np.ndarray:
+    """(k, 2) element pairs (lower first, sorted) of the first ``n`` particles (clusters ``start``) with at least as
+    many particle pairs deeper than ``PART_DEPTH`` of the smaller radius as the smaller of the two has particles."""
     from scipy.spatial import cKDTree
 
     if n < 2:
         return NO_PAIRS
-    x, r, elem = x[:n], r[:n], elem[:n]
+    x, r = x[:n], r[:n]
+    elem = np.repeat(np.arange(len(start) - 1), np.diff(start))
     i, j = cKDTree(x).query_pairs(2.0 * float(r.max()), output_type="ndarray").T
-    other = elem[i] != elem[j]
-    i, j = i[other], j[other]
     depth = r[i] + r[j] - np.linalg.norm(x[i] - x[j], axis=1)
-    deep = depth > PART_DEPTH * np.minimum(r[i], r[j])
-    pairs = np.sort(np.stack([elem[i[deep]], elem[j[deep]]], axis=1), axis=1)
-    return np.unique(pairs, axis=0).astype(np.int64) if len(pairs) else NO_PAIRS
+    deep = (elem[i] != elem[j]) & (depth > PART_DEPTH * np.minimum(r[i], r[j]))
+    if not deep.any():
+        return NO_PAIRS
+    pairs, count = np.unique(
+        np.sort(np.stack([elem[i[deep]], elem[j[deep]]], axis=1), axis=1), axis=0, return_counts=True
+    )
+    size = np.diff(start)
+    return pairs[count >= np.minimum(size[pairs[:, 0]], size[pairs[:, 1]])].astype(np.int64)
 
 
 def deepest(x: np.ndarray, r: np.ndarray, start: np.ndarray, pairs: np.ndarray) -> np.ndarray:
