@@ -2,11 +2,11 @@
 
 A placement keeps overlaps up to its cull's threshold, judged on the implicit shapes: a pair it keeps can still have
 particles over 1 r deep in each other. Static friction, with clumping's cohesion in its load, then holds such a pair
-locked: it drifts together and its contacts throw it once they give (docs/validation.md, "part without friction"). The pairs
-with at least a cluster's count of particle pairs deeper than ``PART_DEPTH`` radii at the start lose friction between
-each other (only each other) until their deepest overlap is back under it; their contacts then part them at the
-solver's own depenetration. Fewer deep particle pairs mark an ordinary contact: a pressed block of grains has 25 pairs
-past 0.5 r with at most 6 each, the nigiri's placement 336 with up to 15.
+locked: it drifts together and its contacts throw it once they give (docs/validation.md, "part without friction").
+The pairs with at least a cluster's count of particle pairs deeper than ``PART_DEPTH`` radii at the start lose friction
+between each other (only each other) until their deepest overlap is back under it; their contacts then part them at
+the solver's own depenetration. Fewer deep particle pairs mark an ordinary contact: a pressed block of grains has 25
+pairs past 0.5 r with at most 6 each, the nigiri's placement 336 with up to 15.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Two grains placed inside one another, particles 1.09 r deep, in a tray too narrow for them side by side (4.4 mm
-for two 3 mm grains), clumping 1.0: held by static friction, with the cohesion in its load, they stayed 0.56 r deep
+for two 3 mm grains), clumping 1.0: held by static friction, with the cohesion in its load, they stay 0.56 r deep
 for good; parting without friction between them (``parting``), they are under 0.3 r within 10 frames, at no more
-than 41 mm/s (issue 46; docs/validation.md, "can lock")."""
+than 41 mm/s (issue 46; docs/validation.md, "part without friction")."""
 
 import numpy as np
 from scene_builders import box_mesh, rice_library
