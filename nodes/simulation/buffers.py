@@ -8,13 +8,14 @@ anchors and loads, tolerated overlaps): they follow the particles of the ``State
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
 
 from .friction import FORCE, NO_GROUPS, RUBBED, ContactGroups
 from .model import Model
+from .parting import NO_ENTRIES, NO_PAIRS
 from .settings import PAIR_EFFECTS, SolverSettings
 
 
@@ -129,6 +130,10 @@ class Contacts:
     # which contact each entry belongs to (``friction.contact_groups``)
     groups: ContactGroups = NO_GROUPS
     displacement: float = np.inf
+    # element pairs placed inside one another, not yet parted, and per list entry whether it is one of theirs
+    # (``parting``): they part without friction between them
+    deep: np.ndarray = field(default_factory=NO_PAIRS.copy)
+    parting: np.ndarray = field(default_factory=NO_ENTRIES.copy)
 
     @classmethod
     def allocate(cls, model: Model, settings: SolverSettings) -> Contacts | None:

@@ -43,8 +43,9 @@ Colouring = namedtuple("Colouring", "cell_start order dims")
 # load), its contact's mean load over the last substep and its friction mode (``friction.pool_contacts``), what
 # friction removed this substep (``friction.RUBBED`` columns), and ``glued``: its grains are glued (``glue``), so
 # its friction takes the true masses and tests each entry alone (``_project_slab``); empty: none is
-# and ``spring``: the elastic overlap its compliance holds so far this substep (``compliant_push``; empty: rigid)
-PairEntries = namedtuple("PairEntries", "allowance anchor load held mode rubbed glued spring")
+# and ``spring``: the elastic overlap its compliance holds so far this substep (``compliant_push``; empty: rigid);
+# ``parting``: its elements were placed inside one another and part without friction (``parting``; empty: none)
+PairEntries = namedtuple("PairEntries", "allowance anchor load held mode rubbed glued spring parting")
 # compliant contacts' ``alpha`` (α̃ of one element's face, ``face_compliance`` / h², 1/g; 0 = rigid contacts),
 # ``crush`` (the overlap in mm one face gives before it turns rigid) and ``zeta`` (damping ratio of their unloading,
 # ``compliant_push``); flat fields: numba's parallel loop takes no tuple inside the bundle
@@ -208,12 +209,14 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
     ±170 mm/s at ≈ 40 Hz, growing 1.3–1.7× a frame until it slid: nothing ever slept; docs/validation.md).
     Without their friction a tall glued block toppled (it is part of the glue's shear stiffness), without the
     mass scaling of their normal corrections the onigiri slumped to 93 % of its height.
+    Pairs of elements placed inside one another (``entries.parting``) rub not at all until they part (``parting``).
     The particle arrays are the sweep's sorted copies (``_sorted_copies``: row p holds particle order[p], a
     partner's row is ``rows.at``)."""
     nbr_start, nbr, half, order, at = rows
-    allowance, anchor, load, held_mean, modes, rubbed, glued, spring = entries
+    allowance, anchor, load, held_mean, modes, rubbed, glued, spring, parting = entries
     wake_step, lift, upright, mu_s, mu_k, anchored, normal, cohesion, alpha, crush, zeta = rule
     any_glued = glued.shape[0] > 0
+    any_parting = parting.shape[0] > 0
     for p in range(p0, p1):
         i = order[p]
         for a in range(nbr_start[p], nbr_start[p + 1]):
@@ -239,7 +242,7 @@ def _project_slab(x, x_prev, awake, pushed, w, r, rows, entries, rule, p0, p1):
             if alpha > 0.0 and pen > 0.0:  # the correction a compliant contact takes (before friction reads it)
                 soft = (alpha, crush, zeta)
                 pen = compliant_push(x, x_prev, w, p, q, (nx, ny, nz), pen, share, spring, a, soft)
-            if mu_s > 0.0:  # friction first, the normal correction has the last word on the pair
+            if mu_s > 0.0 and not (any_parting and parting[a]):  # friction first, the normal correction last
                 mode = TESTED
                 if anchored:  # the contact's pooled load and mode, else (none touched last substep, glued, or a
                     # sphere's: ``friction.ROLLS``) its own

@@ -17,6 +17,7 @@ from .clusters import element_cluster, matrix_to_quat
 from .collider import free_space_field, rigid_into_free_space
 from .deformation import element_bends, element_transforms
 from .model import Model, Yolks, build_model
+from .parting import deep_pairs
 from .settings import PAIR_EFFECTS, XpbdParams, solver_settings
 from .solver import Diagnostics, XpbdSolver
 from .state import State
@@ -261,10 +262,14 @@ def build_simulation(
         yolks=yolks,
         obstacles=static_obstacles(obstacles, effects),
     )
+    solver = XpbdSolver(model, settings, threads=threads)
+    if solver.contacts is not None and "friction" in effects and aggregate.deformations is None:
+        # placed, not handed on: pairs placed inside one another part without friction (``parting``)
+        solver.contacts.deep = deep_pairs(model.x0, model.r, model.start, model.n_moving)
     return Simulation(
         model,
         model.state(),
-        XpbdSolver(model, settings, threads=threads),
+        solver,
         aggregate,
         np.array(local_centre),
         yolk_local if yolks is not None else None,

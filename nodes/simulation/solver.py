@@ -32,6 +32,7 @@ from . import (
     contact_constraints,
     glue,
     integrate,
+    parting,
     shape_matching,
     spatial_hash,
 )
@@ -431,6 +432,7 @@ class XpbdSolver:
             self.settings.friction.lists_rebuilt(self.dispatch, old, pairs, m)
         pairs.x_built[:] = st.x
         pairs.displacement = 0.0
+        pairs.parting = parting.entry_flags(nbr_start, nbr, pairs.lists.order, m.elem, pairs.deep)
         if "contact" in self.settings.effects:
             pairs.allowance = np.zeros(len(nbr))
             if self.coefficients.contact_alpha > 0:  # this substep's elastic overlaps start afresh
@@ -519,6 +521,7 @@ class XpbdSolver:
                 pairs.rubbed,
                 self._stuck(lists),
                 pairs.spring,
+                pairs.parting,
             ),
             cc.ContactRule(
                 float(wake_step),
@@ -599,7 +602,17 @@ class XpbdSolver:
                     residual = self._substep(state, self.default_control, self.contacts, first=j == 0)
                 solves += pieces
             self._diagnose(state, residual, solves)
+        self._part(state)
         self._use(1)
+
+    def _part(self, st: State) -> None:
+        """Give the pairs placed inside one another that have parted their friction back (``parting``)."""
+        pairs, m = self.contacts, self.model
+        if pairs is None or not len(pairs.deep):
+            return
+        pairs.deep = parting.still_deep(st.x, m.r, m.start, pairs.deep)
+        lists = pairs.lists
+        pairs.parting = parting.entry_flags(lists.nbr_start, lists.nbr, lists.order, m.elem, pairs.deep)
 
     def _diagnose(self, st: State, residual: float, solves: int) -> None:
         s, m = self.settings, self.model
