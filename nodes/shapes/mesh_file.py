@@ -25,6 +25,17 @@ def repaired(path: str, repair: bool) -> tuple[object, list[str]]:
     return mesh, list(dict.fromkeys(changes))
 
 
+def _readable(node_id: str, nodes) -> list[tuple[str, str, bool]]:
+    """A file that exists but is no closed mesh (no triangles, open past repair, damaged), refused by ``nodegraph
+    check`` at ``path`` with the reader's reason, before the estimate reads it (its placement weighs the shape)."""
+    params = nodes[node_id].params
+    try:
+        repaired(params["path"], params["repair"])
+    except ValueError as refused:
+        return [("path", str(refused).removeprefix("path: "), False)]
+    return []
+
+
 def _warns(node_id: str, nodes) -> list[tuple[str, str]]:
     """What a run will say of the mesh file (``nodegraph check``): its repairs; nothing where it cannot be read
     (the parameter's own check says why)."""
@@ -53,6 +64,7 @@ def _warns(node_id: str, nodes) -> list[tuple[str, str]]:
         "repair": Param(bool, True, "fix inverted normals and fill small holes instead of refusing the mesh"),
     },
     check=_check,
+    check_work=_readable,
 )
 def mesh_file(ctx, *, path, size, center, repair):
     """Load a closed mesh; an open or inside-out one is repaired (``repair``, said as a warning) or refused with a
