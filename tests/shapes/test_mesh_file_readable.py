@@ -12,7 +12,8 @@ from nodegraph.api import default_registry, load_recipe
 from nodegraph.errors import RecipeError
 
 ROOT = Path(__file__).resolve().parents[2]
-TRIANGLE = "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n"
+TRIANGLE = "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+TRIANGLE += "endloop\nendfacet\nendsolid t\n"
 
 
 @pytest.mark.parametrize(
