@@ -92,6 +92,7 @@ class Cost:
     elements: int | None = None  # elements its outputs carry on (None: not known from the recipe)
     inscribed: float | None = None  # mm: the smallest inscribed radius of the elements its outputs are made of
     volume: float | None = None  # mm³: the mean volume of the elements its outputs are made of
+    elongation: float | None = None  # the largest length over width of the elements its outputs are made of
     faces: float | None = None  # mesh faces per element its outputs carry (a mean over them)
     kinds: tuple[str, ...] = ()  # the element kinds its outputs carry, where a library names them (a cull's share)
     made: int = 0  # elements it makes (a placement)
@@ -137,6 +138,11 @@ class CostQuery:
         radii = [c.inscribed for c in self.inputs.get(port, []) if c.inscribed is not None]
         return min(radii) if radii else None
 
+    def elongation(self, port: str) -> float | None:
+        """The largest length over width among the wires into ``port`` (None when none says)."""
+        ratios = [c.elongation for c in self.inputs.get(port, []) if c.elongation is not None]
+        return max(ratios) if ratios else None
+
     def volume(self, port: str) -> float | None:
         """The mean element volume over the wires into ``port`` (None when one of them does not say)."""
         volumes = [c.volume for c in self.inputs.get(port, [])]
@@ -167,8 +173,8 @@ def passes(
 ) -> Callable[[CostQuery], Cost]:
     """A ``cost`` for a node whose output carries the elements of input ``port`` (× ``share``: a cull's kept
     share, or a function of the element kinds that gives it), with the faces per element, the kinds, the smallest
-    inscribed radius and the mean volume of input ``faces`` (default ``port``: the meshes a placement gets from the
-    libraries it is mixed with), and whose own work is small."""
+    inscribed radius, the mean volume and the elongation of input ``faces`` (default ``port``: the meshes a
+    placement gets from the libraries it is mixed with), and whose own work is small."""
 
     def cost(q: CostQuery) -> Cost:
         count = q.elements(port)
@@ -178,6 +184,7 @@ def passes(
             elements=None if count is None else int(round(count * kept)),
             inscribed=q.inscribed(faces or port),
             volume=q.volume(faces or port),
+            elongation=q.elongation(faces or port),
             faces=q.faces(faces or port),
             kinds=kinds,
         )

@@ -80,7 +80,8 @@ def _cost(q: CostQuery) -> Cost:
     """The smallest inscribed radius its meshes can have and their volume (what a placement whose r comes from the
     elements reads), from the parameters alone: an egg's radius at its diameter's low clip (−2 sd) and the volume
     at its mean diameter, a grain's or flake's half thickness, a grain's volume its mesh's at the wired variety's
-    length (made now: milliseconds); and its faces; a file's are not known before it is read."""
+    length (made now: milliseconds), its length over its width (a slender run's clusters); and its faces; a file's
+    are not known before it is read."""
     p = q.params
     sphere = 20 * 4 ** p["subdivisions"]  # faces of the icosphere a grain or an egg's shell is made from
     if p["shape"] == "ikura":  # membrane and yolk, each a sphere one subdivision finer
@@ -91,24 +92,28 @@ def _cost(q: CostQuery) -> Cost:
     size = p["size"] or DEFAULT_SIZE[p["shape"]]
     if p["shape"] == "chestnut":  # a quarter of the kernel: about half its smallest half-size
         return Cost(inscribed=0.25 * min(size), faces=sphere)
-    volume = _grain_volume(q, size) if p["shape"] == "rice" else None
-    return Cost(inscribed=0.5 * min(size), volume=volume, faces=sphere)
-
-
-def _grain_volume(q: CostQuery, size) -> float | None:
-    """The rice grain's volume at the length factor of the variety wired from a rice_variety node (1 unwired;
-    None when a variety comes from elsewhere)."""
-    wires = q.nodes[q.node_id].inputs.get("variety") or []
-    factor = 1.0
-    if wires:
-        source = q.nodes.get(wires[0].node)
-        if source is None or source.spec.type_name != "rice_variety":
-            return None
-        factor = RICE_VARIETIES[source.params["variety"]].length_factor
-    p = q.params
+    if p["shape"] != "rice":
+        longest, middle, _ = sorted(size, reverse=True)
+        return Cost(inscribed=0.5 * min(size), elongation=longest / middle, faces=sphere)
+    factor = _length_factor(q)
+    if factor is None:
+        return Cost(inscribed=0.5 * min(size), faces=sphere)
     length, width, thickness = size
     mesh = grain_shapes.rice_grain(length * factor, width, thickness, p["bluntness"], p["bend"], p["subdivisions"])
-    return grain_shapes.volume_centroid(*mesh)[0]
+    volume = grain_shapes.volume_centroid(*mesh)[0]
+    return Cost(inscribed=0.5 * min(size), volume=volume, elongation=length * factor / width, faces=sphere)
+
+
+def _length_factor(q: CostQuery) -> float | None:
+    """The length factor of the variety wired from a rice_variety node (1 unwired; None when a variety comes from
+    elsewhere)."""
+    wires = q.nodes[q.node_id].inputs.get("variety") or []
+    if not wires:
+        return 1.0
+    source = q.nodes.get(wires[0].node)
+    if source is None or source.spec.type_name != "rice_variety":
+        return None
+    return RICE_VARIETIES[source.params["variety"]].length_factor
 
 
 def _warns(node_id: str, nodes) -> list[tuple[str, str]]:

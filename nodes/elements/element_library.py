@@ -17,6 +17,7 @@ def _cost(q: CostQuery) -> Cost:
         elements=sum(q.nodes[w.node].family or 1 for w in wires) or None,
         inscribed=q.inscribed("meshes"),
         volume=q.volume("meshes"),
+        elongation=q.elongation("meshes"),
         faces=q.faces("meshes"),
         kinds=(q.params["kind"],) if q.params["kind"] else (),
     )

@@ -38,7 +38,7 @@ def _cost(q: CostQuery) -> Cost:
     elsewhere."""
     from .grain_shapes import RICE_VARIETIES
 
-    inscribed, volume = q.inscribed("field"), q.volume("field")
+    inscribed, volume, elongation = q.inscribed("field"), q.volume("field"), q.elongation("field")
     wires = [w for w in q.nodes[q.node_id].inputs.get("variety") or []]
     if inscribed is None:
         return Cost()
@@ -51,7 +51,12 @@ def _cost(q: CostQuery) -> Cost:
     cubed = lo**3 if hi == lo else (hi**4 - lo**4) / (4.0 * (hi - lo))  # the mean of P³, P uniform in [lo, hi]
     kept = 1.0 - q.params["broken"] * (1.0 - sum(q.params["broken_length"]) / 2.0)
     grown = None if volume is None else volume * cubed * kept
-    return Cost(inscribed=inscribed * lo * _least_growth(q.params["elongation"]), volume=grown)
+    e = q.params["elongation"]  # the length grows by P·e^(2/3), the width by P·e^(−1/3): length over width by e
+    return Cost(
+        inscribed=inscribed * lo * _least_growth(e),
+        volume=grown,
+        elongation=None if elongation is None else elongation * e,
+    )
 
 
 def _least_growth(elongation: float) -> float:

@@ -18,6 +18,7 @@ def _cost(q) -> Cost:
         faces=q.params["target_faces"],
         inscribed=None if inscribed is None else max(inscribed - q.params["level"], 0.0),
         volume=q.volume("field"),
+        elongation=q.elongation("field"),
     )
 
 

@@ -22,6 +22,16 @@ from nodegraph.params import Param, ParamValueError, resolve
 from .friction_models import FRICTION_MODELS, AnchoredFriction, SubstepFriction
 from .moisture import WATER_CONTENT, moisture_factors
 
+# a japonica grain's length over its width (SPEC §1: 5 × 3 mm raw): the shape ``particles_per_element`` is set for
+REFERENCE_ELONGATION = 5.0 / 3.0
+
+
+def slender_m(elongation: float) -> int:
+    """m ≥ 1 of a ``slender`` run: an element's length over its width in units of a japonica grain's
+    (``REFERENCE_ELONGATION``), rounded; its run takes m² × the particles and m³ × the substeps."""
+    return max(1, int(round(elongation / REFERENCE_ELONGATION)))
+
+
 EFFECTS = ("gravity", "contact", "friction", "adhesion", "collider", "buoyancy", "moisture", "damping")
 PAIR_EFFECTS = frozenset({"contact", "friction", "adhesion"})  # the effects that need neighbour lists
 ADHESION_STIFFNESS = 10.0  # N/m at clumping 1: pulls a 25 mg grain with ≈ 40× its weight per mm of gap

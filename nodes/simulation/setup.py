@@ -18,23 +18,21 @@ from .collider import free_space_field, rigid_into_free_space
 from .deformation import element_bends, element_transforms
 from .model import Model, Yolks, build_model
 from .parting import deep_pairs
-from .settings import PAIR_EFFECTS, XpbdParams, solver_settings
+from .settings import PAIR_EFFECTS, XpbdParams, slender_m, solver_settings
 from .solver import Diagnostics, XpbdSolver
 from .state import State
 
-# a japonica grain's length over its width (SPEC §1: 5 × 3 mm raw): the shape ``particles_per_element`` is set for
-REFERENCE_ELONGATION = 5.0 / 3.0
 # mm/s: the depenetration speed of a slender run (m > 1) that sets none (``XpbdParams.depenetration_speed``)
 SLENDER_DEPENETRATION = 50.0
 
 
 def slender_factor(mesh) -> int:
     """m ≥ 1: the element's length over its width (its longest and middle extent in its own frame, where the
-    library lays the long axis on x) in units of a japonica grain's (``REFERENCE_ELONGATION``), rounded. An indica
+    library lays the long axis on x) in units of a japonica grain's (``settings.slender_m``), rounded. An indica
     grain (11.1 × 3.7 × 2.6 mm) is 2: a cluster of 8 spheres, each no deeper than the grain is thick, leaves its
     skin up to 0.94 mm outside every sphere, 16 leave 0.59 mm (japonica's 8: 0.47 mm; docs/look.md)."""
     extent = np.sort(np.ptp(np.asarray(mesh.vertices), axis=0))[::-1]
-    return max(1, int(round(extent[0] / max(extent[1], 1e-12) / REFERENCE_ELONGATION)))
+    return slender_m(extent[0] / max(extent[1], 1e-12))
 
 
 @dataclass

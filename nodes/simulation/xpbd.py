@@ -13,7 +13,7 @@ from nodegraph.node import In, Moved, Out, node
 from nodegraph.values import Mesh
 
 from ..values import Aggregate, CookedMaterial, ParticleState
-from .settings import EFFECTS, PARAMS, XpbdParams, solver_settings, xpbd_params
+from .settings import EFFECTS, PARAMS, XpbdParams, slender_m, solver_settings, xpbd_params
 from .step_limits import check_gravity_step, most_pieces, solve_pieces
 
 # particle-iterations per CPU second of a substep's work: what ``expect_cost`` tells before a long run starts (and
@@ -80,10 +80,12 @@ def _cost(q: CostQuery) -> Cost:
     if elements is None:
         return Cost()
     p = q.params
-    particles = elements * p["particles_per_element"]
+    elongation = q.elongation("aggregate")
+    m = slender_m(elongation) if p["slender"] and elongation is not None else 1  # as the run's ``slender_factor``
+    particles = elements * p["particles_per_element"] * m * m
     obstacles = sum(c.particles for c in q.inputs.get("obstacles", []))  # what the wired simulations simulate
     setup = SETUP_SECONDS + particles * SETUP_SECONDS_PER_PARTICLE + obstacles * SETUP_SECONDS_PER_OBSTACLE
-    solve, what = _solve(particles, obstacles, p["frames"], p["substeps"], p["iterations"], about="≈ ")
+    solve, what = _solve(particles, obstacles, p["frames"], p["substeps"] * m**3, p["iterations"], about="≈ ")
     seconds = setup + solve
     frames = p["frames"]
 
