@@ -66,3 +66,12 @@ def test_a_prop_that_cannot_fit_its_shape_is_refused_by_check(overrides, param, 
         load_recipe(ROOT / "graphs" / "onigiri.yaml", default_registry(), overrides, work=True)
     message = str(caught.value)
     assert f"'{overrides[0].split('.')[0]}', {param}:" in message and "allowed" in message and allowed in message
+
+
+def test_a_band_that_leaves_a_rounder_shape_is_refused_by_check():
+    """Issue 47: ``onigiri.roundness=0.5`` passed ``check`` (its band wrapped at 4 × 16 rays) and failed at ``nori``
+    after the simulations (at the run's 48 × 320 a ray met the rounder shape's face from inside); 0.35 fits."""
+    with pytest.raises(RecipeError) as caught:
+        load_recipe(ROOT / "graphs" / "onigiri.yaml", default_registry(), ["onigiri.roundness=0.5"], work=True)
+    assert "node 'nori', height:" in str(caught.value) and "leaves the shape 'onigiri'" in str(caught.value)
+    load_recipe(ROOT / "graphs" / "onigiri.yaml", default_registry(), ["onigiri.roundness=0.35"], work=True)
