@@ -672,19 +672,6 @@ TABLES = {
             ("3-spp passes, wall s", value("layers_wall")),
         ],
     ),
-    "bowl_band": (
-        "bowl_band.jsonl",
-        None,
-        [
-            ("recipe", field("recipe")),
-            ("rice core", field("core")),
-            (
-                "FLIP against 64 spp + OIDN: frame / lower band / table",
-                lambda r: " / ".join(number(r["values"][k]) for k in ("flip_frame", "flip_band", "flip_table")),
-            ),
-            ("preview CPU s", value("cpu")),
-        ],
-    ),
     "rice_look": (
         "rice_denoise.jsonl",
         lambda r: "quantity" in r,
