@@ -626,29 +626,3 @@ def test_the_denoisers_albedo_guide_shows_each_eggs_eye(shaded):
     assert distinct(flat) <= len([m for m in shaded.materials if m.name.startswith("ikura_membrane")])
     assert distinct(eyes) > 3 * distinct(flat)
     assert eyes[eggs][:, 1].max() > flat[eggs][:, 1].max() + 0.05  # paler (more green kept) over an eye
-
-
-def test_the_rice_under_the_top_layer_shows_nowhere_through_the_bowls_glaze():
-    """The rice core (``vessel_region`` 'outer', the shade node's ``filling``, drawn as rice) lies halfway through
-    the bowl's wall, on neither face: seen level from the side, below the rim, the bowl shows only its glaze. A core
-    on the wall's outer face coincides with the glaze there, and the render shows stripes of rice through it, which
-    the denoiser smears into a wavy band (docs/look.md, "The denoiser")."""
-    from nodegraph.values import Mesh
-    from nodes.export.mitsuba_scene import Camera
-    from nodes.shading import materials
-    from nodes.shapes import shape, vessel_region
-    from nodes.values import ShadedScene
-
-    from .test_studio import shows
-
-    bowl = shape.call(kind="bowl", size=42.0, depth=35.0, wall=4.0, fill=0.8, mound=6.0, resolution=2)
-    core = vessel_region.call(vessel=bowl["vessel"], surface="outer", lower=5.0)
-    container = Mesh(bowl["container"].vertices, bowl["container"].faces, name="bowl")
-    scene = ShadedScene(
-        (container, core),
-        (materials.ceramic_material((0.03, 0.021, 0.015)), materials.rice_material(15.0)),
-        np.array([0, 1]),
-    )
-    p = preview.resolve_params({})
-    camera = Camera(0.0, p["azimuth"], p["fov"], p["margin"], p["f_stop"], p["focus"])
-    assert not shows(scene, camera, 160, 90, p["sun_direction"], "rice").any()
