@@ -1,10 +1,8 @@
 """The ``vessel_region`` node: a region derived from a vessel, so it follows the vessel — SPEC §2 inputs.
 
 A bowl's rice layers, its static core and the layer its eggs start in are bowls of their own (a cavity to a
-fill plane plus a mound) whose numbers all follow from the vessel's: the same rim and depth (or a surface halfway
-through the container's wall, so that regions subtracted from one another share no walls, and a region drawn as rice
-(the shade node's ``filling``) lies on no face of the bowl: on the outer face the two surfaces coincide and the render
-shows stripes of rice through the glaze, which the denoiser smears into a wavy band), the fill plane
+fill plane plus a mound) whose numbers all follow from the vessel's: the same rim and depth (or the
+container's outer surface, so that regions subtracted from one another share no walls), the fill plane
 moved by a few millimetres, the rim pulled in. Stated as offsets of the vessel, ``--set bowl.size=30`` gives a
 smaller don whose regions still sit in its bowl.
 """
@@ -28,8 +26,8 @@ SURFACES = ("cavity", "outer")
         "surface": Param(
             str,
             "cavity",
-            "cavity: the bowl's inside; outer: halfway through the container's wall (rim radius and depth + half "
-            "the wall), for a region another is cut from (they then share no wall; inside the wall it shows nowhere)",
+            "cavity: the bowl's inside; outer: the container's outer surface (rim radius + wall, depth + wall), "
+            "for a region another is cut from (they then share no wall)",
             choices=SURFACES,
         ),
         "fill": Param(
@@ -69,7 +67,7 @@ def vessel_region(ctx, vessel, *, surface, fill, lower, mound, inset, inset_shar
 
     if vessel.kind != "bowl":
         raise ValueError(f"vessel: a region is derived from a bowl, got a shape of kind '{vessel.kind}'")
-    grow = vessel.wall / 2 if surface == "outer" else 0.0  # inside the wall: on no face of the bowl
+    grow = vessel.wall if surface == "outer" else 0.0
     radius, depth = vessel.radius + grow - inset - inset_share * vessel.radius, vessel.depth + grow
     if radius <= 0:
         raise ValueError(
