@@ -82,6 +82,31 @@ TABLES = {
             ("load", field("load")),
         ],
     ),
+    "mass_scaling": (
+        "mass_scaling.jsonl",
+        None,
+        [
+            ("set-up", field("what")),
+            ("substeps", field("substeps")),
+            (
+                "ours",
+                lambda r: (
+                    f"falls {number(r['values']['fall'])} mm"
+                    if "fall" in r["values"]
+                    else f"rises {number(r['values']['rise'])} mm; {r['values']['outside']} of "
+                    f"{r['values']['grains']} grains outside the bowl"
+                ),
+            ),
+            (
+                "physics says",
+                lambda r: (
+                    f"falls ½·g·t² = {number(r['values']['free_fall'])} mm (contacts between the two add no momentum)"
+                    if "fall" in r["values"]
+                    else "a pile settles: no rise; none outside"
+                ),
+            ),
+        ],
+    ),
     "lift_apart": (
         "lift_apart.jsonl",
         None,

@@ -32,17 +32,17 @@ INDICA = [
 
 @pytest.fixture(scope="module")
 def indica_run(tmp_path_factory):
-    """(the run's aggregate, the bowl's vessel) of the reduced indica bowl."""
+    """(the run's aggregate, the bowl's vessel, the placed pile) of the reduced indica bowl."""
     recipe = load_recipe(REPO / "graphs" / "rice_bowl.yaml", default_registry(), INDICA)
     cache = Cache(tmp_path_factory.mktemp("indica") / "cache")
-    result = run_recipe(recipe, outputs=["rice_sim.aggregate", "bowl.vessel"], cache=cache)
-    return result.output("rice_sim.aggregate"), result.output("bowl.vessel")
+    result = run_recipe(recipe, outputs=["rice_sim.aggregate", "bowl.vessel", "pile.aggregate"], cache=cache)
+    return result.output("rice_sim.aggregate"), result.output("bowl.vessel"), result.output("pile.aggregate")
 
 
 def test_the_run_keeps_the_long_grains_in_the_bowl(indica_run):
     # a fix by more solver effort must not launch grains: 16 particles at 80 substeps (or 8 at 40) sent grains
     # through the reduced bowl at up to 1,200 mm/s (docs/look.md); the recipe's run keeps every grain inside
-    aggregate, vessel = indica_run
+    aggregate, vessel, _ = indica_run
     assert not vessel.outside(aggregate.placement.positions, margin=vessel.wall).any()
 
 
@@ -52,11 +52,27 @@ def test_long_grains_do_not_stay_crossed_after_the_run(indica_run):
     # (``rigid_start``), ``slender`` and ``depenetration_speed``: 203 pairs, 0.25 / 0.40 / 0.50, 1 deeper than 0.5 mm.
     # Not the count of pairs: the draft's 400-face meshes cut ≈ 0.25 mm into each other wherever grains touch (the
     # 16 × 80 run that launched grains out of the bowl had 59); japonica's full-resolution meshes cross p95 0.62 mm
-    aggregate, _ = indica_run
+    aggregate, _, _ = indica_run
     _, depth = crossing_depths([aggregate.element_mesh(i) for i in range(len(aggregate.placement))])
     depth = depth[depth > 0]
     assert (depth > 0.5).sum() <= 10
     assert np.percentile(depth, 95) <= 0.62 and depth.max() <= 1.0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 46: the contacts' mass scaling lifts the clumped pile 12.9 mm at the depenetration cap "
+    "(docs/validation.md, 'Mass scaling adds momentum')",
+)
+def test_the_pile_does_not_rise(indica_run):
+    # the slender run's 80 substeps turn the contacts' mass scaling into a lift: the overlaps that shape matching
+    # re-makes every substep are pushed apart with the upper particle taking the larger share, every substep, and the
+    # whole clumped pile rises from its placement at the depenetration cap (50 mm/s); placed nearer the rim (the rice
+    # core halfway through the bowl's wall) it carried a grain over it. Bounding the scaled split to ten layers'
+    # sinking per substep keeps it to 1.2 mm (its start's overlaps with the core), see the docs for what that broke
+    aggregate, _, placed = indica_run
+    rise = aggregate.placement.positions[:, 2].mean() - placed.placement.positions[:, 2].mean()
+    assert rise <= 2.5
 
 
 @pytest.mark.parametrize("rigid_start", [None, True, pytest.param(False, marks=pytest.mark.xfail(strict=True))])
