@@ -18,7 +18,7 @@ import json
 import os
 from pathlib import Path
 
-from machine import stamp
+from machine import stamp, write_rows
 
 REPO = Path(__file__).resolve().parents[1]
 RECORD = REPO / "benchmarks" / "measured" / "lift_apart.jsonl"
@@ -82,8 +82,7 @@ def main() -> int:
                 }
             )
     if args.record:
-        RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
-        print(f"wrote {RECORD.relative_to(REPO)}")
+        write_rows(RECORD, rows)
     return 0
 
 

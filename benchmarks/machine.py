@@ -5,6 +5,7 @@ OpenMP loses most of its speed when another process holds a core; a table is onl
 one taken under the same line. Call after the first parallel kernel ran (the layer is chosen then).
 """
 
+import json
 import os
 import time
 
@@ -30,3 +31,9 @@ def stamp(load_at_start: float) -> dict[str, str]:
         "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
         "machine": f"{os.cpu_count()} cores",
     }
+
+
+def write_rows(path, rows: list[dict]) -> None:
+    """Replace a ``benchmarks/measured`` file with ``rows``, one JSON line each (``tools/measured_tables.py``)."""
+    path.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
+    print(f"wrote {path.relative_to(path.parents[2])}")

@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from machine import stamp
+from machine import stamp, write_rows
 
 REPO = Path(__file__).resolve().parents[1]
 RECORD = REPO / "benchmarks" / "measured" / "mass_scaling.jsonl"
@@ -85,38 +85,20 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record", action="store_true", help=f"write {RECORD.relative_to(REPO)}")
     args = parser.parse_args()
+    cases = (
+        ("two crossed grains in free fall, 10 frames: mass-weighted fall against ½·g·t²", crossed_pair_fall),
+        ("the reduced indica bowl (slender: 8 × its substeps), 15 frames: mean grain rise", indica_bowl),
+    )
     rows = []
-    for substeps in (10, 40):
-        load = os.getloadavg()[0]
-        found = crossed_pair_fall(substeps)
-        rows.append(
-            {
-                "what": "two crossed grains in free fall, 10 frames: mass-weighted fall against ½·g·t²",
-                "substeps": substeps,
-                "command": COMMAND,
-                "values": found,
-                "unit": "mm",
-                **stamp(load),
-            }
-        )
-        print(json.dumps(rows[-1]["values"]), substeps, flush=True)
-    for substeps in (10, 40):
-        load = os.getloadavg()[0]
-        found = indica_bowl(substeps)
-        rows.append(
-            {
-                "what": "the reduced indica bowl (slender: 8 × its substeps), 15 frames: mean grain rise",
-                "substeps": substeps,
-                "command": COMMAND,
-                "values": found,
-                "unit": "mm",
-                **stamp(load),
-            }
-        )
-        print(json.dumps(rows[-1]["values"]), substeps, flush=True)
+    for what, measure in cases:
+        for substeps in (10, 40):
+            load = os.getloadavg()[0]
+            found = measure(substeps)
+            row = {"what": what, "substeps": substeps, "command": COMMAND, "values": found, "unit": "mm"}
+            rows.append({**row, **stamp(load)})
+            print(json.dumps(found), substeps, flush=True)
     if args.record:
-        RECORD.write_text("".join(json.dumps(row, ensure_ascii=False) + "\n" for row in rows))
-        print(f"wrote {RECORD.relative_to(REPO)}")
+        write_rows(RECORD, rows)
     return 0
 
 
