@@ -27,6 +27,9 @@ def _check(params):
     for name in ("light_colors", "light_intensities"):
         if len(params.get(name, ())) not in (1, n):
             problems.append((name, f"give one value for all lights or one per light ({n} directions)"))
+    dark = [k for k, v in enumerate(params.get("light_intensities", ())) if not v > 0]
+    if dark:  # the range is inclusive; a light of intensity 0 failed in the run, after the simulations
+        problems.append(("light_intensities", f"light {dark[0]}: a light must have intensity > 0 (remove it instead)"))
     try:  # a misspelt preset is refused by ``check``, not after the simulation
         parse_overrides(params.get("presets", []))
     except ValueError as error:

@@ -249,6 +249,14 @@ def test_bad_input_at_run_time_gives_clear_errors(scene_inputs):
     )
 
 
+def test_a_dark_light_is_refused_by_check():
+    """A new user's ``--set "shade.light_intensities=[0]"`` passed ``check`` (its range is inclusive) and failed in
+    the shade node after 20 s of simulation."""
+    base = {"light_directions": [(0, 0, 1)], "light_colors": [(1, 1, 1)]}
+    assert [name for name, _ in shade.check({**base, "light_intensities": [0.0]})] == ["light_intensities"]
+    assert not shade.check({**base, "light_intensities": [0.5]})
+
+
 def test_a_misspelt_preset_is_refused_by_check_and_a_misspelt_kind_by_the_run(scene_inputs):
     """A new user's ``--set "shade.presets=[slamon=tuna]"`` changed nothing, without a word, and ``[salmon=tunaa]``
     passed ``check`` and failed after the simulation: a preset is checked with the recipe, a kind against the
