@@ -18,6 +18,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from repo_tool import load_tool
 
 from nodegraph import runtime
 
@@ -26,16 +27,6 @@ runtime.configure()
 ROOT = Path(__file__).resolve().parents[1]
 REGIONS = {"eggs": ("ikura",), "rice": ("rice",), "bowl": ("ceramic",)}  # material names start with these
 OTHER = "table"  # every pixel no element covers: the table's boards and the studio behind
-
-
-def _side_by_side():
-    """``tools/blender_side_by_side.py``, loaded from its file: sys.path is left as it is."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("blender_side_by_side", ROOT / "tools" / "blender_side_by_side.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def draft(out: Path):
@@ -113,7 +104,7 @@ def preview(scene, p: dict, spp: int, seed: int, path: Path) -> np.ndarray:
 
 def cycles(scene, p: dict, glb: Path, samples: int, seed: int, path: Path) -> np.ndarray:
     """Cycles' render of ``glb`` in the preview's studio at ``samples`` and ``seed`` (kept at ``path``)."""
-    side = _side_by_side()
+    side = load_tool("blender_side_by_side")
     from PIL import Image
 
     if not path.exists():

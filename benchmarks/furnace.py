@@ -16,22 +16,14 @@ import json
 import subprocess
 from pathlib import Path
 
+from repo_tool import load_tool
+
 from nodegraph import runtime
 
 runtime.configure()
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZE = 64  # px
-
-
-def _side_by_side():
-    """``tools/blender_side_by_side.py``, loaded from its file: sys.path is left as it is."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("blender_side_by_side", ROOT / "tools" / "blender_side_by_side.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def mitsuba(skin: dict, medium: dict | None, spp: int) -> float:
@@ -44,7 +36,7 @@ def mitsuba(skin: dict, medium: dict | None, spp: int) -> float:
 def cycles(roughness: float, ior: float, sigma_t: float, distribution: str, spp: int) -> float:
     from nodes.export.furnace import RADIUS
 
-    side = _side_by_side()
+    side = load_tool("blender_side_by_side")
     command = [str(side.blender_python()), str(ROOT / "tools" / "cycles_furnace.py")]
     out = subprocess.run(
         command + [str(v) for v in (RADIUS, roughness, ior, sigma_t, distribution, spp)],

@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from tools.vessel_check import vessel_report
+from repo_tool import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -40,7 +40,7 @@ def main() -> None:
                 start = time.perf_counter()
                 subprocess.run(command, cwd=ROOT, check=True)
                 row = {"wall_mm": float(wall), "speed_clamp": float(clamp), "substeps": args.substeps}
-                row |= vessel_report(out / "rice_bowl.glb")
+                row |= load_tool("vessel_check").vessel_report(out / "rice_bowl.glb")
                 row |= {"seconds": round(time.perf_counter() - start, 1), "load": round(os.getloadavg()[0], 1)}
                 print(json.dumps(row), flush=True)
 
