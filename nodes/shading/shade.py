@@ -27,9 +27,6 @@ def _check(params):
     for name in ("light_colors", "light_intensities"):
         if len(params.get(name, ())) not in (1, n):
             problems.append((name, f"give one value for all lights or one per light ({n} directions)"))
-    dark = [k for k, v in enumerate(params.get("light_intensities", ())) if not v > 0]
-    if dark:  # the range is inclusive; a light of intensity 0 failed in the run, after the simulations
-        problems.append(("light_intensities", f"light {dark[0]}: a light must have intensity > 0 (remove it instead)"))
     try:  # a misspelt preset is refused by ``check``, not after the simulation
         parse_overrides(params.get("presets", []))
     except ValueError as error:
@@ -87,10 +84,11 @@ def _check(params):
         "light_intensities": Param(
             list[float],
             [KEY_INTENSITY],
-            "intensity per light (or one for all); must be > 0. The first light is the key: the preview's key "
-            f"softbox and its glints scale with it ({KEY_INTENSITY}: the studio's own; 2.4: twice as bright), in the "
-            "preview and the Blender side-by-side alike; the others light only the baked vertex colours",
-            range=(0.0, 100.0),
+            "intensity per light (or one for all; remove a light rather than set it to 0). The first light is the "
+            f"key: the preview's key softbox and its glints scale with it ({KEY_INTENSITY}: the studio's own; 2.4: "
+            "twice as bright), in the preview and the Blender side-by-side alike; the others light only the baked "
+            "vertex colours",
+            range=(0.01, 100.0),  # inclusive: at 0 the run refused the light in shade, after the simulations
         ),
         "baked_ambient": Param(
             float,

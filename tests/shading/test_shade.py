@@ -232,14 +232,14 @@ def test_out_of_range_parameters_are_refused_before_running(name, value):
 
 
 def test_bad_input_at_run_time_gives_clear_errors(scene_inputs):
-    with pytest.raises(ValueError, match="intensity > 0"):
-        shade.call(**scene_inputs, light_intensities=[0.0])
     with pytest.raises(ValueError, match="zero vector"):
         shade.call(**scene_inputs, light_directions=[(0.0, 0.0, 0.0)])
     # Past the declaration (as a caller skipping validation would): the node's own checks still refuse.
     unchecked = {**shade.resolve_params({}), **scene_inputs}
     with pytest.raises(ValueError, match="linear RGB"):
         shade(Context.standalone(), **{**unchecked, "syrup_color": (1.5, 0.0, 0.0)})
+    with pytest.raises(ValueError, match="intensity > 0"):
+        shade(Context.standalone(), **{**unchecked, "light_intensities": [0.0]})
     with pytest.raises(ValueError, match="water_content"):
         cooked_material(water_content=25.0)
     with pytest.raises(ValueError, match="presets"):
@@ -249,12 +249,13 @@ def test_bad_input_at_run_time_gives_clear_errors(scene_inputs):
     )
 
 
-def test_a_dark_light_is_refused_by_check():
-    """A new user's ``--set "shade.light_intensities=[0]"`` passed ``check`` (its range is inclusive) and failed in
+def test_a_dark_light_is_refused_by_its_declaration():
+    """A new user's ``--set "shade.light_intensities=[0]"`` passed ``check`` (its range was 0–100) and failed in
     the shade node after 20 s of simulation."""
-    base = {"light_directions": [(0, 0, 1)], "light_colors": [(1, 1, 1)]}
-    assert [name for name, _ in shade.check({**base, "light_intensities": [0.0]})] == ["light_intensities"]
-    assert not shade.check({**base, "light_intensities": [0.5]})
+    with pytest.raises(ParamValueError) as refused:
+        shade.params["light_intensities"].validate([0.0])
+    assert "0.01 ≤ value" in refused.value.allowed
+    assert shade.params["light_intensities"].validate([0.5]) == [0.5]
 
 
 def test_a_misspelt_preset_is_refused_by_check_and_a_misspelt_kind_by_the_run(scene_inputs):
