@@ -21,15 +21,14 @@ NO_PAIRS = np.zeros((0, 2), np.int64)  # no pair parting
 NO_ENTRIES = np.zeros(0, np.bool_)  # no list entry parting: the sweep rubs every pair
 
 
-def deep_pairs(x: np.ndarray, r: np.ndarray, start: np.ndarray, n: int) -> np.ndarray:
-    """(k, 2) element pairs (lower first, sorted) of the first ``n`` particles (clusters ``start``) with at least as
+def deep_pairs(x: np.ndarray, r: np.ndarray, elem: np.ndarray, n: int) -> np.ndarray:
+    """(k, 2) element pairs (lower first, sorted) of the first ``n`` particles (element ids ``elem``) with at least as
     many particle pairs deeper than ``PART_DEPTH`` of the smaller radius as the smaller of the two has particles."""
     from scipy.spatial import cKDTree
 
     if n < 2:
         return NO_PAIRS
-    x, r = x[:n], r[:n]
-    elem = np.repeat(np.arange(len(start) - 1), np.diff(start))
+    x, r, elem = x[:n], r[:n], elem[:n]
     i, j = cKDTree(x).query_pairs(2.0 * float(r.max()), output_type="ndarray").T
     depth = r[i] + r[j] - np.linalg.norm(x[i] - x[j], axis=1)
     deep = (elem[i] != elem[j]) & (depth > PART_DEPTH * np.minimum(r[i], r[j]))
@@ -38,7 +37,7 @@ def deep_pairs(x: np.ndarray, r: np.ndarray, start: np.ndarray, n: int) -> np.nd
     pairs, count = np.unique(
         np.sort(np.stack([elem[i[deep]], elem[j[deep]]], axis=1), axis=1), axis=0, return_counts=True
     )
-    size = np.diff(start)
+    size = np.bincount(elem)  # particles per element
     return pairs[count >= np.minimum(size[pairs[:, 0]], size[pairs[:, 1]])].astype(np.int64)
 
 

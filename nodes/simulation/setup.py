@@ -263,7 +263,7 @@ def build_simulation(
     solver = XpbdSolver(model, settings, threads=threads)
     if solver.contacts is not None and "friction" in effects and aggregate.deformations is None:
         # placed, not handed on: pairs placed inside one another part without friction (``parting``)
-        solver.contacts.deep = deep_pairs(model.x0, model.r, model.start, model.n_moving)
+        solver.contacts.deep = deep_pairs(model.x0, model.r, model.elem, model.n_moving)
     return Simulation(
         model,
         model.state(),
