@@ -4,7 +4,8 @@ reduced bowl's run is ``slender``: its own 80):
 - two 12 × 3 mm grains crossed at right angles, the upper 0.3 mm into the lower, falling freely for 10 frames: the
   pair's centre of mass (weighted by the particles' masses) must fall ½·g·t², whatever its contacts do;
 - the reduced indica rice bowl of ``tests/simulation/test_slender.py`` (39 clumped long grains, 15 frames): the
-  pile's mean grain height must not rise, and no grain may leave the bowl.
+  pile's mean grain height must not rise, and no grain may leave the bowl; and at 10 substeps, what each kernel
+  family adds to the mean particle height per frame (frames 2–15), pre-stabilisation's contact sweep apart.
 
     python benchmarks/mass_scaling.py            # print the table
     python benchmarks/mass_scaling.py --record   # and write benchmarks/measured/mass_scaling.jsonl
@@ -81,6 +82,51 @@ def indica_bowl(substeps: int) -> dict:
     }
 
 
+def by_family(substeps: int) -> dict:
+    """The reduced indica bowl's mean particle height (mm) added per frame by each kernel family, over frames 2–15:
+    each kernel call's dispatch measured before and after (adhesion writes a copy: its output is read)."""
+    from collections import defaultdict
+
+    from nodes.simulation import setup
+
+    added, frames, build = defaultdict(float), [], setup.build_simulation
+
+    def recording(*args, **kwargs):
+        sim = build(*args, **kwargs)
+        n, dispatch, prestabilise, frame = sim.model.n_moving, sim.solver.dispatch, sim.solver._prestabilise, sim.frame
+        inside = []
+
+        def call(family, kernel, *kernel_args):
+            name = family if isinstance(family, str) else "+".join(family)
+            before = sim.state.x[:n, 2].mean()
+            result = dispatch(family, kernel, *kernel_args)
+            after = (kernel_args[-1] if family == "adhesion" else sim.state.x)[:n, 2].mean()
+            added[name + (" (pre-stabilisation)" if inside else "")] += after - before
+            return result
+
+        def prestabilised(*a):
+            inside.append(True)
+            prestabilise(*a)
+            inside.pop()
+
+        def framed():
+            frame()
+            frames.append(dict(added))
+            added.clear()
+
+        sim.solver.dispatch, sim.solver._prestabilise, sim.frame = call, prestabilised, framed
+        return sim
+
+    setup.build_simulation = recording
+    try:
+        indica_bowl(substeps)
+    finally:
+        setup.build_simulation = build
+    kept = frames[1:]
+    names = sorted({k for f in kept for k in f})
+    return {k: round(sum(f.get(k, 0.0) for f in kept) / len(kept), 3) for k in names}
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record", action="store_true", help=f"write {RECORD.relative_to(REPO)}")
@@ -97,6 +143,11 @@ def main() -> int:
             row = {"what": what, "substeps": substeps, "command": COMMAND, "values": found, "unit": "mm"}
             rows.append({**row, **stamp(load)})
             print(json.dumps(found), substeps, flush=True)
+    load = os.getloadavg()[0]
+    found = by_family(10)
+    what = "the reduced indica bowl, 10 substeps (slender: 80): mean particle height added per frame, by kernel family"
+    rows.append({"what": what, "substeps": 10, "command": COMMAND, "values": found, "unit": "mm", **stamp(load)})
+    print(json.dumps(found), flush=True)
     if args.record:
         write_rows(RECORD, rows)
     return 0

@@ -33,6 +33,17 @@ def records(name: str) -> list[dict]:
     return [json.loads(line) for line in lines if line.strip()]
 
 
+def _mass_scaling(r: dict) -> tuple[str, str]:
+    """(what ours does, what physics says) of a ``mass_scaling.jsonl`` row: a fall, a rise, or the kernel families."""
+    v = r["values"]
+    if "fall" in v:
+        return f"falls {number(v['fall'])} mm", f"½·g·t² = {number(v['free_fall'])} mm: the pair adds no momentum"
+    if "rise" in v:
+        return f"rises {number(v['rise'])} mm; {v['outside']} of {v['grains']} outside", "a pile settles: no rise"
+    added = "; ".join(f"{name} {value:+.3f}" for name, value in v.items() if abs(value) >= 0.0005)
+    return added + " mm a frame", "contacts between grains add no height; gravity and the walls do"
+
+
 def number(value, digits: int | None = None) -> str:
     """A figure as the docs print it: a thousands separator, the decimals it was recorded with (or ``digits``),
     "—" for none."""
@@ -88,23 +99,8 @@ TABLES = {
         [
             ("set-up", field("what")),
             ("substeps", field("substeps")),
-            (
-                "ours",
-                lambda r: (
-                    f"falls {number(r['values']['fall'])} mm"
-                    if "fall" in r["values"]
-                    else f"rises {number(r['values']['rise'])} mm; {r['values']['outside']} of "
-                    f"{r['values']['grains']} grains outside the bowl"
-                ),
-            ),
-            (
-                "physics says",
-                lambda r: (
-                    f"falls ½·g·t² = {number(r['values']['free_fall'])} mm (contacts between the two add no momentum)"
-                    if "fall" in r["values"]
-                    else "a pile settles: no rise; none outside"
-                ),
-            ),
+            ("ours", lambda r: _mass_scaling(r)[0]),
+            ("physics says", lambda r: _mass_scaling(r)[1]),
         ],
     ),
     "lift_apart": (
